@@ -1,0 +1,29 @@
+//! The `coopnav` binary: parses arguments and calls the library crates. Nothing here computes.
+
+use anyhow::Result;
+use clap::{Parser, Subcommand};
+
+mod reproduce;
+
+#[derive(Parser)]
+#[command(name = "coopnav", version, about = "Cooperative navigation of AUV teams: CNA path planning, OWTT navigation, adaptive acoustic links")]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Reproduce a thesis table: prints our numbers beside the thesis's, with property checks.
+    Reproduce(reproduce::Args),
+}
+
+fn main() -> Result<()> {
+    tracing_subscriber::fmt()
+        .with_env_filter(tracing_subscriber::EnvFilter::from_default_env())
+        .with_writer(std::io::stderr)
+        .init();
+    match Cli::parse().command {
+        Command::Reproduce(args) => reproduce::run(args),
+    }
+}

@@ -1,0 +1,17 @@
+//! coopnav-core: the vocabulary every other coopnav crate speaks.
+//!
+//! It owns the frame and unit conventions (x east, y north, z depth positive down; SI units;
+//! math-convention headings inside, compass headings only at the edge), seeded randomness that
+//! keeps Monte Carlo runs bit-identical on any thread count, and survey missions (waypoints,
+//! lawnmower patterns, time-stamped tracks with linear interpolation).
+//! It deliberately knows nothing about planners, filters or modems.
+
+pub mod angle;
+pub mod geometry;
+pub mod mission;
+pub mod rng;
+
+pub use angle::{wrap_pi, CompassDeg, Degrees, Heading, Radians};
+pub use geometry::Vec3;
+pub use mission::{DepthProfile, Lawnmower, Track, TrackError, TrackSample};
+pub use rng::{run_seed, SeedStream};

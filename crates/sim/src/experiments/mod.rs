@@ -1,0 +1,88 @@
+//! Thesis reproductions: each experiment is a named function that runs our models on the thesis's
+//! set-up (or our recorded reconstruction of it), and returns our numbers beside the thesis's,
+//! plus the property checks (trends, bands) that must hold.
+//!
+//! `coopnav reproduce <id>` runs one; CI runs the reduced forms through the sim crate's tests.
+
+use serde::Serialize;
+use thiserror::Error;
+
+/// How big a reproduction to run.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Size {
+    /// The thesis's full set-up (number of runs, sweep ranges).
+    Full,
+    /// A reduced form for CI: fewer runs or a thinner sweep, with bands widened by the Monte
+    /// Carlo standard error where the experiment is statistical.
+    Reduced,
+}
+
+#[derive(Debug, Clone, Copy)]
+pub struct ReproOptions {
+    pub size: Size,
+    /// Base seed; run i uses `coopnav_core::run_seed(seed, i)`.
+    pub seed: u64,
+}
+
+impl Default for ReproOptions {
+    fn default() -> Self {
+        ReproOptions { size: Size::Full, seed: 1 }
+    }
+}
+
+/// One property a reproduction must show (a trend, a band, an identity).
+#[derive(Debug, Clone, Serialize)]
+pub struct Check {
+    pub name: String,
+    pub passed: bool,
+    pub detail: String,
+}
+
+impl Check {
+    pub fn new(name: impl Into<String>, passed: bool, detail: impl Into<String>) -> Self {
+        Check { name: name.into(), passed, detail: detail.into() }
+    }
+}
+
+/// What a reproduction returns: a human-readable table (ours beside the thesis's), the checks,
+/// and the same numbers as JSON.
+#[derive(Debug, Clone, Serialize)]
+pub struct ReproReport {
+    pub id: String,
+    pub table: String,
+    pub checks: Vec<Check>,
+    pub data: serde_json::Value,
+}
+
+impl ReproReport {
+    pub fn all_passed(&self) -> bool {
+        self.checks.iter().all(|c| c.passed)
+    }
+}
+
+#[derive(Debug, Error)]
+pub enum ExperimentError {
+    #[error("unknown experiment '{0}'; run `coopnav reproduce --list` to see the available ones")]
+    Unknown(String),
+    #[error("experiment {id}: {message}")]
+    Failed { id: String, message: String },
+}
+
+/// A registered reproduction.
+pub struct Experiment {
+    pub id: &'static str,
+    pub about: &'static str,
+    pub run: fn(&ReproOptions) -> Result<ReproReport, ExperimentError>,
+}
+
+/// Every reproduction coopnav knows, in a stable order. Each thesis adds its own entries
+/// from its own module.
+pub fn registry() -> Vec<Experiment> {
+    Vec::new()
+}
+
+/// Runs the experiment named `id`.
+pub fn run(id: &str, opts: &ReproOptions) -> Result<ReproReport, ExperimentError> {
+    let exp = registry().into_iter().find(|e| e.id == id).ok_or_else(|| ExperimentError::Unknown(id.to_string()))?;
+    (exp.run)(opts)
+}

@@ -1,0 +1,7 @@
+//! coopnav-sim: the fast-time world that joins the planner, the navigation filters and the
+//! acoustic link.
+//!
+//! It owns scenario files, the world loop, metrics, Monte Carlo and the experiments that
+//! reproduce the theses' tables (see [`experiments`]).
+
+pub mod experiments;
