@@ -5,3 +5,5 @@
 //! reproduce the theses' tables (see [`experiments`]).
 
 pub mod experiments;
+pub mod output;
+pub mod plot;
