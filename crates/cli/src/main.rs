@@ -3,6 +3,7 @@
 use anyhow::Result;
 use clap::{Parser, Subcommand};
 
+mod bench;
 mod reproduce;
 
 #[derive(Parser)]
@@ -16,6 +17,9 @@ struct Cli {
 enum Command {
     /// Reproduce a thesis table: prints our numbers beside the thesis's, with property checks.
     Reproduce(reproduce::Args),
+    /// Speed measurements, printed as JSON.
+    #[command(subcommand)]
+    Bench(bench::Target),
 }
 
 fn main() -> Result<()> {
@@ -25,5 +29,6 @@ fn main() -> Result<()> {
         .init();
     match Cli::parse().command {
         Command::Reproduce(args) => reproduce::run(args),
+        Command::Bench(target) => bench::run(target),
     }
 }

@@ -14,6 +14,7 @@ pub mod penalty;
 pub mod planner;
 mod search;
 mod tree;
+pub mod workload;
 #[cfg(test)]
 mod tests;
 
