@@ -4,6 +4,7 @@ use anyhow::Result;
 use clap::{Parser, Subcommand};
 
 mod bench;
+mod plan;
 mod reproduce;
 
 #[derive(Parser)]
@@ -17,6 +18,8 @@ struct Cli {
 enum Command {
     /// Reproduce a thesis table: prints our numbers beside the thesis's, with property checks.
     Reproduce(reproduce::Args),
+    /// Pre-deployment CNA path planning of a whole mission (no scenario: the embedded example).
+    Plan(plan::Args),
     /// Speed measurements, printed as JSON.
     #[command(subcommand)]
     Bench(bench::Target),
@@ -29,6 +32,7 @@ fn main() -> Result<()> {
         .init();
     match Cli::parse().command {
         Command::Reproduce(args) => reproduce::run(args),
+        Command::Plan(args) => plan::run(args),
         Command::Bench(target) => bench::run(target),
     }
 }
