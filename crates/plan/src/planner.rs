@@ -10,7 +10,7 @@ use crate::error_model::{to_arr, AuvError, ErrorModel};
 use crate::motion::{CnaPose, FastPose, MotionConfig, MotionOption};
 use crate::penalty::PenaltyPair;
 use crate::search::{branch_and_bound, Shared};
-use crate::tree::{rest_floors, Tree};
+use crate::tree::{reaches, rest_floors, Tree};
 use crate::{brute, PlanError, SearchOutcome};
 use coopnav_core::Vec3;
 use serde::{Deserialize, Serialize};
@@ -247,6 +247,7 @@ impl LookAheadPlanner {
             root_options,
             depth: levels,
             n,
+            reach: reaches(&auv, n, cfg.motion.speed * cfg.motion.tau),
             auv,
             rest_floor: rest_floors(&cfg.error, &sigma2, &root_eps2, alpha_tau, levels),
             sigma2,

