@@ -3,7 +3,8 @@
 use anyhow::{ensure, Result};
 use clap::Subcommand;
 use coopnav_plan::workload::Workload;
-use coopnav_plan::Algorithm;
+use coopnav_plan::{Algorithm, LookAheadPlanner};
+use coopnav_sim::predeploy::{self, Scenario, EXAMPLE};
 use serde_json::json;
 use std::time::Instant;
 
@@ -73,8 +74,37 @@ fn planner(reps: usize, brute_max_leaves: u64) -> Result<()> {
             "tree_nodes_full": (1..=w.l as u32 + 1).map(|d| ((w.a * w.b) as u64).pow(d)).sum::<u64>(),
         }));
     }
-    println!("{}", serde_json::to_string_pretty(&json!({ "target": "planner", "reps": reps, "results": rows }))?);
+    let missions = [4, 6].into_iter().map(mission_nodes).collect::<Result<Vec<_>>>()?;
+    println!("{}", serde_json::to_string_pretty(&json!({ "target": "planner", "reps": reps, "results": rows, "missions": missions }))?);
     Ok(())
+}
+
+/// Nodes expanded over the whole embedded example mission (N = 2, A = 5) at look-ahead `l`:
+/// branch-and-bound (one thread) against the full tree a plain depth-first search visits and the
+/// brute force's path recomputations.
+fn mission_nodes(l: usize) -> Result<serde_json::Value> {
+    let file = std::path::Path::new("<embedded example>");
+    let mut mission = Scenario::parse(EXAMPLE, file)?.build(file, std::path::Path::new("."))?;
+    mission.planner.look_ahead = l;
+    mission.planner.search.parallel = false;
+    let m = mission.planner.motion.options().len() as u64;
+    let mut planner = LookAheadPlanner::new(mission.planner)?;
+    let t0 = Instant::now();
+    let result = predeploy::run(&mission, &mut planner, &|_| {})?;
+    let seconds = t0.elapsed().as_secs_f64();
+    let bnb: u64 = result.decisions.iter().map(|d| d.nodes).sum();
+    let full: u64 = result.decisions.iter().map(|d| (1..=d.levels_searched as u32).map(|k| m.pow(k)).sum::<u64>()).sum();
+    let brute: u64 = result.decisions.iter().map(|d| m.pow(d.levels_searched as u32) * d.levels_searched as u64).sum();
+    Ok(json!({
+        "scenario": "embedded example (N = 2, A = 5, tau = 10 s)",
+        "look_ahead": l,
+        "decisions": result.decisions.len(),
+        "seconds_1_thread": seconds,
+        "bnb_nodes": bnb,
+        "full_tree_nodes": full,
+        "brute_force_nodes": brute,
+        "bnb_fraction_of_full_tree": bnb as f64 / full as f64,
+    }))
 }
 
 fn rayon_threads() -> usize {

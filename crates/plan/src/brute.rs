@@ -15,8 +15,8 @@ pub(crate) fn brute_force(tree: &Tree) -> SearchOutcome {
     loop {
         let mut acc = 0.0;
         let mut pose = tree.root_pose;
-        for l in 0..depth {
-            let opt = tree.level_options(l)[idx[l]];
+        for (l, &i) in idx.iter().enumerate() {
+            let opt = tree.level_options(l)[i];
             let (e, s) = (eps2.split_at_mut(l * n), los.split_at_mut(l * n));
             let parent = if l == 0 { tree.root() } else { NodeRef { pose, eps2: &e.0[(l - 1) * n..], los: &s.0[(l - 1) * n..] } };
             let (p, c) = tree.expand(l, &parent, opt, &mut e.1[..n], &mut s.1[..n]);

@@ -6,6 +6,7 @@
 //!   path known, so no minimum-cost path is ever cut;
 //! - ties between equal minima go to the lowest level-0 option index, and parallel tasks are
 //!   merged in index order, so the result does not depend on thread timing.
+//!
 //! Only the node count varies with the thread count.
 
 use crate::tree::{NodeRef, Tree};

@@ -77,10 +77,8 @@ fn bad_track_files_name_the_line() {
     let dir = tempfile::tempdir().unwrap();
     let with_csv = |csv: &str| {
         std::fs::write(dir.path().join("t.csv"), csv).unwrap();
-        let text = format!(
-            "[cna]\nx = 0.0\ny = 0.0\nheading_compass_deg = 90.0\n[planner]\nlook_ahead = 1\npenalty = {{ case = \"1\" }}\n[planner.motion]\nspeed = 2.0\ntau = 10.0\nheading_options = 3\ncna = {{ kind = \"asc\" }}\n[[auv]]\nname = \"a\"\ntrack_csv = \"t.csv\"\n"
-        );
-        Scenario::parse(&text, Path::new("s.toml")).unwrap().build(Path::new("s.toml"), dir.path())
+        let text = "[cna]\nx = 0.0\ny = 0.0\nheading_compass_deg = 90.0\n[planner]\nlook_ahead = 1\npenalty = { case = \"1\" }\n[planner.motion]\nspeed = 2.0\ntau = 10.0\nheading_options = 3\ncna = { kind = \"asc\" }\n[[auv]]\nname = \"a\"\ntrack_csv = \"t.csv\"\n";
+        Scenario::parse(text, Path::new("s.toml")).unwrap().build(Path::new("s.toml"), dir.path())
     };
     assert!(with_csv("t,x,y,z\n0,0,0,90\n100,150,0,90\n").is_ok());
     let e = with_csv("").unwrap_err().to_string();

@@ -204,9 +204,8 @@ fn table_53(id: &str, n: usize, sort: SortBy, thesis: &[ThesisRow], opts: &Repro
     let _ = writeln!(table, "{id}: best results, N = {n}, tau = 10 s, canonical geometry (digest A17), {} set-ups", setups.len());
     let _ = writeln!(table, "{:<31}|{:<31}", "ours: CNA  s   A  B  L   cost  max  rms", " thesis: CNA  s   A  B  L   cost  max  rms");
     let show = thesis.len();
-    for i in 0..show {
+    for (i, t) in thesis.iter().enumerate().take(show) {
         let ours = rows.get(i).map(|r| format!("{} {:>7.1}{:>5.2}{:>5.2}", r.setup.label(), r.summary.average_cost, r.summary.max_error, r.summary.rms_error)).unwrap_or_default();
-        let t = thesis[i];
         let ts = Setup { b: if t.0 { t.3 } else { 0 }, speed: t.1, a: t.2, l: t.4 };
         let _ = writeln!(table, "{ours:<42}| {} {:>7.1}{:>5.2}{:>5.2}", ts.label(), t.5, t.6, t.7);
     }

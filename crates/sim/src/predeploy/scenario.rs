@@ -236,7 +236,7 @@ impl Scenario {
                     return Err(invalid("lawnmower", "lane_length must be > 0 m, lanes >= 1 and spacing finite".into()));
                 }
                 if let DepthProfile::Sinusoid { period, .. } = m.depth {
-                    if !(period > 0.0) {
+                    if period.is_nan() || period <= 0.0 {
                         return Err(invalid("lawnmower.depth.period", format!("must be > 0 s, got {period}")));
                     }
                 }
