@@ -14,7 +14,7 @@ use serde::{Deserialize, Serialize};
 #[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
 pub enum CnaKind {
     /// A surface craft: heading options only, depth fixed.
-    Asc,
+    Asc {},
     /// An AUV CNA: B pitch options too, with pitch and depth limits (A5 defaults, invented).
     Auv {
         /// Number of pitch options B (≥ 1).
@@ -168,7 +168,7 @@ impl MotionConfig {
     pub fn options(&self) -> Vec<MotionOption> {
         let psi = linspace((self.max_turn_rate_deg_s * self.tau).to_radians(), self.heading_options);
         let phi = match self.cna {
-            CnaKind::Asc => vec![0.0],
+            CnaKind::Asc {} => vec![0.0],
             CnaKind::Auv { pitch_options, max_pitch_rate_deg_s, .. } => linspace((max_pitch_rate_deg_s * self.tau).to_radians(), pitch_options),
         };
         psi.iter().flat_map(|&dpsi| phi.iter().map(move |&dphi| MotionOption { dpsi, dphi })).collect()
@@ -194,7 +194,7 @@ impl MotionConfig {
     #[inline]
     pub(crate) fn limit_violation(&self, p: &FastPose) -> f64 {
         match self.cna {
-            CnaKind::Asc => 0.0,
+            CnaKind::Asc {} => 0.0,
             CnaKind::Auv { max_pitch_deg, min_depth, max_depth, .. } => {
                 let pitch_excess = (p.phi.abs() - max_pitch_deg.to_radians()).max(0.0);
                 let depth_excess = (min_depth - p.p[2]).max(0.0) + (p.p[2] - max_depth).max(0.0);
@@ -214,7 +214,7 @@ mod tests {
 
     #[test]
     fn heading_options_span_the_turn_limit() {
-        let o = cfg(5, CnaKind::Asc).options();
+        let o = cfg(5, CnaKind::Asc {}).options();
         let d: Vec<f64> = o.iter().map(|o| o.dpsi.to_degrees()).collect();
         for (got, want) in d.iter().zip([-120.0, -60.0, 0.0, 60.0, 120.0]) {
             assert!((got - want).abs() < 1e-9);
@@ -239,10 +239,10 @@ mod tests {
 
     #[test]
     fn bad_motion_is_rejected() {
-        assert!(cfg(1, CnaKind::Asc).validate().is_err());
-        assert!(MotionConfig { speed: -1.0, ..cfg(3, CnaKind::Asc) }.validate().is_err());
-        let e = MotionConfig { tau: 45.0, ..cfg(3, CnaKind::Asc) }.validate().unwrap_err();
+        assert!(cfg(1, CnaKind::Asc {}).validate().is_err());
+        assert!(MotionConfig { speed: -1.0, ..cfg(3, CnaKind::Asc {}) }.validate().is_err());
+        let e = MotionConfig { tau: 45.0, ..cfg(3, CnaKind::Asc {}) }.validate().unwrap_err();
         assert!(e.to_string().contains("max_turn_rate_deg_s"), "{e}");
-        assert!(cfg(3, CnaKind::Asc).validate().is_ok());
+        assert!(cfg(3, CnaKind::Asc {}).validate().is_ok());
     }
 }

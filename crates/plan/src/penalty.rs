@@ -113,8 +113,9 @@ impl Penalty for ScaledViolation {
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
 pub enum PenaltyFn {
-    None,
-    Doubling,
+    // Empty struct variants, so `deny_unknown_fields` also rejects stray keys here.
+    None {},
+    Doubling {},
     Scaled { too_close: SideTerm, too_far: SideTerm },
 }
 
@@ -122,8 +123,8 @@ impl Penalty for PenaltyFn {
     #[inline]
     fn apply(&self, cost: f64, v: &Violation) -> f64 {
         match *self {
-            PenaltyFn::None => NoPenalty {}.apply(cost, v),
-            PenaltyFn::Doubling => Doubling {}.apply(cost, v),
+            PenaltyFn::None {} => NoPenalty {}.apply(cost, v),
+            PenaltyFn::Doubling {} => Doubling {}.apply(cost, v),
             PenaltyFn::Scaled { too_close, too_far } => ScaledViolation { too_close, too_far }.apply(cost, v),
         }
     }
@@ -224,7 +225,7 @@ fn side(a: f64, m: f64, b: f64, p: f64) -> SideTerm {
 impl Primary {
     fn build(self) -> PenaltyFn {
         match self {
-            Primary::None => PenaltyFn::None,
+            Primary::None => PenaltyFn::None {},
             Primary::Orig(p) => PenaltyFn::Scaled { too_close: side(1.0, 2.0, 0.0, p), too_far: side(1.0, 1.0, 0.0, p) },
             Primary::FiveCost(p) => PenaltyFn::Scaled { too_close: side(5.0, 0.0, 25.0, p), too_far: side(1.0, 0.0, 2.0, p) },
         }
@@ -234,8 +235,8 @@ impl Primary {
 impl LookAhead {
     fn build(self) -> PenaltyFn {
         match self {
-            LookAhead::None => PenaltyFn::None,
-            LookAhead::Doubling => PenaltyFn::Doubling,
+            LookAhead::None => PenaltyFn::None {},
+            LookAhead::Doubling => PenaltyFn::Doubling {},
             LookAhead::New => PenaltyFn::Scaled { too_close: side(2.0, 0.0, 1.0, 3.0), too_far: side(2.0, 0.0, 1.0, 2.0) },
         }
     }

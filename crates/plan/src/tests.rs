@@ -37,7 +37,7 @@ fn exact(algorithm: Algorithm, parallel: bool) -> SearchConfig {
 fn asc(a: usize, l: usize, case: PenaltyCase) -> PlannerConfig {
     PlannerConfig {
         look_ahead: l,
-        motion: MotionConfig { speed: 2.0, tau: 10.0, heading_options: a, max_turn_rate_deg_s: 4.0, cna: CnaKind::Asc },
+        motion: MotionConfig { speed: 2.0, tau: 10.0, heading_options: a, max_turn_rate_deg_s: 4.0, cna: CnaKind::Asc {} },
         error: ErrorModel::default(),
         limits: DistanceLimits::default(),
         penalties: case.penalties(),
@@ -50,7 +50,7 @@ prop_compose! {
                   case in 0usize..21, speed in 0.5f64..4.0, heading in -3.1f64..3.1, cna_z in 0.0f64..100.0,
                   seeds in prop::collection::vec((-1500.0f64..1500.0, -1500.0f64..1500.0, 0.0f64..120.0, -3.1f64..3.1, 0.5f64..3.0), 5),
                   slant in any::<bool>(), tangential in any::<bool>()) -> Instance {
-        let cna = if auv_cna { CnaKind::auv(b) } else { CnaKind::Asc };
+        let cna = if auv_cna { CnaKind::auv(b) } else { CnaKind::Asc {} };
         let m = a * if auv_cna { b } else { 1 };
         // Keep the brute force affordable: at most ~20k leaves.
         let mut l = l;

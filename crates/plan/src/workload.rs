@@ -26,7 +26,7 @@ impl Workload {
                 tau: 10.0,
                 heading_options: self.a,
                 max_turn_rate_deg_s: 4.0,
-                cna: if self.b > 1 { CnaKind::auv(self.b) } else { CnaKind::Asc },
+                cna: if self.b > 1 { CnaKind::auv(self.b) } else { CnaKind::Asc {} },
             },
             error: ErrorModel::default(),
             limits: DistanceLimits::default(),

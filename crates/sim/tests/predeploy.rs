@@ -32,7 +32,7 @@ fn example_runs_and_respects_limits() {
     assert_eq!(r.steps.len(), 61);
     // The CNA moves s·τ each step.
     for w in r.steps.windows(2) {
-        assert!(((w[1].cna.pos - w[0].cna.pos).norm() - 20.0).abs() < 1e-9);
+        assert!(((w[1].cna.pos - w[0].cna.pos).norm() - 30.0).abs() < 1e-9);
     }
     assert!(r.summary.max_error >= r.summary.rms_error && r.summary.rms_error > 1.0);
     assert!(r.summary.min_distance <= r.summary.mean_distance && r.summary.mean_distance <= r.summary.max_distance);
@@ -62,7 +62,7 @@ fn bad_scenarios_name_the_field() {
     assert!(e.contains("unknown field") && e.contains("lookahead"), "{e}");
     let e = err_of(&EXAMPLE.replace("heading_options = 5", "heading_options = 1"));
     assert!(e.contains("heading_options") && e.contains(">= 2"), "{e}");
-    let e = err_of(&EXAMPLE.replace("speed = 2.0 ", "speed = -2.0 "));
+    let e = err_of(&EXAMPLE.replace("speed = 3.0 ", "speed = -2.0 "));
     assert!(e.contains("speed") && e.contains("> 0"), "{e}");
     let e = err_of(&EXAMPLE.replace("max_turn_rate_deg_s = 4.0", "max_turn_rate_deg_s = 18.0"));
     assert!(e.contains("max_turn_rate_deg_s") && e.contains("180"), "{e}");
@@ -123,4 +123,12 @@ fn run_directory_holds_every_output() {
     let wp = std::fs::read_to_string(out.join("cna_waypoints.csv")).unwrap();
     assert!(wp.starts_with("step,t,x,y,depth,heading_compass_deg"));
     assert!(RunDir::create(&out, false).is_err(), "an existing run is not overwritten without force");
+}
+
+#[test]
+fn stray_keys_in_tagged_tables_are_rejected() {
+    let e = err_of(&EXAMPLE.replace("cna = { kind = \"asc\" }", "cna = { kind = \"asc\", pitch_options = 3 }"));
+    assert!(e.contains("unknown field") && e.contains("pitch_options"), "{e}");
+    let e = err_of(&EXAMPLE.replace("penalty = { case = \"8\" }", "penalty = { primary = { kind = \"none\" }, look_ahead = { kind = \"doubling\", factor = 3 } }"));
+    assert!(e.contains("unknown field") && e.contains("factor"), "{e}");
 }

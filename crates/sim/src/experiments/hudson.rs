@@ -33,7 +33,7 @@ pub struct Setup {
 impl Setup {
     fn cna(&self) -> CnaKind {
         if self.b == 0 {
-            CnaKind::Asc
+            CnaKind::Asc {}
         } else {
             CnaKind::auv(self.b)
         }
