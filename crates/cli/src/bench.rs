@@ -43,12 +43,13 @@ fn time<T>(reps: usize, mut f: impl FnMut() -> Result<T>) -> Result<(f64, T)> {
 
 fn planner(reps: usize, brute_max_leaves: u64) -> Result<()> {
     let workloads = [
-        Workload { n: 2, a: 5, b: 1, l: 5 },
-        Workload { n: 5, a: 7, b: 1, l: 7 },
-        Workload { n: 2, a: 7, b: 1, l: 4 },
-        Workload { n: 5, a: 5, b: 1, l: 4 },
-        Workload { n: 2, a: 4, b: 5, l: 3 },
-        Workload { n: 5, a: 3, b: 6, l: 3 },
+        Workload { n: 2, a: 5, b: 1, l: 5, gap: 500.0 },
+        Workload { n: 2, a: 5, b: 1, l: 5, gap: 100.0 },
+        Workload { n: 5, a: 7, b: 1, l: 7, gap: 500.0 },
+        Workload { n: 5, a: 7, b: 1, l: 7, gap: 100.0 },
+        Workload { n: 2, a: 7, b: 1, l: 4, gap: 500.0 },
+        Workload { n: 2, a: 4, b: 5, l: 3, gap: 500.0 },
+        Workload { n: 5, a: 3, b: 6, l: 3, gap: 100.0 },
     ];
     let mut rows = Vec::new();
     for w in workloads {

@@ -105,8 +105,8 @@ impl PlannerConfig {
         let bad = |field: &str, allowed: &str, value: String| Err(PlanError::Invalid { field: field.into(), allowed: allowed.into(), value });
         let m = self.motion.options().len();
         let leaves = (m as f64).powi(self.look_ahead as i32 + 1);
-        if m > 4096 || leaves > MAX_LEAVES {
-            return bad("look_ahead", "(heading_options * pitch_options)^(look_ahead + 1) <= 1e12", format!("{} with {m} options", self.look_ahead));
+        if m > 4096 || leaves > MAX_LEAVES || self.look_ahead >= crate::tree::MAX_LEVELS {
+            return bad("look_ahead", "look_ahead <= 63 and (heading_options * pitch_options)^(look_ahead + 1) <= 1e12", format!("{} with {m} options", self.look_ahead));
         }
         if !(self.error.alpha.is_finite() && self.error.alpha >= 0.0) {
             return bad("error.alpha", ">= 0 m^2/s", self.error.alpha.to_string());

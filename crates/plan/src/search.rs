@@ -125,7 +125,7 @@ fn dfs(tree: &Tree, level: usize, parent: &NodeRef, acc: f64, levels: &mut [Leve
             ctx.leaf(v);
         } else {
             let child = NodeRef { pose: lv.pose[o], eps2: &lv.eps2[o * n..(o + 1) * n], los: &lv.los[o * n..(o + 1) * n] };
-            if v + tree.rest_bound(level, child.eps2, child.los) <= ctx.bound() {
+            if v + tree.rest_bound(level, &child) <= ctx.bound() {
                 dfs(tree, level + 1, &child, v, deeper, ctx);
             }
         }
@@ -155,7 +155,7 @@ fn sequential(tree: &Tree, shared: &Shared) -> SearchOutcome {
             ctx.leaf(v);
         } else {
             let child = NodeRef { pose: top.pose[o], eps2: &top.eps2[o * n..(o + 1) * n], los: &top.los[o * n..(o + 1) * n] };
-            if v + tree.rest_bound(0, child.eps2, child.los) <= ctx.bound() {
+            if v + tree.rest_bound(0, &child) <= ctx.bound() {
                 dfs(tree, 1, &child, v, deeper, &mut ctx);
             }
         }
@@ -186,9 +186,11 @@ fn parallel_search(tree: &Tree, shared: &Shared) -> SearchOutcome {
                 let v = c0 + c1;
                 if tree.depth == 2 {
                     ctx.leaf(v);
-                } else if v + tree.rest_bound(1, e2, los) <= ctx.bound() {
+                } else {
                     let child = NodeRef { pose: p1, eps2: e2, los };
-                    dfs(tree, 2, &child, v, &mut lv[2..], &mut ctx);
+                    if v + tree.rest_bound(1, &child) <= ctx.bound() {
+                        dfs(tree, 2, &child, v, &mut lv[2..], &mut ctx);
+                    }
                 }
                 (ctx.best, ctx.best_root, ctx.nodes)
             },

@@ -6,8 +6,11 @@
 
 use crate::error_model::{tangential_update, ErrorModel};
 use crate::motion::{FastOption, FastPose, MotionConfig};
-use crate::penalty::{Penalty, PenaltyPair, Violation};
+use crate::penalty::{Penalty, PenaltyFn, PenaltyPair, Violation};
 use crate::planner::DistanceLimits;
+
+/// Most tree levels a search may have (L ≤ 63; validated in `PlannerConfig::validate`).
+pub(crate) const MAX_LEVELS: usize = 64;
 
 /// The data of one tree search.
 pub(crate) struct Tree {
@@ -64,26 +67,42 @@ impl Tree {
         }
     }
 
-    /// A lower bound on the summed costs of levels `level`+1 .. depth−1 below a node at `level`
-    /// with errors `eps2` and lines of sight `los`. The line of sight to AUV k can turn by at most
-    /// asin(r/D) in a step when it moves by r ≤ reach and is D ≥ |los| − (earlier reaches) long, so
-    /// sin²Δθ ≤ S = (r/D)² (or 1), and eq. (1a) gives ε'² ≥ σ²·S + ε²·(1 − S) + ατ when ε² > σ²
-    /// (else ε² + ατ). Penalties never lower a cost. A relative margin of 1e-9 absorbs rounding.
-    pub fn rest_bound(&self, level: usize, eps2: &[f64], los: &[[f64; 3]]) -> f64 {
-        let mut total = 0.0;
+    /// A lower bound on the summed costs of levels `level`+1 .. depth−1 below `node` (at `level`).
+    /// - Bearing: the line of sight to AUV k can turn by at most asin(r/D) in a step when it moves
+    ///   by r ≤ reach and is D ≥ |los| − (earlier reaches) long, so sin²Δθ ≤ S = (r/D)² (or 1), and
+    ///   eq. (1a) gives ε'² ≥ σ²·S + ε²·(1 − S) + ατ when ε² > σ² (else ε² + ατ).
+    /// - Distance: the 3-D CNA–AUV distance changes by at most the same reach per level, so when
+    ///   some AUV is surely beyond the maximum (or within the minimum) distance at a level, a
+    ///   doubling look-ahead penalty surely applies there. Other penalties count as ×1 (they never
+    ///   lower a cost).
+    /// A relative margin of 1e-9 absorbs rounding.
+    pub fn rest_bound(&self, level: usize, node: &NodeRef) -> f64 {
+        let mut per_level = [0.0f64; MAX_LEVELS];
+        let mut violated = [false; MAX_LEVELS];
+        let doubling = matches!(self.penalties.look_ahead, PenaltyFn::Doubling {});
+        let auv = &self.auv[level * self.n..(level + 1) * self.n];
+        let p = node.pose.p;
+        let (lo, hi) = (self.limits.min, self.limits.max);
         for k in 0..self.n {
             let s2 = self.sigma2[k];
-            let mut x = eps2[k];
-            let l = los[k];
+            let mut x = node.eps2[k];
+            let l = node.los[k];
             let mut dist = (l[0] * l[0] + l[1] * l[1] + l[2] * l[2]).sqrt();
+            let a = auv[k];
+            let d3 = ((a[0] - p[0]).powi(2) + (a[1] - p[1]).powi(2) + (a[2] - p[2]).powi(2)).sqrt();
+            let (mut near, mut far) = (d3, d3);
             for j in level + 1..self.depth {
                 let r = self.reach[j * self.n + k];
                 let smax = if dist > r { (r / dist) * (r / dist) } else { 1.0 };
                 x = if s2 < x { s2 * smax + x * (1.0 - smax) + self.alpha_tau } else { x + self.alpha_tau };
-                total += self.model.cost_term(s2, x);
+                per_level[j] += self.model.cost_term(s2, x);
                 dist -= r;
+                near -= r;
+                far += r;
+                violated[j] |= near > hi * (1.0 + 1e-9) || far < lo * (1.0 - 1e-9);
             }
         }
+        let total: f64 = (level + 1..self.depth).map(|j| if doubling && violated[j] { 2.0 * per_level[j] } else { per_level[j] }).sum();
         total * (1.0 - 1e-9)
     }
 

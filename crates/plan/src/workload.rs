@@ -1,6 +1,7 @@
 //! Standard planning workloads for benchmarks (criterion and `coopnav bench planner`): one
-//! decision of the planner on the digest §5.2 geometry — N survey AUVs on adjacent 500 m lanes
-//! heading north at 1.5 m/s at 90 m depth, the CNA starting at (140, 0, 0) heading east,
+//! decision of the planner on the digest §5.2 geometry — N survey AUVs on adjacent lanes `gap`
+//! metres apart (500 m in Sec. 5.2; 100 m for the Sec. 5.3 canonical geometry) heading north at
+//! 1.5 m/s at 90 m depth, the CNA starting at (140, 0, 0) heading east,
 //! τ = 10 s, s = 1.5 m/s, penalty case 1. Invented where the thesis is silent (digest A17, A18).
 
 use crate::{AuvError, CnaKind, CnaPolicy, CnaPose, Deadline, Decision, DistanceLimits, ErrorModel, FnForecast, LookAheadPlanner, MotionConfig, PenaltyCase, PlanError, PlanInput, PlannerConfig, SearchConfig};
@@ -9,12 +10,14 @@ use coopnav_core::{Heading, Vec3};
 use serde::Serialize;
 
 /// One benchmark decision: N AUVs, A heading options, B pitch options (1 = ASC), L look-ahead.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct Workload {
     pub n: usize,
     pub a: usize,
     pub b: usize,
     pub l: usize,
+    /// East–west gap between neighbouring AUVs, m.
+    pub gap: f64,
 }
 
 impl Workload {
@@ -43,7 +46,8 @@ impl Workload {
     /// Plans one decision.
     pub fn decide(&self, algorithm: Algorithm, parallel: bool) -> Result<Decision, PlanError> {
         let cfg = self.config(algorithm, parallel);
-        let auv = |k: usize, t: f64| Vec3::new(500.0 * k as f64 + 50.0, 1.5 * t, 90.0);
+        let gap = self.gap;
+        let auv = move |k: usize, t: f64| Vec3::new(gap * k as f64 + 50.0, 1.5 * t, 90.0);
         let cna = CnaPose { pos: Vec3::new(140.0, 0.0, 0.0), heading: Heading::from_radians(0.0), pitch: 0.0 };
         let errors: Vec<AuvError> = (0..self.n).map(|k| cfg.error.initial(1.0, 1.0, &cna.pos, &auv(k, 0.0))).collect();
         let forecast = FnForecast { n: self.n, f: move |k: usize, t: f64| Some(auv(k, t)) };
