@@ -64,6 +64,8 @@ struct Ctx<'s> {
     best_root: usize,
     root: usize,
     nodes: u64,
+    /// Searches entered since the clock was last read (starts at 255: each task reads it first).
+    since_clock: u32,
 }
 
 impl Ctx<'_> {
@@ -77,9 +79,11 @@ impl Ctx<'_> {
             self.shared.offer(v);
         }
     }
-    /// Checks the deadline every 4096 nodes; true when the search must stop.
+    /// Reads the clock every 256 subtree entries; true when the search must stop.
     fn out_of_time(&mut self) -> bool {
-        if self.nodes & 4095 == 0 {
+        self.since_clock += 1;
+        if self.since_clock >= 256 {
+            self.since_clock = 0;
             if let Some(d) = self.shared.deadline {
                 if Instant::now() >= d {
                     self.shared.abort.store(true, Ordering::Relaxed);
@@ -140,7 +144,7 @@ pub(crate) fn branch_and_bound(tree: &Tree, parallel: bool, shared: &Shared) -> 
 
 fn sequential(tree: &Tree, shared: &Shared) -> SearchOutcome {
     let mut lv = levels(tree);
-    let mut ctx = Ctx { shared, best: f64::INFINITY, best_root: usize::MAX, root: usize::MAX, nodes: 0 };
+    let mut ctx = Ctx { shared, best: f64::INFINITY, best_root: usize::MAX, root: usize::MAX, nodes: 0, since_clock: 255 };
     let (top, deeper) = lv.split_first_mut().expect("depth >= 1");
     expand_all(tree, 0, &tree.root(), top, &mut ctx);
     let n = tree.n;
@@ -180,7 +184,7 @@ fn parallel_search(tree: &Tree, shared: &Shared) -> SearchOutcome {
             || (levels(tree), vec![0.0; n], vec![[0.0; 3]; n]),
             |(lv, e2, los), &(r, c)| {
                 let (o, pose, c0) = roots[r];
-                let mut ctx = Ctx { shared, best: f64::INFINITY, best_root: usize::MAX, root: o, nodes: 1 };
+                let mut ctx = Ctx { shared, best: f64::INFINITY, best_root: usize::MAX, root: o, nodes: 1, since_clock: 255 };
                 let parent = NodeRef { pose, eps2: &root_eps2[o * n..(o + 1) * n], los: &root_los[o * n..(o + 1) * n] };
                 let (p1, c1) = tree.expand(1, &parent, c, e2, los);
                 let v = c0 + c1;

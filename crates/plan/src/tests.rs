@@ -145,16 +145,20 @@ fn same_decisions_on_one_and_two_threads() {
 
 #[test]
 fn deadline_returns_the_deepest_completed_level() {
-    let inst = instance_fixed(asc(7, 12, PenaltyCase::C2));
     let generous = instance_fixed(asc(5, 3, PenaltyCase::C1));
     let full = generous.decide(SearchConfig { deadline: Deadline::Seconds { seconds: 60.0 }, ..exact(Algorithm::BranchAndBound, false) });
     let exact_d = generous.decide(exact(Algorithm::BranchAndBound, false));
     assert_eq!((full.option, full.value, full.levels_searched), (exact_d.option, exact_d.value, 4));
-    let mut p = LookAheadPlanner::new(PlannerConfig { search: SearchConfig { deadline: Deadline::Seconds { seconds: 0.02 }, ..exact(Algorithm::BranchAndBound, false) }, ..inst.cfg }).unwrap();
-    let (e, f) = (inst.errors(), inst.forecast());
-    match p.decide(&PlanInput { t: 0.0, cna: inst.cna, errors: &e, forecast: &f }) {
-        Ok(d) => assert!(d.levels_searched >= 1 && d.levels_searched < 13, "{}", d.levels_searched),
-        Err(e) => assert_eq!(e, PlanError::Deadline),
+    // Odd and even option counts, sequential and parallel: the clock must be read in every mode.
+    for (a, parallel) in [(7, false), (6, true), (8, false)] {
+        let inst = instance_fixed(asc(a, 12, PenaltyCase::C2));
+        let search = SearchConfig { deadline: Deadline::Seconds { seconds: 0.02 }, ..exact(Algorithm::BranchAndBound, parallel) };
+        let mut p = LookAheadPlanner::new(PlannerConfig { search, ..inst.cfg }).unwrap();
+        let (e, f) = (inst.errors(), inst.forecast());
+        match p.decide(&PlanInput { t: 0.0, cna: inst.cna, errors: &e, forecast: &f }) {
+            Ok(d) => assert!(d.levels_searched >= 1 && d.levels_searched < 13, "A={a}: {}", d.levels_searched),
+            Err(e) => assert_eq!(e, PlanError::Deadline),
+        }
     }
 }
 

@@ -168,7 +168,7 @@ impl SortBy {
 
 /// Largest tree a Sec. 5.3 sweep decision may have: (A·B)^(L+1). The thesis's MATLAB ran every
 /// combination; in the full form we skip AUV-CNA set-ups above this (recorded as a deviation).
-const FULL_LEAF_CAP: f64 = 2.2e5;
+const FULL_LEAF_CAP: f64 = 1.0e7;
 
 fn grid_53(size: Size) -> Vec<Setup> {
     let (speeds, a_set, bs, ls): (Vec<f64>, Vec<usize>, Vec<usize>, Vec<usize>) = match size {
