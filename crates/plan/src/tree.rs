@@ -75,6 +75,7 @@ impl Tree {
     ///   some AUV is surely beyond the maximum (or within the minimum) distance at a level, a
     ///   doubling look-ahead penalty surely applies there. Other penalties count as ×1 (they never
     ///   lower a cost).
+    ///
     /// A relative margin of 1e-9 absorbs rounding.
     pub fn rest_bound(&self, level: usize, node: &NodeRef) -> f64 {
         let mut per_level = [0.0f64; MAX_LEVELS];
@@ -83,12 +84,11 @@ impl Tree {
         let auv = &self.auv[level * self.n..(level + 1) * self.n];
         let p = node.pose.p;
         let (lo, hi) = (self.limits.min, self.limits.max);
-        for k in 0..self.n {
+        for (k, a) in auv.iter().enumerate() {
             let s2 = self.sigma2[k];
             let mut x = node.eps2[k];
             let l = node.los[k];
             let mut dist = (l[0] * l[0] + l[1] * l[1] + l[2] * l[2]).sqrt();
-            let a = auv[k];
             let d3 = ((a[0] - p[0]).powi(2) + (a[1] - p[1]).powi(2) + (a[2] - p[2]).powi(2)).sqrt();
             let (mut near, mut far) = (d3, d3);
             for j in level + 1..self.depth {
