@@ -7,3 +7,4 @@
 pub mod experiments;
 pub mod output;
 pub mod plot;
+pub mod policy;
