@@ -8,3 +8,4 @@ pub mod experiments;
 pub mod output;
 pub mod plot;
 pub mod policy;
+pub mod report;
