@@ -3,6 +3,8 @@
 use anyhow::Result;
 use clap::{Parser, Subcommand};
 
+mod bench;
+mod plan;
 mod reproduce;
 
 #[derive(Parser)]
@@ -16,6 +18,11 @@ struct Cli {
 enum Command {
     /// Reproduce a thesis table: prints our numbers beside the thesis's, with property checks.
     Reproduce(reproduce::Args),
+    /// Pre-deployment CNA path planning of a whole mission (no scenario: the embedded example).
+    Plan(plan::Args),
+    /// Speed measurements, printed as JSON.
+    #[command(subcommand)]
+    Bench(bench::Target),
 }
 
 fn main() -> Result<()> {
@@ -25,5 +32,7 @@ fn main() -> Result<()> {
         .init();
     match Cli::parse().command {
         Command::Reproduce(args) => reproduce::run(args),
+        Command::Plan(args) => plan::run(args),
+        Command::Bench(target) => bench::run(target),
     }
 }
