@@ -114,6 +114,14 @@ impl SurfaceEkf {
         (self.ekf.x()[0], self.ekf.x()[1])
     }
 
+    /// Mean position extrapolated to time `t` (constant speed and heading), without touching
+    /// the filter.
+    pub fn position_at(&self, t: f64) -> [f64; 2] {
+        let x = self.ekf.x();
+        let h = t - self.ekf.t();
+        [x[0] + h * x[2] * x[3].cos(), x[1] + h * x[2] * x[3].sin()]
+    }
+
     /// Predicts to time `t` in steps no longer than the nominal step, so the Jacobian and the
     /// per-step Q mean the same thing for any gap length (eq. 11).
     pub fn predict_to(&mut self, t: f64) {

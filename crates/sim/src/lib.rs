@@ -5,3 +5,4 @@
 //! reproduce the theses' tables (see [`experiments`]).
 
 pub mod experiments;
+pub mod hbl;
