@@ -3,7 +3,10 @@
 use anyhow::Result;
 use clap::{Parser, Subcommand};
 
+mod bench;
+mod hbl;
 mod reproduce;
+mod rundir;
 
 #[derive(Parser)]
 #[command(name = "coopnav", version, about = "Cooperative navigation of AUV teams: CNA path planning, OWTT navigation, adaptive acoustic links")]
@@ -16,6 +19,12 @@ struct Cli {
 enum Command {
     /// Reproduce a thesis table: prints our numbers beside the thesis's, with property checks.
     Reproduce(reproduce::Args),
+    /// Hybrid-baseline (Gill) navigation: simulate, Monte Carlo, buoy grid, tuning, post-processing.
+    #[command(subcommand)]
+    Hbl(hbl::Command),
+    /// Benchmarks, printed as JSON.
+    #[command(subcommand)]
+    Bench(bench::Target),
 }
 
 fn main() -> Result<()> {
@@ -25,5 +34,7 @@ fn main() -> Result<()> {
         .init();
     match Cli::parse().command {
         Command::Reproduce(args) => reproduce::run(args),
+        Command::Hbl(cmd) => hbl::run_command(cmd),
+        Command::Bench(target) => bench::run(target),
     }
 }
