@@ -5,7 +5,9 @@ use clap::{Parser, Subcommand};
 
 mod bench;
 mod plan;
+mod hbl;
 mod reproduce;
+mod rundir;
 
 #[derive(Parser)]
 #[command(name = "coopnav", version, about = "Cooperative navigation of AUV teams: CNA path planning, OWTT navigation, adaptive acoustic links")]
@@ -20,7 +22,10 @@ enum Command {
     Reproduce(reproduce::Args),
     /// Pre-deployment CNA path planning of a whole mission (no scenario: the embedded example).
     Plan(plan::Args),
-    /// Speed measurements, printed as JSON.
+    /// Hybrid-baseline (Gill) navigation: simulate, Monte Carlo, buoy grid, tuning, post-processing.
+    #[command(subcommand)]
+    Hbl(hbl::Command),
+    /// Benchmarks, printed as JSON.
     #[command(subcommand)]
     Bench(bench::Target),
 }
@@ -33,6 +38,7 @@ fn main() -> Result<()> {
     match Cli::parse().command {
         Command::Reproduce(args) => reproduce::run(args),
         Command::Plan(args) => plan::run(args),
+        Command::Hbl(cmd) => hbl::run_command(cmd),
         Command::Bench(target) => bench::run(target),
     }
 }

@@ -10,3 +10,4 @@ pub mod plot;
 pub mod policy;
 pub mod report;
 pub mod predeploy;
+pub mod hbl;

@@ -7,6 +7,8 @@
 use serde::Serialize;
 use thiserror::Error;
 
+pub mod gill;
+
 /// How big a reproduction to run.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Size {
@@ -78,7 +80,9 @@ pub struct Experiment {
 /// Every reproduction coopnav knows, in a stable order. Each thesis adds its own entries
 /// from its own module.
 pub fn registry() -> Vec<Experiment> {
-    Vec::new()
+    let mut all = Vec::new();
+    all.extend(gill::experiments());
+    all
 }
 
 /// Runs the experiment named `id`.
