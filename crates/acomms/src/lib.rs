@@ -5,7 +5,9 @@
 //! adaptive rate selector.
 
 pub mod codec;
+pub mod estimator;
 pub mod rates;
+pub mod selector;
 pub mod status;
 pub mod success;
 pub mod tl;
