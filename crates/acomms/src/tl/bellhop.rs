@@ -149,7 +149,8 @@ fn list(values: impl Iterator<Item = f64>) -> String {
 
 /// The `.env` text.
 fn env_text(env: &AcousticEnv, g: &Geometry<'_>) -> String {
-    let max_depth = g.bottom.iter().map(|p| p.1).fold(0.0, f64::max);
+    // Rounded up so that no printed bathymetry point lies below the SSP's last depth.
+    let max_depth = (g.bottom.iter().map(|p| p.1).fold(0.0, f64::max) * 100.0).ceil() / 100.0;
     let max_range_km = g.ranges.iter().copied().fold(0.0, f64::max) / 1000.0;
     let mut s = String::new();
     let _ = writeln!(s, "'coopnav auto-generated ENV file for BELLHOP'");
@@ -361,7 +362,7 @@ mod tests {
 
     #[test]
     fn env_file_has_the_thesis_environment() {
-        let g = Geometry { bottom: vec![(0.0, 22.2), (500.0, 40.8)], source_depth: 0.5, ranges: &[100.0, 200.0], depths: vec![10.0] };
+        let g = Geometry { bottom: vec![(0.0, 22.2), (500.0, 40.7999)], source_depth: 0.5, ranges: &[100.0, 200.0], depths: vec![10.0] };
         let t = env_text(&env(), &g);
         let lines: Vec<&str> = t.lines().collect();
         assert_eq!(lines[1], "25000.0");
@@ -373,6 +374,8 @@ mod tests {
         assert!(t.contains("'IB*'"));
         assert!(t.ends_with("0.0 41.208 0.20200\n"));
         assert_eq!(bty_text(&g.bottom), "'L'\n2\n0.00000 22.200\n0.50000 40.800\n");
+        let deep = Geometry { bottom: vec![(0.0, 53.3333)], ..g };
+        assert!(env_text(&env(), &deep).contains("0 0.0 53.34\n"), "max depth rounds up");
         let s = sbp_text(&AcousticEnv { source_pitch_deg: 10.0, ..env() });
         assert!(s.starts_with("19\n-145.00 -6.90\n"));
     }
