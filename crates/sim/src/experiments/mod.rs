@@ -4,6 +4,8 @@
 //!
 //! `coopnav reproduce <id>` runs one; CI runs the reduced forms through the sim crate's tests.
 
+pub mod nams;
+
 use serde::Serialize;
 use thiserror::Error;
 
@@ -78,7 +80,9 @@ pub struct Experiment {
 /// Every reproduction coopnav knows, in a stable order. Each thesis adds its own entries
 /// from its own module.
 pub fn registry() -> Vec<Experiment> {
-    Vec::new()
+    let mut all = Vec::new();
+    all.extend(nams::experiments());
+    all
 }
 
 /// Runs the experiment named `id`.
