@@ -3,6 +3,9 @@
 use anyhow::Result;
 use clap::{Parser, Subcommand};
 
+mod bench;
+mod bench_acomms;
+mod channel;
 mod reproduce;
 
 #[derive(Parser)]
@@ -16,6 +19,13 @@ struct Cli {
 enum Command {
     /// Reproduce a thesis table: prints our numbers beside the thesis's, with property checks.
     Reproduce(reproduce::Args),
+    /// Transmission loss and packet-success likelihood per WHOI rate against range (table + SVG).
+    Channel(channel::Args),
+    /// Timing runs that print JSON.
+    Bench {
+        #[command(subcommand)]
+        target: bench::Target,
+    },
 }
 
 fn main() -> Result<()> {
@@ -25,5 +35,7 @@ fn main() -> Result<()> {
         .init();
     match Cli::parse().command {
         Command::Reproduce(args) => reproduce::run(args),
+        Command::Channel(args) => channel::run(args),
+        Command::Bench { target } => bench::run(target),
     }
 }
