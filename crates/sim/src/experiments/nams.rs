@@ -75,7 +75,7 @@ pub fn report(opts: &ReproOptions, tl: &dyn TransmissionLoss, tl_label: &str, pr
         );
     }
     let _ = writeln!(t, "\nTables 9–11: adaptive vs best control (the control with the highest bandwidth), ours | thesis:");
-    let _ = writeln!(t, "{:<11} {:<22} {:>9} {:>9} {:>18} | {:>9} {:>9}", "scenario", "metric", "adaptive", "control", "(which)", "adaptive", "control");
+    let _ = writeln!(t, "{:<11} {:<24} {:>9} {:>9} {:>18} | {:>9} {:>9}", "scenario", "metric", "adaptive", "control", "(which)", "adaptive", "control");
     let mut checks = Vec::new();
     let mut notes = Vec::new();
     let mut data = Vec::new();
@@ -88,7 +88,7 @@ pub fn report(opts: &ReproOptions, tl: &dyn TransmissionLoss, tl_label: &str, pr
         };
         let ours = [(a.mean.bandwidth, c.mean.bandwidth), (a.mean.status_period, c.mean.status_period), (a.mean.duty_cycle, c.mean.duty_cycle)];
         for (k, name) in ["Table 9 bandwidth B/s", "Table 10 status period s", "Table 11 duty cycle"].iter().enumerate() {
-            let _ = writeln!(t, "{:<11} {:<22} {:>9.2} {:>9.2} {:>18} | {:>9.2} {:>9.2}", scenario, name, ours[k].0, ours[k].1, c.behaviour, thesis[k].0, thesis[k].1);
+            let _ = writeln!(t, "{:<11} {:<24} {:>9.2} {:>9.2} {:>18} | {:>9.2} {:>9.2}", scenario, name, ours[k].0, ours[k].1, c.behaviour, thesis[k].0, thesis[k].1);
             let same_direction = (ours[k].0 - ours[k].1).signum() == (thesis[k].0 - thesis[k].1).signum() || (thesis[k].0 == thesis[k].1 && (ours[k].0 - ours[k].1).abs() < 0.05);
             if k > 0 && !same_direction {
                 notes.push(format!(
