@@ -31,12 +31,17 @@ pub enum Target {
         #[arg(long, default_value_t = 1)]
         seed: u64,
     },
+    /// The acoustic link: the full Nams experiment (4 scenarios × 4 behaviours × 40 runs) on the
+    /// analytic TL and on a cached TL grid, tracker encode/decode throughput, and one BELLHOP run
+    /// against a cached-grid lookup.
+    Acomms(crate::bench_acomms::Args),
 }
 
 pub fn run(target: Target) -> Result<()> {
     match target {
         Target::Planner { reps, brute_max_leaves } => planner(reps.max(1), brute_max_leaves),
         Target::Hbl { runs, threads, seed } => hbl(runs, threads, seed),
+        Target::Acomms(args) => crate::bench_acomms::run(args),
     }
 }
 

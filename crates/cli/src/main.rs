@@ -6,6 +6,8 @@ use clap::{Parser, Subcommand};
 mod bench;
 mod plan;
 mod hbl;
+mod bench_acomms;
+mod channel;
 mod reproduce;
 mod rundir;
 
@@ -25,6 +27,8 @@ enum Command {
     /// Hybrid-baseline (Gill) navigation: simulate, Monte Carlo, buoy grid, tuning, post-processing.
     #[command(subcommand)]
     Hbl(hbl::Command),
+    /// Transmission loss and packet-success likelihood per WHOI rate against range (table + SVG).
+    Channel(channel::Args),
     /// Benchmarks, printed as JSON.
     #[command(subcommand)]
     Bench(bench::Target),
@@ -39,6 +43,7 @@ fn main() -> Result<()> {
         Command::Reproduce(args) => reproduce::run(args),
         Command::Plan(args) => plan::run(args),
         Command::Hbl(cmd) => hbl::run_command(cmd),
+        Command::Channel(args) => channel::run(args),
         Command::Bench(target) => bench::run(target),
     }
 }
