@@ -3,8 +3,10 @@
 use anyhow::{ensure, Result};
 use clap::Subcommand;
 use coopnav_plan::workload::Workload;
+use coopnav_nav::cycle::Configuration;
 use coopnav_plan::{Algorithm, LookAheadPlanner};
-use coopnav_sim::predeploy::{self, Scenario, EXAMPLE};
+use coopnav_sim::hbl::{monte_carlo, Scenario};
+use coopnav_sim::predeploy::{self, EXAMPLE};
 use serde_json::json;
 use std::time::Instant;
 
@@ -20,11 +22,27 @@ pub enum Target {
         #[arg(long, default_value_t = 6_000_000)]
         brute_max_leaves: u64,
     },
+    /// The Table 5 Monte Carlo (Δt = 0.1 s) for MSBL, HBL One and HBL Two.
+    Hbl {
+        #[arg(long, default_value_t = 250)]
+        runs: usize,
+        /// Worker threads (0 = rayon default).
+        #[arg(long, default_value_t = 0)]
+        threads: usize,
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+    },
+    /// The acoustic link: the full Nams experiment (4 scenarios × 4 behaviours × 40 runs) on the
+    /// analytic TL and on a cached TL grid, tracker encode/decode throughput, and one BELLHOP run
+    /// against a cached-grid lookup.
+    Acomms(crate::bench_acomms::Args),
 }
 
 pub fn run(target: Target) -> Result<()> {
     match target {
         Target::Planner { reps, brute_max_leaves } => planner(reps.max(1), brute_max_leaves),
+        Target::Hbl { runs, threads, seed } => hbl(runs, threads, seed),
+        Target::Acomms(args) => crate::bench_acomms::run(args),
     }
 }
 
@@ -85,7 +103,7 @@ fn planner(reps: usize, brute_max_leaves: u64) -> Result<()> {
 /// brute force's path recomputations.
 fn mission_nodes(l: usize) -> Result<serde_json::Value> {
     let file = std::path::Path::new("<embedded example>");
-    let mut mission = Scenario::parse(EXAMPLE, file)?.build(file, std::path::Path::new("."))?;
+    let mut mission = predeploy::Scenario::parse(EXAMPLE, file)?.build(file, std::path::Path::new("."))?;
     mission.planner.look_ahead = l;
     mission.planner.search.parallel = false;
     let m = mission.planner.motion.options().len() as u64;
@@ -110,4 +128,31 @@ fn mission_nodes(l: usize) -> Result<serde_json::Value> {
 
 fn rayon_threads() -> usize {
     std::thread::available_parallelism().map(|n| n.get()).unwrap_or(1)
+}
+
+fn hbl(runs: usize, threads: usize, seed: u64) -> Result<()> {
+    let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build()?;
+    let mut results = Vec::new();
+    for c in [Configuration::Msbl, Configuration::HblOne, Configuration::HblTwo] {
+        let sc = Scenario::table5(c);
+        let start = Instant::now();
+        let r = pool.install(|| monte_carlo(&sc, runs, seed, &|_| {}))?;
+        let secs = start.elapsed().as_secs_f64();
+        let s = &r.summary;
+        results.push(json!({
+            "configuration": s.configuration,
+            "runs": runs,
+            "dt": sc.dt,
+            "seconds": secs,
+            "runs_per_second": runs as f64 / secs,
+            "filter_updates": s.filter_updates,
+            "filter_predicts": s.filter_predicts,
+            "ekf_updates_per_second": s.filter_updates as f64 / secs,
+            "ekf_steps_per_second": (s.filter_updates + s.filter_predicts) as f64 / secs,
+            "zone_error_mean": s.zone_error.mean,
+        }));
+    }
+    let out = json!({ "target": "hbl", "threads": pool.current_num_threads(), "results": results });
+    println!("{}", serde_json::to_string_pretty(&out)?);
+    Ok(())
 }

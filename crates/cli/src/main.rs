@@ -5,7 +5,11 @@ use clap::{Parser, Subcommand};
 
 mod bench;
 mod plan;
+mod hbl;
+mod bench_acomms;
+mod channel;
 mod reproduce;
+mod rundir;
 
 #[derive(Parser)]
 #[command(name = "coopnav", version, about = "Cooperative navigation of AUV teams: CNA path planning, OWTT navigation, adaptive acoustic links")]
@@ -20,7 +24,12 @@ enum Command {
     Reproduce(reproduce::Args),
     /// Pre-deployment CNA path planning of a whole mission (no scenario: the embedded example).
     Plan(plan::Args),
-    /// Speed measurements, printed as JSON.
+    /// Hybrid-baseline (Gill) navigation: simulate, Monte Carlo, buoy grid, tuning, post-processing.
+    #[command(subcommand)]
+    Hbl(hbl::Command),
+    /// Transmission loss and packet-success likelihood per WHOI rate against range (table + SVG).
+    Channel(channel::Args),
+    /// Benchmarks, printed as JSON.
     #[command(subcommand)]
     Bench(bench::Target),
 }
@@ -33,6 +42,8 @@ fn main() -> Result<()> {
     match Cli::parse().command {
         Command::Reproduce(args) => reproduce::run(args),
         Command::Plan(args) => plan::run(args),
+        Command::Hbl(cmd) => hbl::run_command(cmd),
+        Command::Channel(args) => channel::run(args),
         Command::Bench(target) => bench::run(target),
     }
 }

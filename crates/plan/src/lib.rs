@@ -3,6 +3,7 @@
 //! It owns the survey-AUV position-error model, the CNA motion options, the distance penalties,
 //! the exact look-ahead tree search and the survey-track predictors. It does not simulate a world:
 //! `coopnav-sim` drives it step by step.
+
 //!
 //! Entry points: [`LookAheadPlanner`] (a [`CnaPolicy`]) configured by [`PlannerConfig`], fed each
 //! τ with the CNA pose, the AUVs' modelled errors ([`AuvError`]) and an [`AuvForecast`].
@@ -12,6 +13,7 @@ pub mod error_model;
 pub mod motion;
 pub mod penalty;
 pub mod planner;
+pub mod predict;
 mod search;
 mod tree;
 pub mod workload;

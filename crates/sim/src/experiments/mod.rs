@@ -4,7 +4,9 @@
 //!
 //! `coopnav reproduce <id>` runs one; CI runs the reduced forms through the sim crate's tests.
 
+pub mod gill;
 pub mod hudson;
+pub mod nams;
 
 use serde::Serialize;
 use thiserror::Error;
@@ -82,6 +84,8 @@ pub struct Experiment {
 pub fn registry() -> Vec<Experiment> {
     let mut all = Vec::new();
     all.extend(hudson::experiments());
+    all.extend(gill::experiments());
+    all.extend(nams::experiments());
     all
 }
 
