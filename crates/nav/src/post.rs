@@ -219,8 +219,11 @@ impl PostConfig {
     }
     pub fn validate(&self) -> Result<(), PostError> {
         self.auv.validate("auv.")?;
+        if !(self.buoy_depth.is_finite() && self.buoy_depth >= 0.0) {
+            return Err(ParamError::Negative { field: "buoy_depth".into(), value: self.buoy_depth }.into());
+        }
         if !self.acoustic_time_offset_s.is_finite() {
-            return Err(ParamError::NotPositive { field: "acoustic_time_offset_s".into(), value: self.acoustic_time_offset_s }.into());
+            return Err(ParamError::NotFinite { field: "acoustic_time_offset_s".into(), value: self.acoustic_time_offset_s }.into());
         }
         Ok(())
     }
@@ -460,6 +463,8 @@ mod tests {
         assert!(matches!(e, PostError::NoInit));
         let e = PostConfig::from_toml("acoustic_time_offset = 2\n").unwrap_err().to_string();
         assert!(e.contains("acoustic_time_offset"), "{e}");
+        let e = PostConfig::from_toml("buoy_depth = -3.0\n").unwrap_err().to_string();
+        assert!(e.contains("buoy_depth"), "{e}");
         let e = PostConfig::from_toml("[auv]\nsigma_speed = -1\n").unwrap_err().to_string();
         assert!(e.contains("auv.sigma_speed"), "{e}");
     }
