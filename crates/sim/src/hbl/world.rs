@@ -248,6 +248,7 @@ impl<'a> World<'a> {
             trace: record.then(Trace::default),
         };
         w.log(0.0, Record::Init { e: g.auv_start_x, n: g.path_y, speed: g.auv_speed, compass_deg: 90.0 });
+        w.log_ship_fix(0.0);
         w
     }
 
@@ -371,15 +372,25 @@ impl<'a> World<'a> {
         let heading = wrap_pi(self.auv.psi + self.compass.at(self.auv.psi) + white);
         self.f.auv.update_speed(speed);
         self.f.auv.update_heading(heading);
-        let ship_fix = Record::ShipFix {
-            e: self.ship.x + s.dgps_sd * normal(&mut self.rng.log),
-            n: self.ship.y + s.dgps_sd * normal(&mut self.rng.log),
-            compass_deg: CompassDeg::from(Heading::from_radians(self.ship.psi)).0,
-        };
         self.log(t_next, Record::Speed(speed));
         self.log(t_next, Record::Heading { compass_deg: CompassDeg::from(Heading::from_radians(heading)).0 });
         self.log(t_next, Record::Truth { e: self.auv.x, n: self.auv.y });
-        self.log(t_next, ship_fix);
+        self.log_ship_fix(t_next);
+    }
+
+    /// The ship's pre-quantisation DGPS fix, for post-processing (its own stream: logging
+    /// never shifts the noise the filters see).
+    fn log_ship_fix(&mut self, t: f64) {
+        if self.trace.is_none() {
+            return;
+        }
+        let dgps = self.sc.sensors.dgps_sd;
+        let fix = Record::ShipFix {
+            e: self.ship.x + dgps * normal(&mut self.rng.log),
+            n: self.ship.y + dgps * normal(&mut self.rng.log),
+            compass_deg: CompassDeg::from(Heading::from_radians(self.ship.psi)).0,
+        };
+        self.log(t, fix);
     }
 
     /// Accumulates the metrics at the end of a step; returns x_rel.
