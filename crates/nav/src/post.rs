@@ -349,7 +349,8 @@ pub fn postprocess(entries: &[Entry], cfg: &PostConfig) -> Result<PostResult, Po
             Record::Depth(z) => depth = Some(z),
             Record::Range { src, travel_time } => {
                 summary.ranges += 1;
-                let t_tx = ev.t - travel_time;
+                // Round-off in t_rx − τ must not put a fix logged at the transmit instant "after" it.
+                let t_tx = ev.t - travel_time + 1e-9;
                 let pos = match src {
                     Transmitter::Ship(side) => fixes.ship_at(t_tx).map(|(e, n, psi)| cfg.outriggers.position(side, e, n, psi)),
                     Transmitter::Buoy => fixes.buoy_at(t_tx, cfg.buoy_fixes).map(|(e, n)| Vec3::new(e, n, cfg.buoy_depth)),

@@ -359,7 +359,8 @@ impl<'a> World<'a> {
             if self.f.auv.update_range(&meas, None).applied() {
                 self.metrics.ranges_applied += 1;
             }
-            self.log(fl.t_rx, Record::Range { src: fl.from, travel_time: fl.travel_time });
+            // The AUV's clock reads the top of the second plus the measured travel time.
+            self.log(fl.t_tx + fl.travel_time, Record::Range { src: fl.from, travel_time: fl.travel_time });
         }
     }
 
