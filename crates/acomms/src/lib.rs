@@ -3,3 +3,16 @@
 //! It owns the WHOI Micro-Modem rate table, transmission-loss models (analytic and BELLHOP),
 //! packet success, TDMA, the bit-exact message codecs, the packet-success tracker and the
 //! adaptive rate selector.
+
+pub mod codec;
+pub mod estimator;
+pub mod rates;
+pub mod selector;
+pub mod status;
+pub mod success;
+pub mod tl;
+pub mod tracker;
+
+pub use rates::{Rate, RateSpec, Tdma};
+pub use success::{Reception, Receiver, SuccessModel};
+pub use tl::{TlError, TransmissionLoss};

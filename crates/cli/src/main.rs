@@ -4,7 +4,10 @@ use anyhow::Result;
 use clap::{Parser, Subcommand};
 
 mod bench;
+mod plan;
 mod hbl;
+mod bench_acomms;
+mod channel;
 mod reproduce;
 mod rundir;
 
@@ -19,9 +22,13 @@ struct Cli {
 enum Command {
     /// Reproduce a thesis table: prints our numbers beside the thesis's, with property checks.
     Reproduce(reproduce::Args),
+    /// Pre-deployment CNA path planning of a whole mission (no scenario: the embedded example).
+    Plan(plan::Args),
     /// Hybrid-baseline (Gill) navigation: simulate, Monte Carlo, buoy grid, tuning, post-processing.
     #[command(subcommand)]
     Hbl(hbl::Command),
+    /// Transmission loss and packet-success likelihood per WHOI rate against range (table + SVG).
+    Channel(channel::Args),
     /// Benchmarks, printed as JSON.
     #[command(subcommand)]
     Bench(bench::Target),
@@ -34,7 +41,9 @@ fn main() -> Result<()> {
         .init();
     match Cli::parse().command {
         Command::Reproduce(args) => reproduce::run(args),
+        Command::Plan(args) => plan::run(args),
         Command::Hbl(cmd) => hbl::run_command(cmd),
+        Command::Channel(args) => channel::run(args),
         Command::Bench(target) => bench::run(target),
     }
 }

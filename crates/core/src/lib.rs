@@ -7,10 +7,14 @@
 //! It deliberately knows nothing about planners, filters or modems.
 
 pub mod angle;
+pub mod bathymetry;
 pub mod geometry;
+pub mod kinematics;
 pub mod mission;
 pub mod rng;
 
+pub use bathymetry::{Bathymetry, BathymetryError, Shelf};
+pub use kinematics::{DepthTarget, Iver2, Iver2Params, Iver2State, Waypoint};
 pub use angle::{wrap_pi, CompassDeg, Degrees, Heading, Radians};
 pub use geometry::Vec3;
 pub use mission::{DepthProfile, Lawnmower, Track, TrackError, TrackSample};

@@ -5,4 +5,10 @@
 //! reproduce the theses' tables (see [`experiments`]).
 
 pub mod experiments;
+pub mod nams;
+pub mod output;
+pub mod plot;
+pub mod policy;
+pub mod report;
+pub mod predeploy;
 pub mod hbl;

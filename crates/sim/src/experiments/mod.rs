@@ -4,10 +4,11 @@
 //!
 //! `coopnav reproduce <id>` runs one; CI runs the reduced forms through the sim crate's tests.
 
+pub mod gill;
+pub mod nams;
+
 use serde::Serialize;
 use thiserror::Error;
-
-pub mod gill;
 
 /// How big a reproduction to run.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -82,6 +83,7 @@ pub struct Experiment {
 pub fn registry() -> Vec<Experiment> {
     let mut all = Vec::new();
     all.extend(gill::experiments());
+    all.extend(nams::experiments());
     all
 }
 

@@ -1,0 +1,410 @@
+//! Rate-selection policies (Nams §5.3–5.4, nams digest §3.3–3.5): at each own TDMA slot a policy
+//! decides whether to transmit and at which WHOI rate. Each policy is one type behind
+//! [`RatePolicy`]: [`FixedRate`] (controls 1 and 2: rate 0, rate 1), [`Alternating`] (control 3:
+//! rates 0 and 5 in turn) and [`AdaptiveBins`] (the thesis's adaptive distance-bin selector).
+
+use crate::rates::Rate;
+use serde::{Deserialize, Serialize};
+use std::collections::{BTreeMap, VecDeque};
+
+/// A policy's decision for one own slot.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+pub enum Choice {
+    Silent,
+    Transmit(Rate),
+}
+
+/// A resolved own transmission: `success` = the collaborator got at least one frame.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Outcome {
+    pub slot: u64,
+    pub success: bool,
+}
+
+/// A rate-selection policy.
+pub trait RatePolicy: Send {
+    fn name(&self) -> String;
+    /// Every rate the policy may use (drives the TDMA slot length and the header mask width).
+    fn rates(&self) -> Vec<Rate>;
+    /// Outcomes the tracker resolved since the last call, and whether the peer was heard since.
+    fn feedback(&mut self, resolved: &[Outcome], heard_peer: bool);
+    /// Decision for own slot `slot`, given the estimated distance to the recipient (None when
+    /// nothing is known of it yet).
+    fn choose(&mut self, slot: u64, distance: Option<f64>) -> Choice;
+}
+
+/// Always transmit at one rate.
+#[derive(Debug, Clone)]
+pub struct FixedRate {
+    pub rate: Rate,
+}
+
+impl RatePolicy for FixedRate {
+    fn name(&self) -> String {
+        format!("fixed rate {}", self.rate)
+    }
+    fn rates(&self) -> Vec<Rate> {
+        vec![self.rate]
+    }
+    fn feedback(&mut self, _: &[Outcome], _: bool) {}
+    fn choose(&mut self, _: u64, _: Option<f64>) -> Choice {
+        Choice::Transmit(self.rate)
+    }
+}
+
+/// Transmit every own slot, cycling through `rates` (Schneider & Schmidt: 0 and 5).
+#[derive(Debug, Clone)]
+pub struct Alternating {
+    pub rates: Vec<Rate>,
+    turn: usize,
+}
+
+impl Alternating {
+    pub fn new(rates: Vec<Rate>) -> Self {
+        Alternating { rates, turn: 0 }
+    }
+}
+
+impl RatePolicy for Alternating {
+    fn name(&self) -> String {
+        format!("alternating {}", self.rates.iter().map(Rate::to_string).collect::<Vec<_>>().join("/"))
+    }
+    fn rates(&self) -> Vec<Rate> {
+        self.rates.clone()
+    }
+    fn feedback(&mut self, _: &[Outcome], _: bool) {}
+    fn choose(&mut self, _: u64, _: Option<f64>) -> Choice {
+        let r = self.rates[self.turn % self.rates.len()];
+        self.turn += 1;
+        Choice::Transmit(r)
+    }
+}
+
+/// Parameters of the adaptive selector (thesis Table 8 tuned values as defaults; the initial
+/// thresholds, D_max and the status-mode exit rule are reconstructed: nams digest §8 items 2–10).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct AdaptiveConfig {
+    /// Memory M: resolved outcomes in each success estimate.
+    pub memory: usize,
+    /// Tolerance τ around the target success ratio.
+    pub tolerance: f64,
+    /// Bin increment Δ, m.
+    pub step: f64,
+    /// T: sequential unconfirmed attempts before switching to the status bins.
+    pub t_status: u32,
+    /// Target success ratio Π per rate 0, 1, 4, 5; 0 disables the rate.
+    pub targets: [f64; 4],
+    /// Initial data-bin upper thresholds for rates 0, 1, 4, 5, m.
+    pub data_thresholds: [f64; 4],
+    /// Initial status-bin thresholds for rates 0 and 1, m (status bins use low rates only).
+    pub status_thresholds: [f64; 2],
+    pub d_max: f64,
+    /// Leave status mode when any packet from the peer is heard (not only on a confirmed success).
+    pub exit_status_on_heard: bool,
+}
+
+impl Default for AdaptiveConfig {
+    fn default() -> Self {
+        AdaptiveConfig {
+            memory: 10,
+            tolerance: 0.05,
+            step: 5.0,
+            t_status: 3,
+            targets: [0.0, 0.4, 0.3, 0.0],
+            data_thresholds: [1500.0, 1500.0, 400.0, 100.0],
+            status_thresholds: [2500.0, 2500.0],
+            d_max: 5000.0,
+            exit_status_on_heard: true,
+        }
+    }
+}
+
+impl AdaptiveConfig {
+    /// Checks ranges; the error names the field and what is allowed.
+    pub fn validate(&self) -> Result<(), String> {
+        if self.memory == 0 {
+            return Err("adaptive.memory must be ≥ 1".into());
+        }
+        if !(0.0..=0.5).contains(&self.tolerance) {
+            return Err(format!("adaptive.tolerance {} must be in [0, 0.5]", self.tolerance));
+        }
+        if !(self.step > 0.0 && self.d_max > 0.0) {
+            return Err("adaptive.step and adaptive.d_max must be > 0 m".into());
+        }
+        if self.targets.iter().any(|t| !(0.0..=1.0).contains(t)) {
+            return Err("adaptive.targets must each be in [0, 1] (0 disables the rate)".into());
+        }
+        if self.targets.iter().all(|t| *t == 0.0) {
+            return Err("adaptive.targets: at least one rate must have a target > 0".into());
+        }
+        if self.data_thresholds.iter().chain(&self.status_thresholds).any(|t| !(0.0..=self.d_max).contains(t)) {
+            return Err(format!("adaptive thresholds must be in [0, d_max = {}] m", self.d_max));
+        }
+        Ok(())
+    }
+}
+
+/// One array of distance bins: fastest rate nearest; beyond the last threshold, silence.
+#[derive(Debug, Clone)]
+struct BinArray {
+    rates: Vec<Rate>,
+    targets: Vec<f64>,
+    th: Vec<f64>,
+    hist: Vec<VecDeque<bool>>,
+    fresh: Vec<bool>,
+}
+
+impl BinArray {
+    fn new(entries: Vec<(Rate, f64, f64)>) -> Self {
+        let n = entries.len();
+        let mut a = BinArray {
+            rates: entries.iter().map(|e| e.0).collect(),
+            targets: entries.iter().map(|e| e.1).collect(),
+            th: entries.iter().map(|e| e.2).collect(),
+            hist: vec![VecDeque::new(); n],
+            fresh: vec![false; n],
+        };
+        for i in 0..n {
+            a.make_monotone(i);
+        }
+        a
+    }
+
+    fn bin(&self, d: f64) -> Option<usize> {
+        self.th.iter().position(|t| d < *t)
+    }
+
+    /// Keeps th non-decreasing from fastest to slowest after th[i] moved.
+    fn make_monotone(&mut self, i: usize) {
+        let v = self.th[i];
+        for t in &mut self.th[..i] {
+            *t = t.min(v);
+        }
+        for t in &mut self.th[i + 1..] {
+            *t = t.max(v);
+        }
+    }
+
+    fn record(&mut self, i: usize, success: bool, memory: usize) {
+        self.hist[i].push_back(success);
+        while self.hist[i].len() > memory {
+            self.hist[i].pop_front();
+        }
+        self.fresh[i] = true;
+    }
+
+    /// Moves each bin that got new outcomes by Δ toward its target success ratio.
+    fn adapt(&mut self, c: &AdaptiveConfig) {
+        for i in 0..self.th.len() {
+            if !std::mem::take(&mut self.fresh[i]) {
+                continue;
+            }
+            let h = &self.hist[i];
+            let p = h.iter().filter(|s| **s).count() as f64 / h.len() as f64;
+            let target = self.targets[i];
+            let delta = if p < target - c.tolerance {
+                -c.step
+            } else if p > target + c.tolerance {
+                c.step
+            } else {
+                continue;
+            };
+            self.th[i] = (self.th[i] + delta).clamp(0.0, c.d_max);
+            self.make_monotone(i);
+        }
+    }
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+pub enum Mode {
+    Data,
+    Status,
+}
+
+/// The adaptive distance-bin selector.
+#[derive(Debug, Clone)]
+pub struct AdaptiveBins {
+    cfg: AdaptiveConfig,
+    data: BinArray,
+    status: BinArray,
+    /// Own attempts since the last confirmed success (unresolved ones count as failures).
+    drought: u32,
+    pending: BTreeMap<u64, (Mode, usize)>,
+}
+
+const RATE_ORDER: [(usize, Rate); 4] = [(3, Rate::R5), (2, Rate::R4), (1, Rate::R1), (0, Rate::R0)];
+
+impl AdaptiveBins {
+    pub fn new(cfg: AdaptiveConfig) -> Result<Self, String> {
+        cfg.validate()?;
+        let enabled = |k: usize| cfg.targets[k] > 0.0;
+        let data = RATE_ORDER.iter().filter(|(k, _)| enabled(*k)).map(|&(k, r)| (r, cfg.targets[k], cfg.data_thresholds[k])).collect();
+        let mut status: Vec<(Rate, f64, f64)> =
+            [(1usize, Rate::R1), (0, Rate::R0)].iter().filter(|(k, _)| enabled(*k)).map(|&(k, r)| (r, cfg.targets[k], cfg.status_thresholds[k])).collect();
+        if status.is_empty() {
+            // No low rate enabled: the status bins use rate 1 at the lowest enabled target.
+            let t = cfg.targets.iter().copied().filter(|t| *t > 0.0).fold(1.0, f64::min);
+            status.push((Rate::R1, t, cfg.status_thresholds[1]));
+        }
+        Ok(AdaptiveBins { data: BinArray::new(data), status: BinArray::new(status), cfg, drought: 0, pending: BTreeMap::new() })
+    }
+
+    pub fn mode(&self) -> Mode {
+        if self.drought >= self.cfg.t_status {
+            Mode::Status
+        } else {
+            Mode::Data
+        }
+    }
+
+    /// Current thresholds (rate, upper distance m) of the data and status arrays.
+    pub fn thresholds(&self) -> (Vec<(Rate, f64)>, Vec<(Rate, f64)>) {
+        let z = |a: &BinArray| a.rates.iter().copied().zip(a.th.iter().copied()).collect();
+        (z(&self.data), z(&self.status))
+    }
+
+    fn array(&mut self, m: Mode) -> &mut BinArray {
+        match m {
+            Mode::Data => &mut self.data,
+            Mode::Status => &mut self.status,
+        }
+    }
+}
+
+impl RatePolicy for AdaptiveBins {
+    fn name(&self) -> String {
+        "adaptive".into()
+    }
+    fn rates(&self) -> Vec<Rate> {
+        let mut r: Vec<Rate> = self.data.rates.iter().chain(&self.status.rates).copied().collect();
+        r.sort();
+        r.dedup();
+        r
+    }
+    fn feedback(&mut self, resolved: &[Outcome], heard_peer: bool) {
+        let memory = self.cfg.memory;
+        for o in resolved {
+            if let Some((m, i)) = self.pending.remove(&o.slot) {
+                self.array(m).record(i, o.success, memory);
+            }
+            if o.success {
+                self.drought = 0;
+            }
+        }
+        if heard_peer && self.cfg.exit_status_on_heard {
+            self.drought = 0;
+        }
+        let cfg = self.cfg.clone();
+        self.data.adapt(&cfg);
+        self.status.adapt(&cfg);
+    }
+    fn choose(&mut self, slot: u64, distance: Option<f64>) -> Choice {
+        let mode = self.mode();
+        // Unknown position: treat the peer as in range so a wrong or missing estimate cannot
+        // lock the vehicle out (the thesis's field-trial bug, nams digest §5.3).
+        let d = distance.unwrap_or(0.0);
+        let a = self.array(mode);
+        match a.bin(d) {
+            Some(i) => {
+                let r = a.rates[i];
+                self.pending.insert(slot, (mode, i));
+                self.drought += 1;
+                Choice::Transmit(r)
+            }
+            None => Choice::Silent,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn adaptive() -> AdaptiveBins {
+        AdaptiveBins::new(AdaptiveConfig::default()).unwrap()
+    }
+
+    #[test]
+    fn controls() {
+        let mut f = FixedRate { rate: Rate::R1 };
+        assert_eq!(f.choose(0, Some(1e9)), Choice::Transmit(Rate::R1));
+        let mut a = Alternating::new(vec![Rate::R0, Rate::R5]);
+        let picks: Vec<Choice> = (0..4).map(|k| a.choose(k, None)).collect();
+        assert_eq!(picks, vec![Choice::Transmit(Rate::R0), Choice::Transmit(Rate::R5), Choice::Transmit(Rate::R0), Choice::Transmit(Rate::R5)]);
+        assert_eq!(a.name(), "alternating 0/5");
+    }
+
+    #[test]
+    fn default_bins_pick_fast_near_slow_far_silent_beyond() {
+        let mut s = adaptive();
+        assert_eq!(s.rates(), vec![Rate::R1, Rate::R4]);
+        assert_eq!(s.choose(0, Some(100.0)), Choice::Transmit(Rate::R4));
+        assert_eq!(s.choose(2, Some(1000.0)), Choice::Transmit(Rate::R1));
+        assert_eq!(s.choose(4, Some(2000.0)), Choice::Silent);
+        assert_eq!(s.choose(6, None), Choice::Transmit(Rate::R4), "unknown position counts as in range");
+    }
+
+    #[test]
+    fn bins_shrink_in_a_poor_channel_and_grow_in_a_good_one() {
+        let mut s = adaptive();
+        for k in 0..20u64 {
+            assert_eq!(s.choose(2 * k, Some(100.0)), Choice::Transmit(Rate::R4));
+            s.feedback(&[Outcome { slot: 2 * k, success: false }], true);
+        }
+        let (data, _) = s.thresholds();
+        assert_eq!(data[0], (Rate::R4, 400.0 - 20.0 * 5.0));
+        let mut g = adaptive();
+        for k in 0..20u64 {
+            g.choose(2 * k, Some(1000.0));
+            g.feedback(&[Outcome { slot: 2 * k, success: true }], true);
+        }
+        assert_eq!(g.thresholds().0[1], (Rate::R1, 1600.0));
+        // On target (p within τ of Π): no movement.
+        let mut t = adaptive();
+        for k in 0..10u64 {
+            t.choose(2 * k, Some(100.0));
+            t.feedback(&[Outcome { slot: 2 * k, success: k % 10 < 3 }], true);
+        }
+        let before = t.thresholds().0[0].1;
+        t.choose(100, Some(100.0));
+        t.feedback(&[Outcome { slot: 100, success: true }], true); // window: 3/10 → on target
+        assert_eq!(t.thresholds().0[0].1, before);
+    }
+
+    #[test]
+    fn thresholds_stay_monotone_and_bounded() {
+        let mut s = adaptive();
+        for k in 0..1000u64 {
+            s.choose(2 * k, Some(1.0));
+            s.feedback(&[Outcome { slot: 2 * k, success: true }], true);
+        }
+        let (d, _) = s.thresholds();
+        assert_eq!(d[0].1, 5000.0);
+        assert!(d[1].1 >= d[0].1, "rate 1's bin is pushed out with rate 4's: {d:?}");
+    }
+
+    #[test]
+    fn drought_switches_to_status_bins_and_a_success_returns() {
+        let mut s = adaptive();
+        for k in 0..3u64 {
+            assert_eq!(s.mode(), Mode::Data);
+            s.choose(2 * k, Some(1000.0));
+            s.feedback(&[], false);
+        }
+        assert_eq!(s.mode(), Mode::Status);
+        assert_eq!(s.choose(6, Some(2000.0)), Choice::Transmit(Rate::R1), "status bins reach further");
+        s.feedback(&[Outcome { slot: 6, success: true }], false);
+        assert_eq!(s.mode(), Mode::Data);
+    }
+
+    #[test]
+    fn config_validation_names_the_field() {
+        let bad = AdaptiveConfig { tolerance: 0.9, ..AdaptiveConfig::default() };
+        assert!(AdaptiveBins::new(bad).unwrap_err().contains("tolerance"));
+        let none = AdaptiveConfig { targets: [0.0; 4], ..AdaptiveConfig::default() };
+        assert!(AdaptiveBins::new(none).unwrap_err().contains("targets"));
+        let far = AdaptiveConfig { data_thresholds: [1.0, 1.0, 9999.0, 1.0], ..AdaptiveConfig::default() };
+        assert!(AdaptiveBins::new(far).is_err());
+    }
+}

@@ -1,0 +1,157 @@
+//! Table 7 metrics of one run (nams digest §4.8, with the §6.6 reading (b) accounting: one
+//! transmission opportunity per slot network-wide, bytes summed over both directions).
+//!
+//! score = 0.5·BW/19.2 + 0.3·(1 − duty) + 0.2·mean f(P), f(P) = 1 if P ≤ Th else Th/P ("half
+//! score per doubling", continuous form), Th = 60·(1 + floor(d̄/500)) s. Reconstructed: digest
+//! §8 item 19.
+
+use serde::Serialize;
+
+/// Bandwidth ceiling of Table 7: rate 1 (192 B) every 10 s at 100 % success, B/s.
+pub const BW_CEILING: f64 = 19.2;
+
+/// Raw counts a run accumulates.
+#[derive(Debug, Clone, Default)]
+pub struct Tally {
+    pub opportunities: u64,
+    pub transmissions: u64,
+    /// Payload bytes of every frame received.
+    pub bytes_gross: u64,
+    /// The same, less the frame-0 bytes spent on the tracking header and status message.
+    pub bytes_net: u64,
+    /// Times of status receptions (frame 0 arrived), both directions, in order.
+    pub status_times: Vec<f64>,
+    /// Per-direction status receptions (receiver index).
+    pub status_times_by_rx: [Vec<f64>; 2],
+    pub header_bits: u64,
+    pub queue_len_sum: u64,
+    pub queue_len_max: u64,
+    /// Transmissions at rates 0..=5.
+    pub rate_use: [u64; 6],
+}
+
+/// Metrics of one run.
+#[derive(Debug, Clone, Copy, Serialize, Default)]
+pub struct RunMetrics {
+    pub bandwidth: f64,
+    pub bandwidth_net: f64,
+    pub duty_cycle: f64,
+    pub status_period: f64,
+    pub status_period_per_direction: f64,
+    pub frequency_score: f64,
+    pub score: f64,
+    pub header_bytes_mean: f64,
+    pub queue_len_mean: f64,
+    pub queue_len_max: f64,
+    pub mean_distance: f64,
+    pub duration: f64,
+    pub transmissions: f64,
+}
+
+/// Intervals between consecutive receptions; with fewer than 2, the whole mission counts as one.
+fn intervals(times: &[f64], duration: f64) -> Vec<f64> {
+    if times.len() < 2 {
+        return vec![duration];
+    }
+    times.windows(2).map(|w| w[1] - w[0]).collect()
+}
+
+fn mean(v: &[f64]) -> f64 {
+    v.iter().sum::<f64>() / v.len().max(1) as f64
+}
+
+impl RunMetrics {
+    pub fn from_tally(t: &Tally, duration: f64, mean_distance: f64) -> Self {
+        let periods = intervals(&t.status_times, duration);
+        let th = 60.0 * (1.0 + (mean_distance / 500.0).floor());
+        let frequency_score = mean(&periods.iter().map(|&p| if p <= th { 1.0 } else { th / p }).collect::<Vec<_>>());
+        let bandwidth = t.bytes_gross as f64 / duration;
+        let duty_cycle = t.transmissions as f64 / t.opportunities.max(1) as f64;
+        let per_dir: Vec<f64> = t.status_times_by_rx.iter().map(|ts| mean(&intervals(ts, duration))).collect();
+        RunMetrics {
+            bandwidth,
+            bandwidth_net: t.bytes_net as f64 / duration,
+            duty_cycle,
+            status_period: mean(&periods),
+            status_period_per_direction: mean(&per_dir),
+            frequency_score,
+            score: 0.5 * bandwidth / BW_CEILING + 0.3 * (1.0 - duty_cycle) + 0.2 * frequency_score,
+            header_bytes_mean: t.header_bits as f64 / 8.0 / t.transmissions.max(1) as f64,
+            queue_len_mean: t.queue_len_sum as f64 / t.transmissions.max(1) as f64,
+            queue_len_max: t.queue_len_max as f64,
+            mean_distance,
+            duration,
+            transmissions: t.transmissions as f64,
+        }
+    }
+}
+
+impl RunMetrics {
+    fn fields(&self) -> [f64; 13] {
+        [
+            self.bandwidth, self.bandwidth_net, self.duty_cycle, self.status_period, self.status_period_per_direction,
+            self.frequency_score, self.score, self.header_bytes_mean, self.queue_len_mean, self.queue_len_max,
+            self.mean_distance, self.duration, self.transmissions,
+        ]
+    }
+    fn from_fields(f: [f64; 13]) -> Self {
+        let [bandwidth, bandwidth_net, duty_cycle, status_period, status_period_per_direction, frequency_score, score, header_bytes_mean, queue_len_mean, queue_len_max, mean_distance, duration, transmissions] = f;
+        RunMetrics { bandwidth, bandwidth_net, duty_cycle, status_period, status_period_per_direction, frequency_score, score, header_bytes_mean, queue_len_mean, queue_len_max, mean_distance, duration, transmissions }
+    }
+    /// Field-wise mean and sample standard deviation over runs.
+    pub fn mean_sd(runs: &[RunMetrics]) -> (RunMetrics, RunMetrics) {
+        let n = runs.len().max(1) as f64;
+        let mut m = [0.0; 13];
+        for r in runs {
+            for (a, v) in m.iter_mut().zip(r.fields()) {
+                *a += v / n;
+            }
+        }
+        let mut sd = [0.0; 13];
+        if runs.len() > 1 {
+            for r in runs {
+                for ((a, v), mu) in sd.iter_mut().zip(r.fields()).zip(m) {
+                    *a += (v - mu).powi(2) / (n - 1.0);
+                }
+            }
+        }
+        (RunMetrics::from_fields(m), RunMetrics::from_fields(sd.map(f64::sqrt)))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn ceiling_run_scores_its_parts() {
+        // Rate 1 every 10 s, all received, 100 s: BW = ceiling, duty 1, every period 10 s.
+        let t = Tally {
+            opportunities: 10,
+            transmissions: 10,
+            bytes_gross: 1920,
+            bytes_net: 1800,
+            status_times: (0..10).map(|k| k as f64 * 10.0).collect(),
+            ..Tally::default()
+        };
+        let m = RunMetrics::from_tally(&t, 100.0, 300.0);
+        assert!((m.bandwidth - BW_CEILING).abs() < 1e-12);
+        assert_eq!(m.duty_cycle, 1.0);
+        assert_eq!(m.status_period, 10.0);
+        assert!((m.score - (0.5 + 0.0 + 0.2)).abs() < 1e-12);
+    }
+
+    #[test]
+    fn long_periods_lose_half_per_doubling() {
+        let t = Tally { opportunities: 4, transmissions: 2, status_times: vec![0.0, 240.0], ..Tally::default() };
+        // d̄ = 600 m → Th = 120 s; one period of 240 s → f = 0.5.
+        let m = RunMetrics::from_tally(&t, 1000.0, 600.0);
+        assert!((m.frequency_score - 0.5).abs() < 1e-12);
+        assert!((m.score - (0.3 * 0.5 + 0.2 * 0.5)).abs() < 1e-12);
+        let (mu, sd) = RunMetrics::mean_sd(&[m, RunMetrics { bandwidth: 2.0, ..m }]);
+        assert!((mu.bandwidth - (m.bandwidth + 2.0) / 2.0).abs() < 1e-12 && mu.duty_cycle == m.duty_cycle);
+        assert!((sd.bandwidth - (2.0 - m.bandwidth).abs() / 2f64.sqrt()).abs() < 1e-12 && sd.duty_cycle == 0.0);
+        let none = RunMetrics::from_tally(&Tally { opportunities: 5, ..Tally::default() }, 1000.0, 100.0);
+        assert_eq!(none.status_period, 1000.0);
+    }
+}

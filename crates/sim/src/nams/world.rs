@@ -1,0 +1,129 @@
+//! One run: both vehicles' policies, trackers and shadow estimators over a prepared scenario.
+//! Every packet's frame 0 is really encoded and, when it arrives, decoded — the receiver learns
+//! only what the bits carry.
+
+use super::metrics::{RunMetrics, Tally};
+use super::prepare::Prepared;
+use super::scenario::{Behaviour, EstimatorMode, ExperimentConfig, Scenario};
+use coopnav_acomms::estimator::{Knowledge, ShadowEstimator};
+use coopnav_acomms::selector::{Choice, Outcome, RatePolicy};
+use coopnav_acomms::status::{Frame0, LocalOrigin, NextWaypoint, StatusMessage};
+use coopnav_acomms::tracker::{Delivery, MaskWidth, Tracker};
+use coopnav_acomms::{Rate, SuccessModel, Tdma};
+use coopnav_core::geometry::horizontal_distance;
+use coopnav_core::{Bathymetry, DepthTarget, SeedStream};
+use rand_chacha::ChaCha8Rng;
+use thiserror::Error;
+
+#[derive(Debug, Error)]
+pub enum WorldError {
+    #[error("behaviour: {0}")]
+    Behaviour(String),
+    #[error("slot {slot}: frame 0 does not encode: {message}")]
+    Encode { slot: u64, message: String },
+    #[error("slot {slot}: frame 0 does not decode: {message}")]
+    Decode { slot: u64, message: String },
+}
+
+/// One vehicle's comms stack.
+struct Node {
+    policy: Box<dyn RatePolicy>,
+    tracker: Tracker,
+    estimator: ShadowEstimator,
+    outcomes: Vec<Outcome>,
+    heard: bool,
+    rng: ChaCha8Rng,
+}
+
+fn status(p: &Prepared, k: usize, v: usize, mode: EstimatorMode, origin: &LocalOrigin) -> StatusMessage {
+    let s = p.samples[k][v];
+    let next = match mode {
+        EstimatorMode::PrePlanned => NextWaypoint::Id(s.next_wp.min(254) as u8),
+        EstimatorMode::Dynamic => {
+            let plan = &p.plans[v];
+            let wp = plan[s.next_wp.min(plan.len() - 1)];
+            let (lat, lon) = origin.to_latlon(wp.x, wp.y);
+            NextWaypoint::LatLon { lat, lon }
+        }
+    };
+    StatusMessage { pos: s.pos, heading: s.heading, speed: s.speed, next }
+}
+
+fn node(v: usize, p: &Prepared, scenario: &Scenario, cfg: &ExperimentConfig, behaviour: &Behaviour, seeds: &SeedStream, origin: LocalOrigin) -> Result<Node, WorldError> {
+    let policy = behaviour.policy().map_err(WorldError::Behaviour)?;
+    let rates = policy.rates();
+    let width = MaskWidth::for_rates(rates.iter().copied());
+    let min_frame = rates.iter().map(|r| r.spec().frame_bytes).min().unwrap_or(32);
+    let status_bits = status(p, 0, v, cfg.estimator, &origin).bits();
+    let tracker = Tracker::new(v, 2, width, Frame0::max_header_entries(min_frame, status_bits, width));
+    let peer = 1 - v;
+    let estimator = match cfg.estimator {
+        EstimatorMode::PrePlanned => ShadowEstimator::new(Knowledge::PrePlanned { plan: p.plans[peer].clone() }, cfg.vehicle, Some(p.starts[peer])),
+        EstimatorMode::Dynamic => ShadowEstimator::new(
+            Knowledge::Dynamic { target: DepthTarget::Altitude { altitude: scenario.altitude }, speed: scenario.speed, origin },
+            cfg.vehicle,
+            None,
+        ),
+    };
+    Ok(Node { policy, tracker, estimator, outcomes: Vec::new(), heard: false, rng: seeds.rng(1 + v as u64) })
+}
+
+/// Slot length the behaviour forces on the network (15 s if it may use rate 5).
+pub fn slot_length(cfg: &ExperimentConfig, behaviour: &Behaviour) -> Result<f64, WorldError> {
+    let rates: Vec<Rate> = behaviour.policy().map_err(WorldError::Behaviour)?.rates();
+    Ok(cfg.tdma.slot_length(rates, cfg.ack))
+}
+
+/// Runs one repetition.
+pub fn run(p: &Prepared, scenario: &Scenario, cfg: &ExperimentConfig, bathy: &Bathymetry, behaviour: &Behaviour, seed: u64) -> Result<RunMetrics, WorldError> {
+    let origin = LocalOrigin::default();
+    let seeds = SeedStream::new(seed);
+    let mut nodes = [node(0, p, scenario, cfg, behaviour, &seeds, origin)?, node(1, p, scenario, cfg, behaviour, &seeds, origin)?];
+    let success = SuccessModel { noise_db: scenario.noise_db, ..cfg.success.clone() };
+    let mut tally = Tally::default();
+    for k in 0..p.samples.len() {
+        let slot = k as u64;
+        let t = k as f64 * p.slot_len;
+        let s = Tdma::owner(slot, 2);
+        let r = 1 - s;
+        let own_pos = p.samples[k][s].pos;
+        let tx = &mut nodes[s];
+        let outcomes = std::mem::take(&mut tx.outcomes);
+        tx.policy.feedback(&outcomes, std::mem::take(&mut tx.heard));
+        let distance = tx.estimator.estimate(t, bathy).map(|e| horizontal_distance(&own_pos, &e));
+        tally.opportunities += 1;
+        let Choice::Transmit(rate) = tx.policy.choose(slot, distance) else { continue };
+        let header = tx.tracker.on_transmit(slot, rate);
+        let width = tx.tracker.width();
+        tally.transmissions += 1;
+        tally.rate_use[rate.index() as usize] += 1;
+        tally.queue_len_sum += header.entries.len() as u64;
+        tally.queue_len_max = tally.queue_len_max.max(header.entries.len() as u64);
+        tally.header_bits += header.bits(width) as u64;
+        let frame = Frame0 { header, status: status(p, k, s, cfg.estimator, &origin) };
+        let spec = rate.spec();
+        let bytes = frame.encode(width, spec.frame_bytes).map_err(|e| WorldError::Encode { slot, message: e.to_string() })?;
+        let reception = success.draw(rate, p.tl[k], scenario.receiver, &mut tx.rng);
+        if !reception.received() {
+            continue;
+        }
+        let decoded = if reception.frame0() {
+            Some(Frame0::decode(&bytes, width).map_err(|e| WorldError::Decode { slot, message: e.to_string() })?)
+        } else {
+            None
+        };
+        let rx = &mut nodes[r];
+        rx.heard = true;
+        let resolved = rx.tracker.on_receive(slot, s, reception, decoded.as_ref().map(|f| &f.header));
+        rx.outcomes.extend(resolved.iter().map(|res| Outcome { slot: res.slot, success: matches!(res.delivery, Delivery::Received { .. }) }));
+        let gross = reception.count() as u64 * spec.frame_bytes as u64;
+        tally.bytes_gross += gross;
+        tally.bytes_net += gross - if decoded.is_some() { bytes.len() as u64 } else { 0 };
+        if let Some(f) = decoded {
+            rx.estimator.on_status(&f.status, t);
+            tally.status_times.push(t);
+            tally.status_times_by_rx[r].push(t);
+        }
+    }
+    Ok(RunMetrics::from_tally(&tally, p.duration, p.mean_distance))
+}
