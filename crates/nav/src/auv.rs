@@ -59,6 +59,8 @@ pub enum ParamError {
     NotPositive { field: String, value: f64 },
     #[error("{field} = {value}: must be a finite number ≥ 0")]
     Negative { field: String, value: f64 },
+    #[error("{field} = {value}: must be a finite number")]
+    NotFinite { field: String, value: f64 },
 }
 
 pub(crate) fn check_positive(field: &str, value: f64) -> Result<(), ParamError> {

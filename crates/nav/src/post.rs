@@ -219,8 +219,11 @@ impl PostConfig {
     }
     pub fn validate(&self) -> Result<(), PostError> {
         self.auv.validate("auv.")?;
+        if !(self.buoy_depth.is_finite() && self.buoy_depth >= 0.0) {
+            return Err(ParamError::Negative { field: "buoy_depth".into(), value: self.buoy_depth }.into());
+        }
         if !self.acoustic_time_offset_s.is_finite() {
-            return Err(ParamError::NotPositive { field: "acoustic_time_offset_s".into(), value: self.acoustic_time_offset_s }.into());
+            return Err(ParamError::NotFinite { field: "acoustic_time_offset_s".into(), value: self.acoustic_time_offset_s }.into());
         }
         Ok(())
     }
@@ -346,7 +349,8 @@ pub fn postprocess(entries: &[Entry], cfg: &PostConfig) -> Result<PostResult, Po
             Record::Depth(z) => depth = Some(z),
             Record::Range { src, travel_time } => {
                 summary.ranges += 1;
-                let t_tx = ev.t - travel_time;
+                // Round-off in t_rx − τ must not put a fix logged at the transmit instant "after" it.
+                let t_tx = ev.t - travel_time + 1e-9;
                 let pos = match src {
                     Transmitter::Ship(side) => fixes.ship_at(t_tx).map(|(e, n, psi)| cfg.outriggers.position(side, e, n, psi)),
                     Transmitter::Buoy => fixes.buoy_at(t_tx, cfg.buoy_fixes).map(|(e, n)| Vec3::new(e, n, cfg.buoy_depth)),
@@ -460,6 +464,8 @@ mod tests {
         assert!(matches!(e, PostError::NoInit));
         let e = PostConfig::from_toml("acoustic_time_offset = 2\n").unwrap_err().to_string();
         assert!(e.contains("acoustic_time_offset"), "{e}");
+        let e = PostConfig::from_toml("buoy_depth = -3.0\n").unwrap_err().to_string();
+        assert!(e.contains("buoy_depth"), "{e}");
         let e = PostConfig::from_toml("[auv]\nsigma_speed = -1\n").unwrap_err().to_string();
         assert!(e.contains("auv.sigma_speed"), "{e}");
     }

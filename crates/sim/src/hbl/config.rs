@@ -375,7 +375,7 @@ impl Scenario {
         check("acoustic.outlier_max_m", a.outlier_max_m, a.outlier_max_m >= a.outlier_min_m, "must be ≥ acoustic.outlier_min_m")?;
         check("acoustic.sound_speed", a.sound_speed, a.sound_speed >= 1300.0 && a.sound_speed <= 1700.0, "must be in [1300, 1700] m/s")?;
         let cf = a.sound_speed + a.filter_sound_speed_bias;
-        check("acoustic.filter_sound_speed_bias", a.filter_sound_speed_bias, cf >= 1300.0 && cf <= 1700.0, "sound speed + bias must stay in [1300, 1700] m/s")?;
+        check("acoustic.filter_sound_speed_bias", a.filter_sound_speed_bias, (1300.0..=1700.0).contains(&cf), "sound speed + bias must stay in [1300, 1700] m/s")?;
         check("acoustic.clock_drift_mean_us_h", a.clock_drift_mean_us_h, true, NONNEG)?;
         check("acoustic.clock_drift_sd_us_h", a.clock_drift_sd_us_h, a.clock_drift_sd_us_h >= 0.0, NONNEG)?;
         let b = &self.buoy;

@@ -1,0 +1,47 @@
+//! The `coopnav hbl` subcommands end to end: a run directory is written whole, bad input exits
+//! non-zero and writes nothing, and a simulated log post-processes.
+
+use std::process::Command;
+
+fn coopnav(args: &[&str]) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_coopnav")).args(args).output().expect("run coopnav")
+}
+
+#[test]
+fn simulate_then_postprocess() {
+    let tmp = tempfile::tempdir().unwrap();
+    let sim = tmp.path().join("sim");
+    let out = coopnav(&["hbl", "simulate", "--seed", "4", "--out", sim.to_str().unwrap()]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    for f in ["manifest.json", "summary.json", "trace.csv", "log.csv", "tracks.svg", "error_vs_xrel.svg"] {
+        assert!(sim.join(f).exists(), "missing {f}");
+    }
+    let again = coopnav(&["hbl", "simulate", "--out", sim.to_str().unwrap()]);
+    assert!(!again.status.success(), "must refuse to overwrite without --force");
+    let post = tmp.path().join("post");
+    let out = coopnav(&["hbl", "postprocess", "--log", sim.join("log.csv").to_str().unwrap(), "--out", post.to_str().unwrap()]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let summary = std::fs::read_to_string(post.join("summary.json")).unwrap();
+    assert!(summary.contains("mean_smoothed_error"));
+}
+
+#[test]
+fn bad_config_exits_nonzero_and_writes_nothing() {
+    let tmp = tempfile::tempdir().unwrap();
+    let cfg = tmp.path().join("bad.toml");
+    std::fs::write(&cfg, "[acoustic]\np_drop = 0.7\n").unwrap();
+    let out_dir = tmp.path().join("mc");
+    let out = coopnav(&["hbl", "montecarlo", "--runs", "4", "--config", cfg.to_str().unwrap(), "--out", out_dir.to_str().unwrap()]);
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("bad.toml") && err.contains("sum to 1"), "{err}");
+    assert!(!out_dir.exists());
+    let log = tmp.path().join("log.csv");
+    std::fs::write(&log, "t,kind,src,v1,v2,v3,v4\n0,init,,0,0,0.85,90\n1,range,99,0.1,,,\n").unwrap();
+    let post = tmp.path().join("post");
+    let out = coopnav(&["hbl", "postprocess", "--log", log.to_str().unwrap(), "--out", post.to_str().unwrap()]);
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("line 3") && err.contains("99"), "{err}");
+    assert!(!post.exists());
+}

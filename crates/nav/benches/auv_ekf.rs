@@ -1,0 +1,29 @@
+//! AUV EKF cost per step: predict + speed + compass updates, and a range update.
+
+use coopnav_core::Vec3;
+use coopnav_nav::{AuvEkf, AuvParams, RangeMeasurement};
+use criterion::{black_box, criterion_group, criterion_main, Criterion};
+
+fn bench(c: &mut Criterion) {
+    c.bench_function("auv_ekf_step_predict_speed_heading", |b| {
+        let mut f = AuvEkf::new(0.0, 0.0, 0.0, 0.85, 0.0, AuvParams::default());
+        let mut t = 0.0;
+        b.iter(|| {
+            t += 0.1;
+            f.predict_to(t, black_box(0.001));
+            f.update_speed(black_box(0.85));
+            f.update_heading(black_box(0.0))
+        })
+    });
+    c.bench_function("auv_ekf_range_update", |b| {
+        let f0 = AuvEkf::new(0.0, 0.0, 0.0, 0.85, 0.0, AuvParams::default());
+        let m = RangeMeasurement { range: 101.0, travel_time: 101.0 / 1500.0, transponder: Vec3::new(100.0, 10.0, 1.5) };
+        b.iter(|| {
+            let mut f = f0.clone();
+            f.update_range(black_box(&m), None)
+        })
+    });
+}
+
+criterion_group!(benches, bench);
+criterion_main!(benches);
