@@ -156,7 +156,7 @@ impl ExperimentConfig {
             b.policy()?;
         }
         if let Some(t) = self.max_time {
-            if !(t > 0.0) {
+            if t.is_nan() || t <= 0.0 {
                 return Err(format!("max_time = {t} must be > 0 s"));
             }
         }
