@@ -70,7 +70,7 @@ pub fn report(opts: &ReproOptions, tl: &dyn TransmissionLoss, tl_label: &str, pr
         let m = &c.mean;
         let _ = writeln!(
             t,
-            "{:<11} {:<16} {:>4.0}s {:>7.2} ±{:<4.2} {:>7.2} {:>8.1} ±{:<5.1} {:>6.2} {:>6.3} {:>9.2} {:>7.2} {:>6.1} ({:>5.0})",
+            "{:<11} {:<16} {:>4.0}s {:>7.2} ±{:<4.2} {:>7.2} {:>8.1} ±{:<5.1} {:>6.2} {:>6.3} {:>9.2} {:>7.2} {:>6.2} ({:>5.1})",
             c.scenario, c.behaviour, c.slot_len, m.bandwidth, c.sd.bandwidth, m.bandwidth_net, m.status_period, c.sd.status_period, m.duty_cycle, m.score,
             m.header_bytes_mean, m.queue_len_mean, m.estimate_error_mean, m.estimate_error_max
         );
