@@ -4,9 +4,12 @@ use anyhow::Result;
 use clap::{Parser, Subcommand};
 
 mod bench;
+mod plan;
+mod hbl;
 mod bench_acomms;
 mod channel;
 mod reproduce;
+mod rundir;
 
 #[derive(Parser)]
 #[command(name = "coopnav", version, about = "Cooperative navigation of AUV teams: CNA path planning, OWTT navigation, adaptive acoustic links")]
@@ -19,13 +22,16 @@ struct Cli {
 enum Command {
     /// Reproduce a thesis table: prints our numbers beside the thesis's, with property checks.
     Reproduce(reproduce::Args),
+    /// Pre-deployment CNA path planning of a whole mission (no scenario: the embedded example).
+    Plan(plan::Args),
+    /// Hybrid-baseline (Gill) navigation: simulate, Monte Carlo, buoy grid, tuning, post-processing.
+    #[command(subcommand)]
+    Hbl(hbl::Command),
     /// Transmission loss and packet-success likelihood per WHOI rate against range (table + SVG).
     Channel(channel::Args),
-    /// Timing runs that print JSON.
-    Bench {
-        #[command(subcommand)]
-        target: bench::Target,
-    },
+    /// Benchmarks, printed as JSON.
+    #[command(subcommand)]
+    Bench(bench::Target),
 }
 
 fn main() -> Result<()> {
@@ -35,7 +41,9 @@ fn main() -> Result<()> {
         .init();
     match Cli::parse().command {
         Command::Reproduce(args) => reproduce::run(args),
+        Command::Plan(args) => plan::run(args),
+        Command::Hbl(cmd) => hbl::run_command(cmd),
         Command::Channel(args) => channel::run(args),
-        Command::Bench { target } => bench::run(target),
+        Command::Bench(target) => bench::run(target),
     }
 }

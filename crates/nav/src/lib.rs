@@ -1,4 +1,18 @@
 //! coopnav-nav: survey-AUV navigation with one-way-travel-time (OWTT) ranges, after Gill (2013).
 //!
 //! It owns the generic EKF, the AUV and surface-vehicle filters, the OWTT range model, the
-//! mini-packet codec, the ranging cycles and the RTS smoother.
+//! mini-packet codec, the ranging cycles, the RTS smoother and the post-processing of logs.
+
+pub mod auv;
+pub mod codec;
+pub mod cycle;
+pub mod ekf;
+pub mod post;
+pub mod range;
+pub mod smoother;
+pub mod surface;
+
+pub use auv::{AuvEkf, AuvParams, ParamError};
+pub use ekf::{Ekf, Gate, UpdateOutcome};
+pub use range::{RangeMeasurement, RangeNoise};
+pub use surface::{Outriggers, Side, StateKind, SurfaceEkf, SurfaceParams};

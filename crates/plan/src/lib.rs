@@ -4,4 +4,45 @@
 //! the exact look-ahead tree search and the survey-track predictors. It does not simulate a world:
 //! `coopnav-sim` drives it step by step.
 
+//!
+//! Entry points: [`LookAheadPlanner`] (a [`CnaPolicy`]) configured by [`PlannerConfig`], fed each
+//! τ with the CNA pose, the AUVs' modelled errors ([`AuvError`]) and an [`AuvForecast`].
+
+mod brute;
+pub mod error_model;
+pub mod motion;
+pub mod penalty;
+pub mod planner;
 pub mod predict;
+mod search;
+mod tree;
+pub mod workload;
+#[cfg(test)]
+mod tests;
+
+pub use error_model::{AuvError, BearingMode, CostMode, ErrorModel};
+pub use motion::{CnaKind, CnaPose, MotionConfig, MotionOption};
+pub use penalty::{Doubling, NoPenalty, Penalty, PenaltyCase, PenaltyFn, PenaltyPair, ScaledViolation, SideTerm, Violation};
+pub use planner::{Algorithm, AuvForecast, CnaPolicy, Deadline, Decision, DistanceLimits, FnForecast, LookAheadPlanner, PlanInput, PlannerConfig, SearchConfig};
+
+use thiserror::Error;
+
+#[derive(Debug, Error, PartialEq)]
+pub enum PlanError {
+    #[error("invalid planner setting {field} = {value}: allowed {allowed}")]
+    Invalid { field: String, allowed: String, value: String },
+    #[error("invalid planner input: {0}")]
+    Input(String),
+    #[error("no survey-AUV forecast at t = {t} s: the survey data has ended")]
+    NoForecast { t: f64 },
+    #[error("the decision deadline passed before even one look-ahead level was searched")]
+    Deadline,
+}
+
+/// What a search finds: the best level-0 option, the minimum path cost and the nodes evaluated.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct SearchOutcome {
+    pub root_option: usize,
+    pub value: f64,
+    pub nodes: u64,
+}

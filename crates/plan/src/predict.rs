@@ -6,6 +6,7 @@
 //! along the reported waypoints at the last reported speed (so waypoint ETAs are recomputed with
 //! every new report), then in a straight line, with depth held at the last reported value.
 
+use crate::AuvForecast;
 use coopnav_core::{Heading, Vec3};
 use serde::{Deserialize, Serialize};
 use std::collections::VecDeque;
@@ -155,6 +156,16 @@ impl UnderwayPredictor {
             _ => r.heading.radians(),
         };
         (from.0 + remaining * direction.cos(), from.1 + remaining * direction.sin())
+    }
+}
+
+/// A fleet of predictors is the planner's forecast in underway mode.
+impl AuvForecast for [UnderwayPredictor] {
+    fn n_auvs(&self) -> usize {
+        self.len()
+    }
+    fn position(&self, k: usize, t: f64) -> Option<Vec3> {
+        self.get(k)?.position_at(t)
     }
 }
 

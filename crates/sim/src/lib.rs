@@ -10,3 +10,5 @@ pub mod output;
 pub mod plot;
 pub mod policy;
 pub mod report;
+pub mod predeploy;
+pub mod hbl;

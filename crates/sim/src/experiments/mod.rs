@@ -4,6 +4,7 @@
 //!
 //! `coopnav reproduce <id>` runs one; CI runs the reduced forms through the sim crate's tests.
 
+pub mod gill;
 pub mod nams;
 
 use serde::Serialize;
@@ -81,6 +82,7 @@ pub struct Experiment {
 /// from its own module.
 pub fn registry() -> Vec<Experiment> {
     let mut all = Vec::new();
+    all.extend(gill::experiments());
     all.extend(nams::experiments());
     all
 }

@@ -134,7 +134,7 @@ impl CnaPolicy for Trail {
     }
     fn decide(&mut self, ctx: &PolicyContext) -> CnaCommand {
         let t1 = ctx.t + ctx.tau;
-        let (Some(now), Some(next)) = (ctx.fleet.predicted(self.auv, ctx.t), ctx.fleet.predicted(self.auv, t1)) else {
+        let (Some(now), Some(next)) = (ctx.fleet.position(self.auv, ctx.t), ctx.fleet.position(self.auv, t1)) else {
             return CnaCommand::Hold;
         };
         let moving = (next.x - now.x).hypot(next.y - now.y) > 1e-6;
@@ -157,7 +157,7 @@ impl CnaPolicy for MidpointRelay {
         "relay"
     }
     fn decide(&mut self, ctx: &PolicyContext) -> CnaCommand {
-        match ctx.fleet.predicted(self.auv, ctx.t + ctx.tau) {
+        match ctx.fleet.position(self.auv, ctx.t + ctx.tau) {
             Some(p) => CnaCommand::GoTo(Vec3::new((p.x + self.base.0) / 2.0, (p.y + self.base.1) / 2.0, ctx.cna.pos.z)),
             None => CnaCommand::Hold,
         }
@@ -188,26 +188,26 @@ impl CnaPolicy for TimedWaypoints {
 
 #[cfg(test)]
 mod tests {
-    use super::super::{CnaPose, FleetView};
     use super::*;
+    use coopnav_plan::{AuvForecast, CnaPose};
 
     /// AUVs moving east at 1 m/s from given starting points.
     struct Eastbound(Vec<(f64, f64)>);
 
-    impl FleetView for Eastbound {
-        fn len(&self) -> usize {
+    impl AuvForecast for Eastbound {
+        fn n_auvs(&self) -> usize {
             self.0.len()
         }
-        fn predicted(&self, k: usize, t: f64) -> Option<Vec3> {
+        fn position(&self, k: usize, t: f64) -> Option<Vec3> {
             self.0.get(k).map(|&(x, y)| Vec3::new(x + t, y, 10.0))
         }
     }
 
-    fn ctx<'a>(t: f64, pos: (f64, f64), fleet: &'a dyn FleetView) -> PolicyContext<'a> {
+    fn ctx<'a>(t: f64, pos: (f64, f64), fleet: &'a dyn AuvForecast) -> PolicyContext<'a> {
         PolicyContext {
             t,
             tau: 30.0,
-            cna: CnaPose { pos: Vec3::new(pos.0, pos.1, 0.0), heading: Heading::from_radians(0.0) },
+            cna: CnaPose { pos: Vec3::new(pos.0, pos.1, 0.0), heading: Heading::from_radians(0.0), pitch: 0.0 },
             speed: 2.0,
             fleet,
         }

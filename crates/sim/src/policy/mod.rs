@@ -9,34 +9,8 @@ mod baselines;
 
 pub use baselines::{Centroid, FixedPattern, MidpointRelay, NoCna, Rect, TimedWaypoints, Trail};
 
-use coopnav_core::{Heading, Vec3};
-use coopnav_plan::predict::UnderwayPredictor;
-
-/// The CNA's own state as it knows it.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct CnaPose {
-    pub pos: Vec3,
-    pub heading: Heading,
-}
-
-/// What the CNA knows of the survey fleet: a predicted position per AUV at a future time, or
-/// `None` while nothing has been heard from that AUV.
-pub trait FleetView {
-    fn len(&self) -> usize;
-    fn predicted(&self, auv: usize, t: f64) -> Option<Vec3>;
-    fn is_empty(&self) -> bool {
-        self.len() == 0
-    }
-}
-
-impl FleetView for [UnderwayPredictor] {
-    fn len(&self) -> usize {
-        <[UnderwayPredictor]>::len(self)
-    }
-    fn predicted(&self, auv: usize, t: f64) -> Option<Vec3> {
-        self.get(auv)?.position_at(t)
-    }
-}
+use coopnav_core::Vec3;
+use coopnav_plan::{AuvForecast, CnaPose};
 
 /// Everything a policy may look at when it decides.
 pub struct PolicyContext<'a> {
@@ -44,16 +18,18 @@ pub struct PolicyContext<'a> {
     pub t: f64,
     /// The decision period τ, s: the command holds until t + τ.
     pub tau: f64,
+    /// The CNA's pose as it knows it.
     pub cna: CnaPose,
     /// The CNA's transit speed, m/s.
     pub speed: f64,
-    pub fleet: &'a dyn FleetView,
+    /// The survey AUVs' predicted positions (from their status messages).
+    pub fleet: &'a dyn AuvForecast,
 }
 
 impl PolicyContext<'_> {
     /// Predicted positions of every AUV heard from, at time `t`.
     pub fn predicted_all(&self, t: f64) -> Vec<Vec3> {
-        (0..self.fleet.len()).filter_map(|k| self.fleet.predicted(k, t)).collect()
+        (0..self.fleet.n_auvs()).filter_map(|k| self.fleet.position(k, t)).collect()
     }
 }
 

@@ -1,0 +1,210 @@
+//! `coopnav hbl simulate|montecarlo|grid|tune|postprocess`: the Gill hybrid-baseline tools.
+
+use crate::rundir::RunDir;
+use anyhow::{Context, Result};
+use coopnav_nav::post::{self, PostConfig};
+use coopnav_sim::hbl::grid::{self, GridSpec};
+use coopnav_sim::hbl::tune::{tune, TuneSpec};
+use coopnav_sim::hbl::{monte_carlo, plot, run, Scenario};
+use indicatif::{ProgressBar, ProgressStyle};
+use serde_json::json;
+use std::path::{Path, PathBuf};
+
+#[derive(clap::Subcommand)]
+pub enum Command {
+    /// One run: tracks, errors and a post-processing log (CSV), summary.json, SVG plots.
+    Simulate(Common),
+    /// A Monte Carlo of one scenario: per-run CSV and summary.json.
+    Montecarlo {
+        #[command(flatten)]
+        common: Common,
+        #[arg(long, default_value_t = 250)]
+        runs: usize,
+    },
+    /// The buoy-location grid: CSV plus an SVG heat map.
+    Grid {
+        #[command(flatten)]
+        common: Common,
+        /// Grid TOML (x, y, spacing, runs_per_cell); defaults to the thesis grid.
+        #[arg(long)]
+        grid: Option<PathBuf>,
+    },
+    /// Bounded Nelder–Mead tuning of filter coefficients on a fixed-seed Monte Carlo.
+    Tune {
+        #[command(flatten)]
+        common: Common,
+        /// Tuning TOML (coefficients, objective, runs, max_iters, seed).
+        #[arg(long)]
+        spec: PathBuf,
+    },
+    /// Post-process a CSV log: EKF then RTS smoother.
+    Postprocess {
+        /// The log (format in coopnav_nav::post).
+        #[arg(long)]
+        log: PathBuf,
+        /// Post-processing TOML (auv coefficients, acoustic_time_offset_s, slant_range, ...).
+        #[arg(long)]
+        config: Option<PathBuf>,
+        #[arg(long)]
+        out: PathBuf,
+        #[arg(long)]
+        force: bool,
+    },
+}
+
+#[derive(clap::Args)]
+pub struct Common {
+    /// Scenario TOML; defaults to the Table 5 HBL Two set-up.
+    #[arg(long)]
+    config: Option<PathBuf>,
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    /// Output directory.
+    #[arg(long)]
+    out: PathBuf,
+    #[arg(long)]
+    force: bool,
+}
+
+fn read(path: &Path) -> Result<String> {
+    std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))
+}
+
+fn scenario(c: &Common) -> Result<Scenario> {
+    match &c.config {
+        Some(p) => Scenario::from_toml(&read(p)?).with_context(|| format!("in {}", p.display())),
+        None => Ok(Scenario::default()),
+    }
+}
+
+fn bar(n: u64) -> ProgressBar {
+    let pb = ProgressBar::new(n);
+    pb.set_style(ProgressStyle::with_template("{bar:40} {pos}/{len} {elapsed}").unwrap_or_else(|_| ProgressStyle::default_bar()));
+    pb
+}
+
+fn manifest(dir: &RunDir, command: &str, seed: u64, inputs: serde_json::Value) -> Result<()> {
+    dir.write_json("manifest.json", &json!({ "command": command, "seed": seed, "version": env!("CARGO_PKG_VERSION"), "inputs": inputs }))
+}
+
+pub fn run_command(cmd: Command) -> Result<()> {
+    match cmd {
+        Command::Simulate(c) => simulate(&c),
+        Command::Montecarlo { common, runs } => montecarlo(&common, runs),
+        Command::Grid { common, grid } => grid_cmd(&common, grid.as_deref()),
+        Command::Tune { common, spec } => tune_cmd(&common, &spec),
+        Command::Postprocess { log, config, out, force } => postprocess(&log, config.as_deref(), &out, force),
+    }
+}
+
+fn simulate(c: &Common) -> Result<()> {
+    let sc = scenario(c)?;
+    let cycle = sc.resolved_cycle()?;
+    let (metrics, trace) = run(&sc, &cycle, coopnav_core::run_seed(c.seed, 0), true);
+    let trace = trace.context("the simulator returned no trace")?;
+    let dir = RunDir::create(&c.out, c.force)?;
+    manifest(&dir, "hbl simulate", c.seed, json!({ "scenario": sc }))?;
+    let mut csv = String::from("t,x_rel,auv_e,auv_n,est_e,est_n,sd_e,sd_n,ship_e,ship_n,ship_est_e,ship_est_n,buoy_e,buoy_n,buoy_est_e,buoy_est_n,error\n");
+    for r in &trace.rows {
+        let o = |v: Option<[f64; 2]>, i: usize| v.map_or(String::new(), |p| p[i].to_string());
+        csv.push_str(&format!(
+            "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}\n",
+            r.t, r.x_rel, r.auv_true[0], r.auv_true[1], r.auv_est[0], r.auv_est[1], r.auv_sd[0], r.auv_sd[1], r.ship_true[0], r.ship_true[1],
+            r.ship_est[0], r.ship_est[1], o(r.buoy_true, 0), o(r.buoy_true, 1), o(r.buoy_est, 0), o(r.buoy_est, 1), r.error
+        ));
+    }
+    dir.write("trace.csv", csv)?;
+    let mut log = Vec::new();
+    post::write_log(&mut log, &trace.log)?;
+    dir.write("log.csv", log)?;
+    dir.write("tracks.svg", plot::tracks(&trace.rows)?)?;
+    dir.write("error_vs_xrel.svg", plot::error_vs_xrel(&trace.rows, (sc.geometry.zone_min, sc.geometry.zone_max))?)?;
+    dir.write_json("summary.json", &metrics)?;
+    let out = dir.finish()?;
+    println!("zone error {:.3} m; wrote {}", metrics.zone_error.unwrap_or(f64::NAN), out.display());
+    Ok(())
+}
+
+fn montecarlo(c: &Common, runs: usize) -> Result<()> {
+    let sc = scenario(c)?;
+    sc.validate()?;
+    let pb = bar(runs as u64);
+    let r = monte_carlo(&sc, runs, c.seed, &|n| pb.set_position(n))?;
+    pb.finish_and_clear();
+    let dir = RunDir::create(&c.out, c.force)?;
+    manifest(&dir, "hbl montecarlo", c.seed, json!({ "scenario": sc, "runs": runs }))?;
+    let mut csv = String::from("run,zone_error,zone_parallel,zone_perpendicular,buoy_error,saturation_error,ranges_received,ranges_applied,healthy\n");
+    for (i, m) in r.runs.iter().enumerate() {
+        let o = |v: Option<f64>| v.map_or(String::new(), |x| x.to_string());
+        csv.push_str(&format!(
+            "{i},{},{},{},{},{},{},{},{}\n",
+            o(m.zone_error), o(m.zone_parallel), o(m.zone_perpendicular), o(m.buoy_error), o(m.saturation_error), m.ranges_received, m.ranges_applied, m.healthy
+        ));
+    }
+    dir.write("runs.csv", csv)?;
+    dir.write_json("summary.json", &r.summary)?;
+    let out = dir.finish()?;
+    let z = r.summary.zone_error;
+    println!("{}: zone error {:.3} ± {:.3} m (SE {:.3}, {} runs); wrote {}", r.summary.configuration, z.mean, z.sd, z.se, z.n, out.display());
+    Ok(())
+}
+
+fn grid_cmd(c: &Common, grid_path: Option<&Path>) -> Result<()> {
+    let sc = scenario(c)?;
+    let spec: GridSpec = match grid_path {
+        Some(p) => toml::from_str(&read(p)?).with_context(|| format!("in {}", p.display()))?,
+        None => GridSpec::default(),
+    };
+    spec.validate()?;
+    let pb = bar(spec.cells().len() as u64);
+    let cells = grid::buoy_grid(&sc, &spec, c.seed, &|n| pb.set_position(n))?;
+    pb.finish_and_clear();
+    let dir = RunDir::create(&c.out, c.force)?;
+    manifest(&dir, "hbl grid", c.seed, json!({ "scenario": sc, "grid": spec }))?;
+    let mut buf = Vec::new();
+    grid::write_csv(&mut buf, &cells)?;
+    dir.write("grid.csv", buf)?;
+    dir.write("heat_map.svg", plot::heat_map(&cells, spec.spacing)?)?;
+    let best = grid::optimal_region(&cells, 0.10);
+    dir.write_json("summary.json", &json!({ "cells": cells.len(), "optimal_region_within_10pct": best }))?;
+    let out = dir.finish()?;
+    println!("{} cells, {} in the optimal region; wrote {}", cells.len(), best.len(), out.display());
+    Ok(())
+}
+
+fn tune_cmd(c: &Common, spec_path: &Path) -> Result<()> {
+    let sc = scenario(c)?;
+    let spec: TuneSpec = toml::from_str(&read(spec_path)?).with_context(|| format!("in {}", spec_path.display()))?;
+    let r = tune(&sc, &spec)?;
+    let dir = RunDir::create(&c.out, c.force)?;
+    manifest(&dir, "hbl tune", spec.seed, json!({ "scenario": sc, "spec": spec }))?;
+    dir.write_json("summary.json", &r)?;
+    let out = dir.finish()?;
+    println!("cost {:.4} → {:.4} after {} iterations: {:?}; wrote {}", r.start_cost, r.best_cost, r.iterations, r.coefficients, out.display());
+    Ok(())
+}
+
+fn postprocess(log: &Path, config: Option<&Path>, out: &Path, force: bool) -> Result<()> {
+    let cfg = match config {
+        Some(p) => PostConfig::from_toml(&read(p)?).with_context(|| format!("in {}", p.display()))?,
+        None => PostConfig::default(),
+    };
+    let file = std::fs::File::open(log).with_context(|| format!("opening {}", log.display()))?;
+    let entries = post::read_log(file).with_context(|| format!("in {}", log.display()))?;
+    let result = post::postprocess(&entries, &cfg)?;
+    let dir = RunDir::create(out, force)?;
+    manifest(&dir, "hbl postprocess", 0, json!({ "log": log, "config": cfg }))?;
+    let mut csv = String::from("t,filt_e,filt_n,filt_sd_e,filt_sd_n,smooth_e,smooth_n,smooth_sd_e,smooth_sd_n,true_e,true_n\n");
+    for s in &result.samples {
+        let o = |i: usize| s.truth.map_or(String::new(), |p| p[i].to_string());
+        csv.push_str(&format!(
+            "{},{},{},{},{},{},{},{},{},{},{}\n",
+            s.t, s.filtered[0], s.filtered[1], s.filtered_sd[0], s.filtered_sd[1], s.smoothed[0], s.smoothed[1], s.smoothed_sd[0], s.smoothed_sd[1], o(0), o(1)
+        ));
+    }
+    dir.write("estimates.csv", csv)?;
+    dir.write_json("summary.json", &result.summary)?;
+    let out = dir.finish()?;
+    println!("{:?}; wrote {}", result.summary, out.display());
+    Ok(())
+}

@@ -1,0 +1,249 @@
+//! The survey AUV's 5-state EKF [E, N, S, ψ, b] (digest §3.2): heading-rate input, speed and
+//! compass updates, and OWTT range updates from *any* transponder whose position at transmit time
+//! the caller supplies (ship outrigger, buoy, or a CNA that carries its position in its message).
+//!
+//! Headings inside are math convention (0 = east, counter-clockwise), so E advances with cos ψ
+//! and N with sin ψ; the thesis writes the same model clockwise from north.
+
+use crate::ekf::{Ekf, Gate, UpdateOutcome};
+use crate::range::{RangeMeasurement, RangeNoise};
+use coopnav_core::{wrap_pi, Vec3};
+use nalgebra::{SMatrix, SVector};
+use serde::{Deserialize, Serialize};
+use thiserror::Error;
+
+pub type AuvState = SVector<f64, 5>;
+pub const E: usize = 0;
+pub const N: usize = 1;
+pub const S: usize = 2;
+pub const PSI: usize = 3;
+pub const BIAS: usize = 4;
+
+/// Coefficients of the AUV filter. Variances are per *nominal step* `step_s` (digest §3.1: Q is
+/// added once per predict); a prediction over h seconds adds Q·h/step_s.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct AuvParams {
+    /// Nominal filter step Δt (s) the Q values refer to. Reconstructed: digest §10 A1 (0.1 s).
+    pub step_s: f64,
+    /// Initial variances [E m², N m², S (m/s)², ψ rad², b rad²]. Reconstructed: digest §10 A2.
+    pub p0: [f64; 5],
+    /// Per-step process noise. Q_E = Q_N = 0.255448 is Table 3; S, ψ, b: digest §10 A2.
+    pub q: [f64; 5],
+    /// Speed-measurement SD (m/s). Digest §10 A2.
+    pub sigma_speed: f64,
+    /// Compass SD (rad). Digest §10 A2 (0.5°).
+    pub sigma_heading: f64,
+    pub range_noise: RangeNoise,
+    pub range_gate: Gate,
+}
+
+impl Default for AuvParams {
+    fn default() -> Self {
+        let deg = std::f64::consts::PI / 180.0;
+        AuvParams {
+            step_s: 0.1,
+            p0: [16.0, 16.0, 0.0025, 0.01, (0.5 * deg).powi(2)],
+            q: [0.255448, 0.255448, 1e-4, (0.2 * deg).powi(2), (0.01 * deg).powi(2)],
+            sigma_speed: 0.05,
+            sigma_heading: 0.5 * deg,
+            range_noise: RangeNoise::default(),
+            range_gate: Gate::OFF,
+        }
+    }
+}
+
+#[derive(Debug, Error, PartialEq)]
+pub enum ParamError {
+    #[error("{field} = {value}: must be a finite number > 0")]
+    NotPositive { field: String, value: f64 },
+    #[error("{field} = {value}: must be a finite number ≥ 0")]
+    Negative { field: String, value: f64 },
+}
+
+pub(crate) fn check_positive(field: &str, value: f64) -> Result<(), ParamError> {
+    if value.is_finite() && value > 0.0 {
+        Ok(())
+    } else {
+        Err(ParamError::NotPositive { field: field.to_string(), value })
+    }
+}
+
+pub(crate) fn check_non_negative(field: &str, value: f64) -> Result<(), ParamError> {
+    if value.is_finite() && value >= 0.0 {
+        Ok(())
+    } else {
+        Err(ParamError::Negative { field: field.to_string(), value })
+    }
+}
+
+impl AuvParams {
+    /// Checks every coefficient; the error names the field (prefixed by `prefix`).
+    pub fn validate(&self, prefix: &str) -> Result<(), ParamError> {
+        check_positive(&format!("{prefix}step_s"), self.step_s)?;
+        for (i, v) in self.p0.iter().enumerate() {
+            check_positive(&format!("{prefix}p0[{i}]"), *v)?;
+        }
+        for (i, v) in self.q.iter().enumerate() {
+            check_non_negative(&format!("{prefix}q[{i}]"), *v)?;
+        }
+        check_positive(&format!("{prefix}sigma_speed"), self.sigma_speed)?;
+        check_positive(&format!("{prefix}sigma_heading"), self.sigma_heading)?;
+        self.range_noise.validate(&format!("{prefix}range_noise."))
+    }
+}
+
+/// The AUV navigation filter.
+#[derive(Debug, Clone)]
+pub struct AuvEkf {
+    ekf: Ekf<5>,
+    params: AuvParams,
+}
+
+impl AuvEkf {
+    /// Starts at time `t0` from position (e, n), speed, math heading ψ and zero compass bias.
+    pub fn new(t0: f64, e: f64, n: f64, speed: f64, psi: f64, params: AuvParams) -> Self {
+        let x0 = AuvState::from([e, n, speed, psi, 0.0]);
+        let p0 = SMatrix::<f64, 5, 5>::from_diagonal(&SVector::from(params.p0));
+        AuvEkf { ekf: Ekf::new(t0, x0, p0, [false, false, false, true, true]), params }
+    }
+
+    pub fn ekf(&self) -> &Ekf<5> {
+        &self.ekf
+    }
+    pub fn ekf_mut(&mut self) -> &mut Ekf<5> {
+        &mut self.ekf
+    }
+    pub fn params(&self) -> &AuvParams {
+        &self.params
+    }
+    pub fn state(&self) -> &AuvState {
+        self.ekf.x()
+    }
+    pub fn position(&self) -> (f64, f64) {
+        (self.ekf.x()[E], self.ekf.x()[N])
+    }
+
+    /// Dead-reckons to time `t` with the measured heading rate `yaw_rate` (rad/s, math sense)
+    /// held over the interval (eq. 7). Does nothing if `t` is not after the filter time.
+    pub fn predict_to(&mut self, t: f64, yaw_rate: f64) -> bool {
+        let h = t - self.ekf.t();
+        if !(h > 0.0) {
+            return false;
+        }
+        let x = *self.ekf.x();
+        let (sin, cos) = x[PSI].sin_cos();
+        let mut x_new = x;
+        x_new[E] += h * x[S] * cos;
+        x_new[N] += h * x[S] * sin;
+        x_new[PSI] = wrap_pi(x[PSI] + h * yaw_rate);
+        let mut f = SMatrix::<f64, 5, 5>::identity();
+        f[(E, S)] = h * cos;
+        f[(E, PSI)] = -h * x[S] * sin;
+        f[(N, S)] = h * sin;
+        f[(N, PSI)] = h * x[S] * cos;
+        let q = SMatrix::<f64, 5, 5>::from_diagonal(&SVector::from(self.params.q)) * (h / self.params.step_s);
+        self.ekf.predict(t, x_new, f, q)
+    }
+
+    /// Speed-sensor update (m/s).
+    pub fn update_speed(&mut self, measured: f64) -> UpdateOutcome {
+        let mut h = SMatrix::<f64, 1, 5>::zeros();
+        h[S] = 1.0;
+        let y = measured - self.ekf.x()[S];
+        self.ekf.update_scalar(y, h, self.params.sigma_speed.powi(2), &Gate::OFF)
+    }
+
+    /// Compass update: the compass reads ψ + b (math convention, rad).
+    pub fn update_heading(&mut self, measured: f64) -> UpdateOutcome {
+        let mut h = SMatrix::<f64, 1, 5>::zeros();
+        h[PSI] = 1.0;
+        h[BIAS] = 1.0;
+        let y = wrap_pi(measured - self.ekf.x()[PSI] - self.ekf.x()[BIAS]);
+        self.ekf.update_scalar(y, h, self.params.sigma_heading.powi(2), &Gate::OFF)
+    }
+
+    /// OWTT range update (eq. 9). `auv_depth` = Some(z) uses the 3-D slant range to the
+    /// transponder's depth (field mode); None the horizontal range (simulation mode, digest A4).
+    pub fn update_range(&mut self, m: &RangeMeasurement, auv_depth: Option<f64>) -> UpdateOutcome {
+        let x = self.ekf.x();
+        let de = x[E] - m.transponder.x;
+        let dn = x[N] - m.transponder.y;
+        let dz = auv_depth.map_or(0.0, |z| z - m.transponder.z);
+        let predicted = (de * de + dn * dn + dz * dz).sqrt();
+        // Directly overhead in 2-D the range has no gradient: no information, no update.
+        if !(predicted > 1e-6) {
+            return UpdateOutcome::Unusable;
+        }
+        let mut h = SMatrix::<f64, 1, 5>::zeros();
+        h[E] = de / predicted;
+        h[N] = dn / predicted;
+        let r = self.params.range_noise.variance(m.travel_time);
+        self.ekf.update_scalar(m.range - predicted, h, r, &self.params.range_gate)
+    }
+
+    /// Predicted range from the current estimate to a transponder (for residual bookkeeping).
+    pub fn predicted_range(&self, transponder: &Vec3, auv_depth: Option<f64>) -> f64 {
+        let x = self.ekf.x();
+        let dz = auv_depth.map_or(0.0, |z| z - transponder.z);
+        ((x[E] - transponder.x).powi(2) + (x[N] - transponder.y).powi(2) + dz * dz).sqrt()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::ekf::is_positive_definite;
+
+    fn meas(range: f64, at: Vec3) -> RangeMeasurement {
+        RangeMeasurement { range, travel_time: range / 1500.0, transponder: at }
+    }
+
+    #[test]
+    fn dead_reckoning_follows_heading_and_rate() {
+        let mut f = AuvEkf::new(0.0, 0.0, 0.0, 1.0, 0.0, AuvParams::default());
+        for k in 1..=10 {
+            f.predict_to(k as f64 * 0.1, 0.0);
+        }
+        assert!((f.position().0 - 1.0).abs() < 1e-12 && f.position().1.abs() < 1e-12);
+        f.predict_to(2.0, std::f64::consts::FRAC_PI_2 / 1.0);
+        assert!(f.state()[PSI] > 1.0, "heading integrates the rate input");
+    }
+
+    #[test]
+    fn range_update_pulls_towards_the_measured_circle() {
+        let mut f = AuvEkf::new(0.0, 0.0, 0.0, 0.0, 0.0, AuvParams::default());
+        let out = f.update_range(&meas(95.0, Vec3::new(100.0, 0.0, 0.0)), None);
+        assert!(out.applied());
+        assert!(f.position().0 > 3.0, "moved towards the transponder: {:?}", f.position());
+        assert!(f.position().1.abs() < 1e-9, "no information across the line of sight");
+        assert!(f.ekf().p()[(E, E)] < 16.0 && (f.ekf().p()[(N, N)] - 16.0).abs() < 1e-9);
+    }
+
+    #[test]
+    fn overhead_transponder_is_harmless() {
+        let mut f = AuvEkf::new(0.0, 5.0, 5.0, 0.0, 0.0, AuvParams::default());
+        assert_eq!(f.update_range(&meas(0.0, Vec3::new(5.0, 5.0, 1.5)), None), UpdateOutcome::Unusable);
+        let out = f.update_range(&meas(8.5, Vec3::new(5.0, 5.0, 1.5)), Some(10.0));
+        assert!(out.applied());
+        assert!(f.state().iter().all(|v| v.is_finite()));
+        assert!(is_positive_definite(f.ekf().p()));
+    }
+
+    #[test]
+    fn compass_update_splits_heading_and_bias_and_wraps() {
+        let mut f = AuvEkf::new(0.0, 0.0, 0.0, 0.0, std::f64::consts::PI - 0.01, AuvParams::default());
+        f.update_heading(-std::f64::consts::PI + 0.01);
+        // The innovation is +0.02 rad across the ±π seam, not −6.26.
+        let est = f.state()[PSI] + f.state()[BIAS];
+        assert!(wrap_pi(est - (std::f64::consts::PI - 0.01)) > 0.0);
+        assert!(wrap_pi(est - (std::f64::consts::PI - 0.01)) < 0.021);
+    }
+
+    #[test]
+    fn bad_params_name_the_field() {
+        let mut p = AuvParams::default();
+        p.q[2] = -1.0;
+        assert_eq!(p.validate("auv.").unwrap_err().to_string(), "auv.q[2] = -1: must be a finite number ≥ 0");
+    }
+}

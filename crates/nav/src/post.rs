@@ -1,0 +1,466 @@
+//! Post-processing of a logged run (digest §3.6): the AUV EKF re-run over a CSV log with
+//! transponder positions from the logged ship DGPS and buoy topside fixes (not the onboard
+//! ship/buoy filters), a per-run acoustic time offset, then the EKF-RTS backward pass.
+//!
+//! # Log format
+//! One CSV file with the header `t,kind,src,v1,v2,v3,v4` (unused fields empty). Times are
+//! seconds on the AUV clock; headings are compass degrees (0 = north, clockwise), rates deg/s
+//! clockwise-positive, positions metres in the local east/north frame.
+//!
+//! | kind       | src      | v1                 | v2     | v3          | v4              |
+//! |------------|----------|--------------------|--------|-------------|-----------------|
+//! | `init`     |          | E                  | N      | speed (m/s) | heading (deg)   |
+//! | `yaw_rate` |          | heading rate deg/s |        |             |                 |
+//! | `speed`    |          | speed m/s          |        |             |                 |
+//! | `heading`  |          | compass deg        |        |             |                 |
+//! | `depth`    |          | AUV depth m        |        |             |                 |
+//! | `range`    | modem id | travel time s      |        |             |                 |
+//! | `ship_fix` |          | E                  | N      | heading deg |                 |
+//! | `buoy_fix` |          | E                  | N      |             |                 |
+//! | `truth`    |          | E                  | N      |             |                 |
+//!
+//! A `range` row's `t` is the **modem receive time**; the transmit time is t − travel time
+//! (top of a second). `init` is the filter's starting estimate (the first one is used);
+//! `truth` rows (topside AUV fixes) are only used to score the result.
+
+use crate::auv::{AuvEkf, AuvParams, ParamError};
+use crate::cycle::Transmitter;
+use crate::range::RangeMeasurement;
+use crate::smoother::{rts, SmoothError};
+use crate::surface::Outriggers;
+use coopnav_core::{wrap_pi, CompassDeg, Heading, Vec3};
+use serde::{Deserialize, Serialize};
+use std::io::Read;
+use thiserror::Error;
+
+pub const LOG_HEADER: [&str; 7] = ["t", "kind", "src", "v1", "v2", "v3", "v4"];
+
+#[derive(Debug, Error)]
+pub enum PostError {
+    #[error("log: {0}")]
+    Csv(#[from] csv::Error),
+    #[error("log header is {found:?}; expected exactly {expected:?}")]
+    Header { found: Vec<String>, expected: Vec<String> },
+    #[error("log line {line}: field '{field}' = {value:?} is not a finite number")]
+    Number { line: u64, field: &'static str, value: String },
+    #[error("log line {line}: unknown kind {kind:?} (allowed: init, yaw_rate, speed, heading, depth, range, ship_fix, buoy_fix, truth)")]
+    Kind { line: u64, kind: String },
+    #[error("log line {line}: range src {src:?} is not a transponder modem id (allowed 13 buoy, 14 ship port, 15 ship starboard)")]
+    Source { line: u64, src: String },
+    #[error("log line {line}: range travel time {value} s must be in [0, 1) (OWTT from the top of the second)")]
+    TravelTime { line: u64, value: f64 },
+    #[error("log has no 'init' row: the filter needs a starting estimate")]
+    NoInit,
+    #[error("post-processing config: {0}")]
+    Param(#[from] ParamError),
+    #[error("post-processing config: {0}")]
+    Toml(#[from] toml::de::Error),
+    #[error("smoother: {0}")]
+    Smooth(#[from] SmoothError),
+}
+
+/// One log row, parsed.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Record {
+    Init { e: f64, n: f64, speed: f64, compass_deg: f64 },
+    YawRate { compass_deg_s: f64 },
+    Speed(f64),
+    Heading { compass_deg: f64 },
+    Depth(f64),
+    Range { src: Transmitter, travel_time: f64 },
+    ShipFix { e: f64, n: f64, compass_deg: f64 },
+    BuoyFix { e: f64, n: f64 },
+    Truth { e: f64, n: f64 },
+}
+
+impl Record {
+    fn kind(&self) -> &'static str {
+        match self {
+            Record::Init { .. } => "init",
+            Record::YawRate { .. } => "yaw_rate",
+            Record::Speed(_) => "speed",
+            Record::Heading { .. } => "heading",
+            Record::Depth(_) => "depth",
+            Record::Range { .. } => "range",
+            Record::ShipFix { .. } => "ship_fix",
+            Record::BuoyFix { .. } => "buoy_fix",
+            Record::Truth { .. } => "truth",
+        }
+    }
+    /// The row's fields (src, v1..v4) as written to the log.
+    fn fields(&self) -> [String; 5] {
+        let f = |v: f64| format!("{v}");
+        let e = String::new;
+        match *self {
+            Record::Init { e: x, n, speed, compass_deg } => [e(), f(x), f(n), f(speed), f(compass_deg)],
+            Record::YawRate { compass_deg_s } => [e(), f(compass_deg_s), e(), e(), e()],
+            Record::Speed(s) => [e(), f(s), e(), e(), e()],
+            Record::Heading { compass_deg } => [e(), f(compass_deg), e(), e(), e()],
+            Record::Depth(z) => [e(), f(z), e(), e(), e()],
+            Record::Range { src, travel_time } => [src.modem_id().to_string(), f(travel_time), e(), e(), e()],
+            Record::ShipFix { e: x, n, compass_deg } => [e(), f(x), f(n), f(compass_deg), e()],
+            Record::BuoyFix { e: x, n } | Record::Truth { e: x, n } => [e(), f(x), f(n), e(), e()],
+        }
+    }
+}
+
+/// A time-stamped log row.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Entry {
+    pub t: f64,
+    pub record: Record,
+}
+
+/// Writes entries in the log format.
+pub fn write_log<W: std::io::Write>(out: W, entries: &[Entry]) -> Result<(), PostError> {
+    let mut w = csv::Writer::from_writer(out);
+    w.write_record(LOG_HEADER)?;
+    for en in entries {
+        let [src, v1, v2, v3, v4] = en.record.fields();
+        w.write_record([format!("{}", en.t), en.record.kind().to_string(), src, v1, v2, v3, v4])?;
+    }
+    w.flush().map_err(csv::Error::from)?;
+    Ok(())
+}
+
+/// Reads and checks a log; errors name the line and field.
+pub fn read_log<R: Read>(input: R) -> Result<Vec<Entry>, PostError> {
+    let mut r = csv::ReaderBuilder::new().has_headers(true).flexible(false).from_reader(input);
+    let header: Vec<String> = r.headers()?.iter().map(|s| s.trim().to_string()).collect();
+    if header != LOG_HEADER {
+        return Err(PostError::Header { found: header, expected: LOG_HEADER.iter().map(|s| s.to_string()).collect() });
+    }
+    let mut entries = Vec::new();
+    for row in r.records() {
+        let row = row?;
+        let line = row.position().map_or(0, |p| p.line());
+        let num = |i: usize, field: &'static str| -> Result<f64, PostError> {
+            let v = row.get(i).unwrap_or("").trim();
+            match v.parse::<f64>() {
+                Ok(x) if x.is_finite() => Ok(x),
+                _ => Err(PostError::Number { line, field, value: v.to_string() }),
+            }
+        };
+        let t = num(0, "t")?;
+        let kind = row.get(1).unwrap_or("").trim();
+        let record = match kind {
+            "init" => Record::Init { e: num(3, "v1")?, n: num(4, "v2")?, speed: num(5, "v3")?, compass_deg: num(6, "v4")? },
+            "yaw_rate" => Record::YawRate { compass_deg_s: num(3, "v1")? },
+            "speed" => Record::Speed(num(3, "v1")?),
+            "heading" => Record::Heading { compass_deg: num(3, "v1")? },
+            "depth" => Record::Depth(num(3, "v1")?),
+            "range" => {
+                let src_text = row.get(2).unwrap_or("").trim();
+                let src = src_text
+                    .parse::<u8>()
+                    .ok()
+                    .and_then(Transmitter::from_modem_id)
+                    .ok_or_else(|| PostError::Source { line, src: src_text.to_string() })?;
+                let travel_time = num(3, "v1")?;
+                if !(0.0..1.0).contains(&travel_time) {
+                    return Err(PostError::TravelTime { line, value: travel_time });
+                }
+                Record::Range { src, travel_time }
+            }
+            "ship_fix" => Record::ShipFix { e: num(3, "v1")?, n: num(4, "v2")?, compass_deg: num(5, "v3")? },
+            "buoy_fix" => Record::BuoyFix { e: num(3, "v1")?, n: num(4, "v2")? },
+            "truth" => Record::Truth { e: num(3, "v1")?, n: num(4, "v2")? },
+            other => return Err(PostError::Kind { line, kind: other.to_string() }),
+        };
+        entries.push(Entry { t, record });
+    }
+    Ok(entries)
+}
+
+/// How buoy positions between topside fixes are obtained (digest §3.6).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum BuoyFixUse {
+    /// Most recent fix (zero-order hold).
+    #[default]
+    Hold,
+    /// Linear interpolation between fixes.
+    Linear,
+}
+
+/// Post-processing settings.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct PostConfig {
+    pub auv: AuvParams,
+    /// Added to every range row's time before processing (e.g. −2 removes a 2 s modem delay).
+    pub acoustic_time_offset_s: f64,
+    /// Use the 3-D slant range with logged depth (field mode) instead of the horizontal range.
+    pub slant_range: bool,
+    pub outriggers: Outriggers,
+    pub buoy_fixes: BuoyFixUse,
+    /// Depth of the buoy transponder (m).
+    pub buoy_depth: f64,
+}
+
+impl Default for PostConfig {
+    fn default() -> Self {
+        PostConfig {
+            auv: AuvParams::default(),
+            acoustic_time_offset_s: 0.0,
+            slant_range: false,
+            outriggers: Outriggers::default(),
+            buoy_fixes: BuoyFixUse::Hold,
+            buoy_depth: 1.5,
+        }
+    }
+}
+
+impl PostConfig {
+    pub fn from_toml(text: &str) -> Result<Self, PostError> {
+        let c: PostConfig = toml::from_str(text)?;
+        c.validate()?;
+        Ok(c)
+    }
+    pub fn validate(&self) -> Result<(), PostError> {
+        self.auv.validate("auv.")?;
+        if !self.acoustic_time_offset_s.is_finite() {
+            return Err(ParamError::NotPositive { field: "acoustic_time_offset_s".into(), value: self.acoustic_time_offset_s }.into());
+        }
+        Ok(())
+    }
+}
+
+/// Filtered and smoothed estimates at one filter step.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct PostSample {
+    pub t: f64,
+    pub filtered: [f64; 2],
+    pub filtered_sd: [f64; 2],
+    pub smoothed: [f64; 2],
+    pub smoothed_sd: [f64; 2],
+    /// Topside truth at this time, if the log had a fix here.
+    pub truth: Option<[f64; 2]>,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize)]
+pub struct PostSummary {
+    pub ranges: usize,
+    pub ranges_applied: usize,
+    /// Ranges before any fix of their transponder, or with no usable geometry.
+    pub ranges_skipped: usize,
+    pub truth_points: usize,
+    pub mean_filtered_error: Option<f64>,
+    pub mean_smoothed_error: Option<f64>,
+    /// Mean 2-D NEES eᵀP⁻¹e of position at truth points (≈ 2 when the covariance is consistent).
+    pub mean_filtered_nees: Option<f64>,
+    pub mean_smoothed_nees: Option<f64>,
+}
+
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct PostResult {
+    pub samples: Vec<PostSample>,
+    pub summary: PostSummary,
+}
+
+/// Positions of the surface transponders over time, from logged fixes.
+struct Fixes {
+    ship: Vec<(f64, f64, f64, f64)>,
+    buoy: Vec<(f64, f64, f64)>,
+}
+
+impl Fixes {
+    fn ship_at(&self, t: f64) -> Option<(f64, f64, f64)> {
+        let i = self.ship.partition_point(|f| f.0 <= t);
+        let first = self.ship.first()?;
+        if i == 0 {
+            return (t >= first.0).then_some((first.1, first.2, first.3));
+        }
+        let a = self.ship[i - 1];
+        let Some(b) = self.ship.get(i) else { return Some((a.1, a.2, a.3)) };
+        let f = (t - a.0) / (b.0 - a.0);
+        Some((a.1 + f * (b.1 - a.1), a.2 + f * (b.2 - a.2), a.3 + f * wrap_pi(b.3 - a.3)))
+    }
+    fn buoy_at(&self, t: f64, mode: BuoyFixUse) -> Option<(f64, f64)> {
+        let i = self.buoy.partition_point(|f| f.0 <= t);
+        if i == 0 {
+            return None;
+        }
+        let a = self.buoy[i - 1];
+        match (mode, self.buoy.get(i)) {
+            (BuoyFixUse::Linear, Some(b)) => {
+                let f = (t - a.0) / (b.0 - a.0);
+                Some((a.1 + f * (b.1 - a.1), a.2 + f * (b.2 - a.2)))
+            }
+            _ => Some((a.1, a.2)),
+        }
+    }
+}
+
+fn math_heading(compass_deg: f64) -> f64 {
+    Heading::from(CompassDeg(compass_deg)).radians()
+}
+
+/// Runs the post-processing EKF and the RTS smoother over a log.
+pub fn postprocess(entries: &[Entry], cfg: &PostConfig) -> Result<PostResult, PostError> {
+    cfg.validate()?;
+    let mut events: Vec<Entry> = entries
+        .iter()
+        .map(|e| match e.record {
+            Record::Range { .. } => Entry { t: e.t + cfg.acoustic_time_offset_s, record: e.record },
+            _ => *e,
+        })
+        .collect();
+    events.sort_by(|a, b| a.t.total_cmp(&b.t));
+    let (t0, init) = events
+        .iter()
+        .find_map(|e| match e.record {
+            Record::Init { e: x, n, speed, compass_deg } => Some((e.t, (x, n, speed, compass_deg))),
+            _ => None,
+        })
+        .ok_or(PostError::NoInit)?;
+    let mut fixes = Fixes { ship: Vec::new(), buoy: Vec::new() };
+    for e in &events {
+        match e.record {
+            Record::ShipFix { e: x, n, compass_deg } => fixes.ship.push((e.t, x, n, math_heading(compass_deg))),
+            Record::BuoyFix { e: x, n } => fixes.buoy.push((e.t, x, n)),
+            _ => {}
+        }
+    }
+    let mut f = AuvEkf::new(t0, init.0, init.1, init.2, math_heading(init.3), cfg.auv.clone());
+    f.ekf_mut().record_history();
+    let mut summary = PostSummary::default();
+    let (mut yaw_rate, mut depth) = (0.0, None);
+    let mut truth_at: Vec<(usize, [f64; 2])> = Vec::new();
+    for ev in events.iter().filter(|e| e.t >= t0) {
+        // Dynamic step: predict to the event in pieces no longer than the nominal step.
+        while ev.t - f.ekf().t() > 1e-9 {
+            let to = (f.ekf().t() + cfg.auv.step_s).min(ev.t);
+            if !f.predict_to(to, yaw_rate) {
+                break;
+            }
+        }
+        match ev.record {
+            Record::YawRate { compass_deg_s } => yaw_rate = -compass_deg_s.to_radians(),
+            Record::Speed(s) => {
+                f.update_speed(s);
+            }
+            Record::Heading { compass_deg } => {
+                f.update_heading(math_heading(compass_deg));
+            }
+            Record::Depth(z) => depth = Some(z),
+            Record::Range { src, travel_time } => {
+                summary.ranges += 1;
+                let t_tx = ev.t - travel_time;
+                let pos = match src {
+                    Transmitter::Ship(side) => fixes.ship_at(t_tx).map(|(e, n, psi)| cfg.outriggers.position(side, e, n, psi)),
+                    Transmitter::Buoy => fixes.buoy_at(t_tx, cfg.buoy_fixes).map(|(e, n)| Vec3::new(e, n, cfg.buoy_depth)),
+                };
+                let applied = pos.is_some_and(|p| {
+                    let m = RangeMeasurement { range: cfg.auv.range_noise.sound_speed * travel_time, travel_time, transponder: p };
+                    f.update_range(&m, if cfg.slant_range { depth } else { None }).applied()
+                });
+                if applied {
+                    summary.ranges_applied += 1;
+                } else {
+                    summary.ranges_skipped += 1;
+                }
+            }
+            Record::Truth { e, n } => {
+                let len = f.ekf().history().map_or(0, |h| h.len());
+                truth_at.push((len.saturating_sub(1), [e, n]));
+            }
+            Record::Init { .. } | Record::ShipFix { .. } | Record::BuoyFix { .. } => {}
+        }
+    }
+    let history = f.ekf().history().ok_or(SmoothError::NoHistory)?;
+    let smoothed = rts(history, f.ekf().angles())?;
+    let mut samples: Vec<PostSample> = history
+        .iter()
+        .zip(&smoothed)
+        .map(|(h, s)| PostSample {
+            t: h.t,
+            filtered: [h.x_post[0], h.x_post[1]],
+            filtered_sd: [h.p_post[(0, 0)].sqrt(), h.p_post[(1, 1)].sqrt()],
+            smoothed: [s.x[0], s.x[1]],
+            smoothed_sd: [s.p[(0, 0)].sqrt(), s.p[(1, 1)].sqrt()],
+            truth: None,
+        })
+        .collect();
+    score(&mut samples, &mut summary, &truth_at, history, &smoothed);
+    Ok(PostResult { samples, summary })
+}
+
+fn score(
+    samples: &mut [PostSample],
+    summary: &mut PostSummary,
+    truth_at: &[(usize, [f64; 2])],
+    history: &[crate::ekf::Step<5>],
+    smoothed: &[crate::smoother::Smoothed<5>],
+) {
+    let nees = |x: &nalgebra::SVector<f64, 5>, p: &nalgebra::SMatrix<f64, 5, 5>, tr: [f64; 2]| {
+        let e = nalgebra::Vector2::new(x[0] - tr[0], x[1] - tr[1]);
+        let pp = p.fixed_view::<2, 2>(0, 0).into_owned();
+        pp.cholesky().map(|c| (e.transpose() * c.solve(&e))[(0, 0)])
+    };
+    let (mut ef, mut es, mut nf, mut ns, mut nn) = (0.0, 0.0, 0.0, 0.0, 0usize);
+    for &(i, tr) in truth_at {
+        samples[i].truth = Some(tr);
+        ef += (history[i].x_post[0] - tr[0]).hypot(history[i].x_post[1] - tr[1]);
+        es += (smoothed[i].x[0] - tr[0]).hypot(smoothed[i].x[1] - tr[1]);
+        if let (Some(a), Some(b)) = (nees(&history[i].x_post, &history[i].p_post, tr), nees(&smoothed[i].x, &smoothed[i].p, tr)) {
+            nf += a;
+            ns += b;
+            nn += 1;
+        }
+    }
+    summary.truth_points = truth_at.len();
+    if !truth_at.is_empty() {
+        let k = truth_at.len() as f64;
+        summary.mean_filtered_error = Some(ef / k);
+        summary.mean_smoothed_error = Some(es / k);
+    }
+    if nn > 0 {
+        summary.mean_filtered_nees = Some(nf / nn as f64);
+        summary.mean_smoothed_nees = Some(ns / nn as f64);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn log(text: &str) -> Result<Vec<Entry>, PostError> {
+        read_log(text.as_bytes())
+    }
+
+    #[test]
+    fn round_trip_through_csv() {
+        let entries = vec![
+            Entry { t: 0.0, record: Record::Init { e: 1.0, n: 2.0, speed: 0.85, compass_deg: 90.0 } },
+            Entry { t: 0.1, record: Record::Range { src: Transmitter::Buoy, travel_time: 0.05 } },
+            Entry { t: 0.2, record: Record::ShipFix { e: 3.0, n: 4.0, compass_deg: 270.0 } },
+        ];
+        let mut buf = Vec::new();
+        write_log(&mut buf, &entries).unwrap();
+        assert_eq!(log(std::str::from_utf8(&buf).unwrap()).unwrap(), entries);
+    }
+
+    #[test]
+    fn bad_logs_name_line_and_field() {
+        let h = "t,kind,src,v1,v2,v3,v4\n";
+        let e = log("t,kind,v1\n0,speed,1\n").unwrap_err().to_string();
+        assert!(e.contains("header"), "{e}");
+        let e = log(&format!("{h}0,speed,,abc,,,\n")).unwrap_err().to_string();
+        assert!(e.contains("line 2") && e.contains("v1") && e.contains("abc"), "{e}");
+        let e = log(&format!("{h}0,speed,,1,,,\n1,warp,,1,,,\n")).unwrap_err().to_string();
+        assert!(e.contains("line 3") && e.contains("warp"), "{e}");
+        let e = log(&format!("{h}0,range,7,0.1,,,\n")).unwrap_err().to_string();
+        assert!(e.contains("src") && e.contains("13"), "{e}");
+        let e = log(&format!("{h}0,range,13,1.5,,,\n")).unwrap_err().to_string();
+        assert!(e.contains("travel time"), "{e}");
+        let e = log(&format!("{h}0,speed,,1,,\n")).unwrap_err().to_string();
+        assert!(e.contains("line 2") || e.contains("fields"), "{e}");
+        let e = postprocess(&log(&format!("{h}0,speed,,1,,,\n")).unwrap(), &PostConfig::default()).unwrap_err();
+        assert!(matches!(e, PostError::NoInit));
+        let e = PostConfig::from_toml("acoustic_time_offset = 2\n").unwrap_err().to_string();
+        assert!(e.contains("acoustic_time_offset"), "{e}");
+        let e = PostConfig::from_toml("[auv]\nsigma_speed = -1\n").unwrap_err().to_string();
+        assert!(e.contains("auv.sigma_speed"), "{e}");
+    }
+}

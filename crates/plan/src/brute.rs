@@ -1,0 +1,49 @@
+//! The plain reference search: enumerates every option sequence of the tree, recomputes each
+//! path from the root, and keeps the minimum path sum (ties: lowest level-0 option index).
+//! It is deliberately simple: it is what the production search is tested against.
+
+use crate::tree::{NodeRef, Tree};
+use crate::SearchOutcome;
+
+pub(crate) fn brute_force(tree: &Tree) -> SearchOutcome {
+    let (n, depth) = (tree.n, tree.depth);
+    let mut eps2 = vec![0.0; n * depth];
+    let mut los = vec![[0.0; 3]; n * depth];
+    let mut idx = vec![0usize; depth];
+    let (mut best, mut best_root) = (f64::INFINITY, usize::MAX);
+    let mut nodes = 0u64;
+    loop {
+        let mut acc = 0.0;
+        let mut pose = tree.root_pose;
+        for l in 0..depth {
+            let opt = tree.level_options(l)[idx[l]];
+            let (e, s) = (eps2.split_at_mut(l * n), los.split_at_mut(l * n));
+            let parent = if l == 0 { tree.root() } else { NodeRef { pose, eps2: &e.0[(l - 1) * n..], los: &s.0[(l - 1) * n..] } };
+            let (p, c) = tree.expand(l, &parent, opt, &mut e.1[..n], &mut s.1[..n]);
+            pose = p;
+            acc += c;
+            nodes += 1;
+        }
+        let root = tree.root_options[idx[0]];
+        if acc < best || (acc == best && root < best_root) {
+            best = acc;
+            best_root = root;
+        }
+        if !advance(&mut idx, tree) {
+            break;
+        }
+    }
+    SearchOutcome { root_option: best_root, value: best, nodes }
+}
+
+/// Odometer over option sequences, the deepest level turning fastest. False when exhausted.
+fn advance(idx: &mut [usize], tree: &Tree) -> bool {
+    for l in (0..idx.len()).rev() {
+        idx[l] += 1;
+        if idx[l] < tree.level_options(l).len() {
+            return true;
+        }
+        idx[l] = 0;
+    }
+    false
+}

@@ -1,0 +1,248 @@
+//! CNA motion (Hudson eq. 2, reconstructed: digest §2.3–2.4, A4–A6): the discrete heading (and,
+//! for an AUV CNA, pitch) options, and one constant-speed straight step of τ seconds.
+//!
+//! Headings are math convention (0 = east, counter-clockwise). Depth z is positive down and a
+//! positive pitch is nose up, so z' = z − s·τ·sin φ'. The new heading and pitch hold for the
+//! whole step (instantaneous turn, A6).
+
+use crate::PlanError;
+use coopnav_core::{Heading, Vec3};
+use serde::{Deserialize, Serialize};
+
+/// Which vehicle is the CNA.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
+pub enum CnaKind {
+    /// A surface craft: heading options only, depth fixed.
+    Asc,
+    /// An AUV CNA: B pitch options too, with pitch and depth limits (A5 defaults, invented).
+    Auv {
+        /// Number of pitch options B (≥ 1).
+        pitch_options: usize,
+        /// Maximum pitch rate φ̇max, degrees per second (Table 5.1: 1.5).
+        #[serde(default = "default_pitch_rate")]
+        max_pitch_rate_deg_s: f64,
+        /// Maximum |pitch| φmax, degrees. Reconstructed: digest A5 (30°).
+        #[serde(default = "default_max_pitch")]
+        max_pitch_deg: f64,
+        /// Shallowest allowed depth, m. Reconstructed: digest A5 (0 m).
+        #[serde(default)]
+        min_depth: f64,
+        /// Deepest allowed depth, m. Reconstructed: digest A5 (100 m).
+        #[serde(default = "default_max_depth")]
+        max_depth: f64,
+    },
+}
+
+fn default_pitch_rate() -> f64 {
+    1.5
+}
+fn default_max_pitch() -> f64 {
+    30.0
+}
+fn default_max_depth() -> f64 {
+    100.0
+}
+fn default_turn_rate() -> f64 {
+    4.0
+}
+
+impl CnaKind {
+    /// An AUV CNA with B pitch options and the digest's default limits.
+    pub fn auv(pitch_options: usize) -> Self {
+        CnaKind::Auv {
+            pitch_options,
+            max_pitch_rate_deg_s: default_pitch_rate(),
+            max_pitch_deg: default_max_pitch(),
+            min_depth: 0.0,
+            max_depth: default_max_depth(),
+        }
+    }
+}
+
+/// How the CNA may move each step.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MotionConfig {
+    /// CNA speed s, m/s (> 0).
+    pub speed: f64,
+    /// Decision period τ, s (> 0).
+    pub tau: f64,
+    /// Number of heading options A (≥ 2).
+    pub heading_options: usize,
+    /// Maximum turn rate ψ̇max, degrees per second (Table 5.1: 4). ψ̇max·τ must stay below 180°.
+    #[serde(default = "default_turn_rate")]
+    pub max_turn_rate_deg_s: f64,
+    pub cna: CnaKind,
+}
+
+/// The CNA's pose: position, heading and pitch.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct CnaPose {
+    pub pos: Vec3,
+    pub heading: Heading,
+    /// Pitch φ, radians, positive nose up (0 for an ASC).
+    pub pitch: f64,
+}
+
+/// One candidate manoeuvre: heading change and pitch change, radians.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct MotionOption {
+    pub dpsi: f64,
+    pub dphi: f64,
+}
+
+/// A pose in the form the search steps quickly: heading as (cos, sin), rotated per step.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct FastPose {
+    pub p: [f64; 3],
+    pub ch: f64,
+    pub sh: f64,
+    pub phi: f64,
+}
+
+/// An option with its rotation precomputed.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct FastOption {
+    pub cd: f64,
+    pub sd: f64,
+    pub dphi: f64,
+}
+
+impl FastPose {
+    pub fn from_pose(p: &CnaPose) -> Self {
+        let (sh, ch) = p.heading.radians().sin_cos();
+        FastPose { p: [p.pos.x, p.pos.y, p.pos.z], ch, sh, phi: p.pitch }
+    }
+    pub fn to_pose(self) -> CnaPose {
+        CnaPose {
+            pos: Vec3::new(self.p[0], self.p[1], self.p[2]),
+            heading: Heading::from_radians(self.sh.atan2(self.ch)),
+            pitch: self.phi,
+        }
+    }
+}
+
+fn linspace(half_width: f64, n: usize) -> Vec<f64> {
+    if n == 1 {
+        return vec![0.0];
+    }
+    (0..n).map(|i| -half_width + 2.0 * half_width * i as f64 / (n - 1) as f64).collect()
+}
+
+impl MotionConfig {
+    /// Checks every field; errors name the field and the allowed range.
+    pub fn validate(&self) -> Result<(), PlanError> {
+        let bad = |field: &str, allowed: &str, value: String| Err(PlanError::Invalid { field: field.into(), allowed: allowed.into(), value });
+        if !(self.speed.is_finite() && self.speed > 0.0) {
+            return bad("speed", "a finite number > 0 m/s", self.speed.to_string());
+        }
+        if !(self.tau.is_finite() && self.tau > 0.0) {
+            return bad("tau", "a finite number > 0 s", self.tau.to_string());
+        }
+        if self.heading_options < 2 {
+            return bad("heading_options", ">= 2", self.heading_options.to_string());
+        }
+        let swing = self.max_turn_rate_deg_s * self.tau;
+        if !(self.max_turn_rate_deg_s.is_finite() && self.max_turn_rate_deg_s > 0.0 && swing < 180.0) {
+            return bad("max_turn_rate_deg_s", "> 0 with max_turn_rate_deg_s * tau < 180 degrees (so hard left and hard right never overlap)", format!("{} (x tau = {swing} deg)", self.max_turn_rate_deg_s));
+        }
+        if let CnaKind::Auv { pitch_options, max_pitch_rate_deg_s, max_pitch_deg, min_depth, max_depth } = self.cna {
+            if pitch_options < 1 {
+                return bad("cna.pitch_options", ">= 1", pitch_options.to_string());
+            }
+            if !(max_pitch_rate_deg_s.is_finite() && max_pitch_rate_deg_s >= 0.0) {
+                return bad("cna.max_pitch_rate_deg_s", ">= 0", max_pitch_rate_deg_s.to_string());
+            }
+            if !(max_pitch_deg > 0.0 && max_pitch_deg < 90.0) {
+                return bad("cna.max_pitch_deg", "in (0, 90)", max_pitch_deg.to_string());
+            }
+            if !(min_depth.is_finite() && max_depth.is_finite() && min_depth < max_depth) {
+                return bad("cna.min_depth/max_depth", "finite with min_depth < max_depth", format!("{min_depth}/{max_depth}"));
+            }
+        }
+        Ok(())
+    }
+
+    /// The A·B options in ascending (Δψ, Δφ) order: the order that breaks ties (A10).
+    pub fn options(&self) -> Vec<MotionOption> {
+        let psi = linspace((self.max_turn_rate_deg_s * self.tau).to_radians(), self.heading_options);
+        let phi = match self.cna {
+            CnaKind::Asc => vec![0.0],
+            CnaKind::Auv { pitch_options, max_pitch_rate_deg_s, .. } => linspace((max_pitch_rate_deg_s * self.tau).to_radians(), pitch_options),
+        };
+        psi.iter().flat_map(|&dpsi| phi.iter().map(move |&dphi| MotionOption { dpsi, dphi })).collect()
+    }
+
+    pub(crate) fn fast_options(&self) -> Vec<FastOption> {
+        self.options().iter().map(|o| FastOption { cd: o.dpsi.cos(), sd: o.dpsi.sin(), dphi: o.dphi }).collect()
+    }
+
+    /// One step of eq. (2).
+    #[inline(always)]
+    pub(crate) fn step(&self, p: &FastPose, o: &FastOption) -> FastPose {
+        let ch = p.ch * o.cd - p.sh * o.sd;
+        let sh = p.sh * o.cd + p.ch * o.sd;
+        let d = self.speed * self.tau;
+        let phi = p.phi + o.dphi;
+        let (sp, cp) = if phi == 0.0 { (0.0, 1.0) } else { phi.sin_cos() };
+        FastPose { p: [p.p[0] + d * ch * cp, p.p[1] + d * sh * cp, p.p[2] - d * sp], ch, sh, phi }
+    }
+
+    /// How far a pose breaks the AUV-CNA pitch and depth limits (0 = within limits; else metres:
+    /// depth excess plus pitch excess times the step length). Always 0 for an ASC.
+    #[inline]
+    pub(crate) fn limit_violation(&self, p: &FastPose) -> f64 {
+        match self.cna {
+            CnaKind::Asc => 0.0,
+            CnaKind::Auv { max_pitch_deg, min_depth, max_depth, .. } => {
+                let pitch_excess = (p.phi.abs() - max_pitch_deg.to_radians()).max(0.0);
+                let depth_excess = (min_depth - p.p[2]).max(0.0) + (p.p[2] - max_depth).max(0.0);
+                depth_excess + pitch_excess * self.speed * self.tau
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn cfg(a: usize, cna: CnaKind) -> MotionConfig {
+        MotionConfig { speed: 2.0, tau: 30.0, heading_options: a, max_turn_rate_deg_s: 4.0, cna }
+    }
+
+    #[test]
+    fn heading_options_span_the_turn_limit() {
+        let o = cfg(5, CnaKind::Asc).options();
+        let d: Vec<f64> = o.iter().map(|o| o.dpsi.to_degrees()).collect();
+        for (got, want) in d.iter().zip([-120.0, -60.0, 0.0, 60.0, 120.0]) {
+            assert!((got - want).abs() < 1e-9);
+        }
+        let o = cfg(3, CnaKind::auv(3)).options();
+        assert_eq!(o.len(), 9);
+        assert!(o.windows(2).all(|w| (w[0].dpsi, w[0].dphi) < (w[1].dpsi, w[1].dphi)));
+        assert!((o[2].dphi.to_degrees() - 45.0).abs() < 1e-9);
+    }
+
+    #[test]
+    fn step_moves_at_speed_and_pitch_up_is_shallower() {
+        let c = cfg(3, CnaKind::auv(3));
+        let p = FastPose::from_pose(&CnaPose { pos: Vec3::new(0.0, 0.0, 50.0), heading: Heading::from_radians(0.0), pitch: 0.0 });
+        let up = c.fast_options()[5]; // Δψ = 0, Δφ = +45°
+        let q = c.step(&p, &up);
+        let moved = ((q.p[0]).powi(2) + q.p[1].powi(2) + (q.p[2] - 50.0).powi(2)).sqrt();
+        assert!((moved - 60.0).abs() < 1e-9);
+        assert!(q.p[2] < 50.0);
+        assert!(c.limit_violation(&q) > 0.0, "45 deg pitch breaks the 30 deg limit");
+    }
+
+    #[test]
+    fn bad_motion_is_rejected() {
+        assert!(cfg(1, CnaKind::Asc).validate().is_err());
+        assert!(MotionConfig { speed: -1.0, ..cfg(3, CnaKind::Asc) }.validate().is_err());
+        let e = MotionConfig { tau: 45.0, ..cfg(3, CnaKind::Asc) }.validate().unwrap_err();
+        assert!(e.to_string().contains("max_turn_rate_deg_s"), "{e}");
+        assert!(cfg(3, CnaKind::Asc).validate().is_ok());
+    }
+}

@@ -1,0 +1,299 @@
+//! The planner's public face: configuration, the survey-AUV forecast it reads, the
+//! [`CnaPolicy`] trait every CNA policy (this planner, later baselines) implements, and
+//! [`LookAheadPlanner`], the receding-horizon tree-search planner of Hudson Ch. 3.
+//!
+//! Each call plans one decision from the CNA's current pose and the AUVs' current modelled
+//! errors; the caller executes it, then updates the errors from the positions that really
+//! happened (in pre-deployment mode they are the forecast ones).
+
+use crate::error_model::{to_arr, AuvError, ErrorModel};
+use crate::motion::{CnaPose, FastPose, MotionConfig, MotionOption};
+use crate::penalty::PenaltyPair;
+use crate::search::{branch_and_bound, Shared};
+use crate::tree::{rest_floors, Tree};
+use crate::{brute, PlanError, SearchOutcome};
+use coopnav_core::Vec3;
+use serde::{Deserialize, Serialize};
+use std::time::{Duration, Instant};
+
+/// CNA–AUV distance limits, metres (Table 5.1: 100 and 1000).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DistanceLimits {
+    pub min: f64,
+    pub max: f64,
+}
+
+impl Default for DistanceLimits {
+    fn default() -> Self {
+        DistanceLimits { min: 100.0, max: 1000.0 }
+    }
+}
+
+/// Which search computes the decision (both give the same decision and cost).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum Algorithm {
+    #[default]
+    BranchAndBound,
+    BruteForce,
+}
+
+/// The time budget of one decision (digest §7.2, A16).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
+pub enum Deadline {
+    /// Search the full depth, however long it takes (deterministic).
+    None,
+    /// τ minus a margin (seconds): iterative deepening, the deepest completed level wins.
+    TauMinus { margin_s: f64 },
+    /// A fixed budget in seconds, with iterative deepening.
+    Seconds { seconds: f64 },
+}
+
+impl Default for Deadline {
+    fn default() -> Self {
+        Deadline::TauMinus { margin_s: 1.0 }
+    }
+}
+
+/// How the tree is searched.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SearchConfig {
+    #[serde(default)]
+    pub algorithm: Algorithm,
+    /// Use rayon over the top two levels.
+    #[serde(default = "yes")]
+    pub parallel: bool,
+    #[serde(default)]
+    pub deadline: Deadline,
+}
+
+fn yes() -> bool {
+    true
+}
+
+impl Default for SearchConfig {
+    fn default() -> Self {
+        SearchConfig { algorithm: Algorithm::default(), parallel: true, deadline: Deadline::default() }
+    }
+}
+
+/// Everything the look-ahead planner needs.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PlannerConfig {
+    /// Look-ahead levels L (the tree has L + 1 levels).
+    pub look_ahead: usize,
+    pub motion: MotionConfig,
+    #[serde(default)]
+    pub error: ErrorModel,
+    #[serde(default)]
+    pub limits: DistanceLimits,
+    pub penalties: PenaltyPair,
+    #[serde(default)]
+    pub search: SearchConfig,
+}
+
+/// Largest tree we accept: (A·B)^(L+1) leaves.
+pub const MAX_LEAVES: f64 = 1e12;
+
+impl PlannerConfig {
+    pub fn validate(&self) -> Result<(), PlanError> {
+        self.motion.validate()?;
+        let bad = |field: &str, allowed: &str, value: String| Err(PlanError::Invalid { field: field.into(), allowed: allowed.into(), value });
+        let m = self.motion.options().len();
+        let leaves = (m as f64).powi(self.look_ahead as i32 + 1);
+        if m > 4096 || leaves > MAX_LEAVES {
+            return bad("look_ahead", "(heading_options * pitch_options)^(look_ahead + 1) <= 1e12", format!("{} with {m} options", self.look_ahead));
+        }
+        if !(self.error.alpha.is_finite() && self.error.alpha >= 0.0) {
+            return bad("error.alpha", ">= 0 m^2/s", self.error.alpha.to_string());
+        }
+        let DistanceLimits { min, max } = self.limits;
+        if !(min.is_finite() && max.is_finite() && min >= 0.0 && min < max) {
+            return bad("limits", "0 <= min < max (metres)", format!("min {min}, max {max}"));
+        }
+        self.penalties.primary.validate("penalties.primary")?;
+        self.penalties.look_ahead.validate("penalties.look_ahead")?;
+        match self.search.deadline {
+            Deadline::TauMinus { margin_s } if !(margin_s >= 0.0 && margin_s < self.motion.tau) => bad("search.deadline.margin_s", "0 <= margin_s < tau", margin_s.to_string()),
+            Deadline::Seconds { seconds } if !(seconds > 0.0 && seconds.is_finite()) => bad("search.deadline.seconds", "> 0", seconds.to_string()),
+            _ => Ok(()),
+        }
+    }
+
+    fn budget(&self) -> Option<Duration> {
+        match self.search.deadline {
+            Deadline::None => None,
+            Deadline::TauMinus { margin_s } => Some(Duration::from_secs_f64(self.motion.tau - margin_s)),
+            Deadline::Seconds { seconds } => Some(Duration::from_secs_f64(seconds)),
+        }
+    }
+}
+
+/// Where the survey AUVs will be: position of AUV `k` at time `t`, or `None` past the end of
+/// what is known (the horizon is then truncated, A11).
+pub trait AuvForecast {
+    fn n_auvs(&self) -> usize;
+    fn position(&self, k: usize, t: f64) -> Option<Vec3>;
+}
+
+/// A forecast from a closure `(k, t) -> Option<Vec3>`.
+pub struct FnForecast<F> {
+    pub n: usize,
+    pub f: F,
+}
+
+impl<F: Fn(usize, f64) -> Option<Vec3>> AuvForecast for FnForecast<F> {
+    fn n_auvs(&self) -> usize {
+        self.n
+    }
+    fn position(&self, k: usize, t: f64) -> Option<Vec3> {
+        (self.f)(k, t)
+    }
+}
+
+/// What a policy is asked each τ.
+pub struct PlanInput<'a> {
+    /// Time of the decision, s.
+    pub t: f64,
+    pub cna: CnaPose,
+    /// Current modelled error of each AUV (same order as the forecast).
+    pub errors: &'a [AuvError],
+    pub forecast: &'a dyn AuvForecast,
+}
+
+/// One decision.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct Decision {
+    /// Index of the chosen option in [`MotionConfig::options`].
+    pub option: usize,
+    pub motion: MotionOption,
+    /// The CNA pose after the step: the next waypoint.
+    pub next: CnaPose,
+    /// Minimum path cost over the searched tree (penalised).
+    pub value: f64,
+    /// Tree levels requested (L + 1) and completed.
+    pub levels_requested: usize,
+    pub levels_searched: usize,
+    /// Tree nodes evaluated (varies with the thread count under parallel search).
+    pub nodes: u64,
+}
+
+/// A CNA path policy: anything that picks the CNA's next move each τ.
+pub trait CnaPolicy {
+    fn name(&self) -> &str;
+    fn decide(&mut self, input: &PlanInput) -> Result<Decision, PlanError>;
+}
+
+/// The exact receding-horizon look-ahead planner.
+#[derive(Debug, Clone)]
+pub struct LookAheadPlanner {
+    cfg: PlannerConfig,
+}
+
+impl LookAheadPlanner {
+    pub fn new(cfg: PlannerConfig) -> Result<Self, PlanError> {
+        cfg.validate()?;
+        Ok(LookAheadPlanner { cfg })
+    }
+
+    pub fn config(&self) -> &PlannerConfig {
+        &self.cfg
+    }
+
+    /// Builds the tree of `depth` levels (fewer when the forecast ends).
+    fn tree(&self, input: &PlanInput, depth: usize) -> Result<Tree, PlanError> {
+        let cfg = &self.cfg;
+        let n = input.forecast.n_auvs();
+        if n == 0 || input.errors.len() != n {
+            return Err(PlanError::Input(format!("{} error states for {n} forecast AUVs (need one per AUV, at least one)", input.errors.len())));
+        }
+        let mut auv = Vec::with_capacity(n * depth);
+        let mut levels = 0;
+        'levels: for l in 0..depth {
+            let t = input.t + (l + 1) as f64 * cfg.motion.tau;
+            let mut row = Vec::with_capacity(n);
+            for k in 0..n {
+                match input.forecast.position(k, t) {
+                    Some(p) => row.push(to_arr(&p)),
+                    None => break 'levels,
+                }
+            }
+            auv.extend(row);
+            levels += 1;
+        }
+        if levels == 0 {
+            return Err(PlanError::NoForecast { t: input.t + cfg.motion.tau });
+        }
+        let sigma2: Vec<f64> = input.errors.iter().map(|e| e.sigma2).collect();
+        let root_eps2: Vec<f64> = input.errors.iter().map(|e| e.eps2).collect();
+        let alpha_tau = cfg.error.alpha * cfg.motion.tau;
+        let options = cfg.motion.fast_options();
+        let root_pose = FastPose::from_pose(&input.cna);
+        // Level 0 keeps only the options that break the AUV-CNA limits least (none, normally): A5.
+        let violation: Vec<f64> = options.iter().map(|o| cfg.motion.limit_violation(&cfg.motion.step(&root_pose, o))).collect();
+        let least = violation.iter().cloned().fold(f64::INFINITY, f64::min);
+        let root_options = (0..options.len()).filter(|&i| violation[i] <= least).collect();
+        Ok(Tree {
+            motion: cfg.motion,
+            model: cfg.error,
+            limits: cfg.limits,
+            penalties: cfg.penalties,
+            all_options: (0..options.len()).collect(),
+            options,
+            root_options,
+            depth: levels,
+            n,
+            auv,
+            rest_floor: rest_floors(&cfg.error, &sigma2, &root_eps2, alpha_tau, levels),
+            sigma2,
+            alpha_tau,
+            root_pose,
+            root_eps2,
+            root_los: input.errors.iter().map(|e| e.los).collect(),
+        })
+    }
+
+    fn decision(&self, tree: &Tree, out: SearchOutcome, requested: usize) -> Decision {
+        let opt = self.cfg.motion.options()[out.root_option];
+        let next = self.cfg.motion.step(&tree.root_pose, &tree.options[out.root_option]).to_pose();
+        Decision { option: out.root_option, motion: opt, next, value: out.value, levels_requested: requested, levels_searched: tree.depth, nodes: out.nodes }
+    }
+}
+
+impl CnaPolicy for LookAheadPlanner {
+    fn name(&self) -> &str {
+        "look-ahead"
+    }
+
+    fn decide(&mut self, input: &PlanInput) -> Result<Decision, PlanError> {
+        let requested = self.cfg.look_ahead + 1;
+        let full = self.tree(input, requested)?;
+        let search = |tree: &Tree, shared: &Shared| match self.cfg.search.algorithm {
+            Algorithm::BruteForce => Some(brute::brute_force(tree)),
+            Algorithm::BranchAndBound => branch_and_bound(tree, self.cfg.search.parallel, shared),
+        };
+        let Some(budget) = self.cfg.budget() else {
+            let out = search(&full, &Shared::new(None)).expect("no deadline, no abort");
+            return Ok(self.decision(&full, out, requested));
+        };
+        // Anytime: iterative deepening; the deepest level completed before the deadline decides.
+        let deadline = Instant::now() + budget;
+        let mut best: Option<Decision> = None;
+        let mut nodes = 0;
+        for depth in 1..=full.depth {
+            let tree = self.tree(input, depth)?;
+            match search(&tree, &Shared::new(Some(deadline))) {
+                Some(out) => {
+                    nodes += out.nodes;
+                    best = Some(Decision { nodes, ..self.decision(&tree, out, requested) });
+                }
+                None => break,
+            }
+        }
+        best.ok_or(PlanError::Deadline)
+    }
+}

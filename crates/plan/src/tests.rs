@@ -1,0 +1,202 @@
+//! Search tests: the production search against the brute-force reference, greedy identity,
+//! leaf counts, determinism across thread counts, the deadline, and the distance penalty's
+//! effect over a whole mission.
+
+use super::*;
+use coopnav_core::{Heading, Vec3};
+use proptest::prelude::*;
+
+/// A test instance: AUVs on straight lines, the CNA somewhere near them.
+#[derive(Debug, Clone)]
+struct Instance {
+    cfg: PlannerConfig,
+    cna: CnaPose,
+    starts: Vec<Vec3>,
+    vels: Vec<Vec3>,
+    eps: Vec<f64>,
+}
+
+impl Instance {
+    fn errors(&self) -> Vec<AuvError> {
+        self.starts.iter().zip(&self.eps).map(|(p, &e)| self.cfg.error.initial(1.0, e, &self.cna.pos, p)).collect()
+    }
+    fn forecast(&self) -> FnForecast<impl Fn(usize, f64) -> Option<Vec3> + '_> {
+        FnForecast { n: self.starts.len(), f: move |k: usize, t: f64| Some(self.starts[k] + self.vels[k] * t) }
+    }
+    fn decide(&self, search: SearchConfig) -> Decision {
+        let mut p = LookAheadPlanner::new(PlannerConfig { search, ..self.cfg }).unwrap();
+        let (e, f) = (self.errors(), self.forecast());
+        p.decide(&PlanInput { t: 0.0, cna: self.cna, errors: &e, forecast: &f }).unwrap()
+    }
+}
+
+fn exact(algorithm: Algorithm, parallel: bool) -> SearchConfig {
+    SearchConfig { algorithm, parallel, deadline: Deadline::None }
+}
+
+fn asc(a: usize, l: usize, case: PenaltyCase) -> PlannerConfig {
+    PlannerConfig {
+        look_ahead: l,
+        motion: MotionConfig { speed: 2.0, tau: 10.0, heading_options: a, max_turn_rate_deg_s: 4.0, cna: CnaKind::Asc },
+        error: ErrorModel::default(),
+        limits: DistanceLimits::default(),
+        penalties: case.penalties(),
+        search: exact(Algorithm::BranchAndBound, false),
+    }
+}
+
+prop_compose! {
+    fn instance()(n in 1usize..=5, a in 2usize..=7, b in 1usize..=4, l in 0usize..=4, auv_cna in any::<bool>(),
+                  case in 0usize..21, speed in 0.5f64..4.0, heading in -3.1f64..3.1, cna_z in 0.0f64..100.0,
+                  seeds in prop::collection::vec((-1500.0f64..1500.0, -1500.0f64..1500.0, 0.0f64..120.0, -3.1f64..3.1, 0.5f64..3.0), 5),
+                  slant in any::<bool>(), tangential in any::<bool>()) -> Instance {
+        let cna = if auv_cna { CnaKind::auv(b) } else { CnaKind::Asc };
+        let m = a * if auv_cna { b } else { 1 };
+        // Keep the brute force affordable: at most ~20k leaves.
+        let mut l = l;
+        while l > 0 && (m as f64).powi(l as i32 + 1) > 2.0e4 { l -= 1; }
+        let mut cfg = asc(a, l, PenaltyCase::ALL[case]);
+        cfg.motion.speed = speed;
+        cfg.motion.cna = cna;
+        cfg.error.bearing = if slant { BearingMode::Slant3d } else { BearingMode::Horizontal };
+        cfg.error.cost = if tangential { CostMode::TangentialOnly } else { CostMode::Total };
+        let z = if auv_cna { cna_z } else { 0.0 };
+        let starts = seeds[..n].iter().map(|s| Vec3::new(s.0, s.1, s.2)).collect();
+        let vels = seeds[..n].iter().map(|s| Vec3::new(1.5 * s.3.cos(), 1.5 * s.3.sin(), 0.0)).collect();
+        let eps = seeds[..n].iter().map(|s| s.4).collect();
+        Instance { cfg, cna: CnaPose { pos: Vec3::new(0.0, 0.0, z), heading: Heading::from_radians(heading), pitch: 0.0 }, starts, vels, eps }
+    }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 300, ..ProptestConfig::default() })]
+
+    #[test]
+    fn branch_and_bound_equals_brute_force(inst in instance()) {
+        let brute = inst.decide(exact(Algorithm::BruteForce, false));
+        let seq = inst.decide(exact(Algorithm::BranchAndBound, false));
+        let par = inst.decide(exact(Algorithm::BranchAndBound, true));
+        prop_assert_eq!(brute.option, seq.option);
+        prop_assert_eq!(brute.value, seq.value);
+        prop_assert_eq!(brute.option, par.option);
+        prop_assert_eq!(brute.value, par.value);
+        prop_assert!(seq.nodes <= brute.nodes);
+    }
+}
+
+#[test]
+fn leaf_count_is_options_to_the_levels() {
+    for (a, l) in [(2, 0), (3, 2), (5, 3), (4, 4)] {
+        let inst = instance_fixed(asc(a, l, PenaltyCase::C1));
+        let d = inst.decide(exact(Algorithm::BruteForce, false));
+        // The brute force recomputes every path: nodes = leaves × levels.
+        assert_eq!(d.nodes, (a as u64).pow(l as u32 + 1) * (l as u64 + 1), "A={a} L={l}");
+        assert_eq!(d.levels_searched, l + 1);
+    }
+}
+
+fn instance_fixed(cfg: PlannerConfig) -> Instance {
+    Instance {
+        cfg,
+        cna: CnaPose { pos: Vec3::new(140.0, 0.0, 0.0), heading: Heading::from_radians(0.0), pitch: 0.0 },
+        starts: vec![Vec3::new(0.0, 0.0, 90.0), Vec3::new(500.0, 0.0, 70.0)],
+        vels: vec![Vec3::new(0.0, 1.5, 0.0), Vec3::new(0.0, 1.5, 0.0)],
+        eps: vec![1.0, 1.0],
+    }
+}
+
+#[test]
+fn look_ahead_zero_is_greedy() {
+    for case in [PenaltyCase::C2, PenaltyCase::C1, PenaltyCase::C9] {
+        let inst = instance_fixed(asc(7, 0, case));
+        let d = inst.decide(exact(Algorithm::BranchAndBound, false));
+        // Greedy by hand: step every option, update every AUV's error, penalise, take the first minimum.
+        let (m, errs) = (inst.cfg.motion, inst.errors());
+        let mut best = (f64::INFINITY, usize::MAX);
+        for (i, o) in m.options().iter().enumerate() {
+            let h = inst.cna.heading.turned(o.dpsi);
+            let pos = inst.cna.pos + Vec3::new(h.unit().0, h.unit().1, 0.0) * (m.speed * m.tau);
+            let (mut c, mut dmin, mut dmax) = (0.0, f64::INFINITY, 0.0f64);
+            for (k, e) in errs.iter().enumerate() {
+                let a = inst.starts[k] + inst.vels[k] * m.tau;
+                let e2 = inst.cfg.error.step(e, inst.cfg.error.los([pos.x, pos.y, pos.z], [a.x, a.y, a.z]), m.tau);
+                c += e2.sigma2 + e2.eps2;
+                dmin = dmin.min((a - pos).norm());
+                dmax = dmax.max((a - pos).norm());
+            }
+            let v = Violation { too_close: (100.0 - dmin).max(0.0), too_far: (dmax - 1000.0).max(0.0) };
+            let c = inst.cfg.penalties.primary.apply(c, &v);
+            if c < best.0 - 1e-9 {
+                best = (c, i);
+            }
+        }
+        assert_eq!(d.option, best.1, "{case:?}");
+        assert!((d.value - best.0).abs() < 1e-9);
+    }
+}
+
+#[test]
+fn same_decisions_on_one_and_two_threads() {
+    let inst = instance_fixed(asc(5, 4, PenaltyCase::C8));
+    let run = |threads| rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap().install(|| inst.decide(exact(Algorithm::BranchAndBound, true)));
+    let (one, two) = (run(1), run(2));
+    assert_eq!((one.option, one.value, one.next), (two.option, two.value, two.next));
+}
+
+#[test]
+fn deadline_returns_the_deepest_completed_level() {
+    let inst = instance_fixed(asc(7, 12, PenaltyCase::C2));
+    let generous = instance_fixed(asc(5, 3, PenaltyCase::C1));
+    let full = generous.decide(SearchConfig { deadline: Deadline::Seconds { seconds: 60.0 }, ..exact(Algorithm::BranchAndBound, false) });
+    let exact_d = generous.decide(exact(Algorithm::BranchAndBound, false));
+    assert_eq!((full.option, full.value, full.levels_searched), (exact_d.option, exact_d.value, 4));
+    let mut p = LookAheadPlanner::new(PlannerConfig { search: SearchConfig { deadline: Deadline::Seconds { seconds: 0.02 }, ..exact(Algorithm::BranchAndBound, false) }, ..inst.cfg }).unwrap();
+    let (e, f) = (inst.errors(), inst.forecast());
+    match p.decide(&PlanInput { t: 0.0, cna: inst.cna, errors: &e, forecast: &f }) {
+        Ok(d) => assert!(d.levels_searched >= 1 && d.levels_searched < 13, "{}", d.levels_searched),
+        Err(e) => assert_eq!(e, PlanError::Deadline),
+    }
+}
+
+#[test]
+fn horizon_is_truncated_at_the_end_of_data() {
+    let inst = instance_fixed(asc(3, 5, PenaltyCase::C1));
+    let f = FnForecast { n: 2, f: |k: usize, t: f64| (t <= 20.0).then(|| inst.starts[k] + inst.vels[k] * t) };
+    let mut p = LookAheadPlanner::new(inst.cfg).unwrap();
+    let e = inst.errors();
+    let d = p.decide(&PlanInput { t: 0.0, cna: inst.cna, errors: &e, forecast: &f }).unwrap();
+    assert_eq!((d.levels_requested, d.levels_searched), (6, 2));
+    let err = p.decide(&PlanInput { t: 20.0, cna: inst.cna, errors: &e, forecast: &f }).unwrap_err();
+    assert!(matches!(err, PlanError::NoForecast { .. }));
+}
+
+/// Flies a whole mission: one AUV eastbound at 1.5 m/s, the CNA starting `gap` m north of it.
+fn fly(case: PenaltyCase, gap: f64, steps: usize) -> Vec<f64> {
+    let mut cfg = asc(5, 0, case);
+    cfg.motion.speed = 1.5;
+    let mut p = LookAheadPlanner::new(cfg).unwrap();
+    let auv = |t: f64| Vec3::new(1.5 * t, 0.0, 90.0);
+    let f = FnForecast { n: 1, f: move |_: usize, t: f64| Some(auv(t)) };
+    let mut cna = CnaPose { pos: Vec3::new(0.0, gap, 0.0), heading: Heading::from_radians(std::f64::consts::FRAC_PI_2), pitch: 0.0 };
+    let mut errs = vec![cfg.error.initial(1.0, 1.0, &cna.pos, &auv(0.0))];
+    let mut dist = Vec::new();
+    for s in 0..steps {
+        let t = s as f64 * cfg.motion.tau;
+        let d = p.decide(&PlanInput { t, cna, errors: &errs, forecast: &f }).unwrap();
+        cna = d.next;
+        let a = auv(t + cfg.motion.tau);
+        errs[0] = cfg.error.step(&errs[0], cfg.error.los([cna.pos.x, cna.pos.y, cna.pos.z], [a.x, a.y, a.z]), cfg.motion.tau);
+        dist.push((a - cna.pos).norm());
+    }
+    dist
+}
+
+#[test]
+fn distance_penalty_stops_drift_from_a_far_auv() {
+    // Sec. 5.1: with an initial separation just over 1 km the greedy planner needs the penalty.
+    let with = fly(PenaltyCase::C1, 1050.0, 300);
+    let without = fly(PenaltyCase::C2, 1050.0, 300);
+    let max_tail = |d: &[f64]| d[150..].iter().cloned().fold(0.0, f64::max);
+    assert!(max_tail(&with) < 1000.0 + 2.0 * 20.0, "penalised CNA kept {}", max_tail(&with));
+    assert!(max_tail(&without) > max_tail(&with), "without {} with {}", max_tail(&without), max_tail(&with));
+}

@@ -1,0 +1,52 @@
+//! Standard planning workloads for benchmarks (criterion and `coopnav bench planner`): one
+//! decision of the planner on the digest §5.2 geometry — N survey AUVs on adjacent 500 m lanes
+//! heading north at 1.5 m/s at 90 m depth, the CNA starting at (140, 0, 0) heading east,
+//! τ = 10 s, s = 1.5 m/s, penalty case 1. Invented where the thesis is silent (digest A17, A18).
+
+use crate::{AuvError, CnaKind, CnaPolicy, CnaPose, Deadline, Decision, DistanceLimits, ErrorModel, FnForecast, LookAheadPlanner, MotionConfig, PenaltyCase, PlanError, PlanInput, PlannerConfig, SearchConfig};
+use crate::planner::Algorithm;
+use coopnav_core::{Heading, Vec3};
+use serde::Serialize;
+
+/// One benchmark decision: N AUVs, A heading options, B pitch options (1 = ASC), L look-ahead.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+pub struct Workload {
+    pub n: usize,
+    pub a: usize,
+    pub b: usize,
+    pub l: usize,
+}
+
+impl Workload {
+    pub fn config(&self, algorithm: Algorithm, parallel: bool) -> PlannerConfig {
+        PlannerConfig {
+            look_ahead: self.l,
+            motion: MotionConfig {
+                speed: 1.5,
+                tau: 10.0,
+                heading_options: self.a,
+                max_turn_rate_deg_s: 4.0,
+                cna: if self.b > 1 { CnaKind::auv(self.b) } else { CnaKind::Asc },
+            },
+            error: ErrorModel::default(),
+            limits: DistanceLimits::default(),
+            penalties: PenaltyCase::C1.penalties(),
+            search: SearchConfig { algorithm, parallel, deadline: Deadline::None },
+        }
+    }
+
+    /// Leaves of the full tree, (A·B)^(L+1).
+    pub fn leaves(&self) -> u64 {
+        ((self.a * self.b) as u64).pow(self.l as u32 + 1)
+    }
+
+    /// Plans one decision.
+    pub fn decide(&self, algorithm: Algorithm, parallel: bool) -> Result<Decision, PlanError> {
+        let cfg = self.config(algorithm, parallel);
+        let auv = |k: usize, t: f64| Vec3::new(500.0 * k as f64 + 50.0, 1.5 * t, 90.0);
+        let cna = CnaPose { pos: Vec3::new(140.0, 0.0, 0.0), heading: Heading::from_radians(0.0), pitch: 0.0 };
+        let errors: Vec<AuvError> = (0..self.n).map(|k| cfg.error.initial(1.0, 1.0, &cna.pos, &auv(k, 0.0))).collect();
+        let forecast = FnForecast { n: self.n, f: move |k: usize, t: f64| Some(auv(k, t)) };
+        LookAheadPlanner::new(cfg)?.decide(&PlanInput { t: 0.0, cna, errors: &errors, forecast: &forecast })
+    }
+}

@@ -1,0 +1,133 @@
+//! The buoy-location grid (digest §5.7 item 1, §10 A14): a zero-drift Monte Carlo per candidate
+//! buoy position north of the path, the region within a tolerance of the best cell, and CSV
+//! output (the SVG heat map is in [`super::plot`]).
+
+use super::config::{Drift, Scenario};
+use super::mc::{monte_carlo, McError, Stats};
+use serde::{Deserialize, Serialize};
+use thiserror::Error;
+
+/// Grid extent and sampling. Defaults: the 200 m path, 0–100 m north, 10 m spacing, 250 runs.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct GridSpec {
+    pub x: [f64; 2],
+    pub y: [f64; 2],
+    pub spacing: f64,
+    pub runs_per_cell: usize,
+}
+
+impl Default for GridSpec {
+    fn default() -> Self {
+        GridSpec { x: [-79.0, 121.0], y: [0.0, 100.0], spacing: 10.0, runs_per_cell: 250 }
+    }
+}
+
+#[derive(Debug, Error)]
+pub enum GridError {
+    #[error("grid field '{field}' = {value}: {allowed}")]
+    Spec { field: &'static str, value: f64, allowed: &'static str },
+    #[error(transparent)]
+    Mc(#[from] McError),
+    #[error("grid CSV: {0}")]
+    Csv(#[from] csv::Error),
+}
+
+impl GridSpec {
+    pub fn validate(&self) -> Result<(), GridError> {
+        let bad = |field, value, allowed| Err(GridError::Spec { field, value, allowed });
+        if !(self.spacing.is_finite() && self.spacing > 0.0) {
+            return bad("spacing", self.spacing, "must be > 0 m");
+        }
+        if !(self.x[0].is_finite() && self.x[1] >= self.x[0]) {
+            return bad("x[1]", self.x[1], "must be finite and ≥ x[0]");
+        }
+        if !(self.y[0].is_finite() && self.y[1] >= self.y[0]) {
+            return bad("y[1]", self.y[1], "must be finite and ≥ y[0]");
+        }
+        if self.runs_per_cell < 2 {
+            return bad("runs_per_cell", self.runs_per_cell as f64, "must be ≥ 2");
+        }
+        if self.cells().len() > 10_000 {
+            return bad("spacing", self.spacing, "gives more than 10 000 cells; use a coarser spacing");
+        }
+        Ok(())
+    }
+    fn axis(lo: f64, hi: f64, step: f64) -> Vec<f64> {
+        let n = ((hi - lo) / step + 1e-9).floor() as usize;
+        (0..=n).map(|i| lo + i as f64 * step).collect()
+    }
+    pub fn xs(&self) -> Vec<f64> {
+        Self::axis(self.x[0], self.x[1], self.spacing)
+    }
+    pub fn ys(&self) -> Vec<f64> {
+        Self::axis(self.y[0], self.y[1], self.spacing)
+    }
+    /// Cells in row-major order (y outer, x inner).
+    pub fn cells(&self) -> Vec<[f64; 2]> {
+        let xs = self.xs();
+        self.ys().into_iter().flat_map(|y| xs.iter().map(move |&x| [x, y])).collect()
+    }
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct GridCell {
+    pub x: f64,
+    pub y: f64,
+    pub zone_error: Stats,
+}
+
+/// Runs every cell with the same base seed (common random numbers across cells); `progress`
+/// receives the number of finished cells.
+pub fn buoy_grid(base: &Scenario, spec: &GridSpec, seed: u64, progress: &(dyn Fn(u64) + Sync)) -> Result<Vec<GridCell>, GridError> {
+    spec.validate()?;
+    let mut out = Vec::new();
+    for (i, [x, y]) in spec.cells().into_iter().enumerate() {
+        let mut sc = base.clone();
+        sc.buoy.fixed = Some([x, y]);
+        sc.buoy.drift = Drift::None;
+        let r = monte_carlo(&sc, spec.runs_per_cell, seed, &|_| {})?;
+        out.push(GridCell { x, y, zone_error: r.summary.zone_error });
+        progress(i as u64 + 1);
+    }
+    Ok(out)
+}
+
+/// Cells whose mean error is within `tolerance` (fraction) of the best cell's.
+pub fn optimal_region(cells: &[GridCell], tolerance: f64) -> Vec<GridCell> {
+    let best = cells.iter().map(|c| c.zone_error.mean).fold(f64::INFINITY, f64::min);
+    cells.iter().filter(|c| c.zone_error.mean <= best * (1.0 + tolerance)).copied().collect()
+}
+
+pub fn write_csv<W: std::io::Write>(out: W, cells: &[GridCell]) -> Result<(), GridError> {
+    let mut w = csv::Writer::from_writer(out);
+    w.write_record(["x", "y", "runs", "mean_zone_error", "sd", "se"])?;
+    for c in cells {
+        let s = c.zone_error;
+        w.write_record([c.x, c.y, s.n as f64, s.mean, s.sd, s.se].map(|v| v.to_string()))?;
+    }
+    w.flush().map_err(csv::Error::from)?;
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn cells_cover_the_box() {
+        let g = GridSpec { x: [0.0, 20.0], y: [0.0, 10.0], spacing: 10.0, runs_per_cell: 2 };
+        assert_eq!(g.cells(), vec![[0.0, 0.0], [10.0, 0.0], [20.0, 0.0], [0.0, 10.0], [10.0, 10.0], [20.0, 10.0]]);
+        let bad = GridSpec { spacing: 0.0, ..g.clone() };
+        assert!(bad.validate().unwrap_err().to_string().contains("spacing"));
+        let bad = GridSpec { runs_per_cell: 1, ..g };
+        assert!(bad.validate().unwrap_err().to_string().contains("runs_per_cell"));
+    }
+
+    #[test]
+    fn optimal_region_tolerance() {
+        let s = |m| Stats { n: 2, mean: m, sd: 0.0, se: 0.0 };
+        let cells = [GridCell { x: 0.0, y: 0.0, zone_error: s(1.0) }, GridCell { x: 1.0, y: 0.0, zone_error: s(1.05) }, GridCell { x: 2.0, y: 0.0, zone_error: s(2.0) }];
+        assert_eq!(optimal_region(&cells, 0.1).len(), 2);
+    }
+}

@@ -1,0 +1,16 @@
+//! The Gill (2013) hybrid-baseline world: truth simulation of an AUV passing counter-course
+//! under a ship with an off-path buoy, the sensor and acoustic noise, Monte Carlo with common
+//! random numbers, the buoy-location grid, coefficient tuning and the log writer for the
+//! post-processing pipeline. The filters themselves live in `coopnav_nav`.
+
+pub mod config;
+pub mod grid;
+pub mod mc;
+pub mod noise;
+pub mod plot;
+pub mod tune;
+pub mod world;
+
+pub use config::{ConfigError, Scenario};
+pub use mc::{monte_carlo, welch_95, McError, McResult, McSummary, Stats, WelchCi};
+pub use world::{run, RunMetrics, Trace, TraceRow};

@@ -1,0 +1,230 @@
+//! Coefficient tuning (digest §5.7 item 3): a bounded Nelder–Mead search (argmin) over a chosen
+//! subset of the Table 2/3 coefficients, on the Monte Carlo cost with fixed seeds (common random
+//! numbers make the cost a deterministic function of the coefficients).
+
+use super::config::Scenario;
+use super::mc::{monte_carlo, McError};
+use argmin::core::{CostFunction, Executor, State};
+use argmin::solver::neldermead::NelderMead;
+use serde::{Deserialize, Serialize};
+use thiserror::Error;
+
+/// A tunable coefficient (E and N share one value, as in Table 3).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Coefficient {
+    AuvQEn,
+    BuoyPEn,
+    BuoyPSpeed,
+    BuoyPHeading,
+    BuoyQEn,
+    BuoyQSpeed,
+    BuoyQHeading,
+}
+
+impl Coefficient {
+    /// Upper bound from Table 2 (the lower bound is 0).
+    pub fn upper(self) -> f64 {
+        let four_pi2 = 4.0 * std::f64::consts::PI.powi(2);
+        match self {
+            Coefficient::AuvQEn => 3.0,
+            Coefficient::BuoyPEn => 30.0,
+            Coefficient::BuoyPSpeed => 5.0,
+            Coefficient::BuoyPHeading => four_pi2,
+            Coefficient::BuoyQEn => 10.0,
+            Coefficient::BuoyQSpeed => 5.0,
+            Coefficient::BuoyQHeading => four_pi2,
+        }
+    }
+    pub fn get(self, sc: &Scenario) -> f64 {
+        let (a, b) = (&sc.filters.auv, &sc.filters.buoy);
+        match self {
+            Coefficient::AuvQEn => a.q[0],
+            Coefficient::BuoyPEn => b.p0[0],
+            Coefficient::BuoyPSpeed => b.p0[2],
+            Coefficient::BuoyPHeading => b.p0[3],
+            Coefficient::BuoyQEn => b.q[0],
+            Coefficient::BuoyQSpeed => b.q[2],
+            Coefficient::BuoyQHeading => b.q[3],
+        }
+    }
+    pub fn set(self, sc: &mut Scenario, v: f64) {
+        let (a, b) = (&mut sc.filters.auv, &mut sc.filters.buoy);
+        match self {
+            Coefficient::AuvQEn => (a.q[0], a.q[1]) = (v, v),
+            Coefficient::BuoyPEn => (b.p0[0], b.p0[1]) = (v, v),
+            Coefficient::BuoyPSpeed => b.p0[2] = v,
+            Coefficient::BuoyPHeading => b.p0[3] = v,
+            Coefficient::BuoyQEn => (b.q[0], b.q[1]) = (v, v),
+            Coefficient::BuoyQSpeed => b.q[2] = v,
+            Coefficient::BuoyQHeading => b.q[3] = v,
+        }
+    }
+}
+
+/// What the Monte Carlo cost measures.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Objective {
+    /// Mean AUV zone error (the cost for Q^A).
+    AuvZone,
+    /// Mean buoy-filter error over the mission (the cost for the buoy coefficients).
+    BuoyMission,
+}
+
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TuneSpec {
+    pub coefficients: Vec<Coefficient>,
+    pub objective: Objective,
+    #[serde(default = "default_runs")]
+    pub runs: usize,
+    #[serde(default = "default_iters")]
+    pub max_iters: u64,
+    #[serde(default = "default_seed")]
+    pub seed: u64,
+}
+
+fn default_runs() -> usize {
+    50
+}
+fn default_iters() -> u64 {
+    40
+}
+fn default_seed() -> u64 {
+    1
+}
+
+#[derive(Debug, Error)]
+pub enum TuneError {
+    #[error("tune: coefficients is empty; name at least one (auv_q_en, buoy_p_en, buoy_p_speed, buoy_p_heading, buoy_q_en, buoy_q_speed, buoy_q_heading)")]
+    NoCoefficients,
+    #[error("tune: {name} starts at {value}, outside its bounds [0, {upper}] (Table 2)")]
+    StartOutOfBounds { name: String, value: f64, upper: f64 },
+    #[error("tune: max_iters = 0; at least one iteration is needed")]
+    NoIterations,
+    #[error(transparent)]
+    Mc(#[from] McError),
+    #[error("tune: the optimiser failed: {0}")]
+    Optimiser(String),
+}
+
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct TuneResult {
+    pub coefficients: Vec<(Coefficient, f64)>,
+    pub start_cost: f64,
+    pub best_cost: f64,
+    pub iterations: u64,
+}
+
+struct Problem<'a> {
+    base: &'a Scenario,
+    spec: &'a TuneSpec,
+}
+
+impl Problem<'_> {
+    /// Unit-box coordinates → coefficient values, clamped to [tiny, upper]; the distance
+    /// outside the box is returned for the penalty.
+    fn scenario(&self, u: &[f64]) -> (Scenario, f64) {
+        let mut sc = self.base.clone();
+        let mut outside = 0.0;
+        for (c, &ui) in self.spec.coefficients.iter().zip(u) {
+            let clamped = ui.clamp(1e-9, 1.0);
+            outside += (ui - clamped).abs();
+            c.set(&mut sc, clamped * c.upper());
+        }
+        (sc, outside)
+    }
+    fn evaluate(&self, u: &[f64]) -> Result<f64, McError> {
+        let (sc, outside) = self.scenario(u);
+        let r = monte_carlo(&sc, self.spec.runs, self.spec.seed, &|_| {})?;
+        let cost = match self.spec.objective {
+            Objective::AuvZone => r.summary.zone_error.mean,
+            Objective::BuoyMission => r.summary.buoy_error.map_or(f64::INFINITY, |s| s.mean),
+        };
+        Ok(cost + 10.0 * outside)
+    }
+}
+
+impl CostFunction for Problem<'_> {
+    type Param = Vec<f64>;
+    type Output = f64;
+    fn cost(&self, u: &Vec<f64>) -> Result<f64, argmin::core::Error> {
+        Ok(self.evaluate(u)?)
+    }
+}
+
+/// Tunes the chosen coefficients of `base`, starting from their current values.
+pub fn tune(base: &Scenario, spec: &TuneSpec) -> Result<TuneResult, TuneError> {
+    if spec.coefficients.is_empty() {
+        return Err(TuneError::NoCoefficients);
+    }
+    if spec.max_iters == 0 {
+        return Err(TuneError::NoIterations);
+    }
+    base.validate().map_err(McError::from)?;
+    let start: Vec<f64> = spec
+        .coefficients
+        .iter()
+        .map(|c| {
+            let v = c.get(base);
+            if (0.0..=c.upper()).contains(&v) {
+                Ok(v / c.upper())
+            } else {
+                Err(TuneError::StartOutOfBounds { name: format!("{c:?}"), value: v, upper: c.upper() })
+            }
+        })
+        .collect::<Result<_, _>>()?;
+    let problem = Problem { base, spec };
+    let start_cost = problem.evaluate(&start)?;
+    // Initial simplex: the start and one vertex per coordinate, moved 20 % of the box inwards.
+    let mut simplex = vec![start.clone()];
+    for i in 0..start.len() {
+        let mut v = start.clone();
+        v[i] = if v[i] > 0.5 { v[i] - 0.2 } else { v[i] + 0.2 };
+        simplex.push(v);
+    }
+    let solver = NelderMead::new(simplex).with_sd_tolerance(1e-4).map_err(|e| TuneError::Optimiser(e.to_string()))?;
+    let res = Executor::new(problem, solver)
+        .configure(|s| s.max_iters(spec.max_iters))
+        .run()
+        .map_err(|e| TuneError::Optimiser(e.to_string()))?;
+    let state = res.state();
+    let best = state.get_best_param().cloned().unwrap_or(start);
+    let problem = Problem { base, spec };
+    let (best_sc, _) = problem.scenario(&best);
+    Ok(TuneResult {
+        coefficients: spec.coefficients.iter().map(|c| (*c, c.get(&best_sc))).collect(),
+        start_cost,
+        best_cost: state.get_best_cost(),
+        iterations: state.get_iter(),
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn tuning_never_worsens_the_fixed_seed_cost() {
+        let mut base = Scenario::default();
+        // Start from a deliberately poor Q^A so there is something to find.
+        Coefficient::AuvQEn.set(&mut base, 2.5);
+        let spec = TuneSpec { coefficients: vec![Coefficient::AuvQEn], objective: Objective::AuvZone, runs: 8, max_iters: 6, seed: 3 };
+        let r = tune(&base, &spec).unwrap();
+        assert!(r.best_cost <= r.start_cost + 1e-12, "{r:?}");
+        let v = r.coefficients[0].1;
+        assert!(v > 0.0 && v <= 3.0);
+    }
+
+    #[test]
+    fn bad_specs_are_refused() {
+        let base = Scenario::default();
+        let spec = TuneSpec { coefficients: vec![], objective: Objective::AuvZone, runs: 4, max_iters: 2, seed: 1 };
+        assert!(matches!(tune(&base, &spec), Err(TuneError::NoCoefficients)));
+        let mut off = base.clone();
+        Coefficient::BuoyPEn.set(&mut off, 85.0);
+        let spec = TuneSpec { coefficients: vec![Coefficient::BuoyPEn], objective: Objective::BuoyMission, runs: 4, max_iters: 2, seed: 1 };
+        assert!(matches!(tune(&off, &spec), Err(TuneError::StartOutOfBounds { .. })));
+    }
+}
