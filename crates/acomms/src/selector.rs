@@ -83,7 +83,7 @@ impl RatePolicy for Alternating {
 /// Parameters of the adaptive selector (thesis Table 8 tuned values as defaults; the initial
 /// thresholds, D_max and the status-mode exit rule are reconstructed: nams digest §8 items 2–10).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
+#[serde(default, deny_unknown_fields)]
 pub struct AdaptiveConfig {
     /// Memory M: resolved outcomes in each success estimate.
     pub memory: usize,
