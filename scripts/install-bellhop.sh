@@ -13,8 +13,10 @@ exe="$dest/bellhop.exe"
 runs() {
   # BELLHOP with a missing environment file prints an error and exits; what matters is that the
   # dynamic loader resolves every library (exit 127 or a loader message otherwise).
-  local out
-  out="$(cd "$(mktemp -d)" && LD_LIBRARY_PATH="$dest/lib:${LD_LIBRARY_PATH:-}" "$exe" coopnav_probe 2>&1 || true)"
+  local out probe
+  probe="$(mktemp -d)"
+  out="$(cd "$probe" && LD_LIBRARY_PATH="$dest/lib:${LD_LIBRARY_PATH:-}" "$exe" coopnav_probe 2>&1 || true)"
+  rm -rf "$probe"
   ! grep -qiE "error while loading shared libraries|not found|cannot execute" <<<"$out"
 }
 
@@ -29,7 +31,11 @@ case "$(uname -m)" in
   *) echo "install-bellhop: unsupported machine $(uname -m); set COOPNAV_BELLHOP to a bellhop.exe" >&2; exit 1 ;;
 esac
 
-py="$(command -v python3 || command -v python)"
+py="$(command -v python3 || command -v python || true)"
+if [ -z "$py" ] || ! "$py" -m pip --version >/dev/null 2>&1; then
+  echo "install-bellhop: python3 with pip is needed to download the aubellhop wheel from PyPI" >&2
+  exit 1
+fi
 tmp="$(mktemp -d)"
 trap 'rm -rf "$tmp"' EXIT
 # Try the common manylinux tags from newest to oldest; pip picks the wheel that matches.

@@ -63,7 +63,7 @@ impl BitWriter {
     }
     fn push_bits(&mut self, mut code: u64, n: u32) {
         for _ in 0..n {
-            if self.bits % 8 == 0 {
+            if self.bits & 7 == 0 {
                 self.bytes.push(0);
             }
             if code & 1 == 1 {

@@ -94,7 +94,7 @@ impl std::fmt::Display for Rate {
 
 /// TDMA timing: one transmitter per slot, slots owned round-robin.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
+#[serde(default, deny_unknown_fields)]
 pub struct Tdma {
     /// Slot length without rate 5, s (thesis: 10 s).
     pub base_slot: f64,

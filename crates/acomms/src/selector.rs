@@ -83,7 +83,7 @@ impl RatePolicy for Alternating {
 /// Parameters of the adaptive selector (thesis Table 8 tuned values as defaults; the initial
 /// thresholds, D_max and the status-mode exit rule are reconstructed: nams digest §8 items 2–10).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
+#[serde(default, deny_unknown_fields)]
 pub struct AdaptiveConfig {
     /// Memory M: resolved outcomes in each success estimate.
     pub memory: usize,
@@ -233,6 +233,9 @@ pub struct AdaptiveBins {
     pending: BTreeMap<u64, (Mode, usize)>,
 }
 
+/// (rate, upper distance threshold m) from fastest to slowest.
+pub type Thresholds = Vec<(Rate, f64)>;
+
 const RATE_ORDER: [(usize, Rate); 4] = [(3, Rate::R5), (2, Rate::R4), (1, Rate::R1), (0, Rate::R0)];
 
 impl AdaptiveBins {
@@ -259,7 +262,7 @@ impl AdaptiveBins {
     }
 
     /// Current thresholds (rate, upper distance m) of the data and status arrays.
-    pub fn thresholds(&self) -> (Vec<(Rate, f64)>, Vec<(Rate, f64)>) {
+    pub fn thresholds(&self) -> (Thresholds, Thresholds) {
         let z = |a: &BinArray| a.rates.iter().copied().zip(a.th.iter().copied()).collect();
         (z(&self.data), z(&self.status))
     }

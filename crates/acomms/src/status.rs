@@ -195,7 +195,7 @@ mod tests {
     proptest! {
         #[test]
         fn frame0_round_trip(x in -19_999.0f64..19_999.0, y in -19_999.0f64..19_999.0, z in 0.0f64..999.0,
-                             h in -3.14f64..3.14, s in 0.0f64..5.0, id in 0u8..=254, ll in any::<bool>(),
+                             h in -std::f64::consts::PI..std::f64::consts::PI, s in 0.0f64..5.0, id in 0u8..=254, ll in any::<bool>(),
                              n in 0usize..11) {
             let o = LocalOrigin::default();
             let (lat, lon) = o.to_latlon(x, y);

@@ -60,7 +60,7 @@ impl Reception {
 
 /// The success engine. Defaults are Tables 4 and 5.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
+#[serde(default, deny_unknown_fields)]
 pub struct SuccessModel {
     /// Curves for rates 0, 1, 4, 5 (rates 2 and 3 reuse 1 and 4).
     pub curves: [SuccessCurve; 4],
@@ -82,6 +82,22 @@ impl Default for SuccessModel {
 }
 
 impl SuccessModel {
+    /// Checks probabilities and thresholds; names the bad field.
+    pub fn validate(&self) -> Result<(), String> {
+        for (i, c) in self.curves.iter().enumerate() {
+            if !(0.0..=1.0).contains(&c.p_a) || c.tl_ab >= c.tl_bc || !c.tl_ab.is_finite() || !c.tl_bc.is_finite() {
+                return Err(format!("success.curves[{i}]: need 0 ≤ p_a ≤ 1 and finite tl_ab < tl_bc, got {c:?}"));
+            }
+        }
+        if self.partial.iter().flatten().any(|p| !(0.0..=1.0).contains(p)) {
+            return Err("success.partial: every probability must be in [0, 1]".into());
+        }
+        if !(self.noise_db.is_finite() && self.noise_db >= 0.0) {
+            return Err(format!("success.noise_db = {} must be ≥ 0 dB", self.noise_db));
+        }
+        Ok(())
+    }
+
     fn curve(&self, rate: Rate) -> &SuccessCurve {
         &self.curves[match rate.index() {
             0 => 0,
@@ -146,6 +162,17 @@ mod tests {
                 last = p;
             }
         }
+    }
+
+    #[test]
+    fn validation_names_the_field() {
+        assert!(SuccessModel::default().validate().is_ok());
+        let mut m = SuccessModel::default();
+        m.partial[1][0] = 1.5;
+        assert!(m.validate().unwrap_err().contains("partial"));
+        let mut m = SuccessModel::default();
+        m.curves[2].tl_bc = 10.0;
+        assert!(m.validate().unwrap_err().contains("curves[2]"));
     }
 
     #[test]

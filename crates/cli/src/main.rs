@@ -8,6 +8,7 @@ mod plan;
 mod hbl;
 mod bench_acomms;
 mod channel;
+mod nams;
 mod reproduce;
 mod rundir;
 
@@ -29,6 +30,8 @@ enum Command {
     Hbl(hbl::Command),
     /// Transmission loss and packet-success likelihood per WHOI rate against range (table + SVG).
     Channel(channel::Args),
+    /// Run a Nams adaptive-rate experiment from a TOML file (scenarios × behaviours × repetitions).
+    Nams(nams::Args),
     /// Benchmarks, printed as JSON.
     #[command(subcommand)]
     Bench(bench::Target),
@@ -44,6 +47,7 @@ fn main() -> Result<()> {
         Command::Plan(args) => plan::run(args),
         Command::Hbl(cmd) => hbl::run_command(cmd),
         Command::Channel(args) => channel::run(args),
+        Command::Nams(args) => nams::run(args),
         Command::Bench(target) => bench::run(target),
     }
 }

@@ -38,7 +38,7 @@ pub struct Bathymetry {
 /// `deep` at x = `x_deep` (held beyond), uniform in y. Reconstructed: nams digest §6.7 item 1
 /// ("a synthetic shelf sloping from ~20 m to ~60 m").
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
+#[serde(default, deny_unknown_fields)]
 pub struct Shelf {
     pub shallow: f64,
     pub deep: f64,

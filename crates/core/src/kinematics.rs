@@ -32,7 +32,7 @@ pub struct Waypoint {
 
 /// Constants of the IVER2 model. Defaults are `vehicle.m`'s values (nams digest §4.2 table).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
+#[serde(default, deny_unknown_fields)]
 pub struct Iver2Params {
     pub timestep: f64,
     /// Forward acceleration limit, m/s².
@@ -79,6 +79,39 @@ impl Default for Iver2Params {
             waypoint_tolerance: 5.0,
             turn_slowdown: 0.2,
         }
+    }
+}
+
+impl Iver2Params {
+    /// Checks that every step, limit and gain can drive the model; names the bad field.
+    pub fn validate(&self) -> Result<(), String> {
+        let positive = [
+            ("timestep", self.timestep),
+            ("max_lin_accel", self.max_lin_accel),
+            ("max_pitch_rate", self.max_pitch_rate),
+            ("max_yaw_rate", self.max_yaw_rate),
+            ("max_pitch", self.max_pitch),
+            ("waypoint_tolerance", self.waypoint_tolerance),
+        ];
+        for (name, v) in positive {
+            if !(v.is_finite() && v > 0.0) {
+                return Err(format!("vehicle.{name} = {v} must be a finite number > 0"));
+            }
+        }
+        if self.timestep > 10.0 {
+            return Err(format!("vehicle.timestep = {} must be ≤ 10 s", self.timestep));
+        }
+        if !(0.0..1.0).contains(&self.turn_slowdown) {
+            return Err(format!("vehicle.turn_slowdown = {} must be in [0, 1)", self.turn_slowdown));
+        }
+        if self.max_yaw_accel.is_some_and(|a| !(a.is_finite() && a > 0.0)) {
+            return Err("vehicle.max_yaw_accel must be > 0 when set".into());
+        }
+        let gains = [self.kp_speed, self.kd_speed, self.kp_yaw, self.kd_yaw, self.kp_pitch, self.kd_pitch];
+        if gains.iter().any(|g| !g.is_finite()) {
+            return Err("vehicle gains (kp_*, kd_*) must be finite".into());
+        }
+        Ok(())
     }
 }
 
@@ -250,6 +283,14 @@ mod tests {
         let parked = v.state.pos;
         v.step(&b);
         assert_eq!(v.state.pos, parked, "a complete vehicle parks");
+    }
+
+    #[test]
+    fn bad_params_are_named() {
+        assert!(Iver2Params::default().validate().is_ok());
+        let e = Iver2Params { timestep: 0.0, ..Iver2Params::default() }.validate().unwrap_err();
+        assert!(e.contains("timestep"), "{e}");
+        assert!(Iver2Params { turn_slowdown: 1.0, ..Iver2Params::default() }.validate().unwrap_err().contains("turn_slowdown"));
     }
 
     #[test]

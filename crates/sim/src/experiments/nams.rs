@@ -64,14 +64,15 @@ pub fn report(opts: &ReproOptions, tl: &dyn TransmissionLoss, tl_label: &str, pr
     let adaptive = Behaviour::Adaptive(Default::default()).label();
     let mut t = String::new();
     let _ = writeln!(t, "Nams Tables 9–11 — TL: {tl_label}; synthetic shelf 20→60 m; {} repetitions per cell", cfg.repetitions);
-    let _ = writeln!(t, "\nAll behaviours (mean ± sd over repetitions; bandwidth = received payload bytes, both directions, per second):");
-    let _ = writeln!(t, "{:<11} {:<16} {:>5} {:>13} {:>7} {:>15} {:>6} {:>6} {:>9} {:>7}", "scenario", "behaviour", "slot", "BW B/s", "net", "status period s", "duty", "score", "header B", "queue");
+    let _ = writeln!(t, "\nAll behaviours (mean ± sd over repetitions; bandwidth = received payload bytes, both directions, per second;\n net = less frame-0 header and status bytes; header B = tracking header per packet; queue = header entries per packet;\n est. err = mean (max) horizontal error of the shadow estimate of the collaborator):");
+    let _ = writeln!(t, "{:<11} {:<16} {:>5} {:>13} {:>7} {:>15} {:>6} {:>6} {:>9} {:>7} {:>13}", "scenario", "behaviour", "slot", "BW B/s", "net", "status period s", "duty", "score", "header B", "queue", "est. err m");
     for c in &result.cells {
         let m = &c.mean;
         let _ = writeln!(
             t,
-            "{:<11} {:<16} {:>4.0}s {:>7.2} ±{:<4.2} {:>7.2} {:>8.1} ±{:<5.1} {:>6.2} {:>6.3} {:>9.2} {:>7.2}",
-            c.scenario, c.behaviour, c.slot_len, m.bandwidth, c.sd.bandwidth, m.bandwidth_net, m.status_period, c.sd.status_period, m.duty_cycle, m.score, m.header_bytes_mean, m.queue_len_mean
+            "{:<11} {:<16} {:>4.0}s {:>7.2} ±{:<4.2} {:>7.2} {:>8.1} ±{:<5.1} {:>6.2} {:>6.3} {:>9.2} {:>7.2} {:>6.2} ({:>5.1})",
+            c.scenario, c.behaviour, c.slot_len, m.bandwidth, c.sd.bandwidth, m.bandwidth_net, m.status_period, c.sd.status_period, m.duty_cycle, m.score,
+            m.header_bytes_mean, m.queue_len_mean, m.estimate_error_mean, m.estimate_error_max
         );
     }
     let _ = writeln!(t, "\nTables 9–11: adaptive vs best control (the control with the highest bandwidth), ours | thesis:");

@@ -28,6 +28,10 @@ pub struct Tally {
     pub queue_len_max: u64,
     /// Transmissions at rates 0..=5.
     pub rate_use: [u64; 6],
+    /// Horizontal error of the shadow estimate of the collaborator at each decision, m.
+    pub estimate_error_sum: f64,
+    pub estimate_error_max: f64,
+    pub decisions: u64,
 }
 
 /// Metrics of one run.
@@ -46,6 +50,8 @@ pub struct RunMetrics {
     pub mean_distance: f64,
     pub duration: f64,
     pub transmissions: f64,
+    pub estimate_error_mean: f64,
+    pub estimate_error_max: f64,
 }
 
 /// Intervals between consecutive receptions; with fewer than 2, the whole mission counts as one.
@@ -82,32 +88,37 @@ impl RunMetrics {
             mean_distance,
             duration,
             transmissions: t.transmissions as f64,
+            estimate_error_mean: t.estimate_error_sum / t.decisions.max(1) as f64,
+            estimate_error_max: t.estimate_error_max,
         }
     }
 }
 
 impl RunMetrics {
-    fn fields(&self) -> [f64; 13] {
+    fn fields(&self) -> [f64; 15] {
         [
             self.bandwidth, self.bandwidth_net, self.duty_cycle, self.status_period, self.status_period_per_direction,
             self.frequency_score, self.score, self.header_bytes_mean, self.queue_len_mean, self.queue_len_max,
-            self.mean_distance, self.duration, self.transmissions,
+            self.mean_distance, self.duration, self.transmissions, self.estimate_error_mean, self.estimate_error_max,
         ]
     }
-    fn from_fields(f: [f64; 13]) -> Self {
-        let [bandwidth, bandwidth_net, duty_cycle, status_period, status_period_per_direction, frequency_score, score, header_bytes_mean, queue_len_mean, queue_len_max, mean_distance, duration, transmissions] = f;
-        RunMetrics { bandwidth, bandwidth_net, duty_cycle, status_period, status_period_per_direction, frequency_score, score, header_bytes_mean, queue_len_mean, queue_len_max, mean_distance, duration, transmissions }
+    fn from_fields(f: [f64; 15]) -> Self {
+        let [bandwidth, bandwidth_net, duty_cycle, status_period, status_period_per_direction, frequency_score, score, header_bytes_mean, queue_len_mean, queue_len_max, mean_distance, duration, transmissions, estimate_error_mean, estimate_error_max] = f;
+        RunMetrics {
+            bandwidth, bandwidth_net, duty_cycle, status_period, status_period_per_direction, frequency_score, score, header_bytes_mean,
+            queue_len_mean, queue_len_max, mean_distance, duration, transmissions, estimate_error_mean, estimate_error_max,
+        }
     }
     /// Field-wise mean and sample standard deviation over runs.
     pub fn mean_sd(runs: &[RunMetrics]) -> (RunMetrics, RunMetrics) {
         let n = runs.len().max(1) as f64;
-        let mut m = [0.0; 13];
+        let mut m = [0.0; 15];
         for r in runs {
             for (a, v) in m.iter_mut().zip(r.fields()) {
                 *a += v / n;
             }
         }
-        let mut sd = [0.0; 13];
+        let mut sd = [0.0; 15];
         if runs.len() > 1 {
             for r in runs {
                 for ((a, v), mu) in sd.iter_mut().zip(r.fields()).zip(m) {

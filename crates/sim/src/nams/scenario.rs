@@ -8,7 +8,7 @@ use serde::{Deserialize, Serialize};
 
 /// One mission environment.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
+#[serde(default, deny_unknown_fields)]
 pub struct Scenario {
     pub name: String,
     /// Side of the square lawnmower, m (500 or 2000 in the thesis).
@@ -22,6 +22,12 @@ pub struct Scenario {
     pub altitude: f64,
     /// Speed through water, m/s (3 kn).
     pub speed: f64,
+}
+
+impl Default for Scenario {
+    fn default() -> Self {
+        Scenario::thesis(1)
+    }
 }
 
 impl Scenario {
@@ -106,7 +112,7 @@ pub enum EstimatorMode {
 
 /// Everything an experiment needs besides the TL provider.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
+#[serde(default, deny_unknown_fields)]
 pub struct ExperimentConfig {
     pub scenarios: Vec<Scenario>,
     pub behaviours: Vec<Behaviour>,
@@ -156,10 +162,12 @@ impl ExperimentConfig {
             b.policy()?;
         }
         if let Some(t) = self.max_time {
-            if !(t > 0.0) {
+            if t.is_nan() || t <= 0.0 {
                 return Err(format!("max_time = {t} must be > 0 s"));
             }
         }
+        self.success.validate()?;
+        self.vehicle.validate()?;
         if !(self.tdma.base_slot > 0.0 && self.tdma.rate5_slot > 0.0 && self.tdma.ack_extra >= 0.0) {
             return Err("tdma slot lengths must be > 0 s and ack_extra ≥ 0 s".into());
         }
