@@ -35,11 +35,12 @@ mod stream {
     pub const UPLINK: u64 = 7;
 }
 
-/// Test hook and scenario knob: links forced to lose every packet.
+/// Links forced to lose every packet (failure studies and tests).
 #[derive(Debug, Clone, Default)]
 pub struct Faults {
-    /// AUVs whose packets (both directions) are all lost.
+    /// AUVs whose packets (both directions) are all lost from `silent_from_s` on.
     pub silent_auvs: Vec<usize>,
+    pub silent_from_s: f64,
 }
 
 /// One row of the time series (every second, per AUV).
@@ -308,7 +309,7 @@ pub fn run(sc: &Scenario, policy: &mut Policy, seed: u64, record: bool, faults: 
     let mut next_broadcast = 0u64;
     let mut next_status = vec![0u64; n];
     let slot = |m: u64, j: usize| m as f64 * tau + (j + 1) as f64 * tau / (n + 1) as f64;
-    let silent = |k: usize| faults.silent_auvs.contains(&k);
+    let silent = |k: usize, t: f64| t >= faults.silent_from_s && faults.silent_auvs.contains(&k);
     let mut healthy = true;
 
     for step in 0..steps {
@@ -330,7 +331,7 @@ pub fn run(sc: &Scenario, policy: &mut Policy, seed: u64, record: bool, faults: 
                 }
                 a.down.sent += 1;
                 let rx = sc.comms.success.draw(sc.comms.cna_rate, tl_between(sc, &cna.pos, &a.truth), receiver(false), &mut a.rng_down);
-                let got = rx.frame0() && !silent(k);
+                let got = rx.frame0() && !silent(k, t_tx);
                 if let Some(tr) = trace.as_mut() {
                     tr.comms.push(CommsEvent { t: t_tx, direction: "down", auv: k, received: got });
                 }
@@ -376,7 +377,7 @@ pub fn run(sc: &Scenario, policy: &mut Policy, seed: u64, record: bool, faults: 
             next_status[j] += 1;
             a.up.sent += 1;
             let rx = sc.comms.success.draw(sc.comms.status_rate, tl_between(sc, &a.truth, &cna.pos), receiver(true), &mut a.rng_up);
-            let got = rx.frame0() && !silent(j);
+            let got = rx.frame0() && !silent(j, t_tx);
             if let Some(tr) = trace.as_mut() {
                 tr.comms.push(CommsEvent { t: t_tx, direction: "up", auv: j, received: got });
             }
