@@ -10,6 +10,7 @@ mod bench_acomms;
 mod channel;
 mod reproduce;
 mod rundir;
+mod simulate;
 
 #[derive(Parser)]
 #[command(name = "coopnav", version, about = "Cooperative navigation of AUV teams: CNA path planning, OWTT navigation, adaptive acoustic links")]
@@ -29,6 +30,9 @@ enum Command {
     Hbl(hbl::Command),
     /// Transmission loss and packet-success likelihood per WHOI rate against range (table + SVG).
     Channel(channel::Args),
+    /// Closed-loop mission: CNA policy, survey-AUV OWTT filters and the acoustic link together
+    /// (no scenario: the embedded default mission; --runs: Monte Carlo comparison of policies).
+    Simulate(simulate::Args),
     /// Benchmarks, printed as JSON.
     #[command(subcommand)]
     Bench(bench::Target),
@@ -44,6 +48,7 @@ fn main() -> Result<()> {
         Command::Plan(args) => plan::run(args),
         Command::Hbl(cmd) => hbl::run_command(cmd),
         Command::Channel(args) => channel::run(args),
+        Command::Simulate(args) => simulate::run(args),
         Command::Bench(target) => bench::run(target),
     }
 }
