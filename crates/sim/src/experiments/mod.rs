@@ -4,6 +4,7 @@
 //!
 //! `coopnav reproduce <id>` runs one; CI runs the reduced forms through the sim crate's tests.
 
+pub mod closed_loop;
 pub mod gill;
 pub mod nams;
 
@@ -84,6 +85,7 @@ pub fn registry() -> Vec<Experiment> {
     let mut all = Vec::new();
     all.extend(gill::experiments());
     all.extend(nams::experiments());
+    all.extend(closed_loop::experiments());
     all
 }
 
