@@ -7,6 +7,7 @@ mod bench;
 mod plan;
 mod hbl;
 mod bench_acomms;
+mod bench_closed_loop;
 mod channel;
 mod reproduce;
 mod rundir;

@@ -319,6 +319,20 @@ impl Scenario {
         }
     }
 
+    /// The benchmark mission of issue 5: 3 h, 5 survey AUVs on 16-lane blocks (long enough to
+    /// keep surveying for the whole 3 h), τ = 30 s, A = 5, L = 5, 10 Hz EKFs.
+    pub fn bench() -> Self {
+        let mut s = Self::example().with_auvs(5);
+        s.duration_s = 3.0 * 3600.0;
+        s.fleet.lanes = 16;
+        s.fleet.lane_length = 900.0;
+        s.fleet.lane_spacing = 50.0;
+        s.fleet.block_offset = 850.0;
+        s.cna.x = 2100.0;
+        (s.planner.heading_options, s.planner.look_ahead, s.comms.tau, s.dt) = (5, 5, 30.0, 0.1);
+        s
+    }
+
     /// Copy with N survey AUVs (experiments sweep N).
     pub fn with_auvs(&self, n: usize) -> Self {
         let mut s = self.clone();
@@ -340,6 +354,9 @@ mod tests {
         let s = Scenario::parse(EXAMPLE, Path::new("example.toml")).unwrap();
         assert_eq!((s.fleet.n_auvs, s.seed, s.duration_s), (3, 1, 3600.0));
         assert_eq!((s.planner.heading_options, s.planner.look_ahead), (5, 5));
+        Scenario::bench().validate(Path::new("bench")).unwrap();
+        let survey_s = Scenario::bench().lawnmower(0).path_length() / 1.5;
+        assert!(survey_s >= 3.0 * 3600.0 * 0.95, "bench survey lasts {survey_s} s");
     }
 
     #[test]
