@@ -325,7 +325,7 @@ impl Scenario {
         let mut s = Self::example().with_auvs(5);
         s.duration_s = 3.0 * 3600.0;
         s.fleet.lanes = 16;
-        s.fleet.lane_length = 900.0;
+        s.fleet.lane_length = 950.0;
         s.fleet.lane_spacing = 50.0;
         s.fleet.block_offset = 850.0;
         s.cna.x = 2100.0;
