@@ -109,7 +109,8 @@ impl NodeReport {
         put(&mut w, NAV_X, self.x, 1.0)?;
         put(&mut w, NAV_Y, self.y, 1.0)?;
         put(&mut w, SPEED, self.speed, 10.0)?;
-        let compass = CompassDeg::from(self.heading).0.rem_euclid(360.0).round();
+        // 360° is a valid code on the wire, but the encoder always sends north as 0°.
+        let compass = CompassDeg::from(self.heading).0.rem_euclid(360.0).round() % 360.0;
         put(&mut w, HEADING, compass, 1.0)?;
         if self.waypoints.len() > 3 {
             return Err(EncodeError { field: "waypoints", value: self.waypoints.len() as i64, min: 0, max: 3 });
@@ -353,7 +354,11 @@ mod tests {
         #[test]
         fn arbitrary_bytes_never_panic(bytes in proptest::collection::vec(any::<u8>(), 0..40)) {
             if let Ok(m) = NodeReport::decode(&bytes) {
-                prop_assert_eq!(m.encode().unwrap(), bytes);
+                // Whatever decodes re-encodes to a message that decodes the same (a 360° heading
+                // comes back as 0°, the same direction).
+                let again = NodeReport::decode(&m.encode().unwrap()).unwrap();
+                prop_assert!(coopnav_core::wrap_pi(again.heading.radians() - m.heading.radians()).abs() < 1e-9);
+                prop_assert_eq!(NodeReport { heading: m.heading, ..again }, m);
             }
         }
     }
