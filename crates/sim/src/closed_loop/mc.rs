@@ -167,7 +167,13 @@ pub fn comparison_table(c: &Comparison) -> String {
                 p.difference.mean,
                 p.difference.low,
                 p.difference.high,
-                if p.planner_better { "planner better" } else { "NOT significantly better" }
+                if p.planner_better {
+                    "planner better"
+                } else if p.difference.low > 0.0 {
+                    "planner WORSE"
+                } else {
+                    "no significant difference"
+                }
             );
         }
     }

@@ -62,7 +62,7 @@ pub fn run_with_progress(opts: &ReproOptions, progress: &(dyn Fn(u64) + Sync)) -
         for p in &c.paired {
             if !p.planner_better {
                 if let Some(b) = find(&c, &p.baseline) {
-                    let _ = writeln!(table, "  where/why vs {}: {}", p.baseline, why(planner, b));
+                    let _ = writeln!(table, "  where/why vs {}: {}", p.baseline, why(planner, b, p.difference.low <= 0.0));
                 }
             }
             checks.push(Check::new(
@@ -86,8 +86,11 @@ fn find<'a>(c: &'a Comparison, name: &str) -> Option<&'a PolicySummary> {
 /// The measured differences that explain a loss, only those that apply: the planner optimises
 /// its modelled error (eq. 1) under distance-limit penalties, so a gap between modelled and true
 /// error, a limit trade-off or a link difference shows why.
-fn why(planner: &PolicySummary, b: &PolicySummary) -> String {
+fn why(planner: &PolicySummary, b: &PolicySummary, tie: bool) -> String {
     let mut reasons = Vec::new();
+    if tie {
+        reasons.push("the paired 95 % CI includes zero: no significant difference either way".to_string());
+    }
     if let (Some(pm), Some(bm)) = (planner.modelled_mean, b.modelled_mean) {
         if pm < bm {
             reasons.push(format!(
