@@ -236,11 +236,16 @@ impl Scenario {
                 return Err(bad(field, v.to_string(), "coordinates within ±10 000 m (status message range ±16 000 m)"));
             }
         }
+        // Every survey waypoint must fit the status message's ±16 000 m fields (with room for drift).
+        let extent = (0..f.n_auvs).flat_map(|k| self.lawnmower(k).waypoints()).map(|(x, y)| x.abs().max(y.abs())).fold(0.0, f64::max);
+        if !(extent < 15_000.0) {
+            return Err(bad("fleet", format!("survey reaching {extent:.0} m from the origin"), "every lawnmower within ±15 000 m (status message fields are ±16 000 m)"));
+        }
         positive("cna.speed", self.cna.speed)?;
         positive("cna.max_turn_rate_deg_s", self.cna.max_turn_rate_deg_s)?;
         non_negative("cna.gps_sd", self.cna.gps_sd)?;
         let c = &self.comms;
-        if !(c.tau >= 5.0 && c.tau <= 600.0) {
+        if !(5.0..=600.0).contains(&c.tau) {
             return Err(bad("comms.tau", c.tau.to_string(), "5..=600 s"));
         }
         if self.dt > c.tau {
@@ -373,6 +378,8 @@ mod tests {
         assert!(e.contains("comms.cna_rate"), "{e}");
         let e = err(&EXAMPLE.replace("speed = 1.5", "speed = -1.5"));
         assert!(e.contains("fleet.speed"), "{e}");
+        let e = err(&EXAMPLE.replace("lane_length = 800.0", "lane_length = 20000.0"));
+        assert!(e.contains("field fleet") && e.contains("15 000"), "{e}");
         let e = err(&EXAMPLE.replace("heading_options = 5", "heading_options = 1"));
         assert!(e.contains("planner") && e.contains("heading_options"), "{e}");
     }

@@ -20,8 +20,11 @@ pub fn experiments() -> Vec<Experiment> {
     }]
 }
 
+/// The scenario for N survey AUVs.
+pub type ScenarioFor = Box<dyn Fn(usize) -> Scenario>;
+
 /// The set-up at a given size: (N values, runs per policy, scenario for N).
-pub fn setup(opts: &ReproOptions) -> (Vec<usize>, usize, Box<dyn Fn(usize) -> Scenario>) {
+pub fn setup(opts: &ReproOptions) -> (Vec<usize>, usize, ScenarioFor) {
     let seed = opts.seed;
     let base = move |n: usize, duration: Option<f64>| {
         let mut sc = Scenario::example().with_auvs(n);
