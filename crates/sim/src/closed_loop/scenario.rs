@@ -5,7 +5,7 @@
 use crate::hbl::config::Sensors;
 use coopnav_acomms::tl::analytic::Thorp;
 use coopnav_acomms::{Rate, SuccessModel};
-use coopnav_core::{CompassDeg, DepthTarget, Heading, Lawnmower};
+use coopnav_core::{Bathymetry, CompassDeg, DepthTarget, Heading, Lawnmower, Shelf};
 use coopnav_nav::AuvParams;
 use coopnav_plan::predict::{PredictorConfig, WaypointUse};
 use coopnav_plan::{CnaKind, Deadline, DistanceLimits, ErrorModel, MotionConfig, PenaltyCase, PlannerConfig, SearchConfig};
@@ -67,9 +67,12 @@ pub struct Fleet {
     pub speed: f64,
     /// Constant depth or height above the seafloor.
     pub depth: DepthTarget,
-    /// Flat seafloor depth, m.
+    /// Flat seafloor depth, m (used unless `shelf` is given).
     #[serde(default = "default_seafloor")]
     pub seafloor_depth: f64,
+    /// A sloping synthetic shelf instead of the flat seafloor (altitude targets follow it).
+    #[serde(default)]
+    pub shelf: Option<Shelf>,
     /// Constant water current (east, north), m/s: true tracks depart from the plan.
     #[serde(default)]
     pub current: (f64, f64),
@@ -227,6 +230,17 @@ impl Scenario {
             DepthTarget::Altitude { altitude } if !(altitude > 0.0 && altitude < f.seafloor_depth) => return Err(bad("fleet.depth.altitude", altitude.to_string(), "0 < altitude < fleet.seafloor_depth")),
             _ => {}
         }
+        if let Some(shelf) = &f.shelf {
+            Bathymetry::shelf(shelf).map_err(|e| bad("fleet.shelf", e.to_string(), "a valid shelf (extent, spacing, depths > 0)"))?;
+            let shallowest = shelf.shallow.min(shelf.deep);
+            let clear = match f.depth {
+                DepthTarget::Depth { depth } => depth < shallowest,
+                DepthTarget::Altitude { altitude } => altitude < shallowest,
+            };
+            if !clear {
+                return Err(bad("fleet.depth", format!("{:?}", f.depth), "shallower than the shelf's shallowest water"));
+            }
+        }
         if !(f.current.0.is_finite() && f.current.1.is_finite() && f.current.0.hypot(f.current.1) < f.speed) {
             return Err(bad("fleet.current", format!("{:?}", f.current), "finite, slower than fleet.speed"));
         }
@@ -273,6 +287,16 @@ impl Scenario {
         }
         self.planner_config().validate().map_err(|e| bad("planner", e.to_string(), "see the message"))?;
         Ok(())
+    }
+
+    /// The seafloor: the shelf if given, else a flat bottom at `seafloor_depth`.
+    pub fn bathymetry(&self) -> Bathymetry {
+        let flat = || Bathymetry::new(-20_000.0, -20_000.0, 40_000.0, 40_000.0, 2, 2, vec![self.fleet.seafloor_depth; 4]);
+        let grid = match &self.fleet.shelf {
+            Some(shelf) => Bathymetry::shelf(shelf),
+            None => flat(),
+        };
+        grid.or_else(|_| flat()).expect("validated scenarios always give a grid")
     }
 
     /// The look-ahead planner's configuration for this scenario.

@@ -117,3 +117,18 @@ fn every_policy_runs() {
         assert_eq!(r.policy, name);
     }
 }
+
+#[test]
+fn altitude_keeping_follows_the_shelf() {
+    let mut sc = short(1, 900.0);
+    // Lanes run north; the shelf deepens eastwards, so turn the lanes east to cross it.
+    sc.fleet.lane_heading_compass_deg = 90.0;
+    sc.fleet.shelf = Some(coopnav_core::Shelf { shallow: 30.0, deep: 90.0, x_shallow: 0.0, x_deep: 800.0, ..Default::default() });
+    sc.fleet.depth = coopnav_core::DepthTarget::Altitude { altitude: 15.0 };
+    sc.validate(std::path::Path::new("t")).unwrap();
+    let r = one_run(&sc, "planner", 4, true, &Faults::default());
+    let z: Vec<f64> = r.trace.unwrap().rows.iter().map(|x| x.true_z).collect();
+    let (lo, hi) = z.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |a, &v| (a.0.min(v), a.1.max(v)));
+    assert!(lo > 10.0 && hi - lo > 30.0, "depth should follow the sloping bottom: {lo:.1}..{hi:.1}");
+    assert!(r.fleet.healthy);
+}

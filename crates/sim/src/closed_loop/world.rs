@@ -13,7 +13,7 @@ use super::scenario::Scenario;
 use crate::hbl::noise::{normal, CompassBias};
 use crate::policy::{CnaCommand, PolicyContext};
 use coopnav_acomms::node_report::{NodeReport, VehicleType};
-use coopnav_core::{wrap_pi, Bathymetry, Heading, Iver2, Iver2Params, Iver2State, SeedStream, Vec3, Waypoint};
+use coopnav_core::{wrap_pi, Bathymetry, DepthTarget, Heading, Iver2, Iver2Params, Iver2State, SeedStream, Vec3, Waypoint};
 use coopnav_nav::{AuvEkf, RangeMeasurement};
 use coopnav_plan::predict::{StatusReport, UnderwayPredictor};
 use coopnav_plan::{AuvForecast, CnaPose};
@@ -50,6 +50,8 @@ pub struct TraceRow {
     pub auv: usize,
     pub true_x: f64,
     pub true_y: f64,
+    /// True depth, m.
+    pub true_z: f64,
     pub est_x: f64,
     pub est_y: f64,
     pub error: f64,
@@ -144,20 +146,24 @@ struct SurveyAuv {
 }
 
 impl SurveyAuv {
-    fn new(sc: &Scenario, k: usize, streams: &SeedStream) -> Self {
+    fn new(sc: &Scenario, k: usize, streams: &SeedStream, bathy: &Bathymetry) -> Self {
         let rng = |id: u64| streams.rng(stream::AUV_BASE + 10 * k as u64 + id);
         let lawn = sc.lawnmower(k);
         let pts = lawn.waypoints();
         let start = pts[0];
         let heading = pts.get(1).map_or(0.0, |b| (b.1 - start.1).atan2(b.0 - start.0));
         let waypoints: Vec<Waypoint> = pts.iter().map(|&(x, y)| Waypoint { x, y, target: sc.fleet.depth, speed: sc.fleet.speed }).collect();
-        let z0 = lawn.depth.at(0.0);
+        let bottom = bathy.depth_at(start.0, start.1);
+        let z0 = match sc.fleet.depth {
+            DepthTarget::Depth { depth } => depth,
+            DepthTarget::Altitude { altitude } => bottom - altitude,
+        };
         let truth = Vec3::new(start.0, start.1, z0);
         let mut r_init = rng(stream::INIT);
         let sd = sc.fleet.init_position_sd;
         let (ex, ey) = (start.0 + sd * normal(&mut r_init), start.1 + sd * normal(&mut r_init));
         let mut state = Iver2State::at_rest(Vec3::new(ex, ey, z0), Heading::from_radians(heading));
-        state.altitude = sc.fleet.seafloor_depth - z0;
+        state.altitude = bottom - z0;
         SurveyAuv {
             ctrl: Iver2::new(Iver2Params::default(), state, waypoints),
             truth,
@@ -290,8 +296,8 @@ pub fn run(sc: &Scenario, policy: &mut Policy, seed: u64, record: bool, faults: 
     let mut timing = Timing::default();
     let streams = SeedStream::new(seed);
     let n = sc.fleet.n_auvs;
-    let bathy = Bathymetry::new(-20_000.0, -20_000.0, 40_000.0, 40_000.0, 2, 2, vec![sc.fleet.seafloor_depth; 4]).expect("a 2 x 2 flat grid is valid");
-    let mut auvs: Vec<SurveyAuv> = (0..n).map(|k| SurveyAuv::new(sc, k, &streams)).collect();
+    let bathy = sc.bathymetry();
+    let mut auvs: Vec<SurveyAuv> = (0..n).map(|k| SurveyAuv::new(sc, k, &streams, &bathy)).collect();
     let start = cna_start(sc);
     let mut cna = Craft { pos: start.pos, heading: start.heading.radians(), target: None };
     let mut rng_gps = streams.rng(stream::CNA_GPS);
@@ -428,6 +434,7 @@ pub fn run(sc: &Scenario, policy: &mut Policy, seed: u64, record: bool, faults: 
                         auv: k,
                         true_x: a.truth.x,
                         true_y: a.truth.y,
+                        true_z: a.truth.z,
                         est_x: ex,
                         est_y: ey,
                         error: e,
