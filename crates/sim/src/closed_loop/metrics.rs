@@ -42,15 +42,27 @@ fn quantile(sorted: &[f64], q: f64) -> f64 {
     sorted[i] + f * (next - sorted[i])
 }
 
-/// Sent and received packets of one directed link.
+/// Sent and received packets of one directed link, in total and per WHOI rate 0..=5.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
 pub struct LinkStats {
-    pub rate: u8,
     pub sent: u64,
     pub received: u64,
+    pub sent_by_rate: [u64; 6],
+    pub received_by_rate: [u64; 6],
 }
 
 impl LinkStats {
+    /// Counts one packet sent at `rate` (0..=5), received or not.
+    pub fn record(&mut self, rate: u8, received: bool) {
+        let r = usize::from(rate.min(5));
+        self.sent += 1;
+        self.sent_by_rate[r] += 1;
+        if received {
+            self.received += 1;
+            self.received_by_rate[r] += 1;
+        }
+    }
+
     pub fn success(&self) -> f64 {
         if self.sent == 0 {
             0.0

@@ -4,6 +4,7 @@
 
 use crate::hbl::config::Sensors;
 use coopnav_acomms::tl::analytic::Thorp;
+use coopnav_acomms::selector::AdaptiveConfig;
 use coopnav_acomms::{Rate, SuccessModel};
 use coopnav_core::{Bathymetry, CompassDeg, DepthTarget, Heading, Lawnmower, Shelf};
 use coopnav_nav::AuvParams;
@@ -117,7 +118,12 @@ pub struct Comms {
     /// Period τ of the CNA's broadcast and of its decisions, s (independent of N).
     pub tau: f64,
     pub cna_rate: Rate,
+    /// Fixed rate of the status messages, unless `status_adaptive` is given.
     pub status_rate: Rate,
+    /// The Nams adaptive distance-bin selector for the status messages: each AUV picks the rate
+    /// from its estimated distance to the CNA; the CNA's next broadcast acknowledges (one bit per
+    /// AUV) the statuses it received since its last one.
+    pub status_adaptive: Option<AdaptiveConfig>,
     pub tl: Thorp,
     pub success: SuccessModel,
     pub sound_speed: f64,
@@ -132,6 +138,7 @@ impl Default for Comms {
             tau: 30.0,
             cna_rate: Rate::R0,
             status_rate: Rate::R0,
+            status_adaptive: None,
             tl: Thorp::default(),
             success: SuccessModel::default(),
             sound_speed: 1500.0,
@@ -270,6 +277,9 @@ impl Scenario {
                 return Err(bad(field, rate.to_string(), "0, 1, 4 or 5 (rates 2 and 3 are deprecated)"));
             }
         }
+        if let Some(a) = &c.status_adaptive {
+            a.validate().map_err(|e| bad("comms.status_adaptive", e, "see the message"))?;
+        }
         positive("comms.sound_speed", c.sound_speed)?;
         non_negative("comms.extra_range_sd", c.extra_range_sd)?;
         positive("comms.tl.k", c.tl.k)?;
@@ -384,6 +394,10 @@ mod tests {
         assert_eq!((s.fleet.n_auvs, s.seed, s.duration_s), (3, 1, 3600.0));
         assert_eq!((s.planner.heading_options, s.planner.look_ahead), (5, 5));
         Scenario::bench().validate(Path::new("bench")).unwrap();
+        // The commented-out options of the example are valid too.
+        let options = EXAMPLE.replace("# status_adaptive", "status_adaptive").replace("# shelf", "shelf");
+        let s = Scenario::parse(&options, Path::new("options.toml")).unwrap();
+        assert!(s.comms.status_adaptive.is_some() && s.fleet.shelf.is_some());
         let survey_s = Scenario::bench().lawnmower(0).path_length() / 1.5;
         assert!(survey_s >= 3.0 * 3600.0 * 0.95, "bench survey lasts {survey_s} s");
     }

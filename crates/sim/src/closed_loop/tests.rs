@@ -132,3 +132,24 @@ fn altitude_keeping_follows_the_shelf() {
     assert!(lo > 10.0 && hi - lo > 30.0, "depth should follow the sloping bottom: {lo:.1}..{hi:.1}");
     assert!(r.fleet.healthy);
 }
+
+#[test]
+fn status_rates_follow_the_fixed_rate_or_the_adaptive_selector() {
+    let mut sc = short(2, 900.0);
+    let fixed = one_run(&sc, "planner", 5, false, &Faults::default());
+    for a in &fixed.auvs {
+        assert_eq!(a.uplink.sent_by_rate[0], a.uplink.sent, "fixed rate 0 only");
+        assert_eq!(a.downlink.sent_by_rate[0], a.downlink.sent);
+    }
+    sc.comms.status_adaptive = Some(coopnav_acomms::selector::AdaptiveConfig::default());
+    sc.validate(std::path::Path::new("t")).unwrap();
+    let adaptive = one_run(&sc, "planner", 5, false, &Faults::default());
+    for a in &adaptive.auvs {
+        let up = &a.uplink;
+        // Thesis Table 8 targets enable rates 1 and 4 only (status bins: rate 1).
+        assert_eq!(up.sent_by_rate[0] + up.sent_by_rate[5], 0, "{up:?}");
+        assert!(up.sent_by_rate[1] + up.sent_by_rate[4] == up.sent && up.sent > 0, "{up:?}");
+        assert!(up.received > 0 && up.received <= up.sent);
+    }
+    assert_eq!(adaptive.planner.unwrap().failures, 0);
+}

@@ -13,6 +13,7 @@ use super::scenario::Scenario;
 use crate::hbl::noise::{normal, CompassBias};
 use crate::policy::{CnaCommand, PolicyContext};
 use coopnav_acomms::node_report::{NodeReport, VehicleType};
+use coopnav_acomms::selector::{AdaptiveBins, Choice, FixedRate, Outcome, RatePolicy};
 use coopnav_core::{wrap_pi, Bathymetry, DepthTarget, Heading, Iver2, Iver2Params, Iver2State, SeedStream, Vec3, Waypoint};
 use coopnav_nav::{AuvEkf, RangeMeasurement};
 use coopnav_plan::predict::{StatusReport, UnderwayPredictor};
@@ -143,6 +144,12 @@ struct SurveyAuv {
     down: LinkStats,
     up: LinkStats,
     applied: u64,
+    /// Rate selection for the status messages, and what it still waits to hear about.
+    selector: Box<dyn RatePolicy>,
+    /// Own status slots sent since the last CNA broadcast heard.
+    unacked: Vec<u64>,
+    /// Last CNA position heard (from its broadcast).
+    cna_heard: Option<Vec3>,
 }
 
 impl SurveyAuv {
@@ -180,9 +187,15 @@ impl SurveyAuv {
             distances: Vec::new(),
             violations: 0,
             modelled: Vec::new(),
-            down: LinkStats { rate: sc.comms.cna_rate.index(), ..LinkStats::default() },
-            up: LinkStats { rate: sc.comms.status_rate.index(), ..LinkStats::default() },
+            down: LinkStats::default(),
+            up: LinkStats::default(),
             applied: 0,
+            selector: match &sc.comms.status_adaptive {
+                Some(cfg) => Box::new(AdaptiveBins::new(cfg.clone()).expect("validated adaptive config")),
+                None => Box::new(FixedRate { rate: sc.comms.status_rate }),
+            },
+            unacked: Vec::new(),
+            cna_heard: None,
         }
     }
 
@@ -314,6 +327,8 @@ pub fn run(sc: &Scenario, policy: &mut Policy, seed: u64, record: bool, faults: 
     let mut trace = record.then(Trace::default);
     let mut next_broadcast = 0u64;
     let mut next_status = vec![0u64; n];
+    // Status slots the CNA received since its last broadcast (its one-bit-per-AUV acknowledgement).
+    let mut acked: Vec<Vec<u64>> = vec![Vec::new(); n];
     let slot = |m: u64, j: usize| m as f64 * tau + (j + 1) as f64 * tau / (n + 1) as f64;
     let silent = |k: usize, t: f64| t >= faults.silent_from_s && faults.silent_auvs.contains(&k);
     let mut healthy = true;
@@ -335,9 +350,9 @@ pub fn run(sc: &Scenario, policy: &mut Policy, seed: u64, record: bool, faults: 
                 if let Some(p) = predictors[k].position_at(t_tx).filter(|_| predictors[k].reports_received() >= sc.planner.start_after_reports) {
                     model.ping(k, &fix, &p, 1.0);
                 }
-                a.down.sent += 1;
                 let rx = sc.comms.success.draw(sc.comms.cna_rate, tl_between(sc, &cna.pos, &a.truth), receiver(false), &mut a.rng_down);
                 let got = rx.frame0() && !silent(k, t_tx);
+                a.down.record(sc.comms.cna_rate.index(), got);
                 if let Some(tr) = trace.as_mut() {
                     tr.comms.push(CommsEvent { t: t_tx, direction: "down", auv: k, received: got });
                 }
@@ -346,7 +361,11 @@ pub fn run(sc: &Scenario, policy: &mut Policy, seed: u64, record: bool, faults: 
                 if !got {
                     continue;
                 }
-                a.down.received += 1;
+                // The broadcast acknowledges the statuses the CNA got; the rest of this AUV's
+                // unacknowledged ones are resolved as lost.
+                let outcomes: Vec<Outcome> = a.unacked.drain(..).map(|slot| Outcome { slot, success: acked[k].contains(&slot) }).collect();
+                a.selector.feedback(&outcomes, true);
+                a.cna_heard = Some(fix);
                 // OWTT: the AUV moves during the flight; one fixed-point iteration suffices.
                 let v = a.ground_velocity(sc.fleet.current);
                 let at = |dt_f: f64| Vec3::new(a.truth.x + v.0 * dt_f, a.truth.y + v.1 * dt_f, a.truth.z);
@@ -356,6 +375,7 @@ pub fn run(sc: &Scenario, policy: &mut Policy, seed: u64, record: bool, faults: 
                 let measured = tt + sd * noise / sc.filter.range_noise.sound_speed;
                 a.pending.push((t_tx + tt, measured, fix));
             }
+            acked.iter_mut().for_each(Vec::clear);
             timing.channel_s += t0.elapsed().as_secs_f64();
             for (k, a) in auvs.iter_mut().enumerate() {
                 if let Some(e) = model.total(k) {
@@ -380,30 +400,35 @@ pub fn run(sc: &Scenario, policy: &mut Policy, seed: u64, record: bool, faults: 
             if t_tx >= t_next - 1e-9 {
                 continue;
             }
+            let slot_id = next_status[j];
             next_status[j] += 1;
-            a.up.sent += 1;
-            let rx = sc.comms.success.draw(sc.comms.status_rate, tl_between(sc, &a.truth, &cna.pos), receiver(true), &mut a.rng_up);
-            let got = rx.frame0() && !silent(j, t_tx);
-            if let Some(tr) = trace.as_mut() {
-                tr.comms.push(CommsEvent { t: t_tx, direction: "up", auv: j, received: got });
-            }
-            if !got {
-                continue;
-            }
+            let (ex, ey) = a.ekf.position();
+            let distance = a.cna_heard.map(|c| (c.x - ex).hypot(c.y - ey));
+            let Choice::Transmit(rate) = a.selector.choose(slot_id, distance) else { continue };
             // Through the wire format: what the CNA gets is the decoded message.
-            let decoded = a.status(j, t_tx).encode().map_err(|e| e.to_string()).and_then(|b| NodeReport::decode(&b).map_err(|e| e.to_string()));
-            match decoded {
-                Ok(m) => {
-                    a.up.received += 1;
-                    predictors[j].receive(StatusReport {
-                        t: resolve_time(m.time_of_day, t_tx),
-                        pos: Vec3::new(m.x, m.y, m.depth),
-                        speed: m.speed,
-                        heading: m.heading,
-                        waypoints: m.waypoints,
-                    });
+            let bytes = match a.status(j, t_tx).encode() {
+                Ok(b) => b,
+                Err(e) => {
+                    tracing::warn!(t = t_tx, auv = j, error = %e, "status message cannot be encoded; not sent");
+                    continue;
                 }
-                Err(e) => tracing::warn!(t = t_tx, auv = j, error = %e, "status message not sent"),
+            };
+            a.unacked.push(slot_id);
+            let rx = sc.comms.success.draw(rate, tl_between(sc, &a.truth, &cna.pos), receiver(true), &mut a.rng_up);
+            let decoded = (rx.frame0() && !silent(j, t_tx)).then(|| NodeReport::decode(&bytes)).and_then(Result::ok);
+            a.up.record(rate.index(), decoded.is_some());
+            if let Some(tr) = trace.as_mut() {
+                tr.comms.push(CommsEvent { t: t_tx, direction: "up", auv: j, received: decoded.is_some() });
+            }
+            if let Some(m) = decoded {
+                acked[j].push(slot_id);
+                predictors[j].receive(StatusReport {
+                    t: resolve_time(m.time_of_day, t_tx),
+                    pos: Vec3::new(m.x, m.y, m.depth),
+                    speed: m.speed,
+                    heading: m.heading,
+                    waypoints: m.waypoints,
+                });
             }
         }
         timing.channel_s += t0.elapsed().as_secs_f64();
