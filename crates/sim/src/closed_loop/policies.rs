@@ -62,7 +62,8 @@ pub fn survey_area(sc: &Scenario) -> Rect {
 
 /// The CNA's start pose.
 pub fn cna_start(sc: &Scenario) -> CnaPose {
-    CnaPose { pos: Vec3::new(sc.cna.x, sc.cna.y, 0.0), heading: Heading::from(CompassDeg(sc.cna.heading_compass_deg)), pitch: 0.0 }
+    let z = sc.cna.auv.as_ref().map_or(0.0, |a| a.depth);
+    CnaPose { pos: Vec3::new(sc.cna.x, sc.cna.y, z), heading: Heading::from(CompassDeg(sc.cna.heading_compass_deg)), pitch: 0.0 }
 }
 
 /// A checked policy name with whatever it needs precomputed (the open-loop plan), so Monte

@@ -89,7 +89,8 @@ fn one() -> f64 {
     1.0
 }
 
-/// The CNA: an autonomous surface craft with GPS (an AUV CNA is not simulated yet).
+/// The CNA: an autonomous surface craft with GPS, or (with `auv`) an AUV CNA that changes depth
+/// by pitch and broadcasts its own dead-reckoned position estimate.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Cna {
@@ -101,9 +102,25 @@ pub struct Cna {
     /// Turn-rate limit of the craft, deg/s (Table 5.1: 4).
     #[serde(default = "default_turn_rate")]
     pub max_turn_rate_deg_s: f64,
-    /// GPS position SD of the fix the CNA broadcasts, m.
+    /// GPS position SD of the fix the CNA broadcasts, m (ASC).
     #[serde(default = "one")]
     pub gps_sd: f64,
+    /// An AUV CNA instead of an ASC.
+    #[serde(default)]
+    pub auv: Option<AuvCna>,
+}
+
+/// An AUV as the CNA (Hudson's AUV-CNA case: heading and pitch options).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct AuvCna {
+    /// Pitch options B of the planner (≥ 1).
+    pub pitch_options: usize,
+    /// Start depth, m.
+    pub depth: f64,
+    /// Growth of the CNA's own horizontal position-error variance, m²/s per axis (a random walk:
+    /// what it broadcasts is its truth plus this error). Invented: no thesis value.
+    pub nav_diffusion: f64,
 }
 
 fn default_turn_rate() -> f64 {
@@ -263,6 +280,15 @@ impl Scenario {
             return Err(bad("fleet", format!("survey reaching {extent:.0} m from the origin"), "every lawnmower within ±15 000 m (status message fields are ±16 000 m)"));
         }
         positive("cna.speed", self.cna.speed)?;
+        if let Some(a) = &self.cna.auv {
+            if a.pitch_options == 0 {
+                return Err(bad("cna.auv.pitch_options", "0".into(), ">= 1"));
+            }
+            if !(a.depth >= 0.0 && a.depth < 100.0) {
+                return Err(bad("cna.auv.depth", a.depth.to_string(), "0 <= depth < 100 m (the planner's AUV-CNA depth limits)"));
+            }
+            non_negative("cna.auv.nav_diffusion", a.nav_diffusion)?;
+        }
         positive("cna.max_turn_rate_deg_s", self.cna.max_turn_rate_deg_s)?;
         non_negative("cna.gps_sd", self.cna.gps_sd)?;
         let c = &self.comms;
@@ -319,7 +345,7 @@ impl Scenario {
                 tau: self.comms.tau,
                 heading_options: p.heading_options,
                 max_turn_rate_deg_s: self.cna.max_turn_rate_deg_s,
-                cna: CnaKind::Asc,
+                cna: self.cna.auv.as_ref().map_or(CnaKind::Asc, |a| CnaKind::auv(a.pitch_options)),
             },
             error: p.error,
             limits: p.limits,
@@ -395,9 +421,9 @@ mod tests {
         assert_eq!((s.planner.heading_options, s.planner.look_ahead), (5, 5));
         Scenario::bench().validate(Path::new("bench")).unwrap();
         // The commented-out options of the example are valid too.
-        let options = EXAMPLE.replace("# status_adaptive", "status_adaptive").replace("# shelf", "shelf");
+        let options = EXAMPLE.replace("# status_adaptive", "status_adaptive").replace("# shelf", "shelf").replace("# auv", "auv");
         let s = Scenario::parse(&options, Path::new("options.toml")).unwrap();
-        assert!(s.comms.status_adaptive.is_some() && s.fleet.shelf.is_some());
+        assert!(s.comms.status_adaptive.is_some() && s.fleet.shelf.is_some() && s.cna.auv.is_some());
         let survey_s = Scenario::bench().lawnmower(0).path_length() / 1.5;
         assert!(survey_s >= 3.0 * 3600.0 * 0.95, "bench survey lasts {survey_s} s");
     }
@@ -416,6 +442,8 @@ mod tests {
         assert!(e.contains("comms.cna_rate"), "{e}");
         let e = err(&EXAMPLE.replace("speed = 1.5", "speed = -1.5"));
         assert!(e.contains("fleet.speed"), "{e}");
+        let e = err(&EXAMPLE.replace("gps_sd = 1.0", "gps_sd = 1.0\nauv = { pitch_options = 0, depth = 10.0, nav_diffusion = 0.01 }"));
+        assert!(e.contains("cna.auv.pitch_options"), "{e}");
         let e = err(&EXAMPLE.replace("lane_length = 800.0", "lane_length = 20000.0"));
         assert!(e.contains("field fleet") && e.contains("15 000"), "{e}");
         let e = err(&EXAMPLE.replace("heading_options = 5", "heading_options = 1"));

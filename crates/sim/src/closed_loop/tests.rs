@@ -153,3 +153,18 @@ fn status_rates_follow_the_fixed_rate_or_the_adaptive_selector() {
     }
     assert_eq!(adaptive.planner.unwrap().failures, 0);
 }
+
+#[test]
+fn an_auv_cna_plans_with_pitch_and_broadcasts_its_own_estimate() {
+    let mut sc = short(2, 1200.0);
+    sc.planner.look_ahead = 2;
+    sc.cna.auv = Some(scenario::AuvCna { pitch_options: 3, depth: 10.0, nav_diffusion: 0.01 });
+    sc.validate(std::path::Path::new("t")).unwrap();
+    let r = one_run(&sc, "planner", 6, true, &Faults::default());
+    let dr = one_run(&sc, "none", 6, false, &Faults::default());
+    assert!(r.fleet.healthy);
+    let p = r.planner.as_ref().unwrap();
+    assert_eq!((p.failures, p.min_levels_searched), (0, 3));
+    assert!(r.auvs.iter().all(|a| a.ranges_applied > 0));
+    assert!(r.fleet.error.mean < dr.fleet.error.mean / 2.0, "{} vs DR {}", r.fleet.error.mean, dr.fleet.error.mean);
+}

@@ -25,6 +25,7 @@ use std::time::{Duration, Instant};
 /// Stream ids of one run: the CNA's GPS, and a block of ten per survey AUV.
 mod stream {
     pub const CNA_GPS: u64 = 1;
+    pub const CNA_NAV: u64 = 2;
     pub const AUV_BASE: u64 = 100;
     pub const INIT: u64 = 0;
     pub const SPEED: u64 = 1;
@@ -272,7 +273,7 @@ impl SurveyAuv {
 }
 
 /// The CNA craft: steers to its commanded point at transit speed with a turn-rate limit and holds
-/// station on arrival.
+/// station on arrival; an AUV CNA also moves towards the commanded depth, pitch-limited.
 struct Craft {
     pos: Vec3,
     heading: f64,
@@ -282,6 +283,9 @@ struct Craft {
 impl Craft {
     fn step(&mut self, speed: f64, max_rate: f64, dt: f64) {
         let Some(goal) = self.target else { return };
+        // Depth changes at most at the speed's vertical share at the 30° pitch limit (digest A5).
+        let dz_max = speed * dt * 0.5;
+        self.pos.z += (goal.z - self.pos.z).clamp(-dz_max, dz_max);
         let (dx, dy) = (goal.x - self.pos.x, goal.y - self.pos.y);
         let dist = dx.hypot(dy);
         if dist <= speed * dt {
@@ -314,6 +318,9 @@ pub fn run(sc: &Scenario, policy: &mut Policy, seed: u64, record: bool, faults: 
     let start = cna_start(sc);
     let mut cna = Craft { pos: start.pos, heading: start.heading.radians(), target: None };
     let mut rng_gps = streams.rng(stream::CNA_GPS);
+    let mut rng_nav = streams.rng(stream::CNA_NAV);
+    // An AUV CNA's own navigation error (random walk); an ASC has GPS instead.
+    let mut cna_nav_error = (0.0, 0.0);
     let mut predictors: Vec<UnderwayPredictor> = (0..n).map(|_| UnderwayPredictor::new(sc.predictor_config())).collect();
     let cfg = sc.planner_config();
     let mut model = ErrorTracker::new(n, cfg.error, sc.comms.tau, sc.planner.sigma0, sc.planner.eps0);
@@ -340,7 +347,14 @@ pub fn run(sc: &Scenario, policy: &mut Policy, seed: u64, record: bool, faults: 
         if (next_broadcast as f64) * tau < t_next - 1e-9 {
             let t_tx = next_broadcast as f64 * tau;
             next_broadcast += 1;
-            let fix = Vec3::new(cna.pos.x + sc.cna.gps_sd * normal(&mut rng_gps), cna.pos.y + sc.cna.gps_sd * normal(&mut rng_gps), cna.pos.z);
+            let fix = match &sc.cna.auv {
+                None => Vec3::new(cna.pos.x + sc.cna.gps_sd * normal(&mut rng_gps), cna.pos.y + sc.cna.gps_sd * normal(&mut rng_gps), cna.pos.z),
+                Some(a) => {
+                    let sd = (a.nav_diffusion * if t_tx > 0.0 { tau } else { 0.0 }).sqrt();
+                    cna_nav_error = (cna_nav_error.0 + sd * normal(&mut rng_nav), cna_nav_error.1 + sd * normal(&mut rng_nav));
+                    Vec3::new(cna.pos.x + cna_nav_error.0, cna.pos.y + cna_nav_error.1, cna.pos.z)
+                }
+            };
             let t0 = Instant::now();
             for (k, a) in auvs.iter_mut().enumerate() {
                 if !transmits {
@@ -388,7 +402,7 @@ pub fn run(sc: &Scenario, policy: &mut Policy, seed: u64, record: bool, faults: 
             let ctx = PolicyContext { t: t_tx, tau, cna: pose, speed: sc.cna.speed, fleet: &fleet };
             cna.target = match policy.as_policy().decide(&ctx) {
                 // The command is relative to the GPS fix the policy saw.
-                CnaCommand::GoTo(p) => Some(Vec3::new(cna.pos.x + p.x - fix.x, cna.pos.y + p.y - fix.y, cna.pos.z)),
+                CnaCommand::GoTo(p) => Some(Vec3::new(cna.pos.x + p.x - fix.x, cna.pos.y + p.y - fix.y, p.z)),
                 CnaCommand::Hold => None,
             };
             timing.planner_s += t0.elapsed().as_secs_f64();
