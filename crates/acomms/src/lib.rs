@@ -6,6 +6,7 @@
 
 pub mod codec;
 pub mod estimator;
+pub mod node_report;
 pub mod rates;
 pub mod selector;
 pub mod status;

@@ -36,6 +36,9 @@ pub enum Target {
     /// analytic TL and on a cached TL grid, tracker encode/decode throughput, and one BELLHOP run
     /// against a cached-grid lookup.
     Acomms(crate::bench_acomms::Args),
+    /// The closed loop: 3 h mission, 5 survey AUVs, τ = 30 s, planner A = 5, L = 5, 10 Hz EKFs;
+    /// wall time against the ≤ 1.1 s target, with the planner/filters/channel split.
+    ClosedLoop(crate::bench_closed_loop::Args),
 }
 
 pub fn run(target: Target) -> Result<()> {
@@ -43,6 +46,7 @@ pub fn run(target: Target) -> Result<()> {
         Target::Planner { reps, brute_max_leaves } => planner(reps.max(1), brute_max_leaves),
         Target::Hbl { runs, threads, seed } => hbl(runs, threads, seed),
         Target::Acomms(args) => crate::bench_acomms::run(args),
+        Target::ClosedLoop(args) => crate::bench_closed_loop::run(args),
     }
 }
 

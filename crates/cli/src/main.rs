@@ -7,10 +7,12 @@ mod bench;
 mod plan;
 mod hbl;
 mod bench_acomms;
+mod bench_closed_loop;
 mod channel;
 mod nams;
 mod reproduce;
 mod rundir;
+mod simulate;
 
 #[derive(Parser)]
 #[command(name = "coopnav", version, about = "Cooperative navigation of AUV teams: CNA path planning, OWTT navigation, adaptive acoustic links")]
@@ -32,6 +34,9 @@ enum Command {
     Channel(channel::Args),
     /// Run a Nams adaptive-rate experiment from a TOML file (scenarios × behaviours × repetitions).
     Nams(nams::Args),
+    /// Closed-loop mission: CNA policy, survey-AUV OWTT filters and the acoustic link together
+    /// (no scenario: the embedded default mission; --runs: Monte Carlo comparison of policies).
+    Simulate(simulate::Args),
     /// Benchmarks, printed as JSON.
     #[command(subcommand)]
     Bench(bench::Target),
@@ -48,6 +53,7 @@ fn main() -> Result<()> {
         Command::Hbl(cmd) => hbl::run_command(cmd),
         Command::Channel(args) => channel::run(args),
         Command::Nams(args) => nams::run(args),
+        Command::Simulate(args) => simulate::run(args),
         Command::Bench(target) => bench::run(target),
     }
 }

@@ -12,3 +12,4 @@ pub mod policy;
 pub mod report;
 pub mod predeploy;
 pub mod hbl;
+pub mod closed_loop;

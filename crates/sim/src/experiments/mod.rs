@@ -4,6 +4,7 @@
 //!
 //! `coopnav reproduce <id>` runs one; CI runs the reduced forms through the sim crate's tests.
 
+pub mod closed_loop;
 pub mod gill;
 pub mod hudson;
 pub mod nams;
@@ -86,6 +87,7 @@ pub fn registry() -> Vec<Experiment> {
     all.extend(hudson::experiments());
     all.extend(gill::experiments());
     all.extend(nams::experiments());
+    all.extend(closed_loop::experiments());
     all
 }
 

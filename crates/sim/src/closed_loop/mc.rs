@@ -1,0 +1,181 @@
+//! Seeded Monte Carlo comparison of CNA policies on one scenario. Run i of every policy uses the
+//! same seed `run_seed(base, i)` (common random numbers: the same sensor noise, compass maps and
+//! channel draws), so the planner's advantage over a baseline is judged run by run (paired 95 %
+//! CI). Runs go through rayon and are merged in index order: bit-identical on any thread count.
+
+use super::policies::{PolicyError, PolicySpec};
+use super::scenario::Scenario;
+use super::world::{run, Faults, RunResult, Timing};
+use crate::hbl::mc::{t_975, Stats};
+use coopnav_core::run_seed;
+use rayon::prelude::*;
+use serde::Serialize;
+
+/// Mean and 95 % confidence interval.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct Ci {
+    pub mean: f64,
+    pub low: f64,
+    pub high: f64,
+}
+
+impl Ci {
+    pub fn of(v: &[f64]) -> Ci {
+        let s = Stats::of(v);
+        let half = if s.n > 1 { t_975((s.n - 1) as f64) * s.se } else { f64::INFINITY };
+        Ci { mean: s.mean, low: s.mean - half, high: s.mean + half }
+    }
+}
+
+/// One policy over all runs.
+#[derive(Debug, Clone, Serialize)]
+pub struct PolicySummary {
+    pub policy: String,
+    /// Per-run fleet mean true error, over runs.
+    pub mean_error: Ci,
+    pub rms_error: f64,
+    pub p95_error: f64,
+    pub max_error: f64,
+    pub modelled_mean: Option<f64>,
+    pub downlink_success: f64,
+    pub uplink_success: f64,
+    pub limit_violation: f64,
+    pub deadline_misses: u64,
+    pub healthy: bool,
+    /// Per-run fleet mean errors, in run order.
+    pub runs: Vec<f64>,
+}
+
+/// Planner minus a baseline, paired by run (negative = the planner is better).
+#[derive(Debug, Clone, Serialize)]
+pub struct Paired {
+    pub baseline: String,
+    pub difference: Ci,
+    /// The planner's mean is lower and the CI excludes zero.
+    pub planner_better: bool,
+}
+
+#[derive(Debug, Clone, Serialize)]
+pub struct Comparison {
+    pub n_auvs: usize,
+    pub runs: usize,
+    pub seed: u64,
+    pub policies: Vec<PolicySummary>,
+    pub paired: Vec<Paired>,
+    #[serde(skip)]
+    pub timing: Timing,
+}
+
+/// Runs every policy `runs` times. `progress(done)` is called after each run.
+pub fn monte_carlo(sc: &Scenario, policies: &[String], runs: usize, progress: &(dyn Fn(u64) + Sync)) -> Result<Comparison, PolicyError> {
+    let specs = policies.iter().map(|p| PolicySpec::new(p, sc)).collect::<Result<Vec<_>, _>>()?;
+    let jobs: Vec<(usize, usize)> = (0..specs.len()).flat_map(|p| (0..runs).map(move |i| (p, i))).collect();
+    let done = std::sync::atomic::AtomicU64::new(0);
+    let results = jobs
+        .par_iter()
+        .map(|&(p, i)| {
+            let mut policy = specs[p].build(sc)?;
+            let r = run(sc, &mut policy, run_seed(sc.seed, i as u64), false, &Faults::default());
+            progress(done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1);
+            Ok(r)
+        })
+        .collect::<Result<Vec<RunResult>, PolicyError>>()?;
+    let mut timing = Timing::default();
+    for r in &results {
+        timing.planner_s += r.timing.planner_s;
+        timing.filters_s += r.timing.filters_s;
+        timing.channel_s += r.timing.channel_s;
+        timing.total_s += r.timing.total_s;
+    }
+    let summaries: Vec<PolicySummary> = results.chunks(runs.max(1)).zip(&specs).map(|(rs, s)| summarise(&s.name, rs)).collect();
+    let paired = match summaries.iter().find(|s| s.policy == "planner") {
+        Some(planner) => summaries
+            .iter()
+            .filter(|s| s.policy != "planner")
+            .map(|b| {
+                let d: Vec<f64> = planner.runs.iter().zip(&b.runs).map(|(p, q)| p - q).collect();
+                let ci = Ci::of(&d);
+                Paired { baseline: b.policy.clone(), difference: ci, planner_better: ci.high < 0.0 }
+            })
+            .collect(),
+        None => Vec::new(),
+    };
+    Ok(Comparison { n_auvs: sc.fleet.n_auvs, runs, seed: sc.seed, policies: summaries, paired, timing })
+}
+
+fn summarise(name: &str, rs: &[RunResult]) -> PolicySummary {
+    let avg = |f: &dyn Fn(&RunResult) -> f64| rs.iter().map(f).sum::<f64>() / rs.len().max(1) as f64;
+    let link = |down: bool| {
+        let (sent, got) = rs.iter().flat_map(|r| &r.auvs).fold((0u64, 0u64), |acc, a| {
+            let l = if down { a.downlink } else { a.uplink };
+            (acc.0 + l.sent, acc.1 + l.received)
+        });
+        if sent == 0 {
+            0.0
+        } else {
+            got as f64 / sent as f64
+        }
+    };
+    let modelled: Vec<f64> = rs.iter().filter_map(|r| r.fleet.modelled_mean).collect();
+    let runs: Vec<f64> = rs.iter().map(|r| r.fleet.error.mean).collect();
+    PolicySummary {
+        policy: name.to_string(),
+        mean_error: Ci::of(&runs),
+        rms_error: avg(&|r| r.fleet.error.rms),
+        p95_error: avg(&|r| r.fleet.error.p95),
+        max_error: avg(&|r| r.fleet.error.max),
+        modelled_mean: (!modelled.is_empty()).then(|| modelled.iter().sum::<f64>() / modelled.len() as f64),
+        downlink_success: link(true),
+        uplink_success: link(false),
+        limit_violation: avg(&|r| r.auvs.iter().map(|a| a.limit_violation).sum::<f64>() / r.auvs.len().max(1) as f64),
+        deadline_misses: rs.iter().filter_map(|r| r.planner.as_ref()).map(|p| p.deadline_misses).sum(),
+        healthy: rs.iter().all(|r| r.fleet.healthy),
+        runs,
+    }
+}
+
+/// A plain-text comparison table (policies by mean true error, with 95 % CIs and the paired
+/// planner-minus-baseline differences).
+pub fn comparison_table(c: &Comparison) -> String {
+    let mut out = format!("N = {} survey AUVs, {} runs per policy, base seed {}\n", c.n_auvs, c.runs, c.seed);
+    out += &format!(
+        "{:<10} {:>22} {:>8} {:>8} {:>8} {:>9} {:>7} {:>7} {:>7}\n",
+        "policy", "mean true err [95% CI]", "RMS", "p95", "max", "modelled", "down%", "up%", "limit%"
+    );
+    for s in &c.policies {
+        out += &format!(
+            "{:<10} {:>7.2} [{:>6.2}, {:>6.2}] {:>8.2} {:>8.2} {:>8.2} {:>9} {:>7.1} {:>7.1} {:>7.1}\n",
+            s.policy,
+            s.mean_error.mean,
+            s.mean_error.low,
+            s.mean_error.high,
+            s.rms_error,
+            s.p95_error,
+            s.max_error,
+            s.modelled_mean.map_or("-".to_string(), |m| format!("{m:.2}")),
+            100.0 * s.downlink_success,
+            100.0 * s.uplink_success,
+            100.0 * s.limit_violation,
+        );
+    }
+    if !c.paired.is_empty() {
+        out += "planner minus baseline (paired by run, m; negative = planner better):\n";
+        for p in &c.paired {
+            out += &format!(
+                "  vs {:<10} {:>7.2} [{:>6.2}, {:>6.2}] {}\n",
+                p.baseline,
+                p.difference.mean,
+                p.difference.low,
+                p.difference.high,
+                if p.planner_better {
+                    "planner better"
+                } else if p.difference.low > 0.0 {
+                    "planner WORSE"
+                } else {
+                    "no significant difference"
+                }
+            );
+        }
+    }
+    out
+}

@@ -1,0 +1,105 @@
+//! Per-run metrics of the closed loop: each survey AUV's *true* navigation error statistics
+//! (mean, RMS, max, 95th percentile, CEP50 over time) beside the planner's modelled error,
+//! ranges and packets per link, CNA–AUV distances and limit violations.
+
+use serde::{Deserialize, Serialize};
+
+/// Summary statistics of a sampled error series, m.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
+pub struct ErrorStats {
+    pub mean: f64,
+    pub rms: f64,
+    pub max: f64,
+    pub p95: f64,
+    /// Median radial error (circular error probable, 50 %).
+    pub cep50: f64,
+}
+
+impl ErrorStats {
+    /// Statistics of `samples` (all zero when empty).
+    pub fn of(samples: &[f64]) -> Self {
+        if samples.is_empty() {
+            return ErrorStats::default();
+        }
+        let n = samples.len() as f64;
+        let mut sorted = samples.to_vec();
+        sorted.sort_by(f64::total_cmp);
+        ErrorStats {
+            mean: samples.iter().sum::<f64>() / n,
+            rms: (samples.iter().map(|e| e * e).sum::<f64>() / n).sqrt(),
+            max: sorted[sorted.len() - 1],
+            p95: quantile(&sorted, 0.95),
+            cep50: quantile(&sorted, 0.5),
+        }
+    }
+}
+
+/// Linear-interpolated quantile of sorted data.
+fn quantile(sorted: &[f64], q: f64) -> f64 {
+    let pos = q * (sorted.len() - 1) as f64;
+    let (i, f) = (pos.floor() as usize, pos.fract());
+    let next = sorted[(i + 1).min(sorted.len() - 1)];
+    sorted[i] + f * (next - sorted[i])
+}
+
+/// Sent and received packets of one directed link, in total and per WHOI rate 0..=5.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
+pub struct LinkStats {
+    pub sent: u64,
+    pub received: u64,
+    pub sent_by_rate: [u64; 6],
+    pub received_by_rate: [u64; 6],
+}
+
+impl LinkStats {
+    /// Counts one packet sent at `rate` (0..=5), received or not.
+    pub fn record(&mut self, rate: u8, received: bool) {
+        let r = usize::from(rate.min(5));
+        self.sent += 1;
+        self.sent_by_rate[r] += 1;
+        if received {
+            self.received += 1;
+            self.received_by_rate[r] += 1;
+        }
+    }
+
+    pub fn success(&self) -> f64 {
+        if self.sent == 0 {
+            0.0
+        } else {
+            self.received as f64 / self.sent as f64
+        }
+    }
+}
+
+/// Everything measured about one survey AUV.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct AuvMetrics {
+    pub name: String,
+    /// True EKF position error (horizontal), sampled every second.
+    pub error: ErrorStats,
+    /// Mean of the modelled error √(σ² + ε²) at the decision times (None before any model).
+    pub modelled_mean: Option<f64>,
+    /// CNA broadcasts (ranges): sent towards this AUV and received by it.
+    pub downlink: LinkStats,
+    /// Ranges the EKF applied.
+    pub ranges_applied: u64,
+    /// Status messages from this AUV to the CNA.
+    pub uplink: LinkStats,
+    /// True horizontal CNA–AUV distance, m, sampled every second.
+    pub distance_mean: f64,
+    pub distance_min: f64,
+    pub distance_max: f64,
+    /// Fraction of samples outside the planner's [min, max] distance limits.
+    pub limit_violation: f64,
+}
+
+/// Summary of the whole fleet.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct FleetMetrics {
+    /// Statistics of all AUVs' samples pooled.
+    pub error: ErrorStats,
+    pub modelled_mean: Option<f64>,
+    /// Every filter state finite throughout.
+    pub healthy: bool,
+}

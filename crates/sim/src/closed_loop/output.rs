@@ -1,0 +1,124 @@
+//! The run directory of one closed-loop mission: time series CSV, the comms log, summary.json,
+//! manifest.json, SVG plots (tracks true/estimated/CNA, error vs time per AUV, comms timeline)
+//! and a self-contained report.html that shows every plot inline.
+
+use super::scenario::Scenario;
+use super::world::{RunResult, Trace};
+use crate::output::{Manifest, OutputError, RunDir};
+use crate::plot::{line_svg, track_svg, Labels, PlotError, Series};
+use crate::report::HtmlReport;
+use std::path::PathBuf;
+use thiserror::Error;
+
+#[derive(Debug, Error)]
+pub enum WriteError {
+    #[error(transparent)]
+    Output(#[from] OutputError),
+    #[error(transparent)]
+    Plot(#[from] PlotError),
+    #[error("the run was not recorded (no time series to write)")]
+    NotRecorded,
+}
+
+/// The plots every run directory holds: (file, caption).
+pub const PLOTS: [(&str, &str); 3] = [
+    ("tracks.svg", "True (solid) and estimated tracks of every survey AUV, and the CNA's track"),
+    ("error.svg", "True navigation error of each survey AUV over time, beside the planner's modelled error"),
+    ("comms.svg", "Comms timeline: cumulative packets received per link (down = CNA broadcast, up = status)"),
+];
+
+/// Writes `result` (recorded with a trace) into `dir` and finishes it.
+pub fn write_run(dir: RunDir, sc: &Scenario, result: &RunResult, command: &str) -> Result<PathBuf, WriteError> {
+    let trace = result.trace.as_ref().ok_or(WriteError::NotRecorded)?;
+    let inputs = serde_json::json!({ "scenario": sc, "policy": result.policy });
+    dir.write_json("manifest.json", &Manifest::new(command, Some(result.seed), inputs))?;
+    dir.write_json("summary.json", result)?;
+    dir.write_csv("timeseries.csv", trace.rows.iter())?;
+    dir.write_csv("comms.csv", trace.comms.iter())?;
+    let svgs = plots(sc.fleet.n_auvs, trace)?;
+    for ((file, _), svg) in PLOTS.iter().zip(&svgs) {
+        dir.write_text(file, svg)?;
+    }
+    dir.write_text("report.html", &report(sc, result, &svgs))?;
+    Ok(dir.finish()?)
+}
+
+fn plots(n: usize, tr: &Trace) -> Result<Vec<String>, PlotError> {
+    let per_auv = |f: &dyn Fn(&super::world::TraceRow) -> (f64, f64), k: usize| tr.rows.iter().filter(|r| r.auv == k).map(f).collect::<Vec<_>>();
+    let mut tracks = Vec::new();
+    for k in 0..n {
+        tracks.push(Series::new(format!("auv{k} true"), per_auv(&|r| (r.true_x, r.true_y), k)));
+        tracks.push(Series::new(format!("auv{k} estimated"), per_auv(&|r| (r.est_x, r.est_y), k)));
+    }
+    tracks.push(Series::new("CNA", tr.cna.iter().map(|c| (c.1, c.2)).collect()));
+    let mut errors = Vec::new();
+    for k in 0..n {
+        errors.push(Series::new(format!("auv{k} true error"), per_auv(&|r| (r.t, r.error), k)));
+        let modelled: Vec<(f64, f64)> = tr.rows.iter().filter(|r| r.auv == k).filter_map(|r| r.modelled.map(|m| (r.t, m))).collect();
+        if !modelled.is_empty() {
+            errors.push(Series::new(format!("auv{k} modelled"), modelled));
+        }
+    }
+    let mut comms = Vec::new();
+    for dir in ["down", "up"] {
+        for k in 0..n {
+            let mut count = 0.0;
+            let pts = tr
+                .comms
+                .iter()
+                .filter(|e| e.auv == k && e.direction == dir)
+                .map(|e| {
+                    count += f64::from(u8::from(e.received));
+                    (e.t, count)
+                })
+                .collect();
+            comms.push(Series::new(format!("{dir} auv{k}"), pts));
+        }
+    }
+    Ok(vec![
+        track_svg(Labels { title: "Tracks", x: "east [m]", y: "north [m]" }, &tracks)?,
+        line_svg(Labels { title: "Navigation error", x: "time [s]", y: "error [m]" }, &errors)?,
+        line_svg(Labels { title: "Comms timeline", x: "time [s]", y: "packets received" }, &comms)?,
+    ])
+}
+
+fn report(sc: &Scenario, r: &RunResult, svgs: &[String]) -> String {
+    let mut h = HtmlReport::new(format!("coopnav closed-loop mission: policy {}", r.policy));
+    h.paragraph(&format!(
+        "{} survey AUVs, ASC CNA at {} m/s, τ = {} s, {} s mission, seed {}. Errors are the survey AUVs' TRUE navigation errors (EKF estimate minus truth).",
+        sc.fleet.n_auvs, sc.cna.speed, sc.comms.tau, sc.duration_s, r.seed
+    ));
+    h.heading("Per AUV");
+    let fmt = |v: f64| format!("{v:.2}");
+    let rows: Vec<Vec<String>> = r
+        .auvs
+        .iter()
+        .map(|a| {
+            vec![
+                a.name.clone(),
+                fmt(a.error.mean),
+                fmt(a.error.rms),
+                fmt(a.error.p95),
+                fmt(a.error.max),
+                fmt(a.error.cep50),
+                a.modelled_mean.map_or("-".into(), fmt),
+                format!("{}/{}", a.downlink.received, a.downlink.sent),
+                format!("{}/{}", a.uplink.received, a.uplink.sent),
+                fmt(a.distance_mean),
+                format!("{:.1}", 100.0 * a.limit_violation),
+            ]
+        })
+        .collect();
+    h.table(&["AUV", "mean [m]", "RMS", "p95", "max", "CEP50", "modelled", "ranges rx/tx", "status rx/tx", "mean dist [m]", "limit viol. %"], &rows);
+    if let Some(p) = &r.planner {
+        h.paragraph(&format!(
+            "Planner: {} decisions, {} deadline misses, levels requested {}, mean levels searched {:.2}, {} failed decisions, {} waiting for reports.",
+            p.decisions, p.deadline_misses, p.levels_requested, p.mean_levels_searched, p.failures, p.waiting
+        ));
+    }
+    h.heading("Plots");
+    for ((file, caption), svg) in PLOTS.iter().zip(svgs) {
+        h.figure(file, caption, svg);
+    }
+    h.render()
+}

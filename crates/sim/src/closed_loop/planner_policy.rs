@@ -1,0 +1,221 @@
+//! The look-ahead planner as a closed-loop CNA policy (Hudson underway mode, digest §2.10,
+//! §3.3, A13–A16): it keeps its own modelled error state per survey AUV (eq. 1, stepped at every
+//! ping from the CNA's pose and the AUV's *predicted* position), plans over the AUVs the CNA has
+//! heard from, and records the decisions' deadline misses and the tree levels reached.
+
+use crate::policy::{CnaCommand, CnaPolicy, PolicyContext};
+use coopnav_core::Vec3;
+use coopnav_plan::{AuvError, AuvForecast, ErrorModel, LookAheadPlanner, PlanError, PlanInput, PlannerConfig};
+use coopnav_plan::CnaPolicy as _;
+use serde::Serialize;
+
+/// The planner's error model (eq. 1) tracked per AUV between decisions.
+#[derive(Debug, Clone)]
+pub struct ErrorTracker {
+    model: ErrorModel,
+    tau: f64,
+    sigma0: f64,
+    eps0: f64,
+    errors: Vec<Option<AuvError>>,
+}
+
+impl ErrorTracker {
+    pub fn new(n: usize, model: ErrorModel, tau: f64, sigma0: f64, eps0: f64) -> Self {
+        ErrorTracker { model, tau, sigma0, eps0, errors: vec![None; n] }
+    }
+
+    /// A ping from `cna` at AUV `k` (at `auv`), received with probability `p_received` (1 = the
+    /// thesis's assumption that every ping arrives). The first ping starts the model (A12); a
+    /// ping counts as the expected value over reception: received → eq. 1, lost → ε² + ατ.
+    pub fn ping(&mut self, k: usize, cna: &Vec3, auv: &Vec3, p_received: f64) {
+        let m = self.model;
+        let next = match self.errors[k] {
+            None => m.initial(self.sigma0, self.eps0, cna, auv),
+            Some(prev) => {
+                let got = m.step(&prev, m.los([cna.x, cna.y, cna.z], [auv.x, auv.y, auv.z]), self.tau);
+                let p = p_received.clamp(0.0, 1.0);
+                let lost = prev.eps2 + m.alpha * self.tau;
+                AuvError { eps2: p * got.eps2 + (1.0 - p) * lost, ..got }
+            }
+        };
+        self.errors[k] = Some(next);
+    }
+
+    /// No ping this period (no CNA, or the AUV unknown): ε² grows by ατ.
+    pub fn silent(&mut self, k: usize) {
+        if let Some(e) = self.errors[k].as_mut() {
+            e.eps2 += self.model.alpha * self.tau;
+        }
+    }
+
+    pub fn error(&self, k: usize) -> Option<&AuvError> {
+        self.errors[k].as_ref()
+    }
+
+    /// Modelled total error √(σ² + ε²) of AUV `k`, m.
+    pub fn total(&self, k: usize) -> Option<f64> {
+        self.error(k).map(AuvError::total)
+    }
+}
+
+/// How the planner's decisions went.
+#[derive(Debug, Clone, Default, PartialEq, Serialize)]
+pub struct PlannerStats {
+    pub decisions: u64,
+    /// Decisions whose search stopped at the deadline before the full depth.
+    pub deadline_misses: u64,
+    pub levels_requested: usize,
+    /// Shallowest and mean tree depth completed.
+    pub min_levels_searched: usize,
+    pub mean_levels_searched: f64,
+    /// Decisions the planner could not make (no forecast): the CNA held position.
+    pub failures: u64,
+    /// Decisions taken before any AUV was known (the CNA held position).
+    pub waiting: u64,
+}
+
+/// The success likelihood the planner assumes for a ping over a given slant distance.
+pub type PingLikelihood = Box<dyn Fn(f64) -> f64 + Send>;
+
+/// The underway look-ahead planner behind [`CnaPolicy`].
+pub struct PlannerPolicy {
+    planner: LookAheadPlanner,
+    tracker: ErrorTracker,
+    lost_pings: Option<PingLikelihood>,
+    stats: PlannerStats,
+    levels_total: u64,
+}
+
+/// The AUVs of a forecast that are known, renumbered 0..m.
+struct Known<'a> {
+    inner: &'a dyn AuvForecast,
+    index: &'a [usize],
+}
+
+impl AuvForecast for Known<'_> {
+    fn n_auvs(&self) -> usize {
+        self.index.len()
+    }
+    fn position(&self, k: usize, t: f64) -> Option<Vec3> {
+        self.inner.position(*self.index.get(k)?, t)
+    }
+}
+
+impl PlannerPolicy {
+    /// `n` survey AUVs; `lost_pings` = Some(likelihood) models lost pings, None is the thesis.
+    pub fn new(cfg: PlannerConfig, n: usize, sigma0: f64, eps0: f64, lost_pings: Option<PingLikelihood>) -> Result<Self, PlanError> {
+        let tracker = ErrorTracker::new(n, cfg.error, cfg.motion.tau, sigma0, eps0);
+        let stats = PlannerStats { levels_requested: cfg.look_ahead + 1, min_levels_searched: usize::MAX, ..PlannerStats::default() };
+        Ok(PlannerPolicy { planner: LookAheadPlanner::new(cfg)?, tracker, lost_pings, stats, levels_total: 0 })
+    }
+
+    pub fn stats(&self) -> PlannerStats {
+        let mut s = self.stats.clone();
+        let planned = s.decisions - s.failures - s.waiting;
+        s.mean_levels_searched = if planned > 0 { self.levels_total as f64 / planned as f64 } else { 0.0 };
+        if s.min_levels_searched == usize::MAX {
+            s.min_levels_searched = 0;
+        }
+        s
+    }
+
+    pub fn tracker(&self) -> &ErrorTracker {
+        &self.tracker
+    }
+}
+
+impl CnaPolicy for PlannerPolicy {
+    fn name(&self) -> &'static str {
+        "planner"
+    }
+
+    /// Called right after the CNA's broadcast at `ctx.t`: first the broadcast's effect on the
+    /// modelled errors, then the next decision.
+    fn decide(&mut self, ctx: &PolicyContext) -> CnaCommand {
+        self.stats.decisions += 1;
+        let n = ctx.fleet.n_auvs();
+        let mut known = Vec::with_capacity(n);
+        for k in 0..n {
+            match ctx.fleet.position(k, ctx.t) {
+                Some(p) => {
+                    let likelihood = self.lost_pings.as_ref().map_or(1.0, |f| f((p - ctx.cna.pos).norm()));
+                    self.tracker.ping(k, &ctx.cna.pos, &p, likelihood);
+                    known.push(k);
+                }
+                None => self.tracker.silent(k),
+            }
+        }
+        if known.is_empty() {
+            self.stats.waiting += 1;
+            return CnaCommand::Hold;
+        }
+        let errors: Vec<AuvError> = known.iter().filter_map(|&k| self.tracker.error(k).copied()).collect();
+        let forecast = Known { inner: ctx.fleet, index: &known };
+        match self.planner.decide(&PlanInput { t: ctx.t, cna: ctx.cna, errors: &errors, forecast: &forecast }) {
+            Ok(d) => {
+                if d.levels_searched < d.levels_requested {
+                    self.stats.deadline_misses += 1;
+                }
+                self.stats.min_levels_searched = self.stats.min_levels_searched.min(d.levels_searched);
+                self.levels_total += d.levels_searched as u64;
+                CnaCommand::GoTo(d.next.pos)
+            }
+            Err(e) => {
+                tracing::warn!(t = ctx.t, error = %e, "planner could not decide; the CNA holds");
+                self.stats.failures += 1;
+                CnaCommand::Hold
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use coopnav_core::Heading;
+    use coopnav_plan::{CnaKind, CnaPose, Deadline, DistanceLimits, FnForecast, MotionConfig, PenaltyCase, SearchConfig};
+
+    fn cfg() -> PlannerConfig {
+        PlannerConfig {
+            look_ahead: 2,
+            motion: MotionConfig { speed: 2.0, tau: 30.0, heading_options: 5, max_turn_rate_deg_s: 4.0, cna: CnaKind::Asc {} },
+            error: ErrorModel::default(),
+            limits: DistanceLimits::default(),
+            penalties: PenaltyCase::C1.penalties(),
+            search: SearchConfig { deadline: Deadline::None, parallel: false, ..SearchConfig::default() },
+        }
+    }
+
+    #[test]
+    fn plans_over_known_auvs_and_tracks_their_errors() {
+        let mut p = PlannerPolicy::new(cfg(), 2, 1.0, 1.0, None).unwrap();
+        // AUV 1 never heard from: the planner still plans for AUV 0.
+        let fleet = FnForecast { n: 2, f: |k: usize, t: f64| (k == 0).then(|| Vec3::new(300.0, 1.5 * t, 20.0)) };
+        let cna = CnaPose { pos: Vec3::new(0.0, 0.0, 0.0), heading: Heading::from_radians(0.0), pitch: 0.0 };
+        for step in 0..4 {
+            let ctx = PolicyContext { t: 30.0 * step as f64, tau: 30.0, cna, speed: 2.0, fleet: &fleet };
+            assert!(matches!(p.decide(&ctx), CnaCommand::GoTo(_)));
+        }
+        assert!(p.tracker().total(0).unwrap() > 1.0);
+        assert!(p.tracker().total(1).is_none());
+        let s = p.stats();
+        assert_eq!((s.decisions, s.deadline_misses, s.failures, s.min_levels_searched), (4, 0, 0, 3));
+    }
+
+    #[test]
+    fn lost_pings_grow_the_modelled_error() {
+        let (m, c, a) = (ErrorModel::default(), Vec3::zeros(), Vec3::new(100.0, 0.0, 0.0));
+        let (mut sure, mut lossy) = (ErrorTracker::new(1, m, 30.0, 1.0, 1.0), ErrorTracker::new(1, m, 30.0, 1.0, 1.0));
+        for i in 0..10 {
+            let ang = i as f64;
+            let auv = Vec3::new(100.0 * ang.cos(), 100.0 * ang.sin(), 0.0);
+            sure.ping(0, &c, &auv, 1.0);
+            lossy.ping(0, &c, &auv, 0.3);
+        }
+        assert!(lossy.total(0).unwrap() > sure.total(0).unwrap());
+        let mut silent = ErrorTracker::new(1, m, 30.0, 1.0, 1.0);
+        silent.ping(0, &c, &a, 1.0);
+        silent.silent(0);
+        assert!((silent.error(0).unwrap().eps2 - (1.0 + 3.0)).abs() < 1e-12);
+    }
+}

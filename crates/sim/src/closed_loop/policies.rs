@@ -1,0 +1,162 @@
+//! Which CNA policy a closed-loop run uses, by name: the underway planner or one of the
+//! baselines of [`crate::policy`], configured from the scenario (survey area, fleet, CNA start).
+
+use super::planner_policy::{PingLikelihood, PlannerPolicy, PlannerStats};
+use super::scenario::Scenario;
+use crate::policy::{Centroid, CnaPolicy, FixedPattern, MidpointRelay, NoCna, Rect, TimedWaypoints, Trail};
+use crate::predeploy::runner;
+use crate::predeploy::scenario::Mission;
+use coopnav_acomms::{Receiver, TransmissionLoss};
+use coopnav_core::{CompassDeg, Heading, Vec3};
+use coopnav_plan::{CnaPose, Deadline, LookAheadPlanner, PlanError};
+use thiserror::Error;
+
+/// Every policy name, the planner first.
+pub const POLICY_NAMES: [&str; 8] = ["planner", "none", "racetrack", "zigzag", "centroid", "trail", "relay", "open-loop"];
+
+#[derive(Debug, Error)]
+pub enum PolicyError {
+    #[error("unknown policy '{name}' (allowed: {})", POLICY_NAMES.join(", "))]
+    Unknown { name: String },
+    #[error("policy {name}: {source}")]
+    Plan { name: String, source: PlanError },
+}
+
+/// A configured CNA policy; the planner is kept visible for its statistics.
+pub enum Policy {
+    Planner(Box<PlannerPolicy>),
+    Baseline(Box<dyn CnaPolicy>),
+}
+
+impl Policy {
+    pub fn as_policy(&mut self) -> &mut dyn CnaPolicy {
+        match self {
+            Policy::Planner(p) => p.as_mut(),
+            Policy::Baseline(b) => b.as_mut(),
+        }
+    }
+    pub fn planner_stats(&self) -> Option<PlannerStats> {
+        match self {
+            Policy::Planner(p) => Some(p.stats()),
+            Policy::Baseline(_) => None,
+        }
+    }
+}
+
+/// Capture radius of the fixed patterns, m; inset of the racetrack, m; zig-zag legs. Invented.
+const CAPTURE_RADIUS: f64 = 20.0;
+const RACETRACK_INSET: f64 = 100.0;
+const ZIGZAG_LEGS: usize = 4;
+/// Trail one AUV this far directly behind it, m (BHV_Trail-style). Invented.
+const TRAIL_RANGE: f64 = 150.0;
+
+/// The bounding box of every AUV's lawnmower.
+pub fn survey_area(sc: &Scenario) -> Rect {
+    let pts: Vec<(f64, f64)> = (0..sc.fleet.n_auvs).flat_map(|k| sc.lawnmower(k).waypoints()).collect();
+    let fold = |f: fn(f64, f64) -> f64, init: f64, pick: fn(&(f64, f64)) -> f64| pts.iter().map(pick).fold(init, f);
+    Rect {
+        min: (fold(f64::min, f64::INFINITY, |p| p.0), fold(f64::min, f64::INFINITY, |p| p.1)),
+        max: (fold(f64::max, f64::NEG_INFINITY, |p| p.0), fold(f64::max, f64::NEG_INFINITY, |p| p.1)),
+    }
+}
+
+/// The CNA's start pose.
+pub fn cna_start(sc: &Scenario) -> CnaPose {
+    let z = sc.cna.auv.as_ref().map_or(0.0, |a| a.depth);
+    CnaPose { pos: Vec3::new(sc.cna.x, sc.cna.y, z), heading: Heading::from(CompassDeg(sc.cna.heading_compass_deg)), pitch: 0.0 }
+}
+
+/// A checked policy name with whatever it needs precomputed (the open-loop plan), so Monte
+/// Carlo runs build their policies cheaply.
+#[derive(Debug, Clone)]
+pub struct PolicySpec {
+    pub name: String,
+    open_loop: Option<TimedWaypoints>,
+}
+
+impl PolicySpec {
+    pub fn new(name: &str, sc: &Scenario) -> Result<Self, PolicyError> {
+        if !POLICY_NAMES.contains(&name) {
+            return Err(PolicyError::Unknown { name: name.to_string() });
+        }
+        let open_loop = match name {
+            "open-loop" => Some(open_loop(sc).map_err(|source| PolicyError::Plan { name: name.to_string(), source })?),
+            _ => None,
+        };
+        Ok(PolicySpec { name: name.to_string(), open_loop })
+    }
+
+    /// A fresh policy for one run.
+    pub fn build(&self, sc: &Scenario) -> Result<Policy, PolicyError> {
+        build(&self.name, sc, self.open_loop.as_ref())
+    }
+}
+
+/// Builds policy `name` for scenario `sc` (`planned`: a precomputed open-loop plan).
+fn build(name: &str, sc: &Scenario, planned: Option<&TimedWaypoints>) -> Result<Policy, PolicyError> {
+    let n = sc.fleet.n_auvs;
+    let plan_err = |source| PolicyError::Plan { name: name.to_string(), source };
+    let baseline: Box<dyn CnaPolicy> = match name {
+        "planner" => {
+            let p = &sc.planner;
+            let likelihood: Option<PingLikelihood> = p.model_lost_pings.then(|| {
+                let (tl, success, rate) = (sc.comms.tl, sc.comms.success.clone(), sc.comms.cna_rate);
+                Box::new(move |d: f64| success.p_success(rate, tl.at_distance(d))) as PingLikelihood
+            });
+            let policy = PlannerPolicy::new(sc.planner_config(), n, p.sigma0, p.eps0, likelihood).map_err(plan_err)?;
+            return Ok(Policy::Planner(Box::new(policy)));
+        }
+        "none" => Box::new(NoCna),
+        "racetrack" => Box::new(FixedPattern::racetrack(survey_area(sc), RACETRACK_INSET, CAPTURE_RADIUS)),
+        "zigzag" => Box::new(FixedPattern::zigzag(survey_area(sc), ZIGZAG_LEGS, CAPTURE_RADIUS)),
+        "centroid" => Box::new(Centroid),
+        "trail" => Box::new(Trail { auv: n / 2, range: TRAIL_RANGE, angle: std::f64::consts::PI }),
+        "relay" => Box::new(MidpointRelay { base: (sc.cna.x, sc.cna.y), auv: n / 2 }),
+        "open-loop" => match planned {
+            Some(p) => Box::new(p.clone()),
+            None => Box::new(open_loop(sc).map_err(plan_err)?),
+        },
+        _ => return Err(PolicyError::Unknown { name: name.to_string() }),
+    };
+    Ok(Policy::Baseline(baseline))
+}
+
+/// The pre-deployment plan on the nominal survey tracks (no current, no nav error), flown by time.
+fn open_loop(sc: &Scenario) -> Result<TimedWaypoints, PlanError> {
+    let mut cfg = sc.planner_config();
+    cfg.search.deadline = Deadline::None;
+    let tracks = (0..sc.fleet.n_auvs)
+        .map(|k| sc.lawnmower(k).track(1.0))
+        .collect::<Result<Vec<_>, _>>()
+        .map_err(|e| PlanError::Input(format!("nominal survey track: {e}")))?;
+    let n = tracks.len();
+    let mission = Mission {
+        planner: cfg,
+        cna: cna_start(sc),
+        names: (0..n).map(|k| format!("auv{k}")).collect(),
+        tracks,
+        sigma0: vec![sc.planner.sigma0; n],
+        eps0: vec![sc.planner.eps0; n],
+        start_time: 0.0,
+        end_time: sc.duration_s,
+    };
+    let mut planner = LookAheadPlanner::new(cfg)?;
+    let run = runner::run(&mission, &mut planner, &|_| {}).map_err(|e| PlanError::Input(e.to_string()))?;
+    let tau = sc.comms.tau;
+    Ok(TimedWaypoints { waypoints: run.decisions.iter().enumerate().map(|(i, d)| ((i + 1) as f64 * tau, d.next.pos)).collect() })
+}
+
+/// The link model the world uses (kept here so the planner's lost-ping likelihood and the
+/// world's draws agree): TL between two points.
+pub fn tl_between(sc: &Scenario, a: &Vec3, b: &Vec3) -> f64 {
+    sc.comms.tl.tl(a, b).unwrap_or(coopnav_acomms::tl::TL_CEILING)
+}
+
+/// Receiver type of a link's far end.
+pub fn receiver(to_cna: bool) -> Receiver {
+    if to_cna {
+        Receiver::Barge
+    } else {
+        Receiver::Iver2
+    }
+}
