@@ -1,6 +1,6 @@
 //! `coopnav hbl simulate|montecarlo|grid|tune|postprocess`: the Gill hybrid-baseline tools.
 
-use crate::rundir::RunDir;
+use coopnav_sim::output::{Manifest, RunDir};
 use anyhow::{Context, Result};
 use coopnav_nav::post::{self, PostConfig};
 use coopnav_sim::hbl::grid::{self, GridSpec};
@@ -84,7 +84,7 @@ fn bar(n: u64) -> ProgressBar {
 }
 
 fn manifest(dir: &RunDir, command: &str, seed: u64, inputs: serde_json::Value) -> Result<()> {
-    dir.write_json("manifest.json", &json!({ "command": command, "seed": seed, "version": env!("CARGO_PKG_VERSION"), "inputs": inputs }))
+    Ok(dir.write_json("manifest.json", &Manifest::new(command, Some(seed), inputs))?)
 }
 
 pub fn run_command(cmd: Command) -> Result<()> {
@@ -113,12 +113,12 @@ fn simulate(c: &Common) -> Result<()> {
             r.ship_est[0], r.ship_est[1], o(r.buoy_true, 0), o(r.buoy_true, 1), o(r.buoy_est, 0), o(r.buoy_est, 1), r.error
         ));
     }
-    dir.write("trace.csv", csv)?;
+    dir.write_bytes("trace.csv", csv)?;
     let mut log = Vec::new();
     post::write_log(&mut log, &trace.log)?;
-    dir.write("log.csv", log)?;
-    dir.write("tracks.svg", plot::tracks(&trace.rows)?)?;
-    dir.write("error_vs_xrel.svg", plot::error_vs_xrel(&trace.rows, (sc.geometry.zone_min, sc.geometry.zone_max))?)?;
+    dir.write_bytes("log.csv", log)?;
+    dir.write_bytes("tracks.svg", plot::tracks(&trace.rows)?)?;
+    dir.write_bytes("error_vs_xrel.svg", plot::error_vs_xrel(&trace.rows, (sc.geometry.zone_min, sc.geometry.zone_max))?)?;
     dir.write_json("summary.json", &metrics)?;
     let out = dir.finish()?;
     println!("zone error {:.3} m; wrote {}", metrics.zone_error.unwrap_or(f64::NAN), out.display());
@@ -141,7 +141,7 @@ fn montecarlo(c: &Common, runs: usize) -> Result<()> {
             o(m.zone_error), o(m.zone_parallel), o(m.zone_perpendicular), o(m.buoy_error), o(m.saturation_error), m.ranges_received, m.ranges_applied, m.healthy
         ));
     }
-    dir.write("runs.csv", csv)?;
+    dir.write_bytes("runs.csv", csv)?;
     dir.write_json("summary.json", &r.summary)?;
     let out = dir.finish()?;
     let z = r.summary.zone_error;
@@ -163,8 +163,8 @@ fn grid_cmd(c: &Common, grid_path: Option<&Path>) -> Result<()> {
     manifest(&dir, "hbl grid", c.seed, json!({ "scenario": sc, "grid": spec }))?;
     let mut buf = Vec::new();
     grid::write_csv(&mut buf, &cells)?;
-    dir.write("grid.csv", buf)?;
-    dir.write("heat_map.svg", plot::heat_map(&cells, spec.spacing)?)?;
+    dir.write_bytes("grid.csv", buf)?;
+    dir.write_bytes("heat_map.svg", plot::heat_map(&cells, spec.spacing)?)?;
     let best = grid::optimal_region(&cells, 0.10);
     dir.write_json("summary.json", &json!({ "cells": cells.len(), "optimal_region_within_10pct": best }))?;
     let out = dir.finish()?;
@@ -202,7 +202,7 @@ fn postprocess(log: &Path, config: Option<&Path>, out: &Path, force: bool) -> Re
             s.t, s.filtered[0], s.filtered[1], s.filtered_sd[0], s.filtered_sd[1], s.smoothed[0], s.smoothed[1], s.smoothed_sd[0], s.smoothed_sd[1], o(0), o(1)
         ));
     }
-    dir.write("estimates.csv", csv)?;
+    dir.write_bytes("estimates.csv", csv)?;
     dir.write_json("summary.json", &result.summary)?;
     let out = dir.finish()?;
     println!("{:?}; wrote {}", result.summary, out.display());

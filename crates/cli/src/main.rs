@@ -11,7 +11,6 @@ mod bench_closed_loop;
 mod channel;
 mod nams;
 mod reproduce;
-mod rundir;
 mod simulate;
 
 #[derive(Parser)]

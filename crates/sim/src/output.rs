@@ -93,8 +93,12 @@ impl RunDir {
     }
 
     pub fn write_text(&self, name: &str, text: &str) -> Result<(), OutputError> {
+        self.write_bytes(name, text)
+    }
+
+    pub fn write_bytes(&self, name: &str, bytes: impl AsRef<[u8]>) -> Result<(), OutputError> {
         let path = self.staged(name);
-        fs::write(&path, text).map_err(io_err(&path))
+        fs::write(&path, bytes).map_err(io_err(&path))
     }
 
     pub fn write_json<T: Serialize + ?Sized>(&self, name: &str, value: &T) -> Result<(), OutputError> {
