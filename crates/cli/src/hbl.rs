@@ -13,7 +13,13 @@ use std::path::{Path, PathBuf};
 #[derive(clap::Subcommand)]
 pub enum Command {
     /// One run: tracks, errors and a post-processing log (CSV), summary.json, SVG plots.
-    Simulate(Common),
+    Simulate {
+        #[command(flatten)]
+        common: Common,
+        /// Replay run I of a Monte Carlo with the same --seed (its runs are 0 … runs − 1).
+        #[arg(long, default_value_t = 0)]
+        run: u64,
+    },
     /// A Monte Carlo of one scenario: per-run CSV and summary.json.
     Montecarlo {
         #[command(flatten)]
@@ -89,7 +95,7 @@ fn manifest(dir: &RunDir, command: &str, seed: u64, inputs: serde_json::Value) -
 
 pub fn run_command(cmd: Command) -> Result<()> {
     match cmd {
-        Command::Simulate(c) => simulate(&c),
+        Command::Simulate { common, run } => simulate(&common, run),
         Command::Montecarlo { common, runs } => montecarlo(&common, runs),
         Command::Grid { common, grid } => grid_cmd(&common, grid.as_deref()),
         Command::Tune { common, spec } => tune_cmd(&common, &spec),
@@ -97,13 +103,13 @@ pub fn run_command(cmd: Command) -> Result<()> {
     }
 }
 
-fn simulate(c: &Common) -> Result<()> {
+fn simulate(c: &Common, index: u64) -> Result<()> {
     let sc = scenario(c)?;
     let cycle = sc.resolved_cycle()?;
-    let (metrics, trace) = run(&sc, &cycle, coopnav_core::run_seed(c.seed, 0), true);
+    let (metrics, trace) = run(&sc, &cycle, coopnav_core::run_seed(c.seed, index), true);
     let trace = trace.context("the simulator returned no trace")?;
     let dir = RunDir::create(&c.out, c.force)?;
-    manifest(&dir, "hbl simulate", c.seed, json!({ "scenario": sc }))?;
+    manifest(&dir, "hbl simulate", c.seed, json!({ "scenario": sc, "run": index }))?;
     let mut csv = String::from("t,x_rel,auv_e,auv_n,est_e,est_n,sd_e,sd_n,ship_e,ship_n,ship_est_e,ship_est_n,buoy_e,buoy_n,buoy_est_e,buoy_est_n,error\n");
     for r in &trace.rows {
         let o = |v: Option<[f64; 2]>, i: usize| v.map_or(String::new(), |p| p[i].to_string());

@@ -41,7 +41,19 @@ enum Command {
     Bench(bench::Target),
 }
 
-fn main() -> Result<()> {
+/// Errors print as one chain of causes ("what: why: detail"), never a backtrace: a failed
+/// check or a bad file is the user's business, not a crash.
+fn main() -> std::process::ExitCode {
+    match run() {
+        Ok(()) => std::process::ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("Error: {e:#}");
+            std::process::ExitCode::FAILURE
+        }
+    }
+}
+
+fn run() -> Result<()> {
     tracing_subscriber::fmt()
         .with_env_filter(tracing_subscriber::EnvFilter::from_default_env())
         .with_writer(std::io::stderr)
