@@ -22,6 +22,18 @@ pub fn experiments() -> Vec<Experiment> {
 
 const ID5: &str = "gill-table-5";
 
+/// Why our MSBL stays below the thesis's 3.03 m (measured; see the issue-3 notes).
+const MSBL_DEVIATION: &str = "our MSBL keeps the thesis's shape (perpendicular error ≈ 3 m until ~30 m before the \
+crossing, then corrected) but corrects earlier and deeper near the ship, so the zone mean is ≈ 2 m. The MSBL-era AUV \
+and ship coefficients that set this are unpublished (digest §10 A2); raising our MSBL error would mean degrading \
+its filter by hand, which we do not do. A smaller Q^A or a longer Δt only lowers it further (1.66–1.75 m for Q^A/100, Δt = 1 s, Q per 2 s).";
+
+/// Why Short does not beat Long here (measured; see the issue-3 notes).
+const CYCLES_DEVIATION: &str = "in our simulation Long carries 20 % more buoy ranges (0.15 vs 0.125 Hz) and 60 % more \
+ship-East updates than Short, which outweighs Short's fresher ship North/speed/heading; the difference is within \
+its 95 % CI of zero, also with the pre-optimisation buoy coefficients (buoy = ship values). The thesis's cycle study \
+ran with unpublished pre-optimisation AUV coefficients (digest §7.2).";
+
 fn runs(o: &ReproOptions, full: usize, reduced: usize) -> usize {
     match o.size {
         Size::Full => full,
@@ -80,7 +92,7 @@ fn table_5(o: &ReproOptions) -> Result<ReproReport, ExperimentError> {
     let (msbl, one, two) = (&rows[0].3, &rows[1].3, &rows[2].3);
     let d = welch_95(&two.zone_error, &one.zone_error);
     let mut checks = vec![
-        band("MSBL band", &msbl.zone_error, 2.5, 3.5, widen(o, msbl.zone_error.se)),
+        band("MSBL band", &msbl.zone_error, 2.5, 3.5, widen(o, msbl.zone_error.se)).known_deviation(MSBL_DEVIATION),
         band("HBL One band", &one.zone_error, 1.0, 1.7, widen(o, one.zone_error.se)),
         band("HBL Two band", &two.zone_error, 1.0, 1.7, widen(o, two.zone_error.se)),
         Check::new(
@@ -119,7 +131,8 @@ fn cycles(o: &ReproOptions) -> Result<ReproReport, ExperimentError> {
         "Short ≤ Long",
         short.zone_error.mean <= long.zone_error.mean + widen(o, ci.se),
         format!("short {:.3} vs long {:.3} (+{:.3} allowed)", short.zone_error.mean, long.zone_error.mean, widen(o, ci.se)),
-    )];
+    )
+    .known_deviation(CYCLES_DEVIATION)];
     let data = json!({ "runs": n, "short": short, "long": long, "welch_long_minus_short": ci });
     Ok(ReproReport { id: id.into(), table, checks, data })
 }
@@ -134,12 +147,22 @@ const TABLE_4: [([f64; 2], f64, f64, f64); 6] = [
     ([0.05, 0.05], 2.31, 1.78, 2.96),
 ];
 
+/// Side of the square the Table 4 buoy starts in (m), centred on the Table 5 region's centre.
+/// Reconstructed (gill digest §7.4, A14, A19; the thesis gives no region): with Lake drift and
+/// our saturation metric, a 44 m square gives the thesis's 0.09 m saturation at 0.2 m grids
+/// (40 m: 0.03, 50 m: 0.19; sampled offline from the same drift model). The Table 5 box
+/// (80 × 50 m) would saturate a 51.2 m zone from the start, and Table 4's lower standard-grid
+/// AUV error (1.15 vs 1.35 m) also points to a tighter buoy placement in that experiment.
+const TABLE_4_BUOY_SQUARE_M: f64 = 44.0;
+
 fn table_4(o: &ReproOptions) -> Result<ReproReport, ExperimentError> {
     let id = "gill-table-4";
     let n = runs(o, 250, 30);
-    let base = Scenario::table5(Configuration::HblTwo);
+    let mut base = Scenario::table5(Configuration::HblTwo);
     // Digest §7.4: the buoy zone is centred on the centre of the buoy's initial region.
     let centre = [(base.buoy.region_x[0] + base.buoy.region_x[1]) / 2.0, (base.buoy.region_y[0] + base.buoy.region_y[1]) / 2.0];
+    let half = TABLE_4_BUOY_SQUARE_M / 2.0;
+    (base.buoy.region_x, base.buoy.region_y) = ([centre[0] - half, centre[0] + half], [centre[1] - half, centre[1] + half]);
     let mut rows = Vec::new();
     for (res, tb, ta, ts) in TABLE_4 {
         let mut sc = base.clone();
@@ -148,7 +171,9 @@ fn table_4(o: &ReproOptions) -> Result<ReproReport, ExperimentError> {
         let s = mc(id, &sc, n, o.seed)?;
         rows.push((res, tb, ta, ts, s));
     }
-    let mut table = format!("Gill Table 4 — buoy quantisation grid, HBL Two, {n} runs per grid (buoy zone centred at {centre:?})\n");
+    let mut table = format!(
+        "Gill Table 4 — buoy quantisation grid, HBL Two, {n} runs per grid (buoy starts in a {TABLE_4_BUOY_SQUARE_M} m square centred at {centre:?}, as is its zone;\n  the square is sized to give the thesis's 0.09 m saturation at 0.2 m, so that cell agrees by construction)\n"
+    );
     writeln!(table, "{:<11} | {:>6} {:>6} {:>6} | {:>7} {:>7} {:>7}", "grid (m)", "buoy", "AUV", "sat", "buoy", "AUV", "sat").ok();
     writeln!(table, "{:<11} | {:^20} | {:^23}", "", "thesis", "ours").ok();
     let get = |s: &McSummary, f: fn(&McSummary) -> Option<Stats>| f(s).map_or(f64::NAN, |x| x.mean);

@@ -169,6 +169,22 @@ impl Default for Acoustic {
     }
 }
 
+impl Acoustic {
+    /// Mean square of the range error of a *received* message under the thesis's mixture
+    /// (digest §5.4: uniform "slight" errors and uniform 5–10 m outliers), in m².
+    pub fn received_error_mean_square(&self) -> f64 {
+        let uniform_sq = |a: f64, b: f64| (a * a + a * b + b * b) / 3.0;
+        let received = self.p_slightly_long + self.p_slightly_short + self.p_outlier;
+        let sum = (self.p_slightly_long + self.p_slightly_short) * uniform_sq(0.0, self.slight_max_m)
+            + self.p_outlier * uniform_sq(self.outlier_min_m, self.outlier_max_m);
+        if received > 0.0 {
+            sum / received
+        } else {
+            0.0
+        }
+    }
+}
+
 /// Buoy drift model (digest §5.5).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
@@ -421,6 +437,16 @@ mod tests {
         let s = Scenario::from_toml("configuration = 'msbl'\ncycle = 'msbl'\n[acoustic]\np_drop = 0.2\np_slightly_long = 0.4\n").unwrap();
         assert_eq!(s.configuration, Configuration::Msbl);
         assert_eq!(s.acoustic.p_drop, 0.2);
+    }
+
+    /// The AUV filter's default timing noise is matched to this simulator's range-error mixture
+    /// (see `coopnav_nav::RangeNoise`); the two defaults must not drift apart.
+    #[test]
+    fn default_range_noise_matches_the_channel() {
+        let rms = Acoustic::default().received_error_mean_square().sqrt();
+        let noise = Filters::default().auv.range_noise;
+        let filter = noise.sound_speed * noise.sigma_time;
+        assert!((filter - rms).abs() < 0.01 * rms, "filter σ at zero range {filter} m vs channel RMS {rms} m");
     }
 
     #[test]

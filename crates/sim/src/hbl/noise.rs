@@ -155,6 +155,26 @@ mod tests {
         assert!((share(drop) - 0.10).abs() < 0.008);
     }
 
+    /// The filter's default range noise is derived from this mean square, so check it against
+    /// the sampler itself (mean of e² over received messages, within 4 standard errors).
+    #[test]
+    fn received_mean_square_matches_the_sampler() {
+        for a in [Acoustic::default(), Acoustic { p_outlier: 0.0, p_slightly_long: 0.55, ..Acoustic::default() }] {
+            let mut rng = SeedStream::new(11).rng(2);
+            let sq: Vec<f64> = (0..200_000)
+                .filter_map(|_| match draw_reception(&a, &mut rng) {
+                    Reception::Received(e) => Some(e * e),
+                    Reception::Dropped => None,
+                })
+                .collect();
+            let n = sq.len() as f64;
+            let mean = sq.iter().sum::<f64>() / n;
+            let se = (sq.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (n - 1.0) / n).sqrt();
+            let analytic = a.received_error_mean_square();
+            assert!((mean - analytic).abs() < 4.0 * se + 1e-12, "sampled {mean} vs analytic {analytic} (se {se})");
+        }
+    }
+
     #[test]
     fn drift_speed_and_circle() {
         let b = Buoy { drift_mean: 0.1, drift_sd: 0.0, circular_fraction: 1.0, ..Buoy::default() };
