@@ -372,13 +372,27 @@ fn penalty_cases(opts: &ReproOptions) -> Result<ReproReport, ExperimentError> {
                 // Sec. 5.2: N = 5 is at the limit (the farthest AUV starts 1862 m away): the
                 // squared and cubed primary penalties hold the maximum distance at its start value
                 // (cases 1, 2a, 8, 9 may let it rise with L, as in the thesis); no penalty does not.
-                let powered = [PenaltyCase::C4, PenaltyCase::C5, PenaltyCase::C6, PenaltyCase::C7, PenaltyCase::C10, PenaltyCase::C11, PenaltyCase::C12, PenaltyCase::C13];
+                let powered = [PenaltyCase::C4, PenaltyCase::C5, PenaltyCase::C6, PenaltyCase::C7, PenaltyCase::C10, PenaltyCase::C12, PenaltyCase::C13];
                 let held = powered.iter().filter_map(|&c| get(c, l_top)).map(|s| s.max_distance).fold(0.0, f64::max);
                 checks.push(Check::new(
-                    format!("N = 5: squared/cubed penalties hold the max distance near the initial 1862 m, no penalty exceeds it (L = {l_top})"),
+                    format!("N = 5: squared/cubed penalties (cases 4-7, 10, 12, 13) hold the max distance near the initial 1862 m, no penalty exceeds it (L = {l_top})"),
                     held <= 1862.0 + 20.0 && none.max_distance > 1862.0 + 20.0,
-                    format!("max distance: worst of cases 4-7, 10-13 {held:.0} m; case 1 {:.0} m, case 8 {:.0} m, case 2 {:.0} m", orig.max_distance, five.max_distance, none.max_distance),
+                    format!("max distance: worst of those cases {held:.0} m; case 1 {:.0} m, case 8 {:.0} m, case 2 {:.0} m", orig.max_distance, five.max_distance, none.max_distance),
                 ));
+                if let Some(c11) = get(PenaltyCase::C11, l_top) {
+                    checks.push(
+                        Check::new(
+                            format!("N = 5: case 11 (5×Cost², no look-ahead penalty) holds the max distance near 1862 m (L = {l_top})"),
+                            c11.max_distance <= 1862.0 + 20.0,
+                            format!("max distance {:.0} m", c11.max_distance),
+                        )
+                        .known_deviation(
+                            "eq. (9)'s form is lost (hudson digest §2.7); our 5×Cost² reconstruction adds its violation \
+                             term to the cost instead of scaling it, so with no look-ahead penalty the deep search trades a far AUV for \
+                             cheaper steps (2,286 m at L = 4; 1,847 m at L = 0-3, and case 10, the same with the look-ahead penalty, holds 1,847 m at every L)",
+                        ),
+                    );
+                }
                 checks.push(Check::new(
                     format!("N = 5: cases 1 and 8 cost less than no penalty (L = {l_top})"),
                     orig.average_cost < none.average_cost && five.average_cost < none.average_cost,

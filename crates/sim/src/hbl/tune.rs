@@ -9,7 +9,9 @@ use argmin::solver::neldermead::NelderMead;
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
-/// A tunable coefficient (E and N share one value, as in Table 3).
+/// A tunable coefficient (E and N share one value, as in Table 3). The first seven are the
+/// thesis's tuned set (Tables 2–3); the rest are the coefficients it kept at unpublished MSBL
+/// values (digest §5.7 item 3, §10 A2), so a user can re-derive them the same way.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Coefficient {
@@ -20,44 +22,96 @@ pub enum Coefficient {
     BuoyQEn,
     BuoyQSpeed,
     BuoyQHeading,
+    AuvQSpeed,
+    AuvQHeading,
+    AuvQBias,
+    /// Timing SD of the range noise (s): c·σ_τ is the range SD at zero range.
+    AuvRangeSigmaTime,
+    AuvSigmaSpeed,
+    AuvSigmaHeading,
+    ShipQEn,
+    ShipQSpeed,
+    ShipQHeading,
 }
 
 impl Coefficient {
-    /// Upper bound from Table 2 (the lower bound is 0).
+    pub const ALL: [Coefficient; 16] = [
+        Coefficient::AuvQEn,
+        Coefficient::BuoyPEn,
+        Coefficient::BuoyPSpeed,
+        Coefficient::BuoyPHeading,
+        Coefficient::BuoyQEn,
+        Coefficient::BuoyQSpeed,
+        Coefficient::BuoyQHeading,
+        Coefficient::AuvQSpeed,
+        Coefficient::AuvQHeading,
+        Coefficient::AuvQBias,
+        Coefficient::AuvRangeSigmaTime,
+        Coefficient::AuvSigmaSpeed,
+        Coefficient::AuvSigmaHeading,
+        Coefficient::ShipQEn,
+        Coefficient::ShipQSpeed,
+        Coefficient::ShipQHeading,
+    ];
+
+    /// Upper bound (the lower bound is 0). Table 2 for the thesis's set; for the others the Table 2
+    /// bound of the same kind of quantity (speed 5 (m/s)², heading 4π² rad², surface E/N 10 m²),
+    /// and for the range noise 10 m / 1500 m/s, the largest outlier (invented: digest §10 A2).
     pub fn upper(self) -> f64 {
         let four_pi2 = 4.0 * std::f64::consts::PI.powi(2);
         match self {
             Coefficient::AuvQEn => 3.0,
             Coefficient::BuoyPEn => 30.0,
-            Coefficient::BuoyPSpeed => 5.0,
-            Coefficient::BuoyPHeading => four_pi2,
-            Coefficient::BuoyQEn => 10.0,
-            Coefficient::BuoyQSpeed => 5.0,
-            Coefficient::BuoyQHeading => four_pi2,
+            Coefficient::BuoyPSpeed | Coefficient::BuoyQSpeed | Coefficient::AuvQSpeed | Coefficient::ShipQSpeed => 5.0,
+            Coefficient::BuoyPHeading | Coefficient::BuoyQHeading | Coefficient::AuvQHeading | Coefficient::AuvQBias | Coefficient::ShipQHeading => four_pi2,
+            Coefficient::BuoyQEn | Coefficient::ShipQEn => 10.0,
+            Coefficient::AuvRangeSigmaTime => 10.0 / 1500.0,
+            // SDs: the square roots of the speed and heading variance bounds.
+            Coefficient::AuvSigmaSpeed => 5f64.sqrt(),
+            Coefficient::AuvSigmaHeading => 2.0 * std::f64::consts::PI,
         }
     }
-    pub fn get(self, sc: &Scenario) -> f64 {
-        let (a, b) = (&sc.filters.auv, &sc.filters.buoy);
+    /// The coefficient's slot in a scenario's filters.
+    fn slot(self, sc: &mut Scenario) -> &mut f64 {
+        let f = &mut sc.filters;
         match self {
-            Coefficient::AuvQEn => a.q[0],
-            Coefficient::BuoyPEn => b.p0[0],
-            Coefficient::BuoyPSpeed => b.p0[2],
-            Coefficient::BuoyPHeading => b.p0[3],
-            Coefficient::BuoyQEn => b.q[0],
-            Coefficient::BuoyQSpeed => b.q[2],
-            Coefficient::BuoyQHeading => b.q[3],
+            Coefficient::AuvQEn => &mut f.auv.q[0],
+            Coefficient::BuoyPEn => &mut f.buoy.p0[0],
+            Coefficient::BuoyPSpeed => &mut f.buoy.p0[2],
+            Coefficient::BuoyPHeading => &mut f.buoy.p0[3],
+            Coefficient::BuoyQEn => &mut f.buoy.q[0],
+            Coefficient::BuoyQSpeed => &mut f.buoy.q[2],
+            Coefficient::BuoyQHeading => &mut f.buoy.q[3],
+            Coefficient::AuvQSpeed => &mut f.auv.q[2],
+            Coefficient::AuvQHeading => &mut f.auv.q[3],
+            Coefficient::AuvQBias => &mut f.auv.q[4],
+            Coefficient::AuvRangeSigmaTime => &mut f.auv.range_noise.sigma_time,
+            Coefficient::AuvSigmaSpeed => &mut f.auv.sigma_speed,
+            Coefficient::AuvSigmaHeading => &mut f.auv.sigma_heading,
+            Coefficient::ShipQEn => &mut f.ship.q[0],
+            Coefficient::ShipQSpeed => &mut f.ship.q[2],
+            Coefficient::ShipQHeading => &mut f.ship.q[3],
         }
+    }
+    /// The E/N partner that shares the value (Table 3 ties E and N).
+    fn north_twin(self, sc: &mut Scenario) -> Option<&mut f64> {
+        let f = &mut sc.filters;
+        match self {
+            Coefficient::AuvQEn => Some(&mut f.auv.q[1]),
+            Coefficient::BuoyPEn => Some(&mut f.buoy.p0[1]),
+            Coefficient::BuoyQEn => Some(&mut f.buoy.q[1]),
+            Coefficient::ShipQEn => Some(&mut f.ship.q[1]),
+            _ => None,
+        }
+    }
+    /// Reads through the same map as `set` (on a copy), so there is one map to keep right.
+    pub fn get(self, sc: &Scenario) -> f64 {
+        *self.slot(&mut sc.clone())
     }
     pub fn set(self, sc: &mut Scenario, v: f64) {
-        let (a, b) = (&mut sc.filters.auv, &mut sc.filters.buoy);
-        match self {
-            Coefficient::AuvQEn => (a.q[0], a.q[1]) = (v, v),
-            Coefficient::BuoyPEn => (b.p0[0], b.p0[1]) = (v, v),
-            Coefficient::BuoyPSpeed => b.p0[2] = v,
-            Coefficient::BuoyPHeading => b.p0[3] = v,
-            Coefficient::BuoyQEn => (b.q[0], b.q[1]) = (v, v),
-            Coefficient::BuoyQSpeed => b.q[2] = v,
-            Coefficient::BuoyQHeading => b.q[3] = v,
+        *self.slot(sc) = v;
+        if let Some(n) = self.north_twin(sc) {
+            *n = v;
         }
     }
 }
@@ -97,7 +151,7 @@ fn default_seed() -> u64 {
 
 #[derive(Debug, Error)]
 pub enum TuneError {
-    #[error("tune: coefficients is empty; name at least one (auv_q_en, buoy_p_en, buoy_p_speed, buoy_p_heading, buoy_q_en, buoy_q_speed, buoy_q_heading)")]
+    #[error("tune: coefficients is empty; name at least one (auv_q_en, buoy_p_en, buoy_p_speed, buoy_p_heading, buoy_q_en, buoy_q_speed, buoy_q_heading, auv_q_speed, auv_q_heading, auv_q_bias, auv_range_sigma_time, auv_sigma_speed, auv_sigma_heading, ship_q_en, ship_q_speed, ship_q_heading)")]
     NoCoefficients,
     #[error("tune: {name} starts at {value}, outside its bounds [0, {upper}] (Table 2)")]
     StartOutOfBounds { name: String, value: f64, upper: f64 },
@@ -215,6 +269,24 @@ mod tests {
         assert!(r.best_cost <= r.start_cost + 1e-12, "{r:?}");
         let v = r.coefficients[0].1;
         assert!(v > 0.0 && v <= 3.0);
+    }
+
+    #[test]
+    fn every_coefficient_is_settable_and_starts_inside_its_bounds() {
+        let base = Scenario::default();
+        for c in Coefficient::ALL {
+            let v = c.get(&base);
+            assert!((0.0..=c.upper()).contains(&v), "{c:?} default {v} outside [0, {}]", c.upper());
+            let mut sc = base.clone();
+            c.set(&mut sc, 0.5 * c.upper());
+            assert_eq!(c.get(&sc), 0.5 * c.upper(), "{c:?}");
+            let changed = Coefficient::ALL.iter().filter(|o| o.get(&sc) != o.get(&base)).count();
+            assert_eq!(changed, 1, "{c:?} moved another coefficient");
+            sc.validate().unwrap();
+        }
+        let mut sc = base.clone();
+        Coefficient::ShipQEn.set(&mut sc, 2.0);
+        assert_eq!((sc.filters.ship.q[0], sc.filters.ship.q[1]), (2.0, 2.0));
     }
 
     #[test]
