@@ -6,8 +6,6 @@ use clap::{Parser, Subcommand};
 mod bench;
 mod plan;
 mod hbl;
-mod bench_acomms;
-mod bench_closed_loop;
 mod channel;
 mod nams;
 mod reproduce;
