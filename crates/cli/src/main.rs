@@ -9,6 +9,7 @@ mod hbl;
 mod channel;
 mod nams;
 mod reproduce;
+mod scenario_args;
 mod simulate;
 
 #[derive(Parser)]
