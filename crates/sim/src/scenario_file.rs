@@ -9,18 +9,20 @@ use serde::de::DeserializeOwned;
 use std::path::{Path, PathBuf};
 use thiserror::Error;
 
+/// The underlying errors are part of each message (fields named `cause`, not `source`), so a
+/// printed cause chain shows them once.
 #[derive(Debug, Error)]
 pub enum ScenarioError {
-    #[error("cannot read scenario {file}: {source}")]
-    Read { file: PathBuf, source: std::io::Error },
+    #[error("cannot read scenario {file}: {cause}")]
+    Read { file: PathBuf, cause: std::io::Error },
     #[error("scenario {file}: {message}")]
     Parse { file: PathBuf, message: String },
     #[error("scenario {file}: field {field} = {value}: allowed {allowed}")]
     Invalid { file: PathBuf, field: String, value: String, allowed: String },
-    #[error("scenario {file}: {source}")]
-    Planner { file: PathBuf, source: PlanError },
-    #[error("scenario {file}: auv[{index}] track: {source}")]
-    Track { file: PathBuf, index: usize, source: TrackLoadError },
+    #[error("scenario {file}: {cause}")]
+    Planner { file: PathBuf, cause: PlanError },
+    #[error("scenario {file}: auv[{index}] track: {cause}")]
+    Track { file: PathBuf, index: usize, cause: TrackLoadError },
 }
 
 impl ScenarioError {
@@ -42,7 +44,7 @@ pub fn parse<T: DeserializeOwned>(text: &str, file: &Path, validate: Validate<T>
 
 /// Reads `file`, then [`parse`]s it.
 pub fn load<T: DeserializeOwned>(file: &Path, validate: Validate<T>) -> Result<T, ScenarioError> {
-    let text = std::fs::read_to_string(file).map_err(|source| ScenarioError::Read { file: file.to_path_buf(), source })?;
+    let text = std::fs::read_to_string(file).map_err(|cause| ScenarioError::Read { file: file.to_path_buf(), cause })?;
     parse(&text, file, validate)
 }
 

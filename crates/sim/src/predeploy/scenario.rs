@@ -150,7 +150,7 @@ impl Scenario {
     /// Checks the planner settings, the CNA pose and each AUV's settings (the track files and the
     /// mission span they allow are checked by [`Scenario::build`]).
     pub fn validate(&self, file: &Path) -> Result<(), ScenarioError> {
-        self.planner_config(file)?.validate().map_err(|source| ScenarioError::Planner { file: file.to_path_buf(), source })?;
+        self.planner_config(file)?.validate().map_err(|cause| ScenarioError::Planner { file: file.to_path_buf(), cause })?;
         let c = &self.cna;
         if ![c.x, c.y, c.depth, c.heading_compass_deg, c.pitch_deg].iter().all(|v| v.is_finite()) {
             let value = format!("{{ x = {}, y = {}, depth = {}, heading_compass_deg = {}, pitch_deg = {} }}", c.x, c.y, c.depth, c.heading_compass_deg, c.pitch_deg);
@@ -244,7 +244,7 @@ impl Scenario {
 
     /// AUV `i`'s track (CSV paths relative to `base_dir`).
     fn track(i: usize, a: &AuvSpec, file: &Path, base_dir: &Path) -> Result<Track, ScenarioError> {
-        let track_err = |source| ScenarioError::Track { file: file.to_path_buf(), index: i, source };
+        let track_err = |cause| ScenarioError::Track { file: file.to_path_buf(), index: i, cause };
         match Self::source(i, a, file)? {
             TrackSource::Lawnmower(m) => m.to_lawnmower().track(LAWNMOWER_DT).map_err(|e| track_err(TrackLoadError::Track { path: PathBuf::from("<lawnmower>"), source: e })),
             TrackSource::Csv(path) => load_track_csv(&base_dir.join(path)).map_err(track_err),
