@@ -4,8 +4,7 @@
 
 use super::scenario::Scenario;
 use super::world::{RunResult, Trace};
-pub use crate::output::WriteError;
-use crate::output::{Manifest, RunDir};
+use crate::output::{Manifest, RunDir, WriteError};
 use crate::plot::{line_svg, track_svg, Labels, PlotError, Series};
 use crate::report::HtmlReport;
 use std::path::PathBuf;

@@ -4,8 +4,7 @@
 
 use super::runner::RunResult;
 use super::scenario::Mission;
-pub use crate::output::WriteError;
-use crate::output::{Manifest, RunDir};
+use crate::output::{Manifest, RunDir, WriteError};
 use crate::plot::{line_svg, track_svg, Labels, Series};
 use coopnav_core::CompassDeg;
 use serde::Serialize;
