@@ -6,11 +6,10 @@ use clap::{Parser, Subcommand};
 mod bench;
 mod plan;
 mod hbl;
-mod bench_acomms;
-mod bench_closed_loop;
 mod channel;
 mod nams;
 mod reproduce;
+mod scenario_args;
 mod simulate;
 
 #[derive(Parser)]

@@ -2,51 +2,40 @@
 //! whole mission. Without a scenario it plans the embedded example; without -o it writes a fresh
 //! directory under runs/ (runs/plan-<name>, runs/plan-<name>-2, ...).
 
+use crate::scenario_args::{Loaded, ScenarioArgs, ScenarioCommand};
 use anyhow::{Context, Result};
 use coopnav_plan::LookAheadPlanner;
-use coopnav_sim::output::RunDir;
-use coopnav_sim::predeploy::{self, output::write_run, Scenario, EXAMPLE};
+use coopnav_sim::predeploy::{self, output::write_run, Scenario, ScenarioError, EXAMPLE};
 use indicatif::{ProgressBar, ProgressStyle};
 use std::io::IsTerminal;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
-#[derive(clap::Args)]
-pub struct Args {
-    /// Scenario file (TOML). Omit it to plan the embedded example scenario.
-    scenario: Option<PathBuf>,
-    /// Output directory (default: a fresh runs/plan-<name>).
-    #[arg(short, long)]
-    output: Option<PathBuf>,
-    /// Replace the output directory if it exists.
-    #[arg(long)]
-    force: bool,
-    /// Print the embedded example scenario and exit.
-    #[arg(long)]
-    example: bool,
+/// `coopnav plan`'s arguments: just the shared scenario arguments.
+pub type Args = ScenarioArgs<Plan>;
+
+/// What `coopnav plan` reads: a pre-deployment scenario.
+pub enum Plan {}
+
+impl ScenarioCommand for Plan {
+    type Scenario = Scenario;
+    const SCENARIO_HELP: &'static str = "Scenario file (TOML). Omit it to plan the embedded example scenario";
+    const OUTPUT_HELP: &'static str = "Output directory (default: a fresh runs/plan-<name>)";
+    const EXAMPLE_HELP: &'static str = "Print the embedded example scenario and exit";
+    const EXAMPLE: &'static str = EXAMPLE;
+    const EMBEDDED: &'static str = "example";
+    const RUN_PREFIX: &'static str = "plan";
+    const PARSE: fn(&str, &Path) -> Result<Scenario, ScenarioError> = Scenario::parse;
+    const LOAD: fn(&Path) -> Result<Scenario, ScenarioError> = Scenario::load;
 }
 
 pub fn run(args: Args) -> Result<()> {
-    if args.example {
-        print!("{EXAMPLE}");
+    if args.print_example() {
         return Ok(());
     }
-    let (scenario, file, base, stem) = match &args.scenario {
-        Some(path) => {
-            let stem = path.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_else(|| "scenario".into());
-            let base = path.parent().map(Path::to_path_buf).unwrap_or_default();
-            (Scenario::load(path)?, path.clone(), base, stem)
-        }
-        None => {
-            let file = PathBuf::from("<embedded example>");
-            (Scenario::parse(EXAMPLE, &file)?, file, PathBuf::from("."), "example".to_string())
-        }
-    };
+    let Loaded { scenario, file, base, stem } = args.load()?;
     // Everything is validated before any output is created.
     let mission = scenario.build(&file, &base)?;
-    let dir = match &args.output {
-        Some(o) => RunDir::create(o, args.force)?,
-        None => RunDir::create_fresh("runs", &format!("plan-{stem}"))?,
-    };
+    let dir = args.run_dir(&stem)?;
     let mut planner = LookAheadPlanner::new(mission.planner)?;
     let bar = if std::io::stderr().is_terminal() { ProgressBar::new(predeploy::step_count(&mission)) } else { ProgressBar::hidden() };
     bar.set_style(ProgressStyle::with_template("{bar:40} {pos}/{len} decisions [{elapsed_precise} < {eta_precise}]")?);

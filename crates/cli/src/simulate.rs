@@ -3,17 +3,15 @@
 //! run directory with plots and report.html; `--runs N --policy a,b,c` instead runs a seeded
 //! Monte Carlo comparison and prints a table with 95 % confidence intervals.
 
+use crate::scenario_args::{Loaded, ScenarioArgs, ScenarioCommand};
 use anyhow::{bail, Context, Result};
-use coopnav_sim::closed_loop::{self, comparison_table, output::write_run, Faults, PolicySpec, Scenario, EXAMPLE};
-use coopnav_sim::output::RunDir;
+use coopnav_sim::closed_loop::{self, comparison_table, output::write_run, Faults, PolicySpec, Scenario, ScenarioError, EXAMPLE};
 use indicatif::{ProgressBar, ProgressStyle};
 use std::io::IsTerminal;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 #[derive(clap::Args)]
 pub struct Args {
-    /// Scenario file (TOML). Omit it to run the embedded default mission.
-    scenario: Option<PathBuf>,
     /// CNA policies, comma-separated: planner, none, racetrack, zigzag, centroid, trail, relay,
     /// open-loop. One run writes a run directory for the first; --runs compares them all.
     #[arg(long, value_delimiter = ',', default_value = "planner")]
@@ -24,29 +22,34 @@ pub struct Args {
     /// Base seed (default: the scenario's).
     #[arg(long)]
     seed: Option<u64>,
-    /// Output directory (default: a fresh runs/sim-<name>).
-    #[arg(short, long)]
-    output: Option<PathBuf>,
-    /// Replace the output directory if it exists.
-    #[arg(long)]
-    force: bool,
-    /// Print the embedded default scenario as TOML and exit.
-    #[arg(long)]
-    example: bool,
+    /// Scenario file, -o, --force, --example (here, so `--help` lists them after --seed).
+    #[command(flatten)]
+    scenario: ScenarioArgs<Simulate>,
     /// Also write the comparison as JSON here (with --runs).
     #[arg(long)]
     json: Option<PathBuf>,
 }
 
+/// What `coopnav simulate` reads: a closed-loop scenario.
+pub enum Simulate {}
+
+impl ScenarioCommand for Simulate {
+    type Scenario = Scenario;
+    const SCENARIO_HELP: &'static str = "Scenario file (TOML). Omit it to run the embedded default mission";
+    const OUTPUT_HELP: &'static str = "Output directory (default: a fresh runs/sim-<name>)";
+    const EXAMPLE_HELP: &'static str = "Print the embedded default scenario as TOML and exit";
+    const EXAMPLE: &'static str = EXAMPLE;
+    const EMBEDDED: &'static str = "default";
+    const RUN_PREFIX: &'static str = "sim";
+    const PARSE: fn(&str, &Path) -> Result<Scenario, ScenarioError> = Scenario::parse;
+    const LOAD: fn(&Path) -> Result<Scenario, ScenarioError> = Scenario::load;
+}
+
 pub fn run(args: Args) -> Result<()> {
-    if args.example {
-        print!("{EXAMPLE}");
+    if args.scenario.print_example() {
         return Ok(());
     }
-    let (mut scenario, stem) = match &args.scenario {
-        Some(path) => (Scenario::load(path)?, path.file_stem().map_or("scenario".into(), |s| s.to_string_lossy().into_owned())),
-        None => (Scenario::parse(EXAMPLE, &PathBuf::from("<embedded default>"))?, "default".to_string()),
-    };
+    let Loaded { mut scenario, stem, .. } = args.scenario.load()?;
     if let Some(seed) = args.seed {
         scenario.seed = seed;
     }
@@ -60,10 +63,7 @@ pub fn run(args: Args) -> Result<()> {
 }
 
 fn single(sc: &Scenario, spec: &PolicySpec, stem: &str, args: &Args) -> Result<()> {
-    let dir = match &args.output {
-        Some(o) => RunDir::create(o, args.force)?,
-        None => RunDir::create_fresh("runs", &format!("sim-{stem}"))?,
-    };
+    let dir = args.scenario.run_dir(stem)?;
     let mut policy = spec.build(sc)?;
     let result = closed_loop::run(sc, &mut policy, sc.seed, true, &Faults::default());
     let out = write_run(dir, sc, &result, &std::env::args().collect::<Vec<_>>().join(" ")).context("writing the run directory")?;

@@ -5,7 +5,7 @@
 //! `coopnav-sim` drives it step by step.
 
 //!
-//! Entry points: [`LookAheadPlanner`] (a [`CnaPolicy`]) configured by [`PlannerConfig`], fed each
+//! Entry points: [`LookAheadPlanner`] (a [`Planner`]) configured by [`PlannerConfig`], fed each
 //! τ with the CNA pose, the AUVs' modelled errors ([`AuvError`]) and an [`AuvForecast`].
 
 mod brute;
@@ -23,7 +23,7 @@ mod tests;
 pub use error_model::{AuvError, BearingMode, CostMode, ErrorModel};
 pub use motion::{CnaKind, CnaPose, MotionConfig, MotionOption};
 pub use penalty::{Doubling, NoPenalty, Penalty, PenaltyCase, PenaltyFn, PenaltyPair, ScaledViolation, SideTerm, Violation};
-pub use planner::{Algorithm, AuvForecast, CnaPolicy, Deadline, Decision, DistanceLimits, FnForecast, LookAheadPlanner, PlanInput, PlannerConfig, SearchConfig};
+pub use planner::{Algorithm, AuvForecast, Deadline, Decision, DistanceLimits, FnForecast, LookAheadPlanner, PlanInput, Planner, PlannerConfig, SearchConfig};
 
 use thiserror::Error;
 

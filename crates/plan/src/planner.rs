@@ -1,5 +1,6 @@
 //! The planner's public face: configuration, the survey-AUV forecast it reads, the
-//! [`CnaPolicy`] trait every CNA policy (this planner, later baselines) implements, and
+//! [`Planner`] trait every CNA path planner implements (the closed loop's baselines are
+//! `coopnav_sim::policy::CnaPolicy`s instead), and
 //! [`LookAheadPlanner`], the receding-horizon tree-search planner of Hudson Ch. 3.
 //!
 //! Each call plans one decision from the CNA's current pose and the AUVs' current modelled
@@ -182,8 +183,8 @@ pub struct Decision {
     pub nodes: u64,
 }
 
-/// A CNA path policy: anything that picks the CNA's next move each τ.
-pub trait CnaPolicy {
+/// A CNA path planner: anything that plans the CNA's next move each τ from a [`PlanInput`].
+pub trait Planner {
     fn name(&self) -> &str;
     fn decide(&mut self, input: &PlanInput) -> Result<Decision, PlanError>;
 }
@@ -265,7 +266,7 @@ impl LookAheadPlanner {
     }
 }
 
-impl CnaPolicy for LookAheadPlanner {
+impl Planner for LookAheadPlanner {
     fn name(&self) -> &str {
         "look-ahead"
     }

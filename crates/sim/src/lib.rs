@@ -10,6 +10,7 @@ pub mod output;
 pub mod plot;
 pub mod policy;
 pub mod report;
+pub mod scenario_file;
 pub mod predeploy;
 pub mod hbl;
 pub mod closed_loop;

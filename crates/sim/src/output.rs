@@ -5,6 +5,7 @@
 //! [`RunDir::finish`], so a run that fails half-way leaves nothing behind, and an existing
 //! directory is replaced only when the caller says `force`.
 
+use crate::plot::PlotError;
 use serde::Serialize;
 use std::fs;
 use std::path::{Path, PathBuf};
@@ -20,6 +21,17 @@ pub enum OutputError {
     Csv { path: PathBuf, source: csv::Error },
     #[error("cannot serialise {path} as JSON: {source}")]
     Json { path: PathBuf, source: serde_json::Error },
+}
+
+/// Why a run directory could not be written, whatever the run type.
+#[derive(Debug, Error)]
+pub enum WriteError {
+    #[error(transparent)]
+    Output(#[from] OutputError),
+    #[error(transparent)]
+    Plot(#[from] PlotError),
+    #[error("the run was not recorded (no time series to write)")]
+    NotRecorded,
 }
 
 fn io_err(path: &Path) -> impl FnOnce(std::io::Error) -> OutputError + '_ {

@@ -12,6 +12,13 @@ pub struct PlotError {
     message: String,
 }
 
+impl PlotError {
+    /// Drawing the plot titled `title` failed with `e` (for plots drawn beside these, e.g. heat maps).
+    pub(crate) fn new(title: &str, e: &dyn std::fmt::Display) -> Self {
+        PlotError { title: title.to_string(), message: e.to_string() }
+    }
+}
+
 /// One named line on a plot.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Series {
@@ -76,7 +83,7 @@ fn padded((lo, hi): (f64, f64)) -> (f64, f64) {
 }
 
 fn draw(labels: Labels, series: &[Series], x: (f64, f64), y: (f64, f64)) -> Result<String, PlotError> {
-    let fail = |e: &dyn std::fmt::Display| PlotError { title: labels.title.to_string(), message: e.to_string() };
+    let fail = |e: &dyn std::fmt::Display| PlotError::new(labels.title, e);
     let mut svg = String::new();
     {
         let root = SVGBackend::with_string(&mut svg, SIZE).into_drawing_area();

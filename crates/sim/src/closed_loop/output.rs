@@ -4,21 +4,10 @@
 
 use super::scenario::Scenario;
 use super::world::{RunResult, Trace};
-use crate::output::{Manifest, OutputError, RunDir};
+use crate::output::{Manifest, RunDir, WriteError};
 use crate::plot::{line_svg, track_svg, Labels, PlotError, Series};
 use crate::report::HtmlReport;
 use std::path::PathBuf;
-use thiserror::Error;
-
-#[derive(Debug, Error)]
-pub enum WriteError {
-    #[error(transparent)]
-    Output(#[from] OutputError),
-    #[error(transparent)]
-    Plot(#[from] PlotError),
-    #[error("the run was not recorded (no time series to write)")]
-    NotRecorded,
-}
 
 /// The plots every run directory holds: (file, caption).
 pub const PLOTS: [(&str, &str); 3] = [

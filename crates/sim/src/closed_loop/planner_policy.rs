@@ -6,7 +6,7 @@
 use crate::policy::{CnaCommand, CnaPolicy, PolicyContext};
 use coopnav_core::Vec3;
 use coopnav_plan::{AuvError, AuvForecast, ErrorModel, LookAheadPlanner, PlanError, PlanInput, PlannerConfig};
-use coopnav_plan::CnaPolicy as _;
+use coopnav_plan::Planner as _;
 use serde::Serialize;
 
 /// The planner's error model (eq. 1) tracked per AUV between decisions.

@@ -3,6 +3,8 @@
 //! before anything runs; every error names the file, the field and what is allowed.
 
 use crate::hbl::config::Sensors;
+use crate::scenario_file;
+pub use crate::scenario_file::ScenarioError;
 use coopnav_acomms::tl::analytic::Thorp;
 use coopnav_acomms::selector::AdaptiveConfig;
 use coopnav_acomms::{Rate, SuccessModel};
@@ -11,21 +13,10 @@ use coopnav_nav::AuvParams;
 use coopnav_plan::predict::{PredictorConfig, WaypointUse};
 use coopnav_plan::{CnaKind, Deadline, DistanceLimits, ErrorModel, MotionConfig, PenaltyCase, PlannerConfig, SearchConfig};
 use serde::{Deserialize, Serialize};
-use std::path::{Path, PathBuf};
-use thiserror::Error;
+use std::path::Path;
 
 /// The embedded default mission (`coopnav simulate` with no scenario, `--example`).
 pub const EXAMPLE: &str = include_str!("example.toml");
-
-#[derive(Debug, Error)]
-pub enum ScenarioError {
-    #[error("cannot read scenario {file}: {source}")]
-    Read { file: PathBuf, source: std::io::Error },
-    #[error("scenario {file}: {message}")]
-    Parse { file: PathBuf, message: String },
-    #[error("scenario {file}: field {field} = {value}: allowed {allowed}")]
-    Invalid { file: PathBuf, field: String, value: String, allowed: String },
-}
 
 /// The whole file.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -216,19 +207,16 @@ impl Scenario {
 
     /// Parses and validates TOML text; `file` names it in messages.
     pub fn parse(text: &str, file: &Path) -> Result<Self, ScenarioError> {
-        let sc: Scenario = toml::from_str(text).map_err(|e| ScenarioError::Parse { file: file.to_path_buf(), message: e.to_string() })?;
-        sc.validate(file)?;
-        Ok(sc)
+        scenario_file::parse(text, file, Self::validate)
     }
 
     pub fn load(file: &Path) -> Result<Self, ScenarioError> {
-        let text = std::fs::read_to_string(file).map_err(|source| ScenarioError::Read { file: file.to_path_buf(), source })?;
-        Self::parse(&text, file)
+        scenario_file::load(file, Self::validate)
     }
 
     /// Checks every field against its allowed range.
     pub fn validate(&self, file: &Path) -> Result<(), ScenarioError> {
-        let bad = |field: &str, value: String, allowed: &str| ScenarioError::Invalid { file: file.to_path_buf(), field: field.into(), value, allowed: allowed.into() };
+        let bad = |field: &str, value: String, allowed: &str| ScenarioError::invalid(file, field, value, allowed);
         let positive = |field: &str, v: f64| if v.is_finite() && v > 0.0 { Ok(()) } else { Err(bad(field, v.to_string(), "a finite number > 0")) };
         let non_negative = |field: &str, v: f64| if v.is_finite() && v >= 0.0 { Ok(()) } else { Err(bad(field, v.to_string(), "a finite number >= 0")) };
         positive("duration_s", self.duration_s)?;

@@ -1,18 +1,13 @@
-//! SVG figures of the HBL tools (plotters, SVG backend, written to strings): the buoy-grid heat
-//! map, true vs estimated tracks, and error against along-path position x_rel.
+//! SVG figures of the HBL tools: the buoy-grid heat map (drawn here: the shared plots have no
+//! colour maps), and true vs estimated tracks and error against along-path position x_rel (drawn
+//! with the shared [`crate::plot`] line and track plots).
 
 use super::grid::GridCell;
 use super::world::TraceRow;
+use crate::plot::{line_svg, track_svg, Labels, Series};
 use plotters::prelude::*;
-use thiserror::Error;
 
-#[derive(Debug, Error)]
-#[error("plot: {0}")]
-pub struct PlotError(String);
-
-fn err<E: std::fmt::Display>(e: E) -> PlotError {
-    PlotError(e.to_string())
-}
+pub use crate::plot::PlotError;
 
 /// Colour of `v` on a blue (low) → red (high) ramp over [lo, hi].
 fn ramp(v: f64, lo: f64, hi: f64) -> RGBColor {
@@ -22,10 +17,12 @@ fn ramp(v: f64, lo: f64, hi: f64) -> RGBColor {
 
 /// Heat map of mean zone error per buoy cell (`spacing` = cell size in m).
 pub fn heat_map(cells: &[GridCell], spacing: f64) -> Result<String, PlotError> {
+    const TITLE: &str = "Mean AUV zone error by buoy position";
+    let err = |e: &dyn std::fmt::Display| PlotError::new(TITLE, e);
     let mut svg = String::new();
     {
         let root = SVGBackend::with_string(&mut svg, (720, 420)).into_drawing_area();
-        root.fill(&WHITE).map_err(err)?;
+        root.fill(&WHITE).map_err(|e| err(&e))?;
         let (xs, ys): (Vec<f64>, Vec<f64>) = cells.iter().map(|c| (c.x, c.y)).unzip();
         let lo = cells.iter().map(|c| c.zone_error.mean).fold(f64::INFINITY, f64::min);
         let hi = cells.iter().map(|c| c.zone_error.mean).fold(f64::NEG_INFINITY, f64::max);
@@ -33,76 +30,82 @@ pub fn heat_map(cells: &[GridCell], spacing: f64) -> Result<String, PlotError> {
         let min = |v: &[f64]| v.iter().copied().fold(f64::INFINITY, f64::min);
         let max = |v: &[f64]| v.iter().copied().fold(f64::NEG_INFINITY, f64::max);
         let mut chart = ChartBuilder::on(&root)
-            .caption(format!("Mean AUV zone error by buoy position ({lo:.2}–{hi:.2} m, blue = low)"), ("sans-serif", 16))
+            .caption(format!("{TITLE} ({lo:.2}–{hi:.2} m, blue = low)"), ("sans-serif", 16))
             .margin(10)
             .x_label_area_size(35)
             .y_label_area_size(45)
             .build_cartesian_2d(min(&xs) - h..max(&xs) + h, min(&ys) - h..max(&ys) + h)
-            .map_err(err)?;
-        chart.configure_mesh().x_desc("buoy x (m, along path)").y_desc("buoy y (m)").draw().map_err(err)?;
+            .map_err(|e| err(&e))?;
+        chart.configure_mesh().x_desc("buoy x (m, along path)").y_desc("buoy y (m)").draw().map_err(|e| err(&e))?;
         chart
             .draw_series(cells.iter().map(|c| {
                 Rectangle::new([(c.x - h, c.y - h), (c.x + h, c.y + h)], ramp(c.zone_error.mean, lo, hi).filled())
             }))
-            .map_err(err)?;
+            .map_err(|e| err(&e))?;
     }
     Ok(svg)
 }
 
-/// True and estimated AUV tracks, the ship and the buoy.
+/// True and estimated AUV tracks, the ship and (when there is one) the buoy.
 pub fn tracks(rows: &[TraceRow]) -> Result<String, PlotError> {
-    let mut svg = String::new();
-    {
-        let root = SVGBackend::with_string(&mut svg, (800, 450)).into_drawing_area();
-        root.fill(&WHITE).map_err(err)?;
-        let pts = rows.iter().flat_map(|r| [r.auv_true, r.auv_est, r.ship_true].into_iter().chain(r.buoy_true));
-        let (mut x0, mut x1, mut y0, mut y1) = (f64::INFINITY, f64::NEG_INFINITY, f64::INFINITY, f64::NEG_INFINITY);
-        for p in pts {
-            x0 = x0.min(p[0]);
-            x1 = x1.max(p[0]);
-            y0 = y0.min(p[1]);
-            y1 = y1.max(p[1]);
-        }
-        let mut chart = ChartBuilder::on(&root)
-            .caption("AUV true (black) vs estimated (blue); ship (red); buoy (green)", ("sans-serif", 16))
-            .margin(10)
-            .x_label_area_size(35)
-            .y_label_area_size(45)
-            .build_cartesian_2d(x0 - 5.0..x1 + 5.0, y0 - 5.0..y1 + 5.0)
-            .map_err(err)?;
-        chart.configure_mesh().x_desc("east (m)").y_desc("north (m)").draw().map_err(err)?;
-        let line = |f: fn(&TraceRow) -> Option<[f64; 2]>| rows.iter().filter_map(f).map(|p| (p[0], p[1])).collect::<Vec<_>>();
-        for (data, colour) in [
-            (line(|r| Some(r.auv_true)), BLACK),
-            (line(|r| Some(r.auv_est)), BLUE),
-            (line(|r| Some(r.ship_true)), RED),
-            (line(|r| r.buoy_true), GREEN),
-        ] {
-            chart.draw_series(LineSeries::new(data, &colour)).map_err(err)?;
-        }
+    let line = |f: fn(&TraceRow) -> Option<[f64; 2]>| rows.iter().filter_map(f).map(|p| (p[0], p[1])).collect::<Vec<_>>();
+    let mut series = vec![
+        Series::new("AUV true", line(|r| Some(r.auv_true))),
+        Series::new("AUV estimated", line(|r| Some(r.auv_est))),
+        Series::new("ship", line(|r| Some(r.ship_true))),
+    ];
+    let buoy = line(|r| r.buoy_true);
+    if !buoy.is_empty() {
+        series.push(Series::new("buoy", buoy));
     }
-    Ok(svg)
+    track_svg(Labels { title: "AUV true vs estimated track, ship and buoy", x: "east (m)", y: "north (m)" }, &series)
 }
 
-/// AUV position error against x_rel, with the measurement zone marked.
+/// AUV position error against x_rel, with the measurement zone's ends marked by vertical lines.
 pub fn error_vs_xrel(rows: &[TraceRow], zone: (f64, f64)) -> Result<String, PlotError> {
-    let mut svg = String::new();
-    {
-        let root = SVGBackend::with_string(&mut svg, (800, 400)).into_drawing_area();
-        root.fill(&WHITE).map_err(err)?;
-        let x0 = rows.iter().map(|r| r.x_rel).fold(f64::INFINITY, f64::min).min(zone.0);
-        let x1 = rows.iter().map(|r| r.x_rel).fold(f64::NEG_INFINITY, f64::max).max(zone.1);
-        let y1 = rows.iter().map(|r| r.error).fold(1.0, f64::max) * 1.1;
-        let mut chart = ChartBuilder::on(&root)
-            .caption("AUV position error vs x_rel (zone shaded)", ("sans-serif", 16))
-            .margin(10)
-            .x_label_area_size(35)
-            .y_label_area_size(45)
-            .build_cartesian_2d(x0..x1, 0.0..y1)
-            .map_err(err)?;
-        chart.configure_mesh().x_desc("x_rel (m, + = behind the ship)").y_desc("error (m)").draw().map_err(err)?;
-        chart.draw_series([Rectangle::new([(zone.0, 0.0), (zone.1, y1)], RGBColor(220, 235, 255).filled())]).map_err(err)?;
-        chart.draw_series(LineSeries::new(rows.iter().map(|r| (r.x_rel, r.error)), &BLUE)).map_err(err)?;
+    let top = rows.iter().map(|r| r.error).fold(1.0, f64::max);
+    let edge = |x: f64| vec![(x, 0.0), (x, top)];
+    let series = [
+        Series::new("error", rows.iter().map(|r| (r.x_rel, r.error)).collect()),
+        Series::new("zone start", edge(zone.0)),
+        Series::new("zone end", edge(zone.1)),
+    ];
+    line_svg(Labels { title: "AUV position error vs x_rel", x: "x_rel (m, + = behind the ship)", y: "error (m)" }, &series)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::hbl::{run, Scenario};
+    use coopnav_nav::cycle::Configuration;
+
+    fn rows(c: Configuration) -> (Scenario, Vec<TraceRow>) {
+        let sc = Scenario::table5(c);
+        let (_, trace) = run(&sc, &sc.resolved_cycle().unwrap(), 1, true);
+        (sc, trace.unwrap().rows)
     }
-    Ok(svg)
+
+    /// Whether the SVG has a text element reading exactly `name` (a legend entry).
+    fn legend(svg: &str, name: &str) -> bool {
+        svg.contains(&format!(">\n{name}\n</text>"))
+    }
+
+    #[test]
+    fn tracks_name_each_vehicle_and_leave_out_a_missing_buoy() {
+        let (_, hbl) = rows(Configuration::HblTwo);
+        assert!(hbl.iter().any(|r| r.buoy_true.is_some()));
+        let svg = tracks(&hbl).unwrap();
+        assert!(["AUV true", "AUV estimated", "ship", "buoy"].iter().all(|n| legend(&svg, n)), "{svg}");
+        let (_, msbl) = rows(Configuration::Msbl);
+        assert!(msbl.iter().all(|r| r.buoy_true.is_none()));
+        let svg = tracks(&msbl).unwrap();
+        assert!(legend(&svg, "ship") && !legend(&svg, "buoy"));
+    }
+
+    #[test]
+    fn error_plot_marks_the_zone() {
+        let (sc, rows) = rows(Configuration::HblOne);
+        let svg = error_vs_xrel(&rows, (sc.geometry.zone_min, sc.geometry.zone_max)).unwrap();
+        assert!(legend(&svg, "zone start") && legend(&svg, "zone end") && svg.contains("x_rel"));
+    }
 }

@@ -4,20 +4,11 @@
 
 use super::runner::RunResult;
 use super::scenario::Mission;
-use crate::output::{Manifest, OutputError, RunDir};
-use crate::plot::{line_svg, track_svg, Labels, PlotError, Series};
+use crate::output::{Manifest, RunDir, WriteError};
+use crate::plot::{line_svg, track_svg, Labels, Series};
 use coopnav_core::CompassDeg;
 use serde::Serialize;
 use std::fmt::Write;
-use thiserror::Error;
-
-#[derive(Debug, Error)]
-pub enum WriteError {
-    #[error(transparent)]
-    Output(#[from] OutputError),
-    #[error(transparent)]
-    Plot(#[from] PlotError),
-}
 
 #[derive(Serialize)]
 struct WaypointRow {

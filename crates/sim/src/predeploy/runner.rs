@@ -1,11 +1,11 @@
-//! Steps a CNA policy over a whole pre-deployment mission: every τ the policy plans from the
+//! Steps a CNA planner over a whole pre-deployment mission: every τ the planner plans from the
 //! CNA's pose, the CNA moves to the planned waypoint, and each survey AUV's modelled error is
 //! updated from its a-priori position (Hudson §4.1, digest §2.10, §3.2).
 
 use super::metrics::{StepRecord, Summary};
 use super::scenario::Mission;
 use coopnav_core::{Track, Vec3};
-use coopnav_plan::{AuvError, AuvForecast, CnaPolicy, CnaPose, Decision, Penalty, PlanError, PlanInput, Violation};
+use coopnav_plan::{AuvError, AuvForecast, CnaPose, Decision, Penalty, PlanError, PlanInput, Planner, Violation};
 use thiserror::Error;
 
 #[derive(Debug, Error)]
@@ -38,8 +38,8 @@ pub struct RunResult {
     pub summary: Summary,
 }
 
-/// Runs `policy` over `mission`. `progress(step)` is called after each step.
-pub fn run(mission: &Mission, policy: &mut dyn CnaPolicy, progress: &(dyn Fn(u64) + Sync)) -> Result<RunResult, RunError> {
+/// Runs `planner` over `mission`. `progress(step)` is called after each step.
+pub fn run(mission: &Mission, planner: &mut dyn Planner, progress: &(dyn Fn(u64) + Sync)) -> Result<RunResult, RunError> {
     let cfg = &mission.planner;
     let tau = cfg.motion.tau;
     let forecast = TrackForecast { tracks: &mission.tracks, end_time: mission.end_time };
@@ -55,7 +55,7 @@ pub fn run(mission: &Mission, policy: &mut dyn CnaPolicy, progress: &(dyn Fn(u64
     let mut decisions = Vec::new();
     let n_steps = ((mission.end_time - mission.start_time) / tau + 1e-9).floor() as usize;
     for step in 1..=n_steps {
-        let d = policy.decide(&PlanInput { t, cna, errors: &errors, forecast: &forecast }).map_err(|source| RunError::Plan { step, t, source })?;
+        let d = planner.decide(&PlanInput { t, cna, errors: &errors, forecast: &forecast }).map_err(|source| RunError::Plan { step, t, source })?;
         t = mission.start_time + step as f64 * tau;
         cna = d.next;
         let now = positions(t);

@@ -3,28 +3,15 @@
 //! `deny_unknown_fields` and validated before anything runs; errors name the file and the field.
 
 use super::tracks::{load_track_csv, TrackLoadError};
+use crate::scenario_file;
+pub use crate::scenario_file::ScenarioError;
 use coopnav_core::{CompassDeg, DepthProfile, Heading, Lawnmower, Track, Vec3};
-use coopnav_plan::{CnaPose, DistanceLimits, ErrorModel, MotionConfig, PenaltyCase, PenaltyFn, PenaltyPair, PlanError, PlannerConfig, SearchConfig};
+use coopnav_plan::{CnaPose, DistanceLimits, ErrorModel, MotionConfig, PenaltyCase, PenaltyFn, PenaltyPair, PlannerConfig, SearchConfig};
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
-use thiserror::Error;
 
 /// The example scenario embedded in the binary.
 pub const EXAMPLE: &str = include_str!("example.toml");
-
-#[derive(Debug, Error)]
-pub enum ScenarioError {
-    #[error("cannot read scenario {file}: {source}")]
-    Read { file: PathBuf, source: std::io::Error },
-    #[error("scenario {file}: {message}")]
-    Parse { file: PathBuf, message: String },
-    #[error("scenario {file}: field {field}: {message}")]
-    Invalid { file: PathBuf, field: String, message: String },
-    #[error("scenario {file}: {source}")]
-    Planner { file: PathBuf, source: PlanError },
-    #[error("scenario {file}: auv[{index}] track: {source}")]
-    Track { file: PathBuf, index: usize, source: TrackLoadError },
-}
 
 /// The whole file.
 #[derive(Debug, Clone, Serialize, Deserialize)]
@@ -150,51 +137,53 @@ pub struct Mission {
 const LAWNMOWER_DT: f64 = 1.0;
 
 impl Scenario {
-    /// Parses TOML text; `file` is used in messages.
+    /// Parses TOML text and checks every field that needs no track file; `file` names it in
+    /// messages.
     pub fn parse(text: &str, file: &Path) -> Result<Self, ScenarioError> {
-        toml::from_str(text).map_err(|e| ScenarioError::Parse { file: file.to_path_buf(), message: e.to_string() })
+        scenario_file::parse(text, file, Self::validate)
     }
 
     pub fn load(file: &Path) -> Result<Self, ScenarioError> {
-        let text = std::fs::read_to_string(file).map_err(|source| ScenarioError::Read { file: file.to_path_buf(), source })?;
-        Self::parse(&text, file)
+        scenario_file::load(file, Self::validate)
+    }
+
+    /// Checks the planner settings, the CNA pose and each AUV's settings (the track files and the
+    /// mission span they allow are checked by [`Scenario::build`]).
+    pub fn validate(&self, file: &Path) -> Result<(), ScenarioError> {
+        self.planner_config(file)?.validate().map_err(|cause| ScenarioError::Planner { file: file.to_path_buf(), cause })?;
+        let c = &self.cna;
+        if ![c.x, c.y, c.depth, c.heading_compass_deg, c.pitch_deg].iter().all(|v| v.is_finite()) {
+            let value = format!("{{ x = {}, y = {}, depth = {}, heading_compass_deg = {}, pitch_deg = {} }}", c.x, c.y, c.depth, c.heading_compass_deg, c.pitch_deg);
+            return Err(ScenarioError::invalid(file, "cna", value, "finite numbers for x, y, depth, heading_compass_deg and pitch_deg"));
+        }
+        if self.auv.is_empty() {
+            return Err(ScenarioError::invalid(file, "auv", "no [[auv]]", "at least one [[auv]]"));
+        }
+        for (i, a) in self.auv.iter().enumerate() {
+            for (name, v) in [("sigma0", a.sigma0), ("eps0", a.eps0)] {
+                if !(v.is_finite() && v > 0.0) {
+                    return Err(ScenarioError::invalid(file, format!("auv[{i}].{name}"), v.to_string(), "> 0 m"));
+                }
+            }
+            Self::source(i, a, file)?;
+        }
+        Ok(())
     }
 
     /// Validates everything and builds the mission (tracks read relative to `base_dir`).
     pub fn build(&self, file: &Path, base_dir: &Path) -> Result<Mission, ScenarioError> {
-        let invalid = |field: &str, message: String| ScenarioError::Invalid { file: file.to_path_buf(), field: field.into(), message };
-        let planner = PlannerConfig {
-            look_ahead: self.planner.look_ahead,
-            motion: self.planner.motion,
-            error: self.planner.error,
-            limits: self.planner.limits,
-            penalties: self.penalties().map_err(|m| invalid("planner.penalty", m))?,
-            search: self.planner.search,
-        };
-        planner.validate().map_err(|source| ScenarioError::Planner { file: file.to_path_buf(), source })?;
-        let c = &self.cna;
-        if ![c.x, c.y, c.depth, c.heading_compass_deg, c.pitch_deg].iter().all(|v| v.is_finite()) {
-            return Err(invalid("cna", "x, y, depth, heading_compass_deg and pitch_deg must be finite numbers".into()));
-        }
-        if self.auv.is_empty() {
-            return Err(invalid("auv", "at least one [[auv]] is needed".into()));
-        }
-        let mut tracks = Vec::with_capacity(self.auv.len());
-        for (i, a) in self.auv.iter().enumerate() {
-            for (name, v) in [("sigma0", a.sigma0), ("eps0", a.eps0)] {
-                if !(v.is_finite() && v > 0.0) {
-                    return Err(invalid(&format!("auv[{i}].{name}"), format!("must be > 0 m, got {v}")));
-                }
-            }
-            tracks.push(self.track(i, a, file, base_dir)?);
-        }
+        self.validate(file)?;
+        let planner = self.planner_config(file)?;
+        let tracks = self.auv.iter().enumerate().map(|(i, a)| Self::track(i, a, file, base_dir)).collect::<Result<Vec<_>, _>>()?;
         let data_start = tracks.iter().map(Track::start_time).fold(f64::NEG_INFINITY, f64::max);
         let data_end = tracks.iter().map(Track::end_time).fold(f64::INFINITY, f64::min);
         let start_time = self.mission.start_time.unwrap_or(data_start.max(0.0));
         let end_time = self.mission.end_time.unwrap_or(data_end);
         if !(start_time.is_finite() && end_time.is_finite() && start_time + planner.motion.tau <= end_time) {
-            return Err(invalid("mission", format!("start_time {start_time} s + tau must not pass end_time {end_time} s (survey data covers {data_start}..{data_end} s)")));
+            let value = format!("start_time {start_time} s, end_time {end_time} s");
+            return Err(ScenarioError::invalid(file, "mission", value, format!("start_time + tau <= end_time (survey data covers {data_start}..{data_end} s)")));
         }
+        let c = &self.cna;
         Ok(Mission {
             planner,
             cna: CnaPose {
@@ -211,39 +200,70 @@ impl Scenario {
         })
     }
 
-    fn penalties(&self) -> Result<PenaltyPair, String> {
+    fn planner_config(&self, file: &Path) -> Result<PlannerConfig, ScenarioError> {
+        let p = &self.planner;
+        Ok(PlannerConfig { look_ahead: p.look_ahead, motion: p.motion, error: p.error, limits: p.limits, penalties: self.penalties(file)?, search: p.search })
+    }
+
+    fn penalties(&self, file: &Path) -> Result<PenaltyPair, ScenarioError> {
         let p = &self.planner.penalty;
         match (&p.case, p.primary, p.look_ahead) {
             (Some(id), None, None) => PenaltyCase::from_id(id).map(PenaltyCase::penalties).ok_or_else(|| {
                 let ids: Vec<&str> = PenaltyCase::ALL.iter().map(|c| c.id()).collect();
-                format!("unknown case '{id}'; allowed: {}", ids.join(", "))
+                ScenarioError::invalid(file, "planner.penalty.case", format!("'{id}'"), ids.join(", "))
             }),
             (None, Some(primary), Some(look_ahead)) => Ok(PenaltyPair { primary, look_ahead }),
-            _ => Err("give either case = \"<Table 5.2 case>\" or both primary and look_ahead".into()),
+            _ => Err(ScenarioError::invalid(file, "planner.penalty", given(p), "either case = \"<Table 5.2 case>\" or both primary and look_ahead")),
         }
     }
 
-    fn track(&self, i: usize, a: &AuvSpec, file: &Path, base_dir: &Path) -> Result<Track, ScenarioError> {
-        let field = |f: &str| format!("auv[{i}].{f}");
-        let invalid = |f: &str, message: String| ScenarioError::Invalid { file: file.to_path_buf(), field: field(f), message };
-        let track_err = |source| ScenarioError::Track { file: file.to_path_buf(), index: i, source };
+    /// AUV `i`'s track source, checked: exactly one of a sound lawnmower or a track CSV.
+    fn source<'a>(i: usize, a: &'a AuvSpec, file: &Path) -> Result<TrackSource<'a>, ScenarioError> {
+        let invalid = |f: &str, value: String, allowed: &str| ScenarioError::invalid(file, format!("auv[{i}].{f}"), value, allowed);
         match (&a.lawnmower, &a.track_csv) {
             (Some(m), None) => {
                 if !(m.speed.is_finite() && m.speed > 0.0) {
-                    return Err(invalid("lawnmower.speed", format!("must be > 0 m/s, got {}", m.speed)));
+                    return Err(invalid("lawnmower.speed", m.speed.to_string(), "> 0 m/s"));
                 }
                 if !(m.lane_length.is_finite() && m.lane_length > 0.0) || m.lanes == 0 || !m.spacing.is_finite() {
-                    return Err(invalid("lawnmower", "lane_length must be > 0 m, lanes >= 1 and spacing finite".into()));
+                    let value = format!("lane_length {}, lanes {}, spacing {}", m.lane_length, m.lanes, m.spacing);
+                    return Err(invalid("lawnmower", value, "lane_length > 0 m, lanes >= 1 and spacing finite"));
                 }
-                if let DepthProfile::Sinusoid { period, .. } = m.depth {
-                    if period.is_nan() || period <= 0.0 {
-                        return Err(invalid("lawnmower.depth.period", format!("must be > 0 s, got {period}")));
-                    }
+                match m.depth {
+                    DepthProfile::Sinusoid { period, .. } if period.is_nan() || period <= 0.0 => Err(invalid("lawnmower.depth.period", period.to_string(), "> 0 s")),
+                    _ => Ok(TrackSource::Lawnmower(m)),
                 }
-                m.to_lawnmower().track(LAWNMOWER_DT).map_err(|e| track_err(TrackLoadError::Track { path: PathBuf::from("<lawnmower>"), source: e }))
             }
-            (None, Some(path)) => load_track_csv(&base_dir.join(path)).map_err(track_err),
-            _ => Err(invalid("lawnmower/track_csv", "give exactly one of [auv.lawnmower] or track_csv".into())),
+            (None, Some(path)) => Ok(TrackSource::Csv(path)),
+            (lawnmower, _) => {
+                let value = if lawnmower.is_some() { "both" } else { "neither" };
+                Err(invalid("lawnmower/track_csv", value.into(), "exactly one of [auv.lawnmower] or track_csv"))
+            }
         }
     }
+
+    /// AUV `i`'s track (CSV paths relative to `base_dir`).
+    fn track(i: usize, a: &AuvSpec, file: &Path, base_dir: &Path) -> Result<Track, ScenarioError> {
+        let track_err = |cause| ScenarioError::Track { file: file.to_path_buf(), index: i, cause };
+        match Self::source(i, a, file)? {
+            TrackSource::Lawnmower(m) => m.to_lawnmower().track(LAWNMOWER_DT).map_err(|e| track_err(TrackLoadError::Track { path: PathBuf::from("<lawnmower>"), source: e })),
+            TrackSource::Csv(path) => load_track_csv(&base_dir.join(path)).map_err(track_err),
+        }
+    }
+}
+
+/// Which of a penalty's keys a file gave, e.g. "case and primary".
+fn given(p: &PenaltySpec) -> String {
+    let keys: Vec<&str> = [("case", p.case.is_some()), ("primary", p.primary.is_some()), ("look_ahead", p.look_ahead.is_some())].into_iter().filter_map(|(k, set)| set.then_some(k)).collect();
+    if keys.is_empty() {
+        "none of case, primary, look_ahead".into()
+    } else {
+        keys.join(" and ")
+    }
+}
+
+/// Where an AUV's a-priori track comes from.
+enum TrackSource<'a> {
+    Lawnmower(&'a LawnmowerSpec),
+    Csv(&'a Path),
 }

@@ -1,53 +1,22 @@
-//! `coopnav bench <target>`: speed measurements printed as JSON (one target per crate).
+//! `coopnav bench planner`: one planner decision on the issue-2 workloads (branch-and-bound on one
+//! thread and with rayon against brute force), and the nodes expanded over the embedded example
+//! mission.
 
 use anyhow::{ensure, Result};
-use clap::Subcommand;
 use coopnav_plan::workload::Workload;
-use coopnav_nav::cycle::Configuration;
 use coopnav_plan::{Algorithm, LookAheadPlanner};
-use coopnav_sim::hbl::{monte_carlo, Scenario};
 use coopnav_sim::predeploy::{self, EXAMPLE};
 use serde_json::json;
 use std::time::Instant;
 
-#[derive(Subcommand)]
-pub enum Target {
-    /// One planner decision on the issue-2 workloads: branch-and-bound (1 thread and rayon) vs
-    /// brute force, with node counts and AUV-updates per second.
-    Planner {
-        /// Repetitions per measurement (the median is reported).
-        #[arg(long, default_value_t = 5)]
-        reps: usize,
-        /// Skip the brute force above this many leaves.
-        #[arg(long, default_value_t = 6_000_000)]
-        brute_max_leaves: u64,
-    },
-    /// The Table 5 Monte Carlo (Δt = 0.1 s) for MSBL, HBL One and HBL Two.
-    Hbl {
-        #[arg(long, default_value_t = 250)]
-        runs: usize,
-        /// Worker threads (0 = rayon default).
-        #[arg(long, default_value_t = 0)]
-        threads: usize,
-        #[arg(long, default_value_t = 1)]
-        seed: u64,
-    },
-    /// The acoustic link: the full Nams experiment (4 scenarios × 4 behaviours × 40 runs) on the
-    /// analytic TL and on a cached TL grid, tracker encode/decode throughput, and one BELLHOP run
-    /// against a cached-grid lookup.
-    Acomms(crate::bench_acomms::Args),
-    /// The closed loop: 3 h mission, 5 survey AUVs, τ = 30 s, planner A = 5, L = 5, 10 Hz EKFs;
-    /// wall time against the ≤ 1.1 s target, with the planner/filters/channel split.
-    ClosedLoop(crate::bench_closed_loop::Args),
-}
-
-pub fn run(target: Target) -> Result<()> {
-    match target {
-        Target::Planner { reps, brute_max_leaves } => planner(reps.max(1), brute_max_leaves),
-        Target::Hbl { runs, threads, seed } => hbl(runs, threads, seed),
-        Target::Acomms(args) => crate::bench_acomms::run(args),
-        Target::ClosedLoop(args) => crate::bench_closed_loop::run(args),
-    }
+#[derive(clap::Args)]
+pub struct Args {
+    /// Repetitions per measurement (the median is reported).
+    #[arg(long, default_value_t = 5)]
+    reps: usize,
+    /// Skip the brute force above this many leaves.
+    #[arg(long, default_value_t = 6_000_000)]
+    brute_max_leaves: u64,
 }
 
 /// Median wall time (s) of `reps` runs of `f`, and its last result.
@@ -63,7 +32,8 @@ fn time<T>(reps: usize, mut f: impl FnMut() -> Result<T>) -> Result<(f64, T)> {
     Ok((times[reps / 2], last.expect("reps >= 1")))
 }
 
-fn planner(reps: usize, brute_max_leaves: u64) -> Result<()> {
+pub fn run(args: Args) -> Result<()> {
+    let (reps, brute_max_leaves) = (args.reps.max(1), args.brute_max_leaves);
     let workloads = [
         Workload { n: 2, a: 5, b: 1, l: 5, gap: 500.0 },
         Workload { n: 2, a: 5, b: 1, l: 5, gap: 100.0 },
@@ -132,31 +102,4 @@ fn mission_nodes(l: usize) -> Result<serde_json::Value> {
 
 fn rayon_threads() -> usize {
     std::thread::available_parallelism().map(|n| n.get()).unwrap_or(1)
-}
-
-fn hbl(runs: usize, threads: usize, seed: u64) -> Result<()> {
-    let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build()?;
-    let mut results = Vec::new();
-    for c in [Configuration::Msbl, Configuration::HblOne, Configuration::HblTwo] {
-        let sc = Scenario::table5(c);
-        let start = Instant::now();
-        let r = pool.install(|| monte_carlo(&sc, runs, seed, &|_| {}))?;
-        let secs = start.elapsed().as_secs_f64();
-        let s = &r.summary;
-        results.push(json!({
-            "configuration": s.configuration,
-            "runs": runs,
-            "dt": sc.dt,
-            "seconds": secs,
-            "runs_per_second": runs as f64 / secs,
-            "filter_updates": s.filter_updates,
-            "filter_predicts": s.filter_predicts,
-            "ekf_updates_per_second": s.filter_updates as f64 / secs,
-            "ekf_steps_per_second": (s.filter_updates + s.filter_predicts) as f64 / secs,
-            "zone_error_mean": s.zone_error.mean,
-        }));
-    }
-    let out = json!({ "target": "hbl", "threads": pool.current_num_threads(), "results": results });
-    println!("{}", serde_json::to_string_pretty(&out)?);
-    Ok(())
 }

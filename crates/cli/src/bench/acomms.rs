@@ -1,4 +1,5 @@
-//! `coopnav bench acomms`.
+//! `coopnav bench acomms`: the Nams experiment on the analytic TL and on a cached TL grid, tracker
+//! encode/decode throughput, and one BELLHOP run against a cached-grid lookup.
 
 use anyhow::Result;
 use coopnav_acomms::status::{Frame0, NextWaypoint, StatusMessage};

@@ -1,0 +1,35 @@
+//! `coopnav bench <target>`: speed measurements printed as JSON (one target per crate), one file
+//! per target.
+
+use anyhow::Result;
+use clap::Subcommand;
+
+mod acomms;
+mod closed_loop;
+mod hbl;
+mod planner;
+
+#[derive(Subcommand)]
+pub enum Target {
+    /// One planner decision on the issue-2 workloads: branch-and-bound (1 thread and rayon) vs
+    /// brute force, with node counts and AUV-updates per second.
+    Planner(planner::Args),
+    /// The Table 5 Monte Carlo (Δt = 0.1 s) for MSBL, HBL One and HBL Two.
+    Hbl(hbl::Args),
+    /// The acoustic link: the full Nams experiment (4 scenarios × 4 behaviours × 40 runs) on the
+    /// analytic TL and on a cached TL grid, tracker encode/decode throughput, and one BELLHOP run
+    /// against a cached-grid lookup.
+    Acomms(acomms::Args),
+    /// The closed loop: 3 h mission, 5 survey AUVs, τ = 30 s, planner A = 5, L = 5, 10 Hz EKFs;
+    /// wall time against the ≤ 1.1 s target, with the planner/filters/channel split.
+    ClosedLoop(closed_loop::Args),
+}
+
+pub fn run(target: Target) -> Result<()> {
+    match target {
+        Target::Planner(args) => planner::run(args),
+        Target::Hbl(args) => hbl::run(args),
+        Target::Acomms(args) => acomms::run(args),
+        Target::ClosedLoop(args) => closed_loop::run(args),
+    }
+}

@@ -1,0 +1,89 @@
+//! The arguments every scenario-driven command shares (`coopnav plan`, `coopnav simulate`): the
+//! scenario file, `-o/--output`, `--force` and `--example`, and what they mean — print the
+//! embedded scenario, read the file or else the embedded scenario, and open the run directory
+//! (the one given, or a fresh `runs/<prefix>-<name>`). Each command says what differs in a
+//! [`ScenarioCommand`].
+
+use anyhow::Result;
+use coopnav_sim::output::RunDir;
+use coopnav_sim::scenario_file::ScenarioError;
+use std::marker::PhantomData;
+use std::path::{Path, PathBuf};
+
+/// What one scenario-driven command reads and how its shared arguments are described.
+pub trait ScenarioCommand {
+    type Scenario;
+    /// Help of the scenario argument, of `-o` and of `--example`.
+    const SCENARIO_HELP: &'static str;
+    const OUTPUT_HELP: &'static str;
+    const EXAMPLE_HELP: &'static str;
+    /// The embedded scenario (TOML), run when no file is given.
+    const EXAMPLE: &'static str;
+    /// Its name: messages call it `<embedded NAME>`, and its fresh run directories end in NAME.
+    const EMBEDDED: &'static str;
+    /// Fresh run directories are `runs/<RUN_PREFIX>-<scenario name>`.
+    const RUN_PREFIX: &'static str;
+    /// The scenario type's parser (TOML text, its name) and file loader, both validating.
+    const PARSE: fn(&str, &Path) -> Result<Self::Scenario, ScenarioError>;
+    const LOAD: fn(&Path) -> Result<Self::Scenario, ScenarioError>;
+}
+
+#[derive(clap::Args)]
+pub struct ScenarioArgs<C: ScenarioCommand> {
+    #[arg(help = C::SCENARIO_HELP)]
+    scenario: Option<PathBuf>,
+    #[arg(short, long, help = C::OUTPUT_HELP)]
+    output: Option<PathBuf>,
+    #[arg(long, help = "Replace the output directory if it exists")]
+    force: bool,
+    #[arg(long, help = C::EXAMPLE_HELP)]
+    example: bool,
+    #[arg(skip)]
+    command: PhantomData<fn() -> C>,
+}
+
+/// A scenario read and validated, with where it came from.
+pub struct Loaded<S> {
+    pub scenario: S,
+    /// The file, or `<embedded NAME>`.
+    pub file: PathBuf,
+    /// The directory relative paths inside the scenario start from.
+    pub base: PathBuf,
+    /// The name fresh run directories are named after: the file's stem, or the embedded NAME.
+    pub stem: String,
+}
+
+impl<C: ScenarioCommand> ScenarioArgs<C> {
+    /// With `--example`, prints the embedded scenario and says so (the command then stops).
+    pub fn print_example(&self) -> bool {
+        if self.example {
+            print!("{}", C::EXAMPLE);
+        }
+        self.example
+    }
+
+    /// Reads and validates the scenario file, or the embedded scenario when none is given.
+    pub fn load(&self) -> Result<Loaded<C::Scenario>> {
+        Ok(match &self.scenario {
+            Some(path) => Loaded {
+                scenario: (C::LOAD)(path)?,
+                file: path.clone(),
+                base: path.parent().map(Path::to_path_buf).unwrap_or_default(),
+                stem: path.file_stem().map_or("scenario".into(), |s| s.to_string_lossy().into_owned()),
+            },
+            None => {
+                let file = PathBuf::from(format!("<embedded {}>", C::EMBEDDED));
+                Loaded { scenario: (C::PARSE)(C::EXAMPLE, &file)?, file, base: PathBuf::from("."), stem: C::EMBEDDED.to_string() }
+            }
+        })
+    }
+
+    /// Opens the run directory: `-o` (replaced only with `--force`), or a fresh
+    /// `runs/<RUN_PREFIX>-<stem>`.
+    pub fn run_dir(&self, stem: &str) -> Result<RunDir> {
+        Ok(match &self.output {
+            Some(o) => RunDir::create(o, self.force)?,
+            None => RunDir::create_fresh("runs", &format!("{}-{stem}", C::RUN_PREFIX))?,
+        })
+    }
+}

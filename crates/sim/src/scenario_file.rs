@@ -1,0 +1,80 @@
+//! Reading scenario files (TOML, `deny_unknown_fields` on every table): one error type and one
+//! loader — read the file, parse it, validate it — shared by the pre-deployment planner and the
+//! closed-loop simulator. Every error names the file, and a bad value names its field, the value
+//! found and what is allowed.
+
+use crate::predeploy::tracks::TrackLoadError;
+use coopnav_plan::PlanError;
+use serde::de::DeserializeOwned;
+use std::path::{Path, PathBuf};
+use thiserror::Error;
+
+/// The underlying errors are part of each message (fields named `cause`, not `source`), so a
+/// printed cause chain shows them once.
+#[derive(Debug, Error)]
+pub enum ScenarioError {
+    #[error("cannot read scenario {file}: {cause}")]
+    Read { file: PathBuf, cause: std::io::Error },
+    #[error("scenario {file}: {message}")]
+    Parse { file: PathBuf, message: String },
+    #[error("scenario {file}: field {field} = {value}: allowed {allowed}")]
+    Invalid { file: PathBuf, field: String, value: String, allowed: String },
+    #[error("scenario {file}: {cause}")]
+    Planner { file: PathBuf, cause: PlanError },
+    #[error("scenario {file}: auv[{index}] track: {cause}")]
+    Track { file: PathBuf, index: usize, cause: TrackLoadError },
+}
+
+impl ScenarioError {
+    /// A field of `file` holds `value` where only `allowed` is.
+    pub fn invalid(file: &Path, field: impl Into<String>, value: impl Into<String>, allowed: impl Into<String>) -> Self {
+        ScenarioError::Invalid { file: file.to_path_buf(), field: field.into(), value: value.into(), allowed: allowed.into() }
+    }
+}
+
+/// What a scenario type checks before anything runs (`file` names it in messages).
+pub type Validate<T> = fn(&T, &Path) -> Result<(), ScenarioError>;
+
+/// Parses TOML `text` as a `T` and validates it; `file` names the text in messages.
+pub fn parse<T: DeserializeOwned>(text: &str, file: &Path, validate: Validate<T>) -> Result<T, ScenarioError> {
+    let scenario: T = toml::from_str(text).map_err(|e| ScenarioError::Parse { file: file.to_path_buf(), message: e.to_string() })?;
+    validate(&scenario, file)?;
+    Ok(scenario)
+}
+
+/// Reads `file`, then [`parse`]s it.
+pub fn load<T: DeserializeOwned>(file: &Path, validate: Validate<T>) -> Result<T, ScenarioError> {
+    let text = std::fs::read_to_string(file).map_err(|cause| ScenarioError::Read { file: file.to_path_buf(), cause })?;
+    parse(&text, file, validate)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use serde::Deserialize;
+
+    #[derive(Debug, Deserialize)]
+    #[serde(deny_unknown_fields)]
+    struct Tiny {
+        n: u32,
+    }
+
+    fn at_most_three(t: &Tiny, file: &Path) -> Result<(), ScenarioError> {
+        if t.n > 3 {
+            return Err(ScenarioError::invalid(file, "n", t.n.to_string(), "0..=3"));
+        }
+        Ok(())
+    }
+
+    #[test]
+    fn every_error_names_the_file_and_what_was_wrong() {
+        let f = Path::new("tiny.toml");
+        assert_eq!(parse("n = 2", f, at_most_three).unwrap().n, 2);
+        let e = parse("n = 7", f, at_most_three).unwrap_err().to_string();
+        assert_eq!(e, "scenario tiny.toml: field n = 7: allowed 0..=3");
+        let e = parse("n = 1\nm = 2", f, at_most_three).unwrap_err().to_string();
+        assert!(e.contains("tiny.toml") && e.contains("unknown field") && e.contains('m'), "{e}");
+        let e = load(Path::new("/nonexistent/tiny.toml"), at_most_three).unwrap_err().to_string();
+        assert!(e.starts_with("cannot read scenario /nonexistent/tiny.toml"), "{e}");
+    }
+}
