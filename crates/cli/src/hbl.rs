@@ -139,12 +139,12 @@ fn montecarlo(c: &Common, runs: usize) -> Result<()> {
     pb.finish_and_clear();
     let dir = RunDir::create(&c.out, c.force)?;
     manifest(&dir, "hbl montecarlo", c.seed, json!({ "scenario": sc, "runs": runs }))?;
-    let mut csv = String::from("run,zone_error,zone_parallel,zone_perpendicular,buoy_error,saturation_error,ranges_received,ranges_applied,healthy\n");
+    let mut csv = String::from("run,zone_error,zone_parallel,zone_perpendicular,approach_perpendicular,buoy_error,saturation_error,ranges_received,ranges_applied,healthy\n");
     for (i, m) in r.runs.iter().enumerate() {
         let o = |v: Option<f64>| v.map_or(String::new(), |x| x.to_string());
         csv.push_str(&format!(
-            "{i},{},{},{},{},{},{},{},{}\n",
-            o(m.zone_error), o(m.zone_parallel), o(m.zone_perpendicular), o(m.buoy_error), o(m.saturation_error), m.ranges_received, m.ranges_applied, m.healthy
+            "{i},{},{},{},{},{},{},{},{},{}\n",
+            o(m.zone_error), o(m.zone_parallel), o(m.zone_perpendicular), o(m.approach_perpendicular), o(m.buoy_error), o(m.saturation_error), m.ranges_received, m.ranges_applied, m.healthy
         ));
     }
     dir.write_bytes("runs.csv", csv)?;
