@@ -7,6 +7,7 @@ use super::{Check, Experiment, ExperimentError, ReproOptions, ReproReport, Size}
 use crate::hbl::config::Scenario;
 use crate::hbl::grid::{buoy_grid, optimal_region, GridSpec};
 use crate::hbl::mc::{monte_carlo, welch_95, McSummary, Stats};
+use crate::hbl::profile::error_profile;
 use coopnav_nav::cycle::Configuration;
 use serde_json::json;
 use std::fmt::Write;
@@ -58,6 +59,31 @@ fn band(name: &str, s: &Stats, lo: f64, hi: f64, w: f64) -> Check {
     Check::new(name, (l..=h).contains(&s.mean), format!("{:.3} m in [{l:.3}, {h:.3}] (thesis band {lo}–{hi}, widened by {w:.3})", s.mean))
 }
 
+/// The thesis's Figs. 16/19/21 as text: mean |across-path| error per 25 m of x_rel.
+fn across_path_profile(table: &mut String, configs: &[Configuration], runs: usize, seed: u64) -> Result<(), ExperimentError> {
+    const BIN_M: f64 = 25.0;
+    let profiles = configs
+        .iter()
+        .map(|&c| error_profile(&Scenario::table5(c), runs, seed, BIN_M).map_err(|e| ExperimentError::Failed { id: ID5.into(), message: e.to_string() }))
+        .collect::<Result<Vec<_>, _>>()?;
+    // Bins every configuration reached (the end bins hold fewer runs).
+    let xs: Vec<f64> = profiles[0].iter().map(|b| b.x_rel).filter(|x| profiles.iter().all(|p| p.iter().any(|b| b.x_rel == *x))).collect();
+    writeln!(table, "\nmean |across-path| error (m) by x_rel bin centre (MSBL keeps it until near the crossing; HBL corrects it early):").ok();
+    write!(table, "{:<9}", "x_rel").ok();
+    for x in &xs {
+        write!(table, "{x:>7.1}").ok();
+    }
+    for (c, p) in configs.iter().zip(&profiles) {
+        write!(table, "\n{:<9}", c.label()).ok();
+        for x in &xs {
+            let b = p.iter().find(|b| b.x_rel == *x).map_or(f64::NAN, |b| b.perpendicular);
+            write!(table, "{b:>7.2}").ok();
+        }
+    }
+    table.push('\n');
+    Ok(())
+}
+
 /// The approach-window statistics; every Table 5 run reaches the zone, so they exist.
 fn approach(s: &McSummary) -> Stats {
     s.approach_perpendicular.unwrap_or(Stats { n: 0, mean: f64::NAN, sd: f64::NAN, se: f64::NAN })
@@ -102,6 +128,7 @@ fn table_5(o: &ReproOptions) -> Result<ReproReport, ExperimentError> {
     }
     let window = Scenario::default().geometry.approach_m;
     writeln!(table, "par/perp: mean |along|/|across-path| error in the zone; approach: |across| in the {window} m before it").ok();
+    across_path_profile(&mut table, &configs.map(|c| c.0), n, o.seed)?;
     let (msbl, one, two) = (&rows[0].3, &rows[1].3, &rows[2].3);
     let d = welch_95(&two.zone_error, &one.zone_error);
     let mut checks = vec![

@@ -15,8 +15,10 @@ use thiserror::Error;
 pub enum McError {
     #[error(transparent)]
     Config(#[from] ConfigError),
-    #[error("runs = 0: a Monte Carlo needs at least 2 runs")]
+    #[error("runs < 2: a Monte Carlo needs at least 2 runs")]
     TooFewRuns,
+    #[error("profile bin width {0} m: must be a finite number > 0")]
+    BadBin(f64),
     #[error("run {index} (seed {seed}): the AUV never entered the measurement zone within max_duration_s")]
     NoZone { index: usize, seed: u64 },
 }

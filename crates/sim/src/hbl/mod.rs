@@ -8,9 +8,11 @@ pub mod grid;
 pub mod mc;
 pub mod noise;
 pub mod plot;
+pub mod profile;
 pub mod tune;
 pub mod world;
 
 pub use config::{ConfigError, Scenario};
 pub use mc::{monte_carlo, welch_95, McError, McResult, McSummary, Stats, WelchCi};
+pub use profile::{error_profile, ProfileBin};
 pub use world::{run, RunMetrics, Trace, TraceRow};
