@@ -4,7 +4,7 @@ use coopnav_sim::output::{Manifest, RunDir};
 use anyhow::{Context, Result};
 use coopnav_nav::post::{self, PostConfig};
 use coopnav_sim::hbl::grid::{self, GridSpec};
-use coopnav_sim::hbl::tune::{tune, TuneSpec};
+use coopnav_sim::hbl::tune::{tune, Coefficient, Objective, TuneSpec};
 use coopnav_sim::hbl::{error_profile, monte_carlo, plot, run, Scenario};
 
 /// x_rel bin of the Monte Carlo error profile (m).
@@ -47,6 +47,12 @@ pub enum Command {
         #[arg(long)]
         spec: PathBuf,
     },
+    /// Print a documented starting file: the Table 5 scenario, a grid, a tuning spec or a
+    /// post-processing config, every field at its default (edit and pass back with --config etc.).
+    Example {
+        #[arg(value_enum, default_value_t = ExampleKind::Scenario)]
+        kind: ExampleKind,
+    },
     /// Post-process a CSV log: EKF then RTS smoother.
     Postprocess {
         /// The log (format in coopnav_nav::post).
@@ -60,6 +66,18 @@ pub enum Command {
         #[arg(long)]
         force: bool,
     },
+}
+
+#[derive(Clone, Copy, clap::ValueEnum)]
+pub enum ExampleKind {
+    /// `--config` of simulate, montecarlo, grid and tune.
+    Scenario,
+    /// `grid --grid`.
+    Grid,
+    /// `tune --spec`.
+    Tune,
+    /// `postprocess --config`.
+    Post,
 }
 
 #[derive(clap::Args)]
@@ -104,7 +122,34 @@ pub fn run_command(cmd: Command) -> Result<()> {
         Command::Grid { common, grid } => grid_cmd(&common, grid.as_deref()),
         Command::Tune { common, spec } => tune_cmd(&common, &spec),
         Command::Postprocess { log, config, out, force } => postprocess(&log, config.as_deref(), &out, force),
+        Command::Example { kind } => example(kind),
     }
+}
+
+fn example(kind: ExampleKind) -> Result<()> {
+    let text = match kind {
+        ExampleKind::Scenario => toml::to_string_pretty(&Scenario::default())?,
+        ExampleKind::Grid => toml::to_string_pretty(&GridSpec::default())?,
+        ExampleKind::Tune => toml::to_string_pretty(&TuneSpec {
+            coefficients: vec![Coefficient::AuvQEn, Coefficient::BuoyQEn],
+            objective: Objective::AuvZone,
+            runs: 50,
+            max_iters: 40,
+            seed: 1,
+        })?,
+        ExampleKind::Post => toml::to_string_pretty(&PostConfig::default())?,
+    };
+    let what = match kind {
+        ExampleKind::Scenario => "HBL scenario (Gill 2013 Table 5, HBL Two) for --config",
+        ExampleKind::Grid => "buoy-location grid for `hbl grid --grid`",
+        ExampleKind::Tune => "tuning spec for `hbl tune --spec`",
+        ExampleKind::Post => "post-processing config for `hbl postprocess --config`",
+    };
+    println!("# coopnav {what}. Every field is at its default and every field is optional: keep");
+    println!("# only what you change. Units and sources of each field: the rustdoc of coopnav_sim::hbl");
+    println!("# and coopnav_nav (`cargo doc --open`), and ../shared/digests/gill-hbl-navigation.md.");
+    print!("{text}");
+    Ok(())
 }
 
 fn simulate(c: &Common, index: u64) -> Result<()> {

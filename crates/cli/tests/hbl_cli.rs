@@ -45,6 +45,28 @@ fn simulate_run_replays_a_monte_carlo_run() {
     assert_eq!(summary["zone_error"].as_f64().unwrap(), zone_of_run_2);
 }
 
+/// The printed examples are valid inputs of the commands they are for.
+#[test]
+fn examples_load_back() {
+    let tmp = tempfile::tempdir().unwrap();
+    let write = |kind: &str| {
+        let out = coopnav(&["hbl", "example", kind]);
+        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        let path = tmp.path().join(format!("{kind}.toml"));
+        std::fs::write(&path, &out.stdout).unwrap();
+        path
+    };
+    let (scenario, post) = (write("scenario"), write("post"));
+    let mc = tmp.path().join("mc");
+    let out = coopnav(&["hbl", "montecarlo", "--runs", "3", "--config", scenario.to_str().unwrap(), "--out", mc.to_str().unwrap()]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let sim = tmp.path().join("sim");
+    assert!(coopnav(&["hbl", "simulate", "--out", sim.to_str().unwrap()]).status.success());
+    let pp = tmp.path().join("pp");
+    let out = coopnav(&["hbl", "postprocess", "--log", sim.join("log.csv").to_str().unwrap(), "--config", post.to_str().unwrap(), "--out", pp.to_str().unwrap()]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+}
+
 #[test]
 fn bad_config_exits_nonzero_and_writes_nothing() {
     let tmp = tempfile::tempdir().unwrap();
