@@ -6,6 +6,7 @@
 use crate::predeploy::tracks::TrackLoadError;
 use coopnav_plan::PlanError;
 use serde::de::DeserializeOwned;
+use serde::Serialize;
 use std::path::{Path, PathBuf};
 use thiserror::Error;
 
@@ -48,10 +49,57 @@ pub fn load<T: DeserializeOwned>(file: &Path, validate: Validate<T>) -> Result<T
     parse(&text, file, validate)
 }
 
+/// Reads a TOML table over `base`: keys present replace base's, nested tables merge, absent keys
+/// keep base's values (unknown keys are still refused by `T`). For a field whose scenario default
+/// differs from its type's `Default`, so that a partial table does not fall back to the latter.
+pub fn overlay<T: Serialize + DeserializeOwned>(base: &T, patch: toml::Value) -> Result<T, String> {
+    let mut merged = toml::Value::try_from(base).map_err(|e| e.to_string())?;
+    merge(&mut merged, patch);
+    merged.try_into().map_err(|e: toml::de::Error| e.to_string())
+}
+
+fn merge(into: &mut toml::Value, patch: toml::Value) {
+    match (into, patch) {
+        (toml::Value::Table(a), toml::Value::Table(b)) => {
+            for (k, v) in b {
+                match a.get_mut(&k) {
+                    Some(slot) => merge(slot, v),
+                    None => {
+                        a.insert(k, v);
+                    }
+                }
+            }
+        }
+        (slot, v) => *slot = v,
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
     use serde::Deserialize;
+
+    #[derive(Debug, PartialEq, Serialize, Deserialize)]
+    #[serde(deny_unknown_fields)]
+    struct Outer {
+        a: f64,
+        inner: Inner,
+    }
+    #[derive(Debug, PartialEq, Serialize, Deserialize)]
+    #[serde(deny_unknown_fields)]
+    struct Inner {
+        b: f64,
+        c: f64,
+    }
+
+    #[test]
+    fn overlay_keeps_absent_keys_and_refuses_unknown_ones() {
+        let base = Outer { a: 1.0, inner: Inner { b: 2.0, c: 3.0 } };
+        let patch: toml::Value = toml::from_str("[inner]\nc = 9.0\n").unwrap();
+        assert_eq!(overlay(&base, patch).unwrap(), Outer { a: 1.0, inner: Inner { b: 2.0, c: 9.0 } });
+        let bad: toml::Value = toml::from_str("[inner]\nd = 1.0\n").unwrap();
+        assert!(overlay(&base, bad).unwrap_err().contains("unknown field"));
+    }
 
     #[derive(Debug, Deserialize)]
     #[serde(deny_unknown_fields)]
