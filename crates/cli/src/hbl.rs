@@ -121,7 +121,7 @@ fn simulate(c: &Common, index: u64) -> Result<()> {
     }
     dir.write_bytes("trace.csv", csv)?;
     let mut log = Vec::new();
-    post::write_log(&mut log, &trace.log)?;
+    post::write_log(&mut log, &trace.log, sc.log.frame().as_ref())?;
     dir.write_bytes("log.csv", log)?;
     dir.write_bytes("tracks.svg", plot::tracks(&trace.rows)?)?;
     dir.write_bytes("error_vs_xrel.svg", plot::error_vs_xrel(&trace.rows, (sc.geometry.zone_min, sc.geometry.zone_max))?)?;
@@ -196,7 +196,7 @@ fn postprocess(log: &Path, config: Option<&Path>, out: &Path, force: bool) -> Re
         None => PostConfig::default(),
     };
     let file = std::fs::File::open(log).with_context(|| format!("opening {}", log.display()))?;
-    let entries = post::read_log(file).with_context(|| format!("in {}", log.display()))?;
+    let entries = post::read_log(file, cfg.frame().as_ref()).with_context(|| format!("in {}", log.display()))?;
     let result = post::postprocess(&entries, &cfg)?;
     let dir = RunDir::create(out, force)?;
     manifest(&dir, "hbl postprocess", 0, json!({ "log": log, "config": cfg }))?;

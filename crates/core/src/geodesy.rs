@@ -77,11 +77,35 @@ impl LatLon {
     }
 }
 
-/// A geodetic position: latitude/longitude and height above the WGS-84 ellipsoid (m).
-#[derive(Debug, Clone, Copy, PartialEq)]
+/// A geodetic position: latitude/longitude and height above the WGS-84 ellipsoid (m). In files:
+/// `{ lat_deg = …, lon_deg = …, height_m = … }`, height optional (default 0).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(try_from = "GeodeticSpec", into = "GeodeticSpec")]
 pub struct Geodetic {
-    pub latlon: LatLon,
-    pub height_m: f64,
+    latlon: LatLon,
+    height_m: f64,
+}
+
+#[derive(Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct GeodeticSpec {
+    lat_deg: f64,
+    lon_deg: f64,
+    #[serde(default)]
+    height_m: f64,
+}
+
+impl TryFrom<GeodeticSpec> for Geodetic {
+    type Error = GeodesyError;
+    fn try_from(s: GeodeticSpec) -> Result<Self, GeodesyError> {
+        Geodetic::new(LatLon::new(s.lat_deg, s.lon_deg)?, s.height_m)
+    }
+}
+
+impl From<Geodetic> for GeodeticSpec {
+    fn from(g: Geodetic) -> Self {
+        GeodeticSpec { lat_deg: g.latlon.lat_deg, lon_deg: g.latlon.lon_deg, height_m: g.height_m }
+    }
 }
 
 impl Geodetic {
@@ -90,6 +114,12 @@ impl Geodetic {
             return Err(GeodesyError::Height(height_m));
         }
         Ok(Geodetic { latlon, height_m })
+    }
+    pub fn latlon(self) -> LatLon {
+        self.latlon
+    }
+    pub fn height_m(self) -> f64 {
+        self.height_m
     }
 
     /// Earth-centred Earth-fixed coordinates.
@@ -308,6 +338,18 @@ mod tests {
         struct W {
             o: LatLon,
         }
+        #[derive(Debug, Deserialize)]
+        struct G {
+            o: Geodetic,
+        }
+        let g: G = toml::from_str("o = { lat_deg = 47.97, lon_deg = -116.5 }").unwrap();
+        assert_eq!(g.o, at(47.97, -116.5, 0.0));
+        let g: G = toml::from_str("o = { lat_deg = 47.97, lon_deg = -116.5, height_m = 630.0 }").unwrap();
+        assert_eq!(g.o.height_m(), 630.0);
+        let e = toml::from_str::<G>("o = { lat_deg = 0.0, lon_deg = 200.0 }").unwrap_err().to_string();
+        assert!(e.contains("longitude 200"), "{e}");
+        let e = toml::from_str::<G>("o = { lat_deg = 0.0, lon_deg = 0.0, height_m = nan }").unwrap_err().to_string();
+        assert!(e.contains("height NaN"), "{e}");
         let w: W = toml::from_str("o = { lat_deg = 47.97, lon_deg = -116.5 }").unwrap();
         assert_eq!(w.o, ll(47.97, -116.5));
         let e = toml::from_str::<W>("o = { lat_deg = 95.0, lon_deg = 0.0 }").unwrap_err().to_string();
