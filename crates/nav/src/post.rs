@@ -58,7 +58,6 @@ pub enum PostError {
     LatLon { line: u64, source: GeodesyError },
     #[error("writing the log in latitude/longitude: row at t = {t} s: {source}")]
     Unplaceable { t: f64, source: GeodesyError },
-
     #[error("log line {line}: range src {src:?} is not a transponder modem id (allowed 13 buoy, 14 ship port, 15 ship starboard)")]
     Source { line: u64, src: String },
     #[error("log line {line}: range travel time {value} s must be in [0, 1) (OWTT from the top of the second)")]
