@@ -151,8 +151,9 @@ pub struct Ecef {
 
 impl Ecef {
     /// Geodetic coordinates by fixed-point iteration on latitude, φ = atan2(z + e²N(φ) sin φ, p),
-    /// which contracts by ≈ e² per step and stays well-posed at the poles (p → 0).
-    pub fn to_geodetic(self) -> Geodetic {
+    /// which contracts by ≈ e² per step and stays well-posed at the poles (p → 0). Fails only
+    /// on non-finite coordinates.
+    pub fn to_geodetic(self) -> Result<Geodetic, GeodesyError> {
         let p = self.x.hypot(self.y);
         let lon = self.y.atan2(self.x);
         let mut lat = self.z.atan2(p * (1.0 - E2));
@@ -168,8 +169,7 @@ impl Ecef {
         let (s, c) = lat.sin_cos();
         // Valid at every latitude (no division by cos φ).
         let height_m = p * c + self.z * s - WGS84_A * (1.0 - E2 * s * s).sqrt();
-        // atan2 keeps lat in [-90, 90] and lon in [-180, 180]; finite input gives finite output.
-        Geodetic { latlon: LatLon { lat_deg: lat.to_degrees(), lon_deg: lon.to_degrees() }, height_m }
+        Geodetic::new(LatLon::new(lat.to_degrees(), lon.to_degrees())?, height_m)
     }
 }
 
@@ -229,7 +229,7 @@ impl LocalFrame {
         self.ecef_to_enu(g.to_ecef())
     }
 
-    pub fn to_geodetic(&self, v: Enu) -> Geodetic {
+    pub fn to_geodetic(&self, v: Enu) -> Result<Geodetic, GeodesyError> {
         self.enu_to_ecef(v).to_geodetic()
     }
 
@@ -248,14 +248,14 @@ impl LocalFrame {
             return Err(GeodesyError::Plane { east, north, max: MAX_PLANE_DISTANCE_M });
         }
         let mut up = 0.0;
-        let mut g = self.to_geodetic(Enu { east, north, up });
+        let mut g = self.to_geodetic(Enu { east, north, up })?;
         for _ in 0..16 {
             let dh = g.height_m - self.origin.height_m;
             if dh.abs() < 1e-8 {
                 break;
             }
             up -= dh;
-            g = self.to_geodetic(Enu { east, north, up });
+            g = self.to_geodetic(Enu { east, north, up })?;
         }
         Ok(g.latlon)
     }
@@ -330,6 +330,8 @@ mod tests {
         let f = LocalFrame::new(at(10.0, 10.0, 0.0));
         assert!(matches!(f.from_plane(2e6, 0.0), Err(GeodesyError::Plane { .. })));
         assert!(matches!(f.from_plane(f64::NAN, 0.0), Err(GeodesyError::Plane { .. })));
+        let nan = Enu { east: f64::NAN, north: 0.0, up: 0.0 };
+        assert!(f.to_geodetic(nan).is_err());
     }
 
     #[test]
@@ -365,8 +367,8 @@ mod tests {
         let e = at(0.0, 0.0, 0.0).to_ecef();
         assert!((e.x - 6_378_137.0).abs() < 1e-6 && e.y.abs() < 1e-6 && e.z.abs() < 1e-6);
         let p = at(90.0, 0.0, 0.0).to_ecef();
-        assert!((p.z - 6_356_752.3142).abs() < 1e-3 && p.x.abs() < 1e-6, "{p:?}");
-        let back = p.to_geodetic();
+        assert!((p.z - 6_356_752.314_2).abs() < 1e-3 && p.x.abs() < 1e-6, "{p:?}");
+        let back = p.to_geodetic().unwrap();
         assert!((back.latlon.lat_deg - 90.0).abs() < 1e-12 && back.height_m.abs() < 1e-6, "{back:?}");
     }
 
@@ -459,7 +461,7 @@ mod tests {
             let lat = olat + dlat;
             let lon = lon_diff(olon + dist * bearing.sin() / (111_000.0 * lat.to_radians().cos()), 0.0);
             let g = at(lat, lon, h);
-            let back = f.to_geodetic(f.to_enu(g));
+            let back = f.to_geodetic(f.to_enu(g)).unwrap();
             prop_assert!((back.latlon.lat_deg - lat).abs() < 1e-9);
             prop_assert!(lon_diff(back.latlon.lon_deg, lon).abs() < 1e-9);
             prop_assert!((back.height_m - h).abs() < 1e-6);
