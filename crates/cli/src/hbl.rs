@@ -4,8 +4,11 @@ use coopnav_sim::output::{Manifest, RunDir};
 use anyhow::{Context, Result};
 use coopnav_nav::post::{self, PostConfig};
 use coopnav_sim::hbl::grid::{self, GridSpec};
-use coopnav_sim::hbl::tune::{tune, TuneSpec};
-use coopnav_sim::hbl::{monte_carlo, plot, run, Scenario};
+use coopnav_sim::hbl::tune::{tune, Coefficient, Objective, TuneSpec};
+use coopnav_sim::hbl::{error_profile, monte_carlo, plot, run, Scenario};
+
+/// x_rel bin of the Monte Carlo error profile (m).
+const PROFILE_BIN_M: f64 = 5.0;
 use indicatif::{ProgressBar, ProgressStyle};
 use serde_json::json;
 use std::path::{Path, PathBuf};
@@ -20,7 +23,8 @@ pub enum Command {
         #[arg(long, default_value_t = 0)]
         run: u64,
     },
-    /// A Monte Carlo of one scenario: per-run CSV and summary.json.
+    /// A Monte Carlo of one scenario: per-run CSV, summary.json, and the mean error profile
+    /// against x_rel (profile.csv, profile.svg: total, along- and across-path).
     Montecarlo {
         #[command(flatten)]
         common: Common,
@@ -43,6 +47,12 @@ pub enum Command {
         #[arg(long)]
         spec: PathBuf,
     },
+    /// Print a documented starting file: the Table 5 scenario, a grid, a tuning spec or a
+    /// post-processing config, every field at its default (edit and pass back with --config etc.).
+    Example {
+        #[arg(value_enum, default_value_t = ExampleKind::Scenario)]
+        kind: ExampleKind,
+    },
     /// Post-process a CSV log: EKF then RTS smoother.
     Postprocess {
         /// The log (format in coopnav_nav::post).
@@ -56,6 +66,18 @@ pub enum Command {
         #[arg(long)]
         force: bool,
     },
+}
+
+#[derive(Clone, Copy, clap::ValueEnum)]
+pub enum ExampleKind {
+    /// `--config` of simulate, montecarlo, grid and tune.
+    Scenario,
+    /// `grid --grid`.
+    Grid,
+    /// `tune --spec`.
+    Tune,
+    /// `postprocess --config`.
+    Post,
 }
 
 #[derive(clap::Args)]
@@ -100,7 +122,34 @@ pub fn run_command(cmd: Command) -> Result<()> {
         Command::Grid { common, grid } => grid_cmd(&common, grid.as_deref()),
         Command::Tune { common, spec } => tune_cmd(&common, &spec),
         Command::Postprocess { log, config, out, force } => postprocess(&log, config.as_deref(), &out, force),
+        Command::Example { kind } => example(kind),
     }
+}
+
+fn example(kind: ExampleKind) -> Result<()> {
+    let text = match kind {
+        ExampleKind::Scenario => toml::to_string_pretty(&Scenario::default())?,
+        ExampleKind::Grid => toml::to_string_pretty(&GridSpec::default())?,
+        ExampleKind::Tune => toml::to_string_pretty(&TuneSpec {
+            coefficients: vec![Coefficient::AuvQEn, Coefficient::BuoyQEn],
+            objective: Objective::AuvZone,
+            runs: 50,
+            max_iters: 40,
+            seed: 1,
+        })?,
+        ExampleKind::Post => toml::to_string_pretty(&PostConfig::default())?,
+    };
+    let what = match kind {
+        ExampleKind::Scenario => "HBL scenario (Gill 2013 Table 5, HBL Two) for --config",
+        ExampleKind::Grid => "buoy-location grid for `hbl grid --grid`",
+        ExampleKind::Tune => "tuning spec for `hbl tune --spec`",
+        ExampleKind::Post => "post-processing config for `hbl postprocess --config`",
+    };
+    println!("# coopnav {what}. Every field is at its default and every field is optional: keep");
+    println!("# only what you change. Units and sources of each field: the rustdoc of coopnav_sim::hbl");
+    println!("# and coopnav_nav (`cargo doc --open`), and ../shared/digests/gill-hbl-navigation.md.");
+    print!("{text}");
+    Ok(())
 }
 
 fn simulate(c: &Common, index: u64) -> Result<()> {
@@ -137,17 +186,24 @@ fn montecarlo(c: &Common, runs: usize) -> Result<()> {
     let pb = bar(runs as u64);
     let r = monte_carlo(&sc, runs, c.seed, &|n| pb.set_position(n))?;
     pb.finish_and_clear();
+    let bins = error_profile(&sc, runs, c.seed, PROFILE_BIN_M)?;
     let dir = RunDir::create(&c.out, c.force)?;
     manifest(&dir, "hbl montecarlo", c.seed, json!({ "scenario": sc, "runs": runs }))?;
-    let mut csv = String::from("run,zone_error,zone_parallel,zone_perpendicular,buoy_error,saturation_error,ranges_received,ranges_applied,healthy\n");
+    let mut csv = String::from("run,zone_error,zone_parallel,zone_perpendicular,approach_perpendicular,buoy_error,saturation_error,ranges_received,ranges_applied,healthy\n");
     for (i, m) in r.runs.iter().enumerate() {
         let o = |v: Option<f64>| v.map_or(String::new(), |x| x.to_string());
         csv.push_str(&format!(
-            "{i},{},{},{},{},{},{},{},{}\n",
-            o(m.zone_error), o(m.zone_parallel), o(m.zone_perpendicular), o(m.buoy_error), o(m.saturation_error), m.ranges_received, m.ranges_applied, m.healthy
+            "{i},{},{},{},{},{},{},{},{},{}\n",
+            o(m.zone_error), o(m.zone_parallel), o(m.zone_perpendicular), o(m.approach_perpendicular), o(m.buoy_error), o(m.saturation_error), m.ranges_received, m.ranges_applied, m.healthy
         ));
     }
     dir.write_bytes("runs.csv", csv)?;
+    let mut profile = String::from("x_rel,samples,error,parallel,perpendicular\n");
+    for b in &bins {
+        profile.push_str(&format!("{},{},{},{},{}\n", b.x_rel, b.samples, b.error, b.parallel, b.perpendicular));
+    }
+    dir.write_bytes("profile.csv", profile)?;
+    dir.write_bytes("profile.svg", plot::profile(&bins, (sc.geometry.zone_min, sc.geometry.zone_max))?)?;
     dir.write_json("summary.json", &r.summary)?;
     let out = dir.finish()?;
     let z = r.summary.zone_error;

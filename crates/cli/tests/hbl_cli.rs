@@ -25,6 +25,48 @@ fn simulate_then_postprocess() {
     assert!(summary.contains("mean_smoothed_error"));
 }
 
+/// `hbl simulate --run I` replays exactly run I of `hbl montecarlo` with the same seed, and the
+/// Monte Carlo directory carries its error profile.
+#[test]
+fn simulate_run_replays_a_monte_carlo_run() {
+    let tmp = tempfile::tempdir().unwrap();
+    let mc = tmp.path().join("mc");
+    let out = coopnav(&["hbl", "montecarlo", "--runs", "4", "--seed", "9", "--out", mc.to_str().unwrap()]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    for f in ["runs.csv", "profile.csv", "profile.svg", "summary.json"] {
+        assert!(mc.join(f).exists(), "missing {f}");
+    }
+    let runs = std::fs::read_to_string(mc.join("runs.csv")).unwrap();
+    let zone_of_run_2: f64 = runs.lines().nth(3).unwrap().split(',').nth(1).unwrap().parse().unwrap();
+    let sim = tmp.path().join("sim");
+    let out = coopnav(&["hbl", "simulate", "--seed", "9", "--run", "2", "--out", sim.to_str().unwrap()]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let summary: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(sim.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(summary["zone_error"].as_f64().unwrap(), zone_of_run_2);
+}
+
+/// The printed examples are valid inputs of the commands they are for.
+#[test]
+fn examples_load_back() {
+    let tmp = tempfile::tempdir().unwrap();
+    let write = |kind: &str| {
+        let out = coopnav(&["hbl", "example", kind]);
+        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        let path = tmp.path().join(format!("{kind}.toml"));
+        std::fs::write(&path, &out.stdout).unwrap();
+        path
+    };
+    let (scenario, post) = (write("scenario"), write("post"));
+    let mc = tmp.path().join("mc");
+    let out = coopnav(&["hbl", "montecarlo", "--runs", "3", "--config", scenario.to_str().unwrap(), "--out", mc.to_str().unwrap()]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let sim = tmp.path().join("sim");
+    assert!(coopnav(&["hbl", "simulate", "--out", sim.to_str().unwrap()]).status.success());
+    let pp = tmp.path().join("pp");
+    let out = coopnav(&["hbl", "postprocess", "--log", sim.join("log.csv").to_str().unwrap(), "--config", post.to_str().unwrap(), "--out", pp.to_str().unwrap()]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+}
+
 #[test]
 fn bad_config_exits_nonzero_and_writes_nothing() {
     let tmp = tempfile::tempdir().unwrap();

@@ -95,6 +95,28 @@ impl AuvParams {
     }
 }
 
+/// Dead reckoning over `h` seconds with the heading changing by `turn` rad (eq. 7, Euler step):
+/// the mean map the EKF linearises and the unscented smoother pushes sigma points through.
+pub fn transition(x: &AuvState, h: f64, turn: f64) -> AuvState {
+    let (sin, cos) = x[PSI].sin_cos();
+    let mut next = *x;
+    next[E] += h * x[S] * cos;
+    next[N] += h * x[S] * sin;
+    next[PSI] = wrap_pi(x[PSI] + turn);
+    next
+}
+
+/// ∂transition/∂x at `x` (digest §3.2, F^A).
+pub fn transition_jacobian(x: &AuvState, h: f64) -> SMatrix<f64, 5, 5> {
+    let (sin, cos) = x[PSI].sin_cos();
+    let mut f = SMatrix::<f64, 5, 5>::identity();
+    f[(E, S)] = h * cos;
+    f[(E, PSI)] = -h * x[S] * sin;
+    f[(N, S)] = h * sin;
+    f[(N, PSI)] = h * x[S] * cos;
+    f
+}
+
 /// The AUV navigation filter.
 #[derive(Debug, Clone)]
 pub struct AuvEkf {
@@ -134,16 +156,7 @@ impl AuvEkf {
             return false;
         }
         let x = *self.ekf.x();
-        let (sin, cos) = x[PSI].sin_cos();
-        let mut x_new = x;
-        x_new[E] += h * x[S] * cos;
-        x_new[N] += h * x[S] * sin;
-        x_new[PSI] = wrap_pi(x[PSI] + h * yaw_rate);
-        let mut f = SMatrix::<f64, 5, 5>::identity();
-        f[(E, S)] = h * cos;
-        f[(E, PSI)] = -h * x[S] * sin;
-        f[(N, S)] = h * sin;
-        f[(N, PSI)] = h * x[S] * cos;
+        let (x_new, f) = (transition(&x, h, h * yaw_rate), transition_jacobian(&x, h));
         let q = SMatrix::<f64, 5, 5>::from_diagonal(&SVector::from(self.params.q)) * (h / self.params.step_s);
         self.ekf.predict(t, x_new, f, q)
     }

@@ -39,12 +39,14 @@ impl UpdateOutcome {
     }
 }
 
-/// One filter step as the RTS smoother needs it: the transition F from the previous step,
+/// One filter step as the RTS smoothers need it: the transition F and noise Q from the previous step,
 /// the prior after prediction and the posterior after all updates at time `t`.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Step<const N: usize> {
     pub t: f64,
     pub f: SMatrix<f64, N, N>,
+    /// Process noise W Q Wᵀ added by this step's prediction (zero for the first step).
+    pub q: SMatrix<f64, N, N>,
     pub x_prior: SVector<f64, N>,
     pub p_prior: SMatrix<f64, N, N>,
     pub x_post: SVector<f64, N>,
@@ -78,6 +80,7 @@ impl<const N: usize> Ekf<N> {
         self.history = Some(vec![Step {
             t: self.t,
             f: SMatrix::identity(),
+            q: SMatrix::zeros(),
             x_prior: self.x,
             p_prior: self.p,
             x_post: self.x,
@@ -117,7 +120,7 @@ impl<const N: usize> Ekf<N> {
         self.t = t;
         self.predicts += 1;
         if let Some(h) = self.history.as_mut() {
-            h.push(Step { t, f, x_prior: self.x, p_prior: self.p, x_post: self.x, p_post: self.p });
+            h.push(Step { t, f, q, x_prior: self.x, p_prior: self.p, x_post: self.x, p_post: self.p });
         }
         true
     }

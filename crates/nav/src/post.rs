@@ -30,10 +30,10 @@
 //! (top of a second). `init` is the filter's starting estimate (the first one is used);
 //! `truth` rows (topside AUV fixes) are only used to score the result.
 
-use crate::auv::{AuvEkf, AuvParams, ParamError};
+use crate::auv::{transition, AuvEkf, AuvParams, ParamError, PSI};
 use crate::cycle::Transmitter;
 use crate::range::RangeMeasurement;
-use crate::smoother::{rts, SmoothError};
+use crate::smoother::{rts, urts, SmoothError, Smoothed, SmootherKind};
 use crate::surface::Outriggers;
 use coopnav_core::{wrap_pi, CompassDeg, GeodesyError, Geodetic, Heading, LatLon, LocalFrame, Vec3};
 use serde::{Deserialize, Serialize};
@@ -246,6 +246,8 @@ pub struct PostConfig {
     pub buoy_fixes: BuoyFixUse,
     /// Depth of the buoy transponder (m).
     pub buoy_depth: f64,
+    /// Backward pass: `ekf` (EKF-RTS, default) or `unscented` (URTS, the thesis's [25]).
+    pub smoother: SmootherKind,
     /// Geodetic origin of the local east/north frame, needed by `_ll` log rows (digest §10 A28).
     /// `_ll` positions are taken at its height above the ellipsoid (the site's water surface).
     pub origin: Option<Geodetic>,
@@ -260,6 +262,7 @@ impl Default for PostConfig {
             outriggers: Outriggers::default(),
             buoy_fixes: BuoyFixUse::Hold,
             buoy_depth: 1.5,
+            smoother: SmootherKind::Ekf,
             origin: None,
         }
     }
@@ -431,7 +434,7 @@ pub fn postprocess(entries: &[Entry], cfg: &PostConfig) -> Result<PostResult, Po
         }
     }
     let history = f.ekf().history().ok_or(SmoothError::NoHistory)?;
-    let smoothed = rts(history, f.ekf().angles())?;
+    let smoothed = smooth(history, f.ekf().angles(), cfg.smoother)?;
     let mut samples: Vec<PostSample> = history
         .iter()
         .zip(&smoothed)
@@ -446,6 +449,18 @@ pub fn postprocess(entries: &[Entry], cfg: &PostConfig) -> Result<PostResult, Po
         .collect();
     score(&mut samples, &mut summary, &truth_at, history, &smoothed);
     Ok(PostResult { samples, summary })
+}
+
+/// The chosen backward pass. The unscented one replays the forward filter's dead reckoning:
+/// each step's interval and heading change are read back from the recorded means.
+fn smooth(history: &[crate::ekf::Step<5>], angles: &[bool; 5], kind: SmootherKind) -> Result<Vec<Smoothed<5>>, SmoothError> {
+    match kind {
+        SmootherKind::Ekf => rts(history, angles),
+        SmootherKind::Unscented => urts(history, angles, |k, x| {
+            let (cur, next) = (&history[k], &history[k + 1]);
+            transition(x, next.t - cur.t, wrap_pi(next.x_prior[PSI] - cur.x_post[PSI]))
+        }),
+    }
 }
 
 fn score(
@@ -581,5 +596,8 @@ mod tests {
         assert!(e.contains("buoy_depth"), "{e}");
         let e = PostConfig::from_toml("[auv]\nsigma_speed = -1\n").unwrap_err().to_string();
         assert!(e.contains("auv.sigma_speed"), "{e}");
+        let e = PostConfig::from_toml("smoother = 'particle'\n").unwrap_err().to_string();
+        assert!(e.contains("particle") && e.contains("unscented"), "{e}");
+        assert_eq!(PostConfig::from_toml("smoother = 'unscented'\n").unwrap().smoother, SmootherKind::Unscented);
     }
 }

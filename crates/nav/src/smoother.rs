@@ -1,14 +1,29 @@
-//! EKF Rauch–Tung–Striebel smoother (digest §3.6): a backward pass over the forward filter's
-//! history,
+//! Rauch–Tung–Striebel smoothers (digest §3.6, A22): backward passes over the forward filter's
+//! history. The EKF-RTS pass (default) uses the recorded linearisation,
 //!   C_k = P⁺_k F_{k+1}ᵀ (P⁻_{k+1})⁻¹,
 //!   x^s_k = x⁺_k + C_k (x^s_{k+1} ⊖ x⁻_{k+1}),
-//!   P^s_k = P⁺_k + C_k (P^s_{k+1} − P⁻_{k+1}) C_kᵀ,
-//! with angle components differenced and re-wrapped.
+//!   P^s_k = P⁺_k + C_k (P^s_{k+1} − P⁻_{k+1}) C_kᵀ;
+//! the unscented pass (Särkkä's URTS, the thesis's reference [25]) instead pushes sigma points of
+//! (x⁺_k, P⁺_k) through the nonlinear transition for the prediction and the cross-covariance.
+//! Angle components are differenced and re-wrapped in both.
 
 use crate::ekf::{state_difference, symmetrise, Step};
 use coopnav_core::wrap_pi;
 use nalgebra::{SMatrix, SVector};
+use serde::{Deserialize, Serialize};
 use thiserror::Error;
+
+/// Which backward pass to run.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum SmootherKind {
+    /// EKF-RTS on the recorded Jacobians (digest §3.6).
+    #[default]
+    Ekf,
+    /// Unscented RTS (digest A22) with 2N equally weighted sigma points at ±√N σ
+    /// (α = 1, β = 0, κ = 0: no negative weights, so every covariance stays positive).
+    Unscented,
+}
 
 #[derive(Debug, Error, PartialEq)]
 pub enum SmoothError {
@@ -16,6 +31,8 @@ pub enum SmoothError {
     NoHistory,
     #[error("step {0}: the predicted covariance is not invertible")]
     Singular(usize),
+    #[error("step {0}: the filtered covariance is not positive definite (no sigma points)")]
+    NotPositiveDefinite(usize),
 }
 
 /// One smoothed step.
@@ -35,17 +52,71 @@ pub fn rts<const N: usize>(history: &[Step<N>], angles: &[bool; N]) -> Result<Ve
         let chol = next.p_prior.cholesky().ok_or(SmoothError::Singular(k + 1))?;
         // C = P⁺ Fᵀ (P⁻)⁻¹ = ((P⁻)⁻¹ F P⁺)ᵀ.
         let c = chol.solve(&(next.f * cur.p_post)).transpose();
-        let dx = state_difference(&out[k + 1].x, &next.x_prior, angles);
-        let mut x = cur.x_post + c * dx;
-        for (i, is_angle) in angles.iter().enumerate() {
-            if *is_angle {
-                x[i] = wrap_pi(x[i]);
-            }
-        }
-        let p = symmetrise(cur.p_post + c * (out[k + 1].p - next.p_prior) * c.transpose());
-        out[k] = Smoothed { t: cur.t, x, p };
+        out[k] = backward_step(cur, &out[k + 1], &next.x_prior, &next.p_prior, &c, angles);
     }
     Ok(out)
+}
+
+/// Unscented RTS over a recorded history. `transition(k, x)` is the mean map from step k to
+/// step k + 1 (the one the forward filter linearised); Q comes from the history.
+pub fn urts<const N: usize>(
+    history: &[Step<N>],
+    angles: &[bool; N],
+    transition: impl Fn(usize, &SVector<f64, N>) -> SVector<f64, N>,
+) -> Result<Vec<Smoothed<N>>, SmoothError> {
+    let last = history.last().ok_or(SmoothError::NoHistory)?;
+    let mut out = vec![Smoothed { t: last.t, x: last.x_post, p: last.p_post }; history.len()];
+    let weight = 1.0 / (2 * N) as f64;
+    for k in (0..history.len() - 1).rev() {
+        let (cur, next) = (&history[k], &history[k + 1]);
+        let sigma = sigma_points(&cur.x_post, &cur.p_post, angles).ok_or(SmoothError::NotPositiveDefinite(k))?;
+        let moved: Vec<SVector<f64, N>> = sigma.iter().map(|x| transition(k, x)).collect();
+        // Mean of the propagated points, averaged as offsets from the propagated mean state.
+        let centre = transition(k, &cur.x_post);
+        let offset = moved.iter().map(|x| state_difference(x, &centre, angles)).sum::<SVector<f64, N>>() * weight;
+        let x_prior = wrap(centre + offset, angles);
+        let (mut p_prior, mut cross) = (next.q, SMatrix::<f64, N, N>::zeros());
+        for (before, after) in sigma.iter().zip(&moved) {
+            let (a, b) = (state_difference(before, &cur.x_post, angles), state_difference(after, &x_prior, angles));
+            p_prior += b * b.transpose() * weight;
+            cross += a * b.transpose() * weight;
+        }
+        let p_prior = symmetrise(p_prior);
+        let chol = p_prior.cholesky().ok_or(SmoothError::Singular(k + 1))?;
+        // G = D (P⁻)⁻¹ = ((P⁻)⁻¹ Dᵀ)ᵀ.
+        let g = chol.solve(&cross.transpose()).transpose();
+        out[k] = backward_step(cur, &out[k + 1], &x_prior, &p_prior, &g, angles);
+    }
+    Ok(out)
+}
+
+/// The RTS correction shared by both passes, with gain `g`.
+fn backward_step<const N: usize>(
+    cur: &Step<N>,
+    later: &Smoothed<N>,
+    x_prior: &SVector<f64, N>,
+    p_prior: &SMatrix<f64, N, N>,
+    g: &SMatrix<f64, N, N>,
+    angles: &[bool; N],
+) -> Smoothed<N> {
+    let x = wrap(cur.x_post + g * state_difference(&later.x, x_prior, angles), angles);
+    let p = symmetrise(cur.p_post + g * (later.p - p_prior) * g.transpose());
+    Smoothed { t: cur.t, x, p }
+}
+
+fn wrap<const N: usize>(mut x: SVector<f64, N>, angles: &[bool; N]) -> SVector<f64, N> {
+    for (i, is_angle) in angles.iter().enumerate() {
+        if *is_angle {
+            x[i] = wrap_pi(x[i]);
+        }
+    }
+    x
+}
+
+/// x ± √N · (columns of the Cholesky factor of P); None if P is not positive definite.
+fn sigma_points<const N: usize>(x: &SVector<f64, N>, p: &SMatrix<f64, N, N>, angles: &[bool; N]) -> Option<Vec<SVector<f64, N>>> {
+    let l = p.cholesky()?.l() * (N as f64).sqrt();
+    Some(l.column_iter().flat_map(|c| [wrap(x + c, angles), wrap(x - c, angles)]).collect())
 }
 
 #[cfg(test)]
@@ -80,9 +151,53 @@ mod tests {
         assert!(s[10].p[(0, 0)] < hist[10].p_post[(0, 0)] * 0.9);
     }
 
+    /// For a linear transition the unscented transform is exact, so the unscented pass must
+    /// reproduce the EKF-RTS pass (to round-off) on the same history.
+    #[test]
+    fn unscented_pass_equals_ekf_pass_on_a_linear_model() {
+        let mut e = Ekf::new(0.0, Vector2::new(0.0, 1.0), Matrix2::new(2.0, 0.3, 0.3, 1.0), [false, false]);
+        e.record_history();
+        let f = Matrix2::new(1.0, 0.5, 0.0, 1.0);
+        let q = Matrix2::new(0.02, 0.001, 0.001, 0.01);
+        let h = SMatrix::<f64, 1, 2>::new(1.0, 0.0);
+        for k in 1..=30 {
+            let x = f * e.x();
+            e.predict(k as f64 * 0.5, x, f, q);
+            if k % 3 != 0 {
+                e.update_scalar((k as f64 * 0.5 + 0.2 * (k as f64).sin()) - e.x()[0], h, 0.1, &Gate::OFF);
+            }
+        }
+        let hist = e.history().unwrap();
+        let ekf = rts(hist, e.angles()).unwrap();
+        let unscented = urts(hist, e.angles(), |_, x| f * x).unwrap();
+        for (a, b) in ekf.iter().zip(&unscented) {
+            assert!((a.x - b.x).norm() < 1e-9 && (a.p - b.p).norm() < 1e-9, "{a:?} vs {b:?}");
+        }
+        // And it is not the trivial pass-through: smoothing moved the early estimates.
+        assert!((unscented[5].x - hist[5].x_post).norm() > 1e-3);
+    }
+
+    /// Sigma points straddling ±π: the smoothed heading stays wrapped and near the truth.
+    #[test]
+    fn unscented_pass_wraps_angles() {
+        let mut e = Ekf::new(0.0, Vector2::new(3.1, 0.0), Matrix2::new(0.05, 0.0, 0.0, 0.01), [true, false]);
+        e.record_history();
+        let f = Matrix2::identity();
+        let h = SMatrix::<f64, 1, 2>::new(1.0, 0.0);
+        for k in 1..=10 {
+            e.predict(k as f64, *e.x(), f, Matrix2::new(1e-3, 0.0, 0.0, 1e-4));
+            e.update_scalar(wrap_pi(-3.13 - e.x()[0]), h, 0.01, &Gate::OFF);
+        }
+        let s = urts(e.history().unwrap(), e.angles(), |_, x| *x).unwrap();
+        for sm in &s {
+            assert!(sm.x[0].abs() <= std::f64::consts::PI && wrap_pi(sm.x[0] + 3.13).abs() < 0.1, "{:?}", sm.x);
+        }
+    }
+
     #[test]
     fn empty_history_is_an_error() {
         let h: Vec<Step<2>> = vec![];
         assert_eq!(rts(&h, &[false, false]), Err(SmoothError::NoHistory));
+        assert_eq!(urts(&h, &[false, false], |_, x| *x), Err(SmoothError::NoHistory));
     }
 }

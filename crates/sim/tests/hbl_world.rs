@@ -5,6 +5,7 @@
 use coopnav_core::run_seed;
 use coopnav_nav::cycle::{Configuration, Cycle, SlotContent};
 use coopnav_nav::post::{postprocess, read_log, write_log, PostConfig};
+use coopnav_nav::smoother::SmootherKind;
 use coopnav_sim::hbl::{monte_carlo, run, Scenario};
 
 #[test]
@@ -103,6 +104,12 @@ fn simulated_logs_postprocess_end_to_end() {
         let entries = read_log(csv.as_slice(), None).unwrap();
         let r = postprocess(&entries, &PostConfig::default()).unwrap();
         let s = r.summary;
+        // The unscented backward pass over the same forward run: with 0.1 s steps the dead
+        // reckoning is nearly linear, so it must land on the EKF-RTS answer (thesis: "similar").
+        let u = postprocess(&entries, &PostConfig { smoother: SmootherKind::Unscented, ..PostConfig::default() }).unwrap().summary;
+        let (se, su) = (s.mean_smoothed_error.unwrap(), u.mean_smoothed_error.unwrap());
+        assert!((se - su).abs() <= 0.01 * se, "run {i}: EKF-RTS {se} vs URTS {su}");
+        assert_eq!(u.mean_filtered_error, s.mean_filtered_error);
         assert!(s.ranges_applied > 20, "{s:?}");
         assert!(r.samples.iter().all(|p| p.smoothed.iter().chain(&p.smoothed_sd).all(|v| v.is_finite())));
         filt += s.mean_filtered_error.unwrap();

@@ -52,6 +52,10 @@ pub struct Geometry {
     pub zone_max: f64,
     /// The run ends this far past the zone exit (m of x_rel).
     pub end_margin: f64,
+    /// Length of the approach window just before the zone (x_rel in [zone_min − approach_m,
+    /// zone_min)), where the thesis says HBL has already corrected the perpendicular error and
+    /// MSBL has not (digest §7.5, §11; the window length is ours).
+    pub approach_m: f64,
 }
 
 impl Default for Geometry {
@@ -65,6 +69,7 @@ impl Default for Geometry {
             zone_min: -30.0,
             zone_max: 75.0,
             end_margin: 5.0,
+            approach_m: 50.0,
         }
     }
 }
@@ -359,6 +364,7 @@ impl Scenario {
         check("geometry.ship_start_x", g.ship_start_x, g.ship_start_x > g.auv_start_x, "must be east of geometry.auv_start_x")?;
         check("geometry.zone_max", g.zone_max, g.zone_max > g.zone_min, "must exceed geometry.zone_min")?;
         check("geometry.end_margin", g.end_margin, g.end_margin >= 0.0, NONNEG)?;
+        check("geometry.approach_m", g.approach_m, g.approach_m >= 0.0, NONNEG)?;
         check("geometry.path_y", g.path_y, true, NONNEG)?;
         check("init.position_sd", self.init.position_sd, self.init.position_sd >= 0.0, NONNEG)?;
         check("init.speed_sd", self.init.speed_sd, self.init.speed_sd >= 0.0, NONNEG)?;

@@ -15,8 +15,10 @@ use thiserror::Error;
 pub enum McError {
     #[error(transparent)]
     Config(#[from] ConfigError),
-    #[error("runs = 0: a Monte Carlo needs at least 2 runs")]
+    #[error("runs < 2: a Monte Carlo needs at least 2 runs")]
     TooFewRuns,
+    #[error("profile bin width {0} m: must be a finite number > 0")]
+    BadBin(f64),
     #[error("run {index} (seed {seed}): the AUV never entered the measurement zone within max_duration_s")]
     NoZone { index: usize, seed: u64 },
 }
@@ -48,6 +50,8 @@ pub struct McSummary {
     pub zone_error: Stats,
     pub zone_parallel: Stats,
     pub zone_perpendicular: Stats,
+    /// Across-path error just before the zone (digest §11: HBL corrects it there, MSBL not).
+    pub approach_perpendicular: Option<Stats>,
     pub buoy_error: Option<Stats>,
     pub saturation_error: Option<Stats>,
     /// Every run kept finite states and positive-definite covariances.
@@ -106,6 +110,7 @@ fn summarise(sc: &Scenario, cycle: &str, base_seed: u64, per_run: &[RunMetrics])
         zone_error: Stats::of(&zone),
         zone_parallel: Stats::of(&par),
         zone_perpendicular: Stats::of(&perp),
+        approach_perpendicular: opt(|m| m.approach_perpendicular),
         buoy_error: opt(|m| m.buoy_error),
         saturation_error: opt(|m| m.saturation_error),
         all_healthy: per_run.iter().all(|m| m.healthy),

@@ -9,9 +9,11 @@ pub mod log_format;
 pub mod mc;
 pub mod noise;
 pub mod plot;
+pub mod profile;
 pub mod tune;
 pub mod world;
 
 pub use config::{ConfigError, Scenario};
 pub use mc::{monte_carlo, welch_95, McError, McResult, McSummary, Stats, WelchCi};
+pub use profile::{error_profile, ProfileBin};
 pub use world::{run, RunMetrics, Trace, TraceRow};

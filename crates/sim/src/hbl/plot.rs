@@ -3,6 +3,7 @@
 //! with the shared [`crate::plot`] line and track plots).
 
 use super::grid::GridCell;
+use super::profile::ProfileBin;
 use super::world::TraceRow;
 use crate::plot::{line_svg, track_svg, Labels, Series};
 use plotters::prelude::*;
@@ -61,16 +62,33 @@ pub fn tracks(rows: &[TraceRow]) -> Result<String, PlotError> {
     track_svg(Labels { title: "AUV true vs estimated track, ship and buoy", x: "east (m)", y: "north (m)" }, &series)
 }
 
+const X_REL: &str = "x_rel (m, + = behind the ship)";
+
+/// The measurement zone's ends as vertical lines from 0 to `top`.
+fn zone_edges(zone: (f64, f64), top: f64) -> [Series; 2] {
+    let edge = |x: f64| vec![(x, 0.0), (x, top)];
+    [Series::new("zone start", edge(zone.0)), Series::new("zone end", edge(zone.1))]
+}
+
 /// AUV position error against x_rel, with the measurement zone's ends marked by vertical lines.
 pub fn error_vs_xrel(rows: &[TraceRow], zone: (f64, f64)) -> Result<String, PlotError> {
     let top = rows.iter().map(|r| r.error).fold(1.0, f64::max);
-    let edge = |x: f64| vec![(x, 0.0), (x, top)];
-    let series = [
-        Series::new("error", rows.iter().map(|r| (r.x_rel, r.error)).collect()),
-        Series::new("zone start", edge(zone.0)),
-        Series::new("zone end", edge(zone.1)),
+    let mut series = vec![Series::new("error", rows.iter().map(|r| (r.x_rel, r.error)).collect())];
+    series.extend(zone_edges(zone, top));
+    line_svg(Labels { title: "AUV position error vs x_rel", x: X_REL, y: "error (m)" }, &series)
+}
+
+/// Monte Carlo mean error, |along-path| and |across-path| components against x_rel.
+pub fn profile(bins: &[ProfileBin], zone: (f64, f64)) -> Result<String, PlotError> {
+    let top = bins.iter().map(|b| b.error).fold(1.0, f64::max);
+    let line = |f: fn(&ProfileBin) -> f64| bins.iter().map(|b| (b.x_rel, f(b))).collect();
+    let mut series = vec![
+        Series::new("mean error", line(|b| b.error)),
+        Series::new("along path", line(|b| b.parallel)),
+        Series::new("across path", line(|b| b.perpendicular)),
     ];
-    line_svg(Labels { title: "AUV position error vs x_rel", x: "x_rel (m, + = behind the ship)", y: "error (m)" }, &series)
+    series.extend(zone_edges(zone, top));
+    line_svg(Labels { title: "Monte Carlo mean AUV error vs x_rel", x: X_REL, y: "error (m)" }, &series)
 }
 
 #[cfg(test)]

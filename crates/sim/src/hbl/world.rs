@@ -24,6 +24,8 @@ pub struct RunMetrics {
     pub zone_parallel: Option<f64>,
     pub zone_perpendicular: Option<f64>,
     pub zone_samples: usize,
+    /// Mean |across-path| error in the approach window before the zone (None if never there).
+    pub approach_perpendicular: Option<f64>,
     /// Mean buoy-filter position error over the whole mission.
     pub buoy_error: Option<f64>,
     /// Mean distance from the true buoy to its clamp into the broadcast zone, over buoy slots.
@@ -152,6 +154,8 @@ struct Sums {
     zone: f64,
     parallel: f64,
     perpendicular: f64,
+    approach_perpendicular: f64,
+    approach_n: usize,
     buoy: f64,
     buoy_n: usize,
     saturation: f64,
@@ -408,6 +412,9 @@ impl<'a> World<'a> {
             self.sums.parallel += de.abs();
             self.sums.perpendicular += dn.abs();
             self.metrics.zone_samples += 1;
+        } else if (g.zone_min - g.approach_m..g.zone_min).contains(&x_rel) {
+            self.sums.approach_perpendicular += dn.abs();
+            self.sums.approach_n += 1;
         }
         let buoy_true = self.buoy_motion.at(t_next);
         let buoy_est = self.f.buoy.as_ref().map(|b| b.position_at(t_next));
@@ -445,6 +452,7 @@ impl<'a> World<'a> {
             m.zone_parallel = Some(s.parallel / n);
             m.zone_perpendicular = Some(s.perpendicular / n);
         }
+        m.approach_perpendicular = (s.approach_n > 0).then(|| s.approach_perpendicular / s.approach_n as f64);
         m.buoy_error = (s.buoy_n > 0).then(|| s.buoy / s.buoy_n as f64);
         m.saturation_error = (s.saturation_n > 0).then(|| s.saturation / s.saturation_n as f64);
         (m.filter_predicts, m.filter_updates) = self.f.counts();
