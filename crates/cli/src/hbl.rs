@@ -126,9 +126,13 @@ pub fn run_command(cmd: Command) -> Result<()> {
     }
 }
 
+/// The optional geodetic origin (absent by default) for lat/lon (`_ll`) log rows.
+const ORIGIN_HINT: &str = "# origin = { lat_deg = 47.97, lon_deg = -116.5, height_m = 630.0 }  # WGS-84 origin of lat/lon (_ll) log rows";
+
 fn example(kind: ExampleKind) -> Result<()> {
     let text = match kind {
-        ExampleKind::Scenario => toml::to_string_pretty(&Scenario::default())?,
+        // Absent options don't serialise: show the geodetic one where it belongs.
+        ExampleKind::Scenario => toml::to_string_pretty(&Scenario::default())?.replacen("[log]\n", &format!("[log]\n{}\n", ORIGIN_HINT.replacen("origin", "geodetic_origin", 1)), 1),
         ExampleKind::Grid => toml::to_string_pretty(&GridSpec::default())?,
         ExampleKind::Tune => toml::to_string_pretty(&TuneSpec {
             coefficients: vec![Coefficient::AuvQEn, Coefficient::BuoyQEn],
@@ -137,7 +141,7 @@ fn example(kind: ExampleKind) -> Result<()> {
             max_iters: 40,
             seed: 1,
         })?,
-        ExampleKind::Post => toml::to_string_pretty(&PostConfig::default())?,
+        ExampleKind::Post => format!("{ORIGIN_HINT}\n{}", toml::to_string_pretty(&PostConfig::default())?),
     };
     let what = match kind {
         ExampleKind::Scenario => "HBL scenario (Gill 2013 Table 5, HBL Two) for --config",
