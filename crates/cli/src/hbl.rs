@@ -126,9 +126,13 @@ pub fn run_command(cmd: Command) -> Result<()> {
     }
 }
 
+/// The optional geodetic origin (absent by default) for lat/lon (`_ll`) log rows.
+const ORIGIN_HINT: &str = "# origin = { lat_deg = 47.97, lon_deg = -116.5, height_m = 630.0 }  # WGS-84 origin of lat/lon (_ll) log rows";
+
 fn example(kind: ExampleKind) -> Result<()> {
     let text = match kind {
-        ExampleKind::Scenario => toml::to_string_pretty(&Scenario::default())?,
+        // Absent options don't serialise: show the geodetic one where it belongs.
+        ExampleKind::Scenario => toml::to_string_pretty(&Scenario::default())?.replacen("[log]\n", &format!("[log]\n{}\n", ORIGIN_HINT.replacen("origin", "geodetic_origin", 1)), 1),
         ExampleKind::Grid => toml::to_string_pretty(&GridSpec::default())?,
         ExampleKind::Tune => toml::to_string_pretty(&TuneSpec {
             coefficients: vec![Coefficient::AuvQEn, Coefficient::BuoyQEn],
@@ -137,7 +141,7 @@ fn example(kind: ExampleKind) -> Result<()> {
             max_iters: 40,
             seed: 1,
         })?,
-        ExampleKind::Post => toml::to_string_pretty(&PostConfig::default())?,
+        ExampleKind::Post => format!("{ORIGIN_HINT}\n{}", toml::to_string_pretty(&PostConfig::default())?),
     };
     let what = match kind {
         ExampleKind::Scenario => "HBL scenario (Gill 2013 Table 5, HBL Two) for --config",
@@ -170,7 +174,7 @@ fn simulate(c: &Common, index: u64) -> Result<()> {
     }
     dir.write_bytes("trace.csv", csv)?;
     let mut log = Vec::new();
-    post::write_log(&mut log, &trace.log)?;
+    post::write_log(&mut log, &trace.log, sc.log.frame().as_ref())?;
     dir.write_bytes("log.csv", log)?;
     dir.write_bytes("tracks.svg", plot::tracks(&trace.rows)?)?;
     dir.write_bytes("error_vs_xrel.svg", plot::error_vs_xrel(&trace.rows, (sc.geometry.zone_min, sc.geometry.zone_max))?)?;
@@ -252,7 +256,7 @@ fn postprocess(log: &Path, config: Option<&Path>, out: &Path, force: bool) -> Re
         None => PostConfig::default(),
     };
     let file = std::fs::File::open(log).with_context(|| format!("opening {}", log.display()))?;
-    let entries = post::read_log(file).with_context(|| format!("in {}", log.display()))?;
+    let entries = post::read_log(file, cfg.frame().as_ref()).with_context(|| format!("in {}", log.display()))?;
     let result = post::postprocess(&entries, &cfg)?;
     let dir = RunDir::create(out, force)?;
     manifest(&dir, "hbl postprocess", 0, json!({ "log": log, "config": cfg }))?;

@@ -87,3 +87,27 @@ fn bad_config_exits_nonzero_and_writes_nothing() {
     assert!(err.contains("line 3") && err.contains("99"), "{err}");
     assert!(!post.exists());
 }
+
+#[test]
+fn geodetic_log_needs_the_origin_to_postprocess() {
+    let tmp = tempfile::tempdir().unwrap();
+    let origin = "{ lat_deg = 47.97, lon_deg = -116.5, height_m = 630.0 }";
+    let sc = tmp.path().join("sc.toml");
+    std::fs::write(&sc, format!("[log]\ngeodetic_origin = {origin}\nbuoy_fix_storage = \"f32_lost_bit\"\n")).unwrap();
+    let sim = tmp.path().join("sim");
+    let out = coopnav(&["hbl", "simulate", "--config", sc.to_str().unwrap(), "--out", sim.to_str().unwrap()]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let log = sim.join("log.csv");
+    assert!(std::fs::read_to_string(&log).unwrap().contains(",buoy_fix_ll,"));
+    let post = tmp.path().join("post");
+    let out = coopnav(&["hbl", "postprocess", "--log", log.to_str().unwrap(), "--out", post.to_str().unwrap()]);
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("log.csv") && err.contains("line 2") && err.contains("origin = {"), "{err}");
+    assert!(!post.exists());
+    let cfg = tmp.path().join("post.toml");
+    std::fs::write(&cfg, format!("origin = {origin}\n")).unwrap();
+    let out = coopnav(&["hbl", "postprocess", "--log", log.to_str().unwrap(), "--config", cfg.to_str().unwrap(), "--out", post.to_str().unwrap()]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(std::fs::read_to_string(post.join("summary.json")).unwrap().contains("mean_smoothed_error"));
+}

@@ -3,11 +3,13 @@
 //! It owns the frame and unit conventions (x east, y north, z depth positive down; SI units;
 //! math-convention headings inside, compass headings only at the edge), seeded randomness that
 //! keeps Monte Carlo runs bit-identical on any thread count, and survey missions (waypoints,
-//! lawnmower patterns, time-stamped tracks with linear interpolation).
+//! lawnmower patterns, time-stamped tracks with linear interpolation), and WGS-84 geodesy (lat/lon
+//! ↔ ECEF ↔ local east/north/up) for field logs.
 //! It deliberately knows nothing about planners, filters or modems.
 
 pub mod angle;
 pub mod bathymetry;
+pub mod geodesy;
 pub mod geometry;
 pub mod kinematics;
 pub mod mission;
@@ -16,6 +18,7 @@ pub mod rng;
 pub use bathymetry::{Bathymetry, BathymetryError, Shelf};
 pub use kinematics::{DepthTarget, Iver2, Iver2Params, Iver2State, Waypoint};
 pub use angle::{wrap_pi, CompassDeg, Degrees, Heading, Radians};
+pub use geodesy::{Ecef, Enu, GeodesyError, Geodetic, LatLon, LatLonStorage, LocalFrame};
 pub use geometry::Vec3;
 pub use mission::{DepthProfile, Lawnmower, Track, TrackError, TrackSample};
 pub use rng::{run_seed, SeedStream};

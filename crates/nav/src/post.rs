@@ -5,7 +5,10 @@
 //! # Log format
 //! One CSV file with the header `t,kind,src,v1,v2,v3,v4` (unused fields empty). Times are
 //! seconds on the AUV clock; headings are compass degrees (0 = north, clockwise), rates deg/s
-//! clockwise-positive, positions metres in the local east/north frame.
+//! clockwise-positive, positions metres in the local east/north frame — or, in the `_ll` kinds,
+//! WGS-84 latitude/longitude in degrees, converted on reading to that frame's east/north about the
+//! config's geodetic `origin` (the local tangent plane at the origin's height, gill digest §10
+//! A28), so the filter only ever sees metres.
 //!
 //! | kind       | src      | v1                 | v2     | v3          | v4              |
 //! |------------|----------|--------------------|--------|-------------|-----------------|
@@ -18,6 +21,10 @@
 //! | `ship_fix` |          | E                  | N      | heading deg |                 |
 //! | `buoy_fix` |          | E                  | N      |             |                 |
 //! | `truth`    |          | E                  | N      |             |                 |
+//! | `init_ll`     |       | latitude deg       | longitude deg | speed (m/s) | heading (deg) |
+//! | `ship_fix_ll` |       | latitude deg       | longitude deg | heading deg |               |
+//! | `buoy_fix_ll` |       | latitude deg       | longitude deg |             |               |
+//! | `truth_ll`    |       | latitude deg       | longitude deg |             |               |
 //!
 //! A `range` row's `t` is the **modem receive time**; the transmit time is t − travel time
 //! (top of a second). `init` is the filter's starting estimate (the first one is used);
@@ -28,7 +35,7 @@ use crate::cycle::Transmitter;
 use crate::range::RangeMeasurement;
 use crate::smoother::{rts, urts, SmoothError, Smoothed, SmootherKind};
 use crate::surface::Outriggers;
-use coopnav_core::{wrap_pi, CompassDeg, Heading, Vec3};
+use coopnav_core::{wrap_pi, CompassDeg, GeodesyError, Geodetic, Heading, LatLon, LocalFrame, Vec3};
 use serde::{Deserialize, Serialize};
 use std::io::Read;
 use thiserror::Error;
@@ -43,8 +50,14 @@ pub enum PostError {
     Header { found: Vec<String>, expected: Vec<String> },
     #[error("log line {line}: field '{field}' = {value:?} is not a finite number")]
     Number { line: u64, field: &'static str, value: String },
-    #[error("log line {line}: unknown kind {kind:?} (allowed: init, yaw_rate, speed, heading, depth, range, ship_fix, buoy_fix, truth)")]
+    #[error("log line {line}: unknown kind {kind:?} (allowed: init, yaw_rate, speed, heading, depth, range, ship_fix, buoy_fix, truth, init_ll, ship_fix_ll, buoy_fix_ll, truth_ll)")]
     Kind { line: u64, kind: String },
+    #[error("log line {line}: a '{kind}' row is in latitude/longitude but the post-processing config has no geodetic origin; add `origin = {{ lat_deg = ..., lon_deg = ..., height_m = ... }}` (height optional)")]
+    NoOrigin { line: u64, kind: String },
+    #[error("log line {line}: fields v1/v2 (latitude, longitude): {source}")]
+    LatLon { line: u64, source: GeodesyError },
+    #[error("writing the log in latitude/longitude: row at t = {t} s: {source}")]
+    Unplaceable { t: f64, source: GeodesyError },
     #[error("log line {line}: range src {src:?} is not a transponder modem id (allowed 13 buoy, 14 ship port, 15 ship starboard)")]
     Source { line: u64, src: String },
     #[error("log line {line}: range travel time {value} s must be in [0, 1) (OWTT from the top of the second)")]
@@ -87,6 +100,13 @@ impl Record {
             Record::Truth { .. } => "truth",
         }
     }
+    /// The local (east, north) of the position rows.
+    fn position(&self) -> Option<(f64, f64)> {
+        match *self {
+            Record::Init { e, n, .. } | Record::ShipFix { e, n, .. } | Record::BuoyFix { e, n } | Record::Truth { e, n } => Some((e, n)),
+            _ => None,
+        }
+    }
     /// The row's fields (src, v1..v4) as written to the log.
     fn fields(&self) -> [String; 5] {
         let f = |v: f64| format!("{v}");
@@ -111,20 +131,28 @@ pub struct Entry {
     pub record: Record,
 }
 
-/// Writes entries in the log format.
-pub fn write_log<W: std::io::Write>(out: W, entries: &[Entry]) -> Result<(), PostError> {
+/// Writes entries in the log format: positions in metres, or with a `frame` as `_ll` rows in
+/// latitude/longitude (the exact inverse of reading them with the same frame).
+pub fn write_log<W: std::io::Write>(out: W, entries: &[Entry], frame: Option<&LocalFrame>) -> Result<(), PostError> {
     let mut w = csv::Writer::from_writer(out);
     w.write_record(LOG_HEADER)?;
     for en in entries {
-        let [src, v1, v2, v3, v4] = en.record.fields();
-        w.write_record([format!("{}", en.t), en.record.kind().to_string(), src, v1, v2, v3, v4])?;
+        let [src, mut v1, mut v2, v3, v4] = en.record.fields();
+        let mut kind = en.record.kind().to_string();
+        if let (Some(f), Some((e, n))) = (frame, en.record.position()) {
+            let ll = f.from_plane(e, n).map_err(|source| PostError::Unplaceable { t: en.t, source })?;
+            kind.push_str("_ll");
+            (v1, v2) = (format!("{}", ll.lat_deg()), format!("{}", ll.lon_deg()));
+        }
+        w.write_record([format!("{}", en.t), kind, src, v1, v2, v3, v4])?;
     }
     w.flush().map_err(csv::Error::from)?;
     Ok(())
 }
 
-/// Reads and checks a log; errors name the line and field.
-pub fn read_log<R: Read>(input: R) -> Result<Vec<Entry>, PostError> {
+/// Reads and checks a log; errors name the line and field. `frame` (from
+/// [`PostConfig::frame`]) places the `_ll` rows; without it they are an error.
+pub fn read_log<R: Read>(input: R, frame: Option<&LocalFrame>) -> Result<Vec<Entry>, PostError> {
     let mut r = csv::ReaderBuilder::new().has_headers(true).flexible(false).from_reader(input);
     let header: Vec<String> = r.headers()?.iter().map(|s| s.trim().to_string()).collect();
     if header != LOG_HEADER {
@@ -143,8 +171,21 @@ pub fn read_log<R: Read>(input: R) -> Result<Vec<Entry>, PostError> {
         };
         let t = num(0, "t")?;
         let kind = row.get(1).unwrap_or("").trim();
+        // v1, v2 of a position row as local (east, north).
+        let pos = || -> Result<(f64, f64), PostError> {
+            let (a, b) = (num(3, "v1")?, num(4, "v2")?);
+            if !kind.ends_with("_ll") {
+                return Ok((a, b));
+            }
+            let f = frame.ok_or_else(|| PostError::NoOrigin { line, kind: kind.to_string() })?;
+            let ll = LatLon::new(a, b).map_err(|source| PostError::LatLon { line, source })?;
+            Ok(f.to_plane(ll))
+        };
         let record = match kind {
-            "init" => Record::Init { e: num(3, "v1")?, n: num(4, "v2")?, speed: num(5, "v3")?, compass_deg: num(6, "v4")? },
+            "init" | "init_ll" => {
+                let (e, n) = pos()?;
+                Record::Init { e, n, speed: num(5, "v3")?, compass_deg: num(6, "v4")? }
+            }
             "yaw_rate" => Record::YawRate { compass_deg_s: num(3, "v1")? },
             "speed" => Record::Speed(num(3, "v1")?),
             "heading" => Record::Heading { compass_deg: num(3, "v1")? },
@@ -162,9 +203,18 @@ pub fn read_log<R: Read>(input: R) -> Result<Vec<Entry>, PostError> {
                 }
                 Record::Range { src, travel_time }
             }
-            "ship_fix" => Record::ShipFix { e: num(3, "v1")?, n: num(4, "v2")?, compass_deg: num(5, "v3")? },
-            "buoy_fix" => Record::BuoyFix { e: num(3, "v1")?, n: num(4, "v2")? },
-            "truth" => Record::Truth { e: num(3, "v1")?, n: num(4, "v2")? },
+            "ship_fix" | "ship_fix_ll" => {
+                let (e, n) = pos()?;
+                Record::ShipFix { e, n, compass_deg: num(5, "v3")? }
+            }
+            "buoy_fix" | "buoy_fix_ll" => {
+                let (e, n) = pos()?;
+                Record::BuoyFix { e, n }
+            }
+            "truth" | "truth_ll" => {
+                let (e, n) = pos()?;
+                Record::Truth { e, n }
+            }
             other => return Err(PostError::Kind { line, kind: other.to_string() }),
         };
         entries.push(Entry { t, record });
@@ -198,6 +248,9 @@ pub struct PostConfig {
     pub buoy_depth: f64,
     /// Backward pass: `ekf` (EKF-RTS, default) or `unscented` (URTS, the thesis's [25]).
     pub smoother: SmootherKind,
+    /// Geodetic origin of the local east/north frame, needed by `_ll` log rows (digest §10 A28).
+    /// `_ll` positions are taken at its height above the ellipsoid (the site's water surface).
+    pub origin: Option<Geodetic>,
 }
 
 impl Default for PostConfig {
@@ -210,6 +263,7 @@ impl Default for PostConfig {
             buoy_fixes: BuoyFixUse::Hold,
             buoy_depth: 1.5,
             smoother: SmootherKind::Ekf,
+            origin: None,
         }
     }
 }
@@ -229,6 +283,10 @@ impl PostConfig {
             return Err(ParamError::NotFinite { field: "acoustic_time_offset_s".into(), value: self.acoustic_time_offset_s }.into());
         }
         Ok(())
+    }
+    /// The local frame of `_ll` log rows, if an origin is configured.
+    pub fn frame(&self) -> Option<LocalFrame> {
+        self.origin.map(LocalFrame::new)
     }
 }
 
@@ -445,7 +503,11 @@ mod tests {
     use super::*;
 
     fn log(text: &str) -> Result<Vec<Entry>, PostError> {
-        read_log(text.as_bytes())
+        read_log(text.as_bytes(), None)
+    }
+
+    fn pend_oreille() -> LocalFrame {
+        PostConfig::from_toml("origin = { lat_deg = 47.97, lon_deg = -116.5, height_m = 630.0 }\n").unwrap().frame().unwrap()
     }
 
     #[test]
@@ -456,8 +518,59 @@ mod tests {
             Entry { t: 0.2, record: Record::ShipFix { e: 3.0, n: 4.0, compass_deg: 270.0 } },
         ];
         let mut buf = Vec::new();
-        write_log(&mut buf, &entries).unwrap();
+        write_log(&mut buf, &entries, None).unwrap();
         assert_eq!(log(std::str::from_utf8(&buf).unwrap()).unwrap(), entries);
+    }
+
+    #[test]
+    fn latlon_rows_round_trip_to_the_same_metres() {
+        let entries = vec![
+            Entry { t: 0.0, record: Record::Init { e: -79.0, n: 2.0, speed: 0.85, compass_deg: 90.0 } },
+            Entry { t: 0.1, record: Record::Range { src: Transmitter::Buoy, travel_time: 0.05 } },
+            Entry { t: 0.2, record: Record::ShipFix { e: 121.0, n: -4.0, compass_deg: 270.0 } },
+            Entry { t: 0.3, record: Record::BuoyFix { e: 20.0, n: 80.0 } },
+            Entry { t: 0.4, record: Record::Truth { e: -300.0, n: 150.0 } },
+        ];
+        let f = pend_oreille();
+        let mut buf = Vec::new();
+        write_log(&mut buf, &entries, Some(&f)).unwrap();
+        let text = String::from_utf8(buf).unwrap();
+        assert!(text.contains(",buoy_fix_ll,,47.97") && text.contains(",range,13,0.05,"), "{text}");
+        let back = read_log(text.as_bytes(), Some(&f)).unwrap();
+        for (a, b) in entries.iter().zip(&back) {
+            assert_eq!((a.t, a.record.kind()), (b.t, b.record.kind()));
+            match (a.record.position(), b.record.position()) {
+                (Some(p), Some(q)) => assert!((p.0 - q.0).abs() < 1e-6 && (p.1 - q.1).abs() < 1e-6, "{p:?} {q:?}"),
+                _ => assert_eq!(a.record, b.record),
+            }
+        }
+        // Metric rows read the same with or without an origin.
+        assert_eq!(read_log("t,kind,src,v1,v2,v3,v4\n0,truth,,1,2,,\n".as_bytes(), Some(&f)).unwrap()[0].record, Record::Truth { e: 1.0, n: 2.0 });
+    }
+
+    #[test]
+    fn bad_latlon_rows_name_the_line() {
+        let h = "t,kind,src,v1,v2,v3,v4\n0,speed,,1,,,\n";
+        let f = pend_oreille();
+        let e = read_log(format!("{h}1,buoy_fix_ll,,95,-116.5,,\n").as_bytes(), Some(&f)).unwrap_err();
+        assert!(matches!(e, PostError::LatLon { line: 3, source: GeodesyError::Latitude(_) }), "{e:?}");
+        assert!(e.to_string().contains("line 3") && e.to_string().contains("latitude 95"), "{e}");
+        let e = read_log(format!("{h}1,ship_fix_ll,,47.9,-190,0,\n").as_bytes(), Some(&f)).unwrap_err();
+        assert!(matches!(e, PostError::LatLon { line: 3, source: GeodesyError::Longitude(_) }), "{e:?}");
+        let e = read_log(format!("{h}1,truth_ll,,47.97,-116.5,,\n").as_bytes(), None).unwrap_err();
+        assert!(matches!(e, PostError::NoOrigin { line: 3, .. }), "{e:?}");
+        assert!(e.to_string().contains("truth_ll") && e.to_string().contains("origin = {"), "{e}");
+        let e = read_log(format!("{h}1,init_ll,,north,-116.5,0.8,90\n").as_bytes(), Some(&f)).unwrap_err().to_string();
+        assert!(e.contains("line 3") && e.contains("v1") && e.contains("north"), "{e}");
+        let e = read_log(format!("{h}1,yaw_rate_ll,,1,,,\n").as_bytes(), Some(&f)).unwrap_err();
+        assert!(matches!(e, PostError::Kind { line: 3, .. }), "{e:?}");
+        let e = PostConfig::from_toml("origin = { lat_deg = 95.0, lon_deg = 0.0 }\n").unwrap_err().to_string();
+        assert!(e.contains("origin") && e.contains("latitude 95"), "{e}");
+        let e = PostConfig::from_toml("origin = { lat_deg = 45.0, lon_deg = 0.0, height_m = nan }\n").unwrap_err().to_string();
+        assert!(e.contains("origin") && e.contains("height NaN"), "{e}");
+        let far = [Entry { t: 7.0, record: Record::Truth { e: 5e6, n: 0.0 } }];
+        let e = write_log(Vec::new(), &far, Some(&f)).unwrap_err().to_string();
+        assert!(e.contains("t = 7"), "{e}");
     }
 
     #[test]

@@ -100,8 +100,8 @@ fn simulated_logs_postprocess_end_to_end() {
     for i in 0..8 {
         let (_, tr) = run(&sc, &cycle, run_seed(21, i), true);
         let mut csv = Vec::new();
-        write_log(&mut csv, &tr.unwrap().log).unwrap();
-        let entries = read_log(csv.as_slice()).unwrap();
+        write_log(&mut csv, &tr.unwrap().log, None).unwrap();
+        let entries = read_log(csv.as_slice(), None).unwrap();
         let r = postprocess(&entries, &PostConfig::default()).unwrap();
         let s = r.summary;
         // The unscented backward pass over the same forward run: with 0.1 s steps the dead

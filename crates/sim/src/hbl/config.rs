@@ -4,6 +4,7 @@
 use coopnav_nav::codec::Zone;
 use coopnav_nav::cycle::{Configuration, Cycle, CycleError};
 use coopnav_nav::{AuvParams, Outriggers, ParamError, SurfaceParams};
+use super::log_format::LogFormat;
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
@@ -17,6 +18,8 @@ pub enum ConfigError {
     Cycle(#[from] CycleError),
     #[error("scenario file: {0}")]
     Toml(#[from] toml::de::Error),
+    #[error("scenario field 'log.buoy_fix_storage' = {0:?} needs log.geodetic_origin (the rounding happens in latitude/longitude); add `geodetic_origin = {{ lat_deg = ..., lon_deg = ... }}` or use \"f64\"")]
+    LogStorage(coopnav_core::LatLonStorage),
 }
 
 fn check(field: &str, value: f64, ok: bool, allowed: &'static str) -> Result<(), ConfigError> {
@@ -302,6 +305,7 @@ pub struct Scenario {
     pub buoy: Buoy,
     pub quantisation: Quantisation,
     pub filters: Filters,
+    pub log: LogFormat,
 }
 
 impl Default for Scenario {
@@ -320,6 +324,7 @@ impl Default for Scenario {
             buoy: Buoy::default(),
             quantisation: Quantisation::default(),
             filters: Filters::default(),
+            log: LogFormat::default(),
         }
     }
 }
@@ -428,6 +433,7 @@ impl Scenario {
         self.filters.auv.validate("filters.auv.")?;
         self.filters.ship.validate("filters.ship.")?;
         self.filters.buoy.validate("filters.buoy.")?;
+        self.log.validate()?;
         self.resolved_cycle()?;
         Ok(())
     }

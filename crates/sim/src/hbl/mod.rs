@@ -5,6 +5,7 @@
 
 pub mod config;
 pub mod grid;
+pub mod log_format;
 pub mod mc;
 pub mod noise;
 pub mod plot;

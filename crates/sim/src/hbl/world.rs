@@ -309,8 +309,9 @@ impl<'a> World<'a> {
         if vehicle == Vehicle::Buoy {
             self.sums.saturation += zone.saturation_error(pos[0], pos[1]);
             self.sums.saturation_n += 1;
-            let fix = Record::BuoyFix { e: pos[0] + 0.1 * normal(&mut self.rng.log), n: pos[1] + 0.1 * normal(&mut self.rng.log) };
-            self.log(t_tx, fix);
+            let topside = (pos[0] + 0.1 * normal(&mut self.rng.log), pos[1] + 0.1 * normal(&mut self.rng.log));
+            let (e, n) = sc.log.stored_buoy_fix(topside.0, topside.1);
+            self.log(t_tx, Record::BuoyFix { e, n });
         }
         let dgps = sc.sensors.dgps_sd;
         let measured = [pos[0] + dgps * noise[0] + bias[0], pos[1] + dgps * noise[1] + bias[1]];
