@@ -149,9 +149,9 @@ fn example(kind: ExampleKind) -> Result<()> {
         ExampleKind::Tune => "tuning spec for `hbl tune --spec`",
         ExampleKind::Post => "post-processing config for `hbl postprocess --config`",
     };
-    println!("# coopnav {what}. Every field is at its default and every field is optional: keep");
-    println!("# only what you change. Units and sources of each field: the rustdoc of coopnav_sim::hbl");
-    println!("# and coopnav_nav (`cargo doc --open`), and ../shared/digests/gill-hbl-navigation.md.");
+    println!("# coopnav {what}.");
+    println!("# Every field is at its default and optional: keep only what you change. Units and the");
+    println!("# thesis source of each field: the rustdoc of coopnav_sim::hbl and coopnav_nav (`cargo doc --open`).");
     print!("{text}");
     Ok(())
 }
