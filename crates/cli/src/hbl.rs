@@ -5,7 +5,7 @@ use anyhow::{Context, Result};
 use coopnav_nav::post::{self, PostConfig};
 use coopnav_sim::hbl::grid::{self, GridSpec};
 use coopnav_sim::hbl::tune::{tune, Coefficient, Objective, TuneSpec};
-use coopnav_sim::hbl::{error_profile, monte_carlo, plot, run, Scenario};
+use coopnav_sim::hbl::{monte_carlo_profiled, plot, run, Scenario};
 
 /// x_rel bin of the Monte Carlo error profile (m).
 const PROFILE_BIN_M: f64 = 5.0;
@@ -188,9 +188,9 @@ fn montecarlo(c: &Common, runs: usize) -> Result<()> {
     let sc = scenario(c)?;
     sc.validate()?;
     let pb = bar(runs as u64);
-    let r = monte_carlo(&sc, runs, c.seed, &|n| pb.set_position(n))?;
+    let r = monte_carlo_profiled(&sc, runs, c.seed, PROFILE_BIN_M, &|n| pb.set_position(n))?;
     pb.finish_and_clear();
-    let bins = error_profile(&sc, runs, c.seed, PROFILE_BIN_M)?;
+    let bins = r.profile.as_deref().unwrap_or_default();
     let dir = RunDir::create(&c.out, c.force)?;
     manifest(&dir, "hbl montecarlo", c.seed, json!({ "scenario": sc, "runs": runs }))?;
     let mut csv = String::from("run,zone_error,zone_parallel,zone_perpendicular,approach_perpendicular,buoy_error,saturation_error,ranges_received,ranges_applied,healthy\n");
@@ -203,11 +203,11 @@ fn montecarlo(c: &Common, runs: usize) -> Result<()> {
     }
     dir.write_bytes("runs.csv", csv)?;
     let mut profile = String::from("x_rel,samples,error,parallel,perpendicular\n");
-    for b in &bins {
+    for b in bins {
         profile.push_str(&format!("{},{},{},{},{}\n", b.x_rel, b.samples, b.error, b.parallel, b.perpendicular));
     }
     dir.write_bytes("profile.csv", profile)?;
-    dir.write_bytes("profile.svg", plot::profile(&bins, (sc.geometry.zone_min, sc.geometry.zone_max))?)?;
+    dir.write_bytes("profile.svg", plot::profile(bins, (sc.geometry.zone_min, sc.geometry.zone_max))?)?;
     dir.write_json("summary.json", &r.summary)?;
     let out = dir.finish()?;
     let z = r.summary.zone_error;

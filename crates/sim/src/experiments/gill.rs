@@ -6,8 +6,8 @@
 use super::{Check, Experiment, ExperimentError, ReproOptions, ReproReport, Size};
 use crate::hbl::config::Scenario;
 use crate::hbl::grid::{buoy_grid, optimal_region, GridSpec};
-use crate::hbl::mc::{monte_carlo, welch_95, McSummary, Stats};
-use crate::hbl::profile::error_profile;
+use crate::hbl::mc::{monte_carlo, monte_carlo_profiled, welch_95, McError, McSummary, Stats};
+use crate::hbl::profile::ProfileBin;
 use coopnav_nav::cycle::Configuration;
 use serde_json::json;
 use std::fmt::Write;
@@ -50,8 +50,12 @@ fn widen(o: &ReproOptions, se: f64) -> f64 {
     }
 }
 
+fn failed(id: &str, e: McError) -> ExperimentError {
+    ExperimentError::Failed { id: id.into(), message: e.to_string() }
+}
+
 fn mc(id: &str, sc: &Scenario, n: usize, seed: u64) -> Result<McSummary, ExperimentError> {
-    monte_carlo(sc, n, seed, &|_| {}).map(|r| r.summary).map_err(|e| ExperimentError::Failed { id: id.into(), message: e.to_string() })
+    monte_carlo(sc, n, seed, &|_| {}).map(|r| r.summary).map_err(|e| failed(id, e))
 }
 
 fn band(name: &str, s: &Stats, lo: f64, hi: f64, w: f64) -> Check {
@@ -59,13 +63,12 @@ fn band(name: &str, s: &Stats, lo: f64, hi: f64, w: f64) -> Check {
     Check::new(name, (l..=h).contains(&s.mean), format!("{:.3} m in [{l:.3}, {h:.3}] (thesis band {lo}–{hi}, widened by {w:.3})", s.mean))
 }
 
-/// The thesis's Figs. 16/19/21 as text: mean |across-path| error per 25 m of x_rel.
-fn across_path_profile(table: &mut String, configs: &[Configuration], runs: usize, seed: u64) -> Result<(), ExperimentError> {
-    const BIN_M: f64 = 25.0;
-    let profiles = configs
-        .iter()
-        .map(|&c| error_profile(&Scenario::table5(c), runs, seed, BIN_M).map_err(|e| ExperimentError::Failed { id: ID5.into(), message: e.to_string() }))
-        .collect::<Result<Vec<_>, _>>()?;
+/// x_rel bin of the Table 5 across-path profile (m).
+const PROFILE_BIN_M: f64 = 25.0;
+
+/// The thesis's Figs. 16/19/21 as text: mean |across-path| error per bin of x_rel, one profile
+/// per configuration.
+fn across_path_profile(table: &mut String, configs: &[Configuration], profiles: &[Vec<ProfileBin>]) {
     // Bins every configuration reached (the end bins hold fewer runs).
     let xs: Vec<f64> = profiles[0].iter().map(|b| b.x_rel).filter(|x| profiles.iter().all(|p| p.iter().any(|b| b.x_rel == *x))).collect();
     writeln!(table, "\nmean |across-path| error (m) by x_rel bin centre (MSBL keeps it until near the crossing; HBL corrects it early):").ok();
@@ -73,7 +76,7 @@ fn across_path_profile(table: &mut String, configs: &[Configuration], runs: usiz
     for x in &xs {
         write!(table, "{x:>7.1}").ok();
     }
-    for (c, p) in configs.iter().zip(&profiles) {
+    for (c, p) in configs.iter().zip(profiles) {
         write!(table, "\n{:<9}", c.label()).ok();
         for x in &xs {
             let b = p.iter().find(|b| b.x_rel == *x).map_or(f64::NAN, |b| b.perpendicular);
@@ -81,7 +84,6 @@ fn across_path_profile(table: &mut String, configs: &[Configuration], runs: usiz
         }
     }
     table.push('\n');
-    Ok(())
 }
 
 /// The approach-window statistics; every Table 5 run reaches the zone, so they exist.
@@ -92,10 +94,12 @@ fn approach(s: &McSummary) -> Stats {
 fn table_5(o: &ReproOptions) -> Result<ReproReport, ExperimentError> {
     let n = runs(o, 250, 40);
     let configs = [(Configuration::Msbl, 3.03, 3.30), (Configuration::HblOne, 1.37, 1.90), (Configuration::HblTwo, 1.35, 1.59)];
-    let mut rows = Vec::new();
+    let (mut rows, mut profiles) = (Vec::new(), Vec::new());
     for (c, sim, field) in configs {
         let sc = Scenario::table5(c);
-        let plain = mc(ID5, &sc, n, o.seed)?;
+        let profiled = monte_carlo_profiled(&sc, n, o.seed, PROFILE_BIN_M, &|_| {}).map_err(|e| failed(ID5, e))?;
+        let plain = profiled.summary;
+        profiles.push(profiled.profile.unwrap_or_default());
         let mut gated_sc = sc.clone();
         // χ²(1) 99.9 % NIS gate: the "gating on" report of digest §10 A5.
         gated_sc.filters.auv.range_gate.max_nis = Some(10.83);
@@ -128,7 +132,7 @@ fn table_5(o: &ReproOptions) -> Result<ReproReport, ExperimentError> {
     }
     let window = Scenario::default().geometry.approach_m;
     writeln!(table, "par/perp: mean |along|/|across-path| error in the zone; approach: |across| in the {window} m before it").ok();
-    across_path_profile(&mut table, &configs.map(|c| c.0), n, o.seed)?;
+    across_path_profile(&mut table, &configs.map(|c| c.0), &profiles);
     let (msbl, one, two) = (&rows[0].3, &rows[1].3, &rows[2].3);
     let d = welch_95(&two.zone_error, &one.zone_error);
     let mut checks = vec![

@@ -4,6 +4,7 @@
 //! Also the across-run statistics and the Welch confidence interval of a difference (§4.3).
 
 use super::config::{ConfigError, Scenario};
+use super::profile::{bin_rows, merge_bins, BinSums, ProfileBin};
 use super::world::{run, RunMetrics};
 use coopnav_core::run_seed;
 use rayon::prelude::*;
@@ -64,27 +65,45 @@ pub struct McSummary {
 pub struct McResult {
     pub runs: Vec<RunMetrics>,
     pub summary: McSummary,
+    /// The error profile against x_rel, when asked for ([`monte_carlo_profiled`]).
+    pub profile: Option<Vec<ProfileBin>>,
 }
 
 /// Runs `runs` simulations of `sc` with seeds `run_seed(base_seed, i)`; `progress` is called with
 /// the number of finished runs.
 pub fn monte_carlo(sc: &Scenario, runs: usize, base_seed: u64, progress: &(dyn Fn(u64) + Sync)) -> Result<McResult, McError> {
+    simulate_all(sc, runs, base_seed, None, progress)
+}
+
+/// [`monte_carlo`] that also bins every step of the same runs into an error profile against x_rel
+/// (`bin_m` metres per bin), so the runs are simulated once for both.
+pub fn monte_carlo_profiled(sc: &Scenario, runs: usize, base_seed: u64, bin_m: f64, progress: &(dyn Fn(u64) + Sync)) -> Result<McResult, McError> {
+    if !(bin_m.is_finite() && bin_m > 0.0) {
+        return Err(McError::BadBin(bin_m));
+    }
+    simulate_all(sc, runs, base_seed, Some(bin_m), progress)
+}
+
+fn simulate_all(sc: &Scenario, runs: usize, base_seed: u64, bin_m: Option<f64>, progress: &(dyn Fn(u64) + Sync)) -> Result<McResult, McError> {
     sc.validate()?;
     if runs < 2 {
         return Err(McError::TooFewRuns);
     }
     let cycle = sc.resolved_cycle()?;
     let done = AtomicU64::new(0);
-    let per_run: Vec<RunMetrics> = (0..runs)
+    let per_run: Vec<(RunMetrics, Option<BinSums>)> = (0..runs)
         .into_par_iter()
         .map(|i| {
-            let (m, _) = run(sc, &cycle, run_seed(base_seed, i as u64), false);
+            let (m, trace) = run(sc, &cycle, run_seed(base_seed, i as u64), bin_m.is_some());
+            let bins = bin_m.zip(trace).map(|(b, t)| bin_rows(&t.rows, b));
             progress(done.fetch_add(1, Ordering::Relaxed) + 1);
-            m
+            (m, bins)
         })
         .collect();
-    let summary = summarise(sc, &cycle.name, base_seed, &per_run)?;
-    Ok(McResult { runs: per_run, summary })
+    let (metrics, bins): (Vec<RunMetrics>, Vec<Option<BinSums>>) = per_run.into_iter().unzip();
+    let summary = summarise(sc, &cycle.name, base_seed, &metrics)?;
+    let profile = bin_m.map(|b| merge_bins(bins.into_iter().flatten(), b));
+    Ok(McResult { runs: metrics, summary, profile })
 }
 
 fn summarise(sc: &Scenario, cycle: &str, base_seed: u64, per_run: &[RunMetrics]) -> Result<McSummary, McError> {

@@ -14,6 +14,6 @@ pub mod tune;
 pub mod world;
 
 pub use config::{ConfigError, Scenario};
-pub use mc::{monte_carlo, welch_95, McError, McResult, McSummary, Stats, WelchCi};
+pub use mc::{monte_carlo, monte_carlo_profiled, welch_95, McError, McResult, McSummary, Stats, WelchCi};
 pub use profile::{error_profile, ProfileBin};
 pub use world::{run, RunMetrics, Trace, TraceRow};

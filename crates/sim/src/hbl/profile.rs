@@ -1,13 +1,11 @@
 //! The Monte Carlo error profile against along-path position x_rel (digest §5.6, the thesis's
 //! Figs. 16, 19 and 21): per x_rel bin, the mean total, |along-path| and |across-path| AUV error
-//! over every step of every run that fell in the bin. Runs use the Monte Carlo's seeds
-//! (`run_seed(base, i)`), so a profile and a `monte_carlo` with one base seed describe the same runs.
+//! over every step of every run that fell in the bin. The bins are filled by the Monte Carlo
+//! itself ([`super::mc::monte_carlo_profiled`]), so a profile describes the very runs it summarises.
 
 use super::config::Scenario;
-use super::mc::McError;
-use super::world::run;
-use coopnav_core::run_seed;
-use rayon::prelude::*;
+use super::mc::{monte_carlo_profiled, McError};
+use super::world::TraceRow;
 use serde::Serialize;
 use std::collections::BTreeMap;
 
@@ -24,47 +22,43 @@ pub struct ProfileBin {
 }
 
 /// Sums of [count, error, |parallel|, |perpendicular|] per bin index.
-type BinSums = BTreeMap<i64, [f64; 4]>;
+pub(crate) type BinSums = BTreeMap<i64, [f64; 4]>;
 
 /// Mean error profile of `runs` runs of `sc` in bins of `bin_m` metres of x_rel.
 pub fn error_profile(sc: &Scenario, runs: usize, base_seed: u64, bin_m: f64) -> Result<Vec<ProfileBin>, McError> {
-    sc.validate()?;
-    if runs < 2 {
-        return Err(McError::TooFewRuns);
+    Ok(monte_carlo_profiled(sc, runs, base_seed, bin_m, &|_| {})?.profile.unwrap_or_default())
+}
+
+/// One run's steps summed per bin.
+pub(crate) fn bin_rows(rows: &[TraceRow], bin_m: f64) -> BinSums {
+    let mut sums = BinSums::new();
+    for r in rows {
+        let s = sums.entry((r.x_rel / bin_m).floor() as i64).or_default();
+        let (de, dn) = (r.auv_est[0] - r.auv_true[0], r.auv_est[1] - r.auv_true[1]);
+        add(s, [1.0, r.error, de.abs(), dn.abs()]);
     }
-    if !(bin_m.is_finite() && bin_m > 0.0) {
-        return Err(McError::BadBin(bin_m));
-    }
-    let cycle = sc.resolved_cycle()?;
-    let per_run: Vec<BinSums> = (0..runs)
-        .into_par_iter()
-        .map(|i| {
-            let (_, trace) = run(sc, &cycle, run_seed(base_seed, i as u64), true);
-            let mut sums = BinSums::new();
-            for r in trace.map(|t| t.rows).unwrap_or_default() {
-                let s = sums.entry((r.x_rel / bin_m).floor() as i64).or_default();
-                let (de, dn) = (r.auv_est[0] - r.auv_true[0], r.auv_est[1] - r.auv_true[1]);
-                for (acc, v) in s.iter_mut().zip([1.0, r.error, de.abs(), dn.abs()]) {
-                    *acc += v;
-                }
-            }
-            sums
-        })
-        .collect();
-    // Merged in run order, so the sums do not depend on the thread count.
+    sums
+}
+
+/// Runs' sums merged in the order given (run order, so the result does not depend on the
+/// thread count), as per-bin means.
+pub(crate) fn merge_bins(per_run: impl Iterator<Item = BinSums>, bin_m: f64) -> Vec<ProfileBin> {
     let mut total = BinSums::new();
     for sums in per_run {
         for (k, v) in sums {
-            let t = total.entry(k).or_default();
-            for (acc, x) in t.iter_mut().zip(v) {
-                *acc += x;
-            }
+            add(total.entry(k).or_default(), v);
         }
     }
-    Ok(total
+    total
         .into_iter()
         .map(|(k, [n, e, pa, pe])| ProfileBin { x_rel: (k as f64 + 0.5) * bin_m, samples: n as usize, error: e / n, parallel: pa / n, perpendicular: pe / n })
-        .collect())
+        .collect()
+}
+
+fn add(acc: &mut [f64; 4], v: [f64; 4]) {
+    for (a, x) in acc.iter_mut().zip(v) {
+        *a += x;
+    }
 }
 
 #[cfg(test)]
