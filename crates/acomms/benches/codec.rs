@@ -13,7 +13,15 @@ fn frame() -> Frame0 {
         tr.on_receive(k, 1, Reception { frames: 7, n_frames: 3 }, None);
     }
     let header = tr.on_transmit(6, Rate::R1);
-    Frame0 { header, status: StatusMessage { pos: Vec3::new(123.4, 456.7, 28.2), heading: Heading::from_radians(0.7), speed: 1.54, next: NextWaypoint::Id(7) } }
+    Frame0 {
+        header,
+        status: StatusMessage {
+            pos: Vec3::new(123.4, 456.7, 28.2),
+            heading: Heading::from_radians(0.7),
+            speed: 1.54,
+            next: NextWaypoint::Id(7),
+        },
+    }
 }
 
 fn benches(c: &mut Criterion) {
@@ -22,7 +30,8 @@ fn benches(c: &mut Criterion) {
     c.bench_function("frame0_encode", |b| b.iter(|| black_box(&f).encode(MaskWidth::Narrow, 64).unwrap()));
     c.bench_function("frame0_decode", |b| b.iter(|| Frame0::decode(black_box(&bytes), MaskWidth::Narrow).unwrap()));
     c.bench_function("tracker_exchange", |b| {
-        let (mut a, mut z, mut k) = (Tracker::new(0, 2, MaskWidth::Narrow, 11), Tracker::new(1, 2, MaskWidth::Narrow, 11), 0u64);
+        let (mut a, mut z, mut k) =
+            (Tracker::new(0, 2, MaskWidth::Narrow, 11), Tracker::new(1, 2, MaskWidth::Narrow, 11), 0u64);
         b.iter(|| {
             let h = a.on_transmit(k, Rate::R1);
             z.on_receive(k, 0, Reception { frames: 7, n_frames: 3 }, Some(&h));
@@ -32,7 +41,9 @@ fn benches(c: &mut Criterion) {
         })
     });
     let t = Thorp::default();
-    c.bench_function("thorp_tl", |b| b.iter(|| t.tl(black_box(&Vec3::new(0.0, 0.0, 10.0)), black_box(&Vec3::new(700.0, 300.0, 25.0))).unwrap()));
+    c.bench_function("thorp_tl", |b| {
+        b.iter(|| t.tl(black_box(&Vec3::new(0.0, 0.0, 10.0)), black_box(&Vec3::new(700.0, 300.0, 25.0))).unwrap())
+    });
 }
 
 criterion_group!(g, benches);

@@ -136,7 +136,10 @@ impl<'a> BitReader<'a> {
             return Err(DecodeError::Oversized { extra: self.bytes.len() - used });
         }
         if self.remaining() > 0 && (self.bytes[self.pos / 8] >> (self.pos % 8)) != 0 {
-            return Err(DecodeError::Invalid { field: "padding", message: "non-zero padding bits after the last field".into() });
+            return Err(DecodeError::Invalid {
+                field: "padding",
+                message: "non-zero padding bits after the last field".into(),
+            });
         }
         Ok(())
     }

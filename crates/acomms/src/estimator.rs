@@ -80,15 +80,24 @@ mod tests {
 
     fn plan() -> Vec<Waypoint> {
         let t = DepthTarget::Altitude { altitude: 5.0 };
-        [(500.0, 0.0), (500.0, 50.0), (0.0, 50.0)].iter().map(|&(x, y)| Waypoint { x, y, target: t, speed: 1.543 }).collect()
+        [(500.0, 0.0), (500.0, 50.0), (0.0, 50.0)]
+            .iter()
+            .map(|&(x, y)| Waypoint { x, y, target: t, speed: 1.543 })
+            .collect()
     }
 
     fn truth(b: &Bathymetry) -> Vec<Iver2State> {
-        let mut v = Iver2::new(Iver2Params::default(), Iver2State::at_rest(Vec3::new(0.0, 0.0, 15.0), Heading::from_radians(0.0)), plan());
-        (0..8000).map(|_| {
-            v.step(b);
-            v.state
-        }).collect()
+        let mut v = Iver2::new(
+            Iver2Params::default(),
+            Iver2State::at_rest(Vec3::new(0.0, 0.0, 15.0), Heading::from_radians(0.0)),
+            plan(),
+        );
+        (0..8000)
+            .map(|_| {
+                v.step(b);
+                v.state
+            })
+            .collect()
     }
 
     fn report(s: &Iver2State, next: NextWaypoint) -> StatusMessage {

@@ -15,5 +15,5 @@ pub mod tl;
 pub mod tracker;
 
 pub use rates::{Rate, RateSpec, Tdma};
-pub use success::{Reception, Receiver, SuccessModel};
+pub use success::{Receiver, Reception, SuccessModel};
 pub use tl::{TlError, TransmissionLoss};

@@ -54,7 +54,14 @@ pub enum VehicleType {
     Unknown,
 }
 
-const TYPES: [VehicleType; 6] = [VehicleType::Asc, VehicleType::Auv, VehicleType::Ship, VehicleType::Buoy, VehicleType::Glider, VehicleType::Unknown];
+const TYPES: [VehicleType; 6] = [
+    VehicleType::Asc,
+    VehicleType::Auv,
+    VehicleType::Ship,
+    VehicleType::Buoy,
+    VehicleType::Glider,
+    VehicleType::Unknown,
+];
 
 /// One SURVEY_STATUS message in SI units, as quantised on the wire.
 #[derive(Debug, Clone, PartialEq)]
@@ -122,7 +129,12 @@ impl NodeReport {
                     for (f, v) in [(pair[0], x), (pair[1], y)] {
                         let q = v.round();
                         if q.is_nan() || q <= NO_WAYPOINT as f64 {
-                            return Err(EncodeError { field: f.name, value: if q.is_finite() { q as i64 } else { i64::MIN }, min: -16_000, max: 16_000 });
+                            return Err(EncodeError {
+                                field: f.name,
+                                value: if q.is_finite() { q as i64 } else { i64::MIN },
+                                min: -16_000,
+                                max: 16_000,
+                            });
                         }
                         put(&mut w, f, v, 1.0)?;
                     }
@@ -150,7 +162,10 @@ impl NodeReport {
         let mut r = BitReader::new(bytes);
         let id = r.get(ID)?;
         if id != MESSAGE_ID {
-            return Err(DecodeError::Invalid { field: "id", message: format!("message id {id} is not SURVEY_STATUS ({MESSAGE_ID})") });
+            return Err(DecodeError::Invalid {
+                field: "id",
+                message: format!("message id {id} is not SURVEY_STATUS ({MESSAGE_ID})"),
+            });
         }
         let src_id = r.get(SRC)? as u8;
         let time_of_day = r.get(TIME)? as u32;
@@ -167,7 +182,10 @@ impl NodeReport {
                 (true, true) => ended = true,
                 (false, false) if !ended => waypoints.push((wx as f64, wy as f64)),
                 _ => {
-                    return Err(DecodeError::Invalid { field: pair[0].name, message: "waypoint half-set or set after an empty slot".into() });
+                    return Err(DecodeError::Invalid {
+                        field: pair[0].name,
+                        message: "waypoint half-set or set after an empty slot".into(),
+                    });
                 }
             }
         }
@@ -178,7 +196,22 @@ impl NodeReport {
         let altitude = r.get(ALTITUDE)? as f64 / 10.0;
         let battery = r.get(BATTERY)? as f64;
         r.finish()?;
-        Ok(NodeReport { src_id, time_of_day, vehicle, x, y, speed, heading, waypoints, front_seat_error, front_mode, leak, depth, altitude, battery })
+        Ok(NodeReport {
+            src_id,
+            time_of_day,
+            vehicle,
+            x,
+            y,
+            speed,
+            heading,
+            waypoints,
+            front_seat_error,
+            front_mode,
+            leak,
+            depth,
+            altitude,
+            battery,
+        })
     }
 }
 
@@ -313,24 +346,36 @@ mod tests {
         let pos = -16_000.4f64..16_000.4;
         (
             (0u8..32, 0u32..86_400, 0usize..6, pos.clone(), pos.clone(), -2.0f64..9.0, 0.0f64..360.0),
-            (proptest::collection::vec((pos.clone(), pos), 0..=3), 0u8..15, 0u8..5, any::<bool>(), -1.0f64..203.0, -1.0f64..203.0, 0.0f64..100.0),
+            (
+                proptest::collection::vec((pos.clone(), pos), 0..=3),
+                0u8..15,
+                0u8..5,
+                any::<bool>(),
+                -1.0f64..203.0,
+                -1.0f64..203.0,
+                0.0f64..100.0,
+            ),
         )
-            .prop_map(|((src_id, time_of_day, ty, x, y, speed, hdg), (waypoints, fe, fm, leak, depth, altitude, battery))| NodeReport {
-                src_id,
-                time_of_day,
-                vehicle: TYPES[ty],
-                x,
-                y,
-                speed,
-                heading: Heading::from(CompassDeg(hdg)),
-                waypoints,
-                front_seat_error: fe,
-                front_mode: fm,
-                leak,
-                depth,
-                altitude,
-                battery,
-            })
+            .prop_map(
+                |((src_id, time_of_day, ty, x, y, speed, hdg), (waypoints, fe, fm, leak, depth, altitude, battery))| {
+                    NodeReport {
+                        src_id,
+                        time_of_day,
+                        vehicle: TYPES[ty],
+                        x,
+                        y,
+                        speed,
+                        heading: Heading::from(CompassDeg(hdg)),
+                        waypoints,
+                        front_seat_error: fe,
+                        front_mode: fm,
+                        leak,
+                        depth,
+                        altitude,
+                        battery,
+                    }
+                },
+            )
     }
 
     proptest! {

@@ -242,15 +242,28 @@ impl AdaptiveBins {
     pub fn new(cfg: AdaptiveConfig) -> Result<Self, String> {
         cfg.validate()?;
         let enabled = |k: usize| cfg.targets[k] > 0.0;
-        let data = RATE_ORDER.iter().filter(|(k, _)| enabled(*k)).map(|&(k, r)| (r, cfg.targets[k], cfg.data_thresholds[k])).collect();
-        let mut status: Vec<(Rate, f64, f64)> =
-            [(1usize, Rate::R1), (0, Rate::R0)].iter().filter(|(k, _)| enabled(*k)).map(|&(k, r)| (r, cfg.targets[k], cfg.status_thresholds[k])).collect();
+        let data = RATE_ORDER
+            .iter()
+            .filter(|(k, _)| enabled(*k))
+            .map(|&(k, r)| (r, cfg.targets[k], cfg.data_thresholds[k]))
+            .collect();
+        let mut status: Vec<(Rate, f64, f64)> = [(1usize, Rate::R1), (0, Rate::R0)]
+            .iter()
+            .filter(|(k, _)| enabled(*k))
+            .map(|&(k, r)| (r, cfg.targets[k], cfg.status_thresholds[k]))
+            .collect();
         if status.is_empty() {
             // No low rate enabled: the status bins use rate 1 at the lowest enabled target.
             let t = cfg.targets.iter().copied().filter(|t| *t > 0.0).fold(1.0, f64::min);
             status.push((Rate::R1, t, cfg.status_thresholds[1]));
         }
-        Ok(AdaptiveBins { data: BinArray::new(data), status: BinArray::new(status), cfg, drought: 0, pending: BTreeMap::new() })
+        Ok(AdaptiveBins {
+            data: BinArray::new(data),
+            status: BinArray::new(status),
+            cfg,
+            drought: 0,
+            pending: BTreeMap::new(),
+        })
     }
 
     pub fn mode(&self) -> Mode {
@@ -334,7 +347,15 @@ mod tests {
         assert_eq!(f.choose(0, Some(1e9)), Choice::Transmit(Rate::R1));
         let mut a = Alternating::new(vec![Rate::R0, Rate::R5]);
         let picks: Vec<Choice> = (0..4).map(|k| a.choose(k, None)).collect();
-        assert_eq!(picks, vec![Choice::Transmit(Rate::R0), Choice::Transmit(Rate::R5), Choice::Transmit(Rate::R0), Choice::Transmit(Rate::R5)]);
+        assert_eq!(
+            picks,
+            vec![
+                Choice::Transmit(Rate::R0),
+                Choice::Transmit(Rate::R5),
+                Choice::Transmit(Rate::R0),
+                Choice::Transmit(Rate::R5)
+            ]
+        );
         assert_eq!(a.name(), "alternating 0/5");
     }
 

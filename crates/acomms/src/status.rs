@@ -66,7 +66,12 @@ pub struct StatusMessage {
 fn q(v: f64, scale: f64, f: Bounded) -> Result<i64, EncodeError> {
     let c = (v * scale).round();
     if !c.is_finite() || c < f.min as f64 || c > f.max as f64 {
-        return Err(EncodeError { field: f.name, value: if c.is_finite() { c as i64 } else { i64::MAX }, min: f.min, max: f.max });
+        return Err(EncodeError {
+            field: f.name,
+            value: if c.is_finite() { c as i64 } else { i64::MAX },
+            min: f.min,
+            max: f.max,
+        });
     }
     Ok(c as i64)
 }
@@ -74,10 +79,11 @@ fn q(v: f64, scale: f64, f: Bounded) -> Result<i64, EncodeError> {
 impl StatusMessage {
     pub fn bits(&self) -> usize {
         let fixed = [X, Y, DEPTH, HEADING, SPEED].iter().map(|f| f.bits() as usize).sum::<usize>() + 1;
-        fixed + match self.next {
-            NextWaypoint::Id(_) => WP_ID.bits() as usize,
-            NextWaypoint::LatLon { .. } => (LAT.bits() + LON.bits()) as usize,
-        }
+        fixed
+            + match self.next {
+                NextWaypoint::Id(_) => WP_ID.bits() as usize,
+                NextWaypoint::LatLon { .. } => (LAT.bits() + LON.bits()) as usize,
+            }
     }
 
     pub fn encode_into(&self, w: &mut BitWriter) -> Result<(), EncodeError> {
@@ -188,7 +194,13 @@ mod tests {
         let f = Frame0 { header: TrackingHeader::default(), status: status(NextWaypoint::Id(1)) };
         let b = f.encode(MaskWidth::Narrow, 32).unwrap();
         assert!(Frame0::decode(&b[..b.len() - 2], MaskWidth::Narrow).is_err());
-        let big = Frame0 { header: TrackingHeader { entries: (1..=20).map(|c| HeaderEntry { cycles_ago: c, frames: 1 }).collect(), truncated: false }, ..f };
+        let big = Frame0 {
+            header: TrackingHeader {
+                entries: (1..=20).map(|c| HeaderEntry { cycles_ago: c, frames: 1 }).collect(),
+                truncated: false,
+            },
+            ..f
+        };
         assert!(big.encode(MaskWidth::Narrow, 32).is_err());
     }
 

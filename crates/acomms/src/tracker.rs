@@ -94,13 +94,22 @@ impl TrackingHeader {
             let cycles_ago = r.get(CYCLES_AGO)? as u8;
             let frames = r.get(w.field())? as u16;
             if cycles_ago == 0 {
-                return Err(DecodeError::Invalid { field: "header.cycles_ago", message: "0: a vehicle cannot report the slot it transmits in (allowed 1..=63)".into() });
+                return Err(DecodeError::Invalid {
+                    field: "header.cycles_ago",
+                    message: "0: a vehicle cannot report the slot it transmits in (allowed 1..=63)".into(),
+                });
             }
             if frames == 0 {
-                return Err(DecodeError::Invalid { field: "header.frames", message: "empty mask: a reception has at least one frame".into() });
+                return Err(DecodeError::Invalid {
+                    field: "header.frames",
+                    message: "empty mask: a reception has at least one frame".into(),
+                });
             }
             if entries.last().is_some_and(|p: &HeaderEntry| p.cycles_ago >= cycles_ago) {
-                return Err(DecodeError::Invalid { field: "header.cycles_ago", message: "entries must be newest first with distinct slots".into() });
+                return Err(DecodeError::Invalid {
+                    field: "header.cycles_ago",
+                    message: "entries must be newest first with distinct slots".into(),
+                });
             }
             entries.push(HeaderEntry { cycles_ago, frames });
         }
@@ -126,7 +135,9 @@ impl TrackingHeader {
 pub enum Delivery {
     Unknown,
     /// Received, with the frame bitmask the collaborator reported.
-    Received { frames: u16 },
+    Received {
+        frames: u16,
+    },
     Failed,
 }
 
@@ -169,7 +180,14 @@ pub struct Tracker {
 impl Tracker {
     /// `max_entries` caps the header so it fits its frame (see [`TrackingHeader::bits`]).
     pub fn new(me: usize, n: usize, width: MaskWidth, max_entries: usize) -> Self {
-        Tracker { me, n, width, max_entries: max_entries.min(COUNT.max as usize), db: BTreeMap::new(), rx_log: Vec::new() }
+        Tracker {
+            me,
+            n,
+            width,
+            max_entries: max_entries.min(COUNT.max as usize),
+            db: BTreeMap::new(),
+            rx_log: Vec::new(),
+        }
     }
 
     pub fn width(&self) -> MaskWidth {
@@ -206,13 +224,23 @@ impl Tracker {
 
     /// Processes a packet from `src` sent in slot `k`: `rx` is what arrived; `header` is the
     /// decoded header if frame 0 arrived. Returns what this taught about own transmissions.
-    pub fn on_receive(&mut self, k: u64, src: usize, rx: Reception, header: Option<&TrackingHeader>) -> Vec<Resolution> {
+    pub fn on_receive(
+        &mut self,
+        k: u64,
+        src: usize,
+        rx: Reception,
+        header: Option<&TrackingHeader>,
+    ) -> Vec<Resolution> {
         if rx.received() {
             self.rx_log.push(RxEntry { slot: k, src, frames: rx.frames, carried_in: Vec::new() });
         }
         let Some(h) = header else { return Vec::new() };
-        let reported: BTreeMap<u64, u16> =
-            h.entries.iter().filter(|e| u64::from(e.cycles_ago) <= k).map(|e| (k - u64::from(e.cycles_ago), e.frames)).collect();
+        let reported: BTreeMap<u64, u16> = h
+            .entries
+            .iter()
+            .filter(|e| u64::from(e.cycles_ago) <= k)
+            .map(|e| (k - u64::from(e.cycles_ago), e.frames))
+            .collect();
         let oldest_implicit = match (h.truncated, h.entries.last()) {
             (false, _) => k.saturating_sub(HORIZON),
             (true, Some(e)) => k.saturating_sub(u64::from(e.cycles_ago)),
@@ -234,7 +262,8 @@ impl Tracker {
         }
         // Confirmation: src acknowledged own slots j with the header frame received, so it holds
         // every piece of feedback about src's packets that slot j carried.
-        let confirmed: Vec<u64> = reported.iter().filter(|(j, f)| *f & 1 == 1 && self.db.contains_key(j)).map(|(j, _)| *j).collect();
+        let confirmed: Vec<u64> =
+            reported.iter().filter(|(j, f)| *f & 1 == 1 && self.db.contains_key(j)).map(|(j, _)| *j).collect();
         self.rx_log.retain(|e| !(e.src == src && e.carried_in.iter().any(|c| confirmed.contains(c))));
         out
     }
@@ -260,7 +289,10 @@ mod tests {
         // "13 bits = 1.625 B" for the narrow entry; the per-field widths are implemented.
         assert_eq!(MaskWidth::Narrow.entry_bits(), 11);
         assert_eq!(MaskWidth::Wide.entry_bits(), 16);
-        let h = TrackingHeader { entries: vec![HeaderEntry { cycles_ago: 1, frames: 7 }, HeaderEntry { cycles_ago: 3, frames: 1 }], truncated: false };
+        let h = TrackingHeader {
+            entries: vec![HeaderEntry { cycles_ago: 1, frames: 7 }, HeaderEntry { cycles_ago: 3, frames: 1 }],
+            truncated: false,
+        };
         assert_eq!(h.bits(MaskWidth::Narrow), 8 + 22);
         assert_eq!(h.encode(MaskWidth::Narrow).unwrap().len(), 4);
         assert_eq!(h.bits(MaskWidth::Wide), 8 + 32);
@@ -286,11 +318,21 @@ mod tests {
         long.push(0);
         assert!(matches!(TrackingHeader::decode(&long, MaskWidth::Narrow), Err(DecodeError::Oversized { extra: 1 })));
         let zero = TrackingHeader { entries: vec![HeaderEntry { cycles_ago: 2, frames: 0 }], truncated: false };
-        assert!(matches!(TrackingHeader::decode(&zero.encode(MaskWidth::Narrow).unwrap(), MaskWidth::Narrow), Err(DecodeError::Invalid { .. })));
-        let unordered = TrackingHeader { entries: vec![HeaderEntry { cycles_ago: 4, frames: 1 }, HeaderEntry { cycles_ago: 2, frames: 1 }], truncated: false };
+        assert!(matches!(
+            TrackingHeader::decode(&zero.encode(MaskWidth::Narrow).unwrap(), MaskWidth::Narrow),
+            Err(DecodeError::Invalid { .. })
+        ));
+        let unordered = TrackingHeader {
+            entries: vec![HeaderEntry { cycles_ago: 4, frames: 1 }, HeaderEntry { cycles_ago: 2, frames: 1 }],
+            truncated: false,
+        };
         assert!(TrackingHeader::decode(&unordered.encode(MaskWidth::Narrow).unwrap(), MaskWidth::Narrow).is_err());
-        assert!(TrackingHeader { entries: vec![HeaderEntry { cycles_ago: 64, frames: 1 }], truncated: false }.encode(MaskWidth::Narrow).is_err());
-        assert!(TrackingHeader { entries: vec![HeaderEntry { cycles_ago: 1, frames: 8 }], truncated: false }.encode(MaskWidth::Narrow).is_err());
+        assert!(TrackingHeader { entries: vec![HeaderEntry { cycles_ago: 64, frames: 1 }], truncated: false }
+            .encode(MaskWidth::Narrow)
+            .is_err());
+        assert!(TrackingHeader { entries: vec![HeaderEntry { cycles_ago: 1, frames: 8 }], truncated: false }
+            .encode(MaskWidth::Narrow)
+            .is_err());
     }
 
     #[test]
@@ -308,19 +350,25 @@ mod tests {
         let h3 = b.on_transmit(3, Rate::R1);
         assert_eq!(h3.entries, vec![HeaderEntry { cycles_ago: 3, frames: 7 }], "unconfirmed feedback is repeated");
         let res = a.on_receive(3, 1, rx(7, 3), Some(&h3));
-        assert_eq!(res, vec![
-            Resolution { slot: 0, peer: 1, delivery: Delivery::Received { frames: 7 } },
-            Resolution { slot: 2, peer: 1, delivery: Delivery::Failed },
-        ]);
+        assert_eq!(
+            res,
+            vec![
+                Resolution { slot: 0, peer: 1, delivery: Delivery::Received { frames: 7 } },
+                Resolution { slot: 2, peer: 1, delivery: Delivery::Failed },
+            ]
+        );
         // A reports B's slot 3 with frame 0; B then knows A holds the feedback carried in slot 3.
         let h4 = a.on_transmit(4, Rate::R1);
         assert_eq!(h4.entries, vec![HeaderEntry { cycles_ago: 1, frames: 7 }]);
         assert_eq!(b.queue_len(), 1);
         let res_b = b.on_receive(4, 0, rx(7, 3), Some(&h4));
-        assert_eq!(res_b, vec![
-            Resolution { slot: 1, peer: 0, delivery: Delivery::Failed },
-            Resolution { slot: 3, peer: 0, delivery: Delivery::Received { frames: 7 } },
-        ]);
+        assert_eq!(
+            res_b,
+            vec![
+                Resolution { slot: 1, peer: 0, delivery: Delivery::Failed },
+                Resolution { slot: 3, peer: 0, delivery: Delivery::Received { frames: 7 } },
+            ]
+        );
         assert_eq!(b.queue_len(), 1, "only the new reception of slot 4 is queued");
         assert_eq!(b.on_transmit(5, Rate::R1).entries, vec![HeaderEntry { cycles_ago: 1, frames: 7 }]);
     }
@@ -367,12 +415,15 @@ mod tests {
     }
 
     fn header() -> impl Strategy<Value = (TrackingHeader, MaskWidth)> {
-        (any::<bool>(), proptest::collection::btree_map(1u8..=63, 1u16..=255, 0..20), any::<bool>()).prop_map(|(wide, m, truncated)| {
-            let w = if wide { MaskWidth::Wide } else { MaskWidth::Narrow };
-            let max = if wide { 255 } else { 7 };
-            let entries = m.into_iter().map(|(c, f)| HeaderEntry { cycles_ago: c, frames: (f % max).max(1) }).collect();
-            (TrackingHeader { entries, truncated }, w)
-        })
+        (any::<bool>(), proptest::collection::btree_map(1u8..=63, 1u16..=255, 0..20), any::<bool>()).prop_map(
+            |(wide, m, truncated)| {
+                let w = if wide { MaskWidth::Wide } else { MaskWidth::Narrow };
+                let max = if wide { 255 } else { 7 };
+                let entries =
+                    m.into_iter().map(|(c, f)| HeaderEntry { cycles_ago: c, frames: (f % max).max(1) }).collect();
+                (TrackingHeader { entries, truncated }, w)
+            },
+        )
     }
 
     proptest! {

@@ -44,7 +44,10 @@ fn at_least_1e5_cases_ran() {
 #[test]
 fn mutated_valid_headers_never_panic() {
     use coopnav_acomms::tracker::HeaderEntry;
-    let h = TrackingHeader { entries: (1..=6).map(|c| HeaderEntry { cycles_ago: c * 2, frames: 1 + u16::from(c) }).collect(), truncated: false };
+    let h = TrackingHeader {
+        entries: (1..=6).map(|c| HeaderEntry { cycles_ago: c * 2, frames: 1 + u16::from(c) }).collect(),
+        truncated: false,
+    };
     let good = h.encode(MaskWidth::Narrow).unwrap();
     let mut accepted = 0;
     for i in 0..good.len() * 8 {

@@ -70,7 +70,12 @@ struct Row {
 }
 
 pub fn run(args: Args) -> Result<()> {
-    anyhow::ensure!(args.step > 0.0 && args.max_range >= args.step, "--step must be > 0 and ≤ --max-range (got {} and {})", args.step, args.max_range);
+    anyhow::ensure!(
+        args.step > 0.0 && args.max_range >= args.step,
+        "--step must be > 0 and ≤ --max-range (got {} and {})",
+        args.step,
+        args.max_range
+    );
     anyhow::ensure!((0.0..=60.0).contains(&args.noise_db), "--noise-db {} must be in [0, 60]", args.noise_db);
     anyhow::ensure!(args.k > 0.0 && args.k <= 4.0, "--k {} must be in (0, 4]", args.k);
     let bathy = match &args.bathymetry {
@@ -87,28 +92,57 @@ pub fn run(args: Args) -> Result<()> {
     };
     let src = Vec3::new(args.x, args.y, args.source_depth);
     let ranges: Vec<f64> = (1..=(args.max_range / args.step).floor() as usize).map(|i| i as f64 * args.step).collect();
-    let field = tl.field(&src, args.bearing_deg.to_radians(), &ranges, &[args.receiver_depth]).context("computing transmission loss")?;
+    let field = tl
+        .field(&src, args.bearing_deg.to_radians(), &ranges, &[args.receiver_depth])
+        .context("computing transmission loss")?;
     let model = SuccessModel { noise_db: args.noise_db, ..SuccessModel::default() };
     let rows: Vec<Row> = ranges
         .iter()
         .zip(&field)
         .map(|(&range_m, &tl_db)| {
             let p = |r: Rate| model.p_success(r, tl_db);
-            Row { range_m, tl_db, p_rate0: p(Rate::R0), p_rate1: p(Rate::R1), p_rate4: p(Rate::R4), p_rate5: p(Rate::R5) }
+            Row {
+                range_m,
+                tl_db,
+                p_rate0: p(Rate::R0),
+                p_rate1: p(Rate::R1),
+                p_rate4: p(Rate::R4),
+                p_rate5: p(Rate::R5),
+            }
         })
         .collect();
     println!("{:>8} {:>8} {:>7} {:>7} {:>7} {:>7}", "range m", "TL dB", "p(r0)", "p(r1)", "p(r4)", "p(r5)");
     for r in &rows {
-        println!("{:>8.0} {:>8.1} {:>7.3} {:>7.3} {:>7.3} {:>7.3}", r.range_m, r.tl_db, r.p_rate0, r.p_rate1, r.p_rate4, r.p_rate5);
+        println!(
+            "{:>8.0} {:>8.1} {:>7.3} {:>7.3} {:>7.3} {:>7.3}",
+            r.range_m, r.tl_db, r.p_rate0, r.p_rate1, r.p_rate4, r.p_rate5
+        );
     }
     let tl_series = [Series::new("TL", rows.iter().map(|r| (r.range_m, r.tl_db)).collect())];
     let p_series: Vec<Series> = [("rate 0", 0), ("rate 1", 1), ("rate 4", 2), ("rate 5", 3)]
         .iter()
-        .map(|&(name, i)| Series::new(name, rows.iter().map(|r| (r.range_m, [r.p_rate0, r.p_rate1, r.p_rate4, r.p_rate5][i])).collect()))
+        .map(|&(name, i)| {
+            Series::new(
+                name,
+                rows.iter().map(|r| (r.range_m, [r.p_rate0, r.p_rate1, r.p_rate4, r.p_rate5][i])).collect(),
+            )
+        })
         .collect();
     let model_name = format!("{:?}", args.model).to_lowercase();
-    run.write_text("tl.svg", &line_svg(Labels { title: &format!("Transmission loss ({model_name})"), x: "range (m)", y: "TL (dB)" }, &tl_series)?)?;
-    run.write_text("success.svg", &line_svg(Labels { title: &format!("Packet success, noise +{} dB", args.noise_db), x: "range (m)", y: "P(success)" }, &p_series)?)?;
+    run.write_text(
+        "tl.svg",
+        &line_svg(
+            Labels { title: &format!("Transmission loss ({model_name})"), x: "range (m)", y: "TL (dB)" },
+            &tl_series,
+        )?,
+    )?;
+    run.write_text(
+        "success.svg",
+        &line_svg(
+            Labels { title: &format!("Packet success, noise +{} dB", args.noise_db), x: "range (m)", y: "P(success)" },
+            &p_series,
+        )?,
+    )?;
     run.write_csv("channel.csv", &rows)?;
     run.write_json("manifest.json", &Manifest::new("channel", None, serde_json::to_value(&args)?))?;
     let dir = run.finish()?;

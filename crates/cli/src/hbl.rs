@@ -1,11 +1,11 @@
 //! `coopnav hbl simulate|montecarlo|grid|tune|postprocess`: the Gill hybrid-baseline tools.
 
-use coopnav_sim::output::{Manifest, RunDir};
 use anyhow::{Context, Result};
 use coopnav_nav::post::{self, PostConfig};
 use coopnav_sim::hbl::grid::{self, GridSpec};
 use coopnav_sim::hbl::tune::{tune, Coefficient, Objective, TuneSpec};
 use coopnav_sim::hbl::{monte_carlo_profiled, plot, run, Scenario};
+use coopnav_sim::output::{Manifest, RunDir};
 
 /// x_rel bin of the Monte Carlo error profile (m).
 const PROFILE_BIN_M: f64 = 5.0;
@@ -107,7 +107,9 @@ fn scenario(c: &Common) -> Result<Scenario> {
 
 fn bar(n: u64) -> ProgressBar {
     let pb = ProgressBar::new(n);
-    pb.set_style(ProgressStyle::with_template("{bar:40} {pos}/{len} {elapsed}").unwrap_or_else(|_| ProgressStyle::default_bar()));
+    pb.set_style(
+        ProgressStyle::with_template("{bar:40} {pos}/{len} {elapsed}").unwrap_or_else(|_| ProgressStyle::default_bar()),
+    );
     pb
 }
 
@@ -127,12 +129,17 @@ pub fn run_command(cmd: Command) -> Result<()> {
 }
 
 /// The optional geodetic origin (absent by default) for lat/lon (`_ll`) log rows.
-const ORIGIN_HINT: &str = "# origin = { lat_deg = 47.97, lon_deg = -116.5, height_m = 630.0 }  # WGS-84 origin of lat/lon (_ll) log rows";
+const ORIGIN_HINT: &str =
+    "# origin = { lat_deg = 47.97, lon_deg = -116.5, height_m = 630.0 }  # WGS-84 origin of lat/lon (_ll) log rows";
 
 fn example(kind: ExampleKind) -> Result<()> {
     let text = match kind {
         // Absent options don't serialise: show the geodetic one where it belongs.
-        ExampleKind::Scenario => toml::to_string_pretty(&Scenario::default())?.replacen("[log]\n", &format!("[log]\n{}\n", ORIGIN_HINT.replacen("origin", "geodetic_origin", 1)), 1),
+        ExampleKind::Scenario => toml::to_string_pretty(&Scenario::default())?.replacen(
+            "[log]\n",
+            &format!("[log]\n{}\n", ORIGIN_HINT.replacen("origin", "geodetic_origin", 1)),
+            1,
+        ),
         ExampleKind::Grid => toml::to_string_pretty(&GridSpec::default())?,
         ExampleKind::Tune => toml::to_string_pretty(&TuneSpec {
             coefficients: vec![Coefficient::AuvQEn, Coefficient::BuoyQEn],
@@ -168,8 +175,23 @@ fn simulate(c: &Common, index: u64) -> Result<()> {
         let o = |v: Option<[f64; 2]>, i: usize| v.map_or(String::new(), |p| p[i].to_string());
         csv.push_str(&format!(
             "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}\n",
-            r.t, r.x_rel, r.auv_true[0], r.auv_true[1], r.auv_est[0], r.auv_est[1], r.auv_sd[0], r.auv_sd[1], r.ship_true[0], r.ship_true[1],
-            r.ship_est[0], r.ship_est[1], o(r.buoy_true, 0), o(r.buoy_true, 1), o(r.buoy_est, 0), o(r.buoy_est, 1), r.error
+            r.t,
+            r.x_rel,
+            r.auv_true[0],
+            r.auv_true[1],
+            r.auv_est[0],
+            r.auv_est[1],
+            r.auv_sd[0],
+            r.auv_sd[1],
+            r.ship_true[0],
+            r.ship_true[1],
+            r.ship_est[0],
+            r.ship_est[1],
+            o(r.buoy_true, 0),
+            o(r.buoy_true, 1),
+            o(r.buoy_est, 0),
+            o(r.buoy_est, 1),
+            r.error
         ));
     }
     dir.write_bytes("trace.csv", csv)?;
@@ -177,7 +199,10 @@ fn simulate(c: &Common, index: u64) -> Result<()> {
     post::write_log(&mut log, &trace.log, sc.log.frame().as_ref())?;
     dir.write_bytes("log.csv", log)?;
     dir.write_bytes("tracks.svg", plot::tracks(&trace.rows)?)?;
-    dir.write_bytes("error_vs_xrel.svg", plot::error_vs_xrel(&trace.rows, (sc.geometry.zone_min, sc.geometry.zone_max))?)?;
+    dir.write_bytes(
+        "error_vs_xrel.svg",
+        plot::error_vs_xrel(&trace.rows, (sc.geometry.zone_min, sc.geometry.zone_max))?,
+    )?;
     dir.write_json("summary.json", &metrics)?;
     let out = dir.finish()?;
     println!("zone error {:.3} m; wrote {}", metrics.zone_error.unwrap_or(f64::NAN), out.display());
@@ -198,7 +223,15 @@ fn montecarlo(c: &Common, runs: usize) -> Result<()> {
         let o = |v: Option<f64>| v.map_or(String::new(), |x| x.to_string());
         csv.push_str(&format!(
             "{i},{},{},{},{},{},{},{},{},{}\n",
-            o(m.zone_error), o(m.zone_parallel), o(m.zone_perpendicular), o(m.approach_perpendicular), o(m.buoy_error), o(m.saturation_error), m.ranges_received, m.ranges_applied, m.healthy
+            o(m.zone_error),
+            o(m.zone_parallel),
+            o(m.zone_perpendicular),
+            o(m.approach_perpendicular),
+            o(m.buoy_error),
+            o(m.saturation_error),
+            m.ranges_received,
+            m.ranges_applied,
+            m.healthy
         ));
     }
     dir.write_bytes("runs.csv", csv)?;
@@ -211,7 +244,15 @@ fn montecarlo(c: &Common, runs: usize) -> Result<()> {
     dir.write_json("summary.json", &r.summary)?;
     let out = dir.finish()?;
     let z = r.summary.zone_error;
-    println!("{}: zone error {:.3} ± {:.3} m (SE {:.3}, {} runs); wrote {}", r.summary.configuration, z.mean, z.sd, z.se, z.n, out.display());
+    println!(
+        "{}: zone error {:.3} ± {:.3} m (SE {:.3}, {} runs); wrote {}",
+        r.summary.configuration,
+        z.mean,
+        z.sd,
+        z.se,
+        z.n,
+        out.display()
+    );
     Ok(())
 }
 
@@ -246,7 +287,14 @@ fn tune_cmd(c: &Common, spec_path: &Path) -> Result<()> {
     manifest(&dir, "hbl tune", spec.seed, json!({ "scenario": sc, "spec": spec }))?;
     dir.write_json("summary.json", &r)?;
     let out = dir.finish()?;
-    println!("cost {:.4} → {:.4} after {} iterations: {:?}; wrote {}", r.start_cost, r.best_cost, r.iterations, r.coefficients, out.display());
+    println!(
+        "cost {:.4} → {:.4} after {} iterations: {:?}; wrote {}",
+        r.start_cost,
+        r.best_cost,
+        r.iterations,
+        r.coefficients,
+        out.display()
+    );
     Ok(())
 }
 
@@ -260,12 +308,23 @@ fn postprocess(log: &Path, config: Option<&Path>, out: &Path, force: bool) -> Re
     let result = post::postprocess(&entries, &cfg)?;
     let dir = RunDir::create(out, force)?;
     manifest(&dir, "hbl postprocess", 0, json!({ "log": log, "config": cfg }))?;
-    let mut csv = String::from("t,filt_e,filt_n,filt_sd_e,filt_sd_n,smooth_e,smooth_n,smooth_sd_e,smooth_sd_n,true_e,true_n\n");
+    let mut csv =
+        String::from("t,filt_e,filt_n,filt_sd_e,filt_sd_n,smooth_e,smooth_n,smooth_sd_e,smooth_sd_n,true_e,true_n\n");
     for s in &result.samples {
         let o = |i: usize| s.truth.map_or(String::new(), |p| p[i].to_string());
         csv.push_str(&format!(
             "{},{},{},{},{},{},{},{},{},{},{}\n",
-            s.t, s.filtered[0], s.filtered[1], s.filtered_sd[0], s.filtered_sd[1], s.smoothed[0], s.smoothed[1], s.smoothed_sd[0], s.smoothed_sd[1], o(0), o(1)
+            s.t,
+            s.filtered[0],
+            s.filtered[1],
+            s.filtered_sd[0],
+            s.filtered_sd[1],
+            s.smoothed[0],
+            s.smoothed[1],
+            s.smoothed_sd[0],
+            s.smoothed_sd[1],
+            o(0),
+            o(1)
         ));
     }
     dir.write_bytes("estimates.csv", csv)?;

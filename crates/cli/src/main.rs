@@ -4,16 +4,20 @@ use anyhow::Result;
 use clap::{Parser, Subcommand};
 
 mod bench;
-mod plan;
-mod hbl;
 mod channel;
+mod hbl;
 mod nams;
+mod plan;
 mod reproduce;
 mod scenario_args;
 mod simulate;
 
 #[derive(Parser)]
-#[command(name = "coopnav", version, about = "Cooperative navigation of AUV teams: CNA path planning, OWTT navigation, adaptive acoustic links")]
+#[command(
+    name = "coopnav",
+    version,
+    about = "Cooperative navigation of AUV teams: CNA path planning, OWTT navigation, adaptive acoustic links"
+)]
 struct Cli {
     #[command(subcommand)]
     command: Command,

@@ -61,7 +61,13 @@ fn provider(tl: &TlChoice, cfg: &ExperimentConfig) -> Result<Box<dyn Transmissio
             let bathy = Arc::new(Bathymetry::shelf(&cfg.shelf)?);
             let max_depth = bathy.max_depth();
             let bh = Bellhop::new(AcousticEnv::nams(bathy))?;
-            let spec = GridSpec { bearings, range_step, max_range: 1.5 * cfg.scenarios.iter().map(|s| s.square).fold(0.0, f64::max), depth_step, max_depth };
+            let spec = GridSpec {
+                bearings,
+                range_step,
+                max_range: 1.5 * cfg.scenarios.iter().map(|s| s.square).fold(0.0, f64::max),
+                depth_step,
+                max_depth,
+            };
             let pb = ProgressBar::new(bearings as u64).with_message("bellhop grid");
             let grid = CachedGrid::build(&bh, Vec3::new(anchor[0], anchor[1], anchor[2]), spec, &|k| pb.inc(k))?;
             pb.finish_and_clear();
@@ -71,8 +77,10 @@ fn provider(tl: &TlChoice, cfg: &ExperimentConfig) -> Result<Box<dyn Transmissio
 }
 
 pub fn run(args: Args) -> Result<()> {
-    let text = std::fs::read_to_string(&args.config).with_context(|| format!("cannot read {}", args.config.display()))?;
-    let file: File = toml::from_str(&text).with_context(|| format!("{}: invalid experiment file", args.config.display()))?;
+    let text =
+        std::fs::read_to_string(&args.config).with_context(|| format!("cannot read {}", args.config.display()))?;
+    let file: File =
+        toml::from_str(&text).with_context(|| format!("{}: invalid experiment file", args.config.display()))?;
     file.experiment.validate().map_err(|e| anyhow::anyhow!("{}: {e}", args.config.display()))?;
     let tl = provider(&file.tl, &file.experiment)?;
     let run = match &args.out {
@@ -85,7 +93,10 @@ pub fn run(args: Args) -> Result<()> {
     pb.finish_and_clear();
     println!("{:<14} {:<16} {:>9} {:>9} {:>6} {:>6}", "scenario", "behaviour", "BW B/s", "period s", "duty", "score");
     for c in &result.cells {
-        println!("{:<14} {:<16} {:>9.2} {:>9.1} {:>6.2} {:>6.3}", c.scenario, c.behaviour, c.mean.bandwidth, c.mean.status_period, c.mean.duty_cycle, c.mean.score);
+        println!(
+            "{:<14} {:<16} {:>9.2} {:>9.1} {:>6.2} {:>6.3}",
+            c.scenario, c.behaviour, c.mean.bandwidth, c.mean.status_period, c.mean.duty_cycle, c.mean.score
+        );
     }
     #[derive(Serialize)]
     struct Row<'a> {

@@ -37,7 +37,11 @@ pub fn run(args: Args) -> Result<()> {
     let mission = scenario.build(&file, &base)?;
     let dir = args.run_dir(&stem)?;
     let mut planner = LookAheadPlanner::new(mission.planner)?;
-    let bar = if std::io::stderr().is_terminal() { ProgressBar::new(predeploy::step_count(&mission)) } else { ProgressBar::hidden() };
+    let bar = if std::io::stderr().is_terminal() {
+        ProgressBar::new(predeploy::step_count(&mission))
+    } else {
+        ProgressBar::hidden()
+    };
     bar.set_style(ProgressStyle::with_template("{bar:40} {pos}/{len} decisions [{elapsed_precise} < {eta_precise}]")?);
     let result = predeploy::run(&mission, &mut planner, &|s| bar.set_position(s))?;
     bar.finish_and_clear();

@@ -73,7 +73,12 @@ impl<C: ScenarioCommand> ScenarioArgs<C> {
             },
             None => {
                 let file = PathBuf::from(format!("<embedded {}>", C::EMBEDDED));
-                Loaded { scenario: (C::PARSE)(C::EXAMPLE, &file)?, file, base: PathBuf::from("."), stem: C::EMBEDDED.to_string() }
+                Loaded {
+                    scenario: (C::PARSE)(C::EXAMPLE, &file)?,
+                    file,
+                    base: PathBuf::from("."),
+                    stem: C::EMBEDDED.to_string(),
+                }
             }
         })
     }

@@ -5,7 +5,9 @@
 
 use crate::scenario_args::{Loaded, ScenarioArgs, ScenarioCommand};
 use anyhow::{bail, Context, Result};
-use coopnav_sim::closed_loop::{self, comparison_table, output::write_run, Faults, PolicySpec, Scenario, ScenarioError, EXAMPLE};
+use coopnav_sim::closed_loop::{
+    self, comparison_table, output::write_run, Faults, PolicySpec, Scenario, ScenarioError, EXAMPLE,
+};
 use indicatif::{ProgressBar, ProgressStyle};
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
@@ -66,9 +68,20 @@ fn single(sc: &Scenario, spec: &PolicySpec, stem: &str, args: &Args) -> Result<(
     let dir = args.scenario.run_dir(stem)?;
     let mut policy = spec.build(sc)?;
     let result = closed_loop::run(sc, &mut policy, sc.seed, true, &Faults::default());
-    let out = write_run(dir, sc, &result, &std::env::args().collect::<Vec<_>>().join(" ")).context("writing the run directory")?;
-    println!("policy {} · {} survey AUVs · {} s · seed {} -> {}", result.policy, sc.fleet.n_auvs, sc.duration_s, sc.seed, out.display());
-    println!("{:<6} {:>9} {:>8} {:>8} {:>8} {:>8} {:>9} {:>12} {:>12}", "AUV", "mean [m]", "RMS", "p95", "max", "CEP50", "modelled", "ranges rx/tx", "status rx/tx");
+    let out = write_run(dir, sc, &result, &std::env::args().collect::<Vec<_>>().join(" "))
+        .context("writing the run directory")?;
+    println!(
+        "policy {} · {} survey AUVs · {} s · seed {} -> {}",
+        result.policy,
+        sc.fleet.n_auvs,
+        sc.duration_s,
+        sc.seed,
+        out.display()
+    );
+    println!(
+        "{:<6} {:>9} {:>8} {:>8} {:>8} {:>8} {:>9} {:>12} {:>12}",
+        "AUV", "mean [m]", "RMS", "p95", "max", "CEP50", "modelled", "ranges rx/tx", "status rx/tx"
+    );
     for a in &result.auvs {
         println!(
             "{:<6} {:>9.2} {:>8.2} {:>8.2} {:>8.2} {:>8.2} {:>9} {:>12} {:>12}",
@@ -84,7 +97,10 @@ fn single(sc: &Scenario, spec: &PolicySpec, stem: &str, args: &Args) -> Result<(
         );
     }
     if let Some(p) = &result.planner {
-        println!("planner: {} decisions, {} deadline misses, mean levels {:.2} of {}", p.decisions, p.deadline_misses, p.mean_levels_searched, p.levels_requested);
+        println!(
+            "planner: {} decisions, {} deadline misses, mean levels {:.2} of {}",
+            p.decisions, p.deadline_misses, p.mean_levels_searched, p.levels_requested
+        );
     }
     println!("open {}", out.join("report.html").display());
     Ok(())
@@ -98,7 +114,8 @@ fn compare(sc: &Scenario, policies: &[String], runs: usize, json: Option<&PathBu
     bar.finish_and_clear();
     print!("{}", comparison_table(&c));
     if let Some(path) = json {
-        std::fs::write(path, serde_json::to_string_pretty(&c)?).with_context(|| format!("writing {}", path.display()))?;
+        std::fs::write(path, serde_json::to_string_pretty(&c)?)
+            .with_context(|| format!("writing {}", path.display()))?;
     }
     Ok(())
 }

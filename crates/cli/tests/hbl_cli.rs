@@ -19,7 +19,14 @@ fn simulate_then_postprocess() {
     let again = coopnav(&["hbl", "simulate", "--out", sim.to_str().unwrap()]);
     assert!(!again.status.success(), "must refuse to overwrite without --force");
     let post = tmp.path().join("post");
-    let out = coopnav(&["hbl", "postprocess", "--log", sim.join("log.csv").to_str().unwrap(), "--out", post.to_str().unwrap()]);
+    let out = coopnav(&[
+        "hbl",
+        "postprocess",
+        "--log",
+        sim.join("log.csv").to_str().unwrap(),
+        "--out",
+        post.to_str().unwrap(),
+    ]);
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let summary = std::fs::read_to_string(post.join("summary.json")).unwrap();
     assert!(summary.contains("mean_smoothed_error"));
@@ -41,7 +48,8 @@ fn simulate_run_replays_a_monte_carlo_run() {
     let sim = tmp.path().join("sim");
     let out = coopnav(&["hbl", "simulate", "--seed", "9", "--run", "2", "--out", sim.to_str().unwrap()]);
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
-    let summary: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(sim.join("summary.json")).unwrap()).unwrap();
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(sim.join("summary.json")).unwrap()).unwrap();
     assert_eq!(summary["zone_error"].as_f64().unwrap(), zone_of_run_2);
 }
 
@@ -58,12 +66,30 @@ fn examples_load_back() {
     };
     let (scenario, post) = (write("scenario"), write("post"));
     let mc = tmp.path().join("mc");
-    let out = coopnav(&["hbl", "montecarlo", "--runs", "3", "--config", scenario.to_str().unwrap(), "--out", mc.to_str().unwrap()]);
+    let out = coopnav(&[
+        "hbl",
+        "montecarlo",
+        "--runs",
+        "3",
+        "--config",
+        scenario.to_str().unwrap(),
+        "--out",
+        mc.to_str().unwrap(),
+    ]);
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let sim = tmp.path().join("sim");
     assert!(coopnav(&["hbl", "simulate", "--out", sim.to_str().unwrap()]).status.success());
     let pp = tmp.path().join("pp");
-    let out = coopnav(&["hbl", "postprocess", "--log", sim.join("log.csv").to_str().unwrap(), "--config", post.to_str().unwrap(), "--out", pp.to_str().unwrap()]);
+    let out = coopnav(&[
+        "hbl",
+        "postprocess",
+        "--log",
+        sim.join("log.csv").to_str().unwrap(),
+        "--config",
+        post.to_str().unwrap(),
+        "--out",
+        pp.to_str().unwrap(),
+    ]);
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
 }
 
@@ -73,7 +99,16 @@ fn bad_config_exits_nonzero_and_writes_nothing() {
     let cfg = tmp.path().join("bad.toml");
     std::fs::write(&cfg, "[acoustic]\np_drop = 0.7\n").unwrap();
     let out_dir = tmp.path().join("mc");
-    let out = coopnav(&["hbl", "montecarlo", "--runs", "4", "--config", cfg.to_str().unwrap(), "--out", out_dir.to_str().unwrap()]);
+    let out = coopnav(&[
+        "hbl",
+        "montecarlo",
+        "--runs",
+        "4",
+        "--config",
+        cfg.to_str().unwrap(),
+        "--out",
+        out_dir.to_str().unwrap(),
+    ]);
     assert!(!out.status.success());
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("bad.toml") && err.contains("sum to 1"), "{err}");
@@ -107,7 +142,16 @@ fn geodetic_log_needs_the_origin_to_postprocess() {
     assert!(!post.exists());
     let cfg = tmp.path().join("post.toml");
     std::fs::write(&cfg, format!("origin = {origin}\n")).unwrap();
-    let out = coopnav(&["hbl", "postprocess", "--log", log.to_str().unwrap(), "--config", cfg.to_str().unwrap(), "--out", post.to_str().unwrap()]);
+    let out = coopnav(&[
+        "hbl",
+        "postprocess",
+        "--log",
+        log.to_str().unwrap(),
+        "--config",
+        cfg.to_str().unwrap(),
+        "--out",
+        post.to_str().unwrap(),
+    ]);
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     assert!(std::fs::read_to_string(post.join("summary.json")).unwrap().contains("mean_smoothed_error"));
 }

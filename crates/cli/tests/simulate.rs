@@ -5,7 +5,12 @@
 use std::process::Command;
 
 fn coopnav(dir: &std::path::Path, args: &[&str]) -> std::process::Output {
-    Command::new(env!("CARGO_BIN_EXE_coopnav")).args(args).current_dir(dir).env("RUST_BACKTRACE", "0").output().expect("runs the binary")
+    Command::new(env!("CARGO_BIN_EXE_coopnav"))
+        .args(args)
+        .current_dir(dir)
+        .env("RUST_BACKTRACE", "0")
+        .output()
+        .expect("runs the binary")
 }
 
 #[test]
@@ -15,7 +20,16 @@ fn default_mission_writes_a_fresh_run_directory() {
         let out = coopnav(tmp.path(), &["simulate"]);
         assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
         let run = tmp.path().join("runs").join(expected);
-        for f in ["report.html", "summary.json", "manifest.json", "timeseries.csv", "comms.csv", "tracks.svg", "error.svg", "comms.svg"] {
+        for f in [
+            "report.html",
+            "summary.json",
+            "manifest.json",
+            "timeseries.csv",
+            "comms.csv",
+            "tracks.svg",
+            "error.svg",
+            "comms.svg",
+        ] {
             assert!(run.join(f).is_file(), "{expected}/{f}");
         }
     }

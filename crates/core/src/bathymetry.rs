@@ -70,7 +70,15 @@ impl Default for Shelf {
 
 impl Bathymetry {
     /// Builds a grid, checking the shape and that every depth is finite and positive.
-    pub fn new(x0: f64, y0: f64, dx: f64, dy: f64, nx: usize, ny: usize, depth: Vec<f64>) -> Result<Self, BathymetryError> {
+    pub fn new(
+        x0: f64,
+        y0: f64,
+        dx: f64,
+        dy: f64,
+        nx: usize,
+        ny: usize,
+        depth: Vec<f64>,
+    ) -> Result<Self, BathymetryError> {
         if nx < 2 || ny < 2 {
             return Err(BathymetryError::Invalid(format!("need at least 2 × 2 nodes, got {nx} × {ny}")));
         }
@@ -81,7 +89,10 @@ impl Bathymetry {
             return Err(BathymetryError::Invalid(format!("{} depths for {nx} × {ny} nodes", depth.len())));
         }
         if let Some(i) = depth.iter().position(|d| !(d.is_finite() && *d > 0.0)) {
-            return Err(BathymetryError::Invalid(format!("node {i}: depth {} (must be a finite number > 0 m)", depth[i])));
+            return Err(BathymetryError::Invalid(format!(
+                "node {i}: depth {} (must be a finite number > 0 m)",
+                depth[i]
+            )));
         }
         Ok(Bathymetry { x0, y0, dx, dy, nx, ny, depth })
     }
@@ -107,7 +118,8 @@ impl Bathymetry {
     /// Loads `.asc` (ESRI ASCII raster) or anything else as CSV `x,y,depth`.
     pub fn load(path: &Path) -> Result<Self, BathymetryError> {
         let file = path.display().to_string();
-        let text = std::fs::read_to_string(path).map_err(|e| BathymetryError::Io { file: file.clone(), message: e.to_string() })?;
+        let text = std::fs::read_to_string(path)
+            .map_err(|e| BathymetryError::Io { file: file.clone(), message: e.to_string() })?;
         if path.extension().is_some_and(|e| e.eq_ignore_ascii_case("asc")) {
             Self::parse_ascii_grid(&text, &file)
         } else {
@@ -136,7 +148,12 @@ impl Bathymetry {
             }
         }
         let get = |k: &str| header.get(k).map(|(v, _)| *v);
-        let need = |k: &str| get(k).ok_or_else(|| BathymetryError::Shape { file: file.to_string(), message: format!("missing header '{k}'") });
+        let need = |k: &str| {
+            get(k).ok_or_else(|| BathymetryError::Shape {
+                file: file.to_string(),
+                message: format!("missing header '{k}'"),
+            })
+        };
         let count = |k: &str| -> Result<usize, BathymetryError> {
             let v = need(k)?;
             if v >= 2.0 && v.fract() == 0.0 {
@@ -150,7 +167,10 @@ impl Bathymetry {
             match (get(corner), get(center)) {
                 (Some(c), _) => Ok(c + cell / 2.0),
                 (None, Some(c)) => Ok(c),
-                _ => Err(BathymetryError::Shape { file: file.to_string(), message: format!("missing header '{corner}' or '{center}'") }),
+                _ => Err(BathymetryError::Shape {
+                    file: file.to_string(),
+                    message: format!("missing header '{corner}' or '{center}'"),
+                }),
             }
         };
         let (x0, y0) = (half("xllcorner", "xllcenter")?, half("yllcorner", "yllcenter")?);
@@ -162,7 +182,10 @@ impl Bathymetry {
                 .map(|t| {
                     let v: f64 = t.parse().map_err(|_| perr(n + 1, format!("'{t}' is not a number")))?;
                     if Some(v) == nodata || !(v.is_finite() && v > 0.0) {
-                        return Err(perr(n + 1, format!("depth {t} is missing or not > 0 m (every cell needs a depth)")));
+                        return Err(perr(
+                            n + 1,
+                            format!("depth {t} is missing or not > 0 m (every cell needs a depth)"),
+                        ));
                     }
                     Ok(v)
                 })
@@ -173,7 +196,10 @@ impl Bathymetry {
             rows.push(row);
         }
         if rows.len() != ny {
-            return Err(BathymetryError::Shape { file: file.to_string(), message: format!("{} data rows, expected nrows = {ny}", rows.len()) });
+            return Err(BathymetryError::Shape {
+                file: file.to_string(),
+                message: format!("{} data rows, expected nrows = {ny}", rows.len()),
+            });
         }
         let depth = rows.into_iter().rev().flatten().collect();
         Bathymetry::new(x0, y0, cell, cell, nx, ny, depth)
@@ -216,7 +242,9 @@ impl Bathymetry {
             return Err(shape(format!("need at least 2 distinct x and y values, got {} × {}", xs.len(), ys.len())));
         }
         let (dx, dy) = (xs[1] - xs[0], ys[1] - ys[0]);
-        let regular = |a: &[f64], d: f64| a.iter().enumerate().all(|(i, v)| (v - (a[0] + i as f64 * d)).abs() <= 1e-6 * d.max(1.0));
+        let regular = |a: &[f64], d: f64| {
+            a.iter().enumerate().all(|(i, v)| (v - (a[0] + i as f64 * d)).abs() <= 1e-6 * d.max(1.0))
+        };
         if !regular(&xs, dx) || !regular(&ys, dy) {
             return Err(shape("x and y values must be evenly spaced (a regular grid)".into()));
         }
@@ -231,7 +259,11 @@ impl Bathymetry {
             depth[j * nx + i] = p[2];
         }
         if let Some(k) = depth.iter().position(|d| d.is_nan()) {
-            return Err(shape(format!("missing node x = {}, y = {} (every grid node needs a depth)", xs[k % nx], ys[k / nx])));
+            return Err(shape(format!(
+                "missing node x = {}, y = {} (every grid node needs a depth)",
+                xs[k % nx],
+                ys[k / nx]
+            )));
         }
         Bathymetry::new(xs[0], ys[0], dx, dy, nx, ny, depth)
     }
@@ -281,7 +313,8 @@ mod tests {
 
     #[test]
     fn bilinear_interpolation_is_exact_for_planes() {
-        let depth: Vec<f64> = (0..3).flat_map(|j| (0..4).map(move |i| 10.0 + 2.0 * i as f64 + 3.0 * j as f64)).collect();
+        let depth: Vec<f64> =
+            (0..3).flat_map(|j| (0..4).map(move |i| 10.0 + 2.0 * i as f64 + 3.0 * j as f64)).collect();
         let b = Bathymetry::new(0.0, 0.0, 10.0, 10.0, 4, 3, depth).unwrap();
         assert!((b.depth_at(15.0, 5.0) - (10.0 + 3.0 + 1.5)).abs() < 1e-12);
         let s = b.slice((0.0, 0.0), (30.0, 0.0), 4);
@@ -315,10 +348,22 @@ mod tests {
         let ok = "x,y,depth\n0,0,10\n10,0,12\n0,10,14\n10,10,16\n";
         let b = Bathymetry::parse_csv(ok, "g.csv").unwrap();
         assert!((b.depth_at(5.0, 5.0) - 13.0).abs() < 1e-12);
-        assert!(matches!(Bathymetry::parse_csv("x,y,depth\n0,0,10\n10,0,abc\n", "g.csv"), Err(BathymetryError::Parse { line: 3, .. })));
-        assert!(matches!(Bathymetry::parse_csv("0,0,10\n10,0,-1\n", "g.csv"), Err(BathymetryError::Parse { line: 2, .. })));
-        assert!(matches!(Bathymetry::parse_csv("0,0,10\n10,0,12\n0,10,14\n", "g.csv"), Err(BathymetryError::Shape { .. })));
-        assert!(matches!(Bathymetry::parse_csv("0,0,10\n10,0,12\n0,10,14\n10,10,1\n10,10,2\n", "g.csv"), Err(BathymetryError::Parse { line: 5, .. })));
+        assert!(matches!(
+            Bathymetry::parse_csv("x,y,depth\n0,0,10\n10,0,abc\n", "g.csv"),
+            Err(BathymetryError::Parse { line: 3, .. })
+        ));
+        assert!(matches!(
+            Bathymetry::parse_csv("0,0,10\n10,0,-1\n", "g.csv"),
+            Err(BathymetryError::Parse { line: 2, .. })
+        ));
+        assert!(matches!(
+            Bathymetry::parse_csv("0,0,10\n10,0,12\n0,10,14\n", "g.csv"),
+            Err(BathymetryError::Shape { .. })
+        ));
+        assert!(matches!(
+            Bathymetry::parse_csv("0,0,10\n10,0,12\n0,10,14\n10,10,1\n10,10,2\n", "g.csv"),
+            Err(BathymetryError::Parse { line: 5, .. })
+        ));
         assert!(matches!(Bathymetry::load(Path::new("/nonexistent/grid.csv")), Err(BathymetryError::Io { .. })));
     }
 }

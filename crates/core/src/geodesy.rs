@@ -128,11 +128,7 @@ impl Geodetic {
         let (sin_lon, cos_lon) = self.latlon.lon_deg.to_radians().sin_cos();
         let n = prime_vertical_radius(sin_lat);
         let h = self.height_m;
-        Ecef {
-            x: (n + h) * cos_lat * cos_lon,
-            y: (n + h) * cos_lat * sin_lon,
-            z: (n * (1.0 - E2) + h) * sin_lat,
-        }
+        Ecef { x: (n + h) * cos_lat * cos_lon, y: (n + h) * cos_lat * sin_lon, z: (n * (1.0 - E2) + h) * sin_lat }
     }
 }
 

@@ -137,7 +137,17 @@ pub struct Iver2State {
 impl Iver2State {
     /// At rest at `pos`, pointing along `heading`, at time 0.
     pub fn at_rest(pos: Vec3, heading: Heading) -> Self {
-        Iver2State { pos, heading, pitch: 0.0, speed: 0.0, vertical_speed: 0.0, yaw_rate: 0.0, lin_accel: 0.0, altitude: -1.0, t: 0.0 }
+        Iver2State {
+            pos,
+            heading,
+            pitch: 0.0,
+            speed: 0.0,
+            vertical_speed: 0.0,
+            yaw_rate: 0.0,
+            lin_accel: 0.0,
+            altitude: -1.0,
+            t: 0.0,
+        }
     }
 }
 
@@ -208,7 +218,8 @@ impl Iver2 {
         let pitch_rate = pitch_rate_deg.to_radians().clamp(-p.max_pitch_rate, p.max_pitch_rate);
 
         let speed_sp = wp.speed * (1.0 - p.turn_slowdown * yaw_rate.abs() / p.max_yaw_rate);
-        let lin_accel = ((speed_sp - s.speed) * p.kp_speed + s.lin_accel * p.kd_speed).clamp(-p.max_lin_accel, p.max_lin_accel);
+        let lin_accel =
+            ((speed_sp - s.speed) * p.kp_speed + s.lin_accel * p.kd_speed).clamp(-p.max_lin_accel, p.max_lin_accel);
 
         s.speed += lin_accel * dt;
         s.pitch = (s.pitch + pitch_rate * dt).clamp(-p.max_pitch, p.max_pitch);
@@ -245,7 +256,11 @@ mod tests {
     #[test]
     fn reaches_cruise_speed_with_limited_acceleration() {
         let b = flat(30.0);
-        let mut v = Iver2::new(Iver2Params::default(), Iver2State::at_rest(Vec3::new(0.0, 0.0, 25.0), Heading::from_radians(0.0)), vec![wp(5000.0, 0.0)]);
+        let mut v = Iver2::new(
+            Iver2Params::default(),
+            Iver2State::at_rest(Vec3::new(0.0, 0.0, 25.0), Heading::from_radians(0.0)),
+            vec![wp(5000.0, 0.0)],
+        );
         v.step(&b);
         assert!((v.state.speed - 0.025).abs() < 1e-12, "0.25 m/s² for 0.1 s");
         v.advance_to(60.0, &b);
@@ -258,7 +273,11 @@ mod tests {
     fn yaw_rate_is_clamped_and_turns_toward_waypoint() {
         let b = flat(30.0);
         // Waypoint due north, vehicle heading east: a left (counter-clockwise) turn at 13 deg/s.
-        let mut v = Iver2::new(Iver2Params::default(), Iver2State::at_rest(Vec3::new(0.0, 0.0, 25.0), Heading::from_radians(0.0)), vec![wp(0.0, 1000.0)]);
+        let mut v = Iver2::new(
+            Iver2Params::default(),
+            Iver2State::at_rest(Vec3::new(0.0, 0.0, 25.0), Heading::from_radians(0.0)),
+            vec![wp(0.0, 1000.0)],
+        );
         v.step(&b);
         assert!((v.state.yaw_rate - 13f64.to_radians()).abs() < 1e-12);
         v.advance_to(30.0, &b);
@@ -269,7 +288,11 @@ mod tests {
     fn follows_the_terrain_and_completes_the_mission() {
         let b = Bathymetry::shelf(&Shelf::default()).unwrap();
         let wps = vec![wp(300.0, 0.0), wp(300.0, 100.0), wp(0.0, 100.0)];
-        let mut v = Iver2::new(Iver2Params::default(), Iver2State::at_rest(Vec3::new(0.0, 0.0, 20.0), Heading::from_radians(0.0)), wps);
+        let mut v = Iver2::new(
+            Iver2Params::default(),
+            Iver2State::at_rest(Vec3::new(0.0, 0.0, 20.0), Heading::from_radians(0.0)),
+            wps,
+        );
         let mut max_alt_err: f64 = 0.0;
         for _ in 0..12000 {
             v.step(&b);
@@ -290,13 +313,20 @@ mod tests {
         assert!(Iver2Params::default().validate().is_ok());
         let e = Iver2Params { timestep: 0.0, ..Iver2Params::default() }.validate().unwrap_err();
         assert!(e.contains("timestep"), "{e}");
-        assert!(Iver2Params { turn_slowdown: 1.0, ..Iver2Params::default() }.validate().unwrap_err().contains("turn_slowdown"));
+        assert!(Iver2Params { turn_slowdown: 1.0, ..Iver2Params::default() }
+            .validate()
+            .unwrap_err()
+            .contains("turn_slowdown"));
     }
 
     #[test]
     fn pitch_stays_within_limit() {
         let b = flat(80.0);
-        let mut v = Iver2::new(Iver2Params::default(), Iver2State::at_rest(Vec3::new(0.0, 0.0, 0.0), Heading::from_radians(0.0)), vec![wp(5000.0, 0.0)]);
+        let mut v = Iver2::new(
+            Iver2Params::default(),
+            Iver2State::at_rest(Vec3::new(0.0, 0.0, 0.0), Heading::from_radians(0.0)),
+            vec![wp(5000.0, 0.0)],
+        );
         for _ in 0..3000 {
             v.step(&b);
             assert!(v.state.pitch.abs() <= 20f64.to_radians() + 1e-12);

@@ -19,7 +19,9 @@ pub struct TrackSample {
 pub enum TrackError {
     #[error("track is empty: at least one sample is needed")]
     Empty,
-    #[error("track sample {index}: time {t} is not after the previous sample's time {prev} (times must increase strictly)")]
+    #[error(
+        "track sample {index}: time {t} is not after the previous sample's time {prev} (times must increase strictly)"
+    )]
     NonMonotone { index: usize, t: f64, prev: f64 },
     #[error("track sample {index}: non-finite value (time and x, y, z must be finite numbers)")]
     NonFinite { index: usize },

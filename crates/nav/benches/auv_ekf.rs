@@ -17,7 +17,8 @@ fn bench(c: &mut Criterion) {
     });
     c.bench_function("auv_ekf_range_update", |b| {
         let f0 = AuvEkf::new(0.0, 0.0, 0.0, 0.85, 0.0, AuvParams::default());
-        let m = RangeMeasurement { range: 101.0, travel_time: 101.0 / 1500.0, transponder: Vec3::new(100.0, 10.0, 1.5) };
+        let m =
+            RangeMeasurement { range: 101.0, travel_time: 101.0 / 1500.0, transponder: Vec3::new(100.0, 10.0, 1.5) };
         b.iter(|| {
             let mut f = f0.clone();
             f.update_range(black_box(&m), None)

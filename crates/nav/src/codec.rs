@@ -254,7 +254,14 @@ mod tests {
     use proptest::prelude::*;
 
     fn header() -> impl Strategy<Value = Header> {
-        prop::sample::select(vec![Header::North, Header::East, Header::Speed, Header::Heading, Header::FleetLeader, Header::Abort])
+        prop::sample::select(vec![
+            Header::North,
+            Header::East,
+            Header::Speed,
+            Header::Heading,
+            Header::FleetLeader,
+            Header::Abort,
+        ])
     }
 
     #[test]
@@ -303,7 +310,10 @@ mod tests {
         assert!(matches!(with_cs("CAMUA,13,0").parse::<Sentence>(), Err(CodecError::FieldCount(3))));
         assert!(matches!(with_cs("CAMUA,13,0,1B03,9").parse::<Sentence>(), Err(CodecError::FieldCount(5))));
         assert!(matches!(with_cs("CAMUA,300,0,1B03").parse::<Sentence>(), Err(CodecError::BadId { field: "SRC", .. })));
-        assert!(matches!(with_cs("CAMUA,13,-1,1B03").parse::<Sentence>(), Err(CodecError::BadId { field: "DEST", .. })));
+        assert!(matches!(
+            with_cs("CAMUA,13,-1,1B03").parse::<Sentence>(),
+            Err(CodecError::BadId { field: "DEST", .. })
+        ));
         assert!(matches!(with_cs("CAMUA,13,0,2B03").parse::<Sentence>(), Err(CodecError::TooWide(0x2B03))));
         assert!(matches!(with_cs("CAMUA,13,0,0B03").parse::<Sentence>(), Err(CodecError::UnknownHeader(0x0B))));
         assert!(matches!(with_cs("GPGGA,13,0,1B03").parse::<Sentence>(), Err(CodecError::BadTalker(_))));

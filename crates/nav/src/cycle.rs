@@ -103,7 +103,18 @@ impl Cycle {
         Cycle {
             name: "hbl_long".into(),
             slot_seconds: 2.0,
-            slots: vec![ShipEast, ShipNorth, BuoyNorth, ShipSpeed, ShipHeading, BuoyEast, FleetLeader, ShipEast, BuoyNorth, Silent],
+            slots: vec![
+                ShipEast,
+                ShipNorth,
+                BuoyNorth,
+                ShipSpeed,
+                ShipHeading,
+                BuoyEast,
+                FleetLeader,
+                ShipEast,
+                BuoyNorth,
+                Silent,
+            ],
         }
     }
     /// MSBL: HBL Long with the buoy slots silent (digest §10 A8).

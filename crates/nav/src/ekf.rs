@@ -25,9 +25,13 @@ impl Gate {
 /// What happened to one measurement.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum UpdateOutcome {
-    Applied { nis: f64 },
+    Applied {
+        nis: f64,
+    },
     /// Rejected by the gate; the state is unchanged.
-    Gated { nis: f64 },
+    Gated {
+        nis: f64,
+    },
     /// The measurement or its geometry could not be used (non-finite numbers, singular
     /// innovation covariance, degenerate Jacobian); the state is unchanged.
     Unusable,
@@ -181,7 +185,11 @@ impl<const N: usize> Ekf<N> {
 }
 
 /// Difference a − b of two states, with angle components wrapped to (-π, π].
-pub fn state_difference<const N: usize>(a: &SVector<f64, N>, b: &SVector<f64, N>, angles: &[bool; N]) -> SVector<f64, N> {
+pub fn state_difference<const N: usize>(
+    a: &SVector<f64, N>,
+    b: &SVector<f64, N>,
+    angles: &[bool; N],
+) -> SVector<f64, N> {
     let mut d = a - b;
     for (i, is_angle) in angles.iter().enumerate() {
         if *is_angle {

@@ -103,7 +103,10 @@ impl Record {
     /// The local (east, north) of the position rows.
     fn position(&self) -> Option<(f64, f64)> {
         match *self {
-            Record::Init { e, n, .. } | Record::ShipFix { e, n, .. } | Record::BuoyFix { e, n } | Record::Truth { e, n } => Some((e, n)),
+            Record::Init { e, n, .. }
+            | Record::ShipFix { e, n, .. }
+            | Record::BuoyFix { e, n }
+            | Record::Truth { e, n } => Some((e, n)),
             _ => None,
         }
     }
@@ -280,7 +283,11 @@ impl PostConfig {
             return Err(ParamError::Negative { field: "buoy_depth".into(), value: self.buoy_depth }.into());
         }
         if !self.acoustic_time_offset_s.is_finite() {
-            return Err(ParamError::NotFinite { field: "acoustic_time_offset_s".into(), value: self.acoustic_time_offset_s }.into());
+            return Err(ParamError::NotFinite {
+                field: "acoustic_time_offset_s".into(),
+                value: self.acoustic_time_offset_s,
+            }
+            .into());
         }
         Ok(())
     }
@@ -413,11 +420,19 @@ pub fn postprocess(entries: &[Entry], cfg: &PostConfig) -> Result<PostResult, Po
                 // Round-off in t_rx − τ must not put a fix logged at the transmit instant "after" it.
                 let t_tx = ev.t - travel_time + 1e-9;
                 let pos = match src {
-                    Transmitter::Ship(side) => fixes.ship_at(t_tx).map(|(e, n, psi)| cfg.outriggers.position(side, e, n, psi)),
-                    Transmitter::Buoy => fixes.buoy_at(t_tx, cfg.buoy_fixes).map(|(e, n)| Vec3::new(e, n, cfg.buoy_depth)),
+                    Transmitter::Ship(side) => {
+                        fixes.ship_at(t_tx).map(|(e, n, psi)| cfg.outriggers.position(side, e, n, psi))
+                    }
+                    Transmitter::Buoy => {
+                        fixes.buoy_at(t_tx, cfg.buoy_fixes).map(|(e, n)| Vec3::new(e, n, cfg.buoy_depth))
+                    }
                 };
                 let applied = pos.is_some_and(|p| {
-                    let m = RangeMeasurement { range: cfg.auv.range_noise.sound_speed * travel_time, travel_time, transponder: p };
+                    let m = RangeMeasurement {
+                        range: cfg.auv.range_noise.sound_speed * travel_time,
+                        travel_time,
+                        transponder: p,
+                    };
                     f.update_range(&m, if cfg.slant_range { depth } else { None }).applied()
                 });
                 if applied {
@@ -453,7 +468,11 @@ pub fn postprocess(entries: &[Entry], cfg: &PostConfig) -> Result<PostResult, Po
 
 /// The chosen backward pass. The unscented one replays the forward filter's dead reckoning:
 /// each step's interval and heading change are read back from the recorded means.
-fn smooth(history: &[crate::ekf::Step<5>], angles: &[bool; 5], kind: SmootherKind) -> Result<Vec<Smoothed<5>>, SmoothError> {
+fn smooth(
+    history: &[crate::ekf::Step<5>],
+    angles: &[bool; 5],
+    kind: SmootherKind,
+) -> Result<Vec<Smoothed<5>>, SmoothError> {
     match kind {
         SmootherKind::Ekf => rts(history, angles),
         SmootherKind::Unscented => urts(history, angles, |k, x| {
@@ -480,7 +499,9 @@ fn score(
         samples[i].truth = Some(tr);
         ef += (history[i].x_post[0] - tr[0]).hypot(history[i].x_post[1] - tr[1]);
         es += (smoothed[i].x[0] - tr[0]).hypot(smoothed[i].x[1] - tr[1]);
-        if let (Some(a), Some(b)) = (nees(&history[i].x_post, &history[i].p_post, tr), nees(&smoothed[i].x, &smoothed[i].p, tr)) {
+        if let (Some(a), Some(b)) =
+            (nees(&history[i].x_post, &history[i].p_post, tr), nees(&smoothed[i].x, &smoothed[i].p, tr))
+        {
             nf += a;
             ns += b;
             nn += 1;
@@ -507,7 +528,10 @@ mod tests {
     }
 
     fn pend_oreille() -> LocalFrame {
-        PostConfig::from_toml("origin = { lat_deg = 47.97, lon_deg = -116.5, height_m = 630.0 }\n").unwrap().frame().unwrap()
+        PostConfig::from_toml("origin = { lat_deg = 47.97, lon_deg = -116.5, height_m = 630.0 }\n")
+            .unwrap()
+            .frame()
+            .unwrap()
     }
 
     #[test]
@@ -545,7 +569,10 @@ mod tests {
             }
         }
         // Metric rows read the same with or without an origin.
-        assert_eq!(read_log("t,kind,src,v1,v2,v3,v4\n0,truth,,1,2,,\n".as_bytes(), Some(&f)).unwrap()[0].record, Record::Truth { e: 1.0, n: 2.0 });
+        assert_eq!(
+            read_log("t,kind,src,v1,v2,v3,v4\n0,truth,,1,2,,\n".as_bytes(), Some(&f)).unwrap()[0].record,
+            Record::Truth { e: 1.0, n: 2.0 }
+        );
     }
 
     #[test]
@@ -566,7 +593,9 @@ mod tests {
         assert!(matches!(e, PostError::Kind { line: 3, .. }), "{e:?}");
         let e = PostConfig::from_toml("origin = { lat_deg = 95.0, lon_deg = 0.0 }\n").unwrap_err().to_string();
         assert!(e.contains("origin") && e.contains("latitude 95"), "{e}");
-        let e = PostConfig::from_toml("origin = { lat_deg = 45.0, lon_deg = 0.0, height_m = nan }\n").unwrap_err().to_string();
+        let e = PostConfig::from_toml("origin = { lat_deg = 45.0, lon_deg = 0.0, height_m = nan }\n")
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("origin") && e.contains("height NaN"), "{e}");
         let far = [Entry { t: 7.0, record: Record::Truth { e: 5e6, n: 0.0 } }];
         let e = write_log(Vec::new(), &far, Some(&f)).unwrap_err().to_string();

@@ -114,7 +114,11 @@ fn wrap<const N: usize>(mut x: SVector<f64, N>, angles: &[bool; N]) -> SVector<f
 }
 
 /// x ± √N · (columns of the Cholesky factor of P); None if P is not positive definite.
-fn sigma_points<const N: usize>(x: &SVector<f64, N>, p: &SMatrix<f64, N, N>, angles: &[bool; N]) -> Option<Vec<SVector<f64, N>>> {
+fn sigma_points<const N: usize>(
+    x: &SVector<f64, N>,
+    p: &SMatrix<f64, N, N>,
+    angles: &[bool; N],
+) -> Option<Vec<SVector<f64, N>>> {
     let l = p.cholesky()?.l() * (N as f64).sqrt();
     Some(l.column_iter().flat_map(|c| [wrap(x + c, angles), wrap(x - c, angles)]).collect())
 }

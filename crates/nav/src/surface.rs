@@ -101,7 +101,10 @@ impl SurfaceEkf {
     /// Starts at `t0` from (e, n), speed and math heading ψ.
     pub fn new(t0: f64, e: f64, n: f64, speed: f64, psi: f64, params: SurfaceParams) -> Self {
         let p0 = SMatrix::<f64, 4, 4>::from_diagonal(&SVector::from(params.p0));
-        SurfaceEkf { ekf: Ekf::new(t0, SurfaceState::from([e, n, speed, psi]), p0, [false, false, false, true]), params }
+        SurfaceEkf {
+            ekf: Ekf::new(t0, SurfaceState::from([e, n, speed, psi]), p0, [false, false, false, true]),
+            params,
+        }
     }
 
     pub fn state(&self) -> &SurfaceState {

@@ -18,7 +18,11 @@ pub(crate) fn brute_force(tree: &Tree) -> SearchOutcome {
         for (l, &i) in idx.iter().enumerate() {
             let opt = tree.level_options(l)[i];
             let (e, s) = (eps2.split_at_mut(l * n), los.split_at_mut(l * n));
-            let parent = if l == 0 { tree.root() } else { NodeRef { pose, eps2: &e.0[(l - 1) * n..], los: &s.0[(l - 1) * n..] } };
+            let parent = if l == 0 {
+                tree.root()
+            } else {
+                NodeRef { pose, eps2: &e.0[(l - 1) * n..], los: &s.0[(l - 1) * n..] }
+            };
             let (p, c) = tree.expand(l, &parent, opt, &mut e.1[..n], &mut s.1[..n]);
             pose = p;
             acc += c;

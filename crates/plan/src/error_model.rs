@@ -108,7 +108,13 @@ impl ErrorModel {
 /// Eq. (1a). Returns the new ε² and the line of sight to remember. When the CNA is directly above
 /// the AUV (no horizontal bearing), the bearing is taken as unchanged.
 #[inline(always)]
-pub(crate) fn tangential_update(sigma2: f64, eps2: f64, prev: &[f64; 3], new: [f64; 3], alpha_tau: f64) -> (f64, [f64; 3]) {
+pub(crate) fn tangential_update(
+    sigma2: f64,
+    eps2: f64,
+    prev: &[f64; 3],
+    new: [f64; 3],
+    alpha_tau: f64,
+) -> (f64, [f64; 3]) {
     let n_prev = prev[0] * prev[0] + prev[1] * prev[1] + prev[2] * prev[2];
     let n_new = new[0] * new[0] + new[1] * new[1] + new[2] * new[2];
     let denom = n_prev * n_new;

@@ -15,15 +15,20 @@ pub mod penalty;
 pub mod planner;
 pub mod predict;
 mod search;
-mod tree;
-pub mod workload;
 #[cfg(test)]
 mod tests;
+mod tree;
+pub mod workload;
 
 pub use error_model::{AuvError, BearingMode, CostMode, ErrorModel};
 pub use motion::{CnaKind, CnaPose, MotionConfig, MotionOption};
-pub use penalty::{Doubling, NoPenalty, Penalty, PenaltyCase, PenaltyFn, PenaltyPair, ScaledViolation, SideTerm, Violation};
-pub use planner::{Algorithm, AuvForecast, Deadline, Decision, DistanceLimits, FnForecast, LookAheadPlanner, PlanInput, Planner, PlannerConfig, SearchConfig};
+pub use penalty::{
+    Doubling, NoPenalty, Penalty, PenaltyCase, PenaltyFn, PenaltyPair, ScaledViolation, SideTerm, Violation,
+};
+pub use planner::{
+    Algorithm, AuvForecast, Deadline, Decision, DistanceLimits, FnForecast, LookAheadPlanner, PlanInput, Planner,
+    PlannerConfig, SearchConfig,
+};
 
 use thiserror::Error;
 

@@ -133,7 +133,9 @@ fn linspace(half_width: f64, n: usize) -> Vec<f64> {
 impl MotionConfig {
     /// Checks every field; errors name the field and the allowed range.
     pub fn validate(&self) -> Result<(), PlanError> {
-        let bad = |field: &str, allowed: &str, value: String| Err(PlanError::Invalid { field: field.into(), allowed: allowed.into(), value });
+        let bad = |field: &str, allowed: &str, value: String| {
+            Err(PlanError::Invalid { field: field.into(), allowed: allowed.into(), value })
+        };
         if !(self.speed.is_finite() && self.speed > 0.0) {
             return bad("speed", "a finite number > 0 m/s", self.speed.to_string());
         }
@@ -145,7 +147,11 @@ impl MotionConfig {
         }
         let swing = self.max_turn_rate_deg_s * self.tau;
         if !(self.max_turn_rate_deg_s.is_finite() && self.max_turn_rate_deg_s > 0.0 && swing < 180.0) {
-            return bad("max_turn_rate_deg_s", "> 0 with max_turn_rate_deg_s * tau < 180 degrees (so hard left and hard right never overlap)", format!("{} (x tau = {swing} deg)", self.max_turn_rate_deg_s));
+            return bad(
+                "max_turn_rate_deg_s",
+                "> 0 with max_turn_rate_deg_s * tau < 180 degrees (so hard left and hard right never overlap)",
+                format!("{} (x tau = {swing} deg)", self.max_turn_rate_deg_s),
+            );
         }
         if let CnaKind::Auv { pitch_options, max_pitch_rate_deg_s, max_pitch_deg, min_depth, max_depth } = self.cna {
             if pitch_options < 1 {
@@ -158,7 +164,11 @@ impl MotionConfig {
                 return bad("cna.max_pitch_deg", "in (0, 90)", max_pitch_deg.to_string());
             }
             if !(min_depth.is_finite() && max_depth.is_finite() && min_depth < max_depth) {
-                return bad("cna.min_depth/max_depth", "finite with min_depth < max_depth", format!("{min_depth}/{max_depth}"));
+                return bad(
+                    "cna.min_depth/max_depth",
+                    "finite with min_depth < max_depth",
+                    format!("{min_depth}/{max_depth}"),
+                );
             }
         }
         Ok(())
@@ -169,7 +179,9 @@ impl MotionConfig {
         let psi = linspace((self.max_turn_rate_deg_s * self.tau).to_radians(), self.heading_options);
         let phi = match self.cna {
             CnaKind::Asc {} => vec![0.0],
-            CnaKind::Auv { pitch_options, max_pitch_rate_deg_s, .. } => linspace((max_pitch_rate_deg_s * self.tau).to_radians(), pitch_options),
+            CnaKind::Auv { pitch_options, max_pitch_rate_deg_s, .. } => {
+                linspace((max_pitch_rate_deg_s * self.tau).to_radians(), pitch_options)
+            }
         };
         psi.iter().flat_map(|&dpsi| phi.iter().map(move |&dphi| MotionOption { dpsi, dphi })).collect()
     }
@@ -228,7 +240,11 @@ mod tests {
     #[test]
     fn step_moves_at_speed_and_pitch_up_is_shallower() {
         let c = cfg(3, CnaKind::auv(3));
-        let p = FastPose::from_pose(&CnaPose { pos: Vec3::new(0.0, 0.0, 50.0), heading: Heading::from_radians(0.0), pitch: 0.0 });
+        let p = FastPose::from_pose(&CnaPose {
+            pos: Vec3::new(0.0, 0.0, 50.0),
+            heading: Heading::from_radians(0.0),
+            pitch: 0.0,
+        });
         let up = c.fast_options()[5]; // Δψ = 0, Δφ = +45°
         let q = c.step(&p, &up);
         let moved = ((q.p[0]).powi(2) + q.p[1].powi(2) + (q.p[2] - 50.0).powi(2)).sqrt();

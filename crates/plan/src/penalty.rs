@@ -226,8 +226,12 @@ impl Primary {
     fn build(self) -> PenaltyFn {
         match self {
             Primary::None => PenaltyFn::None {},
-            Primary::Orig(p) => PenaltyFn::Scaled { too_close: side(1.0, 2.0, 0.0, p), too_far: side(1.0, 1.0, 0.0, p) },
-            Primary::FiveCost(p) => PenaltyFn::Scaled { too_close: side(5.0, 0.0, 25.0, p), too_far: side(1.0, 0.0, 2.0, p) },
+            Primary::Orig(p) => {
+                PenaltyFn::Scaled { too_close: side(1.0, 2.0, 0.0, p), too_far: side(1.0, 1.0, 0.0, p) }
+            }
+            Primary::FiveCost(p) => {
+                PenaltyFn::Scaled { too_close: side(5.0, 0.0, 25.0, p), too_far: side(1.0, 0.0, 2.0, p) }
+            }
         }
     }
 }
@@ -237,7 +241,9 @@ impl LookAhead {
         match self {
             LookAhead::None => PenaltyFn::None {},
             LookAhead::Doubling => PenaltyFn::Doubling {},
-            LookAhead::New => PenaltyFn::Scaled { too_close: side(2.0, 0.0, 1.0, 3.0), too_far: side(2.0, 0.0, 1.0, 2.0) },
+            LookAhead::New => {
+                PenaltyFn::Scaled { too_close: side(2.0, 0.0, 1.0, 3.0), too_far: side(2.0, 0.0, 1.0, 2.0) }
+            }
         }
     }
 }
@@ -340,7 +346,12 @@ mod tests {
 
     #[test]
     fn five_cost_ratios_at_zero_cost() {
-        for (case, ratio) in [(PenaltyCase::C8, 12.5), (PenaltyCase::C9, 12.5), (PenaltyCase::C10, 12.5f64.sqrt()), (PenaltyCase::C12, 12.5f64.cbrt())] {
+        for (case, ratio) in [
+            (PenaltyCase::C8, 12.5),
+            (PenaltyCase::C9, 12.5),
+            (PenaltyCase::C10, 12.5f64.sqrt()),
+            (PenaltyCase::C12, 12.5f64.cbrt()),
+        ] {
             let p = case.penalties().primary;
             let v = 1.7;
             let close = p.apply(0.0, &tc(v));

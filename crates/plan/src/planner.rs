@@ -103,11 +103,17 @@ pub const MAX_LEAVES: f64 = 1e12;
 impl PlannerConfig {
     pub fn validate(&self) -> Result<(), PlanError> {
         self.motion.validate()?;
-        let bad = |field: &str, allowed: &str, value: String| Err(PlanError::Invalid { field: field.into(), allowed: allowed.into(), value });
+        let bad = |field: &str, allowed: &str, value: String| {
+            Err(PlanError::Invalid { field: field.into(), allowed: allowed.into(), value })
+        };
         let m = self.motion.options().len();
         let leaves = (m as f64).powi(self.look_ahead as i32 + 1);
         if m > 4096 || leaves > MAX_LEAVES || self.look_ahead >= crate::tree::MAX_LEVELS {
-            return bad("look_ahead", "look_ahead <= 63 and (heading_options * pitch_options)^(look_ahead + 1) <= 1e12", format!("{} with {m} options", self.look_ahead));
+            return bad(
+                "look_ahead",
+                "look_ahead <= 63 and (heading_options * pitch_options)^(look_ahead + 1) <= 1e12",
+                format!("{} with {m} options", self.look_ahead),
+            );
         }
         if !(self.error.alpha.is_finite() && self.error.alpha >= 0.0) {
             return bad("error.alpha", ">= 0 m^2/s", self.error.alpha.to_string());
@@ -119,8 +125,12 @@ impl PlannerConfig {
         self.penalties.primary.validate("penalties.primary")?;
         self.penalties.look_ahead.validate("penalties.look_ahead")?;
         match self.search.deadline {
-            Deadline::TauMinus { margin_s } if !(margin_s >= 0.0 && margin_s < self.motion.tau) => bad("search.deadline.margin_s", "0 <= margin_s < tau", margin_s.to_string()),
-            Deadline::Seconds { seconds } if !(seconds > 0.0 && seconds.is_finite()) => bad("search.deadline.seconds", "> 0", seconds.to_string()),
+            Deadline::TauMinus { margin_s } if !(margin_s >= 0.0 && margin_s < self.motion.tau) => {
+                bad("search.deadline.margin_s", "0 <= margin_s < tau", margin_s.to_string())
+            }
+            Deadline::Seconds { seconds } if !(seconds > 0.0 && seconds.is_finite()) => {
+                bad("search.deadline.seconds", "> 0", seconds.to_string())
+            }
             _ => Ok(()),
         }
     }
@@ -210,7 +220,10 @@ impl LookAheadPlanner {
         let cfg = &self.cfg;
         let n = input.forecast.n_auvs();
         if n == 0 || input.errors.len() != n {
-            return Err(PlanError::Input(format!("{} error states for {n} forecast AUVs (need one per AUV, at least one)", input.errors.len())));
+            return Err(PlanError::Input(format!(
+                "{} error states for {n} forecast AUVs (need one per AUV, at least one)",
+                input.errors.len()
+            )));
         }
         let mut auv = Vec::with_capacity(n * depth);
         let mut levels = 0;
@@ -235,7 +248,8 @@ impl LookAheadPlanner {
         let options = cfg.motion.fast_options();
         let root_pose = FastPose::from_pose(&input.cna);
         // Level 0 keeps only the options that break the AUV-CNA limits least (none, normally): A5.
-        let violation: Vec<f64> = options.iter().map(|o| cfg.motion.limit_violation(&cfg.motion.step(&root_pose, o))).collect();
+        let violation: Vec<f64> =
+            options.iter().map(|o| cfg.motion.limit_violation(&cfg.motion.step(&root_pose, o))).collect();
         let least = violation.iter().cloned().fold(f64::INFINITY, f64::min);
         let root_options = (0..options.len()).filter(|&i| violation[i] <= least).collect();
         Ok(Tree {
@@ -262,7 +276,15 @@ impl LookAheadPlanner {
     fn decision(&self, tree: &Tree, out: SearchOutcome, requested: usize) -> Decision {
         let opt = self.cfg.motion.options()[out.root_option];
         let next = self.cfg.motion.step(&tree.root_pose, &tree.options[out.root_option]).to_pose();
-        Decision { option: out.root_option, motion: opt, next, value: out.value, levels_requested: requested, levels_searched: tree.depth, nodes: out.nodes }
+        Decision {
+            option: out.root_option,
+            motion: opt,
+            next,
+            value: out.value,
+            levels_requested: requested,
+            levels_searched: tree.depth,
+            nodes: out.nodes,
+        }
     }
 }
 

@@ -152,7 +152,9 @@ impl UnderwayPredictor {
         }
         let direction = match (self.config.beyond, used) {
             (BeyondWaypoints::LastLeg, [.., a, b]) => (b.1 - a.1).atan2(b.0 - a.0),
-            (BeyondWaypoints::LastLeg, [only]) if (only.0, only.1) != start => (only.1 - start.1).atan2(only.0 - start.0),
+            (BeyondWaypoints::LastLeg, [only]) if (only.0, only.1) != start => {
+                (only.1 - start.1).atan2(only.0 - start.0)
+            }
             _ => r.heading.radians(),
         };
         (from.0 + remaining * direction.cos(), from.1 + remaining * direction.sin())
@@ -210,7 +212,11 @@ mod tests {
 
     #[test]
     fn thesis_waypoint_limit_and_reported_heading() {
-        let cfg = PredictorConfig { waypoints: WaypointUse::thesis(0), beyond: BeyondWaypoints::ReportedHeading, ..Default::default() };
+        let cfg = PredictorConfig {
+            waypoints: WaypointUse::thesis(0),
+            beyond: BeyondWaypoints::ReportedHeading,
+            ..Default::default()
+        };
         let mut p = UnderwayPredictor::new(cfg);
         let mut r = report(0.0, 1.0, vec![(0.0, 10.0), (50.0, 10.0)]);
         r.heading = Heading::from_radians(std::f64::consts::PI);

@@ -128,7 +128,8 @@ fn dfs(tree: &Tree, level: usize, parent: &NodeRef, acc: f64, levels: &mut [Leve
         if last {
             ctx.leaf(v);
         } else {
-            let child = NodeRef { pose: lv.pose[o], eps2: &lv.eps2[o * n..(o + 1) * n], los: &lv.los[o * n..(o + 1) * n] };
+            let child =
+                NodeRef { pose: lv.pose[o], eps2: &lv.eps2[o * n..(o + 1) * n], los: &lv.los[o * n..(o + 1) * n] };
             if v + tree.rest_bound(level, &child) <= ctx.bound() {
                 dfs(tree, level + 1, &child, v, deeper, ctx);
             }
@@ -144,7 +145,8 @@ pub(crate) fn branch_and_bound(tree: &Tree, parallel: bool, shared: &Shared) -> 
 
 fn sequential(tree: &Tree, shared: &Shared) -> SearchOutcome {
     let mut lv = levels(tree);
-    let mut ctx = Ctx { shared, best: f64::INFINITY, best_root: usize::MAX, root: usize::MAX, nodes: 0, since_clock: 255 };
+    let mut ctx =
+        Ctx { shared, best: f64::INFINITY, best_root: usize::MAX, root: usize::MAX, nodes: 0, since_clock: 255 };
     let (top, deeper) = lv.split_first_mut().expect("depth >= 1");
     expand_all(tree, 0, &tree.root(), top, &mut ctx);
     let n = tree.n;
@@ -158,7 +160,8 @@ fn sequential(tree: &Tree, shared: &Shared) -> SearchOutcome {
         if tree.depth == 1 {
             ctx.leaf(v);
         } else {
-            let child = NodeRef { pose: top.pose[o], eps2: &top.eps2[o * n..(o + 1) * n], los: &top.los[o * n..(o + 1) * n] };
+            let child =
+                NodeRef { pose: top.pose[o], eps2: &top.eps2[o * n..(o + 1) * n], los: &top.los[o * n..(o + 1) * n] };
             if v + tree.rest_bound(0, &child) <= ctx.bound() {
                 dfs(tree, 1, &child, v, deeper, &mut ctx);
             }
@@ -174,17 +177,20 @@ fn parallel_search(tree: &Tree, shared: &Shared) -> SearchOutcome {
     let mut root_los = vec![[0.0; 3]; tree.n_options() * n];
     let mut roots = Vec::new();
     for &o in &tree.root_options {
-        let (p, c) = tree.expand(0, &tree.root(), o, &mut root_eps2[o * n..(o + 1) * n], &mut root_los[o * n..(o + 1) * n]);
+        let (p, c) =
+            tree.expand(0, &tree.root(), o, &mut root_eps2[o * n..(o + 1) * n], &mut root_los[o * n..(o + 1) * n]);
         roots.push((o, p, c));
     }
-    let tasks: Vec<(usize, usize)> = (0..roots.len()).flat_map(|r| tree.all_options.iter().map(move |&c| (r, c))).collect();
+    let tasks: Vec<(usize, usize)> =
+        (0..roots.len()).flat_map(|r| tree.all_options.iter().map(move |&c| (r, c))).collect();
     let results: Vec<(f64, usize, u64)> = tasks
         .par_iter()
         .map_init(
             || (levels(tree), vec![0.0; n], vec![[0.0; 3]; n]),
             |(lv, e2, los), &(r, c)| {
                 let (o, pose, c0) = roots[r];
-                let mut ctx = Ctx { shared, best: f64::INFINITY, best_root: usize::MAX, root: o, nodes: 1, since_clock: 255 };
+                let mut ctx =
+                    Ctx { shared, best: f64::INFINITY, best_root: usize::MAX, root: o, nodes: 1, since_clock: 255 };
                 let parent = NodeRef { pose, eps2: &root_eps2[o * n..(o + 1) * n], los: &root_los[o * n..(o + 1) * n] };
                 let (p1, c1) = tree.expand(1, &parent, c, e2, los);
                 let v = c0 + c1;

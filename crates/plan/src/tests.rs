@@ -37,7 +37,13 @@ fn exact(algorithm: Algorithm, parallel: bool) -> SearchConfig {
 fn asc(a: usize, l: usize, case: PenaltyCase) -> PlannerConfig {
     PlannerConfig {
         look_ahead: l,
-        motion: MotionConfig { speed: 2.0, tau: 10.0, heading_options: a, max_turn_rate_deg_s: 4.0, cna: CnaKind::Asc {} },
+        motion: MotionConfig {
+            speed: 2.0,
+            tau: 10.0,
+            heading_options: a,
+            max_turn_rate_deg_s: 4.0,
+            cna: CnaKind::Asc {},
+        },
         error: ErrorModel::default(),
         limits: DistanceLimits::default(),
         penalties: case.penalties(),
@@ -138,7 +144,13 @@ fn look_ahead_zero_is_greedy() {
 #[test]
 fn same_decisions_on_one_and_two_threads() {
     let inst = instance_fixed(asc(5, 4, PenaltyCase::C8));
-    let run = |threads| rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap().install(|| inst.decide(exact(Algorithm::BranchAndBound, true)));
+    let run = |threads| {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap()
+            .install(|| inst.decide(exact(Algorithm::BranchAndBound, true)))
+    };
     let (one, two) = (run(1), run(2));
     assert_eq!((one.option, one.value, one.next), (two.option, two.value, two.next));
 }
@@ -146,13 +158,19 @@ fn same_decisions_on_one_and_two_threads() {
 #[test]
 fn deadline_returns_the_deepest_completed_level() {
     let generous = instance_fixed(asc(5, 3, PenaltyCase::C1));
-    let full = generous.decide(SearchConfig { deadline: Deadline::Seconds { seconds: 60.0 }, ..exact(Algorithm::BranchAndBound, false) });
+    let full = generous.decide(SearchConfig {
+        deadline: Deadline::Seconds { seconds: 60.0 },
+        ..exact(Algorithm::BranchAndBound, false)
+    });
     let exact_d = generous.decide(exact(Algorithm::BranchAndBound, false));
     assert_eq!((full.option, full.value, full.levels_searched), (exact_d.option, exact_d.value, 4));
     // Odd and even option counts, sequential and parallel: the clock must be read in every mode.
     for (a, parallel) in [(7, false), (6, true), (8, false)] {
         let inst = instance_fixed(asc(a, 12, PenaltyCase::C2));
-        let search = SearchConfig { deadline: Deadline::Seconds { seconds: 0.02 }, ..exact(Algorithm::BranchAndBound, parallel) };
+        let search = SearchConfig {
+            deadline: Deadline::Seconds { seconds: 0.02 },
+            ..exact(Algorithm::BranchAndBound, parallel)
+        };
         let mut p = LookAheadPlanner::new(PlannerConfig { search, ..inst.cfg }).unwrap();
         let (e, f) = (inst.errors(), inst.forecast());
         match p.decide(&PlanInput { t: 0.0, cna: inst.cna, errors: &e, forecast: &f }) {
@@ -181,7 +199,11 @@ fn fly(case: PenaltyCase, gap: f64, steps: usize) -> Vec<f64> {
     let mut p = LookAheadPlanner::new(cfg).unwrap();
     let auv = |t: f64| Vec3::new(1.5 * t, 0.0, 90.0);
     let f = FnForecast { n: 1, f: move |_: usize, t: f64| Some(auv(t)) };
-    let mut cna = CnaPose { pos: Vec3::new(0.0, gap, 0.0), heading: Heading::from_radians(std::f64::consts::FRAC_PI_2), pitch: 0.0 };
+    let mut cna = CnaPose {
+        pos: Vec3::new(0.0, gap, 0.0),
+        heading: Heading::from_radians(std::f64::consts::FRAC_PI_2),
+        pitch: 0.0,
+    };
     let mut errs = vec![cfg.error.initial(1.0, 1.0, &cna.pos, &auv(0.0))];
     let mut dist = Vec::new();
     for s in 0..steps {
@@ -189,7 +211,8 @@ fn fly(case: PenaltyCase, gap: f64, steps: usize) -> Vec<f64> {
         let d = p.decide(&PlanInput { t, cna, errors: &errs, forecast: &f }).unwrap();
         cna = d.next;
         let a = auv(t + cfg.motion.tau);
-        errs[0] = cfg.error.step(&errs[0], cfg.error.los([cna.pos.x, cna.pos.y, cna.pos.z], [a.x, a.y, a.z]), cfg.motion.tau);
+        errs[0] =
+            cfg.error.step(&errs[0], cfg.error.los([cna.pos.x, cna.pos.y, cna.pos.z], [a.x, a.y, a.z]), cfg.motion.tau);
         dist.push((a - cna.pos).norm());
     }
     dist

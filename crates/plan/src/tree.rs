@@ -102,7 +102,9 @@ impl Tree {
                 violated[j] |= near > hi * (1.0 + 1e-9) || far < lo * (1.0 - 1e-9);
             }
         }
-        let total: f64 = (level + 1..self.depth).map(|j| if doubling && violated[j] { 2.0 * per_level[j] } else { per_level[j] }).sum();
+        let total: f64 = (level + 1..self.depth)
+            .map(|j| if doubling && violated[j] { 2.0 * per_level[j] } else { per_level[j] })
+            .sum();
         total * (1.0 - 1e-9)
     }
 
@@ -110,7 +112,14 @@ impl Tree {
     /// writes the child's ε² and lines of sight into `out_eps2`/`out_los` and returns its pose and
     /// penalised cost.
     #[inline(always)]
-    pub fn expand(&self, level: usize, parent: &NodeRef, opt: usize, out_eps2: &mut [f64], out_los: &mut [[f64; 3]]) -> (FastPose, f64) {
+    pub fn expand(
+        &self,
+        level: usize,
+        parent: &NodeRef,
+        opt: usize,
+        out_eps2: &mut [f64],
+        out_los: &mut [[f64; 3]],
+    ) -> (FastPose, f64) {
         let pose = self.motion.step(&parent.pose, &self.options[opt]);
         let auv = &self.auv[level * self.n..(level + 1) * self.n];
         let (mut raw, mut dmin2, mut dmax2) = (0.0, f64::INFINITY, 0.0f64);

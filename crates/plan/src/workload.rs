@@ -4,8 +4,11 @@
 //! 1.5 m/s at 90 m depth, the CNA starting at (140, 0, 0) heading east,
 //! τ = 10 s, s = 1.5 m/s, penalty case 1. Invented where the thesis is silent (digest A17, A18).
 
-use crate::{AuvError, CnaKind, CnaPose, Deadline, Decision, DistanceLimits, ErrorModel, FnForecast, LookAheadPlanner, MotionConfig, PenaltyCase, PlanError, PlanInput, Planner, PlannerConfig, SearchConfig};
 use crate::planner::Algorithm;
+use crate::{
+    AuvError, CnaKind, CnaPose, Deadline, Decision, DistanceLimits, ErrorModel, FnForecast, LookAheadPlanner,
+    MotionConfig, PenaltyCase, PlanError, PlanInput, Planner, PlannerConfig, SearchConfig,
+};
 use coopnav_core::{Heading, Vec3};
 use serde::Serialize;
 

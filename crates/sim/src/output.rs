@@ -115,7 +115,8 @@ impl RunDir {
 
     pub fn write_json<T: Serialize + ?Sized>(&self, name: &str, value: &T) -> Result<(), OutputError> {
         let path = self.staged(name);
-        let text = serde_json::to_string_pretty(value).map_err(|source| OutputError::Json { path: path.clone(), source })?;
+        let text =
+            serde_json::to_string_pretty(value).map_err(|source| OutputError::Json { path: path.clone(), source })?;
         fs::write(&path, text + "\n").map_err(io_err(&path))
     }
 

@@ -123,7 +123,8 @@ mod tests {
 
     #[test]
     fn line_plot_contains_title_and_legend() {
-        let s = [Series::new("auv-1", vec![(0.0, 1.0), (10.0, 2.0)]), Series::new("auv-2", vec![(0.0, 3.0), (10.0, 1.0)])];
+        let s =
+            [Series::new("auv-1", vec![(0.0, 1.0), (10.0, 2.0)]), Series::new("auv-2", vec![(0.0, 3.0), (10.0, 1.0)])];
         let svg = line_svg(Labels { title: "error vs time", x: "t [s]", y: "error [m]" }, &s).unwrap();
         assert!(svg.starts_with("<svg"));
         for text in ["error vs time", "auv-1", "auv-2", "t [s]"] {

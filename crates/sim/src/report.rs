@@ -106,7 +106,8 @@ mod tests {
 
     #[test]
     fn report_inlines_figures_and_escapes_text() {
-        let svg = line_svg(Labels { title: "err", x: "t", y: "m" }, &[Series::new("a", vec![(0.0, 1.0), (1.0, 2.0)])]).unwrap();
+        let svg = line_svg(Labels { title: "err", x: "t", y: "m" }, &[Series::new("a", vec![(0.0, 1.0), (1.0, 2.0)])])
+            .unwrap();
         let mut r = HtmlReport::new("Run <1>");
         r.heading("Summary").paragraph("a & b").table(&["k", "v"], &[vec!["x<y".to_string(), "2".to_string()]]);
         r.figure("error.svg", "Error vs time", &svg);

@@ -28,8 +28,18 @@ pub enum ScenarioError {
 
 impl ScenarioError {
     /// A field of `file` holds `value` where only `allowed` is.
-    pub fn invalid(file: &Path, field: impl Into<String>, value: impl Into<String>, allowed: impl Into<String>) -> Self {
-        ScenarioError::Invalid { file: file.to_path_buf(), field: field.into(), value: value.into(), allowed: allowed.into() }
+    pub fn invalid(
+        file: &Path,
+        field: impl Into<String>,
+        value: impl Into<String>,
+        allowed: impl Into<String>,
+    ) -> Self {
+        ScenarioError::Invalid {
+            file: file.to_path_buf(),
+            field: field.into(),
+            value: value.into(),
+            allowed: allowed.into(),
+        }
     }
 }
 
@@ -38,14 +48,16 @@ pub type Validate<T> = fn(&T, &Path) -> Result<(), ScenarioError>;
 
 /// Parses TOML `text` as a `T` and validates it; `file` names the text in messages.
 pub fn parse<T: DeserializeOwned>(text: &str, file: &Path, validate: Validate<T>) -> Result<T, ScenarioError> {
-    let scenario: T = toml::from_str(text).map_err(|e| ScenarioError::Parse { file: file.to_path_buf(), message: e.to_string() })?;
+    let scenario: T =
+        toml::from_str(text).map_err(|e| ScenarioError::Parse { file: file.to_path_buf(), message: e.to_string() })?;
     validate(&scenario, file)?;
     Ok(scenario)
 }
 
 /// Reads `file`, then [`parse`]s it.
 pub fn load<T: DeserializeOwned>(file: &Path, validate: Validate<T>) -> Result<T, ScenarioError> {
-    let text = std::fs::read_to_string(file).map_err(|cause| ScenarioError::Read { file: file.to_path_buf(), cause })?;
+    let text =
+        std::fs::read_to_string(file).map_err(|cause| ScenarioError::Read { file: file.to_path_buf(), cause })?;
     parse(&text, file, validate)
 }
 

@@ -85,12 +85,18 @@ fn float32_buoy_fixes_land_on_the_grid_and_cost_little_accuracy() {
                 assert!(fixes.iter().all(|&(la, lo)| on_f32_grid(la, even) && on_f32_grid(lo, even)), "{fixes:?}");
             }
             let (_, reference, _) = simulate_and_postprocess(&scenario(Some(pend_oreille()), LatLonStorage::F64), i);
-            moved += log.iter().zip(&reference).filter(|(a, b)| matches!(a.record, Record::BuoyFix { .. }) && a != b).count();
+            moved += log
+                .iter()
+                .zip(&reference)
+                .filter(|(a, b)| matches!(a.record, Record::BuoyFix { .. }) && a != b)
+                .count();
             filt += r.summary.mean_filtered_error.unwrap() / runs as f64;
             smooth += r.summary.mean_smoothed_error.unwrap() / runs as f64;
         }
         assert_eq!(moved > 0, storage != LatLonStorage::F64, "{storage:?}: {moved} buoy fixes moved");
-        eprintln!("buoy fixes stored as {storage:?}: mean filtered error {filt:.4} m, smoothed {smooth:.4} m ({runs} runs)");
+        eprintln!(
+            "buoy fixes stored as {storage:?}: mean filtered error {filt:.4} m, smoothed {smooth:.4} m ({runs} runs)"
+        );
         means.push((filt, smooth));
     }
     // The artefact is at most ±0.57 m E × ±0.42 m N on a buoy 20-100 m away: the post-processed

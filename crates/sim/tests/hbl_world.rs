@@ -106,7 +106,9 @@ fn simulated_logs_postprocess_end_to_end() {
         let s = r.summary;
         // The unscented backward pass over the same forward run: with 0.1 s steps the dead
         // reckoning is nearly linear, so it must land on the EKF-RTS answer (thesis: "similar").
-        let u = postprocess(&entries, &PostConfig { smoother: SmootherKind::Unscented, ..PostConfig::default() }).unwrap().summary;
+        let u = postprocess(&entries, &PostConfig { smoother: SmootherKind::Unscented, ..PostConfig::default() })
+            .unwrap()
+            .summary;
         let (se, su) = (s.mean_smoothed_error.unwrap(), u.mean_smoothed_error.unwrap());
         assert!((se - su).abs() <= 0.01 * se, "run {i}: EKF-RTS {se} vs URTS {su}");
         assert_eq!(u.mean_filtered_error, s.mean_filtered_error);

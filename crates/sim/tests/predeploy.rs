@@ -68,7 +68,9 @@ fn bad_scenarios_name_the_field() {
     assert!(e.contains("max_turn_rate_deg_s") && e.contains("180"), "{e}");
     let e = err_of(&EXAMPLE.replace("case = \"8\"", "case = \"14\""));
     assert!(e.contains("planner.penalty") && e.contains("12a"), "{e}");
-    let e = err_of(&EXAMPLE.replace("speed = 1.5\ndepth = { kind = \"constant\"", "speed = 0.0\ndepth = { kind = \"constant\""));
+    let e = err_of(
+        &EXAMPLE.replace("speed = 1.5\ndepth = { kind = \"constant\"", "speed = 0.0\ndepth = { kind = \"constant\""),
+    );
     assert!(e.contains("auv[0].lawnmower.speed"), "{e}");
 }
 
@@ -112,7 +114,17 @@ fn run_directory_holds_every_output() {
     let mut p = LookAheadPlanner::new(m.planner).unwrap();
     let r = predeploy::run(&m, &mut p, &|_| {}).unwrap();
     let out = write_run(RunDir::create(dir.path().join("run"), false).unwrap(), &m, serde_json::json!({}), &r).unwrap();
-    for f in ["cna_waypoints.csv", "cna_waypoints.moos", "timeseries.csv", "auv_timeseries.csv", "summary.json", "manifest.json", "tracks.svg", "error.svg", "distance.svg"] {
+    for f in [
+        "cna_waypoints.csv",
+        "cna_waypoints.moos",
+        "timeseries.csv",
+        "auv_timeseries.csv",
+        "summary.json",
+        "manifest.json",
+        "tracks.svg",
+        "error.svg",
+        "distance.svg",
+    ] {
         assert!(out.join(f).is_file(), "{f} missing");
     }
     let moos = std::fs::read_to_string(out.join("cna_waypoints.moos")).unwrap();
@@ -129,6 +141,9 @@ fn run_directory_holds_every_output() {
 fn stray_keys_in_tagged_tables_are_rejected() {
     let e = err_of(&EXAMPLE.replace("cna = { kind = \"asc\" }", "cna = { kind = \"asc\", pitch_options = 3 }"));
     assert!(e.contains("unknown field") && e.contains("pitch_options"), "{e}");
-    let e = err_of(&EXAMPLE.replace("penalty = { case = \"8\" }", "penalty = { primary = { kind = \"none\" }, look_ahead = { kind = \"doubling\", factor = 3 } }"));
+    let e = err_of(&EXAMPLE.replace(
+        "penalty = { case = \"8\" }",
+        "penalty = { primary = { kind = \"none\" }, look_ahead = { kind = \"doubling\", factor = 3 } }",
+    ));
     assert!(e.contains("unknown field") && e.contains("factor"), "{e}");
 }

@@ -17,13 +17,16 @@ use std::process::Command;
 use std::sync::Arc;
 use thiserror::Error;
 
-const INSTALL_HINT: &str = "run `bash scripts/install-bellhop.sh` at the repository root, or set COOPNAV_BELLHOP to a bellhop.exe";
+const INSTALL_HINT: &str =
+    "run `bash scripts/install-bellhop.sh` at the repository root, or set COOPNAV_BELLHOP to a bellhop.exe";
 
 #[derive(Debug, Error)]
 pub enum BellhopError {
     #[error("BELLHOP not found (looked for {tried}): {INSTALL_HINT}")]
     NotFound { tried: String },
-    #[error("COOPNAV_BELLHOP={path} is not an executable file: point it at bellhop.exe or unset it and {INSTALL_HINT}")]
+    #[error(
+        "COOPNAV_BELLHOP={path} is not an executable file: point it at bellhop.exe or unset it and {INSTALL_HINT}"
+    )]
     BadEnvVar { path: String },
     #[error("BELLHOP input invalid: {0}")]
     BadEnvironment(String),
@@ -65,20 +68,73 @@ pub struct AcousticEnv {
 
 /// The 17 Oct 2013 Bedford Basin cast (nams digest §4.5, App. A).
 pub const OCTOBER_SSP: [(f64, f64); 44] = [
-    (0.0, 1496.8), (1.0, 1495.9), (2.0, 1495.9), (3.0, 1495.8), (4.0, 1495.8), (5.0, 1495.8), (6.0, 1495.8),
-    (7.0, 1495.8), (8.0, 1495.8), (9.0, 1495.9), (10.0, 1495.9), (11.0, 1495.9), (12.0, 1495.9), (13.0, 1495.9),
-    (14.0, 1495.9), (15.0, 1495.9), (16.0, 1496.0), (16.9, 1496.0), (17.9, 1496.0), (19.0, 1495.9), (20.0, 1488.1),
-    (21.0, 1480.8), (21.9, 1474.1), (22.9, 1470.2), (23.9, 1469.5), (24.9, 1468.8), (25.9, 1467.8), (26.9, 1467.3),
-    (27.9, 1466.9), (28.9, 1466.9), (29.9, 1466.9), (30.9, 1466.9), (31.9, 1466.9), (32.9, 1467.0), (33.9, 1467.0),
-    (34.9, 1467.1), (35.9, 1467.2), (36.9, 1467.2), (37.9, 1467.2), (38.9, 1467.2), (39.9, 1467.3), (40.9, 1467.3),
-    (50.0, 1467.3), (60.0, 1467.3),
+    (0.0, 1496.8),
+    (1.0, 1495.9),
+    (2.0, 1495.9),
+    (3.0, 1495.8),
+    (4.0, 1495.8),
+    (5.0, 1495.8),
+    (6.0, 1495.8),
+    (7.0, 1495.8),
+    (8.0, 1495.8),
+    (9.0, 1495.9),
+    (10.0, 1495.9),
+    (11.0, 1495.9),
+    (12.0, 1495.9),
+    (13.0, 1495.9),
+    (14.0, 1495.9),
+    (15.0, 1495.9),
+    (16.0, 1496.0),
+    (16.9, 1496.0),
+    (17.9, 1496.0),
+    (19.0, 1495.9),
+    (20.0, 1488.1),
+    (21.0, 1480.8),
+    (21.9, 1474.1),
+    (22.9, 1470.2),
+    (23.9, 1469.5),
+    (24.9, 1468.8),
+    (25.9, 1467.8),
+    (26.9, 1467.3),
+    (27.9, 1466.9),
+    (28.9, 1466.9),
+    (29.9, 1466.9),
+    (30.9, 1466.9),
+    (31.9, 1466.9),
+    (32.9, 1467.0),
+    (33.9, 1467.0),
+    (34.9, 1467.1),
+    (35.9, 1467.2),
+    (36.9, 1467.2),
+    (37.9, 1467.2),
+    (38.9, 1467.2),
+    (39.9, 1467.3),
+    (40.9, 1467.3),
+    (50.0, 1467.3),
+    (60.0, 1467.3),
 ];
 
 /// BT-1 transducer pattern at 25 kHz (nams digest §4.5, App. A `.sbp`), kept as the thesis's data.
 pub const BT1_BEAM: [(f64, f64); 19] = [
-    (-135.0, -6.90), (-120.0, -9.70), (-105.0, -5.50), (-90.0, -3.70), (-75.0, -5.50), (-60.0, -9.70), (-45.0, -6.90),
-    (-30.0, -3.80), (-15.0, -2.80), (0.0, -2.90), (15.0, -3.70), (30.0, -5.30), (45.0, -6.80), (60.0, -4.50),
-    (75.0, -1.20), (90.0, 0.00), (105.0, -1.20), (120.0, -4.50), (135.0, -6.80),
+    (-135.0, -6.90),
+    (-120.0, -9.70),
+    (-105.0, -5.50),
+    (-90.0, -3.70),
+    (-75.0, -5.50),
+    (-60.0, -9.70),
+    (-45.0, -6.90),
+    (-30.0, -3.80),
+    (-15.0, -2.80),
+    (0.0, -2.90),
+    (15.0, -3.70),
+    (30.0, -5.30),
+    (45.0, -6.80),
+    (60.0, -4.50),
+    (75.0, -1.20),
+    (90.0, 0.00),
+    (105.0, -1.20),
+    (120.0, -4.50),
+    (135.0, -6.80),
 ];
 
 impl AcousticEnv {
@@ -141,7 +197,17 @@ struct Geometry<'a> {
 fn list(values: impl Iterator<Item = f64>) -> String {
     let mut s = String::new();
     for (i, v) in values.enumerate() {
-        let _ = write!(s, "{}{v:.4}", if i > 0 && i % 8 == 0 { "\n" } else if i > 0 { " " } else { "" });
+        let _ = write!(
+            s,
+            "{}{v:.4}",
+            if i > 0 && i % 8 == 0 {
+                "\n"
+            } else if i > 0 {
+                " "
+            } else {
+                ""
+            }
+        );
     }
     s.push_str(" /");
     s
@@ -195,7 +261,10 @@ fn sbp_text(env: &AcousticEnv) -> String {
 pub fn parse_shd(bytes: &[u8], nrz: usize, nrr: usize, file: &str) -> Result<Vec<(f32, f32)>, BellhopError> {
     let bad = |message: String| BellhopError::BadOutput { file: file.to_string(), message };
     let word = |off: usize| -> Result<i32, BellhopError> {
-        bytes.get(off..off + 4).map(|b| i32::from_le_bytes([b[0], b[1], b[2], b[3]])).ok_or_else(|| bad(format!("truncated at byte {off}")))
+        bytes
+            .get(off..off + 4)
+            .map(|b| i32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+            .ok_or_else(|| bad(format!("truncated at byte {off}")))
     };
     let lrecl = word(0)?;
     if lrecl < 10 {
@@ -288,7 +357,8 @@ impl Bellhop {
         // The slice runs 2 % past the last receiver so BELLHOP's range box stays inside it.
         let end = 1.02 * max_range;
         let (c, s) = (bearing.cos(), bearing.sin());
-        let bottom = self.env.bathymetry.slice((src.x, src.y), (src.x + end * c, src.y + end * s), self.env.slice_points);
+        let bottom =
+            self.env.bathymetry.slice((src.x, src.y), (src.x + end * c, src.y + end * s), self.env.slice_points);
         let src_bottom = bottom[0].1;
         let max_depth = bottom.iter().map(|p| p.1).fold(0.0, f64::max);
         let geometry = Geometry {
@@ -297,7 +367,10 @@ impl Bellhop {
             ranges,
             bottom,
         };
-        let dir = tempfile::Builder::new().prefix("coopnav-bellhop-").tempdir().map_err(|e| BellhopError::Io { what: "temporary directory".into(), source: e })?;
+        let dir = tempfile::Builder::new()
+            .prefix("coopnav-bellhop-")
+            .tempdir()
+            .map_err(|e| BellhopError::Io { what: "temporary directory".into(), source: e })?;
         let io = |what: &str| {
             let what = format!("{what} in {}", dir.path().display());
             move |e| BellhopError::Io { what, source: e }
@@ -311,10 +384,16 @@ impl Bellhop {
             Ok(old) if !old.is_empty() => format!("{}:{old}", libdir.display()),
             _ => libdir.display().to_string(),
         };
-        let out = Command::new(&exe).arg("run").current_dir(dir.path()).env("LD_LIBRARY_PATH", ld).output().map_err(io("starting bellhop"))?;
+        let out = Command::new(&exe)
+            .arg("run")
+            .current_dir(dir.path())
+            .env("LD_LIBRARY_PATH", ld)
+            .output()
+            .map_err(io("starting bellhop"))?;
         let shd = dir.path().join("run.shd");
         if !out.status.success() || !shd.is_file() {
-            let prt = std::fs::read_to_string(dir.path().join("run.prt")).unwrap_or_else(|_| String::from_utf8_lossy(&out.stderr).into_owned());
+            let prt = std::fs::read_to_string(dir.path().join("run.prt"))
+                .unwrap_or_else(|_| String::from_utf8_lossy(&out.stderr).into_owned());
             let tail: Vec<&str> = prt.lines().rev().take(8).collect();
             return Err(BellhopError::Exit {
                 exe: exe.display().to_string(),
@@ -362,7 +441,12 @@ mod tests {
 
     #[test]
     fn env_file_has_the_thesis_environment() {
-        let g = Geometry { bottom: vec![(0.0, 22.2), (500.0, 40.7999)], source_depth: 0.5, ranges: &[100.0, 200.0], depths: vec![10.0] };
+        let g = Geometry {
+            bottom: vec![(0.0, 22.2), (500.0, 40.7999)],
+            source_depth: 0.5,
+            ranges: &[100.0, 200.0],
+            depths: vec![10.0],
+        };
         let t = env_text(&env(), &g);
         let lines: Vec<&str> = t.lines().collect();
         assert_eq!(lines[1], "25000.0");
@@ -431,7 +515,10 @@ mod tests {
         assert!(matches!(e, TlError::Bellhop(BellhopError::Exit { .. })), "{e}");
         assert!(e.to_string().contains("install-bellhop.sh"));
         // A program that "succeeds" but writes no .shd.
-        let e = Bellhop::with_exe(PathBuf::from("/bin/true"), env()).unwrap().tl(&Vec3::zeros(), &Vec3::new(50.0, 0.0, 5.0)).unwrap_err();
+        let e = Bellhop::with_exe(PathBuf::from("/bin/true"), env())
+            .unwrap()
+            .tl(&Vec3::zeros(), &Vec3::new(50.0, 0.0, 5.0))
+            .unwrap_err();
         assert!(matches!(e, TlError::Bellhop(BellhopError::Exit { .. })));
     }
 

@@ -37,7 +37,9 @@ impl GridSpec {
         if ok {
             Ok(())
         } else {
-            Err(TlError::Invalid(format!("grid spec {self:?}: need bearings ≥ 1 and 0 < step ≤ max for range and depth")))
+            Err(TlError::Invalid(format!(
+                "grid spec {self:?}: need bearings ≥ 1 and 0 < step ≤ max for range and depth"
+            )))
         }
     }
     fn axis(step: f64, max: f64) -> Vec<f64> {
@@ -59,7 +61,12 @@ pub struct CachedGrid {
 
 impl CachedGrid {
     /// Runs `provider` once per bearing (in parallel), calling `progress(1)` after each.
-    pub fn build(provider: &dyn TransmissionLoss, anchor: Vec3, spec: GridSpec, progress: &(dyn Fn(u64) + Sync)) -> Result<Self, TlError> {
+    pub fn build(
+        provider: &dyn TransmissionLoss,
+        anchor: Vec3,
+        spec: GridSpec,
+        progress: &(dyn Fn(u64) + Sync),
+    ) -> Result<Self, TlError> {
         spec.validate()?;
         let ranges = GridSpec::axis(spec.range_step, spec.max_range);
         let depths = GridSpec::axis(spec.depth_step, spec.max_depth);

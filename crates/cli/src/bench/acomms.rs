@@ -28,7 +28,10 @@ pub struct Args {
 
 fn bar(len: u64, msg: &'static str) -> ProgressBar {
     let pb = ProgressBar::new(len);
-    pb.set_style(ProgressStyle::with_template("{msg} [{bar:40}] {pos}/{len} {elapsed}").unwrap_or_else(|_| ProgressStyle::default_bar()));
+    pb.set_style(
+        ProgressStyle::with_template("{msg} [{bar:40}] {pos}/{len} {elapsed}")
+            .unwrap_or_else(|_| ProgressStyle::default_bar()),
+    );
     pb.set_message(msg);
     pb
 }
@@ -72,7 +75,15 @@ fn tracker() -> Result<Value> {
         tr.on_receive(k, 1, Reception { frames: 7, n_frames: 3 }, None);
     }
     let header = tr.on_transmit(6, Rate::R1);
-    let frame = Frame0 { header, status: StatusMessage { pos: Vec3::new(123.4, 456.7, 28.2), heading: Heading::from_radians(0.7), speed: 1.54, next: NextWaypoint::Id(7) } };
+    let frame = Frame0 {
+        header,
+        status: StatusMessage {
+            pos: Vec3::new(123.4, 456.7, 28.2),
+            heading: Heading::from_radians(0.7),
+            speed: 1.54,
+            next: NextWaypoint::Id(7),
+        },
+    };
     let bytes = frame.encode(MaskWidth::Narrow, 64)?;
     let enc = rate(0.5, || {
         black_box(black_box(&frame).encode(MaskWidth::Narrow, 64).ok());
@@ -81,7 +92,8 @@ fn tracker() -> Result<Value> {
         black_box(Frame0::decode(black_box(&bytes), MaskWidth::Narrow).ok());
     });
     // Tracker bookkeeping: one transmit and one receive per iteration in a two-vehicle exchange.
-    let (mut a, mut b, mut k) = (Tracker::new(0, 2, MaskWidth::Narrow, 11), Tracker::new(1, 2, MaskWidth::Narrow, 11), 0u64);
+    let (mut a, mut b, mut k) =
+        (Tracker::new(0, 2, MaskWidth::Narrow, 11), Tracker::new(1, 2, MaskWidth::Narrow, 11), 0u64);
     let cycle = rate(0.5, || {
         let h = a.on_transmit(k, Rate::R1);
         b.on_receive(k, 0, Reception { frames: 7, n_frames: 3 }, Some(&h));
@@ -89,7 +101,9 @@ fn tracker() -> Result<Value> {
         a.on_receive(k + 1, 1, Reception { frames: 7, n_frames: 3 }, Some(&h));
         k += 2;
     });
-    Ok(json!({"frame0_bytes": bytes.len(), "header_entries": frame.header.entries.len(), "encode_per_s": enc, "decode_per_s": dec, "tracker_exchanges_per_s": cycle}))
+    Ok(
+        json!({"frame0_bytes": bytes.len(), "header_entries": frame.header.entries.len(), "encode_per_s": enc, "decode_per_s": dec, "tracker_exchanges_per_s": cycle}),
+    )
 }
 
 fn bellhop(reps: usize) -> Result<Value> {
@@ -130,7 +144,12 @@ pub fn run(args: Args) -> Result<()> {
     let tl = default_tl();
     let analytic = experiment(&tl, &format!("analytic, k = {}", tl.k), args.reps)?;
     let pb = bar(8, "analytic grid");
-    let grid = CachedGrid::build(&tl, Vec3::new(1000.0, 1000.0, 30.0), GridSpec { bearings: 8, range_step: 25.0, max_range: 3000.0, depth_step: 2.5, max_depth: 60.0 }, &|k| pb.inc(k))?;
+    let grid = CachedGrid::build(
+        &tl,
+        Vec3::new(1000.0, 1000.0, 30.0),
+        GridSpec { bearings: 8, range_step: 25.0, max_range: 3000.0, depth_step: 2.5, max_depth: 60.0 },
+        &|k| pb.inc(k),
+    )?;
     pb.finish_and_clear();
     let cached = experiment(&grid, "cached grid of the analytic model", args.reps)?;
     let bellhop = if args.no_bellhop { json!({"skipped": "--no-bellhop"}) } else { bellhop(args.reps)? };

@@ -47,10 +47,16 @@ pub fn run(args: Args) -> Result<()> {
     for w in workloads {
         let (t_seq, seq) = time(reps, || Ok(w.decide(Algorithm::BranchAndBound, false)?))?;
         let (t_par, par) = time(reps, || Ok(w.decide(Algorithm::BranchAndBound, true)?))?;
-        ensure!((seq.option, seq.value) == (par.option, par.value), "parallel and sequential searches disagree on {w:?}");
+        ensure!(
+            (seq.option, seq.value) == (par.option, par.value),
+            "parallel and sequential searches disagree on {w:?}"
+        );
         let brute = if w.leaves() <= brute_max_leaves {
             let (t, b) = time(1.max(reps / 2), || Ok(w.decide(Algorithm::BruteForce, false)?))?;
-            ensure!((b.option, b.value) == (seq.option, seq.value), "branch-and-bound and brute force disagree on {w:?}");
+            ensure!(
+                (b.option, b.value) == (seq.option, seq.value),
+                "branch-and-bound and brute force disagree on {w:?}"
+            );
             let updates = b.nodes as f64 * w.n as f64;
             json!({ "seconds": t, "nodes": b.nodes, "auv_updates_per_s": updates / t, "same_decision": true })
         } else {
@@ -68,7 +74,12 @@ pub fn run(args: Args) -> Result<()> {
         }));
     }
     let missions = [4, 6].into_iter().map(mission_nodes).collect::<Result<Vec<_>>>()?;
-    println!("{}", serde_json::to_string_pretty(&json!({ "target": "planner", "reps": reps, "results": rows, "missions": missions }))?);
+    println!(
+        "{}",
+        serde_json::to_string_pretty(
+            &json!({ "target": "planner", "reps": reps, "results": rows, "missions": missions })
+        )?
+    );
     Ok(())
 }
 
@@ -86,7 +97,8 @@ fn mission_nodes(l: usize) -> Result<serde_json::Value> {
     let result = predeploy::run(&mission, &mut planner, &|_| {})?;
     let seconds = t0.elapsed().as_secs_f64();
     let bnb: u64 = result.decisions.iter().map(|d| d.nodes).sum();
-    let full: u64 = result.decisions.iter().map(|d| (1..=d.levels_searched as u32).map(|k| m.pow(k)).sum::<u64>()).sum();
+    let full: u64 =
+        result.decisions.iter().map(|d| (1..=d.levels_searched as u32).map(|k| m.pow(k)).sum::<u64>()).sum();
     let brute: u64 = result.decisions.iter().map(|d| m.pow(d.levels_searched as u32) * d.levels_searched as u64).sum();
     Ok(json!({
         "scenario": "embedded example (N = 2, A = 5, tau = 10 s)",

@@ -67,7 +67,12 @@ pub struct Comparison {
 }
 
 /// Runs every policy `runs` times. `progress(done)` is called after each run.
-pub fn monte_carlo(sc: &Scenario, policies: &[String], runs: usize, progress: &(dyn Fn(u64) + Sync)) -> Result<Comparison, PolicyError> {
+pub fn monte_carlo(
+    sc: &Scenario,
+    policies: &[String],
+    runs: usize,
+    progress: &(dyn Fn(u64) + Sync),
+) -> Result<Comparison, PolicyError> {
     let specs = policies.iter().map(|p| PolicySpec::new(p, sc)).collect::<Result<Vec<_>, _>>()?;
     let jobs: Vec<(usize, usize)> = (0..specs.len()).flat_map(|p| (0..runs).map(move |i| (p, i))).collect();
     let done = std::sync::atomic::AtomicU64::new(0);
@@ -87,7 +92,8 @@ pub fn monte_carlo(sc: &Scenario, policies: &[String], runs: usize, progress: &(
         timing.channel_s += r.timing.channel_s;
         timing.total_s += r.timing.total_s;
     }
-    let summaries: Vec<PolicySummary> = results.chunks(runs.max(1)).zip(&specs).map(|(rs, s)| summarise(&s.name, rs)).collect();
+    let summaries: Vec<PolicySummary> =
+        results.chunks(runs.max(1)).zip(&specs).map(|(rs, s)| summarise(&s.name, rs)).collect();
     let paired = match summaries.iter().find(|s| s.policy == "planner") {
         Some(planner) => summaries
             .iter()

@@ -33,7 +33,9 @@ pub fn write_run(dir: RunDir, sc: &Scenario, result: &RunResult, command: &str) 
 }
 
 fn plots(n: usize, tr: &Trace) -> Result<Vec<String>, PlotError> {
-    let per_auv = |f: &dyn Fn(&super::world::TraceRow) -> (f64, f64), k: usize| tr.rows.iter().filter(|r| r.auv == k).map(f).collect::<Vec<_>>();
+    let per_auv = |f: &dyn Fn(&super::world::TraceRow) -> (f64, f64), k: usize| {
+        tr.rows.iter().filter(|r| r.auv == k).map(f).collect::<Vec<_>>()
+    };
     let mut tracks = Vec::new();
     for k in 0..n {
         tracks.push(Series::new(format!("auv{k} true"), per_auv(&|r| (r.true_x, r.true_y), k)));
@@ -43,7 +45,8 @@ fn plots(n: usize, tr: &Trace) -> Result<Vec<String>, PlotError> {
     let mut errors = Vec::new();
     for k in 0..n {
         errors.push(Series::new(format!("auv{k} true error"), per_auv(&|r| (r.t, r.error), k)));
-        let modelled: Vec<(f64, f64)> = tr.rows.iter().filter(|r| r.auv == k).filter_map(|r| r.modelled.map(|m| (r.t, m))).collect();
+        let modelled: Vec<(f64, f64)> =
+            tr.rows.iter().filter(|r| r.auv == k).filter_map(|r| r.modelled.map(|m| (r.t, m))).collect();
         if !modelled.is_empty() {
             errors.push(Series::new(format!("auv{k} modelled"), modelled));
         }
@@ -98,7 +101,22 @@ fn report(sc: &Scenario, r: &RunResult, svgs: &[String]) -> String {
             ]
         })
         .collect();
-    h.table(&["AUV", "mean [m]", "RMS", "p95", "max", "CEP50", "modelled", "ranges rx/tx", "status rx/tx", "mean dist [m]", "limit viol. %"], &rows);
+    h.table(
+        &[
+            "AUV",
+            "mean [m]",
+            "RMS",
+            "p95",
+            "max",
+            "CEP50",
+            "modelled",
+            "ranges rx/tx",
+            "status rx/tx",
+            "mean dist [m]",
+            "limit viol. %",
+        ],
+        &rows,
+    );
     if let Some(p) = &r.planner {
         h.paragraph(&format!(
             "Planner: {} decisions, {} deadline misses, levels requested {}, mean levels searched {:.2}, {} failed decisions, {} waiting for reports.",

@@ -5,8 +5,8 @@
 
 use crate::policy::{CnaCommand, CnaPolicy, PolicyContext};
 use coopnav_core::Vec3;
-use coopnav_plan::{AuvError, AuvForecast, ErrorModel, LookAheadPlanner, PlanError, PlanInput, PlannerConfig};
 use coopnav_plan::Planner as _;
+use coopnav_plan::{AuvError, AuvForecast, ErrorModel, LookAheadPlanner, PlanError, PlanInput, PlannerConfig};
 use serde::Serialize;
 
 /// The planner's error model (eq. 1) tracked per AUV between decisions.
@@ -103,9 +103,19 @@ impl AuvForecast for Known<'_> {
 
 impl PlannerPolicy {
     /// `n` survey AUVs; `lost_pings` = Some(likelihood) models lost pings, None is the thesis.
-    pub fn new(cfg: PlannerConfig, n: usize, sigma0: f64, eps0: f64, lost_pings: Option<PingLikelihood>) -> Result<Self, PlanError> {
+    pub fn new(
+        cfg: PlannerConfig,
+        n: usize,
+        sigma0: f64,
+        eps0: f64,
+        lost_pings: Option<PingLikelihood>,
+    ) -> Result<Self, PlanError> {
         let tracker = ErrorTracker::new(n, cfg.error, cfg.motion.tau, sigma0, eps0);
-        let stats = PlannerStats { levels_requested: cfg.look_ahead + 1, min_levels_searched: usize::MAX, ..PlannerStats::default() };
+        let stats = PlannerStats {
+            levels_requested: cfg.look_ahead + 1,
+            min_levels_searched: usize::MAX,
+            ..PlannerStats::default()
+        };
         Ok(PlannerPolicy { planner: LookAheadPlanner::new(cfg)?, tracker, lost_pings, stats, levels_total: 0 })
     }
 
@@ -173,12 +183,20 @@ impl CnaPolicy for PlannerPolicy {
 mod tests {
     use super::*;
     use coopnav_core::Heading;
-    use coopnav_plan::{CnaKind, CnaPose, Deadline, DistanceLimits, FnForecast, MotionConfig, PenaltyCase, SearchConfig};
+    use coopnav_plan::{
+        CnaKind, CnaPose, Deadline, DistanceLimits, FnForecast, MotionConfig, PenaltyCase, SearchConfig,
+    };
 
     fn cfg() -> PlannerConfig {
         PlannerConfig {
             look_ahead: 2,
-            motion: MotionConfig { speed: 2.0, tau: 30.0, heading_options: 5, max_turn_rate_deg_s: 4.0, cna: CnaKind::Asc {} },
+            motion: MotionConfig {
+                speed: 2.0,
+                tau: 30.0,
+                heading_options: 5,
+                max_turn_rate_deg_s: 4.0,
+                cna: CnaKind::Asc {},
+            },
             error: ErrorModel::default(),
             limits: DistanceLimits::default(),
             penalties: PenaltyCase::C1.penalties(),

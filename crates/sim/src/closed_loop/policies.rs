@@ -12,7 +12,8 @@ use coopnav_plan::{CnaPose, Deadline, LookAheadPlanner, PlanError};
 use thiserror::Error;
 
 /// Every policy name, the planner first.
-pub const POLICY_NAMES: [&str; 8] = ["planner", "none", "racetrack", "zigzag", "centroid", "trail", "relay", "open-loop"];
+pub const POLICY_NAMES: [&str; 8] =
+    ["planner", "none", "racetrack", "zigzag", "centroid", "trail", "relay", "open-loop"];
 
 #[derive(Debug, Error)]
 pub enum PolicyError {
@@ -63,7 +64,11 @@ pub fn survey_area(sc: &Scenario) -> Rect {
 /// The CNA's start pose.
 pub fn cna_start(sc: &Scenario) -> CnaPose {
     let z = sc.cna.auv.as_ref().map_or(0.0, |a| a.depth);
-    CnaPose { pos: Vec3::new(sc.cna.x, sc.cna.y, z), heading: Heading::from(CompassDeg(sc.cna.heading_compass_deg)), pitch: 0.0 }
+    CnaPose {
+        pos: Vec3::new(sc.cna.x, sc.cna.y, z),
+        heading: Heading::from(CompassDeg(sc.cna.heading_compass_deg)),
+        pitch: 0.0,
+    }
 }
 
 /// A checked policy name with whatever it needs precomputed (the open-loop plan), so Monte
@@ -143,7 +148,9 @@ fn open_loop(sc: &Scenario) -> Result<TimedWaypoints, PlanError> {
     let mut planner = LookAheadPlanner::new(cfg)?;
     let run = runner::run(&mission, &mut planner, &|_| {}).map_err(|e| PlanError::Input(e.to_string()))?;
     let tau = sc.comms.tau;
-    Ok(TimedWaypoints { waypoints: run.decisions.iter().enumerate().map(|(i, d)| ((i + 1) as f64 * tau, d.next.pos)).collect() })
+    Ok(TimedWaypoints {
+        waypoints: run.decisions.iter().enumerate().map(|(i, d)| ((i + 1) as f64 * tau, d.next.pos)).collect(),
+    })
 }
 
 /// The link model the world uses (kept here so the planner's lost-ping likelihood and the

@@ -3,15 +3,17 @@
 //! before anything runs; every error names the file, the field and what is allowed.
 
 use crate::hbl::config::Sensors;
-use crate::scenario_file::{self, overlay};
 pub use crate::scenario_file::ScenarioError;
-use coopnav_acomms::tl::analytic::Thorp;
+use crate::scenario_file::{self, overlay};
 use coopnav_acomms::selector::AdaptiveConfig;
+use coopnav_acomms::tl::analytic::Thorp;
 use coopnav_acomms::{Rate, SuccessModel};
 use coopnav_core::{Bathymetry, CompassDeg, DepthTarget, Heading, Lawnmower, Shelf};
 use coopnav_nav::{AuvParams, RangeNoise};
 use coopnav_plan::predict::{PredictorConfig, WaypointUse};
-use coopnav_plan::{CnaKind, Deadline, DistanceLimits, ErrorModel, MotionConfig, PenaltyCase, PlannerConfig, SearchConfig};
+use coopnav_plan::{
+    CnaKind, Deadline, DistanceLimits, ErrorModel, MotionConfig, PenaltyCase, PlannerConfig, SearchConfig,
+};
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 
@@ -230,8 +232,20 @@ impl Scenario {
     /// Checks every field against its allowed range.
     pub fn validate(&self, file: &Path) -> Result<(), ScenarioError> {
         let bad = |field: &str, value: String, allowed: &str| ScenarioError::invalid(file, field, value, allowed);
-        let positive = |field: &str, v: f64| if v.is_finite() && v > 0.0 { Ok(()) } else { Err(bad(field, v.to_string(), "a finite number > 0")) };
-        let non_negative = |field: &str, v: f64| if v.is_finite() && v >= 0.0 { Ok(()) } else { Err(bad(field, v.to_string(), "a finite number >= 0")) };
+        let positive = |field: &str, v: f64| {
+            if v.is_finite() && v > 0.0 {
+                Ok(())
+            } else {
+                Err(bad(field, v.to_string(), "a finite number > 0"))
+            }
+        };
+        let non_negative = |field: &str, v: f64| {
+            if v.is_finite() && v >= 0.0 {
+                Ok(())
+            } else {
+                Err(bad(field, v.to_string(), "a finite number >= 0"))
+            }
+        };
         positive("duration_s", self.duration_s)?;
         if !(self.dt > 0.0 && self.dt <= 1.0) {
             return Err(bad("dt", self.dt.to_string(), "0 < dt <= 1 s"));
@@ -251,34 +265,54 @@ impl Scenario {
         }
         positive("fleet.seafloor_depth", f.seafloor_depth)?;
         match f.depth {
-            DepthTarget::Depth { depth } if !(depth >= 0.0 && depth < f.seafloor_depth) => return Err(bad("fleet.depth.depth", depth.to_string(), "0 <= depth < fleet.seafloor_depth")),
-            DepthTarget::Altitude { altitude } if !(altitude > 0.0 && altitude < f.seafloor_depth) => return Err(bad("fleet.depth.altitude", altitude.to_string(), "0 < altitude < fleet.seafloor_depth")),
+            DepthTarget::Depth { depth } if !(depth >= 0.0 && depth < f.seafloor_depth) => {
+                return Err(bad("fleet.depth.depth", depth.to_string(), "0 <= depth < fleet.seafloor_depth"))
+            }
+            DepthTarget::Altitude { altitude } if !(altitude > 0.0 && altitude < f.seafloor_depth) => {
+                return Err(bad("fleet.depth.altitude", altitude.to_string(), "0 < altitude < fleet.seafloor_depth"))
+            }
             _ => {}
         }
         if let Some(shelf) = &f.shelf {
-            Bathymetry::shelf(shelf).map_err(|e| bad("fleet.shelf", e.to_string(), "a valid shelf (extent, spacing, depths > 0)"))?;
+            Bathymetry::shelf(shelf)
+                .map_err(|e| bad("fleet.shelf", e.to_string(), "a valid shelf (extent, spacing, depths > 0)"))?;
             let shallowest = shelf.shallow.min(shelf.deep);
             let clear = match f.depth {
                 DepthTarget::Depth { depth } => depth < shallowest,
                 DepthTarget::Altitude { altitude } => altitude < shallowest,
             };
             if !clear {
-                return Err(bad("fleet.depth", format!("{:?}", f.depth), "shallower than the shelf's shallowest water"));
+                return Err(bad(
+                    "fleet.depth",
+                    format!("{:?}", f.depth),
+                    "shallower than the shelf's shallowest water",
+                ));
             }
         }
         if !(f.current.0.is_finite() && f.current.1.is_finite() && f.current.0.hypot(f.current.1) < f.speed) {
             return Err(bad("fleet.current", format!("{:?}", f.current), "finite, slower than fleet.speed"));
         }
         non_negative("fleet.init_position_sd", f.init_position_sd)?;
-        for (field, v) in [("fleet.origin", f.origin.0.abs().max(f.origin.1.abs())), ("cna.x", self.cna.x.abs()), ("cna.y", self.cna.y.abs())] {
+        for (field, v) in [
+            ("fleet.origin", f.origin.0.abs().max(f.origin.1.abs())),
+            ("cna.x", self.cna.x.abs()),
+            ("cna.y", self.cna.y.abs()),
+        ] {
             if !(v < 10_000.0) {
                 return Err(bad(field, v.to_string(), "coordinates within ±10 000 m (status message range ±16 000 m)"));
             }
         }
         // Every survey waypoint must fit the status message's ±16 000 m fields (with room for drift).
-        let extent = (0..f.n_auvs).flat_map(|k| self.lawnmower(k).waypoints()).map(|(x, y)| x.abs().max(y.abs())).fold(0.0, f64::max);
+        let extent = (0..f.n_auvs)
+            .flat_map(|k| self.lawnmower(k).waypoints())
+            .map(|(x, y)| x.abs().max(y.abs()))
+            .fold(0.0, f64::max);
         if !(extent < 15_000.0) {
-            return Err(bad("fleet", format!("survey reaching {extent:.0} m from the origin"), "every lawnmower within ±15 000 m (status message fields are ±16 000 m)"));
+            return Err(bad(
+                "fleet",
+                format!("survey reaching {extent:.0} m from the origin"),
+                "every lawnmower within ±15 000 m (status message fields are ±16 000 m)",
+            ));
         }
         positive("cna.speed", self.cna.speed)?;
         if let Some(a) = &self.cna.auv {
@@ -286,7 +320,11 @@ impl Scenario {
                 return Err(bad("cna.auv.pitch_options", "0".into(), ">= 1"));
             }
             if !(a.depth >= 0.0 && a.depth < 100.0) {
-                return Err(bad("cna.auv.depth", a.depth.to_string(), "0 <= depth < 100 m (the planner's AUV-CNA depth limits)"));
+                return Err(bad(
+                    "cna.auv.depth",
+                    a.depth.to_string(),
+                    "0 <= depth < 100 m (the planner's AUV-CNA depth limits)",
+                ));
             }
             non_negative("cna.auv.nav_diffusion", a.nav_diffusion)?;
         }
@@ -328,7 +366,8 @@ impl Scenario {
 
     /// The seafloor: the shelf if given, else a flat bottom at `seafloor_depth`.
     pub fn bathymetry(&self) -> Bathymetry {
-        let flat = || Bathymetry::new(-20_000.0, -20_000.0, 40_000.0, 40_000.0, 2, 2, vec![self.fleet.seafloor_depth; 4]);
+        let flat =
+            || Bathymetry::new(-20_000.0, -20_000.0, 40_000.0, 40_000.0, 2, 2, vec![self.fleet.seafloor_depth; 4]);
         let grid = match &self.fleet.shelf {
             Some(shelf) => Bathymetry::shelf(shelf),
             None => flat(),
@@ -422,7 +461,8 @@ mod tests {
         assert_eq!((s.planner.heading_options, s.planner.look_ahead), (5, 5));
         Scenario::bench().validate(Path::new("bench")).unwrap();
         // The commented-out options of the example are valid too.
-        let options = EXAMPLE.replace("# status_adaptive", "status_adaptive").replace("# shelf", "shelf").replace("# auv", "auv");
+        let options =
+            EXAMPLE.replace("# status_adaptive", "status_adaptive").replace("# shelf", "shelf").replace("# auv", "auv");
         let s = Scenario::parse(&options, Path::new("options.toml")).unwrap();
         assert!(s.comms.status_adaptive.is_some() && s.fleet.shelf.is_some() && s.cna.auv.is_some());
         let survey_s = Scenario::bench().lawnmower(0).path_length() / 1.5;
@@ -456,7 +496,8 @@ mod tests {
         assert!(e.contains("comms.cna_rate"), "{e}");
         let e = err(&EXAMPLE.replace("speed = 1.5", "speed = -1.5"));
         assert!(e.contains("fleet.speed"), "{e}");
-        let e = err(&EXAMPLE.replace("gps_sd = 1.0", "gps_sd = 1.0\nauv = { pitch_options = 0, depth = 10.0, nav_diffusion = 0.01 }"));
+        let e = err(&EXAMPLE
+            .replace("gps_sd = 1.0", "gps_sd = 1.0\nauv = { pitch_options = 0, depth = 10.0, nav_diffusion = 0.01 }"));
         assert!(e.contains("cna.auv.pitch_options"), "{e}");
         let e = err(&EXAMPLE.replace("lane_length = 800.0", "lane_length = 20000.0"));
         assert!(e.contains("field fleet") && e.contains("15 000"), "{e}");

@@ -34,7 +34,15 @@ fn monte_carlo_is_identical_on_one_and_two_threads() {
 
 /// Mean of the errors of AUV 0 over [from, to).
 fn window(r: &RunResult, from: f64, to: f64) -> f64 {
-    let rows: Vec<f64> = r.trace.as_ref().unwrap().rows.iter().filter(|x| x.auv == 0 && x.t >= from && x.t < to).map(|x| x.error).collect();
+    let rows: Vec<f64> = r
+        .trace
+        .as_ref()
+        .unwrap()
+        .rows
+        .iter()
+        .filter(|x| x.auv == 0 && x.t >= from && x.t < to)
+        .map(|x| x.error)
+        .collect();
     rows.iter().sum::<f64>() / rows.len() as f64
 }
 
@@ -62,7 +70,10 @@ fn lost_packets_degrade_gracefully() {
     let r = one_run(&sc, "planner", 3, true, &faults);
     assert!(r.fleet.healthy);
     let trace = r.trace.as_ref().unwrap();
-    assert!(trace.rows.iter().all(|x| x.error.is_finite() && x.est_x.is_finite() && x.modelled.is_none_or(f64::is_finite)));
+    assert!(trace
+        .rows
+        .iter()
+        .all(|x| x.error.is_finite() && x.est_x.is_finite() && x.modelled.is_none_or(f64::is_finite)));
     let p = r.planner.as_ref().unwrap();
     assert_eq!(p.failures, 0);
     assert_eq!(p.decisions, 30);
@@ -94,8 +105,12 @@ fn run_directory_holds_data_plots_and_a_report_referencing_every_plot() {
         assert!(svg.contains("<svg"), "{file}");
         assert!(html.contains(&format!("id=\"{file}\"")), "report lacks {file}");
     }
-    assert!(!html.contains("<script") && !html.contains("src=\"http"), "self-contained: no scripts, no fetched resources");
-    let summary: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    assert!(
+        !html.contains("<script") && !html.contains("src=\"http"),
+        "self-contained: no scripts, no fetched resources"
+    );
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
     assert_eq!(summary["auvs"].as_array().unwrap().len(), 2);
     // Recording changes nothing in the results.
     let plain = one_run(&sc, "planner", 1, false, &Faults::default());
@@ -123,7 +138,8 @@ fn altitude_keeping_follows_the_shelf() {
     let mut sc = short(1, 900.0);
     // Lanes run north; the shelf deepens eastwards, so turn the lanes east to cross it.
     sc.fleet.lane_heading_compass_deg = 90.0;
-    sc.fleet.shelf = Some(coopnav_core::Shelf { shallow: 30.0, deep: 90.0, x_shallow: 0.0, x_deep: 800.0, ..Default::default() });
+    sc.fleet.shelf =
+        Some(coopnav_core::Shelf { shallow: 30.0, deep: 90.0, x_shallow: 0.0, x_deep: 800.0, ..Default::default() });
     sc.fleet.depth = coopnav_core::DepthTarget::Altitude { altitude: 15.0 };
     sc.validate(std::path::Path::new("t")).unwrap();
     let r = one_run(&sc, "planner", 4, true, &Faults::default());

@@ -14,7 +14,9 @@ use crate::hbl::noise::{normal, CompassBias};
 use crate::policy::{CnaCommand, PolicyContext};
 use coopnav_acomms::node_report::{NodeReport, VehicleType};
 use coopnav_acomms::selector::{AdaptiveBins, Choice, FixedRate, Outcome, RatePolicy};
-use coopnav_core::{wrap_pi, Bathymetry, DepthTarget, Heading, Iver2, Iver2Params, Iver2State, SeedStream, Vec3, Waypoint};
+use coopnav_core::{
+    wrap_pi, Bathymetry, DepthTarget, Heading, Iver2, Iver2Params, Iver2State, SeedStream, Vec3, Waypoint,
+};
 use coopnav_nav::{AuvEkf, RangeMeasurement};
 use coopnav_plan::predict::{StatusReport, UnderwayPredictor};
 use coopnav_plan::{AuvForecast, CnaPose};
@@ -160,7 +162,8 @@ impl SurveyAuv {
         let pts = lawn.waypoints();
         let start = pts[0];
         let heading = pts.get(1).map_or(0.0, |b| (b.1 - start.1).atan2(b.0 - start.0));
-        let waypoints: Vec<Waypoint> = pts.iter().map(|&(x, y)| Waypoint { x, y, target: sc.fleet.depth, speed: sc.fleet.speed }).collect();
+        let waypoints: Vec<Waypoint> =
+            pts.iter().map(|&(x, y)| Waypoint { x, y, target: sc.fleet.depth, speed: sc.fleet.speed }).collect();
         let bottom = bathy.depth_at(start.0, start.1);
         let z0 = match sc.fleet.depth {
             DepthTarget::Depth { depth } => depth,
@@ -227,7 +230,8 @@ impl SurveyAuv {
         let due = self.pending.partition_point(|p| p.0 <= t_next);
         for (t_rx, travel_time, transponder) in self.pending.drain(..due) {
             self.ekf.predict_to(t_rx, yaw_rate);
-            let m = RangeMeasurement { range: sc.filter.range_noise.sound_speed * travel_time, travel_time, transponder };
+            let m =
+                RangeMeasurement { range: sc.filter.range_noise.sound_speed * travel_time, travel_time, transponder };
             if self.ekf.update_range(&m, Some(self.truth.z)).applied() {
                 self.applied += 1;
             }
@@ -236,7 +240,9 @@ impl SurveyAuv {
         let s = &sc.sensors;
         let psi = self.ctrl.state.heading.radians();
         self.ekf.update_speed(self.ctrl.state.speed + s.speed_sd * normal(&mut self.rng_speed));
-        self.ekf.update_heading(wrap_pi(psi + self.compass.at(psi) + s.compass_white_deg.to_radians() * normal(&mut self.rng_white)));
+        self.ekf.update_heading(wrap_pi(
+            psi + self.compass.at(psi) + s.compass_white_deg.to_radians() * normal(&mut self.rng_white),
+        ));
     }
 
     fn error(&self) -> f64 {
@@ -304,7 +310,10 @@ impl Craft {
 fn resolve_time(time_of_day: u32, t_now: f64) -> f64 {
     let day = 86_400.0;
     let base = (t_now / day).floor() * day + time_of_day as f64;
-    [base - day, base, base + day].into_iter().min_by(|a, b| (a - t_now).abs().total_cmp(&(b - t_now).abs())).unwrap_or(base)
+    [base - day, base, base + day]
+        .into_iter()
+        .min_by(|a, b| (a - t_now).abs().total_cmp(&(b - t_now).abs()))
+        .unwrap_or(base)
 }
 
 /// Runs `policy` over scenario `sc` with run seed `seed`; `record` keeps the time series.
@@ -321,7 +330,8 @@ pub fn run(sc: &Scenario, policy: &mut Policy, seed: u64, record: bool, faults: 
     let mut rng_nav = streams.rng(stream::CNA_NAV);
     // An AUV CNA's own navigation error (random walk); an ASC has GPS instead.
     let mut cna_nav_error = (0.0, 0.0);
-    let mut predictors: Vec<UnderwayPredictor> = (0..n).map(|_| UnderwayPredictor::new(sc.predictor_config())).collect();
+    let mut predictors: Vec<UnderwayPredictor> =
+        (0..n).map(|_| UnderwayPredictor::new(sc.predictor_config())).collect();
     let cfg = sc.planner_config();
     let mut model = ErrorTracker::new(n, cfg.error, sc.comms.tau, sc.planner.sigma0, sc.planner.eps0);
     let transmits = policy.as_policy().transmits();
@@ -348,10 +358,15 @@ pub fn run(sc: &Scenario, policy: &mut Policy, seed: u64, record: bool, faults: 
             let t_tx = next_broadcast as f64 * tau;
             next_broadcast += 1;
             let fix = match &sc.cna.auv {
-                None => Vec3::new(cna.pos.x + sc.cna.gps_sd * normal(&mut rng_gps), cna.pos.y + sc.cna.gps_sd * normal(&mut rng_gps), cna.pos.z),
+                None => Vec3::new(
+                    cna.pos.x + sc.cna.gps_sd * normal(&mut rng_gps),
+                    cna.pos.y + sc.cna.gps_sd * normal(&mut rng_gps),
+                    cna.pos.z,
+                ),
                 Some(a) => {
                     let sd = (a.nav_diffusion * if t_tx > 0.0 { tau } else { 0.0 }).sqrt();
-                    cna_nav_error = (cna_nav_error.0 + sd * normal(&mut rng_nav), cna_nav_error.1 + sd * normal(&mut rng_nav));
+                    cna_nav_error =
+                        (cna_nav_error.0 + sd * normal(&mut rng_nav), cna_nav_error.1 + sd * normal(&mut rng_nav));
                     Vec3::new(cna.pos.x + cna_nav_error.0, cna.pos.y + cna_nav_error.1, cna.pos.z)
                 }
             };
@@ -361,10 +376,18 @@ pub fn run(sc: &Scenario, policy: &mut Policy, seed: u64, record: bool, faults: 
                     model.silent(k);
                     continue;
                 }
-                if let Some(p) = predictors[k].position_at(t_tx).filter(|_| predictors[k].reports_received() >= sc.planner.start_after_reports) {
+                if let Some(p) = predictors[k]
+                    .position_at(t_tx)
+                    .filter(|_| predictors[k].reports_received() >= sc.planner.start_after_reports)
+                {
                     model.ping(k, &fix, &p, 1.0);
                 }
-                let rx = sc.comms.success.draw(sc.comms.cna_rate, tl_between(sc, &cna.pos, &a.truth), receiver(false), &mut a.rng_down);
+                let rx = sc.comms.success.draw(
+                    sc.comms.cna_rate,
+                    tl_between(sc, &cna.pos, &a.truth),
+                    receiver(false),
+                    &mut a.rng_down,
+                );
                 let got = rx.frame0() && !silent(k, t_tx);
                 a.down.record(sc.comms.cna_rate.index(), got);
                 if let Some(tr) = trace.as_mut() {
@@ -377,7 +400,8 @@ pub fn run(sc: &Scenario, policy: &mut Policy, seed: u64, record: bool, faults: 
                 }
                 // The broadcast acknowledges the statuses the CNA got; the rest of this AUV's
                 // unacknowledged ones are resolved as lost.
-                let outcomes: Vec<Outcome> = a.unacked.drain(..).map(|slot| Outcome { slot, success: acked[k].contains(&slot) }).collect();
+                let outcomes: Vec<Outcome> =
+                    a.unacked.drain(..).map(|slot| Outcome { slot, success: acked[k].contains(&slot) }).collect();
                 a.selector.feedback(&outcomes, true);
                 a.cna_heard = Some(fix);
                 // OWTT: the AUV moves during the flight; one fixed-point iteration suffices.

@@ -65,17 +65,29 @@ pub fn run_with_progress(opts: &ReproOptions, progress: &(dyn Fn(u64) + Sync)) -
         for p in &c.paired {
             if !p.planner_better {
                 if let Some(b) = find(&c, &p.baseline) {
-                    let _ = writeln!(table, "  where/why vs {}: {}", p.baseline, why(planner, b, p.difference.low <= 0.0));
+                    let _ =
+                        writeln!(table, "  where/why vs {}: {}", p.baseline, why(planner, b, p.difference.low <= 0.0));
                 }
             }
             checks.push(Check::new(
                 format!("N={n}: planner beats {} on mean true error", p.baseline),
                 p.planner_better,
-                format!("planner - {} = {:.2} m [{:.2}, {:.2}]", p.baseline, p.difference.mean, p.difference.low, p.difference.high),
+                format!(
+                    "planner - {} = {:.2} m [{:.2}, {:.2}]",
+                    p.baseline, p.difference.mean, p.difference.low, p.difference.high
+                ),
             ));
         }
-        checks.push(Check::new(format!("N={n}: every filter healthy"), c.policies.iter().all(|s| s.healthy), "no NaN, finite covariances"));
-        checks.push(Check::new(format!("N={n}: planner deadline misses"), planner.deadline_misses == 0, format!("{} misses", planner.deadline_misses)));
+        checks.push(Check::new(
+            format!("N={n}: every filter healthy"),
+            c.policies.iter().all(|s| s.healthy),
+            "no NaN, finite covariances",
+        ));
+        checks.push(Check::new(
+            format!("N={n}: planner deadline misses"),
+            planner.deadline_misses == 0,
+            format!("{} misses", planner.deadline_misses),
+        ));
         table.push('\n');
         data.push(serde_json::to_value(&c).map_err(|e| fail(e.to_string()))?);
     }
@@ -108,7 +120,9 @@ fn why(planner: &PolicySummary, b: &PolicySummary, tie: bool) -> String {
         reasons.push(format!(
             "the planner keeps the CNA within the distance limits ({:.0}% of the time outside vs {:.0}% for {}); \
              its limit penalties cost it geometry the baseline uses freely",
-            100.0 * planner.limit_violation, 100.0 * b.limit_violation, b.policy
+            100.0 * planner.limit_violation,
+            100.0 * b.limit_violation,
+            b.policy
         ));
     }
     if b.downlink_success > planner.downlink_success + 0.01 {
@@ -120,9 +134,18 @@ fn why(planner: &PolicySummary, b: &PolicySummary, tie: bool) -> String {
         ));
     }
     if reasons.is_empty() {
-        reasons.push("no single measured factor stands out; the difference is within run-to-run variation of the geometry".into());
+        reasons.push(
+            "no single measured factor stands out; the difference is within run-to-run variation of the geometry"
+                .into(),
+        );
     }
-    format!("planner {:.2} m vs {} {:.2} m true mean error; {}.", planner.mean_error.mean, b.policy, b.mean_error.mean, reasons.join("; "))
+    format!(
+        "planner {:.2} m vs {} {:.2} m true mean error; {}.",
+        planner.mean_error.mean,
+        b.policy,
+        b.mean_error.mean,
+        reasons.join("; ")
+    )
 }
 
 #[cfg(test)]
@@ -133,7 +156,8 @@ mod tests {
     fn reduced_form_runs_and_the_planner_beats_dead_reckoning() {
         let r = closed_loop_vs_baselines(&ReproOptions { size: Size::Reduced, seed: 1 }).unwrap();
         for n in [1, 3] {
-            let by_name = |name: String| r.checks.iter().find(|c| c.name == name).unwrap_or_else(|| panic!("no check {name}"));
+            let by_name =
+                |name: String| r.checks.iter().find(|c| c.name == name).unwrap_or_else(|| panic!("no check {name}"));
             let dr = by_name(format!("N={n}: planner beats none on mean true error"));
             assert!(dr.passed, "{}", dr.detail);
             assert!(by_name(format!("N={n}: every filter healthy")).passed);

@@ -14,10 +14,26 @@ use std::fmt::Write;
 
 pub fn experiments() -> Vec<Experiment> {
     vec![
-        Experiment { id: "gill-table-5", about: "Gill 2013 Table 5: MSBL vs HBL One vs HBL Two zone error (250 runs)", run: table_5 },
-        Experiment { id: "gill-cycles", about: "Gill 2013 §3.1.2: HBL Short (16 s) vs Long (20 s) cycle, Welch CI", run: cycles },
-        Experiment { id: "gill-table-4", about: "Gill 2013 Table 4: buoy quantisation grid vs buoy/AUV/saturation error", run: table_4 },
-        Experiment { id: "gill-buoy-grid", about: "Gill 2013 §3.1.1: buoy-location grid (zero drift), optimal region", run: buoy_grid_exp },
+        Experiment {
+            id: "gill-table-5",
+            about: "Gill 2013 Table 5: MSBL vs HBL One vs HBL Two zone error (250 runs)",
+            run: table_5,
+        },
+        Experiment {
+            id: "gill-cycles",
+            about: "Gill 2013 §3.1.2: HBL Short (16 s) vs Long (20 s) cycle, Welch CI",
+            run: cycles,
+        },
+        Experiment {
+            id: "gill-table-4",
+            about: "Gill 2013 Table 4: buoy quantisation grid vs buoy/AUV/saturation error",
+            run: table_4,
+        },
+        Experiment {
+            id: "gill-buoy-grid",
+            about: "Gill 2013 §3.1.1: buoy-location grid (zero drift), optimal region",
+            run: buoy_grid_exp,
+        },
     ]
 }
 
@@ -60,7 +76,11 @@ fn mc(id: &str, sc: &Scenario, n: usize, seed: u64) -> Result<McSummary, Experim
 
 fn band(name: &str, s: &Stats, lo: f64, hi: f64, w: f64) -> Check {
     let (l, h) = (lo - w, hi + w);
-    Check::new(name, (l..=h).contains(&s.mean), format!("{:.3} m in [{l:.3}, {h:.3}] (thesis band {lo}–{hi}, widened by {w:.3})", s.mean))
+    Check::new(
+        name,
+        (l..=h).contains(&s.mean),
+        format!("{:.3} m in [{l:.3}, {h:.3}] (thesis band {lo}–{hi}, widened by {w:.3})", s.mean),
+    )
 }
 
 /// x_rel bin of the Table 5 across-path profile (m).
@@ -70,7 +90,11 @@ const PROFILE_BIN_M: f64 = 25.0;
 /// per configuration.
 fn across_path_profile(table: &mut String, configs: &[Configuration], profiles: &[Vec<ProfileBin>]) {
     // Bins every configuration reached (the end bins hold fewer runs).
-    let xs: Vec<f64> = profiles[0].iter().map(|b| b.x_rel).filter(|x| profiles.iter().all(|p| p.iter().any(|b| b.x_rel == *x))).collect();
+    let xs: Vec<f64> = profiles[0]
+        .iter()
+        .map(|b| b.x_rel)
+        .filter(|x| profiles.iter().all(|p| p.iter().any(|b| b.x_rel == *x)))
+        .collect();
     writeln!(table, "\nmean |across-path| error (m) by x_rel bin centre (MSBL keeps it until near the crossing; HBL corrects it early):").ok();
     write!(table, "{:<9}", "x_rel").ok();
     for x in &xs {
@@ -93,7 +117,8 @@ fn approach(s: &McSummary) -> Stats {
 
 fn table_5(o: &ReproOptions) -> Result<ReproReport, ExperimentError> {
     let n = runs(o, 250, 40);
-    let configs = [(Configuration::Msbl, 3.03, 3.30), (Configuration::HblOne, 1.37, 1.90), (Configuration::HblTwo, 1.35, 1.59)];
+    let configs =
+        [(Configuration::Msbl, 3.03, 3.30), (Configuration::HblOne, 1.37, 1.90), (Configuration::HblTwo, 1.35, 1.59)];
     let (mut rows, mut profiles) = (Vec::new(), Vec::new());
     for (c, sim, field) in configs {
         let sc = Scenario::table5(c);
@@ -131,7 +156,11 @@ fn table_5(o: &ReproOptions) -> Result<ReproReport, ExperimentError> {
         .ok();
     }
     let window = Scenario::default().geometry.approach_m;
-    writeln!(table, "par/perp: mean |along|/|across-path| error in the zone; approach: |across| in the {window} m before it").ok();
+    writeln!(
+        table,
+        "par/perp: mean |along|/|across-path| error in the zone; approach: |across| in the {window} m before it"
+    )
+    .ok();
     across_path_profile(&mut table, &configs.map(|c| c.0), &profiles);
     let (msbl, one, two) = (&rows[0].3, &rows[1].3, &rows[2].3);
     let d = welch_95(&two.zone_error, &one.zone_error);
@@ -142,12 +171,21 @@ fn table_5(o: &ReproOptions) -> Result<ReproReport, ExperimentError> {
         Check::new(
             "HBL Two ≤ HBL One + 0.1",
             d.difference <= 0.1 + widen(o, d.se),
-            format!("difference {:.3} m (95% CI {:.3}..{:.3}), allowed ≤ {:.3}", d.difference, d.low, d.high, 0.1 + widen(o, d.se)),
+            format!(
+                "difference {:.3} m (95% CI {:.3}..{:.3}), allowed ≤ {:.3}",
+                d.difference,
+                d.low,
+                d.high,
+                0.1 + widen(o, d.se)
+            ),
         ),
         Check::new(
             "HBL corrects perpendicular error better than MSBL",
             two.zone_perpendicular.mean + widen(o, two.zone_perpendicular.se) < msbl.zone_perpendicular.mean,
-            format!("perpendicular {:.3} (HBL Two) vs {:.3} (MSBL)", two.zone_perpendicular.mean, msbl.zone_perpendicular.mean),
+            format!(
+                "perpendicular {:.3} (HBL Two) vs {:.3} (MSBL)",
+                two.zone_perpendicular.mean, msbl.zone_perpendicular.mean
+            ),
         ),
     ];
     let (a_msbl, a_two) = (approach(msbl), approach(two));
@@ -155,7 +193,10 @@ fn table_5(o: &ReproOptions) -> Result<ReproReport, ExperimentError> {
     checks.push(Check::new(
         "HBL corrects perpendicular error before the zone, MSBL does not (95% CI of MSBL − HBL Two above 0)",
         gap.low > 0.0,
-        format!("across-path error before the zone: HBL Two {:.3} m vs MSBL {:.3} m (difference CI {:.3}..{:.3})", a_two.mean, a_msbl.mean, gap.low, gap.high),
+        format!(
+            "across-path error before the zone: HBL Two {:.3} m vs MSBL {:.3} m (difference CI {:.3}..{:.3})",
+            a_two.mean, a_msbl.mean, gap.low, gap.high
+        ),
     ));
     checks.push(Check::new(
         "filters healthy (finite, covariance positive definite)",
@@ -175,13 +216,33 @@ fn cycles(o: &ReproOptions) -> Result<ReproReport, ExperimentError> {
     let ci = welch_95(&long.zone_error, &short.zone_error);
     let mut table = format!("Gill §3.1.2 — HBL Two, Short (16 s) vs Long (20 s) cycle, {n} runs each\n");
     writeln!(table, "{:<10} {:>18} {:>18}", "cycle", "thesis mean ± SD", "ours mean ± SD").ok();
-    writeln!(table, "{:<10} {:>18} {:>11.3} ± {:.3}", "HBL Short", "1.37 ± 0.76", short.zone_error.mean, short.zone_error.sd).ok();
-    writeln!(table, "{:<10} {:>18} {:>11.3} ± {:.3}", "HBL Long", "1.59 ± 0.95", long.zone_error.mean, long.zone_error.sd).ok();
-    writeln!(table, "Long − Short: thesis 95% CI [0.07, 0.37]; ours {:.3} [{:.3}, {:.3}] (Welch, df {:.0})", ci.difference, ci.low, ci.high, ci.df).ok();
+    writeln!(
+        table,
+        "{:<10} {:>18} {:>11.3} ± {:.3}",
+        "HBL Short", "1.37 ± 0.76", short.zone_error.mean, short.zone_error.sd
+    )
+    .ok();
+    writeln!(
+        table,
+        "{:<10} {:>18} {:>11.3} ± {:.3}",
+        "HBL Long", "1.59 ± 0.95", long.zone_error.mean, long.zone_error.sd
+    )
+    .ok();
+    writeln!(
+        table,
+        "Long − Short: thesis 95% CI [0.07, 0.37]; ours {:.3} [{:.3}, {:.3}] (Welch, df {:.0})",
+        ci.difference, ci.low, ci.high, ci.df
+    )
+    .ok();
     let checks = vec![Check::new(
         "Short ≤ Long",
         short.zone_error.mean <= long.zone_error.mean + widen(o, ci.se),
-        format!("short {:.3} vs long {:.3} (+{:.3} allowed)", short.zone_error.mean, long.zone_error.mean, widen(o, ci.se)),
+        format!(
+            "short {:.3} vs long {:.3} (+{:.3} allowed)",
+            short.zone_error.mean,
+            long.zone_error.mean,
+            widen(o, ci.se)
+        ),
     )
     .known_deviation(CYCLES_DEVIATION)];
     let data = json!({ "runs": n, "short": short, "long": long, "welch_long_minus_short": ci });
@@ -211,9 +272,11 @@ fn table_4(o: &ReproOptions) -> Result<ReproReport, ExperimentError> {
     let n = runs(o, 250, 30);
     let mut base = Scenario::table5(Configuration::HblTwo);
     // Digest §7.4: the buoy zone is centred on the centre of the buoy's initial region.
-    let centre = [(base.buoy.region_x[0] + base.buoy.region_x[1]) / 2.0, (base.buoy.region_y[0] + base.buoy.region_y[1]) / 2.0];
+    let centre =
+        [(base.buoy.region_x[0] + base.buoy.region_x[1]) / 2.0, (base.buoy.region_y[0] + base.buoy.region_y[1]) / 2.0];
     let half = TABLE_4_BUOY_SQUARE_M / 2.0;
-    (base.buoy.region_x, base.buoy.region_y) = ([centre[0] - half, centre[0] + half], [centre[1] - half, centre[1] + half]);
+    (base.buoy.region_x, base.buoy.region_y) =
+        ([centre[0] - half, centre[0] + half], [centre[1] - half, centre[1] + half]);
     let mut rows = Vec::new();
     for (res, tb, ta, ts) in TABLE_4 {
         let mut sc = base.clone();
@@ -225,7 +288,12 @@ fn table_4(o: &ReproOptions) -> Result<ReproReport, ExperimentError> {
     let mut table = format!(
         "Gill Table 4 — buoy quantisation grid, HBL Two, {n} runs per grid (buoy starts in a {TABLE_4_BUOY_SQUARE_M} m square centred at {centre:?}, as is its zone;\n  the square is sized to give the thesis's 0.09 m saturation at 0.2 m, so that cell agrees by construction)\n"
     );
-    writeln!(table, "{:<11} | {:>6} {:>6} {:>6} | {:>7} {:>7} {:>7}", "grid (m)", "buoy", "AUV", "sat", "buoy", "AUV", "sat").ok();
+    writeln!(
+        table,
+        "{:<11} | {:>6} {:>6} {:>6} | {:>7} {:>7} {:>7}",
+        "grid (m)", "buoy", "AUV", "sat", "buoy", "AUV", "sat"
+    )
+    .ok();
     writeln!(table, "{:<11} | {:^20} | {:^23}", "", "thesis", "ours").ok();
     let get = |s: &McSummary, f: fn(&McSummary) -> Option<Stats>| f(s).map_or(f64::NAN, |x| x.mean);
     for (res, tb, ta, ts, s) in &rows {
@@ -251,7 +319,11 @@ fn table_4(o: &ReproOptions) -> Result<ReproReport, ExperimentError> {
     let finest = &rows[5].4;
     let w = welch_95(&finest.zone_error, &std.zone_error);
     let checks = vec![
-        Check::new("no saturation at 1.6×0.6 … 0.5×0.5", (0..3).all(|i| sat(i) == 0.0), format!("{:.3}, {:.3}, {:.3}", sat(0), sat(1), sat(2))),
+        Check::new(
+            "no saturation at 1.6×0.6 … 0.5×0.5",
+            (0..3).all(|i| sat(i) == 0.0),
+            format!("{:.3}, {:.3}, {:.3}", sat(0), sat(1), sat(2)),
+        ),
         Check::new(
             "saturation grows as the grid gets finer",
             (3..6).all(|i| sat(i) >= sat(i - 1)) && sat(5) > 0.0,
@@ -276,7 +348,8 @@ fn buoy_grid_exp(o: &ReproOptions) -> Result<ReproReport, ExperimentError> {
         Size::Reduced => GridSpec { x: [-70.0, 110.0], y: [0.0, 90.0], spacing: 45.0, runs_per_cell: 20 },
     };
     let base = Scenario::table5(Configuration::HblTwo);
-    let cells = buoy_grid(&base, &spec, o.seed, &|_| {}).map_err(|e| ExperimentError::Failed { id: id.into(), message: e.to_string() })?;
+    let cells = buoy_grid(&base, &spec, o.seed, &|_| {})
+        .map_err(|e| ExperimentError::Failed { id: id.into(), message: e.to_string() })?;
     let best = optimal_region(&cells, 0.10);
     let on_path: Vec<_> = cells.iter().filter(|c| c.y == spec.y[0]).collect();
     let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len().max(1) as f64;
@@ -301,13 +374,29 @@ fn buoy_grid_exp(o: &ReproOptions) -> Result<ReproReport, ExperimentError> {
         }
         table.push('\n');
     }
-    writeln!(table, "optimal region (within 10% of best): {} cells, mean {best_mean:.3} m (thesis ≈ 1–1.5 m)", best.len()).ok();
+    writeln!(
+        table,
+        "optimal region (within 10% of best): {} cells, mean {best_mean:.3} m (thesis ≈ 1–1.5 m)",
+        best.len()
+    )
+    .ok();
     writeln!(table, "buoy on the path (y = {}): mean {path_mean:.3} m (thesis ≈ 3–3.5 m, MSBL-like)", spec.y[0]).ok();
     let mut path_errors: Vec<f64> = on_path.iter().map(|c| c.zone_error.mean).collect();
     path_errors.sort_by(f64::total_cmp);
-    let mirrored: Vec<String> = on_path.iter().filter(|c| c.zone_error.mean > 5.0).map(|c| format!("{:.0}", c.x)).collect();
-    writeln!(table, "  median {:.3} m; cells above 5 m at x = [{}]: a buoy on the path near the AUV's start puts buoy and ship", path_errors[path_errors.len() / 2], mirrored.join(", ")).ok();
-    writeln!(table, "  on the path line, so y and −y fit (nearly) all ranges; with Q^A = 0.255 m² per 0.1 s the filter follows the").ok();
+    let mirrored: Vec<String> =
+        on_path.iter().filter(|c| c.zone_error.mean > 5.0).map(|c| format!("{:.0}", c.x)).collect();
+    writeln!(
+        table,
+        "  median {:.3} m; cells above 5 m at x = [{}]: a buoy on the path near the AUV's start puts buoy and ship",
+        path_errors[path_errors.len() / 2],
+        mirrored.join(", ")
+    )
+    .ok();
+    writeln!(
+        table,
+        "  on the path line, so y and −y fit (nearly) all ranges; with Q^A = 0.255 m² per 0.1 s the filter follows the"
+    )
+    .ok();
     writeln!(table, "  ranges into the mirror solution and the AUV, steering on it, leaves the path (`coopnav hbl simulate --run I`).").ok();
     let checks = vec![
         Check::new(
@@ -315,7 +404,11 @@ fn buoy_grid_exp(o: &ReproOptions) -> Result<ReproReport, ExperimentError> {
             (1.0 - widen(o, best_se)..=1.5 + widen(o, best_se)).contains(&best_mean),
             format!("{best_mean:.3} m, band widened by {:.3}", widen(o, best_se)),
         ),
-        Check::new("buoy on the path is worse than the optimal region", path_mean > best_mean, format!("{path_mean:.3} vs {best_mean:.3}")),
+        Check::new(
+            "buoy on the path is worse than the optimal region",
+            path_mean > best_mean,
+            format!("{path_mean:.3} vs {best_mean:.3}"),
+        ),
     ];
     let data = json!({ "spec": spec, "cells": cells, "optimal_region": best });
     Ok(ReproReport { id: id.into(), table, checks, data })

@@ -15,7 +15,10 @@
 use super::{Check, ExperimentError, ReproOptions, ReproReport, Size};
 use crate::predeploy::{self, Mission, Summary};
 use coopnav_core::{DepthProfile, Heading, Lawnmower, Track, Vec3};
-use coopnav_plan::{CnaKind, CnaPose, Deadline, DistanceLimits, ErrorModel, LookAheadPlanner, MotionConfig, PenaltyCase, PlannerConfig, SearchConfig};
+use coopnav_plan::{
+    CnaKind, CnaPose, Deadline, DistanceLimits, ErrorModel, LookAheadPlanner, MotionConfig, PenaltyCase, PlannerConfig,
+    SearchConfig,
+};
 use rayon::prelude::*;
 use serde::Serialize;
 use std::fmt::Write;
@@ -85,7 +88,11 @@ fn adjacent_lawnmowers(n: usize, areas: Areas, variable_depth: bool) -> Result<V
     const PERIOD: [f64; 5] = [600.0, 500.0, 700.0, 450.0, 550.0];
     (0..n)
         .map(|k| {
-            let depth = if variable_depth { DepthProfile::Sinusoid { mean: MEAN[k % 5], amplitude: 10.0, period: PERIOD[k % 5] } } else { DepthProfile::Constant { depth: 90.0 } };
+            let depth = if variable_depth {
+                DepthProfile::Sinusoid { mean: MEAN[k % 5], amplitude: 10.0, period: PERIOD[k % 5] }
+            } else {
+                DepthProfile::Constant { depth: 90.0 }
+            };
             let m = Lawnmower {
                 origin: (areas.width * k as f64, 0.0),
                 lane_heading: Heading::from_radians(std::f64::consts::FRAC_PI_2),
@@ -102,7 +109,15 @@ fn adjacent_lawnmowers(n: usize, areas: Areas, variable_depth: bool) -> Result<V
 
 /// The Table 6.1 survey (digest §9).
 fn small_lawnmower() -> Result<Vec<Track>, ExperimentError> {
-    let m = Lawnmower { origin: (0.0, 0.0), lane_heading: Heading::from_radians(std::f64::consts::FRAC_PI_2), lane_length: 200.0, spacing: -25.0, lanes: 5, speed: 1.0, depth: DepthProfile::Constant { depth: 90.0 } };
+    let m = Lawnmower {
+        origin: (0.0, 0.0),
+        lane_heading: Heading::from_radians(std::f64::consts::FRAC_PI_2),
+        lane_length: 200.0,
+        spacing: -25.0,
+        lanes: 5,
+        speed: 1.0,
+        depth: DepthProfile::Constant { depth: 90.0 },
+    };
     Ok(vec![m.track(1.0).map_err(|e| fail("track", e.to_string()))?])
 }
 
@@ -125,7 +140,15 @@ fn mission(tracks: &[Track], cfg: PlannerConfig, start: Vec3, end_time: Option<f
 }
 
 /// Runs every set-up (in parallel, merged in order).
-fn sweep(id: &str, setups: &[Setup], tau: f64, case: PenaltyCase, tracks: &[Track], start: Vec3, end: Option<f64>) -> Result<Vec<Row>, ExperimentError> {
+fn sweep(
+    id: &str,
+    setups: &[Setup],
+    tau: f64,
+    case: PenaltyCase,
+    tracks: &[Track],
+    start: Vec3,
+    end: Option<f64>,
+) -> Result<Vec<Row>, ExperimentError> {
     setups
         .par_iter()
         .map(|s| {
@@ -140,13 +163,71 @@ fn sweep(id: &str, setups: &[Setup], tau: f64, case: PenaltyCase, tracks: &[Trac
 /// Thesis rows: (CNA is AUV, speed, A, B (0 = none), L, avg cost, max error, RMS error).
 type ThesisRow = (bool, f64, usize, usize, usize, f64, f64, f64);
 
-const T53: [ThesisRow; 6] = [(true, 4.0, 3, 6, 3, 142.0, 8.27, 6.75), (false, 4.0, 6, 0, 3, 150.0, 8.67, 7.02), (true, 4.0, 5, 4, 3, 150.0, 8.62, 6.92), (true, 4.0, 5, 3, 3, 150.7, 8.39, 6.99), (true, 4.0, 7, 4, 2, 153.3, 9.36, 7.02), (true, 3.5, 3, 3, 3, 154.3, 9.24, 7.14)];
-const T54: [ThesisRow; 6] = [(true, 4.0, 3, 6, 3, 142.0, 8.27, 6.75), (true, 4.0, 6, 3, 3, 156.1, 8.37, 7.10), (true, 4.0, 5, 3, 3, 150.7, 8.39, 6.99), (true, 4.0, 4, 5, 3, 158.5, 8.39, 7.14), (false, 4.0, 5, 0, 3, 165.9, 8.40, 7.31), (true, 3.0, 3, 5, 3, 163.5, 8.51, 7.05)];
-const T55: [ThesisRow; 6] = [(true, 4.0, 3, 6, 3, 142.0, 8.27, 6.75), (true, 3.0, 3, 4, 3, 157.1, 8.62, 6.86), (true, 4.0, 5, 4, 3, 150.0, 8.62, 6.92), (true, 3.0, 3, 3, 3, 156.8, 8.66, 6.94), (true, 4.0, 5, 3, 3, 150.7, 8.39, 6.99), (true, 4.0, 7, 4, 2, 153.3, 9.36, 7.02)];
-const T56: [ThesisRow; 8] = [(false, 4.0, 9, 0, 3, 68.5, 5.44, 4.78), (false, 4.0, 7, 0, 3, 68.7, 5.45, 4.79), (false, 4.0, 8, 0, 3, 68.8, 5.45, 4.79), (false, 4.0, 5, 0, 3, 68.9, 5.48, 4.80), (false, 4.0, 6, 0, 3, 69.2, 5.47, 4.81), (false, 4.0, 4, 0, 3, 69.6, 5.51, 4.81), (false, 4.0, 3, 0, 3, 69.7, 5.49, 4.82), (true, 4.0, 7, 3, 3, 69.7, 5.47, 4.82)];
-const T57: [ThesisRow; 8] = [(false, 4.0, 5, 0, 3, 44.3, 5.25, 4.05), (false, 4.0, 3, 0, 3, 44.5, 5.20, 4.03), (false, 4.0, 6, 0, 3, 44.5, 5.21, 4.06), (false, 4.0, 9, 0, 3, 44.7, 5.53, 4.05), (false, 4.0, 7, 0, 3, 44.5, 5.54, 4.05), (false, 4.0, 4, 0, 3, 44.6, 5.37, 4.06), (false, 4.0, 8, 0, 3, 44.6, 5.47, 4.06), (true, 4.0, 4, 6, 3, 44.6, 5.28, 4.10)];
-const T58: [ThesisRow; 8] = [(true, 4.0, 9, 3, 3, 22.2, 4.82, 3.36), (true, 4.0, 4, 5, 3, 22.2, 4.71, 3.35), (true, 4.0, 8, 3, 3, 22.3, 4.91, 3.37), (false, 4.0, 6, 0, 3, 22.4, 4.76, 3.36), (true, 4.0, 7, 4, 3, 22.4, 4.83, 3.36), (true, 4.0, 7, 6, 3, 22.4, 4.84, 3.38), (true, 4.0, 8, 6, 3, 22.5, 4.82, 3.36), (true, 4.0, 6, 4, 3, 22.5, 4.90, 3.37)];
-const T59: [ThesisRow; 9] = [(false, 4.0, 4, 0, 3, 4.56, 2.77, 2.14), (false, 4.0, 9, 0, 3, 4.57, 2.74, 2.14), (false, 4.0, 6, 0, 3, 4.58, 2.74, 2.14), (false, 4.0, 5, 0, 2, 4.60, 2.89, 2.14), (false, 4.0, 5, 0, 3, 4.60, 2.76, 2.14), (false, 4.0, 7, 0, 2, 4.60, 2.95, 2.15), (false, 4.0, 3, 0, 2, 4.61, 2.84, 2.15), (false, 4.0, 8, 0, 2, 4.62, 2.90, 2.15), (true, 4.0, 9, 2, 3, 4.90, 2.57, 2.21)];
+const T53: [ThesisRow; 6] = [
+    (true, 4.0, 3, 6, 3, 142.0, 8.27, 6.75),
+    (false, 4.0, 6, 0, 3, 150.0, 8.67, 7.02),
+    (true, 4.0, 5, 4, 3, 150.0, 8.62, 6.92),
+    (true, 4.0, 5, 3, 3, 150.7, 8.39, 6.99),
+    (true, 4.0, 7, 4, 2, 153.3, 9.36, 7.02),
+    (true, 3.5, 3, 3, 3, 154.3, 9.24, 7.14),
+];
+const T54: [ThesisRow; 6] = [
+    (true, 4.0, 3, 6, 3, 142.0, 8.27, 6.75),
+    (true, 4.0, 6, 3, 3, 156.1, 8.37, 7.10),
+    (true, 4.0, 5, 3, 3, 150.7, 8.39, 6.99),
+    (true, 4.0, 4, 5, 3, 158.5, 8.39, 7.14),
+    (false, 4.0, 5, 0, 3, 165.9, 8.40, 7.31),
+    (true, 3.0, 3, 5, 3, 163.5, 8.51, 7.05),
+];
+const T55: [ThesisRow; 6] = [
+    (true, 4.0, 3, 6, 3, 142.0, 8.27, 6.75),
+    (true, 3.0, 3, 4, 3, 157.1, 8.62, 6.86),
+    (true, 4.0, 5, 4, 3, 150.0, 8.62, 6.92),
+    (true, 3.0, 3, 3, 3, 156.8, 8.66, 6.94),
+    (true, 4.0, 5, 3, 3, 150.7, 8.39, 6.99),
+    (true, 4.0, 7, 4, 2, 153.3, 9.36, 7.02),
+];
+const T56: [ThesisRow; 8] = [
+    (false, 4.0, 9, 0, 3, 68.5, 5.44, 4.78),
+    (false, 4.0, 7, 0, 3, 68.7, 5.45, 4.79),
+    (false, 4.0, 8, 0, 3, 68.8, 5.45, 4.79),
+    (false, 4.0, 5, 0, 3, 68.9, 5.48, 4.80),
+    (false, 4.0, 6, 0, 3, 69.2, 5.47, 4.81),
+    (false, 4.0, 4, 0, 3, 69.6, 5.51, 4.81),
+    (false, 4.0, 3, 0, 3, 69.7, 5.49, 4.82),
+    (true, 4.0, 7, 3, 3, 69.7, 5.47, 4.82),
+];
+const T57: [ThesisRow; 8] = [
+    (false, 4.0, 5, 0, 3, 44.3, 5.25, 4.05),
+    (false, 4.0, 3, 0, 3, 44.5, 5.20, 4.03),
+    (false, 4.0, 6, 0, 3, 44.5, 5.21, 4.06),
+    (false, 4.0, 9, 0, 3, 44.7, 5.53, 4.05),
+    (false, 4.0, 7, 0, 3, 44.5, 5.54, 4.05),
+    (false, 4.0, 4, 0, 3, 44.6, 5.37, 4.06),
+    (false, 4.0, 8, 0, 3, 44.6, 5.47, 4.06),
+    (true, 4.0, 4, 6, 3, 44.6, 5.28, 4.10),
+];
+const T58: [ThesisRow; 8] = [
+    (true, 4.0, 9, 3, 3, 22.2, 4.82, 3.36),
+    (true, 4.0, 4, 5, 3, 22.2, 4.71, 3.35),
+    (true, 4.0, 8, 3, 3, 22.3, 4.91, 3.37),
+    (false, 4.0, 6, 0, 3, 22.4, 4.76, 3.36),
+    (true, 4.0, 7, 4, 3, 22.4, 4.83, 3.36),
+    (true, 4.0, 7, 6, 3, 22.4, 4.84, 3.38),
+    (true, 4.0, 8, 6, 3, 22.5, 4.82, 3.36),
+    (true, 4.0, 6, 4, 3, 22.5, 4.90, 3.37),
+];
+const T59: [ThesisRow; 9] = [
+    (false, 4.0, 4, 0, 3, 4.56, 2.77, 2.14),
+    (false, 4.0, 9, 0, 3, 4.57, 2.74, 2.14),
+    (false, 4.0, 6, 0, 3, 4.58, 2.74, 2.14),
+    (false, 4.0, 5, 0, 2, 4.60, 2.89, 2.14),
+    (false, 4.0, 5, 0, 3, 4.60, 2.76, 2.14),
+    (false, 4.0, 7, 0, 2, 4.60, 2.95, 2.15),
+    (false, 4.0, 3, 0, 2, 4.61, 2.84, 2.15),
+    (false, 4.0, 8, 0, 2, 4.62, 2.90, 2.15),
+    (true, 4.0, 9, 2, 3, 4.90, 2.57, 2.21),
+];
 
 /// Sort key of a table.
 #[derive(Clone, Copy)]
@@ -174,7 +255,9 @@ const FULL_LEAF_CAP: f64 = 2.2e5;
 
 fn grid_53(size: Size) -> Vec<Setup> {
     let (speeds, a_set, bs, ls): (Vec<f64>, Vec<usize>, Vec<usize>, Vec<usize>) = match size {
-        Size::Full => ((1..=8).map(|i| 0.5 * i as f64).collect(), (3..=9).collect(), vec![0, 2, 3, 4, 5, 6], (0..=3).collect()),
+        Size::Full => {
+            ((1..=8).map(|i| 0.5 * i as f64).collect(), (3..=9).collect(), vec![0, 2, 3, 4, 5, 6], (0..=3).collect())
+        }
         Size::Reduced => (vec![1.0, 4.0], vec![3, 5], vec![0, 3], vec![0, 2]),
     };
     let mut v = Vec::new();
@@ -196,23 +279,53 @@ fn grid_53(size: Size) -> Vec<Setup> {
 /// Reduced missions stop after this long, s (full: the whole survey).
 const REDUCED_END_53: f64 = 900.0;
 
-fn table_53(id: &str, n: usize, sort: SortBy, thesis: &[ThesisRow], opts: &ReproOptions) -> Result<ReproReport, ExperimentError> {
+fn table_53(
+    id: &str,
+    n: usize,
+    sort: SortBy,
+    thesis: &[ThesisRow],
+    opts: &ReproOptions,
+) -> Result<ReproReport, ExperimentError> {
     let tracks = adjacent_lawnmowers(n, AREAS_53, true)?;
     let end = (opts.size == Size::Reduced).then_some(REDUCED_END_53);
     let setups = grid_53(opts.size);
     let mut rows = sweep(id, &setups, 10.0, PenaltyCase::C1, &tracks, Vec3::new(140.0, 0.0, 0.0), end)?;
     rows.sort_by(|x, y| sort.key(&x.summary).total_cmp(&sort.key(&y.summary)));
     let mut table = String::new();
-    let _ = writeln!(table, "{id}: best results, N = {n}, tau = 10 s, canonical geometry (digest A17), {} set-ups", setups.len());
-    let _ = writeln!(table, "{:<31}|{:<31}", "ours: CNA  s   A  B  L   cost  max  rms", " thesis: CNA  s   A  B  L   cost  max  rms");
+    let _ = writeln!(
+        table,
+        "{id}: best results, N = {n}, tau = 10 s, canonical geometry (digest A17), {} set-ups",
+        setups.len()
+    );
+    let _ = writeln!(
+        table,
+        "{:<31}|{:<31}",
+        "ours: CNA  s   A  B  L   cost  max  rms", " thesis: CNA  s   A  B  L   cost  max  rms"
+    );
     let show = thesis.len();
     for (i, t) in thesis.iter().enumerate().take(show) {
-        let ours = rows.get(i).map(|r| format!("{} {:>7.1}{:>5.2}{:>5.2}", r.setup.label(), r.summary.average_cost, r.summary.max_error, r.summary.rms_error)).unwrap_or_default();
+        let ours = rows
+            .get(i)
+            .map(|r| {
+                format!(
+                    "{} {:>7.1}{:>5.2}{:>5.2}",
+                    r.setup.label(),
+                    r.summary.average_cost,
+                    r.summary.max_error,
+                    r.summary.rms_error
+                )
+            })
+            .unwrap_or_default();
         let ts = Setup { b: if t.0 { t.3 } else { 0 }, speed: t.1, a: t.2, l: t.4 };
         let _ = writeln!(table, "{ours:<42}| {} {:>7.1}{:>5.2}{:>5.2}", ts.label(), t.5, t.6, t.7);
     }
     let checks = checks_53(&rows, &setups, n, 10.0);
-    Ok(ReproReport { id: id.into(), table, checks, data: serde_json::to_value(&rows[..rows.len().min(20)]).unwrap_or_default() })
+    Ok(ReproReport {
+        id: id.into(),
+        table,
+        checks,
+        data: serde_json::to_value(&rows[..rows.len().min(20)]).unwrap_or_default(),
+    })
 }
 
 fn checks_53(rows: &[Row], setups: &[Setup], n: usize, tau: f64) -> Vec<Check> {
@@ -222,12 +335,26 @@ fn checks_53(rows: &[Row], setups: &[Setup], n: usize, tau: f64) -> Vec<Check> {
     let floor = (2.0 + 0.1 * tau).sqrt();
     let lowest = rows.iter().map(|r| r.summary.rms_error).fold(f64::INFINITY, f64::min);
     // Best cost among set-ups at the top speed vs the lowest speed.
-    let best_at = |pred: &dyn Fn(&Setup) -> bool| rows.iter().filter(|r| pred(&r.setup)).map(|r| r.summary.average_cost).fold(f64::INFINITY, f64::min);
+    let best_at = |pred: &dyn Fn(&Setup) -> bool| {
+        rows.iter().filter(|r| pred(&r.setup)).map(|r| r.summary.average_cost).fold(f64::INFINITY, f64::min)
+    };
     let (fast, slow) = (best_at(&|s| s.speed == max_speed), best_at(&|s| s.speed < max_speed));
     let (deep, shallow) = (best_at(&|s| s.l == max_l), best_at(&|s| s.l == 0));
     vec![
-        Check::new("best set-up uses the highest CNA speed", best.setup.speed == max_speed, format!("best {} (cost {:.1}); top speed {max_speed} m/s best {fast:.1} vs slower best {slow:.1}", best.setup.label(), best.summary.average_cost)),
-        Check::new("look-ahead helps: best L = max beats best L = 0", deep <= shallow, format!("L = {max_l}: {deep:.1} m^2, L = 0: {shallow:.1} m^2")),
+        Check::new(
+            "best set-up uses the highest CNA speed",
+            best.setup.speed == max_speed,
+            format!(
+                "best {} (cost {:.1}); top speed {max_speed} m/s best {fast:.1} vs slower best {slow:.1}",
+                best.setup.label(),
+                best.summary.average_cost
+            ),
+        ),
+        Check::new(
+            "look-ahead helps: best L = max beats best L = 0",
+            deep <= shallow,
+            format!("L = {max_l}: {deep:.1} m^2, L = 0: {shallow:.1} m^2"),
+        ),
         Check::new(
             "no AUV beats the error floor sqrt(2 sigma^2 + alpha tau) after t = 0",
             rows.iter().all(|r| r.summary.max_error >= floor - 1e-9),
@@ -242,10 +369,19 @@ fn checks_53(rows: &[Row], setups: &[Setup], n: usize, tau: f64) -> Vec<Check> {
 fn per_auv_trend(opts: &ReproOptions) -> Result<(Vec<f64>, Check), ExperimentError> {
     let end = (opts.size == Size::Reduced).then_some(REDUCED_END_53);
     let (a_set, l_max) = if opts.size == Size::Reduced { (vec![3, 5], 2) } else { (vec![3, 5, 7], 3) };
-    let setups: Vec<Setup> = a_set.iter().flat_map(|&a| (0..=l_max).map(move |l| Setup { b: 0, speed: 4.0, a, l })).collect();
+    let setups: Vec<Setup> =
+        a_set.iter().flat_map(|&a| (0..=l_max).map(move |l| Setup { b: 0, speed: 4.0, a, l })).collect();
     let per: Vec<f64> = (1..=5)
         .map(|n| {
-            let rows = sweep("hudson-table-5.3", &setups, 10.0, PenaltyCase::C1, &adjacent_lawnmowers(n, AREAS_53, true)?, Vec3::new(140.0, 0.0, 0.0), end)?;
+            let rows = sweep(
+                "hudson-table-5.3",
+                &setups,
+                10.0,
+                PenaltyCase::C1,
+                &adjacent_lawnmowers(n, AREAS_53, true)?,
+                Vec3::new(140.0, 0.0, 0.0),
+                end,
+            )?;
             Ok(rows.iter().map(|r| r.summary.average_cost).fold(f64::INFINITY, f64::min) / n as f64)
         })
         .collect::<Result<_, ExperimentError>>()?;
@@ -261,7 +397,11 @@ fn per_auv_trend(opts: &ReproOptions) -> Result<(Vec<f64>, Check), ExperimentErr
 fn t53(o: &ReproOptions) -> Result<ReproReport, ExperimentError> {
     let mut r = table_53("hudson-table-5.3", 5, SortBy::Cost, &T53, o)?;
     let (per, check) = per_auv_trend(o)?;
-    let _ = writeln!(r.table, "per-AUV average cost, N = 1..5: {}", per.iter().map(|c| format!("{c:.1}")).collect::<Vec<_>>().join(", "));
+    let _ = writeln!(
+        r.table,
+        "per-AUV average cost, N = 1..5: {}",
+        per.iter().map(|c| format!("{c:.1}")).collect::<Vec<_>>().join(", ")
+    );
     r.checks.push(check);
     Ok(r)
 }
@@ -285,7 +425,14 @@ fn t59(o: &ReproOptions) -> Result<ReproReport, ExperimentError> {
 }
 
 /// Table 6.1 rows: (A, L, s, max error, RMS error).
-const T61: [(usize, usize, f64, f64, f64); 6] = [(7, 5, 3.50, 2.29, 2.22), (7, 5, 3.75, 2.33, 2.22), (9, 2, 4.00, 2.30, 2.22), (8, 4, 3.75, 2.31, 2.22), (8, 3, 3.75, 2.29, 2.22), (9, 4, 4.00, 2.29, 2.22)];
+const T61: [(usize, usize, f64, f64, f64); 6] = [
+    (7, 5, 3.50, 2.29, 2.22),
+    (7, 5, 3.75, 2.33, 2.22),
+    (9, 2, 4.00, 2.30, 2.22),
+    (8, 4, 3.75, 2.31, 2.22),
+    (8, 3, 3.75, 2.29, 2.22),
+    (9, 4, 4.00, 2.29, 2.22),
+];
 
 /// Deepest L per A in Appendix A (digest §5.4).
 const L_MAX_61: [usize; 8] = [9, 7, 6, 5, 5, 5, 4, 4];
@@ -310,27 +457,62 @@ fn t61(opts: &ReproOptions) -> Result<ReproReport, ExperimentError> {
     }
     let tracks = small_lawnmower()?;
     let mut rows = sweep(id, &setups, 30.0, PenaltyCase::C1, &tracks, Vec3::new(140.0, 0.0, 0.0), None)?;
-    rows.sort_by(|x, y| x.summary.rms_error.total_cmp(&y.summary.rms_error).then(x.summary.max_error.total_cmp(&y.summary.max_error)));
+    rows.sort_by(|x, y| {
+        x.summary.rms_error.total_cmp(&y.summary.rms_error).then(x.summary.max_error.total_cmp(&y.summary.max_error))
+    });
     let mut table = String::new();
-    let _ = writeln!(table, "{id}: ASC CNA, one survey AUV, lawnmower at 90 m, tau = 30 s, {} set-ups (sorted by RMS)", setups.len());
+    let _ = writeln!(
+        table,
+        "{id}: ASC CNA, one survey AUV, lawnmower at 90 m, tau = 30 s, {} set-ups (sorted by RMS)",
+        setups.len()
+    );
     let _ = writeln!(table, "{:<36}| thesis:  A  L    s   max   rms", "ours:  A  L    s   max   rms");
     for (i, t) in T61.iter().enumerate() {
         let r = &rows[i];
-        let _ = writeln!(table, "     {:>3}{:>3}{:>5.2}{:>6.2}{:>6.2}{:10}|        {:>3}{:>3}{:>5.2}{:>6.2}{:>6.2}", r.setup.a, r.setup.l, r.setup.speed, r.summary.max_error, r.summary.rms_error, "", t.0, t.1, t.2, t.3, t.4);
+        let _ = writeln!(
+            table,
+            "     {:>3}{:>3}{:>5.2}{:>6.2}{:>6.2}{:10}|        {:>3}{:>3}{:>5.2}{:>6.2}{:>6.2}",
+            r.setup.a, r.setup.l, r.setup.speed, r.summary.max_error, r.summary.rms_error, "", t.0, t.1, t.2, t.3, t.4
+        );
     }
     let best = &rows[0];
     let steps = best.summary.steps as f64;
     // The RMS floor with the t = 0 value (1.414 m) included: sqrt((2 + 5·n)/(n + 1)).
     let rms_floor = ((2.0 + 5.0 * steps) / (steps + 1.0)).sqrt();
-    let greedy2 = rows.iter().filter(|r| r.setup.a == 2 && r.setup.l == 0).map(|r| r.summary.rms_error).fold(f64::INFINITY, f64::min);
+    let greedy2 = rows
+        .iter()
+        .filter(|r| r.setup.a == 2 && r.setup.l == 0)
+        .map(|r| r.summary.rms_error)
+        .fold(f64::INFINITY, f64::min);
     let worst = rows.iter().map(|r| r.summary.rms_error).fold(0.0, f64::max);
     let checks = vec![
-        Check::new("best RMS error near the thesis's 2.22 m (band 2.20-2.32 m)", (2.20..=2.32).contains(&best.summary.rms_error), format!("ours {:.3} m with {}", best.summary.rms_error, best.setup.label())),
-        Check::new("no run beats the sqrt(2 sigma^2 + alpha tau) floor (2.236 m; RMS floor with t = 0 included)", rows.iter().all(|r| r.summary.rms_error >= rms_floor - 1e-9), format!("RMS floor {rms_floor:.4} m for {steps} steps")),
-        Check::new("best set-ups use high CNA speed (>= 3 m/s)", rows[..5].iter().all(|r| r.setup.speed >= 3.0), rows[..5].iter().map(|r| r.setup.label()).collect::<Vec<_>>().join("; ")),
-        Check::new("A = 2, L = 0 (greedy, +-120 deg) is far from the best", greedy2 > best.summary.rms_error + 0.2, format!("best A = 2, L = 0 RMS {greedy2:.2} m; worst run {worst:.2} m (thesis 3.06-3.72)")),
+        Check::new(
+            "best RMS error near the thesis's 2.22 m (band 2.20-2.32 m)",
+            (2.20..=2.32).contains(&best.summary.rms_error),
+            format!("ours {:.3} m with {}", best.summary.rms_error, best.setup.label()),
+        ),
+        Check::new(
+            "no run beats the sqrt(2 sigma^2 + alpha tau) floor (2.236 m; RMS floor with t = 0 included)",
+            rows.iter().all(|r| r.summary.rms_error >= rms_floor - 1e-9),
+            format!("RMS floor {rms_floor:.4} m for {steps} steps"),
+        ),
+        Check::new(
+            "best set-ups use high CNA speed (>= 3 m/s)",
+            rows[..5].iter().all(|r| r.setup.speed >= 3.0),
+            rows[..5].iter().map(|r| r.setup.label()).collect::<Vec<_>>().join("; "),
+        ),
+        Check::new(
+            "A = 2, L = 0 (greedy, +-120 deg) is far from the best",
+            greedy2 > best.summary.rms_error + 0.2,
+            format!("best A = 2, L = 0 RMS {greedy2:.2} m; worst run {worst:.2} m (thesis 3.06-3.72)"),
+        ),
     ];
-    Ok(ReproReport { id: id.into(), table, checks, data: serde_json::to_value(&rows[..rows.len().min(30)]).unwrap_or_default() })
+    Ok(ReproReport {
+        id: id.into(),
+        table,
+        checks,
+        data: serde_json::to_value(&rows[..rows.len().min(30)]).unwrap_or_default(),
+    })
 }
 
 /// Sec. 5.1–5.2: every Table 5.2 case, ASC, N = 2 and 5, τ = 10 s, A = 5, s = 1.5 m/s.
@@ -345,7 +527,8 @@ fn penalty_cases(opts: &ReproOptions) -> Result<ReproReport, ExperimentError> {
     let mut data = Vec::new();
     for n in [2usize, 5] {
         let tracks = adjacent_lawnmowers(n, AREAS_52, false)?;
-        let jobs: Vec<(PenaltyCase, usize)> = PenaltyCase::ALL.iter().flat_map(|&c| ls.iter().map(move |&l| (c, l))).collect();
+        let jobs: Vec<(PenaltyCase, usize)> =
+            PenaltyCase::ALL.iter().flat_map(|&c| ls.iter().map(move |&l| (c, l))).collect();
         let rows: Vec<(PenaltyCase, usize, Summary)> = jobs
             .par_iter()
             .map(|&(case, l)| {
@@ -356,11 +539,22 @@ fn penalty_cases(opts: &ReproOptions) -> Result<ReproReport, ExperimentError> {
             .collect::<Result<_, ExperimentError>>()?;
         let _ = writeln!(table, "N = {n}: case, L -> avg cost (m^2), min/max distance (m), steps too close/too far");
         for (case, l, s) in &rows {
-            let _ = writeln!(table, "  {:>4} L={l}: {:>8.1} {:>6.0} {:>6.0} {:>4} {:>4}", case.id(), s.average_cost, s.min_distance, s.max_distance, s.too_close_steps, s.too_far_steps);
+            let _ = writeln!(
+                table,
+                "  {:>4} L={l}: {:>8.1} {:>6.0} {:>6.0} {:>4} {:>4}",
+                case.id(),
+                s.average_cost,
+                s.min_distance,
+                s.max_distance,
+                s.too_close_steps,
+                s.too_far_steps
+            );
         }
         let get = |c: PenaltyCase, l: usize| rows.iter().find(|r| r.0 == c && r.1 == l).map(|r| r.2.clone());
         let l_top = *ls.last().unwrap_or(&0);
-        if let (Some(none), Some(orig), Some(five)) = (get(PenaltyCase::C2, l_top), get(PenaltyCase::C1, l_top), get(PenaltyCase::C8, l_top)) {
+        if let (Some(none), Some(orig), Some(five)) =
+            (get(PenaltyCase::C2, l_top), get(PenaltyCase::C1, l_top), get(PenaltyCase::C8, l_top))
+        {
             let viol = |s: &Summary| s.too_close_steps + s.too_far_steps;
             if n == 2 {
                 checks.push(Check::new(
@@ -372,7 +566,15 @@ fn penalty_cases(opts: &ReproOptions) -> Result<ReproReport, ExperimentError> {
                 // Sec. 5.2: N = 5 is at the limit (the farthest AUV starts 1862 m away): the
                 // squared and cubed primary penalties hold the maximum distance at its start value
                 // (cases 1, 2a, 8, 9 may let it rise with L, as in the thesis); no penalty does not.
-                let powered = [PenaltyCase::C4, PenaltyCase::C5, PenaltyCase::C6, PenaltyCase::C7, PenaltyCase::C10, PenaltyCase::C12, PenaltyCase::C13];
+                let powered = [
+                    PenaltyCase::C4,
+                    PenaltyCase::C5,
+                    PenaltyCase::C6,
+                    PenaltyCase::C7,
+                    PenaltyCase::C10,
+                    PenaltyCase::C12,
+                    PenaltyCase::C13,
+                ];
                 let held = powered.iter().filter_map(|&c| get(c, l_top)).map(|s| s.max_distance).fold(0.0, f64::max);
                 checks.push(Check::new(
                     format!("N = 5: squared/cubed penalties (cases 4-7, 10, 12, 13) hold the max distance near the initial 1862 m, no penalty exceeds it (L = {l_top})"),
@@ -396,7 +598,10 @@ fn penalty_cases(opts: &ReproOptions) -> Result<ReproReport, ExperimentError> {
                 checks.push(Check::new(
                     format!("N = 5: cases 1 and 8 cost less than no penalty (L = {l_top})"),
                     orig.average_cost < none.average_cost && five.average_cost < none.average_cost,
-                    format!("avg cost: case 1 {:.1}, case 8 {:.1}, case 2 {:.1} m^2", orig.average_cost, five.average_cost, none.average_cost),
+                    format!(
+                        "avg cost: case 1 {:.1}, case 8 {:.1}, case 2 {:.1} m^2",
+                        orig.average_cost, five.average_cost, none.average_cost
+                    ),
                 ));
             }
         }
@@ -408,9 +613,14 @@ fn penalty_cases(opts: &ReproOptions) -> Result<ReproReport, ExperimentError> {
     let orig = PenaltyCase::C1.penalties().primary;
     let flip = |d_max: f64, d_min: f64| {
         use coopnav_plan::{Penalty, Violation};
-        orig.apply(5.0, &Violation { too_close: 0.0, too_far: d_max - 1000.0 }) > orig.apply(5.0, &Violation { too_close: 100.0 - d_min, too_far: 0.0 })
+        orig.apply(5.0, &Violation { too_close: 0.0, too_far: d_max - 1000.0 })
+            > orig.apply(5.0, &Violation { too_close: 100.0 - d_min, too_far: 0.0 })
     };
-    checks.push(Check::new("eq. 13: Orig. prefers too close once d_max + 2 d_min > 1200 m", flip(1003.0, 99.0) && !flip(1001.0, 99.0), "1003 + 2*99 = 1201 flips; 1001 + 2*99 = 1199 does not".to_string()));
+    checks.push(Check::new(
+        "eq. 13: Orig. prefers too close once d_max + 2 d_min > 1200 m",
+        flip(1003.0, 99.0) && !flip(1001.0, 99.0),
+        "1003 + 2*99 = 1201 flips; 1001 + 2*99 = 1199 does not".to_string(),
+    ));
     Ok(ReproReport { id: id.into(), table, checks, data: serde_json::Value::Array(data) })
 }
 
@@ -418,7 +628,11 @@ fn penalty_cases(opts: &ReproOptions) -> Result<ReproReport, ExperimentError> {
 /// Returns the max distance over the second half with case 1 and with case 2.
 fn far_start_drift(opts: &ReproOptions) -> Result<(f64, f64), ExperimentError> {
     let end = if opts.size == Size::Reduced { 2000.0 } else { 5000.0 };
-    let track = Track::new(vec![coopnav_core::TrackSample { t: 0.0, pos: Vec3::new(0.0, 0.0, 90.0) }, coopnav_core::TrackSample { t: end, pos: Vec3::new(0.0, 1.5 * end, 90.0) }]).map_err(|e| fail("drift", e.to_string()))?;
+    let track = Track::new(vec![
+        coopnav_core::TrackSample { t: 0.0, pos: Vec3::new(0.0, 0.0, 90.0) },
+        coopnav_core::TrackSample { t: end, pos: Vec3::new(0.0, 1.5 * end, 90.0) },
+    ])
+    .map_err(|e| fail("drift", e.to_string()))?;
     let run = |case| -> Result<f64, ExperimentError> {
         let s = Setup { b: 0, speed: 1.5, a: 5, l: 0 };
         let m = mission(std::slice::from_ref(&track), planner(&s, 10.0, case), Vec3::new(1046.0, 0.0, 0.0), None);
@@ -434,14 +648,34 @@ fn far_start_drift(opts: &ReproOptions) -> Result<(f64, f64), ExperimentError> {
 pub fn experiments() -> Vec<super::Experiment> {
     use super::Experiment as E;
     vec![
-        E { id: "hudson-table-5.3", about: "Hudson Table 5.3: N = 5 variable-depth sweep, sorted by average cost (+ per-AUV cost vs N)", run: t53 },
-        E { id: "hudson-table-5.4", about: "Hudson Table 5.4: N = 5 variable-depth sweep, sorted by max error", run: t54 },
-        E { id: "hudson-table-5.5", about: "Hudson Table 5.5: N = 5 variable-depth sweep, sorted by RMS error", run: t55 },
+        E {
+            id: "hudson-table-5.3",
+            about: "Hudson Table 5.3: N = 5 variable-depth sweep, sorted by average cost (+ per-AUV cost vs N)",
+            run: t53,
+        },
+        E {
+            id: "hudson-table-5.4",
+            about: "Hudson Table 5.4: N = 5 variable-depth sweep, sorted by max error",
+            run: t54,
+        },
+        E {
+            id: "hudson-table-5.5",
+            about: "Hudson Table 5.5: N = 5 variable-depth sweep, sorted by RMS error",
+            run: t55,
+        },
         E { id: "hudson-table-5.6", about: "Hudson Table 5.6: N = 4 variable-depth sweep", run: t56 },
         E { id: "hudson-table-5.7", about: "Hudson Table 5.7: N = 3 variable-depth sweep", run: t57 },
         E { id: "hudson-table-5.8", about: "Hudson Table 5.8: N = 2 variable-depth sweep", run: t58 },
         E { id: "hudson-table-5.9", about: "Hudson Table 5.9: N = 1 variable-depth sweep", run: t59 },
-        E { id: "hudson-table-6.1", about: "Hudson Table 6.1 / Appendix A: pre-deployment sweep, one AUV, tau = 30 s", run: t61 },
-        E { id: "hudson-penalty-cases", about: "Hudson Sec. 5.1-5.2: every Table 5.2 distance-penalty case, N = 2 and 5", run: penalty_cases },
+        E {
+            id: "hudson-table-6.1",
+            about: "Hudson Table 6.1 / Appendix A: pre-deployment sweep, one AUV, tau = 30 s",
+            run: t61,
+        },
+        E {
+            id: "hudson-penalty-cases",
+            about: "Hudson Sec. 5.1-5.2: every Table 5.2 distance-penalty case, N = 2 and 5",
+            run: penalty_cases,
+        },
     ]
 }

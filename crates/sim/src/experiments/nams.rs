@@ -53,19 +53,45 @@ fn tables_9_11(opts: &ReproOptions) -> Result<ReproReport, ExperimentError> {
 }
 
 fn best_control<'a>(r: &'a ExperimentResult, scenario: &str) -> Option<&'a Cell> {
-    r.cells.iter().filter(|c| c.scenario == scenario && c.control).max_by(|a, b| a.mean.bandwidth.total_cmp(&b.mean.bandwidth))
+    r.cells
+        .iter()
+        .filter(|c| c.scenario == scenario && c.control)
+        .max_by(|a, b| a.mean.bandwidth.total_cmp(&b.mean.bandwidth))
 }
 
 /// Runs the experiment on `tl` and formats the report.
-pub fn report(opts: &ReproOptions, tl: &dyn TransmissionLoss, tl_label: &str, progress: &(dyn Fn(u64) + Sync)) -> Result<ReproReport, ExperimentError> {
+pub fn report(
+    opts: &ReproOptions,
+    tl: &dyn TransmissionLoss,
+    tl_label: &str,
+    progress: &(dyn Fn(u64) + Sync),
+) -> Result<ReproReport, ExperimentError> {
     let cfg = config(opts);
     let fail = |message: String| ExperimentError::Failed { id: ID.into(), message };
     let result = run_experiment(&cfg, tl, progress).map_err(|e| fail(e.to_string()))?;
     let adaptive = Behaviour::Adaptive(Default::default()).label();
     let mut t = String::new();
-    let _ = writeln!(t, "Nams Tables 9–11 — TL: {tl_label}; synthetic shelf 20→60 m; {} repetitions per cell", cfg.repetitions);
+    let _ = writeln!(
+        t,
+        "Nams Tables 9–11 — TL: {tl_label}; synthetic shelf 20→60 m; {} repetitions per cell",
+        cfg.repetitions
+    );
     let _ = writeln!(t, "\nAll behaviours (mean ± sd over repetitions; bandwidth = received payload bytes, both directions, per second;\n net = less frame-0 header and status bytes; header B = tracking header per packet; queue = header entries per packet;\n est. err = mean (max) horizontal error of the shadow estimate of the collaborator):");
-    let _ = writeln!(t, "{:<11} {:<16} {:>5} {:>13} {:>7} {:>15} {:>6} {:>6} {:>9} {:>7} {:>13}", "scenario", "behaviour", "slot", "BW B/s", "net", "status period s", "duty", "score", "header B", "queue", "est. err m");
+    let _ = writeln!(
+        t,
+        "{:<11} {:<16} {:>5} {:>13} {:>7} {:>15} {:>6} {:>6} {:>9} {:>7} {:>13}",
+        "scenario",
+        "behaviour",
+        "slot",
+        "BW B/s",
+        "net",
+        "status period s",
+        "duty",
+        "score",
+        "header B",
+        "queue",
+        "est. err m"
+    );
     for c in &result.cells {
         let m = &c.mean;
         let _ = writeln!(
@@ -75,8 +101,13 @@ pub fn report(opts: &ReproOptions, tl: &dyn TransmissionLoss, tl_label: &str, pr
             m.header_bytes_mean, m.queue_len_mean, m.estimate_error_mean, m.estimate_error_max
         );
     }
-    let _ = writeln!(t, "\nTables 9–11: adaptive vs best control (the control with the highest bandwidth), ours | thesis:");
-    let _ = writeln!(t, "{:<11} {:<24} {:>9} {:>9} {:>18} | {:>9} {:>9}", "scenario", "metric", "adaptive", "control", "(which)", "adaptive", "control");
+    let _ =
+        writeln!(t, "\nTables 9–11: adaptive vs best control (the control with the highest bandwidth), ours | thesis:");
+    let _ = writeln!(
+        t,
+        "{:<11} {:<24} {:>9} {:>9} {:>18} | {:>9} {:>9}",
+        "scenario", "metric", "adaptive", "control", "(which)", "adaptive", "control"
+    );
     let mut checks = Vec::new();
     let mut notes = Vec::new();
     let mut data = Vec::new();
@@ -87,10 +118,20 @@ pub fn report(opts: &ReproOptions, tl: &dyn TransmissionLoss, tl_label: &str, pr
         let (Some(a), Some(c)) = (result.cell(scenario, &adaptive), best_control(&result, scenario)) else {
             return Err(fail(format!("{scenario}: missing adaptive or control results")));
         };
-        let ours = [(a.mean.bandwidth, c.mean.bandwidth), (a.mean.status_period, c.mean.status_period), (a.mean.duty_cycle, c.mean.duty_cycle)];
-        for (k, name) in ["Table 9 bandwidth B/s", "Table 10 status period s", "Table 11 duty cycle"].iter().enumerate() {
-            let _ = writeln!(t, "{:<11} {:<24} {:>9.2} {:>9.2} {:>18} | {:>9.2} {:>9.2}", scenario, name, ours[k].0, ours[k].1, c.behaviour, thesis[k].0, thesis[k].1);
-            let same_direction = (ours[k].0 - ours[k].1).signum() == (thesis[k].0 - thesis[k].1).signum() || (thesis[k].0 == thesis[k].1 && (ours[k].0 - ours[k].1).abs() < 0.05);
+        let ours = [
+            (a.mean.bandwidth, c.mean.bandwidth),
+            (a.mean.status_period, c.mean.status_period),
+            (a.mean.duty_cycle, c.mean.duty_cycle),
+        ];
+        for (k, name) in ["Table 9 bandwidth B/s", "Table 10 status period s", "Table 11 duty cycle"].iter().enumerate()
+        {
+            let _ = writeln!(
+                t,
+                "{:<11} {:<24} {:>9.2} {:>9.2} {:>18} | {:>9.2} {:>9.2}",
+                scenario, name, ours[k].0, ours[k].1, c.behaviour, thesis[k].0, thesis[k].1
+            );
+            let same_direction = (ours[k].0 - ours[k].1).signum() == (thesis[k].0 - thesis[k].1).signum()
+                || (thesis[k].0 == thesis[k].1 && (ours[k].0 - ours[k].1).abs() < 0.05);
             if k > 0 && !same_direction {
                 notes.push(format!(
                     "{scenario}, {name}: ours {:.2} vs {:.2} does not follow the thesis's direction ({:.2} vs {:.2}); our channel (analytic TL on a synthetic shelf) is not the thesis's BELLHOP/Bedford Basin channel, so success rates per range, and with them how often the adaptive selector stays silent, differ.",
@@ -102,7 +143,10 @@ pub fn report(opts: &ReproOptions, tl: &dyn TransmissionLoss, tl_label: &str, pr
         checks.push(Check::new(
             format!("{scenario}: adaptive beats the best control on bandwidth"),
             a.mean.bandwidth > c.mean.bandwidth,
-            format!("adaptive {:.2} B/s vs {} {:.2} B/s (2 s.e. of the difference {:.2}); thesis {:.1} vs {:.1}", a.mean.bandwidth, c.behaviour, c.mean.bandwidth, margin, thesis[0].0, thesis[0].1),
+            format!(
+                "adaptive {:.2} B/s vs {} {:.2} B/s (2 s.e. of the difference {:.2}); thesis {:.1} vs {:.1}",
+                a.mean.bandwidth, c.behaviour, c.mean.bandwidth, margin, thesis[0].0, thesis[0].1
+            ),
         ));
         data.push(serde_json::json!({"scenario": scenario, "adaptive": a, "best_control": c, "thesis": {"bandwidth": thesis[0], "status_period": thesis[1], "duty_cycle": thesis[2]}}));
     }
@@ -113,7 +157,12 @@ pub fn report(opts: &ReproOptions, tl: &dyn TransmissionLoss, tl_label: &str, pr
         }
     }
     let _ = writeln!(t, "\nAbsolute values differ from the thesis by construction (no Bedford Basin bathymetry, analytic TL); the thesis's own channel gave rate 1 only ≈ 38 % success in scenario 1.");
-    Ok(ReproReport { id: ID.into(), table: t, checks, data: serde_json::json!({"cells": result.cells, "tables": data}) })
+    Ok(ReproReport {
+        id: ID.into(),
+        table: t,
+        checks,
+        data: serde_json::json!({"cells": result.cells, "tables": data}),
+    })
 }
 
 #[cfg(test)]
@@ -132,7 +181,12 @@ mod tests {
 
     #[test]
     fn identical_on_one_and_two_threads() {
-        let cfg = ExperimentConfig { scenarios: vec![Scenario::thesis(2)], repetitions: 3, max_time: Some(1800.0), ..ExperimentConfig::default() };
+        let cfg = ExperimentConfig {
+            scenarios: vec![Scenario::thesis(2)],
+            repetitions: 3,
+            max_time: Some(1800.0),
+            ..ExperimentConfig::default()
+        };
         let tl = default_tl();
         let go = |threads| {
             let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();

@@ -1,10 +1,10 @@
 //! The HBL scenario: every number of the Gill simulation (digest §5), with the digest's
 //! reconstructions as defaults, read from TOML (`deny_unknown_fields`) and validated before a run.
 
+use super::log_format::LogFormat;
 use coopnav_nav::codec::Zone;
 use coopnav_nav::cycle::{Configuration, Cycle, CycleError};
 use coopnav_nav::{AuvParams, Outriggers, ParamError, SurfaceParams};
-use super::log_format::LogFormat;
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
@@ -254,7 +254,13 @@ pub struct Quantisation {
 
 impl Default for Quantisation {
     fn default() -> Self {
-        Quantisation { ship_resolution: [1.6, 0.6], centre_e: 21.0, north_min: -53.6, buoy_resolution: [1.6, 0.6], buoy_centre: None }
+        Quantisation {
+            ship_resolution: [1.6, 0.6],
+            centre_e: 21.0,
+            north_min: -53.6,
+            buoy_resolution: [1.6, 0.6],
+            buoy_centre: None,
+        }
     }
 }
 
@@ -282,7 +288,12 @@ pub struct Filters {
 
 impl Default for Filters {
     fn default() -> Self {
-        Filters { auv: AuvParams::default(), ship: SurfaceParams::ship(), buoy: SurfaceParams::buoy(), outriggers: Outriggers::default() }
+        Filters {
+            auv: AuvParams::default(),
+            ship: SurfaceParams::ship(),
+            buoy: SurfaceParams::buoy(),
+            outriggers: Outriggers::default(),
+        }
     }
 }
 
@@ -361,7 +372,12 @@ impl Scenario {
         let g = &self.geometry;
         check("geometry.auv_speed", g.auv_speed, g.auv_speed > 0.0 && g.auv_speed <= 4.0, "must be in (0, 4] m/s")?;
         check("geometry.ship_speed", g.ship_speed, g.ship_speed > 0.0 && g.ship_speed <= 4.0, "must be in (0, 4] m/s")?;
-        check("geometry.ship_start_x", g.ship_start_x, g.ship_start_x > g.auv_start_x, "must be east of geometry.auv_start_x")?;
+        check(
+            "geometry.ship_start_x",
+            g.ship_start_x,
+            g.ship_start_x > g.auv_start_x,
+            "must be east of geometry.auv_start_x",
+        )?;
         check("geometry.zone_max", g.zone_max, g.zone_max > g.zone_min, "must exceed geometry.zone_min")?;
         check("geometry.end_margin", g.end_margin, g.end_margin >= 0.0, NONNEG)?;
         check("geometry.approach_m", g.approach_m, g.approach_m >= 0.0, NONNEG)?;
@@ -399,15 +415,40 @@ impl Scenario {
         check("acoustic.p_* (sum)", total, (total - 1.0).abs() < 1e-9, "the four probabilities must sum to 1")?;
         check("acoustic.slight_max_m", a.slight_max_m, a.slight_max_m >= 0.0, NONNEG)?;
         check("acoustic.outlier_min_m", a.outlier_min_m, a.outlier_min_m >= 0.0, NONNEG)?;
-        check("acoustic.outlier_max_m", a.outlier_max_m, a.outlier_max_m >= a.outlier_min_m, "must be ≥ acoustic.outlier_min_m")?;
-        check("acoustic.sound_speed", a.sound_speed, a.sound_speed >= 1300.0 && a.sound_speed <= 1700.0, "must be in [1300, 1700] m/s")?;
+        check(
+            "acoustic.outlier_max_m",
+            a.outlier_max_m,
+            a.outlier_max_m >= a.outlier_min_m,
+            "must be ≥ acoustic.outlier_min_m",
+        )?;
+        check(
+            "acoustic.sound_speed",
+            a.sound_speed,
+            a.sound_speed >= 1300.0 && a.sound_speed <= 1700.0,
+            "must be in [1300, 1700] m/s",
+        )?;
         let cf = a.sound_speed + a.filter_sound_speed_bias;
-        check("acoustic.filter_sound_speed_bias", a.filter_sound_speed_bias, (1300.0..=1700.0).contains(&cf), "sound speed + bias must stay in [1300, 1700] m/s")?;
+        check(
+            "acoustic.filter_sound_speed_bias",
+            a.filter_sound_speed_bias,
+            (1300.0..=1700.0).contains(&cf),
+            "sound speed + bias must stay in [1300, 1700] m/s",
+        )?;
         check("acoustic.clock_drift_mean_us_h", a.clock_drift_mean_us_h, true, NONNEG)?;
         check("acoustic.clock_drift_sd_us_h", a.clock_drift_sd_us_h, a.clock_drift_sd_us_h >= 0.0, NONNEG)?;
         let b = &self.buoy;
-        check("buoy.region_x[1]", b.region_x[1], b.region_x[1] >= b.region_x[0] && b.region_x[0].is_finite(), "must be ≥ buoy.region_x[0]")?;
-        check("buoy.region_y[1]", b.region_y[1], b.region_y[1] >= b.region_y[0] && b.region_y[0].is_finite(), "must be ≥ buoy.region_y[0]")?;
+        check(
+            "buoy.region_x[1]",
+            b.region_x[1],
+            b.region_x[1] >= b.region_x[0] && b.region_x[0].is_finite(),
+            "must be ≥ buoy.region_x[0]",
+        )?;
+        check(
+            "buoy.region_y[1]",
+            b.region_y[1],
+            b.region_y[1] >= b.region_y[0] && b.region_y[0].is_finite(),
+            "must be ≥ buoy.region_y[0]",
+        )?;
         if let Some([x, y]) = b.fixed {
             check("buoy.fixed[0]", x, true, "must be finite")?;
             check("buoy.fixed[1]", y, true, "must be finite")?;
@@ -446,7 +487,10 @@ mod tests {
     #[test]
     fn defaults_validate_and_toml_overrides() {
         Scenario::default().validate().unwrap();
-        let s = Scenario::from_toml("configuration = 'msbl'\ncycle = 'msbl'\n[acoustic]\np_drop = 0.2\np_slightly_long = 0.4\n").unwrap();
+        let s = Scenario::from_toml(
+            "configuration = 'msbl'\ncycle = 'msbl'\n[acoustic]\np_drop = 0.2\np_slightly_long = 0.4\n",
+        )
+        .unwrap();
         assert_eq!(s.configuration, Configuration::Msbl);
         assert_eq!(s.acoustic.p_drop, 0.2);
     }

@@ -79,7 +79,12 @@ pub struct GridCell {
 
 /// Runs every cell with the same base seed (common random numbers across cells); `progress`
 /// receives the number of finished cells.
-pub fn buoy_grid(base: &Scenario, spec: &GridSpec, seed: u64, progress: &(dyn Fn(u64) + Sync)) -> Result<Vec<GridCell>, GridError> {
+pub fn buoy_grid(
+    base: &Scenario,
+    spec: &GridSpec,
+    seed: u64,
+    progress: &(dyn Fn(u64) + Sync),
+) -> Result<Vec<GridCell>, GridError> {
     spec.validate()?;
     let mut out = Vec::new();
     for (i, [x, y]) in spec.cells().into_iter().enumerate() {
@@ -127,7 +132,11 @@ mod tests {
     #[test]
     fn optimal_region_tolerance() {
         let s = |m| Stats { n: 2, mean: m, sd: 0.0, se: 0.0 };
-        let cells = [GridCell { x: 0.0, y: 0.0, zone_error: s(1.0) }, GridCell { x: 1.0, y: 0.0, zone_error: s(1.05) }, GridCell { x: 2.0, y: 0.0, zone_error: s(2.0) }];
+        let cells = [
+            GridCell { x: 0.0, y: 0.0, zone_error: s(1.0) },
+            GridCell { x: 1.0, y: 0.0, zone_error: s(1.05) },
+            GridCell { x: 2.0, y: 0.0, zone_error: s(2.0) },
+        ];
         assert_eq!(optimal_region(&cells, 0.1).len(), 2);
     }
 }

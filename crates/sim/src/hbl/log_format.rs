@@ -55,17 +55,25 @@ mod tests {
     fn storage_without_an_origin_is_rejected() {
         let e = Scenario::from_toml("[log]\nbuoy_fix_storage = \"f32\"\n").unwrap_err().to_string();
         assert!(e.contains("log.buoy_fix_storage") && e.contains("log.geodetic_origin"), "{e}");
-        let e = Scenario::from_toml("[log]\ngeodetic_origin = { lat_deg = 91.0, lon_deg = 0.0 }\n").unwrap_err().to_string();
+        let e = Scenario::from_toml("[log]\ngeodetic_origin = { lat_deg = 91.0, lon_deg = 0.0 }\n")
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("latitude 91"), "{e}");
         let e = Scenario::from_toml("[log]\nf32 = true\n").unwrap_err().to_string();
         assert!(e.contains("f32"), "{e}");
-        let sc = Scenario::from_toml("[log]\ngeodetic_origin = { lat_deg = 47.97, lon_deg = -116.5 }\nbuoy_fix_storage = \"f32_lost_bit\"\n").unwrap();
+        let sc = Scenario::from_toml(
+            "[log]\ngeodetic_origin = { lat_deg = 47.97, lon_deg = -116.5 }\nbuoy_fix_storage = \"f32_lost_bit\"\n",
+        )
+        .unwrap();
         assert_eq!(sc.log.buoy_fix_storage, LatLonStorage::F32LostBit);
     }
 
     #[test]
     fn stored_fixes_land_on_the_float32_grid() {
-        let sc = Scenario::from_toml("[log]\ngeodetic_origin = { lat_deg = 47.97, lon_deg = -116.5 }\nbuoy_fix_storage = \"f32\"\n").unwrap();
+        let sc = Scenario::from_toml(
+            "[log]\ngeodetic_origin = { lat_deg = 47.97, lon_deg = -116.5 }\nbuoy_fix_storage = \"f32\"\n",
+        )
+        .unwrap();
         let f = sc.log.frame().unwrap();
         let (e, n) = sc.log.stored_buoy_fix(20.3, 80.1);
         // Moved by at most half a grid step (0.285 m E, 0.212 m N), and exactly onto f32 values.

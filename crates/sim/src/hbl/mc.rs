@@ -71,20 +71,37 @@ pub struct McResult {
 
 /// Runs `runs` simulations of `sc` with seeds `run_seed(base_seed, i)`; `progress` is called with
 /// the number of finished runs.
-pub fn monte_carlo(sc: &Scenario, runs: usize, base_seed: u64, progress: &(dyn Fn(u64) + Sync)) -> Result<McResult, McError> {
+pub fn monte_carlo(
+    sc: &Scenario,
+    runs: usize,
+    base_seed: u64,
+    progress: &(dyn Fn(u64) + Sync),
+) -> Result<McResult, McError> {
     simulate_all(sc, runs, base_seed, None, progress)
 }
 
 /// [`monte_carlo`] that also bins every step of the same runs into an error profile against x_rel
 /// (`bin_m` metres per bin), so the runs are simulated once for both.
-pub fn monte_carlo_profiled(sc: &Scenario, runs: usize, base_seed: u64, bin_m: f64, progress: &(dyn Fn(u64) + Sync)) -> Result<McResult, McError> {
+pub fn monte_carlo_profiled(
+    sc: &Scenario,
+    runs: usize,
+    base_seed: u64,
+    bin_m: f64,
+    progress: &(dyn Fn(u64) + Sync),
+) -> Result<McResult, McError> {
     if !(bin_m.is_finite() && bin_m > 0.0) {
         return Err(McError::BadBin(bin_m));
     }
     simulate_all(sc, runs, base_seed, Some(bin_m), progress)
 }
 
-fn simulate_all(sc: &Scenario, runs: usize, base_seed: u64, bin_m: Option<f64>, progress: &(dyn Fn(u64) + Sync)) -> Result<McResult, McError> {
+fn simulate_all(
+    sc: &Scenario,
+    runs: usize,
+    base_seed: u64,
+    bin_m: Option<f64>,
+    progress: &(dyn Fn(u64) + Sync),
+) -> Result<McResult, McError> {
     sc.validate()?;
     if runs < 2 {
         return Err(McError::TooFewRuns);
@@ -151,7 +168,11 @@ pub struct WelchCi {
 pub fn welch_95(a: &Stats, b: &Stats) -> WelchCi {
     let (va, vb) = (a.sd.powi(2) / a.n as f64, b.sd.powi(2) / b.n as f64);
     let se = (va + vb).sqrt();
-    let df = if se > 0.0 { (va + vb).powi(2) / (va.powi(2) / (a.n as f64 - 1.0) + vb.powi(2) / (b.n as f64 - 1.0)) } else { f64::INFINITY };
+    let df = if se > 0.0 {
+        (va + vb).powi(2) / (va.powi(2) / (a.n as f64 - 1.0) + vb.powi(2) / (b.n as f64 - 1.0))
+    } else {
+        f64::INFINITY
+    };
     let t = t_975(df);
     let difference = a.mean - b.mean;
     WelchCi { difference, se, df, low: difference - t * se, high: difference + t * se }
@@ -165,7 +186,8 @@ pub fn t_975(df: f64) -> f64 {
         return z;
     }
     let (z3, z5, z7) = (z.powi(3), z.powi(5), z.powi(7));
-    z + (z3 + z) / (4.0 * df) + (5.0 * z5 + 16.0 * z3 + 3.0 * z) / (96.0 * df * df)
+    z + (z3 + z) / (4.0 * df)
+        + (5.0 * z5 + 16.0 * z3 + 3.0 * z) / (96.0 * df * df)
         + (3.0 * z7 + 19.0 * z5 + 17.0 * z3 - 15.0 * z) / (384.0 * df.powi(3))
 }
 

@@ -92,7 +92,10 @@ impl BuoyMotion {
     /// Draws initial position and drift; always the same number of draws.
     pub fn draw(b: &Buoy, rng: &mut ChaCha8Rng) -> Self {
         let (ux, uy): (f64, f64) = (rng.gen(), rng.gen());
-        let p0 = b.fixed.unwrap_or([b.region_x[0] + ux * (b.region_x[1] - b.region_x[0]), b.region_y[0] + uy * (b.region_y[1] - b.region_y[0])]);
+        let p0 = b.fixed.unwrap_or([
+            b.region_x[0] + ux * (b.region_x[1] - b.region_x[0]),
+            b.region_y[0] + uy * (b.region_y[1] - b.region_y[0]),
+        ]);
         let speed = (b.drift_mean + b.drift_sd * normal(rng)).max(0.0);
         let (dir, kind, sense): (f64, f64, f64) = (rng.gen::<f64>() * TAU, rng.gen(), rng.gen());
         if b.drift == Drift::None || speed == 0.0 {

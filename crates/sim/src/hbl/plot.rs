@@ -49,7 +49,8 @@ pub fn heat_map(cells: &[GridCell], spacing: f64) -> Result<String, PlotError> {
 
 /// True and estimated AUV tracks, the ship and (when there is one) the buoy.
 pub fn tracks(rows: &[TraceRow]) -> Result<String, PlotError> {
-    let line = |f: fn(&TraceRow) -> Option<[f64; 2]>| rows.iter().filter_map(f).map(|p| (p[0], p[1])).collect::<Vec<_>>();
+    let line =
+        |f: fn(&TraceRow) -> Option<[f64; 2]>| rows.iter().filter_map(f).map(|p| (p[0], p[1])).collect::<Vec<_>>();
     let mut series = vec![
         Series::new("AUV true", line(|r| Some(r.auv_true))),
         Series::new("AUV estimated", line(|r| Some(r.auv_est))),

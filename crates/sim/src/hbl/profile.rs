@@ -51,7 +51,13 @@ pub(crate) fn merge_bins(per_run: impl Iterator<Item = BinSums>, bin_m: f64) -> 
     }
     total
         .into_iter()
-        .map(|(k, [n, e, pa, pe])| ProfileBin { x_rel: (k as f64 + 0.5) * bin_m, samples: n as usize, error: e / n, parallel: pa / n, perpendicular: pe / n })
+        .map(|(k, [n, e, pa, pe])| ProfileBin {
+            x_rel: (k as f64 + 0.5) * bin_m,
+            samples: n as usize,
+            error: e / n,
+            parallel: pa / n,
+            perpendicular: pe / n,
+        })
         .collect()
 }
 
@@ -81,7 +87,13 @@ mod tests {
     #[test]
     fn profile_is_identical_on_one_and_two_threads() {
         let sc = Scenario::default();
-        let on = |n| rayon::ThreadPoolBuilder::new().num_threads(n).build().unwrap().install(|| error_profile(&sc, 6, 3, 10.0).unwrap());
+        let on = |n| {
+            rayon::ThreadPoolBuilder::new()
+                .num_threads(n)
+                .build()
+                .unwrap()
+                .install(|| error_profile(&sc, 6, 3, 10.0).unwrap())
+        };
         assert_eq!(on(1), on(2));
     }
 

@@ -63,7 +63,11 @@ impl Coefficient {
             Coefficient::AuvQEn => 3.0,
             Coefficient::BuoyPEn => 30.0,
             Coefficient::BuoyPSpeed | Coefficient::BuoyQSpeed | Coefficient::AuvQSpeed | Coefficient::ShipQSpeed => 5.0,
-            Coefficient::BuoyPHeading | Coefficient::BuoyQHeading | Coefficient::AuvQHeading | Coefficient::AuvQBias | Coefficient::ShipQHeading => four_pi2,
+            Coefficient::BuoyPHeading
+            | Coefficient::BuoyQHeading
+            | Coefficient::AuvQHeading
+            | Coefficient::AuvQBias
+            | Coefficient::ShipQHeading => four_pi2,
             Coefficient::BuoyQEn | Coefficient::ShipQEn => 10.0,
             Coefficient::AuvRangeSigmaTime => 10.0 / 1500.0,
             // SDs: the square roots of the speed and heading variance bounds.
@@ -264,7 +268,13 @@ mod tests {
         let mut base = Scenario::default();
         // Start from a deliberately poor Q^A so there is something to find.
         Coefficient::AuvQEn.set(&mut base, 2.5);
-        let spec = TuneSpec { coefficients: vec![Coefficient::AuvQEn], objective: Objective::AuvZone, runs: 8, max_iters: 6, seed: 3 };
+        let spec = TuneSpec {
+            coefficients: vec![Coefficient::AuvQEn],
+            objective: Objective::AuvZone,
+            runs: 8,
+            max_iters: 6,
+            seed: 3,
+        };
         let r = tune(&base, &spec).unwrap();
         assert!(r.best_cost <= r.start_cost + 1e-12, "{r:?}");
         let v = r.coefficients[0].1;
@@ -296,7 +306,13 @@ mod tests {
         assert!(matches!(tune(&base, &spec), Err(TuneError::NoCoefficients)));
         let mut off = base.clone();
         Coefficient::BuoyPEn.set(&mut off, 85.0);
-        let spec = TuneSpec { coefficients: vec![Coefficient::BuoyPEn], objective: Objective::BuoyMission, runs: 4, max_iters: 2, seed: 1 };
+        let spec = TuneSpec {
+            coefficients: vec![Coefficient::BuoyPEn],
+            objective: Objective::BuoyMission,
+            runs: 4,
+            max_iters: 2,
+            seed: 1,
+        };
         assert!(matches!(tune(&off, &spec), Err(TuneError::StartOutOfBounds { .. })));
     }
 }

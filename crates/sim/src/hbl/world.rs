@@ -211,7 +211,8 @@ impl<'a> World<'a> {
         let buoy_init = [b0[0] + sc.buoy.init_sd * normal(&mut r_buoy), b0[1] + sc.buoy.init_sd * normal(&mut r_buoy)];
         let clock_rate = {
             let a = &sc.acoustic;
-            let rate = (a.clock_drift_mean_us_h + a.clock_drift_sd_us_h * normal(&mut rng(stream::CLOCK))) * 1e-6 / 3600.0;
+            let rate =
+                (a.clock_drift_mean_us_h + a.clock_drift_sd_us_h * normal(&mut rng(stream::CLOCK))) * 1e-6 / 3600.0;
             if a.clock_drift {
                 rate
             } else {
@@ -272,7 +273,8 @@ impl<'a> World<'a> {
         // The AUV steers on its estimate; the ship's pilot sees the truth.
         let (est, est_psi) = (self.f.auv.position(), self.f.auv.state()[3]);
         let auv_rate = steer(est.1, est_psi, g.path_y, 1.0, sc, sc.control.auv_max_rate_deg_s.to_radians());
-        let ship_rate = steer(self.ship.y, self.ship.psi, g.path_y, -1.0, sc, sc.control.ship_max_rate_deg_s.to_radians());
+        let ship_rate =
+            steer(self.ship.y, self.ship.psi, g.path_y, -1.0, sc, sc.control.ship_max_rate_deg_s.to_radians());
         let measured_rate = auv_rate + sc.sensors.yaw_rate_white_deg_s.to_radians() * normal(&mut self.rng.yaw_rate);
         self.log(t, Record::YawRate { compass_deg_s: -measured_rate.to_degrees() });
         let truth = StepTruth { t, auv_prev: self.auv, ship_prev: self.ship };
@@ -299,7 +301,13 @@ impl<'a> World<'a> {
         let (Some(from), Some((vehicle, kind))) = (self.assignment[idx], content.state()) else { return };
         let frac = ((t_tx - truth.t) / sc.dt).clamp(0.0, 1.0);
         let (pos, speed, psi, zone, bias) = match vehicle {
-            Vehicle::Ship => (Unicycle::lerp(&truth.ship_prev, &self.ship, frac), self.ship.speed, self.ship.psi, self.ship_zone, [0.0, 0.0]),
+            Vehicle::Ship => (
+                Unicycle::lerp(&truth.ship_prev, &self.ship, frac),
+                self.ship.speed,
+                self.ship.psi,
+                self.ship_zone,
+                [0.0, 0.0],
+            ),
             Vehicle::Buoy => (self.buoy_motion.at(t_tx), 0.0, 0.0, self.buoy_zone, sc.buoy.broadcast_bias),
         };
         let transponder = match from {

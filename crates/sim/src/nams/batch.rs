@@ -51,11 +51,16 @@ impl ExperimentResult {
 }
 
 /// Runs the whole experiment; `progress(1)` after every run.
-pub fn run_experiment(cfg: &ExperimentConfig, tl: &dyn TransmissionLoss, progress: &(dyn Fn(u64) + Sync)) -> Result<ExperimentResult, BatchError> {
+pub fn run_experiment(
+    cfg: &ExperimentConfig,
+    tl: &dyn TransmissionLoss,
+    progress: &(dyn Fn(u64) + Sync),
+) -> Result<ExperimentResult, BatchError> {
     cfg.validate().map_err(BatchError::Config)?;
     let bathy = Bathymetry::shelf(&cfg.shelf)?;
     let slot_lens = cfg.behaviours.iter().map(|b| world::slot_length(cfg, b)).collect::<Result<Vec<f64>, _>>()?;
-    let mut keys: Vec<(usize, u64)> = (0..cfg.scenarios.len()).flat_map(|s| slot_lens.iter().map(move |l| (s, l.to_bits()))).collect();
+    let mut keys: Vec<(usize, u64)> =
+        (0..cfg.scenarios.len()).flat_map(|s| slot_lens.iter().map(move |l| (s, l.to_bits()))).collect();
     keys.sort_unstable();
     keys.dedup();
     let prepared: BTreeMap<(usize, u64), Prepared> = keys
@@ -70,7 +75,14 @@ pub fn run_experiment(cfg: &ExperimentConfig, tl: &dyn TransmissionLoss, progres
         .map(|i| {
             let (s, b, rep) = (i / (nb * nr), (i / nr) % nb, i % nr);
             let p = &prepared[&(s, slot_lens[b].to_bits())];
-            let m = world::run(p, &cfg.scenarios[s], cfg, &bathy, &cfg.behaviours[b], run_seed(run_seed(cfg.seed, s as u64), rep as u64));
+            let m = world::run(
+                p,
+                &cfg.scenarios[s],
+                cfg,
+                &bathy,
+                &cfg.behaviours[b],
+                run_seed(run_seed(cfg.seed, s as u64), rep as u64),
+            );
             progress(1);
             m
         })
@@ -82,7 +94,15 @@ pub fn run_experiment(cfg: &ExperimentConfig, tl: &dyn TransmissionLoss, progres
             let (s, b) = (j / nb, j % nb);
             let (mean, sd) = RunMetrics::mean_sd(chunk);
             let beh = &cfg.behaviours[b];
-            Cell { scenario: cfg.scenarios[s].name.clone(), behaviour: beh.label(), control: beh.is_control(), slot_len: slot_lens[b], runs: nr, mean, sd }
+            Cell {
+                scenario: cfg.scenarios[s].name.clone(),
+                behaviour: beh.label(),
+                control: beh.is_control(),
+                slot_len: slot_lens[b],
+                runs: nr,
+                mean,
+                sd,
+            }
         })
         .collect();
     Ok(ExperimentResult { cells })

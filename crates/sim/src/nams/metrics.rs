@@ -97,16 +97,42 @@ impl RunMetrics {
 impl RunMetrics {
     fn fields(&self) -> [f64; 15] {
         [
-            self.bandwidth, self.bandwidth_net, self.duty_cycle, self.status_period, self.status_period_per_direction,
-            self.frequency_score, self.score, self.header_bytes_mean, self.queue_len_mean, self.queue_len_max,
-            self.mean_distance, self.duration, self.transmissions, self.estimate_error_mean, self.estimate_error_max,
+            self.bandwidth,
+            self.bandwidth_net,
+            self.duty_cycle,
+            self.status_period,
+            self.status_period_per_direction,
+            self.frequency_score,
+            self.score,
+            self.header_bytes_mean,
+            self.queue_len_mean,
+            self.queue_len_max,
+            self.mean_distance,
+            self.duration,
+            self.transmissions,
+            self.estimate_error_mean,
+            self.estimate_error_max,
         ]
     }
     fn from_fields(f: [f64; 15]) -> Self {
-        let [bandwidth, bandwidth_net, duty_cycle, status_period, status_period_per_direction, frequency_score, score, header_bytes_mean, queue_len_mean, queue_len_max, mean_distance, duration, transmissions, estimate_error_mean, estimate_error_max] = f;
+        let [bandwidth, bandwidth_net, duty_cycle, status_period, status_period_per_direction, frequency_score, score, header_bytes_mean, queue_len_mean, queue_len_max, mean_distance, duration, transmissions, estimate_error_mean, estimate_error_max] =
+            f;
         RunMetrics {
-            bandwidth, bandwidth_net, duty_cycle, status_period, status_period_per_direction, frequency_score, score, header_bytes_mean,
-            queue_len_mean, queue_len_max, mean_distance, duration, transmissions, estimate_error_mean, estimate_error_max,
+            bandwidth,
+            bandwidth_net,
+            duty_cycle,
+            status_period,
+            status_period_per_direction,
+            frequency_score,
+            score,
+            header_bytes_mean,
+            queue_len_mean,
+            queue_len_max,
+            mean_distance,
+            duration,
+            transmissions,
+            estimate_error_mean,
+            estimate_error_max,
         }
     }
     /// Field-wise mean and sample standard deviation over runs.

@@ -48,7 +48,10 @@ pub fn plans(s: &Scenario) -> [Vec<Waypoint>; 2] {
         depth: coopnav_core::DepthProfile::Constant { depth: 0.0 },
     };
     let wps = |m: Lawnmower| {
-        m.waypoints().into_iter().map(|(x, y)| Waypoint { x, y, target: DepthTarget::Altitude { altitude: s.altitude }, speed: s.speed }).collect()
+        m.waypoints()
+            .into_iter()
+            .map(|(x, y)| Waypoint { x, y, target: DepthTarget::Altitude { altitude: s.altitude }, speed: s.speed })
+            .collect()
     };
     [wps(mower((0.0, 0.0), 0.0)), wps(mower((s.square, s.square), PI))]
 }
@@ -64,10 +67,17 @@ fn sample(v: &Iver2) -> Sample {
 }
 
 /// Flies `scenario` with slots of `slot_len` s and computes the TL of every slot.
-pub fn prepare(scenario: &Scenario, cfg: &ExperimentConfig, bathy: &Bathymetry, tl: &dyn TransmissionLoss, slot_len: f64) -> Result<Prepared, TlError> {
+pub fn prepare(
+    scenario: &Scenario,
+    cfg: &ExperimentConfig,
+    bathy: &Bathymetry,
+    tl: &dyn TransmissionLoss,
+    slot_len: f64,
+) -> Result<Prepared, TlError> {
     let plans = plans(scenario);
     let starts = [start(&plans[0], bathy, scenario.altitude), start(&plans[1], bathy, scenario.altitude)];
-    let mut v = [Iver2::new(cfg.vehicle, starts[0], plans[0].clone()), Iver2::new(cfg.vehicle, starts[1], plans[1].clone())];
+    let mut v =
+        [Iver2::new(cfg.vehicle, starts[0], plans[0].clone()), Iver2::new(cfg.vehicle, starts[1], plans[1].clone())];
     let limit = cfg.max_time.unwrap_or(MAX_MISSION).min(MAX_MISSION);
     let (mut samples, mut tls) = (Vec::new(), Vec::new());
     let mut k = 0u64;

@@ -79,7 +79,12 @@ pub enum Behaviour {
 impl Behaviour {
     /// The thesis's four: controls 1–3 and the adaptive selector without rate 5 (Table 8 values).
     pub fn thesis() -> Vec<Behaviour> {
-        vec![Behaviour::FixedRate0, Behaviour::FixedRate1, Behaviour::Alternating05, Behaviour::Adaptive(AdaptiveConfig::default())]
+        vec![
+            Behaviour::FixedRate0,
+            Behaviour::FixedRate1,
+            Behaviour::Alternating05,
+            Behaviour::Adaptive(AdaptiveConfig::default()),
+        ]
     }
     pub fn policy(&self) -> Result<Box<dyn RatePolicy>, String> {
         Ok(match self {

@@ -49,7 +49,15 @@ fn status(p: &Prepared, k: usize, v: usize, mode: EstimatorMode, origin: &LocalO
     StatusMessage { pos: s.pos, heading: s.heading, speed: s.speed, next }
 }
 
-fn node(v: usize, p: &Prepared, scenario: &Scenario, cfg: &ExperimentConfig, behaviour: &Behaviour, seeds: &SeedStream, origin: LocalOrigin) -> Result<Node, WorldError> {
+fn node(
+    v: usize,
+    p: &Prepared,
+    scenario: &Scenario,
+    cfg: &ExperimentConfig,
+    behaviour: &Behaviour,
+    seeds: &SeedStream,
+    origin: LocalOrigin,
+) -> Result<Node, WorldError> {
     let policy = behaviour.policy().map_err(WorldError::Behaviour)?;
     let rates = policy.rates();
     let width = MaskWidth::for_rates(rates.iter().copied());
@@ -58,9 +66,17 @@ fn node(v: usize, p: &Prepared, scenario: &Scenario, cfg: &ExperimentConfig, beh
     let tracker = Tracker::new(v, 2, width, Frame0::max_header_entries(min_frame, status_bits, width));
     let peer = 1 - v;
     let estimator = match cfg.estimator {
-        EstimatorMode::PrePlanned => ShadowEstimator::new(Knowledge::PrePlanned { plan: p.plans[peer].clone() }, cfg.vehicle, Some(p.starts[peer])),
+        EstimatorMode::PrePlanned => ShadowEstimator::new(
+            Knowledge::PrePlanned { plan: p.plans[peer].clone() },
+            cfg.vehicle,
+            Some(p.starts[peer]),
+        ),
         EstimatorMode::Dynamic => ShadowEstimator::new(
-            Knowledge::Dynamic { target: DepthTarget::Altitude { altitude: scenario.altitude }, speed: scenario.speed, origin },
+            Knowledge::Dynamic {
+                target: DepthTarget::Altitude { altitude: scenario.altitude },
+                speed: scenario.speed,
+                origin,
+            },
             cfg.vehicle,
             None,
         ),
@@ -75,10 +91,18 @@ pub fn slot_length(cfg: &ExperimentConfig, behaviour: &Behaviour) -> Result<f64,
 }
 
 /// Runs one repetition.
-pub fn run(p: &Prepared, scenario: &Scenario, cfg: &ExperimentConfig, bathy: &Bathymetry, behaviour: &Behaviour, seed: u64) -> Result<RunMetrics, WorldError> {
+pub fn run(
+    p: &Prepared,
+    scenario: &Scenario,
+    cfg: &ExperimentConfig,
+    bathy: &Bathymetry,
+    behaviour: &Behaviour,
+    seed: u64,
+) -> Result<RunMetrics, WorldError> {
     let origin = LocalOrigin::default();
     let seeds = SeedStream::new(seed);
-    let mut nodes = [node(0, p, scenario, cfg, behaviour, &seeds, origin)?, node(1, p, scenario, cfg, behaviour, &seeds, origin)?];
+    let mut nodes =
+        [node(0, p, scenario, cfg, behaviour, &seeds, origin)?, node(1, p, scenario, cfg, behaviour, &seeds, origin)?];
     let success = SuccessModel { noise_db: scenario.noise_db, ..cfg.success.clone() };
     let mut tally = Tally::default();
     for k in 0..p.samples.len() {
@@ -109,7 +133,8 @@ pub fn run(p: &Prepared, scenario: &Scenario, cfg: &ExperimentConfig, bathy: &Ba
         tally.header_bits += header.bits(width) as u64;
         let frame = Frame0 { header, status: status(p, k, s, cfg.estimator, &origin) };
         let spec = rate.spec();
-        let bytes = frame.encode(width, spec.frame_bytes).map_err(|e| WorldError::Encode { slot, message: e.to_string() })?;
+        let bytes =
+            frame.encode(width, spec.frame_bytes).map_err(|e| WorldError::Encode { slot, message: e.to_string() })?;
         let reception = success.draw(rate, p.tl[k], scenario.receiver, &mut tx.rng);
         if !reception.received() {
             continue;
@@ -122,7 +147,11 @@ pub fn run(p: &Prepared, scenario: &Scenario, cfg: &ExperimentConfig, bathy: &Ba
         let rx = &mut nodes[r];
         rx.heard = true;
         let resolved = rx.tracker.on_receive(slot, s, reception, decoded.as_ref().map(|f| &f.header));
-        rx.outcomes.extend(resolved.iter().map(|res| Outcome { slot: res.slot, success: matches!(res.delivery, Delivery::Received { .. }) }));
+        rx.outcomes.extend(
+            resolved
+                .iter()
+                .map(|res| Outcome { slot: res.slot, success: matches!(res.delivery, Delivery::Received { .. }) }),
+        );
         let gross = reception.count() as u64 * spec.frame_bytes as u64;
         tally.bytes_gross += gross;
         tally.bytes_net += gross - if decoded.is_some() { bytes.len() as u64 } else { 0 };
@@ -158,7 +187,8 @@ mod tests {
         let scenario = Scenario::thesis(1);
         let bathy = Bathymetry::shelf(&Shelf::default()).unwrap();
         let p = prepare(&scenario, &cfg, &bathy, &Flat(tl_db), slot_length(&cfg, &behaviour).unwrap()).unwrap();
-        let runs: Vec<RunMetrics> = (0..8).map(|i| run(&p, &scenario, &cfg, &bathy, &behaviour, run_seed(9, i)).unwrap()).collect();
+        let runs: Vec<RunMetrics> =
+            (0..8).map(|i| run(&p, &scenario, &cfg, &bathy, &behaviour, run_seed(9, i)).unwrap()).collect();
         RunMetrics::mean_sd(&runs).0
     }
 
@@ -172,17 +202,28 @@ mod tests {
         assert!(m.bandwidth_net < m.bandwidth, "frame 0 carries header and status");
         assert!(m.header_bytes_mean > 1.0 && m.header_bytes_mean < 4.0, "header {} B", m.header_bytes_mean);
         // Pre-planned shadows, a status every ~11 s: the estimate stays within a few metres.
-        assert!(m.estimate_error_mean < 5.0 && m.estimate_error_max < 25.0, "{} / {}", m.estimate_error_mean, m.estimate_error_max);
+        assert!(
+            m.estimate_error_mean < 5.0 && m.estimate_error_max < 25.0,
+            "{} / {}",
+            m.estimate_error_mean,
+            m.estimate_error_max
+        );
     }
 
     #[test]
     fn dynamic_estimates_are_worse_than_preplanned_but_bounded() {
         // Without the plan, the shadow stops at the reported next waypoint: errors grow during
         // droughts (rate 1 at 60 dB: p = 0.6) but a report resets them.
-        let dynamic = ExperimentConfig { estimator: super::super::scenario::EstimatorMode::Dynamic, ..ExperimentConfig::default() };
+        let dynamic = ExperimentConfig {
+            estimator: super::super::scenario::EstimatorMode::Dynamic,
+            ..ExperimentConfig::default()
+        };
         let d = mean_with(dynamic, Behaviour::FixedRate1, 60.0);
         let p = mean_bw(Behaviour::FixedRate1, 60.0);
-        println!("estimate error mean/max: pre-planned {:.2}/{:.1} m, dynamic {:.2}/{:.1} m", p.estimate_error_mean, p.estimate_error_max, d.estimate_error_mean, d.estimate_error_max);
+        println!(
+            "estimate error mean/max: pre-planned {:.2}/{:.1} m, dynamic {:.2}/{:.1} m",
+            p.estimate_error_mean, p.estimate_error_max, d.estimate_error_mean, d.estimate_error_max
+        );
         assert!(d.estimate_error_mean > p.estimate_error_mean);
         assert!(d.estimate_error_mean < 30.0, "{}", d.estimate_error_mean);
         assert!(d.header_bytes_mean > 0.0 && d.bandwidth_net < p.bandwidth_net, "lat/lon costs frame-0 bytes");

@@ -54,7 +54,9 @@ impl Summary {
         let count = executed.len().max(1) as f64;
         let total_cost: f64 = executed.iter().map(|s| s.cost).sum();
         let rms: Vec<f64> = (0..n)
-            .map(|k| (steps.iter().map(|s| s.errors[k].sigma2 + s.errors[k].eps2).sum::<f64>() / steps.len() as f64).sqrt())
+            .map(|k| {
+                (steps.iter().map(|s| s.errors[k].sigma2 + s.errors[k].eps2).sum::<f64>() / steps.len() as f64).sqrt()
+            })
             .collect();
         let all_d = || executed.iter().flat_map(|s| s.distance.iter().cloned());
         Summary {

@@ -51,7 +51,12 @@ struct AuvRow<'a> {
 }
 
 /// Writes the whole run into `dir` and moves it into place.
-pub fn write_run(dir: RunDir, mission: &Mission, inputs: serde_json::Value, result: &RunResult) -> Result<std::path::PathBuf, WriteError> {
+pub fn write_run(
+    dir: RunDir,
+    mission: &Mission,
+    inputs: serde_json::Value,
+    result: &RunResult,
+) -> Result<std::path::PathBuf, WriteError> {
     let steps = &result.steps;
     dir.write_csv(
         "cna_waypoints.csv",
@@ -110,7 +115,11 @@ fn moos_points(mission: &Mission, result: &RunResult) -> String {
     let wps = &result.steps[1..];
     let mut s = String::new();
     let _ = writeln!(s, "// coopnav plan: CNA waypoints for the MOOS-IvP waypoint behaviour (BHV_Waypoint).");
-    let _ = writeln!(s, "// One waypoint every tau = {} s. Headings are compass degrees (0 = north, clockwise).", mission.planner.motion.tau);
+    let _ = writeln!(
+        s,
+        "// One waypoint every tau = {} s. Headings are compass degrees (0 = north, clockwise).",
+        mission.planner.motion.tau
+    );
     let heads: Vec<String> = wps.iter().map(|w| format!("{:.1}", CompassDeg::from(w.cna.heading).0)).collect();
     let _ = writeln!(s, "// leg headings: {}", heads.join(", "));
     let pts: Vec<String> = wps.iter().map(|w| format!("{:.1},{:.1}", w.cna.pos.x, w.cna.pos.y)).collect();
@@ -127,13 +136,25 @@ fn write_plots(dir: &RunDir, mission: &Mission, result: &RunResult) -> Result<()
         (0..n).map(|k| Series::new(mission.names[k].clone(), steps.iter().map(|s| f(k, s)).collect())).collect()
     };
     tracks.extend(per_auv(&|k, s| (s.auv[k].x, s.auv[k].y)));
-    dir.write_text("tracks.svg", &track_svg(Labels { title: "CNA and survey AUV tracks", x: "x east (m)", y: "y north (m)" }, &tracks)?)?;
+    dir.write_text(
+        "tracks.svg",
+        &track_svg(Labels { title: "CNA and survey AUV tracks", x: "x east (m)", y: "y north (m)" }, &tracks)?,
+    )?;
     let errors = per_auv(&|k, s| (s.t, s.errors[k].total()));
-    dir.write_text("error.svg", &line_svg(Labels { title: "Modelled survey-AUV position error", x: "time (s)", y: "error sqrt(sigma^2 + eps^2) (m)" }, &errors)?)?;
+    dir.write_text(
+        "error.svg",
+        &line_svg(
+            Labels { title: "Modelled survey-AUV position error", x: "time (s)", y: "error sqrt(sigma^2 + eps^2) (m)" },
+            &errors,
+        )?,
+    )?;
     let mut dist = per_auv(&|k, s| (s.t, s.distance[k]));
     let (t0, t1) = (steps[0].t, steps[steps.len() - 1].t);
     dist.push(Series::new("min limit", vec![(t0, mission.planner.limits.min), (t1, mission.planner.limits.min)]));
     dist.push(Series::new("max limit", vec![(t0, mission.planner.limits.max), (t1, mission.planner.limits.max)]));
-    dir.write_text("distance.svg", &line_svg(Labels { title: "CNA to survey AUV distance", x: "time (s)", y: "3-D distance (m)" }, &dist)?)?;
+    dir.write_text(
+        "distance.svg",
+        &line_svg(Labels { title: "CNA to survey AUV distance", x: "time (s)", y: "3-D distance (m)" }, &dist)?,
+    )?;
     Ok(())
 }

@@ -39,7 +39,11 @@ pub struct RunResult {
 }
 
 /// Runs `planner` over `mission`. `progress(step)` is called after each step.
-pub fn run(mission: &Mission, planner: &mut dyn Planner, progress: &(dyn Fn(u64) + Sync)) -> Result<RunResult, RunError> {
+pub fn run(
+    mission: &Mission,
+    planner: &mut dyn Planner,
+    progress: &(dyn Fn(u64) + Sync),
+) -> Result<RunResult, RunError> {
     let cfg = &mission.planner;
     let tau = cfg.motion.tau;
     let forecast = TrackForecast { tracks: &mission.tracks, end_time: mission.end_time };
@@ -55,7 +59,9 @@ pub fn run(mission: &Mission, planner: &mut dyn Planner, progress: &(dyn Fn(u64)
     let mut decisions = Vec::new();
     let n_steps = ((mission.end_time - mission.start_time) / tau + 1e-9).floor() as usize;
     for step in 1..=n_steps {
-        let d = planner.decide(&PlanInput { t, cna, errors: &errors, forecast: &forecast }).map_err(|source| RunError::Plan { step, t, source })?;
+        let d = planner
+            .decide(&PlanInput { t, cna, errors: &errors, forecast: &forecast })
+            .map_err(|source| RunError::Plan { step, t, source })?;
         t = mission.start_time + step as f64 * tau;
         cna = d.next;
         let now = positions(t);

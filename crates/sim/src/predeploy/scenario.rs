@@ -6,7 +6,9 @@ use super::tracks::{load_track_csv, TrackLoadError};
 use crate::scenario_file;
 pub use crate::scenario_file::ScenarioError;
 use coopnav_core::{CompassDeg, DepthProfile, Heading, Lawnmower, Track, Vec3};
-use coopnav_plan::{CnaPose, DistanceLimits, ErrorModel, MotionConfig, PenaltyCase, PenaltyFn, PenaltyPair, PlannerConfig, SearchConfig};
+use coopnav_plan::{
+    CnaPose, DistanceLimits, ErrorModel, MotionConfig, PenaltyCase, PenaltyFn, PenaltyPair, PlannerConfig, SearchConfig,
+};
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 
@@ -150,11 +152,21 @@ impl Scenario {
     /// Checks the planner settings, the CNA pose and each AUV's settings (the track files and the
     /// mission span they allow are checked by [`Scenario::build`]).
     pub fn validate(&self, file: &Path) -> Result<(), ScenarioError> {
-        self.planner_config(file)?.validate().map_err(|cause| ScenarioError::Planner { file: file.to_path_buf(), cause })?;
+        self.planner_config(file)?
+            .validate()
+            .map_err(|cause| ScenarioError::Planner { file: file.to_path_buf(), cause })?;
         let c = &self.cna;
         if ![c.x, c.y, c.depth, c.heading_compass_deg, c.pitch_deg].iter().all(|v| v.is_finite()) {
-            let value = format!("{{ x = {}, y = {}, depth = {}, heading_compass_deg = {}, pitch_deg = {} }}", c.x, c.y, c.depth, c.heading_compass_deg, c.pitch_deg);
-            return Err(ScenarioError::invalid(file, "cna", value, "finite numbers for x, y, depth, heading_compass_deg and pitch_deg"));
+            let value = format!(
+                "{{ x = {}, y = {}, depth = {}, heading_compass_deg = {}, pitch_deg = {} }}",
+                c.x, c.y, c.depth, c.heading_compass_deg, c.pitch_deg
+            );
+            return Err(ScenarioError::invalid(
+                file,
+                "cna",
+                value,
+                "finite numbers for x, y, depth, heading_compass_deg and pitch_deg",
+            ));
         }
         if self.auv.is_empty() {
             return Err(ScenarioError::invalid(file, "auv", "no [[auv]]", "at least one [[auv]]"));
@@ -174,14 +186,24 @@ impl Scenario {
     pub fn build(&self, file: &Path, base_dir: &Path) -> Result<Mission, ScenarioError> {
         self.validate(file)?;
         let planner = self.planner_config(file)?;
-        let tracks = self.auv.iter().enumerate().map(|(i, a)| Self::track(i, a, file, base_dir)).collect::<Result<Vec<_>, _>>()?;
+        let tracks = self
+            .auv
+            .iter()
+            .enumerate()
+            .map(|(i, a)| Self::track(i, a, file, base_dir))
+            .collect::<Result<Vec<_>, _>>()?;
         let data_start = tracks.iter().map(Track::start_time).fold(f64::NEG_INFINITY, f64::max);
         let data_end = tracks.iter().map(Track::end_time).fold(f64::INFINITY, f64::min);
         let start_time = self.mission.start_time.unwrap_or(data_start.max(0.0));
         let end_time = self.mission.end_time.unwrap_or(data_end);
         if !(start_time.is_finite() && end_time.is_finite() && start_time + planner.motion.tau <= end_time) {
             let value = format!("start_time {start_time} s, end_time {end_time} s");
-            return Err(ScenarioError::invalid(file, "mission", value, format!("start_time + tau <= end_time (survey data covers {data_start}..{data_end} s)")));
+            return Err(ScenarioError::invalid(
+                file,
+                "mission",
+                value,
+                format!("start_time + tau <= end_time (survey data covers {data_start}..{data_end} s)"),
+            ));
         }
         let c = &self.cna;
         Ok(Mission {
@@ -202,7 +224,14 @@ impl Scenario {
 
     fn planner_config(&self, file: &Path) -> Result<PlannerConfig, ScenarioError> {
         let p = &self.planner;
-        Ok(PlannerConfig { look_ahead: p.look_ahead, motion: p.motion, error: p.error, limits: p.limits, penalties: self.penalties(file)?, search: p.search })
+        Ok(PlannerConfig {
+            look_ahead: p.look_ahead,
+            motion: p.motion,
+            error: p.error,
+            limits: p.limits,
+            penalties: self.penalties(file)?,
+            search: p.search,
+        })
     }
 
     fn penalties(&self, file: &Path) -> Result<PenaltyPair, ScenarioError> {
@@ -213,13 +242,20 @@ impl Scenario {
                 ScenarioError::invalid(file, "planner.penalty.case", format!("'{id}'"), ids.join(", "))
             }),
             (None, Some(primary), Some(look_ahead)) => Ok(PenaltyPair { primary, look_ahead }),
-            _ => Err(ScenarioError::invalid(file, "planner.penalty", given(p), "either case = \"<Table 5.2 case>\" or both primary and look_ahead")),
+            _ => Err(ScenarioError::invalid(
+                file,
+                "planner.penalty",
+                given(p),
+                "either case = \"<Table 5.2 case>\" or both primary and look_ahead",
+            )),
         }
     }
 
     /// AUV `i`'s track source, checked: exactly one of a sound lawnmower or a track CSV.
     fn source<'a>(i: usize, a: &'a AuvSpec, file: &Path) -> Result<TrackSource<'a>, ScenarioError> {
-        let invalid = |f: &str, value: String, allowed: &str| ScenarioError::invalid(file, format!("auv[{i}].{f}"), value, allowed);
+        let invalid = |f: &str, value: String, allowed: &str| {
+            ScenarioError::invalid(file, format!("auv[{i}].{f}"), value, allowed)
+        };
         match (&a.lawnmower, &a.track_csv) {
             (Some(m), None) => {
                 if !(m.speed.is_finite() && m.speed > 0.0) {
@@ -230,7 +266,9 @@ impl Scenario {
                     return Err(invalid("lawnmower", value, "lane_length > 0 m, lanes >= 1 and spacing finite"));
                 }
                 match m.depth {
-                    DepthProfile::Sinusoid { period, .. } if period.is_nan() || period <= 0.0 => Err(invalid("lawnmower.depth.period", period.to_string(), "> 0 s")),
+                    DepthProfile::Sinusoid { period, .. } if period.is_nan() || period <= 0.0 => {
+                        Err(invalid("lawnmower.depth.period", period.to_string(), "> 0 s"))
+                    }
                     _ => Ok(TrackSource::Lawnmower(m)),
                 }
             }
@@ -246,7 +284,10 @@ impl Scenario {
     fn track(i: usize, a: &AuvSpec, file: &Path, base_dir: &Path) -> Result<Track, ScenarioError> {
         let track_err = |cause| ScenarioError::Track { file: file.to_path_buf(), index: i, cause };
         match Self::source(i, a, file)? {
-            TrackSource::Lawnmower(m) => m.to_lawnmower().track(LAWNMOWER_DT).map_err(|e| track_err(TrackLoadError::Track { path: PathBuf::from("<lawnmower>"), source: e })),
+            TrackSource::Lawnmower(m) => m
+                .to_lawnmower()
+                .track(LAWNMOWER_DT)
+                .map_err(|e| track_err(TrackLoadError::Track { path: PathBuf::from("<lawnmower>"), source: e })),
             TrackSource::Csv(path) => load_track_csv(&base_dir.join(path)).map_err(track_err),
         }
     }
@@ -254,7 +295,11 @@ impl Scenario {
 
 /// Which of a penalty's keys a file gave, e.g. "case and primary".
 fn given(p: &PenaltySpec) -> String {
-    let keys: Vec<&str> = [("case", p.case.is_some()), ("primary", p.primary.is_some()), ("look_ahead", p.look_ahead.is_some())].into_iter().filter_map(|(k, set)| set.then_some(k)).collect();
+    let keys: Vec<&str> =
+        [("case", p.case.is_some()), ("primary", p.primary.is_some()), ("look_ahead", p.look_ahead.is_some())]
+            .into_iter()
+            .filter_map(|(k, set)| set.then_some(k))
+            .collect();
     if keys.is_empty() {
         "none of case, primary, look_ahead".into()
     } else {

@@ -17,7 +17,8 @@ pub enum TrackLoadError {
 
 /// Reads a `t,x,y,z` track CSV.
 pub fn load_track_csv(path: &Path) -> Result<Track, TrackLoadError> {
-    let text = std::fs::read_to_string(path).map_err(|source| TrackLoadError::Read { path: path.to_path_buf(), source })?;
+    let text =
+        std::fs::read_to_string(path).map_err(|source| TrackLoadError::Read { path: path.to_path_buf(), source })?;
     parse_track_csv(&text, path)
 }
 
@@ -25,7 +26,9 @@ pub fn load_track_csv(path: &Path) -> Result<Track, TrackLoadError> {
 pub fn parse_track_csv(text: &str, path: &Path) -> Result<Track, TrackLoadError> {
     let line_err = |line: usize, message: String| TrackLoadError::Line { path: path.to_path_buf(), line, message };
     let mut lines = text.lines().enumerate().filter(|(_, l)| !l.trim().is_empty());
-    let (_, header) = lines.next().ok_or_else(|| line_err(1, "file is empty: expected a header t,x,y,z and at least one row".into()))?;
+    let (_, header) = lines
+        .next()
+        .ok_or_else(|| line_err(1, "file is empty: expected a header t,x,y,z and at least one row".into()))?;
     let cols: Vec<String> = header.split(',').map(|c| c.trim().to_ascii_lowercase()).collect();
     if cols != ["t", "x", "y", "z"] {
         return Err(line_err(1, format!("header must be t,x,y,z, got '{}'", header.trim())));
@@ -39,11 +42,16 @@ pub fn parse_track_csv(text: &str, path: &Path) -> Result<Track, TrackLoadError>
         }
         let mut v = [0.0; 4];
         for (j, s) in vals.iter().enumerate() {
-            v[j] = s.parse::<f64>().ok().filter(|x| x.is_finite()).ok_or_else(|| line_err(line, format!("column {} is not a finite number: '{s}'", ["t", "x", "y", "z"][j])))?;
+            v[j] = s.parse::<f64>().ok().filter(|x| x.is_finite()).ok_or_else(|| {
+                line_err(line, format!("column {} is not a finite number: '{s}'", ["t", "x", "y", "z"][j]))
+            })?;
         }
         if let Some(prev) = samples.last().map(|s: &TrackSample| s.t) {
             if v[0] <= prev {
-                return Err(line_err(line, format!("time {} is not after the previous row's {prev} (times must increase strictly)", v[0])));
+                return Err(line_err(
+                    line,
+                    format!("time {} is not after the previous row's {prev} (times must increase strictly)", v[0]),
+                ));
             }
         }
         samples.push(TrackSample { t: v[0], pos: Vec3::new(v[1], v[2], v[3]) });
