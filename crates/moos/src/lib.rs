@@ -3,11 +3,12 @@
 //!
 //! It owns the `.alog` text format (reading and writing, [`alog`]), a run as those tools see it
 //! ([`run`]: vehicle tracks, acoustic pulses, planned legs) and its export as an alog
-//! ([`export`]). It knows nothing about simulators or filters: callers fill in a [`RunLog`] from
+//! ([`export`]), and the interactive replay page built from an alog ([`replay`]). It knows nothing about simulators or filters: callers fill in a [`RunLog`] from
 //! their own records.
 
 pub mod alog;
 pub mod export;
+pub mod replay;
 pub mod run;
 
 pub use alog::{read_alog, read_alog_file, Alog, AlogEntry, AlogError, AlogWriter};

@@ -109,24 +109,28 @@ impl RunLog {
 impl Vehicle {
     /// The position at `t`, linearly interpolated between samples; `None` outside the track.
     pub fn at(&self, t: f64) -> Option<Sample> {
-        let s = &self.samples;
-        let after = s.partition_point(|p| p.t < t);
-        if after == s.len() {
-            return None;
-        }
-        let b = s[after];
-        if b.t == t {
-            return Some(b);
-        }
-        let a = *s.get(after.checked_sub(1)?)?;
-        let f = (t - a.t) / (b.t - a.t);
-        let lerp = |u: f64, v: f64| u + f * (v - u);
-        let sd = match (a.sd, b.sd) {
-            (Some(u), Some(v)) => Some(lerp(u, v)),
-            _ => None,
-        };
-        Some(Sample { t, x: lerp(a.x, b.x), y: lerp(a.y, b.y), depth: lerp(a.depth, b.depth), sd })
+        sample_at(&self.samples, t)
     }
+}
+
+/// The point of a time-ordered track at `t`, linearly interpolated; `None` outside the track.
+pub fn sample_at(s: &[Sample], t: f64) -> Option<Sample> {
+    let after = s.partition_point(|p| p.t < t);
+    if after == s.len() {
+        return None;
+    }
+    let b = s[after];
+    if b.t == t {
+        return Some(b);
+    }
+    let a = *s.get(after.checked_sub(1)?)?;
+    let f = (t - a.t) / (b.t - a.t);
+    let lerp = |u: f64, v: f64| u + f * (v - u);
+    let sd = match (a.sd, b.sd) {
+        (Some(u), Some(v)) => Some(lerp(u, v)),
+        _ => None,
+    };
+    Some(Sample { t, x: lerp(a.x, b.x), y: lerp(a.y, b.y), depth: lerp(a.depth, b.depth), sd })
 }
 
 #[cfg(test)]

@@ -7,6 +7,7 @@
 pub mod closed_loop;
 pub mod experiments;
 pub mod hbl;
+pub mod moos_export;
 pub mod nams;
 pub mod output;
 pub mod plot;
