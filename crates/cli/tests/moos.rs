@@ -279,3 +279,113 @@ fn the_replay_shows_the_run_positions_in_a_real_browser() {
     );
     eprintln!("screenshot: {}", shot.display());
 }
+
+/// The Python that has pymoos2 (scripts/install-pymoos.sh), or why there is none.
+fn pymoos_python() -> Result<PathBuf, String> {
+    let default = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../tools/pymoos/bin/python");
+    let python = std::env::var_os("COOPNAV_PYMOOS_PYTHON").map_or(default, PathBuf::from);
+    match Command::new(&python).args(["-c", "import pymoos2.core.MissionReader"]).output() {
+        Ok(o) if o.status.success() => Ok(python),
+        _ => Err(format!("{} cannot import pymoos2; install it with scripts/install-pymoos.sh", python.display())),
+    }
+}
+
+/// Reads the mission files with pymoos2: the .moos with its MissionReader (globals and each
+/// ProcessConfig block), every BHV_Waypoint `points` of the .bhv with its XYSegList parser.
+const PYMOOS_READ: &str = r#"
+import json, sys
+from pymoos2.core.MissionReader import MissionReader
+from pymoos2.dtos.geometry.XYSegList import XYSegList
+moos, bhv = sys.argv[1], sys.argv[2]
+apps = ["ANTLER", "uSimMarine", "pHelmIvP", "pMarinePIDV22", "pNodeReporter", "pLogger"]
+runs = []
+for line in open(bhv):
+    line = line.split("//")[0].strip()
+    if line.startswith("points"):
+        seg = XYSegList.from_spec("pts={" + line.split("=", 1)[1].strip() + "}")
+        runs.append([[x, y] for x, y in zip(seg.vx, seg.vy)])
+print(json.dumps({
+    "globals": MissionReader(moos).get_all_globals(),
+    "configs": {app: MissionReader(moos, app).get_config_list() for app in apps},
+    "runs": runs,
+}))
+"#;
+
+/// The depth each BHV_ConstantDepth holds, in file order.
+fn constant_depths(bhv: &str) -> Vec<f64> {
+    bhv.split("Behavior = ")
+        .filter(|b| b.starts_with("BHV_ConstantDepth"))
+        .map(|b| {
+            b.lines()
+                .find_map(|l| l.trim().strip_prefix("depth"))
+                .unwrap()
+                .trim_start_matches([' ', '='])
+                .parse()
+                .unwrap()
+        })
+        .collect()
+}
+
+#[test]
+fn plan_mission_files_parse_with_pymoos2_and_fly_the_planned_points() {
+    let python = match pymoos_python() {
+        Ok(p) => p,
+        Err(reason) => {
+            eprintln!("SKIPPED plan_mission_files_parse_with_pymoos2_and_fly_the_planned_points: {reason}");
+            return;
+        }
+    };
+    let tmp = tempfile::tempdir().unwrap();
+    let example = String::from_utf8(coopnav(&["plan", "--example"]).stdout).unwrap();
+    let auv = tmp.path().join("auv.toml");
+    let auv_example = example.replace("cna = { kind = \"asc\" }", "cna = { kind = \"auv\", pitch_options = 3 }");
+    assert_ne!(auv_example, example, "the example names its CNA kind");
+    std::fs::write(&auv, auv_example).unwrap();
+    for (is_auv, scenario) in [(false, None), (true, Some(auv.to_str().unwrap()))] {
+        let run = tmp.path().join(if is_auv { "auv" } else { "asc" });
+        let mut args = vec!["plan", "--moos", "--moos-origin", "47.6,-122.3", "-o", run.to_str().unwrap()];
+        args.extend(scenario);
+        succeed(&args);
+        let o = Command::new(&python)
+            .args(["-c", PYMOOS_READ, run.join("cna.moos").to_str().unwrap(), run.join("cna.bhv").to_str().unwrap()])
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let read: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+        let globals = &read["globals"];
+        assert_eq!((globals["ServerPort"].as_str(), globals["Community"].as_str()), (Some("9000"), Some("cna")));
+        let lat: f64 = globals["LatOrigin"].as_str().unwrap().parse().unwrap();
+        let lon: f64 = globals["LongOrigin"].as_str().unwrap().parse().unwrap();
+        assert_eq!((lat, lon), (47.6, -122.3));
+        let configs = &read["configs"];
+        assert_eq!(configs["pHelmIvP"]["behaviors"], "cna.bhv");
+        assert_eq!(configs["uSimMarine"]["start_pos"], "x=140.00,y=0.00,heading=90.0,speed=0,depth=0.00");
+        assert_eq!(configs["pMarinePIDV22"]["depth_control"], if is_auv { "true" } else { "false" });
+        assert_eq!(configs["pNodeReporter"]["platform_type"], if is_auv { "UUV" } else { "SHIP" });
+        assert!(configs["ANTLER"]["run"].as_str().is_some() && configs["pLogger"]["file"] == "LOG_CNA");
+
+        let waypoints = csv_rows(&run.join("cna_waypoints.csv"));
+        let runs: Vec<Vec<[f64; 2]>> = serde_json::from_value(read["runs"].clone()).unwrap();
+        let flown: Vec<[f64; 2]> = runs.iter().flatten().copied().collect();
+        assert_eq!(flown.len(), waypoints.len(), "every planned waypoint is flown once");
+        for (p, wp) in flown.iter().zip(&waypoints) {
+            close(p[0], num(wp, "x"), 0.005, "waypoint x");
+            close(p[1], num(wp, "y"), 0.005, "waypoint y");
+        }
+        let bhv = std::fs::read_to_string(run.join("cna.bhv")).unwrap();
+        let depths = constant_depths(&bhv);
+        if is_auv {
+            assert_eq!(depths.len(), runs.len(), "one depth per run of waypoints");
+            let mut planned = waypoints.iter();
+            for (points, depth) in runs.iter().zip(&depths) {
+                for wp in planned.by_ref().take(points.len()) {
+                    close(num(wp, "depth"), *depth, 0.1, "the run's depth is its waypoints' depth");
+                }
+            }
+            assert!(depths.iter().any(|d| *d > 1.0), "the AUV CNA dives: {depths:?}");
+        } else {
+            assert!(depths.is_empty() && runs.len() == 1, "an ASC flies one behaviour at the surface");
+        }
+        assert_eq!(bhv.matches("// leg ").count(), waypoints.len(), "every leg's timing is a comment");
+    }
+}

@@ -7,7 +7,12 @@ use crate::closed_loop::{self, RunResult as ClosedLoopResult};
 use crate::hbl;
 use crate::output::{RunDir, WriteError};
 use crate::predeploy::{Mission, RunResult as PlanResult};
-use coopnav_moos::{replay, write_run_alog, Leg, Pulse, PulseKind, Role, RunLog, Sample, Vehicle, SIMULATED_LOG_START};
+use coopnav_core::{CompassDeg, LatLon};
+use coopnav_moos::{
+    mission_files, replay, write_run_alog, Leg, MissionFiles, MissionSpec, Pulse, PulseKind, Role, RunLog, Sample,
+    Vehicle, Waypoint, SIMULATED_LOG_START,
+};
+use coopnav_plan::{CnaKind, CnaPose};
 
 /// The alog every run directory with a time axis holds.
 pub const ALOG_FILE: &str = "run.alog";
@@ -98,7 +103,7 @@ pub fn plan_run(mission: &Mission, result: &PlanResult) -> RunLog {
             vehicle(auv_name(k), Role::Truth, "auv", samples)
         })
         .collect();
-    let cna_kind = if steps.iter().any(|s| s.cna.pos.z > 0.0) { "auv" } else { "ship" };
+    let cna_kind = if plans_an_auv(mission) { "auv" } else { "ship" };
     let cna = steps.iter().map(|s| sample(s.t, s.cna.pos.x, s.cna.pos.y, s.cna.pos.z)).collect();
     vehicles.push(vehicle("cna".into(), Role::Cna, cna_kind, cna));
     let legs = steps
@@ -154,4 +159,32 @@ pub fn hbl_run(sc: &hbl::Scenario, trace: &hbl::Trace) -> RunLog {
         pulses: Vec::new(),
         legs: Vec::new(),
     }
+}
+
+fn plans_an_auv(mission: &Mission) -> bool {
+    matches!(mission.planner.motion.cna, CnaKind::Auv { .. })
+}
+
+/// The MOOS-IvP mission files (`cna.moos`, `cna.bhv`) that fly a plan's CNA path: its start, every
+/// waypoint with its time, depth and leg heading, at the planned speed; `origin` anchors the local
+/// frame.
+pub fn plan_mission(mission: &Mission, result: &PlanResult, origin: LatLon) -> MissionFiles {
+    let waypoint = |t: f64, cna: &CnaPose| Waypoint {
+        t,
+        x: cna.pos.x,
+        y: cna.pos.y,
+        depth: cna.pos.z,
+        heading_compass_deg: CompassDeg::from(cna.heading).0,
+    };
+    let steps = &result.steps;
+    mission_files(&MissionSpec {
+        community: "cna".into(),
+        server_port: 9000,
+        origin,
+        speed: mission.planner.motion.speed,
+        auv: plans_an_auv(mission),
+        start: waypoint(steps[0].t, &steps[0].cna),
+        waypoints: steps[1..].iter().map(|s| waypoint(s.t, &s.cna)).collect(),
+        capture_radius_m: 5.0,
+    })
 }
