@@ -563,6 +563,44 @@ mod tests {
         assert!(e.contains("sigma_tim"), "{e}");
     }
 
+    /// NaN, infinite and negative sensor noise, a bad channel model and a bad finish behaviour:
+    /// every one named with its path in one error, and the sensors' unused keys are refused.
+    #[test]
+    fn every_bad_field_is_reported_at_once() {
+        let text = EXAMPLE
+            .replace("speed_sd = 0.05", "speed_sd = nan")
+            .replace("compass_white_deg = 0.5", "compass_white_deg = -0.5")
+            .replace("yaw_rate_white_deg_s = 0.05", "yaw_rate_white_deg_s = inf")
+            .replace("p_outlier = 0.0555", "p_outlier = -0.1")
+            .replace("capture_margin_db = 6.0", "capture_margin_db = -1.0")
+            .replace("radius_m = 50.0", "radius_m = 0.0")
+            .replace("divergence_window_s = 60.0", "divergence_window_s = nan");
+        let e = err(&text);
+        for field in [
+            "sensors.speed_sd",
+            "sensors.compass_white_deg",
+            "sensors.yaw_rate_white_deg_s",
+            "channel.range_error.p_outlier",
+            "channel.collisions.capture_margin_db",
+            "fleet.finish.radius_m",
+            "health.divergence_window_s",
+        ] {
+            assert!(e.contains(&format!("field {field} = ")), "{field} missing from: {e}");
+        }
+        assert!(e.contains("7 bad fields") && e.contains("s.toml"), "{e}");
+        let e = err(&EXAMPLE.replace("yaw_rate_white_deg_s = 0.05", "yaw_rate_white_deg_s = 0.05\ndgps_sd = 0.1"));
+        assert!(e.contains("dgps_sd"), "{e}");
+    }
+
+    /// Eight AUVs with τ = 30 s leave 3.3 s per slot, less than rate 0's 3.9 s of air time; τ = 44 s fits.
+    #[test]
+    fn a_schedule_that_cannot_fit_is_refused() {
+        let e = err(&EXAMPLE.replace("n_auvs = 3", "n_auvs = 8"));
+        assert!(e.contains("comms.schedule.slot 1 (auv0") && e.contains("air time 3.90 s"), "{e}");
+        let longer = EXAMPLE.replace("n_auvs = 3", "n_auvs = 8").replace("tau = 30.0", "tau = 44.0");
+        Scenario::parse(&longer, Path::new("s.toml")).unwrap();
+    }
+
     #[test]
     fn bad_files_name_the_field() {
         let e = err(&EXAMPLE.replace("n_auvs = 3", "n_auvs = 9"));
