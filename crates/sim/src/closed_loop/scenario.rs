@@ -590,6 +590,8 @@ mod tests {
         assert!(e.contains("7 bad fields") && e.contains("s.toml"), "{e}");
         let e = err(&EXAMPLE.replace("yaw_rate_white_deg_s = 0.05", "yaw_rate_white_deg_s = 0.05\ndgps_sd = 0.1"));
         assert!(e.contains("dgps_sd"), "{e}");
+        let e = err(&EXAMPLE.replace("p_outlier = 0.0555", "p_outliers = 0.0555"));
+        assert!(e.contains("p_outliers"), "{e}");
     }
 
     /// Eight AUVs with τ = 30 s leave 3.3 s per slot, less than rate 0's 3.9 s of air time; τ = 44 s fits.

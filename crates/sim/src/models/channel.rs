@@ -53,18 +53,59 @@ pub enum RangeError {
     /// The filter's own Gaussian (its `range_noise` variance) plus `extra_sd` metres: the truth
     /// as the filter believes it (for studies that want a matched filter).
     Gaussian { extra_sd: f64 },
-    /// Gill's reception mixture (gill digest §5.4), conditioned on a decoded packet: slightly long
-    /// or short by up to `slight_max_m`, or an outlier 5–10 m long; the shares sum to at most 1,
-    /// and the rest is a packet decoded without a usable range. Draws through the HBL world's
-    /// sampler (two uniforms per draw).
-    GillMixture {
-        p_slightly_long: f64,
-        p_slightly_short: f64,
-        p_outlier: f64,
-        slight_max_m: f64,
-        outlier_min_m: f64,
-        outlier_max_m: f64,
-    },
+    /// Gill's reception mixture (gill digest §5.4), conditioned on a decoded packet.
+    GillMixture(Mixture),
+}
+
+/// Gill's range errors of a decoded packet: slightly long or short by up to `slight_max_m`, or an
+/// outlier `outlier_min_m`–`outlier_max_m` long; the shares sum to at most 1, and the rest is a
+/// packet decoded without a usable range. Drawn by the HBL world's sampler (two uniforms a draw).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Mixture {
+    pub p_slightly_long: f64,
+    pub p_slightly_short: f64,
+    pub p_outlier: f64,
+    pub slight_max_m: f64,
+    pub outlier_min_m: f64,
+    pub outlier_max_m: f64,
+}
+
+impl Mixture {
+    fn as_acoustic(&self) -> Acoustic {
+        Acoustic {
+            p_slightly_long: self.p_slightly_long,
+            p_slightly_short: self.p_slightly_short,
+            p_outlier: self.p_outlier,
+            p_drop: (1.0 - self.p_slightly_long - self.p_slightly_short - self.p_outlier).max(0.0),
+            slight_max_m: self.slight_max_m,
+            outlier_min_m: self.outlier_min_m,
+            outlier_max_m: self.outlier_max_m,
+            ..Acoustic::default()
+        }
+    }
+
+    fn problems(&self, prefix: &str) -> Vec<(String, String, String)> {
+        let mut out = Vec::new();
+        let mut need = |field: &str, v: f64, ok: bool, allowed: &str| {
+            if !(v.is_finite() && ok) {
+                out.push((format!("{prefix}{field}"), v.to_string(), allowed.to_string()));
+            }
+        };
+        for (field, p) in [
+            ("p_slightly_long", self.p_slightly_long),
+            ("p_slightly_short", self.p_slightly_short),
+            ("p_outlier", self.p_outlier),
+        ] {
+            need(field, p, (0.0..=1.0).contains(&p), "a probability in [0, 1]");
+        }
+        let sum = self.p_slightly_long + self.p_slightly_short + self.p_outlier;
+        need("p_slightly_long + p_slightly_short + p_outlier", sum, sum <= 1.0 + 1e-9, "a sum <= 1");
+        need("slight_max_m", self.slight_max_m, self.slight_max_m >= 0.0, "a finite number >= 0");
+        need("outlier_min_m", self.outlier_min_m, self.outlier_min_m >= 0.0, "a finite number >= 0");
+        need("outlier_max_m", self.outlier_max_m, self.outlier_max_m >= self.outlier_min_m, ">= outlier_min_m");
+        out
+    }
 }
 
 impl RangeError {
@@ -73,14 +114,14 @@ impl RangeError {
     pub fn gill() -> Self {
         let a = Acoustic::default();
         let kept = 1.0 - a.p_drop;
-        RangeError::GillMixture {
+        RangeError::GillMixture(Mixture {
             p_slightly_long: a.p_slightly_long / kept,
             p_slightly_short: a.p_slightly_short / kept,
             p_outlier: a.p_outlier / kept,
             slight_max_m: a.slight_max_m,
             outlier_min_m: a.outlier_min_m,
             outlier_max_m: a.outlier_max_m,
-        }
+        })
     }
 
     /// The travel-time error (s) of one decoded range, or None when the range is unusable.
@@ -91,69 +132,22 @@ impl RangeError {
                 let sd = (filter_variance + extra_sd * extra_sd).sqrt();
                 Some(sd * normal(rng) / GILL_NOMINAL_SOUND_SPEED)
             }
-            RangeError::GillMixture { .. } => match draw_reception(&self.as_acoustic(), rng) {
+            RangeError::GillMixture(m) => match draw_reception(&m.as_acoustic(), rng) {
                 Reception::Received(metres) => Some(metres / GILL_NOMINAL_SOUND_SPEED),
                 Reception::Dropped => None,
             },
         }
     }
 
-    fn as_acoustic(&self) -> Acoustic {
-        match *self {
-            RangeError::GillMixture {
-                p_slightly_long,
-                p_slightly_short,
-                p_outlier,
-                slight_max_m,
-                outlier_min_m,
-                outlier_max_m,
-            } => Acoustic {
-                p_slightly_long,
-                p_slightly_short,
-                p_outlier,
-                p_drop: (1.0 - p_slightly_long - p_slightly_short - p_outlier).max(0.0),
-                slight_max_m,
-                outlier_min_m,
-                outlier_max_m,
-                ..Acoustic::default()
-            },
-            RangeError::Gaussian { .. } => Acoustic::default(),
-        }
-    }
-
     /// Every bad field, as (field under `prefix`, value, allowed).
     pub fn problems(&self, prefix: &str) -> Vec<(String, String, String)> {
-        let mut out = Vec::new();
-        let mut need = |field: &str, v: f64, ok: bool, allowed: &str| {
-            if !(v.is_finite() && ok) {
-                out.push((format!("{prefix}{field}"), v.to_string(), allowed.to_string()));
+        match self {
+            RangeError::Gaussian { extra_sd } if !(extra_sd.is_finite() && *extra_sd >= 0.0) => {
+                vec![(format!("{prefix}extra_sd"), extra_sd.to_string(), "a finite number >= 0".into())]
             }
-        };
-        match *self {
-            RangeError::Gaussian { extra_sd } => need("extra_sd", extra_sd, extra_sd >= 0.0, "a finite number >= 0"),
-            RangeError::GillMixture {
-                p_slightly_long,
-                p_slightly_short,
-                p_outlier,
-                slight_max_m,
-                outlier_min_m,
-                outlier_max_m,
-            } => {
-                for (field, p) in [
-                    ("p_slightly_long", p_slightly_long),
-                    ("p_slightly_short", p_slightly_short),
-                    ("p_outlier", p_outlier),
-                ] {
-                    need(field, p, (0.0..=1.0).contains(&p), "a probability in [0, 1]");
-                }
-                let sum = p_slightly_long + p_slightly_short + p_outlier;
-                need("p_slightly_long + p_slightly_short + p_outlier", sum, sum <= 1.0 + 1e-9, "a sum <= 1");
-                need("slight_max_m", slight_max_m, slight_max_m >= 0.0, "a finite number >= 0");
-                need("outlier_min_m", outlier_min_m, outlier_min_m >= 0.0, "a finite number >= 0");
-                need("outlier_max_m", outlier_max_m, outlier_max_m >= outlier_min_m, ">= outlier_min_m");
-            }
+            RangeError::Gaussian { .. } => Vec::new(),
+            RangeError::GillMixture(m) => m.problems(prefix),
         }
-        out
     }
 }
 
