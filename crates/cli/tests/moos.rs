@@ -101,6 +101,16 @@ fn the_simulate_alog_holds_every_vehicle_track_of_the_time_series() {
     let ((up_rx, up_rx_csv), (up_lost, up_lost_csv)) = pulses("VIEW_COMMS_PULSE", "up");
     assert_eq!((up_rx, up_lost), (up_rx_csv, up_lost_csv), "comms pulses = status packets, fates kept");
     assert!(down_rx > 0 && up_rx > 0);
+    // Every CNA decision (τ = 30 s) that steers for a point is a leg starting where the CNA was.
+    let legs: Vec<&AlogEntry> = log.postings("VIEW_SEGLIST").collect();
+    assert!((5..=11).contains(&legs.len()), "{} legs in 300 s", legs.len());
+    for leg in legs.iter().filter(|l| l.time >= 1.0) {
+        let pts = leg.value.split_once("pts={").unwrap().1.split_once('}').unwrap().0;
+        let start: Vec<f64> = pts.split(':').next().unwrap().split(',').map(|v| v.parse().unwrap()).collect();
+        let cna = by_key[&("cna".to_string(), (leg.time * 1000.0).round() as i64)];
+        close(start[0], field(cna, "X"), 5e-3, "leg start x");
+        close(start[1], field(cna, "Y"), 5e-3, "leg start y");
+    }
     let report = std::fs::read_to_string(run.join("report.html")).unwrap();
     assert!(report.contains("<a href=\"replay.html\">"), "report.html links the replay");
     assert!(run.join("replay.html").is_file());

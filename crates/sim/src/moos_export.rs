@@ -45,7 +45,7 @@ fn auv_name(k: usize) -> String {
 
 /// A closed-loop mission (`simulate`): every AUV's truth and estimate (with the filter's 1σ)
 /// every second, the CNA, CNA broadcasts as range pulses and AUV status packets as comms pulses.
-/// The trace records no planner decisions, so it has no legs.
+/// Every CNA decision that steers for a point is a leg (VIEW_SEGLIST).
 pub fn closed_loop_run(sc: &closed_loop::Scenario, result: &ClosedLoopResult) -> Result<RunLog, WriteError> {
     let trace = result.trace.as_ref().ok_or(WriteError::NotRecorded)?;
     let mut vehicles = Vec::new();
@@ -74,6 +74,14 @@ pub fn closed_loop_run(sc: &closed_loop::Scenario, result: &ClosedLoopResult) ->
             Pulse { t: e.t, kind, from, to, received: e.received }
         })
         .collect();
+    let legs = trace
+        .decisions
+        .iter()
+        .filter_map(|d| {
+            let to = d.to?;
+            Some(Leg { t: d.t, points: vec![[d.from.x, d.from.y, d.from.z], [to.x, to.y, to.z]] })
+        })
+        .collect();
     Ok(RunLog {
         scenario: format!(
             "closed loop, policy {}, {} survey AUVs, {} CNA, {} s, seed {}",
@@ -88,7 +96,7 @@ pub fn closed_loop_run(sc: &closed_loop::Scenario, result: &ClosedLoopResult) ->
         origin: None,
         vehicles,
         pulses,
-        legs: Vec::new(),
+        legs,
     })
 }
 

@@ -23,7 +23,7 @@ use coopnav_core::{Bathymetry, SeedStream, Vec3};
 use coopnav_plan::predict::UnderwayPredictor;
 use coopnav_plan::AuvForecast;
 use inflight::InFlight;
-pub use observe::{CommsEvent, Observer, Trace, TraceRow};
+pub use observe::{CommsEvent, Decision, Observer, Trace, TraceRow};
 use phases::Payload;
 use rand_chacha::ChaCha8Rng;
 use serde::Serialize;
@@ -211,7 +211,7 @@ impl<'a> Engine<'a> {
             *slot += (now - clock).as_secs_f64();
             clock = now;
         };
-        self.decide(t_next);
+        self.decide(t_next, obs);
         lap(&mut timing.decide_s);
         self.advance();
         lap(&mut timing.advance_s);

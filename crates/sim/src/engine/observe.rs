@@ -42,8 +42,18 @@ pub struct CommsEvent {
     pub lost_to: &'static str,
 }
 
+/// A CNA decision: where it was (true position) and the point it now steers for (none: hold).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Decision {
+    pub t: f64,
+    pub from: Vec3,
+    pub to: Option<Vec3>,
+}
+
 /// Hooks the engine calls; every one defaults to doing nothing.
 pub trait Observer {
+    /// Every CNA decision (every τ), with the leg it chose.
+    fn on_decision(&mut self, _decision: &Decision) {}
     /// After the step ending at `t`, once per second: the CNA's true position and one row per AUV.
     fn on_sample(&mut self, _t: f64, _cna: Vec3, _rows: &[TraceRow]) {}
     /// A packet whose fate is known (at the end of its arrival).
@@ -59,9 +69,13 @@ pub struct Trace {
     pub comms: Vec<CommsEvent>,
     /// CNA true track (t, x, y) every second.
     pub cna: Vec<(f64, f64, f64)>,
+    pub decisions: Vec<Decision>,
 }
 
 impl Observer for Trace {
+    fn on_decision(&mut self, decision: &Decision) {
+        self.decisions.push(*decision);
+    }
     fn on_sample(&mut self, t: f64, cna: Vec3, rows: &[TraceRow]) {
         self.rows.extend_from_slice(rows);
         self.cna.push((t, cna.x, cna.y));

@@ -6,7 +6,7 @@
 
 use super::health::nees_2d;
 use super::inflight::Arrival;
-use super::observe::{CommsEvent, Observer, TraceRow};
+use super::observe::{CommsEvent, Decision, Observer, TraceRow};
 use super::vehicles::lerp;
 use super::{Engine, FleetView};
 use crate::closed_loop::policies::{receiver, tl_between};
@@ -34,7 +34,7 @@ pub enum Payload {
 
 impl Engine<'_> {
     /// The CNA's decision at each m·τ: its position fix, the planner model's pings, the policy.
-    pub(super) fn decide(&mut self, t_next: f64) {
+    pub(super) fn decide(&mut self, t_next: f64, obs: &mut dyn Observer) {
         let tau = self.sc.comms.tau;
         if (self.next_decision as f64) * tau >= t_next - 1e-9 {
             return;
@@ -70,6 +70,7 @@ impl Engine<'_> {
             CnaCommand::GoTo(p) => Some(Vec3::new(here.x + p.x - fix.x, here.y + p.y - fix.y, p.z)),
             CnaCommand::Hold => None,
         };
+        obs.on_decision(&Decision { t: t_dec, from: here, to: cna.craft.target });
     }
 
     /// Draws the CNA's navigation error for this cycle and returns its position fix.
