@@ -65,6 +65,10 @@ pub enum Command {
         out: PathBuf,
         #[arg(long)]
         force: bool,
+        /// Refuse the log (exit non-zero, write nothing) when any row would not be used as logged:
+        /// rows before `init`, a second `init`, ranges without a fresh transponder fix, gated ranges.
+        #[arg(long)]
+        strict: bool,
     },
 }
 
@@ -123,7 +127,9 @@ pub fn run_command(cmd: Command) -> Result<()> {
         Command::Montecarlo { common, runs } => montecarlo(&common, runs),
         Command::Grid { common, grid } => grid_cmd(&common, grid.as_deref()),
         Command::Tune { common, spec } => tune_cmd(&common, &spec),
-        Command::Postprocess { log, config, out, force } => postprocess(&log, config.as_deref(), &out, force),
+        Command::Postprocess { log, config, out, force, strict } => {
+            postprocess(&log, config.as_deref(), &out, force, strict)
+        }
         Command::Example { kind } => example(kind),
     }
 }
@@ -298,7 +304,7 @@ fn tune_cmd(c: &Common, spec_path: &Path) -> Result<()> {
     Ok(())
 }
 
-fn postprocess(log: &Path, config: Option<&Path>, out: &Path, force: bool) -> Result<()> {
+fn postprocess(log: &Path, config: Option<&Path>, out: &Path, force: bool, strict: bool) -> Result<()> {
     let cfg = match config {
         Some(p) => PostConfig::from_toml(&read(p)?).with_context(|| format!("in {}", p.display()))?,
         None => PostConfig::default(),
@@ -306,6 +312,13 @@ fn postprocess(log: &Path, config: Option<&Path>, out: &Path, force: bool) -> Re
     let file = std::fs::File::open(log).with_context(|| format!("opening {}", log.display()))?;
     let entries = post::read_log(file, cfg.frame().as_ref()).with_context(|| format!("in {}", log.display()))?;
     let result = post::postprocess(&entries, &cfg)?;
+    let warnings = result.summary.warnings();
+    if strict && !warnings.is_empty() {
+        anyhow::bail!("{} (--strict): {}", log.display(), warnings.join("; "));
+    }
+    for w in &warnings {
+        eprintln!("warning: {}: {w}", log.display());
+    }
     let dir = RunDir::create(out, force)?;
     manifest(&dir, "hbl postprocess", 0, json!({ "log": log, "config": cfg }))?;
     let mut csv =
@@ -330,6 +343,6 @@ fn postprocess(log: &Path, config: Option<&Path>, out: &Path, force: bool) -> Re
     dir.write_bytes("estimates.csv", csv)?;
     dir.write_json("summary.json", &result.summary)?;
     let out = dir.finish()?;
-    println!("{:?}; wrote {}", result.summary, out.display());
+    println!("{}\nwrote {}", serde_json::to_string_pretty(&result.summary)?, out.display());
     Ok(())
 }

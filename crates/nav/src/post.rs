@@ -30,8 +30,9 @@
 //! (top of a second). `init` is the filter's starting estimate (the first one is used);
 //! `truth` rows (topside AUV fixes) are only used to score the result.
 
-use crate::auv::{transition, AuvEkf, AuvParams, ParamError, PSI};
+use crate::auv::{check_non_negative, check_positive, transition, AuvEkf, AuvParams, ParamError, PSI};
 use crate::cycle::Transmitter;
+use crate::ekf::UpdateOutcome;
 use crate::range::RangeMeasurement;
 use crate::smoother::{rts, urts, SmoothError, Smoothed, SmootherKind};
 use crate::surface::Outriggers;
@@ -225,15 +226,44 @@ pub fn read_log<R: Read>(input: R, frame: Option<&LocalFrame>) -> Result<Vec<Ent
     Ok(entries)
 }
 
-/// How buoy positions between topside fixes are obtained (digest §3.6).
+/// How a transponder's position at a transmit time between two logged fixes is obtained.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
-pub enum BuoyFixUse {
-    /// Most recent fix (zero-order hold).
-    #[default]
+pub enum FixUse {
+    /// Most recent fix (zero-order hold, the thesis's buoy treatment, digest §3.6).
     Hold,
-    /// Linear interpolation between fixes.
+    /// Linear interpolation between the fixes either side (default: a timestamp rounded to the
+    /// millisecond then costs a millisecond of transponder motion, not a whole fix interval).
+    #[default]
     Linear,
+}
+
+/// How logged fixes are matched to a range's transmit time t_rx − τ. Invented parameters (the
+/// thesis does not say how its post-processing matched fixes, digest §3.6): rounded log times put
+/// a transmission's own fix a little after the recovered transmit time, so a fix this close counts
+/// as that transmission's fix; a fix older (or newer) than `max_age_s` is stale, and a range with
+/// no fresh fix is counted as without a fix, never applied with a stale position.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct FixMatching {
+    pub between: FixUse,
+    /// A fix within this many seconds of the transmit time is used as is (s).
+    pub match_tolerance_s: f64,
+    /// The fix used (the nearer one when interpolating) must be within this many seconds (s).
+    pub max_age_s: f64,
+}
+
+impl Default for FixMatching {
+    fn default() -> Self {
+        FixMatching { between: FixUse::Linear, match_tolerance_s: 0.01, max_age_s: 120.0 }
+    }
+}
+
+impl FixMatching {
+    fn validate(&self) -> Result<(), ParamError> {
+        check_non_negative("fixes.match_tolerance_s", self.match_tolerance_s)?;
+        check_positive("fixes.max_age_s", self.max_age_s)
+    }
 }
 
 /// Post-processing settings.
@@ -246,7 +276,8 @@ pub struct PostConfig {
     /// Use the 3-D slant range with logged depth (field mode) instead of the horizontal range.
     pub slant_range: bool,
     pub outriggers: Outriggers,
-    pub buoy_fixes: BuoyFixUse,
+    /// Matching logged transponder fixes to transmit times.
+    pub fixes: FixMatching,
     /// Depth of the buoy transponder (m).
     pub buoy_depth: f64,
     /// Backward pass: `ekf` (EKF-RTS, default) or `unscented` (URTS, the thesis's [25]).
@@ -263,7 +294,7 @@ impl Default for PostConfig {
             acoustic_time_offset_s: 0.0,
             slant_range: false,
             outriggers: Outriggers::default(),
-            buoy_fixes: BuoyFixUse::Hold,
+            fixes: FixMatching::default(),
             buoy_depth: 1.5,
             smoother: SmootherKind::Ekf,
             origin: None,
@@ -279,6 +310,7 @@ impl PostConfig {
     }
     pub fn validate(&self) -> Result<(), PostError> {
         self.auv.validate("auv.")?;
+        self.fixes.validate()?;
         if !(self.buoy_depth.is_finite() && self.buoy_depth >= 0.0) {
             return Err(ParamError::Negative { field: "buoy_depth".into(), value: self.buoy_depth }.into());
         }
@@ -309,12 +341,21 @@ pub struct PostSample {
     pub truth: Option<[f64; 2]>,
 }
 
+/// What happened to every row: nothing is dropped without being counted here.
 #[derive(Debug, Clone, Copy, PartialEq, Default, Serialize)]
 pub struct PostSummary {
     pub ranges: usize,
     pub ranges_applied: usize,
-    /// Ranges before any fix of their transponder, or with no usable geometry.
-    pub ranges_skipped: usize,
+    /// Ranges with no fix of their transponder within `fixes.max_age_s` of the transmit time.
+    pub ranges_without_fix: usize,
+    /// Ranges rejected by the innovation gate (`auv.range_gate`).
+    pub ranges_gated: usize,
+    /// Ranges with no usable geometry (transponder overhead, non-finite numbers).
+    pub ranges_unusable: usize,
+    /// Rows timed before the first `init` row (not processed).
+    pub rows_before_init: usize,
+    /// `init` rows after the first (ignored: the filter starts once).
+    pub extra_inits: usize,
     pub truth_points: usize,
     pub mean_filtered_error: Option<f64>,
     pub mean_smoothed_error: Option<f64>,
@@ -323,44 +364,81 @@ pub struct PostSummary {
     pub mean_smoothed_nees: Option<f64>,
 }
 
+impl PostSummary {
+    /// One sentence per kind of row that was not used as logged (empty when every row was).
+    pub fn warnings(&self) -> Vec<String> {
+        let mut w = Vec::new();
+        let mut say = |n: usize, what: &str| {
+            if n > 0 {
+                w.push(format!("{n} {what}"));
+            }
+        };
+        say(self.rows_before_init, "row(s) timed before the first 'init' row were not processed");
+        say(self.extra_inits, "'init' row(s) after the first were ignored (the filter starts once)");
+        say(
+            self.ranges_without_fix,
+            "range(s) had no transponder fix within fixes.max_age_s of their transmit time and were not applied",
+        );
+        say(self.ranges_gated, "range(s) were rejected by the innovation gate (auv.range_gate)");
+        say(self.ranges_unusable, "range(s) had no usable geometry (transponder overhead) and were not applied");
+        w
+    }
+}
+
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct PostResult {
     pub samples: Vec<PostSample>,
     pub summary: PostSummary,
 }
 
-/// Positions of the surface transponders over time, from logged fixes.
-struct Fixes {
-    ship: Vec<(f64, f64, f64, f64)>,
-    buoy: Vec<(f64, f64, f64)>,
+/// One logged fix of a transponder's vehicle: position and (ship) heading, math radians.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Fix {
+    t: f64,
+    e: f64,
+    n: f64,
+    psi: f64,
 }
 
-impl Fixes {
-    fn ship_at(&self, t: f64) -> Option<(f64, f64, f64)> {
-        let i = self.ship.partition_point(|f| f.0 <= t);
-        let first = self.ship.first()?;
-        if i == 0 {
-            return (t >= first.0).then_some((first.1, first.2, first.3));
-        }
-        let a = self.ship[i - 1];
-        let Some(b) = self.ship.get(i) else { return Some((a.1, a.2, a.3)) };
-        let f = (t - a.0) / (b.0 - a.0);
-        Some((a.1 + f * (b.1 - a.1), a.2 + f * (b.2 - a.2), a.3 + f * wrap_pi(b.3 - a.3)))
-    }
-    fn buoy_at(&self, t: f64, mode: BuoyFixUse) -> Option<(f64, f64)> {
-        let i = self.buoy.partition_point(|f| f.0 <= t);
-        if i == 0 {
-            return None;
-        }
-        let a = self.buoy[i - 1];
-        match (mode, self.buoy.get(i)) {
-            (BuoyFixUse::Linear, Some(b)) => {
-                let f = (t - a.0) / (b.0 - a.0);
-                Some((a.1 + f * (b.1 - a.1), a.2 + f * (b.2 - a.2)))
-            }
-            _ => Some((a.1, a.2)),
+impl Fix {
+    fn lerp(&self, b: &Fix, t: f64) -> Fix {
+        let f = (t - self.t) / (b.t - self.t);
+        Fix {
+            t,
+            e: self.e + f * (b.e - self.e),
+            n: self.n + f * (b.n - self.n),
+            psi: self.psi + f * wrap_pi(b.psi - self.psi),
         }
     }
+}
+
+/// A vehicle's fixes in time order, matched to transmit times by [`FixMatching`].
+#[derive(Debug, Default)]
+struct Track(Vec<Fix>);
+
+impl Track {
+    /// The vehicle at time `t`, or None when no fix is fresh enough.
+    fn at(&self, t: f64, m: &FixMatching) -> Option<Fix> {
+        let i = self.0.partition_point(|f| f.t <= t);
+        let (before, after) = (i.checked_sub(1).map(|k| &self.0[k]), self.0.get(i));
+        let age = |f: &Fix| (f.t - t).abs();
+        let nearest = [before, after].into_iter().flatten().min_by(|a, b| age(a).total_cmp(&age(b)))?;
+        if age(nearest) <= m.match_tolerance_s {
+            return Some(*nearest);
+        }
+        match (m.between, before, after) {
+            (FixUse::Linear, Some(a), Some(b)) if age(nearest) <= m.max_age_s => Some(a.lerp(b, t)),
+            (_, Some(a), _) if age(a) <= m.max_age_s => Some(*a),
+            _ => None,
+        }
+    }
+}
+
+/// Positions of the surface transponders over time, from logged fixes.
+#[derive(Debug, Default)]
+struct Fixes {
+    ship: Track,
+    buoy: Track,
 }
 
 fn math_heading(compass_deg: f64) -> f64 {
@@ -385,17 +463,23 @@ pub fn postprocess(entries: &[Entry], cfg: &PostConfig) -> Result<PostResult, Po
             _ => None,
         })
         .ok_or(PostError::NoInit)?;
-    let mut fixes = Fixes { ship: Vec::new(), buoy: Vec::new() };
+    let mut fixes = Fixes::default();
     for e in &events {
         match e.record {
-            Record::ShipFix { e: x, n, compass_deg } => fixes.ship.push((e.t, x, n, math_heading(compass_deg))),
-            Record::BuoyFix { e: x, n } => fixes.buoy.push((e.t, x, n)),
+            Record::ShipFix { e: x, n, compass_deg } => {
+                fixes.ship.0.push(Fix { t: e.t, e: x, n, psi: math_heading(compass_deg) })
+            }
+            Record::BuoyFix { e: x, n } => fixes.buoy.0.push(Fix { t: e.t, e: x, n, psi: 0.0 }),
             _ => {}
         }
     }
     let mut f = AuvEkf::new(t0, init.0, init.1, init.2, math_heading(init.3), cfg.auv.clone());
     f.ekf_mut().record_history();
-    let mut summary = PostSummary::default();
+    let mut summary = PostSummary {
+        rows_before_init: events.iter().filter(|e| e.t < t0).count(),
+        extra_inits: events.iter().filter(|e| e.t >= t0 && matches!(e.record, Record::Init { .. })).count() - 1,
+        ..PostSummary::default()
+    };
     let (mut yaw_rate, mut depth) = (0.0, None);
     let mut truth_at: Vec<(usize, [f64; 2])> = Vec::new();
     for ev in events.iter().filter(|e| e.t >= t0) {
@@ -417,28 +501,23 @@ pub fn postprocess(entries: &[Entry], cfg: &PostConfig) -> Result<PostResult, Po
             Record::Depth(z) => depth = Some(z),
             Record::Range { src, travel_time } => {
                 summary.ranges += 1;
-                // Round-off in t_rx − τ must not put a fix logged at the transmit instant "after" it.
-                let t_tx = ev.t - travel_time + 1e-9;
+                let t_tx = ev.t - travel_time;
                 let pos = match src {
                     Transmitter::Ship(side) => {
-                        fixes.ship_at(t_tx).map(|(e, n, psi)| cfg.outriggers.position(side, e, n, psi))
+                        fixes.ship.at(t_tx, &cfg.fixes).map(|x| cfg.outriggers.position(side, x.e, x.n, x.psi))
                     }
-                    Transmitter::Buoy => {
-                        fixes.buoy_at(t_tx, cfg.buoy_fixes).map(|(e, n)| Vec3::new(e, n, cfg.buoy_depth))
-                    }
+                    Transmitter::Buoy => fixes.buoy.at(t_tx, &cfg.fixes).map(|x| Vec3::new(x.e, x.n, cfg.buoy_depth)),
                 };
-                let applied = pos.is_some_and(|p| {
-                    let m = RangeMeasurement {
-                        range: cfg.auv.range_noise.sound_speed * travel_time,
-                        travel_time,
-                        transponder: p,
-                    };
-                    f.update_range(&m, if cfg.slant_range { depth } else { None }).applied()
-                });
-                if applied {
-                    summary.ranges_applied += 1;
-                } else {
-                    summary.ranges_skipped += 1;
+                let Some(transponder) = pos else {
+                    summary.ranges_without_fix += 1;
+                    continue;
+                };
+                let m =
+                    RangeMeasurement { range: cfg.auv.range_noise.sound_speed * travel_time, travel_time, transponder };
+                match f.update_range(&m, if cfg.slant_range { depth } else { None }) {
+                    UpdateOutcome::Applied { .. } => summary.ranges_applied += 1,
+                    UpdateOutcome::Gated { .. } => summary.ranges_gated += 1,
+                    UpdateOutcome::Unusable => summary.ranges_unusable += 1,
                 }
             }
             Record::Truth { e, n } => {
