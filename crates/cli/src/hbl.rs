@@ -321,12 +321,15 @@ fn postprocess(log: &Path, config: Option<&Path>, out: &Path, force: bool, stric
     }
     let dir = RunDir::create(out, force)?;
     manifest(&dir, "hbl postprocess", 0, json!({ "log": log, "config": cfg }))?;
-    let mut csv =
-        String::from("t,filt_e,filt_n,filt_sd_e,filt_sd_n,smooth_e,smooth_n,smooth_sd_e,smooth_sd_n,true_e,true_n\n");
+    let mut csv = String::from(
+        "t,filt_e,filt_n,filt_sd_e,filt_sd_n,smooth_e,smooth_n,smooth_sd_e,smooth_sd_n,true_e,true_n,\
+         smooth_heading_bias_deg,smooth_current_e,smooth_current_n\n",
+    );
     for s in &result.samples {
-        let o = |i: usize| s.truth.map_or(String::new(), |p| p[i].to_string());
+        let o = |v: Option<f64>| v.map_or(String::new(), |x| x.to_string());
+        let (truth, current) = (s.truth, s.smoothed_current);
         csv.push_str(&format!(
-            "{},{},{},{},{},{},{},{},{},{},{}\n",
+            "{},{},{},{},{},{},{},{},{},{},{},{},{},{}\n",
             s.t,
             s.filtered[0],
             s.filtered[1],
@@ -336,8 +339,11 @@ fn postprocess(log: &Path, config: Option<&Path>, out: &Path, force: bool, stric
             s.smoothed[1],
             s.smoothed_sd[0],
             s.smoothed_sd[1],
-            o(0),
-            o(1)
+            o(truth.map(|p| p[0])),
+            o(truth.map(|p| p[1])),
+            s.smoothed_heading_bias.to_degrees(),
+            o(current.map(|c| c[0])),
+            o(current.map(|c| c[1])),
         ));
     }
     dir.write_bytes("estimates.csv", csv)?;

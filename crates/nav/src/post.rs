@@ -30,9 +30,12 @@
 //! (top of a second). `init` is the filter's starting estimate (the first one is used);
 //! `truth` rows (topside AUV fixes) are only used to score the result.
 
-use crate::auv::{check_non_negative, check_positive, transition, AuvEkf, AuvParams, ParamError, PSI};
+use crate::auv::{
+    check_non_negative, check_positive, transition, AuvEkf, AuvParams, CurrentParams, ParamError, BIAS, CURRENT_E,
+    CURRENT_N, PSI,
+};
 use crate::cycle::Transmitter;
-use crate::ekf::UpdateOutcome;
+use crate::ekf::{Gate, Step, UpdateOutcome};
 use crate::range::RangeMeasurement;
 use crate::smoother::{rts, urts, SmoothError, Smoothed, SmootherKind};
 use crate::surface::Outriggers;
@@ -67,6 +70,8 @@ pub enum PostError {
     NoInit,
     #[error("post-processing config: {0}")]
     Param(#[from] ParamError),
+    #[error("post-processing config: auv.range_gate is not used here; set the top-level range_gate instead")]
+    AuvGate,
     #[error("post-processing config: {0}")]
     Toml(#[from] toml::de::Error),
     #[error("smoother: {0}")]
@@ -266,11 +271,36 @@ impl FixMatching {
     }
 }
 
+/// The post-processing filter's state vector.
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case")]
+pub enum AuvModel {
+    /// [E, N, S, ψ, b]: the thesis's filter (digest §3.2).
+    #[default]
+    Thesis,
+    /// [E, N, S, ψ, b, c_E, c_N]: with a water current (issue 12, field logs).
+    Current(CurrentParams),
+}
+
 /// Post-processing settings.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct PostConfig {
+    /// The thesis's coefficients. Its `range_gate` must stay off: post-processing gates with the
+    /// top-level `range_gate`.
     pub auv: AuvParams,
+    /// The filter's states: `{ kind = "thesis" }` (5, default) or `{ kind = "current", p0, q }` (7).
+    pub model: AuvModel,
+    /// Innovation gate on ranges; default NIS ≤ 10.83 (χ² with 1 degree of freedom at 99.9 %),
+    /// so an acoustic outlier is counted in `ranges_gated` instead of pulling the track.
+    pub range_gate: Gate,
+    /// A silence between rows longer than this (s) is predicted in one step, not in `auv.step_s`
+    /// pieces, and counted as a gap. Invented bound (issue 11 item 2): no logged sensor is silent
+    /// this long in a working mission.
+    pub max_gap_s: f64,
+    /// Horizontal SD (m, each axis) of the logged transponder fixes, added to the range noise
+    /// along the line of sight. Default 0: the thesis's fixes are DGPS (digest §3.6).
+    pub transponder_sd_m: f64,
     /// Added to every range row's time before processing (e.g. −2 removes a 2 s modem delay).
     pub acoustic_time_offset_s: f64,
     /// Use the 3-D slant range with logged depth (field mode) instead of the horizontal range.
@@ -291,6 +321,10 @@ impl Default for PostConfig {
     fn default() -> Self {
         PostConfig {
             auv: AuvParams::default(),
+            model: AuvModel::Thesis,
+            range_gate: Gate { max_abs_residual: None, max_nis: Some(10.83) },
+            transponder_sd_m: 0.0,
+            max_gap_s: 600.0,
             acoustic_time_offset_s: 0.0,
             slant_range: false,
             outriggers: Outriggers::default(),
@@ -310,6 +344,14 @@ impl PostConfig {
     }
     pub fn validate(&self) -> Result<(), PostError> {
         self.auv.validate("auv.")?;
+        if self.auv.range_gate != Gate::OFF {
+            return Err(PostError::AuvGate);
+        }
+        if let AuvModel::Current(c) = &self.model {
+            c.validate("model.")?;
+        }
+        check_non_negative("transponder_sd_m", self.transponder_sd_m)?;
+        check_positive("max_gap_s", self.max_gap_s)?;
         self.fixes.validate()?;
         if !(self.buoy_depth.is_finite() && self.buoy_depth >= 0.0) {
             return Err(ParamError::Negative { field: "buoy_depth".into(), value: self.buoy_depth }.into());
@@ -337,6 +379,10 @@ pub struct PostSample {
     pub filtered_sd: [f64; 2],
     pub smoothed: [f64; 2],
     pub smoothed_sd: [f64; 2],
+    /// Smoothed heading bias b (rad): the compass's offset from the direction of motion.
+    pub smoothed_heading_bias: f64,
+    /// Smoothed water current (east, north, m/s), with the `current` model.
+    pub smoothed_current: Option<[f64; 2]>,
     /// Topside truth at this time, if the log had a fix here.
     pub truth: Option<[f64; 2]>,
 }
@@ -356,6 +402,8 @@ pub struct PostSummary {
     pub rows_before_init: usize,
     /// `init` rows after the first (ignored: the filter starts once).
     pub extra_inits: usize,
+    /// Silences longer than `max_gap_s` between rows, each dead-reckoned in one step.
+    pub gaps: usize,
     pub truth_points: usize,
     pub mean_filtered_error: Option<f64>,
     pub mean_smoothed_error: Option<f64>,
@@ -379,6 +427,7 @@ impl PostSummary {
             self.ranges_without_fix,
             "range(s) had no transponder fix within fixes.max_age_s of their transmit time and were not applied",
         );
+        say(self.gaps, "silence(s) longer than max_gap_s between rows were dead-reckoned in one step (a time typo?)");
         say(self.ranges_gated, "range(s) were rejected by the innovation gate (auv.range_gate)");
         say(self.ranges_unusable, "range(s) had no usable geometry (transponder overhead) and were not applied");
         w
@@ -473,85 +522,122 @@ pub fn postprocess(entries: &[Entry], cfg: &PostConfig) -> Result<PostResult, Po
             _ => {}
         }
     }
-    let mut f = AuvEkf::new(t0, init.0, init.1, init.2, math_heading(init.3), cfg.auv.clone());
-    f.ekf_mut().record_history();
-    let mut summary = PostSummary {
+    let summary = PostSummary {
         rows_before_init: events.iter().filter(|e| e.t < t0).count(),
         extra_inits: events.iter().filter(|e| e.t >= t0 && matches!(e.record, Record::Init { .. })).count() - 1,
         ..PostSummary::default()
     };
-    let (mut yaw_rate, mut depth) = (0.0, None);
-    let mut truth_at: Vec<(usize, [f64; 2])> = Vec::new();
-    for ev in events.iter().filter(|e| e.t >= t0) {
-        // Dynamic step: predict to the event in pieces no longer than the nominal step.
-        while ev.t - f.ekf().t() > 1e-9 {
-            let to = (f.ekf().t() + cfg.auv.step_s).min(ev.t);
-            if !f.predict_to(to, yaw_rate) {
-                break;
+    let params = AuvParams { range_gate: cfg.range_gate, ..cfg.auv.clone() };
+    let (e0, n0, speed0, psi0) = (init.0, init.1, init.2, math_heading(init.3));
+    let run = Run { events: &events, fixes: &fixes, cfg, t0 };
+    match cfg.model {
+        AuvModel::Thesis => run.filter(AuvEkf::new(t0, e0, n0, speed0, psi0, params), summary),
+        AuvModel::Current(c) => run.filter(AuvEkf::with_current(t0, e0, n0, speed0, psi0, params, c), summary),
+    }
+}
+
+/// One post-processing pass over time-sorted events, for either state vector.
+struct Run<'a> {
+    events: &'a [Entry],
+    fixes: &'a Fixes,
+    cfg: &'a PostConfig,
+    t0: f64,
+}
+
+impl Run<'_> {
+    fn filter<const M: usize>(&self, mut f: AuvEkf<M>, mut summary: PostSummary) -> Result<PostResult, PostError> {
+        let (cfg, fixes) = (self.cfg, self.fixes);
+        f.ekf_mut().record_history();
+        let (mut yaw_rate, mut depth) = (0.0, None);
+        let mut truth_at: Vec<(usize, [f64; 2])> = Vec::new();
+        for ev in self.events.iter().filter(|e| e.t >= self.t0) {
+            // Across a silence longer than max_gap_s one prediction spans it: the history (and
+            // memory) grows with the rows, never with the log's time span (issue 11 item 2).
+            if ev.t - f.ekf().t() > cfg.max_gap_s {
+                summary.gaps += 1;
+                f.predict_to(ev.t, yaw_rate);
             }
-        }
-        match ev.record {
-            Record::YawRate { compass_deg_s } => yaw_rate = -compass_deg_s.to_radians(),
-            Record::Speed(s) => {
-                f.update_speed(s);
-            }
-            Record::Heading { compass_deg } => {
-                f.update_heading(math_heading(compass_deg));
-            }
-            Record::Depth(z) => depth = Some(z),
-            Record::Range { src, travel_time } => {
-                summary.ranges += 1;
-                let t_tx = ev.t - travel_time;
-                let pos = match src {
-                    Transmitter::Ship(side) => {
-                        fixes.ship.at(t_tx, &cfg.fixes).map(|x| cfg.outriggers.position(side, x.e, x.n, x.psi))
-                    }
-                    Transmitter::Buoy => fixes.buoy.at(t_tx, &cfg.fixes).map(|x| Vec3::new(x.e, x.n, cfg.buoy_depth)),
-                };
-                let Some(transponder) = pos else {
-                    summary.ranges_without_fix += 1;
-                    continue;
-                };
-                let m =
-                    RangeMeasurement { range: cfg.auv.range_noise.sound_speed * travel_time, travel_time, transponder };
-                match f.update_range(&m, if cfg.slant_range { depth } else { None }) {
-                    UpdateOutcome::Applied { .. } => summary.ranges_applied += 1,
-                    UpdateOutcome::Gated { .. } => summary.ranges_gated += 1,
-                    UpdateOutcome::Unusable => summary.ranges_unusable += 1,
+            // Dynamic step: predict to the event in pieces no longer than the nominal step.
+            while ev.t - f.ekf().t() > 1e-9 {
+                let to = (f.ekf().t() + cfg.auv.step_s).min(ev.t);
+                if !f.predict_to(to, yaw_rate) {
+                    break;
                 }
             }
-            Record::Truth { e, n } => {
-                let len = f.ekf().history().map_or(0, |h| h.len());
-                truth_at.push((len.saturating_sub(1), [e, n]));
+            match ev.record {
+                Record::YawRate { compass_deg_s } => yaw_rate = -compass_deg_s.to_radians(),
+                Record::Speed(s) => {
+                    f.update_speed(s);
+                }
+                Record::Heading { compass_deg } => {
+                    f.update_heading(math_heading(compass_deg));
+                }
+                Record::Depth(z) => depth = Some(z),
+                Record::Range { src, travel_time } => {
+                    summary.ranges += 1;
+                    let t_tx = ev.t - travel_time;
+                    let pos = match src {
+                        Transmitter::Ship(side) => {
+                            fixes.ship.at(t_tx, &cfg.fixes).map(|x| cfg.outriggers.position(side, x.e, x.n, x.psi))
+                        }
+                        Transmitter::Buoy => {
+                            fixes.buoy.at(t_tx, &cfg.fixes).map(|x| Vec3::new(x.e, x.n, cfg.buoy_depth))
+                        }
+                    };
+                    let Some(transponder) = pos else {
+                        summary.ranges_without_fix += 1;
+                        continue;
+                    };
+                    let m = RangeMeasurement {
+                        range: cfg.auv.range_noise.sound_speed * travel_time,
+                        travel_time,
+                        transponder,
+                    };
+                    match f.update_range_from_uncertain(
+                        &m,
+                        if cfg.slant_range { depth } else { None },
+                        cfg.transponder_sd_m,
+                    ) {
+                        UpdateOutcome::Applied { .. } => summary.ranges_applied += 1,
+                        UpdateOutcome::Gated { .. } => summary.ranges_gated += 1,
+                        UpdateOutcome::Unusable => summary.ranges_unusable += 1,
+                    }
+                }
+                Record::Truth { e, n } => {
+                    let len = f.ekf().history().map_or(0, |h| h.len());
+                    truth_at.push((len.saturating_sub(1), [e, n]));
+                }
+                Record::Init { .. } | Record::ShipFix { .. } | Record::BuoyFix { .. } => {}
             }
-            Record::Init { .. } | Record::ShipFix { .. } | Record::BuoyFix { .. } => {}
         }
+        let history = f.ekf().history().ok_or(SmoothError::NoHistory)?;
+        let smoothed = smooth(history, f.ekf().angles(), cfg.smoother)?;
+        let mut samples: Vec<PostSample> = history
+            .iter()
+            .zip(&smoothed)
+            .map(|(h, s)| PostSample {
+                t: h.t,
+                filtered: [h.x_post[0], h.x_post[1]],
+                filtered_sd: [h.p_post[(0, 0)].sqrt(), h.p_post[(1, 1)].sqrt()],
+                smoothed: [s.x[0], s.x[1]],
+                smoothed_sd: [s.p[(0, 0)].sqrt(), s.p[(1, 1)].sqrt()],
+                smoothed_heading_bias: s.x[BIAS],
+                smoothed_current: (M > CURRENT_N).then(|| [s.x[CURRENT_E], s.x[CURRENT_N]]),
+                truth: None,
+            })
+            .collect();
+        score(&mut samples, &mut summary, &truth_at, history, &smoothed);
+        Ok(PostResult { samples, summary })
     }
-    let history = f.ekf().history().ok_or(SmoothError::NoHistory)?;
-    let smoothed = smooth(history, f.ekf().angles(), cfg.smoother)?;
-    let mut samples: Vec<PostSample> = history
-        .iter()
-        .zip(&smoothed)
-        .map(|(h, s)| PostSample {
-            t: h.t,
-            filtered: [h.x_post[0], h.x_post[1]],
-            filtered_sd: [h.p_post[(0, 0)].sqrt(), h.p_post[(1, 1)].sqrt()],
-            smoothed: [s.x[0], s.x[1]],
-            smoothed_sd: [s.p[(0, 0)].sqrt(), s.p[(1, 1)].sqrt()],
-            truth: None,
-        })
-        .collect();
-    score(&mut samples, &mut summary, &truth_at, history, &smoothed);
-    Ok(PostResult { samples, summary })
 }
 
 /// The chosen backward pass. The unscented one replays the forward filter's dead reckoning:
 /// each step's interval and heading change are read back from the recorded means.
-fn smooth(
-    history: &[crate::ekf::Step<5>],
-    angles: &[bool; 5],
+fn smooth<const M: usize>(
+    history: &[Step<M>],
+    angles: &[bool; M],
     kind: SmootherKind,
-) -> Result<Vec<Smoothed<5>>, SmoothError> {
+) -> Result<Vec<Smoothed<M>>, SmoothError> {
     match kind {
         SmootherKind::Ekf => rts(history, angles),
         SmootherKind::Unscented => urts(history, angles, |k, x| {
@@ -561,14 +647,14 @@ fn smooth(
     }
 }
 
-fn score(
+fn score<const M: usize>(
     samples: &mut [PostSample],
     summary: &mut PostSummary,
     truth_at: &[(usize, [f64; 2])],
-    history: &[crate::ekf::Step<5>],
-    smoothed: &[crate::smoother::Smoothed<5>],
+    history: &[Step<M>],
+    smoothed: &[Smoothed<M>],
 ) {
-    let nees = |x: &nalgebra::SVector<f64, 5>, p: &nalgebra::SMatrix<f64, 5, 5>, tr: [f64; 2]| {
+    let nees = |x: &nalgebra::SVector<f64, M>, p: &nalgebra::SMatrix<f64, M, M>, tr: [f64; 2]| {
         let e = nalgebra::Vector2::new(x[0] - tr[0], x[1] - tr[1]);
         let pp = p.fixed_view::<2, 2>(0, 0).into_owned();
         pp.cholesky().map(|c| (e.transpose() * c.solve(&e))[(0, 0)])
