@@ -347,6 +347,21 @@ fn postprocess(log: &Path, config: Option<&Path>, out: &Path, force: bool, stric
         ));
     }
     dir.write_bytes("estimates.csv", csv)?;
+    let mut res = String::from("t,modem_id,applied,innovation_m,smoothed_residual_m\n");
+    for r in &result.residuals {
+        res.push_str(&format!("{},{},{},{},{}\n", r.t, r.modem_id, r.applied, r.innovation, r.smoothed));
+    }
+    dir.write_bytes("residuals.csv", res)?;
+    if let Some(frame) = cfg.frame() {
+        let mut ll = String::from("t,smooth_lat_deg,smooth_lon_deg\n");
+        for s in &result.samples {
+            let p = frame
+                .from_plane(s.smoothed[0], s.smoothed[1])
+                .with_context(|| format!("smoothed position at t = {} s has no latitude/longitude", s.t))?;
+            ll.push_str(&format!("{},{},{}\n", s.t, p.lat_deg(), p.lon_deg()));
+        }
+        dir.write_bytes("smoothed_ll.csv", ll)?;
+    }
     dir.write_json("summary.json", &result.summary)?;
     let out = dir.finish()?;
     println!("{}\nwrote {}", serde_json::to_string_pretty(&result.summary)?, out.display());

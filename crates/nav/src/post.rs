@@ -404,9 +404,18 @@ pub struct PostSummary {
     pub extra_inits: usize,
     /// Silences longer than `max_gap_s` between rows, each dead-reckoned in one step.
     pub gaps: usize,
+    /// RMS range residual of the applied ranges before their update (innovations) and against
+    /// the smoothed track (m).
+    pub residual_rms_filter_m: Option<f64>,
+    pub residual_rms_smoothed_m: Option<f64>,
     pub truth_points: usize,
     pub mean_filtered_error: Option<f64>,
     pub mean_smoothed_error: Option<f64>,
+    /// RMS, largest and last horizontal error against the truth rows (m).
+    pub rms_filtered_error: Option<f64>,
+    pub rms_smoothed_error: Option<f64>,
+    pub max_smoothed_error: Option<f64>,
+    pub final_smoothed_error: Option<f64>,
     /// Mean 2-D NEES eᵀP⁻¹e of position at truth points (≈ 2 when the covariance is consistent).
     pub mean_filtered_nees: Option<f64>,
     pub mean_smoothed_nees: Option<f64>,
@@ -438,6 +447,28 @@ impl PostSummary {
 pub struct PostResult {
     pub samples: Vec<PostSample>,
     pub summary: PostSummary,
+    /// Every range that reached the filter (applied or gated), in log order.
+    pub residuals: Vec<RangeResidual>,
+}
+
+/// One range's residual (measured − predicted, m) before its update and after smoothing.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct RangeResidual {
+    /// Receive time (s, after `acoustic_time_offset_s`).
+    pub t: f64,
+    pub modem_id: u8,
+    /// False when the gate rejected it.
+    pub applied: bool,
+    /// Against the filter's prediction just before the update (the innovation).
+    pub innovation: f64,
+    /// Against the smoothed track at the same step.
+    pub smoothed: f64,
+}
+
+/// Root mean square, None for no values.
+fn rms(values: impl Iterator<Item = f64>) -> Option<f64> {
+    let (sum, n) = values.fold((0.0, 0usize), |(s, n), v| (s + v * v, n + 1));
+    (n > 0).then(|| (sum / n as f64).sqrt())
 }
 
 /// One logged fix of a transponder's vehicle: position and (ship) heading, math radians.
@@ -549,6 +580,7 @@ impl Run<'_> {
         let (cfg, fixes) = (self.cfg, self.fixes);
         f.ekf_mut().record_history();
         let (mut yaw_rate, mut depth) = (0.0, None);
+        let mut residuals = Vec::new();
         let mut truth_at: Vec<(usize, [f64; 2])> = Vec::new();
         for ev in self.events.iter().filter(|e| e.t >= self.t0) {
             // Across a silence longer than max_gap_s one prediction spans it: the history (and
@@ -593,11 +625,21 @@ impl Run<'_> {
                         travel_time,
                         transponder,
                     };
-                    match f.update_range_from_uncertain(
-                        &m,
-                        if cfg.slant_range { depth } else { None },
-                        cfg.transponder_sd_m,
-                    ) {
+                    let auv_depth = if cfg.slant_range { depth } else { None };
+                    let innovation = m.range - f.predicted_range(&transponder, auv_depth);
+                    let outcome = f.update_range_from_uncertain(&m, auv_depth, cfg.transponder_sd_m);
+                    let step = f.ekf().history().map_or(0, |h| h.len().saturating_sub(1));
+                    if !matches!(outcome, UpdateOutcome::Unusable) {
+                        let residual = RangeResidual {
+                            t: ev.t,
+                            modem_id: src.modem_id(),
+                            applied: outcome.applied(),
+                            innovation,
+                            smoothed: f64::NAN,
+                        };
+                        residuals.push((residual, step, m.range, transponder, auv_depth));
+                    }
+                    match outcome {
                         UpdateOutcome::Applied { .. } => summary.ranges_applied += 1,
                         UpdateOutcome::Gated { .. } => summary.ranges_gated += 1,
                         UpdateOutcome::Unusable => summary.ranges_unusable += 1,
@@ -627,7 +669,18 @@ impl Run<'_> {
             })
             .collect();
         score(&mut samples, &mut summary, &truth_at, history, &smoothed);
-        Ok(PostResult { samples, summary })
+        let residuals = residuals
+            .into_iter()
+            .map(|(r, step, range, at, auv_depth)| {
+                let x = &smoothed[step].x;
+                let dz = auv_depth.map_or(0.0, |z| z - at.z);
+                RangeResidual { smoothed: range - (x[0] - at.x).hypot(x[1] - at.y).hypot(dz), ..r }
+            })
+            .collect::<Vec<_>>();
+        let applied = || residuals.iter().filter(|r| r.applied);
+        summary.residual_rms_filter_m = rms(applied().map(|r| r.innovation));
+        summary.residual_rms_smoothed_m = rms(applied().map(|r| r.smoothed));
+        Ok(PostResult { samples, summary, residuals })
     }
 }
 
@@ -659,11 +712,12 @@ fn score<const M: usize>(
         let pp = p.fixed_view::<2, 2>(0, 0).into_owned();
         pp.cholesky().map(|c| (e.transpose() * c.solve(&e))[(0, 0)])
     };
-    let (mut ef, mut es, mut nf, mut ns, mut nn) = (0.0, 0.0, 0.0, 0.0, 0usize);
+    let (mut nf, mut ns, mut nn) = (0.0, 0.0, 0usize);
+    let (mut filtered, mut smoothed_errors) = (Vec::new(), Vec::new());
     for &(i, tr) in truth_at {
         samples[i].truth = Some(tr);
-        ef += (history[i].x_post[0] - tr[0]).hypot(history[i].x_post[1] - tr[1]);
-        es += (smoothed[i].x[0] - tr[0]).hypot(smoothed[i].x[1] - tr[1]);
+        filtered.push((history[i].x_post[0] - tr[0]).hypot(history[i].x_post[1] - tr[1]));
+        smoothed_errors.push((smoothed[i].x[0] - tr[0]).hypot(smoothed[i].x[1] - tr[1]));
         if let (Some(a), Some(b)) =
             (nees(&history[i].x_post, &history[i].p_post, tr), nees(&smoothed[i].x, &smoothed[i].p, tr))
         {
@@ -675,9 +729,13 @@ fn score<const M: usize>(
     summary.truth_points = truth_at.len();
     if !truth_at.is_empty() {
         let k = truth_at.len() as f64;
-        summary.mean_filtered_error = Some(ef / k);
-        summary.mean_smoothed_error = Some(es / k);
+        summary.mean_filtered_error = Some(filtered.iter().sum::<f64>() / k);
+        summary.mean_smoothed_error = Some(smoothed_errors.iter().sum::<f64>() / k);
     }
+    summary.rms_filtered_error = rms(filtered.iter().copied());
+    summary.rms_smoothed_error = rms(smoothed_errors.iter().copied());
+    summary.max_smoothed_error = smoothed_errors.iter().copied().reduce(f64::max);
+    summary.final_smoothed_error = smoothed_errors.last().copied();
     if nn > 0 {
         summary.mean_filtered_nees = Some(nf / nn as f64);
         summary.mean_smoothed_nees = Some(ns / nn as f64);

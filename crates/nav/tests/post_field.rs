@@ -189,6 +189,8 @@ fn the_default_gate_counts_an_outlier_instead_of_following_it() {
     let clean = postprocess(&mission(2), &PostConfig::default()).unwrap();
     assert_eq!((gated.summary.ranges_gated, open.summary.ranges_gated), (1, 0));
     assert!(gated.summary.warnings().iter().any(|w| w.contains("1 range(s) were rejected")));
+    let outlier: Vec<_> = gated.residuals.iter().filter(|r| !r.applied).collect();
+    assert!(outlier.len() == 1 && outlier[0].innovation > 50.0 && outlier[0].smoothed > 50.0, "{outlier:?}");
     let (eg, eo, ec) = (smoothed_error(&gated), smoothed_error(&open), smoothed_error(&clean));
     assert!(eg < ec + 0.05 && eo > eg + 0.5, "gated {eg} m, ungated {eo} m, clean log {ec} m");
 }
@@ -218,4 +220,23 @@ fn one_row_at_unix_time_in_a_relative_log_costs_one_step_not_ten_billion() {
     assert!(r.samples.len() < rows, "{} filter steps for {rows} rows", r.samples.len());
     assert!(r.summary.warnings().iter().any(|w| w.contains("1 silence(s) longer than max_gap_s")));
     assert_eq!(postprocess(&mission(0), &PostConfig::default()).unwrap().summary.gaps, 0);
+}
+
+#[test]
+fn summary_reports_residuals_before_and_after_smoothing_and_error_figures() {
+    // Ranges carry 0.15 m of timing noise and the fixes 0.1 m: smoothed residuals must come down
+    // to that scale, and below the innovations, which also carry the prior's uncertainty.
+    let with_current = PostConfig { model: AuvModel::Current(CurrentParams::default()), ..PostConfig::default() };
+    let r = postprocess(&mission_in(1, [0.15, -0.1]), &with_current).unwrap();
+    let s = r.summary;
+    let (before, after) = (s.residual_rms_filter_m.unwrap(), s.residual_rms_smoothed_m.unwrap());
+    assert!(after < before && after < 0.5, "residual RMS {before} m before, {after} m after smoothing");
+    assert_eq!(r.residuals.len(), s.ranges_applied + s.ranges_gated);
+    assert!(r.residuals.iter().all(|x| x.modem_id == 13 || x.modem_id == 14));
+    let (mean, rms, max) =
+        (s.mean_smoothed_error.unwrap(), s.rms_smoothed_error.unwrap(), s.max_smoothed_error.unwrap());
+    assert!(mean <= rms && rms <= max && s.final_smoothed_error.unwrap() <= max, "{s:?}");
+    assert!(s.rms_filtered_error.unwrap() > 0.0);
+    let bare = postprocess(&[mission(0)[0]], &PostConfig::default()).unwrap().summary;
+    assert_eq!((bare.residual_rms_filter_m, bare.rms_smoothed_error, bare.max_smoothed_error), (None, None, None));
 }
