@@ -463,6 +463,8 @@ pub struct RangeResidual {
     pub innovation: f64,
     /// Against the smoothed track at the same step.
     pub smoothed: f64,
+    /// Normalised innovation squared y²/S (χ² with 1 degree of freedom when consistent).
+    pub nis: f64,
 }
 
 /// Root mean square, None for no values.
@@ -629,13 +631,14 @@ impl Run<'_> {
                     let innovation = m.range - f.predicted_range(&transponder, auv_depth);
                     let outcome = f.update_range_from_uncertain(&m, auv_depth, cfg.transponder_sd_m);
                     let step = f.ekf().history().map_or(0, |h| h.len().saturating_sub(1));
-                    if !matches!(outcome, UpdateOutcome::Unusable) {
+                    if let UpdateOutcome::Applied { nis } | UpdateOutcome::Gated { nis } = outcome {
                         let residual = RangeResidual {
                             t: ev.t,
                             modem_id: src.modem_id(),
                             applied: outcome.applied(),
                             innovation,
                             smoothed: f64::NAN,
+                            nis,
                         };
                         residuals.push((residual, step, m.range, transponder, auv_depth));
                     }
