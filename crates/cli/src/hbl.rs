@@ -1,5 +1,6 @@
 //! `coopnav hbl simulate|montecarlo|grid|tune|postprocess`: the Gill hybrid-baseline tools.
 
+use crate::alog_import;
 use anyhow::{Context, Result};
 use coopnav_nav::post::{self, PostConfig};
 use coopnav_sim::hbl::grid::{self, GridSpec};
@@ -55,9 +56,12 @@ pub enum Command {
     },
     /// Post-process a CSV log: EKF then RTS smoother.
     Postprocess {
-        /// The log (format in coopnav_nav::post).
+        /// The log (format in coopnav_nav::post), or a MOOS `.alog` (by its extension).
         #[arg(long)]
         log: PathBuf,
+        /// For an `.alog`: TOML mapping MOOS variables to log rows (`hbl example alog-map`).
+        #[arg(long)]
+        alog_map: Option<PathBuf>,
         /// Post-processing TOML (auv coefficients, acoustic_time_offset_s, slant_range, ...).
         #[arg(long)]
         config: Option<PathBuf>,
@@ -65,6 +69,10 @@ pub enum Command {
         out: PathBuf,
         #[arg(long)]
         force: bool,
+        /// Refuse the log (exit non-zero, write nothing) when any row would not be used as logged:
+        /// rows before `init`, a second `init`, ranges without a fresh transponder fix, gated ranges.
+        #[arg(long)]
+        strict: bool,
     },
 }
 
@@ -78,6 +86,8 @@ pub enum ExampleKind {
     Tune,
     /// `postprocess --config`.
     Post,
+    /// `postprocess --alog-map`.
+    AlogMap,
 }
 
 #[derive(clap::Args)]
@@ -123,7 +133,9 @@ pub fn run_command(cmd: Command) -> Result<()> {
         Command::Montecarlo { common, runs } => montecarlo(&common, runs),
         Command::Grid { common, grid } => grid_cmd(&common, grid.as_deref()),
         Command::Tune { common, spec } => tune_cmd(&common, &spec),
-        Command::Postprocess { log, config, out, force } => postprocess(&log, config.as_deref(), &out, force),
+        Command::Postprocess { log, alog_map, config, out, force, strict } => {
+            postprocess(&log, alog_map.as_deref(), config.as_deref(), &out, force, strict)
+        }
         Command::Example { kind } => example(kind),
     }
 }
@@ -149,12 +161,14 @@ fn example(kind: ExampleKind) -> Result<()> {
             seed: 1,
         })?,
         ExampleKind::Post => format!("{ORIGIN_HINT}\n{}", toml::to_string_pretty(&PostConfig::default())?),
+        ExampleKind::AlogMap => toml::to_string_pretty(&crate::alog_import::AlogMapping::default())?,
     };
     let what = match kind {
         ExampleKind::Scenario => "HBL scenario (Gill 2013 Table 5, HBL Two) for --config",
         ExampleKind::Grid => "buoy-location grid for `hbl grid --grid`",
         ExampleKind::Tune => "tuning spec for `hbl tune --spec`",
         ExampleKind::Post => "post-processing config for `hbl postprocess --config`",
+        ExampleKind::AlogMap => "MOOS variable mapping for `hbl postprocess --log X.alog --alog-map`",
     };
     println!("# coopnav {what}.");
     println!("# Every field is at its default and optional: keep only what you change. Units and the");
@@ -299,22 +313,48 @@ fn tune_cmd(c: &Common, spec_path: &Path) -> Result<()> {
     Ok(())
 }
 
-fn postprocess(log: &Path, config: Option<&Path>, out: &Path, force: bool) -> Result<()> {
+fn postprocess(
+    log: &Path,
+    alog_map: Option<&Path>,
+    config: Option<&Path>,
+    out: &Path,
+    force: bool,
+    strict: bool,
+) -> Result<()> {
     let cfg = match config {
         Some(p) => PostConfig::from_toml(&read(p)?).with_context(|| format!("in {}", p.display()))?,
         None => PostConfig::default(),
     };
-    let file = std::fs::File::open(log).with_context(|| format!("opening {}", log.display()))?;
-    let entries = post::read_log(file, cfg.frame().as_ref()).with_context(|| format!("in {}", log.display()))?;
+    let entries = if log.extension().is_some_and(|e| e == "alog") {
+        let alog = coopnav_moos::read_alog_file(log)?;
+        alog_import::entries(&alog, &alog_import::mapping(alog_map)?)
+            .with_context(|| format!("in {}", log.display()))?
+    } else {
+        if let Some(m) = alog_map {
+            anyhow::bail!("--alog-map {} is for an .alog log; {} is not one", m.display(), log.display());
+        }
+        let file = std::fs::File::open(log).with_context(|| format!("opening {}", log.display()))?;
+        post::read_log(file, cfg.frame().as_ref()).with_context(|| format!("in {}", log.display()))?
+    };
     let result = post::postprocess(&entries, &cfg)?;
+    let warnings = result.summary.warnings();
+    if strict && !warnings.is_empty() {
+        anyhow::bail!("{} (--strict): {}", log.display(), warnings.join("; "));
+    }
+    for w in &warnings {
+        eprintln!("warning: {}: {w}", log.display());
+    }
     let dir = RunDir::create(out, force)?;
     manifest(&dir, "hbl postprocess", 0, json!({ "log": log, "config": cfg }))?;
-    let mut csv =
-        String::from("t,filt_e,filt_n,filt_sd_e,filt_sd_n,smooth_e,smooth_n,smooth_sd_e,smooth_sd_n,true_e,true_n\n");
+    let mut csv = String::from(
+        "t,filt_e,filt_n,filt_sd_e,filt_sd_n,smooth_e,smooth_n,smooth_sd_e,smooth_sd_n,true_e,true_n,\
+         smooth_heading_bias_deg,smooth_current_e,smooth_current_n\n",
+    );
     for s in &result.samples {
-        let o = |i: usize| s.truth.map_or(String::new(), |p| p[i].to_string());
+        let o = |v: Option<f64>| v.map_or(String::new(), |x| x.to_string());
+        let (truth, current) = (s.truth, s.smoothed_current);
         csv.push_str(&format!(
-            "{},{},{},{},{},{},{},{},{},{},{}\n",
+            "{},{},{},{},{},{},{},{},{},{},{},{},{},{}\n",
             s.t,
             s.filtered[0],
             s.filtered[1],
@@ -324,13 +364,32 @@ fn postprocess(log: &Path, config: Option<&Path>, out: &Path, force: bool) -> Re
             s.smoothed[1],
             s.smoothed_sd[0],
             s.smoothed_sd[1],
-            o(0),
-            o(1)
+            o(truth.map(|p| p[0])),
+            o(truth.map(|p| p[1])),
+            s.smoothed_heading_bias.to_degrees(),
+            o(current.map(|c| c[0])),
+            o(current.map(|c| c[1])),
         ));
     }
     dir.write_bytes("estimates.csv", csv)?;
+    let mut res = String::from("t,modem_id,applied,innovation_m,smoothed_residual_m,nis\n");
+    for r in &result.residuals {
+        res.push_str(&format!("{},{},{},{},{},{}\n", r.t, r.modem_id, r.applied, r.innovation, r.smoothed, r.nis));
+    }
+    dir.write_bytes("residuals.csv", res)?;
+    if let Some(frame) = cfg.frame() {
+        let mut ll = String::from("t,smooth_lat_deg,smooth_lon_deg\n");
+        for s in &result.samples {
+            let p = frame
+                .from_plane(s.smoothed[0], s.smoothed[1])
+                .with_context(|| format!("smoothed position at t = {} s has no latitude/longitude", s.t))?;
+            ll.push_str(&format!("{},{},{}\n", s.t, p.lat_deg(), p.lon_deg()));
+        }
+        dir.write_bytes("smoothed_ll.csv", ll)?;
+    }
     dir.write_json("summary.json", &result.summary)?;
+    dir.write_bytes("report.html", crate::post_report::render(&entries, &result)?)?;
     let out = dir.finish()?;
-    println!("{:?}; wrote {}", result.summary, out.display());
+    println!("{}\nwrote {}", serde_json::to_string_pretty(&result.summary)?, out.display());
     Ok(())
 }

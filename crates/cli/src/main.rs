@@ -3,11 +3,13 @@
 use anyhow::Result;
 use clap::{Parser, Subcommand};
 
+mod alog_import;
 mod bench;
 mod channel;
 mod hbl;
 mod nams;
 mod plan;
+mod post_report;
 mod reproduce;
 mod scenario_args;
 mod simulate;

@@ -1,9 +1,13 @@
-//! The survey AUV's 5-state EKF [E, N, S, ψ, b] (digest §3.2): heading-rate input, speed and
-//! compass updates, and OWTT range updates from *any* transponder whose position at transmit time
-//! the caller supplies (ship outrigger, buoy, or a CNA that carries its position in its message).
+//! The survey AUV's EKF (digest §3.2): the thesis's 5 states [E, N, S, ψ, b] (`AuvEkf`, the
+//! default), or 7 with a water current [.., c_E, c_N] (`AuvEkf<7>`, field logs); heading-rate
+//! input, speed and compass updates, and OWTT range updates from *any* transponder whose position
+//! at transmit time the caller supplies (ship outrigger, buoy, or a CNA that carries its position
+//! in its message), optionally with that position's own uncertainty.
 //!
-//! Headings inside are math convention (0 = east, counter-clockwise), so E advances with cos ψ
-//! and N with sin ψ; the thesis writes the same model clockwise from north.
+//! ψ is the direction the vehicle moves through the water and b the compass's offset from it, so
+//! b is the heading-bias (crab-angle) state: a vehicle that crabs 8° needs a prior p0[4] wide
+//! enough to reach 8°. Headings inside are math convention (0 = east, counter-clockwise), so E
+//! advances with cos ψ and N with sin ψ; the thesis writes the same model clockwise from north.
 
 use crate::ekf::{Ekf, Gate, UpdateOutcome};
 use crate::range::{RangeMeasurement, RangeNoise};
@@ -18,6 +22,33 @@ pub const N: usize = 1;
 pub const S: usize = 2;
 pub const PSI: usize = 3;
 pub const BIAS: usize = 4;
+/// Water current east and north (m/s), in the 7-state filter only.
+pub const CURRENT_E: usize = 5;
+pub const CURRENT_N: usize = 6;
+
+/// The current states of the 7-state filter: a random walk (constant when `q` = 0). Invented
+/// parameters (the thesis has no current state, digest §3.2; issue 12 field logs).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct CurrentParams {
+    /// Initial variance of each current component ((m/s)²); default (0.3 m/s)².
+    pub p0: f64,
+    /// Per-step process noise of each component ((m/s)² per `step_s`); default (0.3 m/s per hour)².
+    pub q: f64,
+}
+
+impl Default for CurrentParams {
+    fn default() -> Self {
+        CurrentParams { p0: 0.09, q: 0.09 / 36_000.0 }
+    }
+}
+
+impl CurrentParams {
+    pub fn validate(&self, prefix: &str) -> Result<(), ParamError> {
+        check_positive(&format!("{prefix}p0"), self.p0)?;
+        check_non_negative(&format!("{prefix}q"), self.q)
+    }
+}
 
 /// Coefficients of the AUV filter. Variances are per *nominal step* `step_s` (digest §3.1: Q is
 /// added once per predict); a prediction over h seconds adds Q·h/step_s.
@@ -95,53 +126,85 @@ impl AuvParams {
     }
 }
 
-/// Dead reckoning over `h` seconds with the heading changing by `turn` rad (eq. 7, Euler step):
-/// the mean map the EKF linearises and the unscented smoother pushes sigma points through.
-pub fn transition(x: &AuvState, h: f64, turn: f64) -> AuvState {
+/// Dead reckoning over `h` seconds with the heading changing by `turn` rad (eq. 7, Euler step),
+/// plus the drift of the current states when there are 7: the mean map the EKF linearises and the
+/// unscented smoother pushes sigma points through.
+pub fn transition<const M: usize>(x: &SVector<f64, M>, h: f64, turn: f64) -> SVector<f64, M> {
     let (sin, cos) = x[PSI].sin_cos();
     let mut next = *x;
     next[E] += h * x[S] * cos;
     next[N] += h * x[S] * sin;
+    if M > CURRENT_N {
+        next[E] += h * x[CURRENT_E];
+        next[N] += h * x[CURRENT_N];
+    }
     next[PSI] = wrap_pi(x[PSI] + turn);
     next
 }
 
 /// ∂transition/∂x at `x` (digest §3.2, F^A).
-pub fn transition_jacobian(x: &AuvState, h: f64) -> SMatrix<f64, 5, 5> {
+pub fn transition_jacobian<const M: usize>(x: &SVector<f64, M>, h: f64) -> SMatrix<f64, M, M> {
     let (sin, cos) = x[PSI].sin_cos();
-    let mut f = SMatrix::<f64, 5, 5>::identity();
+    let mut f = SMatrix::<f64, M, M>::identity();
     f[(E, S)] = h * cos;
     f[(E, PSI)] = -h * x[S] * sin;
     f[(N, S)] = h * sin;
     f[(N, PSI)] = h * x[S] * cos;
+    if M > CURRENT_N {
+        f[(E, CURRENT_E)] = h;
+        f[(N, CURRENT_N)] = h;
+    }
     f
 }
 
-/// The AUV navigation filter.
+/// The AUV navigation filter with `M` = 5 (thesis) or 7 (with current) states.
 #[derive(Debug, Clone)]
-pub struct AuvEkf {
-    ekf: Ekf<5>,
+pub struct AuvEkf<const M: usize = 5> {
+    ekf: Ekf<M>,
     params: AuvParams,
+    /// Per-step process noise of the states after the thesis's five (none when `M` = 5).
+    extra_q: f64,
 }
 
-impl AuvEkf {
+impl AuvEkf<5> {
     /// Starts at time `t0` from position (e, n), speed, math heading ψ and zero compass bias.
     pub fn new(t0: f64, e: f64, n: f64, speed: f64, psi: f64, params: AuvParams) -> Self {
         let x0 = AuvState::from([e, n, speed, psi, 0.0]);
         let p0 = SMatrix::<f64, 5, 5>::from_diagonal(&SVector::from(params.p0));
-        AuvEkf { ekf: Ekf::new(t0, x0, p0, [false, false, false, true, true]), params }
+        AuvEkf { ekf: Ekf::new(t0, x0, p0, [false, false, false, true, true]), params, extra_q: 0.0 }
     }
+}
 
-    pub fn ekf(&self) -> &Ekf<5> {
+impl AuvEkf<7> {
+    /// The 7-state filter: as [`AuvEkf::new`], with zero current of prior variance `current.p0`.
+    pub fn with_current(
+        t0: f64,
+        e: f64,
+        n: f64,
+        speed: f64,
+        psi: f64,
+        params: AuvParams,
+        current: CurrentParams,
+    ) -> Self {
+        let x0 = SVector::<f64, 7>::from([e, n, speed, psi, 0.0, 0.0, 0.0]);
+        let [pe, pn, ps, ppsi, pb] = params.p0;
+        let p0 = SMatrix::<f64, 7, 7>::from_diagonal(&SVector::from([pe, pn, ps, ppsi, pb, current.p0, current.p0]));
+        let angles = [false, false, false, true, true, false, false];
+        AuvEkf { ekf: Ekf::new(t0, x0, p0, angles), params, extra_q: current.q }
+    }
+}
+
+impl<const M: usize> AuvEkf<M> {
+    pub fn ekf(&self) -> &Ekf<M> {
         &self.ekf
     }
-    pub fn ekf_mut(&mut self) -> &mut Ekf<5> {
+    pub fn ekf_mut(&mut self) -> &mut Ekf<M> {
         &mut self.ekf
     }
     pub fn params(&self) -> &AuvParams {
         &self.params
     }
-    pub fn state(&self) -> &AuvState {
+    pub fn state(&self) -> &SVector<f64, M> {
         self.ekf.x()
     }
     pub fn position(&self) -> (f64, f64) {
@@ -157,13 +220,14 @@ impl AuvEkf {
         }
         let x = *self.ekf.x();
         let (x_new, f) = (transition(&x, h, h * yaw_rate), transition_jacobian(&x, h));
-        let q = SMatrix::<f64, 5, 5>::from_diagonal(&SVector::from(self.params.q)) * (h / self.params.step_s);
+        let q_step = SVector::<f64, M>::from_fn(|i, _| self.params.q.get(i).copied().unwrap_or(self.extra_q));
+        let q = SMatrix::<f64, M, M>::from_diagonal(&q_step) * (h / self.params.step_s);
         self.ekf.predict(t, x_new, f, q)
     }
 
     /// Speed-sensor update (m/s).
     pub fn update_speed(&mut self, measured: f64) -> UpdateOutcome {
-        let mut h = SMatrix::<f64, 1, 5>::zeros();
+        let mut h = SMatrix::<f64, 1, M>::zeros();
         h[S] = 1.0;
         let y = measured - self.ekf.x()[S];
         self.ekf.update_scalar(y, h, self.params.sigma_speed.powi(2), &Gate::OFF)
@@ -171,7 +235,7 @@ impl AuvEkf {
 
     /// Compass update: the compass reads ψ + b (math convention, rad).
     pub fn update_heading(&mut self, measured: f64) -> UpdateOutcome {
-        let mut h = SMatrix::<f64, 1, 5>::zeros();
+        let mut h = SMatrix::<f64, 1, M>::zeros();
         h[PSI] = 1.0;
         h[BIAS] = 1.0;
         let y = wrap_pi(measured - self.ekf.x()[PSI] - self.ekf.x()[BIAS]);
@@ -181,6 +245,18 @@ impl AuvEkf {
     /// OWTT range update (eq. 9). `auv_depth` = Some(z) uses the 3-D slant range to the
     /// transponder's depth (field mode); None the horizontal range (simulation mode, digest A4).
     pub fn update_range(&mut self, m: &RangeMeasurement, auv_depth: Option<f64>) -> UpdateOutcome {
+        self.update_range_from_uncertain(m, auv_depth, 0.0)
+    }
+
+    /// As [`Self::update_range`], with the transponder's horizontal position uncertain by
+    /// `transponder_sd` (m, each axis): its variance along the line of sight is added to the range
+    /// noise (the position error projects onto the range through the same unit vector).
+    pub fn update_range_from_uncertain(
+        &mut self,
+        m: &RangeMeasurement,
+        auv_depth: Option<f64>,
+        transponder_sd: f64,
+    ) -> UpdateOutcome {
         let x = self.ekf.x();
         let de = x[E] - m.transponder.x;
         let dn = x[N] - m.transponder.y;
@@ -190,10 +266,13 @@ impl AuvEkf {
         if !(predicted > 1e-6) {
             return UpdateOutcome::Unusable;
         }
-        let mut h = SMatrix::<f64, 1, 5>::zeros();
+        let mut h = SMatrix::<f64, 1, M>::zeros();
         h[E] = de / predicted;
         h[N] = dn / predicted;
-        let r = self.params.range_noise.variance(m.travel_time);
+        let mut r = self.params.range_noise.variance(m.travel_time);
+        if transponder_sd > 0.0 {
+            r += transponder_sd.powi(2) * (h[E] * h[E] + h[N] * h[N]);
+        }
         self.ekf.update_scalar(m.range - predicted, h, r, &self.params.range_gate)
     }
 
@@ -233,6 +312,34 @@ mod tests {
         assert!(f.position().0 > 3.0, "moved towards the transponder: {:?}", f.position());
         assert!(f.position().1.abs() < 1e-9, "no information across the line of sight");
         assert!(f.ekf().p()[(E, E)] < 16.0 && (f.ekf().p()[(N, N)] - 16.0).abs() < 1e-9);
+    }
+
+    #[test]
+    fn transponder_uncertainty_adds_its_line_of_sight_variance() {
+        // Line of sight along E: the posterior E variance is P·R/(P + R) with R = σ_r² + σ_b².
+        let at = Vec3::new(100.0, 0.0, 0.0);
+        let r0 = AuvParams::default().range_noise.variance(95.0 / 1500.0);
+        for sd in [0.0, 3.0] {
+            let mut f = AuvEkf::new(0.0, 0.0, 0.0, 0.0, 0.0, AuvParams::default());
+            assert!(f.update_range_from_uncertain(&meas(95.0, at), None, sd).applied());
+            let r = r0 + sd * sd;
+            assert!((f.ekf().p()[(E, E)] - 16.0 * r / (16.0 + r)).abs() < 1e-9, "sd {sd}: {}", f.ekf().p()[(E, E)]);
+        }
+    }
+
+    #[test]
+    fn current_states_carry_the_vehicle_and_start_still() {
+        let mut f = AuvEkf::with_current(0.0, 0.0, 0.0, 1.0, 0.0, AuvParams::default(), CurrentParams::default());
+        f.ekf_mut().predict(
+            1.0,
+            SVector::from([0.0, 0.0, 1.0, 0.0, 0.0, 0.2, -0.1]),
+            SMatrix::identity(),
+            SMatrix::zeros(),
+        );
+        f.predict_to(11.0, 0.0);
+        // 10 s at 1 m/s east through the water plus (0.2, −0.1) m/s of current.
+        assert!((f.position().0 - 12.0).abs() < 1e-9 && (f.position().1 + 1.0).abs() < 1e-9, "{:?}", f.position());
+        assert!(f.ekf().p()[(E, CURRENT_E)] > 0.0, "position and current are correlated by the drift");
     }
 
     #[test]

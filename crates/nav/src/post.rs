@@ -30,8 +30,12 @@
 //! (top of a second). `init` is the filter's starting estimate (the first one is used);
 //! `truth` rows (topside AUV fixes) are only used to score the result.
 
-use crate::auv::{transition, AuvEkf, AuvParams, ParamError, PSI};
+use crate::auv::{
+    check_non_negative, check_positive, transition, AuvEkf, AuvParams, CurrentParams, ParamError, BIAS, CURRENT_E,
+    CURRENT_N, PSI,
+};
 use crate::cycle::Transmitter;
+use crate::ekf::{Gate, Step, UpdateOutcome};
 use crate::range::RangeMeasurement;
 use crate::smoother::{rts, urts, SmoothError, Smoothed, SmootherKind};
 use crate::surface::Outriggers;
@@ -66,6 +70,8 @@ pub enum PostError {
     NoInit,
     #[error("post-processing config: {0}")]
     Param(#[from] ParamError),
+    #[error("post-processing config: auv.range_gate is not used here; set the top-level range_gate instead")]
+    AuvGate,
     #[error("post-processing config: {0}")]
     Toml(#[from] toml::de::Error),
     #[error("smoother: {0}")]
@@ -225,28 +231,83 @@ pub fn read_log<R: Read>(input: R, frame: Option<&LocalFrame>) -> Result<Vec<Ent
     Ok(entries)
 }
 
-/// How buoy positions between topside fixes are obtained (digest §3.6).
+/// How a transponder's position at a transmit time between two logged fixes is obtained.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
-pub enum BuoyFixUse {
-    /// Most recent fix (zero-order hold).
-    #[default]
+pub enum FixUse {
+    /// Most recent fix (zero-order hold, the thesis's buoy treatment, digest §3.6).
     Hold,
-    /// Linear interpolation between fixes.
+    /// Linear interpolation between the fixes either side (default: a timestamp rounded to the
+    /// millisecond then costs a millisecond of transponder motion, not a whole fix interval).
+    #[default]
     Linear,
+}
+
+/// How logged fixes are matched to a range's transmit time t_rx − τ. Invented parameters (the
+/// thesis does not say how its post-processing matched fixes, digest §3.6): rounded log times put
+/// a transmission's own fix a little after the recovered transmit time, so a fix this close counts
+/// as that transmission's fix; a fix older (or newer) than `max_age_s` is stale, and a range with
+/// no fresh fix is counted as without a fix, never applied with a stale position.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct FixMatching {
+    pub between: FixUse,
+    /// A fix within this many seconds of the transmit time is used as is (s).
+    pub match_tolerance_s: f64,
+    /// The fix used (the nearer one when interpolating) must be within this many seconds (s).
+    pub max_age_s: f64,
+}
+
+impl Default for FixMatching {
+    fn default() -> Self {
+        FixMatching { between: FixUse::Linear, match_tolerance_s: 0.01, max_age_s: 120.0 }
+    }
+}
+
+impl FixMatching {
+    fn validate(&self) -> Result<(), ParamError> {
+        check_non_negative("fixes.match_tolerance_s", self.match_tolerance_s)?;
+        check_positive("fixes.max_age_s", self.max_age_s)
+    }
+}
+
+/// The post-processing filter's state vector.
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case")]
+pub enum AuvModel {
+    /// [E, N, S, ψ, b]: the thesis's filter (digest §3.2).
+    #[default]
+    Thesis,
+    /// [E, N, S, ψ, b, c_E, c_N]: with a water current (issue 12, field logs).
+    Current(CurrentParams),
 }
 
 /// Post-processing settings.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct PostConfig {
+    /// The thesis's coefficients. Its `range_gate` must stay off: post-processing gates with the
+    /// top-level `range_gate`.
     pub auv: AuvParams,
+    /// The filter's states: `{ kind = "thesis" }` (5, default) or `{ kind = "current", p0, q }` (7).
+    pub model: AuvModel,
+    /// Innovation gate on ranges; default NIS ≤ 10.83 (χ² with 1 degree of freedom at 99.9 %),
+    /// so an acoustic outlier is counted in `ranges_gated` instead of pulling the track.
+    pub range_gate: Gate,
+    /// A silence between rows longer than this (s) is predicted in one step, not in `auv.step_s`
+    /// pieces, and counted as a gap. Invented bound (issue 11 item 2): no logged sensor is silent
+    /// this long in a working mission.
+    pub max_gap_s: f64,
+    /// Horizontal SD (m, each axis) of the logged transponder fixes, added to the range noise
+    /// along the line of sight. Default 0: the thesis's fixes are DGPS (digest §3.6).
+    pub transponder_sd_m: f64,
     /// Added to every range row's time before processing (e.g. −2 removes a 2 s modem delay).
     pub acoustic_time_offset_s: f64,
     /// Use the 3-D slant range with logged depth (field mode) instead of the horizontal range.
     pub slant_range: bool,
     pub outriggers: Outriggers,
-    pub buoy_fixes: BuoyFixUse,
+    /// Matching logged transponder fixes to transmit times.
+    pub fixes: FixMatching,
     /// Depth of the buoy transponder (m).
     pub buoy_depth: f64,
     /// Backward pass: `ekf` (EKF-RTS, default) or `unscented` (URTS, the thesis's [25]).
@@ -260,10 +321,14 @@ impl Default for PostConfig {
     fn default() -> Self {
         PostConfig {
             auv: AuvParams::default(),
+            model: AuvModel::Thesis,
+            range_gate: Gate { max_abs_residual: None, max_nis: Some(10.83) },
+            transponder_sd_m: 0.0,
+            max_gap_s: 600.0,
             acoustic_time_offset_s: 0.0,
             slant_range: false,
             outriggers: Outriggers::default(),
-            buoy_fixes: BuoyFixUse::Hold,
+            fixes: FixMatching::default(),
             buoy_depth: 1.5,
             smoother: SmootherKind::Ekf,
             origin: None,
@@ -279,6 +344,15 @@ impl PostConfig {
     }
     pub fn validate(&self) -> Result<(), PostError> {
         self.auv.validate("auv.")?;
+        if self.auv.range_gate != Gate::OFF {
+            return Err(PostError::AuvGate);
+        }
+        if let AuvModel::Current(c) = &self.model {
+            c.validate("model.")?;
+        }
+        check_non_negative("transponder_sd_m", self.transponder_sd_m)?;
+        check_positive("max_gap_s", self.max_gap_s)?;
+        self.fixes.validate()?;
         if !(self.buoy_depth.is_finite() && self.buoy_depth >= 0.0) {
             return Err(ParamError::Negative { field: "buoy_depth".into(), value: self.buoy_depth }.into());
         }
@@ -305,62 +379,148 @@ pub struct PostSample {
     pub filtered_sd: [f64; 2],
     pub smoothed: [f64; 2],
     pub smoothed_sd: [f64; 2],
+    /// Smoothed heading bias b (rad): the compass's offset from the direction of motion.
+    pub smoothed_heading_bias: f64,
+    /// Smoothed water current (east, north, m/s), with the `current` model.
+    pub smoothed_current: Option<[f64; 2]>,
     /// Topside truth at this time, if the log had a fix here.
     pub truth: Option<[f64; 2]>,
 }
 
+/// What happened to every row: nothing is dropped without being counted here.
 #[derive(Debug, Clone, Copy, PartialEq, Default, Serialize)]
 pub struct PostSummary {
     pub ranges: usize,
     pub ranges_applied: usize,
-    /// Ranges before any fix of their transponder, or with no usable geometry.
-    pub ranges_skipped: usize,
+    /// Ranges with no fix of their transponder within `fixes.max_age_s` of the transmit time.
+    pub ranges_without_fix: usize,
+    /// Ranges rejected by the innovation gate (`auv.range_gate`).
+    pub ranges_gated: usize,
+    /// Ranges with no usable geometry (transponder overhead, non-finite numbers).
+    pub ranges_unusable: usize,
+    /// Rows timed before the first `init` row (not processed).
+    pub rows_before_init: usize,
+    /// `init` rows after the first (ignored: the filter starts once).
+    pub extra_inits: usize,
+    /// Silences longer than `max_gap_s` between rows, each dead-reckoned in one step.
+    pub gaps: usize,
+    /// RMS range residual of the applied ranges before their update (innovations) and against
+    /// the smoothed track (m).
+    pub residual_rms_filter_m: Option<f64>,
+    pub residual_rms_smoothed_m: Option<f64>,
     pub truth_points: usize,
     pub mean_filtered_error: Option<f64>,
     pub mean_smoothed_error: Option<f64>,
+    /// RMS, largest and last horizontal error against the truth rows (m).
+    pub rms_filtered_error: Option<f64>,
+    pub rms_smoothed_error: Option<f64>,
+    pub max_smoothed_error: Option<f64>,
+    pub final_smoothed_error: Option<f64>,
     /// Mean 2-D NEES eᵀP⁻¹e of position at truth points (≈ 2 when the covariance is consistent).
     pub mean_filtered_nees: Option<f64>,
     pub mean_smoothed_nees: Option<f64>,
+}
+
+impl PostSummary {
+    /// One sentence per kind of row that was not used as logged (empty when every row was).
+    pub fn warnings(&self) -> Vec<String> {
+        let mut w = Vec::new();
+        let mut say = |n: usize, what: &str| {
+            if n > 0 {
+                w.push(format!("{n} {what}"));
+            }
+        };
+        say(self.rows_before_init, "row(s) timed before the first 'init' row were not processed");
+        say(self.extra_inits, "'init' row(s) after the first were ignored (the filter starts once)");
+        say(
+            self.ranges_without_fix,
+            "range(s) had no transponder fix within fixes.max_age_s of their transmit time and were not applied",
+        );
+        say(self.gaps, "silence(s) longer than max_gap_s between rows were dead-reckoned in one step (a time typo?)");
+        say(self.ranges_gated, "range(s) were rejected by the innovation gate (auv.range_gate)");
+        say(self.ranges_unusable, "range(s) had no usable geometry (transponder overhead) and were not applied");
+        w
+    }
 }
 
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct PostResult {
     pub samples: Vec<PostSample>,
     pub summary: PostSummary,
+    /// Every range that reached the filter (applied or gated), in log order.
+    pub residuals: Vec<RangeResidual>,
+}
+
+/// One range's residual (measured − predicted, m) before its update and after smoothing.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct RangeResidual {
+    /// Receive time (s, after `acoustic_time_offset_s`).
+    pub t: f64,
+    pub modem_id: u8,
+    /// False when the gate rejected it.
+    pub applied: bool,
+    /// Against the filter's prediction just before the update (the innovation).
+    pub innovation: f64,
+    /// Against the smoothed track at the same step.
+    pub smoothed: f64,
+    /// Normalised innovation squared y²/S (χ² with 1 degree of freedom when consistent).
+    pub nis: f64,
+}
+
+/// Root mean square, None for no values.
+fn rms(values: impl Iterator<Item = f64>) -> Option<f64> {
+    let (sum, n) = values.fold((0.0, 0usize), |(s, n), v| (s + v * v, n + 1));
+    (n > 0).then(|| (sum / n as f64).sqrt())
+}
+
+/// One logged fix of a transponder's vehicle: position and (ship) heading, math radians.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Fix {
+    t: f64,
+    e: f64,
+    n: f64,
+    psi: f64,
+}
+
+impl Fix {
+    fn lerp(&self, b: &Fix, t: f64) -> Fix {
+        let f = (t - self.t) / (b.t - self.t);
+        Fix {
+            t,
+            e: self.e + f * (b.e - self.e),
+            n: self.n + f * (b.n - self.n),
+            psi: self.psi + f * wrap_pi(b.psi - self.psi),
+        }
+    }
+}
+
+/// A vehicle's fixes in time order, matched to transmit times by [`FixMatching`].
+#[derive(Debug, Default)]
+struct Track(Vec<Fix>);
+
+impl Track {
+    /// The vehicle at time `t`, or None when no fix is fresh enough.
+    fn at(&self, t: f64, m: &FixMatching) -> Option<Fix> {
+        let i = self.0.partition_point(|f| f.t <= t);
+        let (before, after) = (i.checked_sub(1).map(|k| &self.0[k]), self.0.get(i));
+        let age = |f: &Fix| (f.t - t).abs();
+        let nearest = [before, after].into_iter().flatten().min_by(|a, b| age(a).total_cmp(&age(b)))?;
+        if age(nearest) <= m.match_tolerance_s {
+            return Some(*nearest);
+        }
+        match (m.between, before, after) {
+            (FixUse::Linear, Some(a), Some(b)) if age(nearest) <= m.max_age_s => Some(a.lerp(b, t)),
+            (_, Some(a), _) if age(a) <= m.max_age_s => Some(*a),
+            _ => None,
+        }
+    }
 }
 
 /// Positions of the surface transponders over time, from logged fixes.
+#[derive(Debug, Default)]
 struct Fixes {
-    ship: Vec<(f64, f64, f64, f64)>,
-    buoy: Vec<(f64, f64, f64)>,
-}
-
-impl Fixes {
-    fn ship_at(&self, t: f64) -> Option<(f64, f64, f64)> {
-        let i = self.ship.partition_point(|f| f.0 <= t);
-        let first = self.ship.first()?;
-        if i == 0 {
-            return (t >= first.0).then_some((first.1, first.2, first.3));
-        }
-        let a = self.ship[i - 1];
-        let Some(b) = self.ship.get(i) else { return Some((a.1, a.2, a.3)) };
-        let f = (t - a.0) / (b.0 - a.0);
-        Some((a.1 + f * (b.1 - a.1), a.2 + f * (b.2 - a.2), a.3 + f * wrap_pi(b.3 - a.3)))
-    }
-    fn buoy_at(&self, t: f64, mode: BuoyFixUse) -> Option<(f64, f64)> {
-        let i = self.buoy.partition_point(|f| f.0 <= t);
-        if i == 0 {
-            return None;
-        }
-        let a = self.buoy[i - 1];
-        match (mode, self.buoy.get(i)) {
-            (BuoyFixUse::Linear, Some(b)) => {
-                let f = (t - a.0) / (b.0 - a.0);
-                Some((a.1 + f * (b.1 - a.1), a.2 + f * (b.2 - a.2)))
-            }
-            _ => Some((a.1, a.2)),
-        }
-    }
+    ship: Track,
+    buoy: Track,
 }
 
 fn math_heading(compass_deg: f64) -> f64 {
@@ -385,94 +545,155 @@ pub fn postprocess(entries: &[Entry], cfg: &PostConfig) -> Result<PostResult, Po
             _ => None,
         })
         .ok_or(PostError::NoInit)?;
-    let mut fixes = Fixes { ship: Vec::new(), buoy: Vec::new() };
+    let mut fixes = Fixes::default();
     for e in &events {
         match e.record {
-            Record::ShipFix { e: x, n, compass_deg } => fixes.ship.push((e.t, x, n, math_heading(compass_deg))),
-            Record::BuoyFix { e: x, n } => fixes.buoy.push((e.t, x, n)),
+            Record::ShipFix { e: x, n, compass_deg } => {
+                fixes.ship.0.push(Fix { t: e.t, e: x, n, psi: math_heading(compass_deg) })
+            }
+            Record::BuoyFix { e: x, n } => fixes.buoy.0.push(Fix { t: e.t, e: x, n, psi: 0.0 }),
             _ => {}
         }
     }
-    let mut f = AuvEkf::new(t0, init.0, init.1, init.2, math_heading(init.3), cfg.auv.clone());
-    f.ekf_mut().record_history();
-    let mut summary = PostSummary::default();
-    let (mut yaw_rate, mut depth) = (0.0, None);
-    let mut truth_at: Vec<(usize, [f64; 2])> = Vec::new();
-    for ev in events.iter().filter(|e| e.t >= t0) {
-        // Dynamic step: predict to the event in pieces no longer than the nominal step.
-        while ev.t - f.ekf().t() > 1e-9 {
-            let to = (f.ekf().t() + cfg.auv.step_s).min(ev.t);
-            if !f.predict_to(to, yaw_rate) {
-                break;
+    let summary = PostSummary {
+        rows_before_init: events.iter().filter(|e| e.t < t0).count(),
+        extra_inits: events.iter().filter(|e| e.t >= t0 && matches!(e.record, Record::Init { .. })).count() - 1,
+        ..PostSummary::default()
+    };
+    let params = AuvParams { range_gate: cfg.range_gate, ..cfg.auv.clone() };
+    let (e0, n0, speed0, psi0) = (init.0, init.1, init.2, math_heading(init.3));
+    let run = Run { events: &events, fixes: &fixes, cfg, t0 };
+    match cfg.model {
+        AuvModel::Thesis => run.filter(AuvEkf::new(t0, e0, n0, speed0, psi0, params), summary),
+        AuvModel::Current(c) => run.filter(AuvEkf::with_current(t0, e0, n0, speed0, psi0, params, c), summary),
+    }
+}
+
+/// One post-processing pass over time-sorted events, for either state vector.
+struct Run<'a> {
+    events: &'a [Entry],
+    fixes: &'a Fixes,
+    cfg: &'a PostConfig,
+    t0: f64,
+}
+
+impl Run<'_> {
+    fn filter<const M: usize>(&self, mut f: AuvEkf<M>, mut summary: PostSummary) -> Result<PostResult, PostError> {
+        let (cfg, fixes) = (self.cfg, self.fixes);
+        f.ekf_mut().record_history();
+        let (mut yaw_rate, mut depth) = (0.0, None);
+        let mut residuals = Vec::new();
+        let mut truth_at: Vec<(usize, [f64; 2])> = Vec::new();
+        for ev in self.events.iter().filter(|e| e.t >= self.t0) {
+            // Across a silence longer than max_gap_s one prediction spans it: the history (and
+            // memory) grows with the rows, never with the log's time span (issue 11 item 2).
+            if ev.t - f.ekf().t() > cfg.max_gap_s {
+                summary.gaps += 1;
+                f.predict_to(ev.t, yaw_rate);
             }
-        }
-        match ev.record {
-            Record::YawRate { compass_deg_s } => yaw_rate = -compass_deg_s.to_radians(),
-            Record::Speed(s) => {
-                f.update_speed(s);
+            // Dynamic step: predict to the event in pieces no longer than the nominal step.
+            while ev.t - f.ekf().t() > 1e-9 {
+                let to = (f.ekf().t() + cfg.auv.step_s).min(ev.t);
+                if !f.predict_to(to, yaw_rate) {
+                    break;
+                }
             }
-            Record::Heading { compass_deg } => {
-                f.update_heading(math_heading(compass_deg));
-            }
-            Record::Depth(z) => depth = Some(z),
-            Record::Range { src, travel_time } => {
-                summary.ranges += 1;
-                // Round-off in t_rx − τ must not put a fix logged at the transmit instant "after" it.
-                let t_tx = ev.t - travel_time + 1e-9;
-                let pos = match src {
-                    Transmitter::Ship(side) => {
-                        fixes.ship_at(t_tx).map(|(e, n, psi)| cfg.outriggers.position(side, e, n, psi))
-                    }
-                    Transmitter::Buoy => {
-                        fixes.buoy_at(t_tx, cfg.buoy_fixes).map(|(e, n)| Vec3::new(e, n, cfg.buoy_depth))
-                    }
-                };
-                let applied = pos.is_some_and(|p| {
+            match ev.record {
+                Record::YawRate { compass_deg_s } => yaw_rate = -compass_deg_s.to_radians(),
+                Record::Speed(s) => {
+                    f.update_speed(s);
+                }
+                Record::Heading { compass_deg } => {
+                    f.update_heading(math_heading(compass_deg));
+                }
+                Record::Depth(z) => depth = Some(z),
+                Record::Range { src, travel_time } => {
+                    summary.ranges += 1;
+                    let t_tx = ev.t - travel_time;
+                    let pos = match src {
+                        Transmitter::Ship(side) => {
+                            fixes.ship.at(t_tx, &cfg.fixes).map(|x| cfg.outriggers.position(side, x.e, x.n, x.psi))
+                        }
+                        Transmitter::Buoy => {
+                            fixes.buoy.at(t_tx, &cfg.fixes).map(|x| Vec3::new(x.e, x.n, cfg.buoy_depth))
+                        }
+                    };
+                    let Some(transponder) = pos else {
+                        summary.ranges_without_fix += 1;
+                        continue;
+                    };
                     let m = RangeMeasurement {
                         range: cfg.auv.range_noise.sound_speed * travel_time,
                         travel_time,
-                        transponder: p,
+                        transponder,
                     };
-                    f.update_range(&m, if cfg.slant_range { depth } else { None }).applied()
-                });
-                if applied {
-                    summary.ranges_applied += 1;
-                } else {
-                    summary.ranges_skipped += 1;
+                    let auv_depth = if cfg.slant_range { depth } else { None };
+                    let innovation = m.range - f.predicted_range(&transponder, auv_depth);
+                    let outcome = f.update_range_from_uncertain(&m, auv_depth, cfg.transponder_sd_m);
+                    let step = f.ekf().history().map_or(0, |h| h.len().saturating_sub(1));
+                    if let UpdateOutcome::Applied { nis } | UpdateOutcome::Gated { nis } = outcome {
+                        let residual = RangeResidual {
+                            t: ev.t,
+                            modem_id: src.modem_id(),
+                            applied: outcome.applied(),
+                            innovation,
+                            smoothed: f64::NAN,
+                            nis,
+                        };
+                        residuals.push((residual, step, m.range, transponder, auv_depth));
+                    }
+                    match outcome {
+                        UpdateOutcome::Applied { .. } => summary.ranges_applied += 1,
+                        UpdateOutcome::Gated { .. } => summary.ranges_gated += 1,
+                        UpdateOutcome::Unusable => summary.ranges_unusable += 1,
+                    }
                 }
+                Record::Truth { e, n } => {
+                    let len = f.ekf().history().map_or(0, |h| h.len());
+                    truth_at.push((len.saturating_sub(1), [e, n]));
+                }
+                Record::Init { .. } | Record::ShipFix { .. } | Record::BuoyFix { .. } => {}
             }
-            Record::Truth { e, n } => {
-                let len = f.ekf().history().map_or(0, |h| h.len());
-                truth_at.push((len.saturating_sub(1), [e, n]));
-            }
-            Record::Init { .. } | Record::ShipFix { .. } | Record::BuoyFix { .. } => {}
         }
+        let history = f.ekf().history().ok_or(SmoothError::NoHistory)?;
+        let smoothed = smooth(history, f.ekf().angles(), cfg.smoother)?;
+        let mut samples: Vec<PostSample> = history
+            .iter()
+            .zip(&smoothed)
+            .map(|(h, s)| PostSample {
+                t: h.t,
+                filtered: [h.x_post[0], h.x_post[1]],
+                filtered_sd: [h.p_post[(0, 0)].sqrt(), h.p_post[(1, 1)].sqrt()],
+                smoothed: [s.x[0], s.x[1]],
+                smoothed_sd: [s.p[(0, 0)].sqrt(), s.p[(1, 1)].sqrt()],
+                smoothed_heading_bias: s.x[BIAS],
+                smoothed_current: (M > CURRENT_N).then(|| [s.x[CURRENT_E], s.x[CURRENT_N]]),
+                truth: None,
+            })
+            .collect();
+        score(&mut samples, &mut summary, &truth_at, history, &smoothed);
+        let residuals = residuals
+            .into_iter()
+            .map(|(r, step, range, at, auv_depth)| {
+                let x = &smoothed[step].x;
+                let dz = auv_depth.map_or(0.0, |z| z - at.z);
+                RangeResidual { smoothed: range - (x[0] - at.x).hypot(x[1] - at.y).hypot(dz), ..r }
+            })
+            .collect::<Vec<_>>();
+        let applied = || residuals.iter().filter(|r| r.applied);
+        summary.residual_rms_filter_m = rms(applied().map(|r| r.innovation));
+        summary.residual_rms_smoothed_m = rms(applied().map(|r| r.smoothed));
+        Ok(PostResult { samples, summary, residuals })
     }
-    let history = f.ekf().history().ok_or(SmoothError::NoHistory)?;
-    let smoothed = smooth(history, f.ekf().angles(), cfg.smoother)?;
-    let mut samples: Vec<PostSample> = history
-        .iter()
-        .zip(&smoothed)
-        .map(|(h, s)| PostSample {
-            t: h.t,
-            filtered: [h.x_post[0], h.x_post[1]],
-            filtered_sd: [h.p_post[(0, 0)].sqrt(), h.p_post[(1, 1)].sqrt()],
-            smoothed: [s.x[0], s.x[1]],
-            smoothed_sd: [s.p[(0, 0)].sqrt(), s.p[(1, 1)].sqrt()],
-            truth: None,
-        })
-        .collect();
-    score(&mut samples, &mut summary, &truth_at, history, &smoothed);
-    Ok(PostResult { samples, summary })
 }
 
 /// The chosen backward pass. The unscented one replays the forward filter's dead reckoning:
 /// each step's interval and heading change are read back from the recorded means.
-fn smooth(
-    history: &[crate::ekf::Step<5>],
-    angles: &[bool; 5],
+fn smooth<const M: usize>(
+    history: &[Step<M>],
+    angles: &[bool; M],
     kind: SmootherKind,
-) -> Result<Vec<Smoothed<5>>, SmoothError> {
+) -> Result<Vec<Smoothed<M>>, SmoothError> {
     match kind {
         SmootherKind::Ekf => rts(history, angles),
         SmootherKind::Unscented => urts(history, angles, |k, x| {
@@ -482,23 +703,24 @@ fn smooth(
     }
 }
 
-fn score(
+fn score<const M: usize>(
     samples: &mut [PostSample],
     summary: &mut PostSummary,
     truth_at: &[(usize, [f64; 2])],
-    history: &[crate::ekf::Step<5>],
-    smoothed: &[crate::smoother::Smoothed<5>],
+    history: &[Step<M>],
+    smoothed: &[Smoothed<M>],
 ) {
-    let nees = |x: &nalgebra::SVector<f64, 5>, p: &nalgebra::SMatrix<f64, 5, 5>, tr: [f64; 2]| {
+    let nees = |x: &nalgebra::SVector<f64, M>, p: &nalgebra::SMatrix<f64, M, M>, tr: [f64; 2]| {
         let e = nalgebra::Vector2::new(x[0] - tr[0], x[1] - tr[1]);
         let pp = p.fixed_view::<2, 2>(0, 0).into_owned();
         pp.cholesky().map(|c| (e.transpose() * c.solve(&e))[(0, 0)])
     };
-    let (mut ef, mut es, mut nf, mut ns, mut nn) = (0.0, 0.0, 0.0, 0.0, 0usize);
+    let (mut nf, mut ns, mut nn) = (0.0, 0.0, 0usize);
+    let (mut filtered, mut smoothed_errors) = (Vec::new(), Vec::new());
     for &(i, tr) in truth_at {
         samples[i].truth = Some(tr);
-        ef += (history[i].x_post[0] - tr[0]).hypot(history[i].x_post[1] - tr[1]);
-        es += (smoothed[i].x[0] - tr[0]).hypot(smoothed[i].x[1] - tr[1]);
+        filtered.push((history[i].x_post[0] - tr[0]).hypot(history[i].x_post[1] - tr[1]));
+        smoothed_errors.push((smoothed[i].x[0] - tr[0]).hypot(smoothed[i].x[1] - tr[1]));
         if let (Some(a), Some(b)) =
             (nees(&history[i].x_post, &history[i].p_post, tr), nees(&smoothed[i].x, &smoothed[i].p, tr))
         {
@@ -510,9 +732,13 @@ fn score(
     summary.truth_points = truth_at.len();
     if !truth_at.is_empty() {
         let k = truth_at.len() as f64;
-        summary.mean_filtered_error = Some(ef / k);
-        summary.mean_smoothed_error = Some(es / k);
+        summary.mean_filtered_error = Some(filtered.iter().sum::<f64>() / k);
+        summary.mean_smoothed_error = Some(smoothed_errors.iter().sum::<f64>() / k);
     }
+    summary.rms_filtered_error = rms(filtered.iter().copied());
+    summary.rms_smoothed_error = rms(smoothed_errors.iter().copied());
+    summary.max_smoothed_error = smoothed_errors.iter().copied().reduce(f64::max);
+    summary.final_smoothed_error = smoothed_errors.last().copied();
     if nn > 0 {
         summary.mean_filtered_nees = Some(nf / nn as f64);
         summary.mean_smoothed_nees = Some(ns / nn as f64);
