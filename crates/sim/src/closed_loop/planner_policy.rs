@@ -161,7 +161,13 @@ impl CnaPolicy for PlannerPolicy {
         }
         let errors: Vec<AuvError> = known.iter().filter_map(|&k| self.tracker.error(k).copied()).collect();
         let forecast = Known { inner: ctx.fleet, index: &known };
-        match self.planner.decide(&PlanInput { t: ctx.t, cna: ctx.cna, errors: &errors, forecast: &forecast }) {
+        match self.planner.decide(&PlanInput {
+            t: ctx.t,
+            cna: ctx.cna,
+            errors: &errors,
+            estimates: &[],
+            forecast: &forecast,
+        }) {
             Ok(d) => {
                 if d.levels_searched < d.levels_requested {
                     self.stats.deadline_misses += 1;
@@ -198,6 +204,7 @@ mod tests {
                 cna: CnaKind::Asc {},
             },
             error: ErrorModel::default(),
+            cost: coopnav_plan::CostSpec::Hudson,
             limits: DistanceLimits::default(),
             penalties: PenaltyCase::C1.penalties(),
             search: SearchConfig { deadline: Deadline::None, parallel: false, ..SearchConfig::default() },

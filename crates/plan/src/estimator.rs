@@ -1,0 +1,333 @@
+//! The estimator-aware cost (issue 10): the planner scores a CNA path by the horizontal position
+//! covariances the survey AUVs' own EKFs would hold, instead of Hudson's isotropic model.
+//!
+//! Derivation, per AUV and look-ahead level of τ seconds (P = [[a, b], [b, c]] east/north, m²):
+//! 1. Prediction: P̃ = P + q·τ·I, with q (m²/s) the horizontal process noise the AUV's filter
+//!    adds per second and axis (reported with P, [`AuvEstimate`]).
+//! 2. Ping from the CNA at p to the AUV at x, slant range r = |x − p|. The range's Jacobian with
+//!    respect to the AUV's horizontal position is h = (x − p)_xy / r (|h| ≤ 1: a CNA right above
+//!    the AUV tells it nothing horizontally, which is the 3-D geometry). Range noise variance
+//!    R(r) = σ₀² + (k·r/1000)² ([`RangeNoise`]). The EKF update is
+//!    P⁺ = P̃ − P̃hhᵀP̃ / (hᵀP̃h + R).
+//! 3. The packet arrives with probability p_s(r) (the acoustic link's model, passed in as a
+//!    [`LinkModel`]); the expected posterior is E = (1 − p_s)·P̃ + p_s·P⁺
+//!    = P̃ − p_s·P̃hhᵀP̃ / (hᵀP̃h + R).
+//! 4. Level cost over the N AUVs ([`Aggregate`]): Σ tr E (default), max tr E (worst AUV), or
+//!    Σ ln(1 + det E / 1 m⁴) (log-det, shifted by one so costs stay ≥ 0 as the penalties and the
+//!    search require). The path cost is the sum of the level costs, as for Hudson's model.
+//!
+//! Lower bound for branch-and-bound (the levels below a node; derivation in [`EkfCost::bound_rest`]):
+//! by operator convexity of the inverse, E ⪰ (P̃⁻¹ + p_s·hhᵀ/R)⁻¹ ⪰ (P̃⁻¹ + hhᵀ/R_min)⁻¹, so the
+//! information Y = E⁻¹ is bounded above by a diagonal matrix in the frame of the node's line of
+//! sight, propagated level by level; the ping directions below the node lie in a cone whose
+//! half-angle is set by how far the line of sight can move (AUV motion plus CNA step per level).
+//! Invented parameters (R's defaults) are marked; digest: hudson §2.2 (the model it replaces),
+//! gill §3 (the filter it models).
+
+use crate::cost_model::CostModel;
+use crate::PlanError;
+use serde::{Deserialize, Serialize};
+use std::sync::Arc;
+
+/// How the per-AUV covariances of a level are joined into its cost.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum Aggregate {
+    /// Σ_k tr P_k (m²).
+    #[default]
+    TraceSum,
+    /// max_k tr P_k (m²).
+    WorstAuv,
+    /// Σ_k ln(1 + det P_k / 1 m⁴).
+    LogDet,
+}
+
+/// Range noise the planner assumes, as a standard deviation growing with distance:
+/// σ(r)² = σ₀² + (k·r/1000)². Invented defaults (issue 10): σ₀ = 0.15 m (the closed loop's range
+/// channel), k = 1 m per km (a 0.07 % sound-speed error).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RangeNoise {
+    /// σ₀, m (> 0).
+    #[serde(default = "default_sigma")]
+    pub sigma_m: f64,
+    /// k, m of standard deviation per km of range (≥ 0).
+    #[serde(default = "default_per_km")]
+    pub per_km_m: f64,
+}
+
+fn default_sigma() -> f64 {
+    0.15
+}
+fn default_per_km() -> f64 {
+    1.0
+}
+
+impl Default for RangeNoise {
+    fn default() -> Self {
+        RangeNoise { sigma_m: default_sigma(), per_km_m: default_per_km() }
+    }
+}
+
+impl RangeNoise {
+    /// R(r), m²; non-decreasing in r (the bound relies on it).
+    #[inline(always)]
+    pub fn variance(&self, range_m: f64) -> f64 {
+        let grow = self.per_km_m * range_m * 1e-3;
+        self.sigma_m * self.sigma_m + grow * grow
+    }
+}
+
+/// The estimator-aware cost's settings (`[planner.cost] kind = "estimator"`).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, Default)]
+#[serde(deny_unknown_fields)]
+pub struct EstimatorSpec {
+    #[serde(default)]
+    pub aggregate: Aggregate,
+    #[serde(default)]
+    pub range_noise: RangeNoise,
+}
+
+impl EstimatorSpec {
+    pub fn validate(&self, field: &str) -> Result<(), PlanError> {
+        let RangeNoise { sigma_m, per_km_m } = self.range_noise;
+        if sigma_m > 0.0 && sigma_m.is_finite() && per_km_m >= 0.0 && per_km_m.is_finite() {
+            Ok(())
+        } else {
+            Err(PlanError::Invalid {
+                field: format!("{field}.range_noise"),
+                allowed: "sigma_m > 0 and per_km_m >= 0 (metres)".into(),
+                value: format!("sigma_m {sigma_m}, per_km_m {per_km_m}"),
+            })
+        }
+    }
+}
+
+/// One survey AUV's navigation uncertainty as its filter reports it.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct AuvEstimate {
+    /// Horizontal position covariance [P_ee, P_en, P_nn], m².
+    pub cov: [f64; 3],
+    /// Horizontal process noise q per axis, m²/s (the covariance grows by q·τ·I per step).
+    pub process_noise: f64,
+}
+
+impl AuvEstimate {
+    fn validate(&self, k: usize) -> Result<(), PlanError> {
+        let [a, b, c] = self.cov;
+        let finite = self.cov.iter().all(|x| x.is_finite()) && self.process_noise.is_finite();
+        if finite && a >= 0.0 && c >= 0.0 && b * b <= a * c * (1.0 + 1e-9) && self.process_noise >= 0.0 {
+            Ok(())
+        } else {
+            Err(PlanError::Input(format!(
+                "AUV {k}: covariance {:?} and process noise {} are not a positive semi-definite covariance and a \
+                 non-negative noise",
+                self.cov, self.process_noise
+            )))
+        }
+    }
+}
+
+/// The acoustic link as the planner needs it: probability that a ping over `slant_range_m`
+/// arrives (in [0, 1]). The sim crate wires the acoustic crate's model in; `()` is a perfect link.
+pub trait LinkModel {
+    fn success(&self, slant_range_m: f64) -> f64;
+}
+
+impl LinkModel for () {
+    fn success(&self, _: f64) -> f64 {
+        1.0
+    }
+}
+
+/// A link model sampled every [`LinkTable::STEP_M`] up to [`LinkTable::MAX_M`] and interpolated
+/// linearly (the last value holds beyond), so the search never calls back into the link model.
+#[derive(Debug, Clone, PartialEq)]
+pub struct LinkTable {
+    p: Arc<[f64]>,
+}
+
+impl LinkTable {
+    pub const STEP_M: f64 = 5.0;
+    pub const MAX_M: f64 = 20_000.0;
+
+    pub fn sample(link: &dyn LinkModel) -> Result<Self, PlanError> {
+        let count = (Self::MAX_M / Self::STEP_M) as usize + 1;
+        let mut p = Vec::with_capacity(count);
+        for i in 0..count {
+            let r = i as f64 * Self::STEP_M;
+            let s = link.success(r);
+            if !(0.0..=1.0).contains(&s) {
+                return Err(PlanError::Input(format!(
+                    "link model: success probability {s} at {r} m is outside [0, 1]"
+                )));
+            }
+            p.push(s);
+        }
+        Ok(LinkTable { p: p.into() })
+    }
+
+    /// A perfect link.
+    pub fn perfect() -> Self {
+        LinkTable { p: vec![1.0, 1.0].into() }
+    }
+
+    #[inline(always)]
+    pub fn success(&self, r: f64) -> f64 {
+        let x = r / Self::STEP_M;
+        let i = x as usize;
+        if i + 1 >= self.p.len() {
+            return self.p[self.p.len() - 1];
+        }
+        let f = x - i as f64;
+        self.p[i] + (self.p[i + 1] - self.p[i]) * f
+    }
+}
+
+/// How much the tangential information is inflated to make the node's information diagonal in
+/// its line-of-sight frame (any value > 0 keeps the bound valid; small keeps the tangential
+/// part, which dominates, tight).
+const TANGENTIAL_SLACK: f64 = 0.1;
+
+/// The estimator-aware model of one decision.
+pub(crate) struct EkfCost {
+    pub spec: EstimatorSpec,
+    /// q_k·τ per AUV, m².
+    pub q_tau: Vec<f64>,
+    pub link: LinkTable,
+}
+
+impl EkfCost {
+    pub fn new(spec: EstimatorSpec, estimates: &[AuvEstimate], tau: f64, link: LinkTable) -> Result<Self, PlanError> {
+        for (k, e) in estimates.iter().enumerate() {
+            e.validate(k)?;
+        }
+        Ok(EkfCost { spec, q_tau: estimates.iter().map(|e| e.process_noise * tau).collect(), link })
+    }
+
+    #[inline(always)]
+    fn term(&self, trace: f64, det: f64) -> f64 {
+        match self.spec.aggregate {
+            Aggregate::TraceSum | Aggregate::WorstAuv => trace,
+            Aggregate::LogDet => det.max(0.0).ln_1p(),
+        }
+    }
+}
+
+impl CostModel for EkfCost {
+    type State = [f64; 3];
+
+    #[inline(always)]
+    fn update(&self, k: usize, parent: &[f64; 3], cna: [f64; 3], auv: [f64; 3]) -> ([f64; 3], f64) {
+        let q = self.q_tau[k];
+        let (mut a, mut b, mut c) = (parent[0] + q, parent[1], parent[2] + q);
+        let d = [auv[0] - cna[0], auv[1] - cna[1], auv[2] - cna[2]];
+        let r2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
+        if r2 > 1e-12 {
+            let r = r2.sqrt();
+            let (h0, h1) = (d[0] / r, d[1] / r);
+            let (ph0, ph1) = (a * h0 + b * h1, b * h0 + c * h1);
+            let innovation = h0 * ph0 + h1 * ph1 + self.spec.range_noise.variance(r);
+            let gain = self.link.success(r) / innovation;
+            a -= gain * ph0 * ph0;
+            b -= gain * ph0 * ph1;
+            c -= gain * ph1 * ph1;
+        }
+        ([a, b, c], self.term(a + c, a * c - b * b))
+    }
+
+    #[inline(always)]
+    fn combine(&self, acc: f64, term: f64) -> f64 {
+        match self.spec.aggregate {
+            Aggregate::WorstAuv => acc.max(term),
+            Aggregate::TraceSum | Aggregate::LogDet => acc + term,
+        }
+    }
+
+    /// In the frame (u, t) of the node's horizontal line of sight u (t ⟂ u):
+    /// - the node's information Y = P⁻¹ ⪯ diag(Y_uu + Y_ut²/(ρ·Y_tt), (1 + ρ)·Y_tt) (ρ > 0:
+    ///   diag − Y = [[Y_ut²/(ρY_tt), −Y_ut], [−Y_ut, ρY_tt]] has zero determinant and is ⪰ 0);
+    /// - prediction: Y ⪯ D ⇒ (Y⁻¹ + qτI)⁻¹ ⪯ (D⁻¹ + qτI)⁻¹, diagonal;
+    /// - ping: after m levels the line of sight has moved by at most Δ = Σ reach, so its direction
+    ///   is within sin δ ≤ s = Δ/D_h of u (D_h the node's horizontal distance; s = 1 when Δ ≥ D_h),
+    ///   and hhᵀ ⪯ ĥĥᵀ = [[cos², cos·sin], [cos·sin, sin²]] ⪯ diag(1 + 1/s, s²(1 + s)) (the same
+    ///   determinant argument with weight κ = 1/s), or ⪯ I, whichever has the smaller tangential
+    ///   entry; R ≥ R(max(0, D − Δ)) with D the node's slant distance (R grows with range) and
+    ///   p_s ≤ 1;
+    /// - E ⪰ D⁻¹ then gives tr E ≥ tr D⁻¹ and det E ≥ det D⁻¹.
+    fn bound_rest(
+        &self,
+        k: usize,
+        state: &[f64; 3],
+        cna: [f64; 3],
+        auv: [f64; 3],
+        reach: impl Iterator<Item = f64>,
+        out: &mut [f64],
+    ) {
+        let q = self.q_tau[k];
+        let (dx, dy, dz) = (auv[0] - cna[0], auv[1] - cna[1], auv[2] - cna[2]);
+        let horizontal = (dx * dx + dy * dy).sqrt();
+        let slant = (horizontal * horizontal + dz * dz).sqrt();
+        let u = if horizontal > 1e-9 { [dx / horizontal, dy / horizontal] } else { [1.0, 0.0] };
+        let (mut v_u, mut v_t) = diagonal_floor(state, u);
+        let mut moved = 0.0;
+        for (slot, r) in out.iter_mut().zip(reach) {
+            moved += r;
+            let s = if horizontal > moved { moved / horizontal } else { 1.0 };
+            let tangential = s * s * (1.0 + s);
+            let (add_u, add_t) = if tangential < 1.0 { (1.0 + 1.0 / s, tangential) } else { (1.0, 1.0) };
+            let r_min = self.spec.range_noise.variance((slant - moved).max(0.0));
+            v_u = 1.0 / (1.0 / (v_u + q) + add_u / r_min);
+            v_t = 1.0 / (1.0 / (v_t + q) + add_t / r_min);
+            *slot = self.combine(*slot, self.term(v_u + v_t, v_u * v_t));
+        }
+    }
+
+    /// From each root covariance's eigenvalues (exact diagonal), with hhᵀ ⪯ I and R ≥ R(0) at
+    /// every level.
+    fn level_floors(&self, root: &[[f64; 3]], depth: usize) -> Vec<f64> {
+        let r_min = self.spec.range_noise.variance(0.0);
+        let mut v: Vec<(f64, f64)> = root.iter().map(eigenvalues).collect();
+        (0..depth)
+            .map(|_| {
+                let mut f = 0.0;
+                for (k, (v1, v2)) in v.iter_mut().enumerate() {
+                    let q = self.q_tau[k];
+                    *v1 = 1.0 / (1.0 / (*v1 + q) + 1.0 / r_min);
+                    *v2 = 1.0 / (1.0 / (*v2 + q) + 1.0 / r_min);
+                    f = self.combine(f, self.term(*v1 + *v2, *v1 * *v2));
+                }
+                f
+            })
+            .collect()
+    }
+}
+
+/// Lower bounds (v_u, v_t) with P ⪰ diag(v_u, v_t) in the frame (u, t = u rotated +90°), from
+/// the diagonal upper bound of P⁻¹ (see `bound_rest`). A singular P gets (0, 0).
+fn diagonal_floor(p: &[f64; 3], u: [f64; 2]) -> (f64, f64) {
+    let [a, b, c] = *p;
+    let det = a * c - b * b;
+    if !(det > 0.0) {
+        return (0.0, 0.0);
+    }
+    let t = [-u[1], u[0]];
+    let p_uu = u[0] * (a * u[0] + b * u[1]) + u[1] * (b * u[0] + c * u[1]);
+    let p_tt = t[0] * (a * t[0] + b * t[1]) + t[1] * (b * t[0] + c * t[1]);
+    let p_ut = u[0] * (a * t[0] + b * t[1]) + u[1] * (b * t[0] + c * t[1]);
+    // Y = P⁻¹ in the frame: Y_uu = p_tt/det, Y_tt = p_uu/det, Y_ut = −p_ut/det.
+    let (y_uu, y_tt, y_ut) = (p_tt / det, p_uu / det, p_ut / det);
+    if y_ut == 0.0 {
+        return (1.0 / y_uu, 1.0 / y_tt);
+    }
+    let y_uu_max = y_uu + y_ut * y_ut / (TANGENTIAL_SLACK * y_tt);
+    (1.0 / y_uu_max, 1.0 / ((1.0 + TANGENTIAL_SLACK) * y_tt))
+}
+
+/// Eigenvalues of the symmetric 2×2 [[a, b], [b, c]], larger first, clamped at 0.
+fn eigenvalues(p: &[f64; 3]) -> (f64, f64) {
+    let [a, b, c] = *p;
+    let mean = 0.5 * (a + c);
+    let radius = (0.25 * (a - c) * (a - c) + b * b).sqrt();
+    ((mean + radius).max(0.0), (mean - radius).max(0.0))
+}
