@@ -331,3 +331,142 @@ fn eigenvalues(p: &[f64; 3]) -> (f64, f64) {
     let radius = (0.25 * (a - c) * (a - c) + b * b).sqrt();
     ((mean + radius).max(0.0), (mean - radius).max(0.0))
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    fn model(aggregate: Aggregate, q_tau: Vec<f64>, link: LinkTable) -> EkfCost {
+        EkfCost { spec: EstimatorSpec { aggregate, range_noise: RangeNoise::default() }, q_tau, link }
+    }
+
+    #[test]
+    fn a_ping_is_the_ekf_range_update() {
+        // P = [[4, 1], [1, 2]], AUV at (300, 400, 0) from the CNA: h = (0.6, 0.8), P̃h = (3.2, 2.2),
+        // hᵀP̃h = 3.68, R = 0.15² + 0.5² = 0.2725, innovation 3.9525.
+        let m = model(Aggregate::TraceSum, vec![0.0], LinkTable::perfect());
+        let (p, cost) = m.update(0, &[4.0, 1.0, 2.0], [0.0; 3], [300.0, 400.0, 0.0]);
+        let want = [4.0 - 10.24 / 3.9525, 1.0 - 7.04 / 3.9525, 2.0 - 4.84 / 3.9525];
+        for i in 0..3 {
+            assert!((p[i] - want[i]).abs() < 1e-12, "{p:?} vs {want:?}");
+        }
+        assert!((cost - (want[0] + want[2])).abs() < 1e-12);
+    }
+
+    #[test]
+    fn a_lost_ping_leaves_only_the_growth_and_half_a_ping_half_the_reduction() {
+        struct Never;
+        impl LinkModel for Never {
+            fn success(&self, _: f64) -> f64 {
+                0.0
+            }
+        }
+        struct Half;
+        impl LinkModel for Half {
+            fn success(&self, _: f64) -> f64 {
+                0.5
+            }
+        }
+        let start = [4.0, 1.0, 2.0];
+        let (cna, auv) = ([0.0; 3], [300.0, 400.0, 50.0]);
+        let lost =
+            model(Aggregate::TraceSum, vec![0.5], LinkTable::sample(&Never).unwrap()).update(0, &start, cna, auv);
+        assert_eq!(lost.0, [4.5, 1.0, 2.5]);
+        let full = model(Aggregate::TraceSum, vec![0.5], LinkTable::perfect()).update(0, &start, cna, auv).1;
+        let half =
+            model(Aggregate::TraceSum, vec![0.5], LinkTable::sample(&Half).unwrap()).update(0, &start, cna, auv).1;
+        assert!((half - 0.5 * (full + lost.1)).abs() < 1e-12);
+    }
+
+    #[test]
+    fn a_cna_overhead_teaches_nothing_horizontally() {
+        let m = model(Aggregate::TraceSum, vec![0.0], LinkTable::perfect());
+        let (p, _) = m.update(0, &[4.0, 1.0, 2.0], [10.0, 20.0, 0.0], [10.0, 20.0, 90.0]);
+        assert_eq!(p, [4.0, 1.0, 2.0]);
+    }
+
+    #[test]
+    fn far_pings_are_noisier_and_bad_settings_are_named() {
+        let n = RangeNoise::default();
+        assert!(n.variance(2000.0) > n.variance(500.0));
+        let bad = EstimatorSpec { range_noise: RangeNoise { sigma_m: 0.0, per_km_m: 1.0 }, ..Default::default() };
+        let e = bad.validate("planner.cost").unwrap_err().to_string();
+        assert!(e.contains("planner.cost.range_noise") && e.contains("sigma_m > 0"), "{e}");
+        let e = EkfCost::new(
+            EstimatorSpec::default(),
+            &[AuvEstimate { cov: [1.0, 2.0, 1.0], process_noise: 0.1 }],
+            10.0,
+            LinkTable::perfect(),
+        )
+        .err()
+        .unwrap()
+        .to_string();
+        assert!(e.contains("AUV 0") && e.contains("positive semi-definite"), "{e}");
+    }
+
+    #[test]
+    fn the_link_table_interpolates_and_holds_its_last_value() {
+        struct Linear;
+        impl LinkModel for Linear {
+            fn success(&self, r: f64) -> f64 {
+                (1.0 - r / 40_000.0).max(0.0)
+            }
+        }
+        let t = LinkTable::sample(&Linear).unwrap();
+        assert!((t.success(1234.5) - (1.0 - 1234.5 / 40_000.0)).abs() < 1e-12);
+        assert_eq!(t.success(1e9), 0.5);
+        struct Broken;
+        impl LinkModel for Broken {
+            fn success(&self, _: f64) -> f64 {
+                1.5
+            }
+        }
+        assert!(LinkTable::sample(&Broken).is_err());
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig { cases: 2000, ..ProptestConfig::default() })]
+
+        /// The bound below a node never exceeds the cost of any path below it: the CNA takes
+        /// random steps of at most `step` while the AUV moves on a line, and the levels' costs
+        /// are compared with `bound_rest` given the same reaches.
+        #[test]
+        fn the_bound_below_a_node_is_never_above_a_real_path(
+            ve in 0.01f64..50.0, vn in 0.01f64..50.0, rho in -0.99f64..0.99, q in 0.0f64..3.0,
+            agg in 0usize..3, auv0 in (-800.0f64..800.0, -800.0f64..800.0, 0.0f64..150.0),
+            vel in (-3.0f64..3.0, -3.0f64..3.0), step in 1.0f64..60.0,
+            moves in prop::collection::vec((-3.2f64..3.2, 0.0f64..1.0, -1.0f64..1.0), 1..8),
+        ) {
+            let aggregate = [Aggregate::TraceSum, Aggregate::WorstAuv, Aggregate::LogDet][agg];
+            let m = model(aggregate, vec![q], LinkTable::perfect());
+            let p0 = [ve, rho * (ve * vn).sqrt(), vn];
+            let mut cna = [0.0, 0.0, 20.0];
+            let mut auv = [auv0.0, auv0.1, auv0.2];
+            let mut bound = vec![0.0; moves.len()];
+            let mut reach = Vec::new();
+            let mut actual = Vec::new();
+            let (node_cna, node_auv) = (cna, auv);
+            let mut p = p0;
+            for &(heading, frac, dz) in &moves {
+                let len = step * frac;
+                let dz = dz * len;
+                let horizontal = (len * len - dz * dz).max(0.0).sqrt();
+                cna = [cna[0] + horizontal * heading.cos(), cna[1] + horizontal * heading.sin(), cna[2] + dz];
+                auv = [auv[0] + vel.0, auv[1] + vel.1, auv[2]];
+                reach.push((vel.0 * vel.0 + vel.1 * vel.1).sqrt() + step);
+                let (next, term) = m.update(0, &p, cna, auv);
+                p = next;
+                actual.push(term);
+            }
+            m.bound_rest(0, &p0, node_cna, node_auv, reach.into_iter(), &mut bound);
+            for (j, (b, a)) in bound.iter().zip(&actual).enumerate() {
+                prop_assert!(*b <= *a * (1.0 + 1e-9) + 1e-12, "level {}: bound {} above cost {}", j, b, a);
+            }
+            let floors = m.level_floors(&[p0], moves.len());
+            for (j, (f, a)) in floors.iter().zip(&actual).enumerate() {
+                prop_assert!(*f <= *a * (1.0 + 1e-9) + 1e-12, "level {}: floor {} above cost {}", j, f, a);
+            }
+        }
+    }
+}
