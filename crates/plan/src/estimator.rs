@@ -187,7 +187,7 @@ impl LinkTable {
 /// How much the tangential information is inflated to make the node's information diagonal in
 /// its line-of-sight frame (any value > 0 keeps the bound valid; small keeps the tangential
 /// part, which dominates, tight).
-const TANGENTIAL_SLACK: f64 = 0.1;
+const TANGENTIAL_SLACK: f64 = 0.02;
 
 /// The estimator-aware model of one decision.
 pub(crate) struct EkfCost {
@@ -250,8 +250,9 @@ impl CostModel for EkfCost {
     /// - prediction: Y ⪯ D ⇒ (Y⁻¹ + qτI)⁻¹ ⪯ (D⁻¹ + qτI)⁻¹, diagonal;
     /// - ping: after m levels the line of sight has moved by at most Δ = Σ reach, so its direction
     ///   is within sin δ ≤ s = Δ/D_h of u (D_h the node's horizontal distance; s = 1 when Δ ≥ D_h),
-    ///   and hhᵀ ⪯ ĥĥᵀ = [[cos², cos·sin], [cos·sin, sin²]] ⪯ diag(1 + 1/s, s²(1 + s)) (the same
-    ///   determinant argument with weight κ = 1/s), or ⪯ I, whichever has the smaller tangential
+    ///   and hhᵀ ⪯ ĥĥᵀ = [[cos², cos·sin], [cos·sin, sin²]] ⪯ diag(1 + κ, s²(1 + 1/κ)) for any κ > 0
+    ///   (the same determinant argument); κ = √s keeps both the radial and the tangential part
+    ///   near their true size when s is small. Or ĥĥᵀ ⪯ I, whichever has the smaller tangential
     ///   entry; R ≥ R(max(0, D − Δ)) with D the node's slant distance (R grows with range) and
     ///   p_s ≤ 1;
     /// - E ⪰ D⁻¹ then gives tr E ≥ tr D⁻¹ and det E ≥ det D⁻¹.
@@ -274,8 +275,9 @@ impl CostModel for EkfCost {
         for (slot, r) in out.iter_mut().zip(reach) {
             moved += r;
             let s = if horizontal > moved { moved / horizontal } else { 1.0 };
-            let tangential = s * s * (1.0 + s);
-            let (add_u, add_t) = if tangential < 1.0 { (1.0 + 1.0 / s, tangential) } else { (1.0, 1.0) };
+            let root_s = s.sqrt();
+            let tangential = s * s + s * root_s;
+            let (add_u, add_t) = if tangential < 1.0 { (1.0 + root_s, tangential) } else { (1.0, 1.0) };
             let r_min = self.spec.range_noise.variance((slant - moved).max(0.0));
             v_u = 1.0 / (1.0 / (v_u + q) + add_u / r_min);
             v_t = 1.0 / (1.0 / (v_t + q) + add_t / r_min);
