@@ -271,6 +271,7 @@ impl CostModel for EkfCost {
         let slant = (horizontal * horizontal + dz * dz).sqrt();
         let u = if horizontal > 1e-9 { [dx / horizontal, dy / horizontal] } else { [1.0, 0.0] };
         let (mut v_u, mut v_t) = diagonal_floor(state, u);
+        let mut eigen = EigenFloor::of(state);
         let mut moved = 0.0;
         for (slot, r) in out.iter_mut().zip(reach) {
             moved += r;
@@ -281,23 +282,22 @@ impl CostModel for EkfCost {
             let r_min = self.spec.range_noise.variance((slant - moved).max(0.0));
             v_u = 1.0 / (1.0 / (v_u + q) + add_u / r_min);
             v_t = 1.0 / (1.0 / (v_t + q) + add_t / r_min);
-            *slot = self.combine(*slot, self.term(v_u + v_t, v_u * v_t));
+            let (trace, det) = eigen.step(q, r_min);
+            *slot = self.combine(*slot, self.term((v_u + v_t).max(trace), (v_u * v_t).max(det)));
         }
     }
 
-    /// From each root covariance's eigenvalues (exact diagonal), with hhᵀ ⪯ I and R ≥ R(0) at
-    /// every level.
+    /// The eigenvalue chain ([`EigenFloor`]) from each root covariance, with R ≥ R(0) at every
+    /// level.
     fn level_floors(&self, root: &[[f64; 3]], depth: usize) -> Vec<f64> {
         let r_min = self.spec.range_noise.variance(0.0);
-        let mut v: Vec<(f64, f64)> = root.iter().map(eigenvalues).collect();
+        let mut chains: Vec<EigenFloor> = root.iter().map(EigenFloor::of).collect();
         (0..depth)
             .map(|_| {
                 let mut f = 0.0;
-                for (k, (v1, v2)) in v.iter_mut().enumerate() {
-                    let q = self.q_tau[k];
-                    *v1 = 1.0 / (1.0 / (*v1 + q) + 1.0 / r_min);
-                    *v2 = 1.0 / (1.0 / (*v2 + q) + 1.0 / r_min);
-                    f = self.combine(f, self.term(*v1 + *v2, *v1 * *v2));
+                for (k, chain) in chains.iter_mut().enumerate() {
+                    let (trace, det) = chain.step(self.q_tau[k], r_min);
+                    f = self.combine(f, self.term(trace, det));
                 }
                 f
             })
@@ -324,6 +324,40 @@ fn diagonal_floor(p: &[f64; 3], u: [f64; 2]) -> (f64, f64) {
     }
     let y_uu_max = y_uu + y_ut * y_ut / (TANGENTIAL_SLACK * y_tt);
     (1.0 / y_uu_max, 1.0 / ((1.0 + TANGENTIAL_SLACK) * y_tt))
+}
+
+/// Lower bounds m₁ (larger) and m₂ (smaller) on the eigenvalues λ₁ ≥ λ₂ of an AUV's covariance,
+/// whatever the ping directions. One level: prediction adds qτ to both; then E = P̃ − (rank-one
+/// ⪰ 0) with |h| ≤ 1, p_s ≤ 1, R ≥ R_min gives
+/// - tr E ≥ tr P̃ − λ₁²/(λ₁ + R) = λ₂ + λ₁R/(λ₁ + R) (the reduction hᵀP̃²h/(hᵀP̃h + R) is largest
+///   along the major axis), increasing in λ₁ and λ₂;
+/// - λ₁(E) ≥ λ₂(P̃) (interlacing) and λ₁(E) ≥ tr E / 2;
+/// - λ₂(E) ≥ 1/(1/λ₂ + 1/R) (E ⪰ (P̃⁻¹ + hhᵀ/R)⁻¹ by operator convexity, whose information is at
+///   most 1/λ₂ + 1/R in any direction);
+/// - det E = λ₁(E)·λ₂(E) ≥ m₁'·m₂'.
+///
+/// It is tight for the next level (one rank-one update), which is where most nodes are cut.
+#[derive(Debug, Clone, Copy)]
+struct EigenFloor {
+    m1: f64,
+    m2: f64,
+}
+
+impl EigenFloor {
+    fn of(p: &[f64; 3]) -> Self {
+        let (m1, m2) = eigenvalues(p);
+        EigenFloor { m1, m2 }
+    }
+
+    /// Advances one level; returns the bounds on (tr E, det E).
+    #[inline(always)]
+    fn step(&mut self, q_tau: f64, r_min: f64) -> (f64, f64) {
+        let (l1, l2) = (self.m1 + q_tau, self.m2 + q_tau);
+        let trace = l2 + l1 * r_min / (l1 + r_min);
+        self.m2 = l2 * r_min / (l2 + r_min);
+        self.m1 = l2.max(0.5 * trace);
+        (trace, self.m1 * self.m2)
+    }
 }
 
 /// Eigenvalues of the symmetric 2×2 [[a, b], [b, c]], larger first, clamped at 0.
