@@ -356,23 +356,20 @@ mod tests {
         assert!(CovFrame0::decode(&thesis.encode(MaskWidth::Narrow, 32).unwrap(), MaskWidth::Narrow).is_err());
         assert!(Frame0::decode(&b, MaskWidth::Narrow).is_err());
         // Another version and a minor axis above the major are refused with their field named.
-        let mut w = BitWriter::new();
-        TrackingHeader::default().encode_into(&mut w, MaskWidth::Narrow).unwrap();
-        w.put(VERSION, 2).unwrap();
-        status(NextWaypoint::Id(2)).encode_into(&mut w).unwrap();
-        for (f, v) in [(SIGMA_MAJOR, 10), (SIGMA_MINOR, 11), (ORIENTATION, 0)] {
-            w.put(f, v).unwrap();
-        }
-        let e = CovFrame0::decode(&w.finish(), MaskWidth::Narrow).unwrap_err().to_string();
+        let hand_made = |version: i64, major: i64, minor: i64| {
+            let mut w = BitWriter::new();
+            TrackingHeader::default().encode_into(&mut w, MaskWidth::Narrow).unwrap();
+            w.put(VERSION, version).unwrap();
+            status(NextWaypoint::Id(2)).encode_into(&mut w).unwrap();
+            for (f, v) in [(SIGMA_MAJOR, major), (SIGMA_MINOR, minor), (ORIENTATION, 0)] {
+                w.put(f, v).unwrap();
+            }
+            CovFrame0::decode(&w.finish(), MaskWidth::Narrow).map_err(|e| e.to_string())
+        };
+        assert!(hand_made(1, 11, 10).is_ok());
+        let e = hand_made(2, 11, 10).unwrap_err();
         assert!(e.contains("status.version") && e.contains("version 2"), "{e}");
-        let mut w = BitWriter::new();
-        TrackingHeader::default().encode_into(&mut w, MaskWidth::Narrow).unwrap();
-        w.put(VERSION, 1).unwrap();
-        status(NextWaypoint::Id(2)).encode_into(&mut w).unwrap();
-        for (f, v) in [(SIGMA_MAJOR, 10), (SIGMA_MINOR, 11), (ORIENTATION, 0)] {
-            w.put(f, v).unwrap();
-        }
-        let e = CovFrame0::decode(&w.finish(), MaskWidth::Narrow).unwrap_err().to_string();
+        let e = hand_made(1, 10, 11).unwrap_err();
         assert!(e.contains("status.sigma_minor_code"), "{e}");
         let huge = CovarianceReport { sigma_major: 2e4, ..ellipse };
         assert!(cov_frame(huge).encode(MaskWidth::Narrow, 32).is_err());
