@@ -56,7 +56,16 @@ fn main() -> std::process::ExitCode {
     }
 }
 
+/// Exit status of a run stopped by Ctrl-C or SIGTERM (128 + SIGINT, as shells report it).
+const INTERRUPTED: i32 = 130;
+
 fn run() -> Result<()> {
+    // An interrupted run must not leave its half-written staging directory behind.
+    ctrlc::set_handler(|| {
+        coopnav_sim::output::remove_unfinished_runs();
+        eprintln!("Interrupted: the unfinished run directory was removed");
+        std::process::exit(INTERRUPTED);
+    })?;
     tracing_subscriber::fmt()
         .with_env_filter(tracing_subscriber::EnvFilter::from_default_env())
         .with_writer(std::io::stderr)
