@@ -184,6 +184,35 @@ impl LinkTable {
     }
 }
 
+/// Steps 1–3 of the module's derivation: the expected covariance [P_ee, P_en, P_nn] after τ of
+/// growth (`q_tau` per axis) and a ping from `cna` to the AUV at `auv` that arrives with
+/// probability `success(slant range)`. Shared by the planner's cost and the closed loop's model
+/// of the AUVs' filters, so both use one formula.
+#[inline(always)]
+pub fn expected_posterior(
+    cov: &[f64; 3],
+    q_tau: f64,
+    cna: [f64; 3],
+    auv: [f64; 3],
+    noise: &RangeNoise,
+    success: impl Fn(f64) -> f64,
+) -> [f64; 3] {
+    let (mut a, mut b, mut c) = (cov[0] + q_tau, cov[1], cov[2] + q_tau);
+    let d = [auv[0] - cna[0], auv[1] - cna[1], auv[2] - cna[2]];
+    let r2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
+    if r2 > 1e-12 {
+        let r = r2.sqrt();
+        let (h0, h1) = (d[0] / r, d[1] / r);
+        let (ph0, ph1) = (a * h0 + b * h1, b * h0 + c * h1);
+        let innovation = h0 * ph0 + h1 * ph1 + noise.variance(r);
+        let gain = success(r) / innovation;
+        a -= gain * ph0 * ph0;
+        b -= gain * ph0 * ph1;
+        c -= gain * ph1 * ph1;
+    }
+    [a, b, c]
+}
+
 /// How much the tangential information is inflated to make the node's information diagonal in
 /// its line-of-sight frame (any value > 0 keeps the bound valid; small keeps the tangential
 /// part, which dominates, tight).
@@ -219,20 +248,9 @@ impl CostModel for EkfCost {
 
     #[inline(always)]
     fn update(&self, k: usize, parent: &[f64; 3], cna: [f64; 3], auv: [f64; 3]) -> ([f64; 3], f64) {
-        let q = self.q_tau[k];
-        let (mut a, mut b, mut c) = (parent[0] + q, parent[1], parent[2] + q);
-        let d = [auv[0] - cna[0], auv[1] - cna[1], auv[2] - cna[2]];
-        let r2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
-        if r2 > 1e-12 {
-            let r = r2.sqrt();
-            let (h0, h1) = (d[0] / r, d[1] / r);
-            let (ph0, ph1) = (a * h0 + b * h1, b * h0 + c * h1);
-            let innovation = h0 * ph0 + h1 * ph1 + self.spec.range_noise.variance(r);
-            let gain = self.link.success(r) / innovation;
-            a -= gain * ph0 * ph0;
-            b -= gain * ph0 * ph1;
-            c -= gain * ph1 * ph1;
-        }
+        let link = &self.link;
+        let [a, b, c] =
+            expected_posterior(parent, self.q_tau[k], cna, auv, &self.spec.range_noise, |r| link.success(r));
         ([a, b, c], self.term(a + c, a * c - b * b))
     }
 
