@@ -1,6 +1,12 @@
 //! The status message (position, depth, heading, speed, next waypoint as a 1-byte id or full
 //! lat/lon; nams digest §3.2 and §8 item 27) and frame 0, which carries the tracking header and
 //! the status message together (digest §8 item 17: the header lives in frame 0).
+//!
+//! Two variants: the thesis-exact [`StatusMessage`] (Appendix C), and the versioned
+//! [`CovStatus`] (issue 10), which starts with a 3-bit version (1) and adds the sender's
+//! horizontal position covariance as an error ellipse ([`CovarianceReport`], 3 bytes), so a CNA
+//! can plan on the survey AUVs' own estimators. Both travel in a frame 0 through the same
+//! [`StatusCodec`] trait.
 
 use crate::codec::{BitReader, BitWriter, Bounded, DecodeError, EncodeError};
 use crate::tracker::{MaskWidth, TrackingHeader};
@@ -123,14 +129,34 @@ impl StatusMessage {
     }
 }
 
-/// Frame 0 of every packet: tracking header then status message.
-#[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct Frame0 {
-    pub header: TrackingHeader,
-    pub status: StatusMessage,
+/// A status-message variant that frame 0 can carry.
+pub trait StatusCodec: Sized {
+    fn encode_into(&self, w: &mut BitWriter) -> Result<(), EncodeError>;
+    fn decode_from(r: &mut BitReader<'_>) -> Result<Self, DecodeError>;
 }
 
-impl Frame0 {
+impl StatusCodec for StatusMessage {
+    fn encode_into(&self, w: &mut BitWriter) -> Result<(), EncodeError> {
+        StatusMessage::encode_into(self, w)
+    }
+    fn decode_from(r: &mut BitReader<'_>) -> Result<Self, DecodeError> {
+        StatusMessage::decode_from(r)
+    }
+}
+
+/// Frame 0 of every packet: tracking header then a status message of variant `S`.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct StatusFrame<S> {
+    pub header: TrackingHeader,
+    pub status: S,
+}
+
+/// The thesis-exact frame 0.
+pub type Frame0 = StatusFrame<StatusMessage>;
+/// Frame 0 with the versioned covariance status.
+pub type CovFrame0 = StatusFrame<CovStatus>;
+
+impl<S: StatusCodec> StatusFrame<S> {
     /// Encodes into at most `frame_bytes` bytes.
     pub fn encode(&self, w: MaskWidth, frame_bytes: usize) -> Result<Vec<u8>, EncodeError> {
         let mut out = BitWriter::new();
@@ -146,15 +172,122 @@ impl Frame0 {
     pub fn decode(bytes: &[u8], w: MaskWidth) -> Result<Self, DecodeError> {
         let mut r = BitReader::new(bytes);
         let header = TrackingHeader::decode_from(&mut r, w)?;
-        let status = StatusMessage::decode_from(&mut r)?;
+        let status = S::decode_from(&mut r)?;
         r.finish()?;
-        Ok(Frame0 { header, status })
+        Ok(StatusFrame { header, status })
     }
+}
 
+impl Frame0 {
     /// Most header entries that fit in a frame of `frame_bytes` next to a status of `status_bits`.
     pub fn max_header_entries(frame_bytes: usize, status_bits: usize, w: MaskWidth) -> usize {
         let empty = TrackingHeader::default().bits(w);
         (frame_bytes * 8).saturating_sub(status_bits + empty) / w.entry_bits()
+    }
+}
+
+const VERSION: Bounded = Bounded::new("status.version", 0, 6);
+/// The version [`CovStatus`] writes (the thesis message has no version field).
+const COV_VERSION: i64 = 1;
+/// σ codes: σ = SIGMA_FLOOR·exp(code / SIGMA_PER_E), 255 codes from 1 cm to 10 km, 5.6 % apart
+/// (so ±2.8 % after rounding). Invented (issue 10): a ratio scale keeps small and large errors
+/// equally precise in one byte.
+const SIGMA_MAJOR: Bounded = Bounded::new("status.sigma_major_code", 0, 254);
+const SIGMA_MINOR: Bounded = Bounded::new("status.sigma_minor_code", 0, 254);
+const SIGMA_FLOOR: f64 = 0.01;
+const SIGMA_MAX: f64 = 10_000.0;
+/// Orientation of the major axis, whole degrees counter-clockwise from east, [0, 180).
+const ORIENTATION: Bounded = Bounded::new("status.orientation_deg", 0, 179);
+
+fn sigma_per_e() -> f64 {
+    254.0 / (SIGMA_MAX / SIGMA_FLOOR).ln()
+}
+
+/// A horizontal position covariance as an error ellipse: standard deviations along the major
+/// and minor axes (m) and the major axis's direction (radians counter-clockwise from east).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct CovarianceReport {
+    pub sigma_major: f64,
+    pub sigma_minor: f64,
+    pub orientation: f64,
+}
+
+impl CovarianceReport {
+    /// The ellipse of the covariance [P_ee, P_en, P_nn] (m²).
+    pub fn from_cov(cov: [f64; 3]) -> Self {
+        let [a, b, c] = cov;
+        let mean = 0.5 * (a + c);
+        let radius = (0.25 * (a - c) * (a - c) + b * b).sqrt();
+        CovarianceReport {
+            sigma_major: (mean + radius).max(0.0).sqrt(),
+            sigma_minor: (mean - radius).max(0.0).sqrt(),
+            orientation: 0.5 * (2.0 * b).atan2(a - c),
+        }
+    }
+
+    /// The covariance [P_ee, P_en, P_nn] (m²) of the ellipse.
+    pub fn to_cov(&self) -> [f64; 3] {
+        let (major, minor) = (self.sigma_major * self.sigma_major, self.sigma_minor * self.sigma_minor);
+        let (s, c) = self.orientation.sin_cos();
+        [major * c * c + minor * s * s, (major - minor) * s * c, major * s * s + minor * c * c]
+    }
+
+    fn encode_into(&self, w: &mut BitWriter) -> Result<(), EncodeError> {
+        let code = |sigma: f64, f: Bounded| q((sigma.max(SIGMA_FLOOR) / SIGMA_FLOOR).ln(), sigma_per_e(), f);
+        let (major, minor) = (code(self.sigma_major, SIGMA_MAJOR)?, code(self.sigma_minor, SIGMA_MINOR)?);
+        if minor > major {
+            return Err(EncodeError { field: SIGMA_MINOR.name, value: minor, min: 0, max: major });
+        }
+        w.put(SIGMA_MAJOR, major)?;
+        w.put(SIGMA_MINOR, minor)?;
+        let degrees = self.orientation.to_degrees().round().rem_euclid(180.0);
+        w.put(ORIENTATION, q(degrees, 1.0, ORIENTATION)?)
+    }
+
+    fn decode_from(r: &mut BitReader<'_>) -> Result<Self, DecodeError> {
+        let sigma = |code: i64| SIGMA_FLOOR * (code as f64 / sigma_per_e()).exp();
+        let (major, minor) = (r.get(SIGMA_MAJOR)?, r.get(SIGMA_MINOR)?);
+        if minor > major {
+            return Err(DecodeError::Invalid {
+                field: SIGMA_MINOR.name,
+                message: format!("minor-axis code {minor} above the major-axis code {major}"),
+            });
+        }
+        let orientation = (r.get(ORIENTATION)? as f64).to_radians();
+        Ok(CovarianceReport { sigma_major: sigma(major), sigma_minor: sigma(minor), orientation })
+    }
+}
+
+/// The versioned status message: the thesis's fields, then the sender's covariance ellipse.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct CovStatus {
+    pub status: StatusMessage,
+    pub cov: CovarianceReport,
+}
+
+impl CovStatus {
+    pub fn bits(&self) -> usize {
+        (VERSION.bits() + SIGMA_MAJOR.bits() + SIGMA_MINOR.bits() + ORIENTATION.bits()) as usize + self.status.bits()
+    }
+}
+
+impl StatusCodec for CovStatus {
+    fn encode_into(&self, w: &mut BitWriter) -> Result<(), EncodeError> {
+        w.put(VERSION, COV_VERSION)?;
+        self.status.encode_into(w)?;
+        self.cov.encode_into(w)
+    }
+
+    fn decode_from(r: &mut BitReader<'_>) -> Result<Self, DecodeError> {
+        let version = r.get(VERSION)?;
+        if version != COV_VERSION {
+            return Err(DecodeError::Invalid {
+                field: VERSION.name,
+                message: format!("version {version} is not known (this codec reads version {COV_VERSION})"),
+            });
+        }
+        let status = StatusMessage::decode_from(r)?;
+        Ok(CovStatus { status, cov: CovarianceReport::decode_from(r)? })
     }
 }
 
@@ -204,7 +337,80 @@ mod tests {
         assert!(big.encode(MaskWidth::Narrow, 32).is_err());
     }
 
+    fn cov_frame(cov: CovarianceReport) -> CovFrame0 {
+        CovFrame0 { header: TrackingHeader::default(), status: CovStatus { status: status(NextWaypoint::Id(2)), cov } }
+    }
+
+    #[test]
+    fn covariance_status_costs_27_bits_more_and_rejects_malformed_frames() {
+        let ellipse = CovarianceReport { sigma_major: 3.0, sigma_minor: 1.0, orientation: 0.4 };
+        let f = cov_frame(ellipse);
+        assert_eq!(f.status.bits(), status(NextWaypoint::Id(2)).bits() + 3 + 8 + 8 + 8);
+        let b = f.encode(MaskWidth::Narrow, 32).unwrap();
+        assert!(CovFrame0::decode(&b[..b.len() - 1], MaskWidth::Narrow).is_err(), "truncated");
+        let mut long = b.clone();
+        long.push(0);
+        assert!(matches!(CovFrame0::decode(&long, MaskWidth::Narrow), Err(DecodeError::Oversized { .. })));
+        // A thesis frame is not a covariance frame and the other way round.
+        let thesis = Frame0 { header: TrackingHeader::default(), status: status(NextWaypoint::Id(2)) };
+        assert!(CovFrame0::decode(&thesis.encode(MaskWidth::Narrow, 32).unwrap(), MaskWidth::Narrow).is_err());
+        assert!(Frame0::decode(&b, MaskWidth::Narrow).is_err());
+        // Another version and a minor axis above the major are refused with their field named.
+        let hand_made = |version: i64, major: i64, minor: i64| {
+            let mut w = BitWriter::new();
+            TrackingHeader::default().encode_into(&mut w, MaskWidth::Narrow).unwrap();
+            w.put(VERSION, version).unwrap();
+            status(NextWaypoint::Id(2)).encode_into(&mut w).unwrap();
+            for (f, v) in [(SIGMA_MAJOR, major), (SIGMA_MINOR, minor), (ORIENTATION, 0)] {
+                w.put(f, v).unwrap();
+            }
+            CovFrame0::decode(&w.finish(), MaskWidth::Narrow).map_err(|e| e.to_string())
+        };
+        assert!(hand_made(1, 11, 10).is_ok());
+        let e = hand_made(2, 11, 10).unwrap_err();
+        assert!(e.contains("status.version") && e.contains("version 2"), "{e}");
+        let e = hand_made(1, 10, 11).unwrap_err();
+        assert!(e.contains("status.sigma_minor_code"), "{e}");
+        let huge = CovarianceReport { sigma_major: 2e4, ..ellipse };
+        assert!(cov_frame(huge).encode(MaskWidth::Narrow, 32).is_err());
+    }
+
+    fn cov_frame_thesis(f: &CovFrame0) -> Frame0 {
+        Frame0 { header: f.header.clone(), status: f.status.status }
+    }
+
+    #[test]
+    fn an_ellipse_and_its_covariance_agree() {
+        // Major axis 3 m along 30°, minor 1 m: P = R diag(9, 1) Rᵀ.
+        let e = CovarianceReport { sigma_major: 3.0, sigma_minor: 1.0, orientation: 30f64.to_radians() };
+        let (c, s) = (30f64.to_radians().cos(), 30f64.to_radians().sin());
+        let p = e.to_cov();
+        let want = [9.0 * c * c + s * s, 8.0 * s * c, 9.0 * s * s + c * c];
+        for i in 0..3 {
+            assert!((p[i] - want[i]).abs() < 1e-12);
+        }
+        let back = CovarianceReport::from_cov(p);
+        assert!((back.sigma_major - 3.0).abs() < 1e-12 && (back.sigma_minor - 1.0).abs() < 1e-12);
+        assert!((back.orientation - 30f64.to_radians()).abs() < 1e-12);
+    }
+
     proptest! {
+        #[test]
+        fn covariance_frame_round_trip(major in 0.01f64..9_000.0, ratio in 0.0f64..1.0, angle in -3.2f64..3.2) {
+            let cov = CovarianceReport { sigma_major: major, sigma_minor: major * ratio, orientation: angle };
+            let f = cov_frame(cov);
+            let b = f.encode(MaskWidth::Narrow, 64).unwrap();
+            let d = CovFrame0::decode(&b, MaskWidth::Narrow).unwrap();
+            prop_assert_eq!(d.status.status, Frame0::decode(&cov_frame_thesis(&f).encode(MaskWidth::Narrow, 64).unwrap(), MaskWidth::Narrow).unwrap().status);
+            let rel = |got: f64, want: f64| (got / want.max(SIGMA_FLOOR)).ln().abs();
+            prop_assert!(rel(d.status.cov.sigma_major, major) <= 0.5 / sigma_per_e() + 1e-9);
+            prop_assert!(major * ratio < SIGMA_FLOOR || rel(d.status.cov.sigma_minor, major * ratio) <= 0.5 / sigma_per_e() + 1e-9);
+            // Orientation is modulo 180°, to the nearest degree.
+            let turn = (d.status.cov.orientation - angle).rem_euclid(std::f64::consts::PI);
+            prop_assert!(turn.min(std::f64::consts::PI - turn) <= 0.5f64.to_radians() + 1e-9);
+            prop_assert_eq!(d.encode(MaskWidth::Narrow, 64).unwrap(), b);
+        }
+
         #[test]
         fn frame0_round_trip(x in -19_999.0f64..19_999.0, y in -19_999.0f64..19_999.0, z in 0.0f64..999.0,
                              h in -std::f64::consts::PI..std::f64::consts::PI, s in 0.0f64..5.0, id in 0u8..=254, ll in any::<bool>(),

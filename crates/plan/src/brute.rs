@@ -2,13 +2,13 @@
 //! path from the root, and keeps the minimum path sum (ties: lowest level-0 option index).
 //! It is deliberately simple: it is what the production search is tested against.
 
+use crate::cost_model::CostModel;
 use crate::tree::{NodeRef, Tree};
 use crate::SearchOutcome;
 
-pub(crate) fn brute_force(tree: &Tree) -> SearchOutcome {
+pub(crate) fn brute_force<M: CostModel>(tree: &Tree<M>) -> SearchOutcome {
     let (n, depth) = (tree.n, tree.depth);
-    let mut eps2 = vec![0.0; n * depth];
-    let mut los = vec![[0.0; 3]; n * depth];
+    let mut state: Vec<M::State> = tree.root_state.iter().cycle().take(n * depth).copied().collect();
     let mut idx = vec![0usize; depth];
     let (mut best, mut best_root) = (f64::INFINITY, usize::MAX);
     let mut nodes = 0u64;
@@ -17,13 +17,9 @@ pub(crate) fn brute_force(tree: &Tree) -> SearchOutcome {
         let mut pose = tree.root_pose;
         for (l, &i) in idx.iter().enumerate() {
             let opt = tree.level_options(l)[i];
-            let (e, s) = (eps2.split_at_mut(l * n), los.split_at_mut(l * n));
-            let parent = if l == 0 {
-                tree.root()
-            } else {
-                NodeRef { pose, eps2: &e.0[(l - 1) * n..], los: &s.0[(l - 1) * n..] }
-            };
-            let (p, c) = tree.expand(l, &parent, opt, &mut e.1[..n], &mut s.1[..n]);
+            let (above, here) = state.split_at_mut(l * n);
+            let parent = if l == 0 { tree.root() } else { NodeRef { pose, state: &above[(l - 1) * n..] } };
+            let (p, c) = tree.expand(l, &parent, opt, &mut here[..n]);
             pose = p;
             acc += c;
             nodes += 1;
@@ -41,7 +37,7 @@ pub(crate) fn brute_force(tree: &Tree) -> SearchOutcome {
 }
 
 /// Odometer over option sequences, the deepest level turning fastest. False when exhausted.
-fn advance(idx: &mut [usize], tree: &Tree) -> bool {
+fn advance<M: CostModel>(idx: &mut [usize], tree: &Tree<M>) -> bool {
     for l in (0..idx.len()).rev() {
         idx[l] += 1;
         if idx[l] < tree.level_options(l).len() {

@@ -9,7 +9,9 @@
 //! τ with the CNA pose, the AUVs' modelled errors ([`AuvError`]) and an [`AuvForecast`].
 
 mod brute;
+mod cost_model;
 pub mod error_model;
+pub mod estimator;
 pub mod motion;
 pub mod penalty;
 pub mod planner;
@@ -21,13 +23,14 @@ mod tree;
 pub mod workload;
 
 pub use error_model::{AuvError, BearingMode, CostMode, ErrorModel};
+pub use estimator::{expected_posterior, Aggregate, AuvEstimate, EstimatorSpec, LinkModel, LinkTable, RangeNoise};
 pub use motion::{CnaKind, CnaPose, MotionConfig, MotionOption};
 pub use penalty::{
     Doubling, NoPenalty, Penalty, PenaltyCase, PenaltyFn, PenaltyPair, ScaledViolation, SideTerm, Violation,
 };
 pub use planner::{
-    Algorithm, AuvForecast, Deadline, Decision, DistanceLimits, FnForecast, LookAheadPlanner, PlanInput, Planner,
-    PlannerConfig, SearchConfig,
+    Algorithm, AuvForecast, CostSpec, Deadline, Decision, DistanceLimits, FnForecast, LookAheadPlanner, PlanInput,
+    Planner, PlannerConfig, SearchConfig,
 };
 
 use thiserror::Error;

@@ -7,8 +7,10 @@
 //! errors; the caller executes it, then updates the errors from the positions that really
 //! happened (in pre-deployment mode they are the forecast ones).
 
+use crate::cost_model::{CostModel, HudsonCost, Tangential};
 use crate::error_model::{to_arr, AuvError, ErrorModel};
-use crate::motion::{CnaPose, FastPose, MotionConfig, MotionOption};
+use crate::estimator::{AuvEstimate, EkfCost, EstimatorSpec, LinkModel, LinkTable};
+use crate::motion::{CnaPose, FastOption, FastPose, MotionConfig, MotionOption};
 use crate::penalty::PenaltyPair;
 use crate::search::{branch_and_bound, Shared};
 use crate::tree::{reaches, rest_floors, Tree};
@@ -81,6 +83,17 @@ impl Default for SearchConfig {
     }
 }
 
+/// What the planner minimises (digest §2.2 for Hudson's; `estimator` module for the other).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, Default)]
+#[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
+pub enum CostSpec {
+    /// Hudson eq. (1): isotropic tangential growth, parameters in `PlannerConfig::error`.
+    #[default]
+    Hudson,
+    /// The survey AUVs' own EKF covariances ([`PlanInput::estimates`]).
+    Estimator(EstimatorSpec),
+}
+
 /// Everything the look-ahead planner needs.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -90,6 +103,8 @@ pub struct PlannerConfig {
     pub motion: MotionConfig,
     #[serde(default)]
     pub error: ErrorModel,
+    #[serde(default)]
+    pub cost: CostSpec,
     #[serde(default)]
     pub limits: DistanceLimits,
     pub penalties: PenaltyPair,
@@ -121,6 +136,9 @@ impl PlannerConfig {
         let DistanceLimits { min, max } = self.limits;
         if !(min.is_finite() && max.is_finite() && min >= 0.0 && min < max) {
             return bad("limits", "0 <= min < max (metres)", format!("min {min}, max {max}"));
+        }
+        if let CostSpec::Estimator(e) = &self.cost {
+            e.validate("cost")?;
         }
         self.penalties.primary.validate("penalties.primary")?;
         self.penalties.look_ahead.validate("penalties.look_ahead")?;
@@ -171,8 +189,11 @@ pub struct PlanInput<'a> {
     /// Time of the decision, s.
     pub t: f64,
     pub cna: CnaPose,
-    /// Current modelled error of each AUV (same order as the forecast).
+    /// Current modelled error of each AUV (same order as the forecast), for Hudson's cost.
     pub errors: &'a [AuvError],
+    /// Each AUV's filter covariance (same order), for the estimator-aware cost; may be empty
+    /// under Hudson's.
+    pub estimates: &'a [AuvEstimate],
     pub forecast: &'a dyn AuvForecast,
 }
 
@@ -203,26 +224,47 @@ pub trait Planner {
 #[derive(Debug, Clone)]
 pub struct LookAheadPlanner {
     cfg: PlannerConfig,
+    link: LinkTable,
+}
+
+/// The cost-independent part of a tree: predicted AUV positions and the CNA's options.
+struct Geometry {
+    auv: Vec<[f64; 3]>,
+    depth: usize,
+    n: usize,
+    options: Vec<FastOption>,
+    root_options: Vec<usize>,
+    root_pose: FastPose,
 }
 
 impl LookAheadPlanner {
+    /// A planner with a perfect acoustic link.
     pub fn new(cfg: PlannerConfig) -> Result<Self, PlanError> {
         cfg.validate()?;
-        Ok(LookAheadPlanner { cfg })
+        Ok(LookAheadPlanner { cfg, link: LinkTable::perfect() })
+    }
+
+    /// A planner whose estimator-aware cost weights each ping by `link`'s success probability.
+    pub fn with_link(cfg: PlannerConfig, link: &dyn LinkModel) -> Result<Self, PlanError> {
+        cfg.validate()?;
+        Ok(LookAheadPlanner { cfg, link: LinkTable::sample(link)? })
     }
 
     pub fn config(&self) -> &PlannerConfig {
         &self.cfg
     }
 
-    /// Builds the tree of `depth` levels (fewer when the forecast ends).
-    fn tree(&self, input: &PlanInput, depth: usize) -> Result<Tree, PlanError> {
+    /// Predicted positions for `depth` levels (fewer when the forecast ends) and the options.
+    fn geometry(&self, input: &PlanInput, depth: usize) -> Result<Geometry, PlanError> {
         let cfg = &self.cfg;
         let n = input.forecast.n_auvs();
-        if n == 0 || input.errors.len() != n {
+        let states = match cfg.cost {
+            CostSpec::Hudson => input.errors.len(),
+            CostSpec::Estimator(_) => input.estimates.len(),
+        };
+        if n == 0 || states != n {
             return Err(PlanError::Input(format!(
-                "{} error states for {n} forecast AUVs (need one per AUV, at least one)",
-                input.errors.len()
+                "{states} error states for {n} forecast AUVs (need one per AUV, at least one)"
             )));
         }
         let mut auv = Vec::with_capacity(n * depth);
@@ -242,9 +284,6 @@ impl LookAheadPlanner {
         if levels == 0 {
             return Err(PlanError::NoForecast { t: input.t + cfg.motion.tau });
         }
-        let sigma2: Vec<f64> = input.errors.iter().map(|e| e.sigma2).collect();
-        let root_eps2: Vec<f64> = input.errors.iter().map(|e| e.eps2).collect();
-        let alpha_tau = cfg.error.alpha * cfg.motion.tau;
         let options = cfg.motion.fast_options();
         let root_pose = FastPose::from_pose(&input.cna);
         // Level 0 keeps only the options that break the AUV-CNA limits least (none, normally): A5.
@@ -252,28 +291,48 @@ impl LookAheadPlanner {
             options.iter().map(|o| cfg.motion.limit_violation(&cfg.motion.step(&root_pose, o))).collect();
         let least = violation.iter().cloned().fold(f64::INFINITY, f64::min);
         let root_options = (0..options.len()).filter(|&i| violation[i] <= least).collect();
-        Ok(Tree {
-            motion: cfg.motion,
-            model: cfg.error,
-            limits: cfg.limits,
-            penalties: cfg.penalties,
-            all_options: (0..options.len()).collect(),
-            options,
-            root_options,
-            depth: levels,
-            n,
-            reach: reaches(&auv, n, cfg.motion.speed * cfg.motion.tau),
-            auv,
-            rest_floor: rest_floors(&cfg.error, &sigma2, &root_eps2, alpha_tau, levels),
-            sigma2,
-            alpha_tau,
-            root_pose,
-            root_eps2,
-            root_los: input.errors.iter().map(|e| e.los).collect(),
-        })
+        Ok(Geometry { auv, depth: levels, n, options, root_options, root_pose })
     }
 
-    fn decision(&self, tree: &Tree, out: SearchOutcome, requested: usize) -> Decision {
+    fn tree<M: CostModel>(&self, g: Geometry, model: M, root_state: Vec<M::State>) -> Tree<M> {
+        let cfg = &self.cfg;
+        Tree {
+            motion: cfg.motion,
+            limits: cfg.limits,
+            penalties: cfg.penalties,
+            all_options: (0..g.options.len()).collect(),
+            options: g.options,
+            root_options: g.root_options,
+            depth: g.depth,
+            n: g.n,
+            reach: reaches(&g.auv, g.n, cfg.motion.speed * cfg.motion.tau),
+            auv: g.auv,
+            rest_floor: rest_floors(&model.level_floors(&root_state, g.depth)),
+            model,
+            root_pose: g.root_pose,
+            root_state,
+        }
+    }
+
+    fn hudson_tree(&self, input: &PlanInput, depth: usize) -> Result<Tree<HudsonCost>, PlanError> {
+        let g = self.geometry(input, depth)?;
+        let model = HudsonCost {
+            model: self.cfg.error,
+            sigma2: input.errors.iter().map(|e| e.sigma2).collect(),
+            alpha_tau: self.cfg.error.alpha * self.cfg.motion.tau,
+        };
+        let root = input.errors.iter().map(|e| Tangential { eps2: e.eps2, los: e.los }).collect();
+        Ok(self.tree(g, model, root))
+    }
+
+    fn estimator_tree(&self, spec: EstimatorSpec, input: &PlanInput, depth: usize) -> Result<Tree<EkfCost>, PlanError> {
+        let g = self.geometry(input, depth)?;
+        let model = EkfCost::new(spec, input.estimates, self.cfg.motion.tau, self.link.clone())?;
+        let root = input.estimates.iter().map(|e| e.cov).collect();
+        Ok(self.tree(g, model, root))
+    }
+
+    fn decision<M: CostModel>(&self, tree: &Tree<M>, out: SearchOutcome, requested: usize) -> Decision {
         let opt = self.cfg.motion.options()[out.root_option];
         let next = self.cfg.motion.step(&tree.root_pose, &tree.options[out.root_option]).to_pose();
         Decision {
@@ -286,17 +345,13 @@ impl LookAheadPlanner {
             nodes: out.nodes,
         }
     }
-}
 
-impl Planner for LookAheadPlanner {
-    fn name(&self) -> &str {
-        "look-ahead"
-    }
-
-    fn decide(&mut self, input: &PlanInput) -> Result<Decision, PlanError> {
+    /// Searches the trees `build(depth)` makes: the full depth when there is no deadline, else
+    /// iterative deepening where the deepest level completed before the deadline decides.
+    fn run<M: CostModel>(&self, build: impl Fn(usize) -> Result<Tree<M>, PlanError>) -> Result<Decision, PlanError> {
         let requested = self.cfg.look_ahead + 1;
-        let full = self.tree(input, requested)?;
-        let search = |tree: &Tree, shared: &Shared| match self.cfg.search.algorithm {
+        let full = build(requested)?;
+        let search = |tree: &Tree<M>, shared: &Shared| match self.cfg.search.algorithm {
             Algorithm::BruteForce => Some(brute::brute_force(tree)),
             Algorithm::BranchAndBound => branch_and_bound(tree, self.cfg.search.parallel, shared),
         };
@@ -304,12 +359,11 @@ impl Planner for LookAheadPlanner {
             let out = search(&full, &Shared::new(None)).expect("no deadline, no abort");
             return Ok(self.decision(&full, out, requested));
         };
-        // Anytime: iterative deepening; the deepest level completed before the deadline decides.
         let deadline = Instant::now() + budget;
         let mut best: Option<Decision> = None;
         let mut nodes = 0;
         for depth in 1..=full.depth {
-            let tree = self.tree(input, depth)?;
+            let tree = build(depth)?;
             match search(&tree, &Shared::new(Some(deadline))) {
                 Some(out) => {
                     nodes += out.nodes;
@@ -319,5 +373,18 @@ impl Planner for LookAheadPlanner {
             }
         }
         best.ok_or(PlanError::Deadline)
+    }
+}
+
+impl Planner for LookAheadPlanner {
+    fn name(&self) -> &str {
+        "look-ahead"
+    }
+
+    fn decide(&mut self, input: &PlanInput) -> Result<Decision, PlanError> {
+        match self.cfg.cost {
+            CostSpec::Hudson => self.run(|depth| self.hudson_tree(input, depth)),
+            CostSpec::Estimator(spec) => self.run(|depth| self.estimator_tree(spec, input, depth)),
+        }
     }
 }

@@ -1,35 +1,38 @@
 //! The production search: depth-first branch-and-bound over the look-ahead tree with
-//! preallocated per-level buffers, children visited cheapest first, and rayon over the top two
-//! levels. It returns exactly the brute-force decision and minimum path cost:
+//! preallocated per-level buffers, children visited cheapest first, and a parallel mode over the
+//! top two levels. It returns exactly the brute-force decision and minimum path cost:
 //! - a subtree is cut only when its lower bound (path so far + a bound on the levels below: the
-//!   per-level floor, then the node's geometric bound) is strictly greater than the best complete
+//!   per-level floor, then the node's own bound) is strictly greater than the best complete
 //!   path known, so no minimum-cost path is ever cut;
-//! - ties between equal minima go to the lowest level-0 option index, and parallel tasks are
-//!   merged in index order, so the result does not depend on thread timing.
+//! - ties between equal minima go to the lowest level-0 option index, and parallel results are
+//!   merged by (value, option), so the result does not depend on thread timing.
 //!
+//! The parallel mode orders the (level-0, level-1) subtrees by their lower bound, searches the
+//! most promising one first on the calling thread to get a tight bound, then lets every worker
+//! pull the remaining subtrees in that order, skipping those the bound already excludes.
 //! Only the node count varies with the thread count.
 
+use crate::cost_model::CostModel;
 use crate::tree::{NodeRef, Tree};
 use crate::SearchOutcome;
 use rayon::prelude::*;
-use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicU64, AtomicUsize, Ordering};
 use std::time::Instant;
 
 /// Preallocated buffers for the children of one level.
-struct Level {
-    eps2: Vec<f64>,
-    los: Vec<[f64; 3]>,
+struct Level<S> {
+    state: Vec<S>,
     pose: Vec<crate::motion::FastPose>,
     cost: Vec<f64>,
     order: Vec<usize>,
 }
 
-fn levels(tree: &Tree) -> Vec<Level> {
+fn levels<M: CostModel>(tree: &Tree<M>) -> Vec<Level<M::State>> {
     let (m, n) = (tree.n_options(), tree.n);
+    let any_state = tree.root_state[0];
     (0..tree.depth)
         .map(|_| Level {
-            eps2: vec![0.0; m * n],
-            los: vec![[0.0; 3]; m * n],
+            state: vec![any_state; m * n],
             pose: vec![tree.root_pose; m],
             cost: vec![0.0; m],
             order: Vec::with_capacity(m),
@@ -37,7 +40,7 @@ fn levels(tree: &Tree) -> Vec<Level> {
         .collect()
 }
 
-/// Shared between tasks: the best complete path value (f64 bits; non-negative floats order like
+/// Shared between workers: the best complete path value (f64 bits; non-negative floats order like
 /// their bits), the abort flag and the deadline.
 pub(crate) struct Shared {
     best_bits: AtomicU64,
@@ -57,18 +60,22 @@ impl Shared {
     }
 }
 
-/// One task's search state.
+/// One worker's search state.
 struct Ctx<'s> {
     shared: &'s Shared,
     best: f64,
     best_root: usize,
+    /// The level-0 option of the subtree being searched.
     root: usize,
     nodes: u64,
-    /// Searches entered since the clock was last read (starts at 255: each task reads it first).
+    /// Searches entered since the clock was last read (starts at 255: each worker reads it first).
     since_clock: u32,
 }
 
-impl Ctx<'_> {
+impl<'s> Ctx<'s> {
+    fn new(shared: &'s Shared) -> Self {
+        Ctx { shared, best: f64::INFINITY, best_root: usize::MAX, root: usize::MAX, nodes: 0, since_clock: 255 }
+    }
     fn bound(&self) -> f64 {
         self.best.min(self.shared.bound())
     }
@@ -92,14 +99,23 @@ impl Ctx<'_> {
         }
         self.shared.abort.load(Ordering::Relaxed)
     }
+    fn outcome(&self) -> SearchOutcome {
+        SearchOutcome { root_option: self.best_root, value: self.best, nodes: self.nodes }
+    }
 }
 
 /// Expands every child of `parent` into `lv` (level `level`) and sorts them cheapest first.
-fn expand_all(tree: &Tree, level: usize, parent: &NodeRef, lv: &mut Level, ctx: &mut Ctx) {
+fn expand_all<M: CostModel>(
+    tree: &Tree<M>,
+    level: usize,
+    parent: &NodeRef<M::State>,
+    lv: &mut Level<M::State>,
+    ctx: &mut Ctx,
+) {
     let n = tree.n;
     lv.order.clear();
     for &o in tree.level_options(level) {
-        let (p, c) = tree.expand(level, parent, o, &mut lv.eps2[o * n..(o + 1) * n], &mut lv.los[o * n..(o + 1) * n]);
+        let (p, c) = tree.expand(level, parent, o, &mut lv.state[o * n..(o + 1) * n]);
         lv.pose[o] = p;
         lv.cost[o] = c;
         lv.order.push(o);
@@ -110,108 +126,150 @@ fn expand_all(tree: &Tree, level: usize, parent: &NodeRef, lv: &mut Level, ctx: 
     lv.order.sort_by(|&a, &b| cost[a].total_cmp(&cost[b]));
 }
 
+/// A node at `level` with path cost `v`: a leaf on the last level, else searched below unless its
+/// bound is beaten.
+fn visit<M: CostModel>(
+    tree: &Tree<M>,
+    level: usize,
+    node: &NodeRef<M::State>,
+    v: f64,
+    deeper: &mut [Level<M::State>],
+    ctx: &mut Ctx,
+) {
+    if level + 1 == tree.depth {
+        ctx.leaf(v);
+    } else if v + tree.rest_bound(level, node) <= ctx.bound() {
+        dfs(tree, level + 1, node, v, deeper, ctx);
+    }
+}
+
 /// Searches below `parent` (at level − 1) with path cost `acc` so far.
-fn dfs(tree: &Tree, level: usize, parent: &NodeRef, acc: f64, levels: &mut [Level], ctx: &mut Ctx) {
+fn dfs<M: CostModel>(
+    tree: &Tree<M>,
+    level: usize,
+    parent: &NodeRef<M::State>,
+    acc: f64,
+    levels: &mut [Level<M::State>],
+    ctx: &mut Ctx,
+) {
     if ctx.out_of_time() {
         return;
     }
     let (lv, deeper) = levels.split_first_mut().expect("one buffer per level");
     expand_all(tree, level, parent, lv, ctx);
-    let last = level + 1 == tree.depth;
     let n = tree.n;
     for i in 0..lv.order.len() {
         let o = lv.order[i];
+        if level == 0 {
+            ctx.root = o;
+        }
         let v = acc + lv.cost[o];
         if v + tree.rest_floor[level] > ctx.bound() {
             break; // children are sorted: every later one is cut too
         }
-        if last {
-            ctx.leaf(v);
-        } else {
-            let child =
-                NodeRef { pose: lv.pose[o], eps2: &lv.eps2[o * n..(o + 1) * n], los: &lv.los[o * n..(o + 1) * n] };
-            if v + tree.rest_bound(level, &child) <= ctx.bound() {
-                dfs(tree, level + 1, &child, v, deeper, ctx);
-            }
-        }
+        let child = NodeRef { pose: lv.pose[o], state: &lv.state[o * n..(o + 1) * n] };
+        visit(tree, level, &child, v, deeper, ctx);
     }
 }
 
 /// Runs the search at the tree's full depth. `None` when the deadline stopped it.
-pub(crate) fn branch_and_bound(tree: &Tree, parallel: bool, shared: &Shared) -> Option<SearchOutcome> {
-    let out = if parallel && tree.depth >= 2 { parallel_search(tree, shared) } else { sequential(tree, shared) };
+pub(crate) fn branch_and_bound<M: CostModel>(tree: &Tree<M>, parallel: bool, shared: &Shared) -> Option<SearchOutcome> {
+    let out = if parallel && tree.depth >= 2 {
+        parallel_search(tree, shared)
+    } else {
+        let mut ctx = Ctx::new(shared);
+        dfs(tree, 0, &tree.root(), 0.0, &mut levels(tree), &mut ctx);
+        ctx.outcome()
+    };
     (!shared.abort.load(Ordering::Relaxed)).then_some(out)
 }
 
-fn sequential(tree: &Tree, shared: &Shared) -> SearchOutcome {
-    let mut lv = levels(tree);
-    let mut ctx =
-        Ctx { shared, best: f64::INFINITY, best_root: usize::MAX, root: usize::MAX, nodes: 0, since_clock: 255 };
-    let (top, deeper) = lv.split_first_mut().expect("depth >= 1");
-    expand_all(tree, 0, &tree.root(), top, &mut ctx);
-    let n = tree.n;
-    for i in 0..top.order.len() {
-        let o = top.order[i];
-        ctx.root = o;
-        let v = top.cost[o];
-        if v + tree.rest_floor[0] > ctx.bound() {
-            break;
-        }
-        if tree.depth == 1 {
-            ctx.leaf(v);
-        } else {
-            let child =
-                NodeRef { pose: top.pose[o], eps2: &top.eps2[o * n..(o + 1) * n], los: &top.los[o * n..(o + 1) * n] };
-            if v + tree.rest_bound(0, &child) <= ctx.bound() {
-                dfs(tree, 1, &child, v, deeper, &mut ctx);
-            }
-        }
-    }
-    SearchOutcome { root_option: ctx.best_root, value: ctx.best, nodes: ctx.nodes }
+/// A (level-0, level-1) subtree of the parallel search, with its path cost and lower bound.
+struct Subtree {
+    root: usize,
+    child: usize,
+    cost: f64,
+    bound: f64,
 }
 
-/// Rayon over (level-0, level-1) pairs; each task owns its buffers; results merged in index order.
-fn parallel_search(tree: &Tree, shared: &Shared) -> SearchOutcome {
+/// The (level-0, level-1) subtrees, most promising (lowest bound) first.
+fn subtrees<M: CostModel>(tree: &Tree<M>, top: &Level<M::State>) -> Vec<Subtree> {
     let n = tree.n;
-    let mut root_eps2 = vec![0.0; tree.n_options() * n];
-    let mut root_los = vec![[0.0; 3]; tree.n_options() * n];
-    let mut roots = Vec::new();
-    for &o in &tree.root_options {
-        let (p, c) =
-            tree.expand(0, &tree.root(), o, &mut root_eps2[o * n..(o + 1) * n], &mut root_los[o * n..(o + 1) * n]);
-        roots.push((o, p, c));
-    }
-    let tasks: Vec<(usize, usize)> =
-        (0..roots.len()).flat_map(|r| tree.all_options.iter().map(move |&c| (r, c))).collect();
-    let results: Vec<(f64, usize, u64)> = tasks
+    let mut all: Vec<Subtree> = tree
+        .root_options
         .par_iter()
-        .map_init(
-            || (levels(tree), vec![0.0; n], vec![[0.0; 3]; n]),
-            |(lv, e2, los), &(r, c)| {
-                let (o, pose, c0) = roots[r];
-                let mut ctx =
-                    Ctx { shared, best: f64::INFINITY, best_root: usize::MAX, root: o, nodes: 1, since_clock: 255 };
-                let parent = NodeRef { pose, eps2: &root_eps2[o * n..(o + 1) * n], los: &root_los[o * n..(o + 1) * n] };
-                let (p1, c1) = tree.expand(1, &parent, c, e2, los);
-                let v = c0 + c1;
-                if tree.depth == 2 {
-                    ctx.leaf(v);
-                } else {
-                    let child = NodeRef { pose: p1, eps2: e2, los };
-                    if v + tree.rest_bound(1, &child) <= ctx.bound() {
-                        dfs(tree, 2, &child, v, &mut lv[2..], &mut ctx);
-                    }
-                }
-                (ctx.best, ctx.best_root, ctx.nodes)
-            },
-        )
+        .flat_map_iter(|&r| {
+            let parent = NodeRef { pose: top.pose[r], state: &top.state[r * n..(r + 1) * n] };
+            let mut out = vec![tree.root_state[0]; n];
+            tree.all_options
+                .iter()
+                .map(|&c| {
+                    let (pose, c1) = tree.expand(1, &parent, c, &mut out);
+                    let cost = top.cost[r] + c1;
+                    let below = if tree.depth > 2 { tree.rest_bound(1, &NodeRef { pose, state: &out }) } else { 0.0 };
+                    Subtree { root: r, child: c, cost, bound: cost + below }
+                })
+                .collect::<Vec<_>>()
+        })
         .collect();
-    let mut out = SearchOutcome { root_option: usize::MAX, value: f64::INFINITY, nodes: roots.len() as u64 };
-    for (v, root, nodes) in results {
-        out.nodes += nodes;
-        if v < out.value || (v == out.value && root < out.root_option) {
-            out.value = v;
-            out.root_option = root;
+    all.sort_by(|a, b| a.bound.total_cmp(&b.bound).then(a.root.cmp(&b.root)).then(a.child.cmp(&b.child)));
+    all
+}
+
+/// Searches one (level-0, level-1) subtree; `below_top` holds the buffers of levels 1, 2, ….
+fn search_subtree<M: CostModel>(
+    tree: &Tree<M>,
+    top: &Level<M::State>,
+    task: &Subtree,
+    below_top: &mut [Level<M::State>],
+    ctx: &mut Ctx,
+) {
+    if task.bound > ctx.bound() || ctx.out_of_time() {
+        return;
+    }
+    let n = tree.n;
+    ctx.root = task.root;
+    let parent = NodeRef { pose: top.pose[task.root], state: &top.state[task.root * n..(task.root + 1) * n] };
+    let (level1, deeper) = below_top.split_first_mut().expect("depth >= 2");
+    let buf = &mut level1.state[..n];
+    let (pose, _) = tree.expand(1, &parent, task.child, buf);
+    visit(tree, 1, &NodeRef { pose, state: buf }, task.cost, deeper, ctx);
+}
+
+/// Subtrees ordered by bound; the first searched alone for a tight bound, the rest pulled in order
+/// by one worker per rayon thread; results merged by (value, level-0 option).
+fn parallel_search<M: CostModel>(tree: &Tree<M>, shared: &Shared) -> SearchOutcome {
+    let mut first = Ctx::new(shared);
+    let mut lv = levels(tree);
+    let (top_slot, rest) = lv.split_first_mut().expect("depth >= 2");
+    expand_all(tree, 0, &tree.root(), top_slot, &mut first);
+    let top = &*top_slot;
+    let tasks = subtrees(tree, top);
+    first.nodes += tasks.len() as u64;
+    search_subtree(tree, top, &tasks[0], rest, &mut first);
+    let next = AtomicUsize::new(1);
+    let workers = rayon::current_num_threads().max(1);
+    let results: Vec<SearchOutcome> = (0..workers)
+        .into_par_iter()
+        .map(|_| {
+            let mut ctx = Ctx::new(shared);
+            let mut lv = levels(tree);
+            loop {
+                let i = next.fetch_add(1, Ordering::Relaxed);
+                if i >= tasks.len() || shared.abort.load(Ordering::Relaxed) {
+                    break;
+                }
+                search_subtree(tree, top, &tasks[i], &mut lv[1..], &mut ctx);
+            }
+            ctx.outcome()
+        })
+        .collect();
+    let mut out = first.outcome();
+    for r in results {
+        out.nodes += r.nodes;
+        if r.value < out.value || (r.value == out.value && r.root_option < out.root_option) {
+            out.value = r.value;
+            out.root_option = r.root_option;
         }
     }
     out

@@ -1,4 +1,5 @@
-//! Search tests: the production search against the brute-force reference, greedy identity,
+//! Search tests: the production search against the brute-force reference (both cost models),
+//! the estimator-aware cost against a hand-written EKF update, greedy identity,
 //! leaf counts, determinism across thread counts, the deadline, and the distance penalty's
 //! effect over a whole mission.
 
@@ -14,6 +15,19 @@ struct Instance {
     starts: Vec<Vec3>,
     vels: Vec<Vec3>,
     eps: Vec<f64>,
+    /// Filter covariances for the estimator-aware cost.
+    estimates: Vec<AuvEstimate>,
+    /// Range (m) where the test link's success probability falls to one half.
+    link_mid: f64,
+}
+
+/// A link whose success falls smoothly with range: 1 / (1 + (r / mid)^4).
+struct FallingLink(f64);
+
+impl LinkModel for FallingLink {
+    fn success(&self, r: f64) -> f64 {
+        1.0 / (1.0 + (r / self.0).powi(4))
+    }
 }
 
 impl Instance {
@@ -24,9 +38,10 @@ impl Instance {
         FnForecast { n: self.starts.len(), f: move |k: usize, t: f64| Some(self.starts[k] + self.vels[k] * t) }
     }
     fn decide(&self, search: SearchConfig) -> Decision {
-        let mut p = LookAheadPlanner::new(PlannerConfig { search, ..self.cfg }).unwrap();
+        let mut p =
+            LookAheadPlanner::with_link(PlannerConfig { search, ..self.cfg }, &FallingLink(self.link_mid)).unwrap();
         let (e, f) = (self.errors(), self.forecast());
-        p.decide(&PlanInput { t: 0.0, cna: self.cna, errors: &e, forecast: &f }).unwrap()
+        p.decide(&PlanInput { t: 0.0, cna: self.cna, errors: &e, estimates: &self.estimates, forecast: &f }).unwrap()
     }
 }
 
@@ -45,6 +60,7 @@ fn asc(a: usize, l: usize, case: PenaltyCase) -> PlannerConfig {
             cna: CnaKind::Asc {},
         },
         error: ErrorModel::default(),
+        cost: CostSpec::Hudson,
         limits: DistanceLimits::default(),
         penalties: case.penalties(),
         search: exact(Algorithm::BranchAndBound, false),
@@ -55,7 +71,10 @@ prop_compose! {
     fn instance()(n in 1usize..=5, a in 2usize..=7, b in 1usize..=4, l in 0usize..=4, auv_cna in any::<bool>(),
                   case in 0usize..21, speed in 0.5f64..4.0, heading in -3.1f64..3.1, cna_z in 0.0f64..100.0,
                   seeds in prop::collection::vec((-1500.0f64..1500.0, -1500.0f64..1500.0, 0.0f64..120.0, -3.1f64..3.1, 0.5f64..3.0), 5),
-                  slant in any::<bool>(), tangential in any::<bool>()) -> Instance {
+                  slant in any::<bool>(), tangential in any::<bool>(),
+                  covs in prop::collection::vec((0.1f64..30.0, 0.1f64..30.0, -0.95f64..0.95, 0.0f64..0.2), 5),
+                  estimator in any::<bool>(), aggregate in 0usize..3, sigma_m in 0.05f64..3.0, per_km_m in 0.0f64..5.0,
+                  link_mid in 300.0f64..3000.0) -> Instance {
         let cna = if auv_cna { CnaKind::auv(b) } else { CnaKind::Asc {} };
         let m = a * if auv_cna { b } else { 1 };
         // Keep the brute force affordable: at most ~20k leaves.
@@ -70,7 +89,12 @@ prop_compose! {
         let starts = seeds[..n].iter().map(|s| Vec3::new(s.0, s.1, s.2)).collect();
         let vels = seeds[..n].iter().map(|s| Vec3::new(1.5 * s.3.cos(), 1.5 * s.3.sin(), 0.0)).collect();
         let eps = seeds[..n].iter().map(|s| s.4).collect();
-        Instance { cfg, cna: CnaPose { pos: Vec3::new(0.0, 0.0, z), heading: Heading::from_radians(heading), pitch: 0.0 }, starts, vels, eps }
+        let estimates = covs[..n].iter().map(|&(ve, vn, rho, q)| AuvEstimate { cov: [ve, rho * (ve * vn).sqrt(), vn], process_noise: q }).collect();
+        if estimator {
+            let aggregate = [Aggregate::TraceSum, Aggregate::WorstAuv, Aggregate::LogDet][aggregate];
+            cfg.cost = CostSpec::Estimator(EstimatorSpec { aggregate, range_noise: RangeNoise { sigma_m, per_km_m } });
+        }
+        Instance { cfg, cna: CnaPose { pos: Vec3::new(0.0, 0.0, z), heading: Heading::from_radians(heading), pitch: 0.0 }, starts, vels, eps, estimates, link_mid }
     }
 }
 
@@ -108,6 +132,8 @@ fn instance_fixed(cfg: PlannerConfig) -> Instance {
         starts: vec![Vec3::new(0.0, 0.0, 90.0), Vec3::new(500.0, 0.0, 70.0)],
         vels: vec![Vec3::new(0.0, 1.5, 0.0), Vec3::new(0.0, 1.5, 0.0)],
         eps: vec![1.0, 1.0],
+        estimates: vec![AuvEstimate { cov: [4.0, 1.0, 2.0], process_noise: 0.05 }; 2],
+        link_mid: 1200.0,
     }
 }
 
@@ -173,7 +199,7 @@ fn deadline_returns_the_deepest_completed_level() {
         };
         let mut p = LookAheadPlanner::new(PlannerConfig { search, ..inst.cfg }).unwrap();
         let (e, f) = (inst.errors(), inst.forecast());
-        match p.decide(&PlanInput { t: 0.0, cna: inst.cna, errors: &e, forecast: &f }) {
+        match p.decide(&PlanInput { t: 0.0, cna: inst.cna, errors: &e, estimates: &[], forecast: &f }) {
             Ok(d) => assert!(d.levels_searched >= 1 && d.levels_searched < 13, "A={a}: {}", d.levels_searched),
             Err(e) => assert_eq!(e, PlanError::Deadline),
         }
@@ -186,9 +212,9 @@ fn horizon_is_truncated_at_the_end_of_data() {
     let f = FnForecast { n: 2, f: |k: usize, t: f64| (t <= 20.0).then(|| inst.starts[k] + inst.vels[k] * t) };
     let mut p = LookAheadPlanner::new(inst.cfg).unwrap();
     let e = inst.errors();
-    let d = p.decide(&PlanInput { t: 0.0, cna: inst.cna, errors: &e, forecast: &f }).unwrap();
+    let d = p.decide(&PlanInput { t: 0.0, cna: inst.cna, errors: &e, estimates: &[], forecast: &f }).unwrap();
     assert_eq!((d.levels_requested, d.levels_searched), (6, 2));
-    let err = p.decide(&PlanInput { t: 20.0, cna: inst.cna, errors: &e, forecast: &f }).unwrap_err();
+    let err = p.decide(&PlanInput { t: 20.0, cna: inst.cna, errors: &e, estimates: &[], forecast: &f }).unwrap_err();
     assert!(matches!(err, PlanError::NoForecast { .. }));
 }
 
@@ -208,7 +234,7 @@ fn fly(case: PenaltyCase, gap: f64, steps: usize) -> Vec<f64> {
     let mut dist = Vec::new();
     for s in 0..steps {
         let t = s as f64 * cfg.motion.tau;
-        let d = p.decide(&PlanInput { t, cna, errors: &errs, forecast: &f }).unwrap();
+        let d = p.decide(&PlanInput { t, cna, errors: &errs, estimates: &[], forecast: &f }).unwrap();
         cna = d.next;
         let a = auv(t + cfg.motion.tau);
         errs[0] =

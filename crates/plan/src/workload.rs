@@ -3,11 +3,13 @@
 //! metres apart (500 m in Sec. 5.2; 100 m for the Sec. 5.3 canonical geometry) heading north at
 //! 1.5 m/s at 90 m depth, the CNA starting at (140, 0, 0) heading east,
 //! τ = 10 s, s = 1.5 m/s, penalty case 1. Invented where the thesis is silent (digest A17, A18).
+//! Under the estimator-aware cost every AUV starts with P = 1 m²·I and q = α/2 per axis (the
+//! same trace growth as Hudson's α), over a perfect link.
 
 use crate::planner::Algorithm;
 use crate::{
-    AuvError, CnaKind, CnaPose, Deadline, Decision, DistanceLimits, ErrorModel, FnForecast, LookAheadPlanner,
-    MotionConfig, PenaltyCase, PlanError, PlanInput, Planner, PlannerConfig, SearchConfig,
+    AuvError, AuvEstimate, CnaKind, CnaPose, CostSpec, Deadline, Decision, DistanceLimits, ErrorModel, FnForecast,
+    LookAheadPlanner, MotionConfig, PenaltyCase, PlanError, PlanInput, Planner, PlannerConfig, SearchConfig,
 };
 use coopnav_core::{Heading, Vec3};
 use serde::Serialize;
@@ -21,6 +23,7 @@ pub struct Workload {
     pub l: usize,
     /// East–west gap between neighbouring AUVs, m.
     pub gap: f64,
+    pub cost: CostSpec,
 }
 
 impl Workload {
@@ -35,6 +38,7 @@ impl Workload {
                 cna: if self.b > 1 { CnaKind::auv(self.b) } else { CnaKind::Asc {} },
             },
             error: ErrorModel::default(),
+            cost: self.cost,
             limits: DistanceLimits::default(),
             penalties: PenaltyCase::C1.penalties(),
             search: SearchConfig { algorithm, parallel, deadline: Deadline::None },
@@ -53,7 +57,10 @@ impl Workload {
         let auv = move |k: usize, t: f64| Vec3::new(gap * k as f64 + 50.0, 1.5 * t, 90.0);
         let cna = CnaPose { pos: Vec3::new(140.0, 0.0, 0.0), heading: Heading::from_radians(0.0), pitch: 0.0 };
         let errors: Vec<AuvError> = (0..self.n).map(|k| cfg.error.initial(1.0, 1.0, &cna.pos, &auv(k, 0.0))).collect();
+        let estimate = AuvEstimate { cov: [1.0, 0.0, 1.0], process_noise: 0.5 * cfg.error.alpha };
+        let estimates = vec![estimate; self.n];
         let forecast = FnForecast { n: self.n, f: move |k: usize, t: f64| Some(auv(k, t)) };
-        LookAheadPlanner::new(cfg)?.decide(&PlanInput { t: 0.0, cna, errors: &errors, forecast: &forecast })
+        let input = PlanInput { t: 0.0, cna, errors: &errors, estimates: &estimates, forecast: &forecast };
+        LookAheadPlanner::new(cfg)?.decide(&input)
     }
 }

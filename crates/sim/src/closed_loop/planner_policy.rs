@@ -2,11 +2,16 @@
 //! §3.3, A13–A16): it keeps its own modelled error state per survey AUV (eq. 1, stepped at every
 //! ping from the CNA's pose and the AUV's *predicted* position), plans over the AUVs the CNA has
 //! heard from, and records the decisions' deadline misses and the tree levels reached.
+//! Under the estimator-aware cost it also keeps a model of each AUV's filter covariance
+//! ([`CovarianceTracker`]), stepped by the same expected EKF update the planner scores with.
 
 use crate::policy::{CnaCommand, CnaPolicy, PolicyContext};
 use coopnav_core::Vec3;
 use coopnav_plan::Planner as _;
-use coopnav_plan::{AuvError, AuvForecast, ErrorModel, LookAheadPlanner, PlanError, PlanInput, PlannerConfig};
+use coopnav_plan::{
+    expected_posterior, AuvError, AuvEstimate, AuvForecast, CostSpec, ErrorModel, LinkModel, LookAheadPlanner,
+    PlanError, PlanInput, PlannerConfig, RangeNoise,
+};
 use serde::Serialize;
 
 /// The planner's error model (eq. 1) tracked per AUV between decisions.
@@ -58,6 +63,48 @@ impl ErrorTracker {
     }
 }
 
+/// The CNA's model of each survey AUV's horizontal filter covariance: it starts at the filter's
+/// initial covariance when the AUV is first pinged, grows by q·τ per axis each period and takes
+/// the expected range update of each ping (`coopnav_plan::expected_posterior`).
+#[derive(Debug, Clone)]
+pub struct CovarianceTracker {
+    start: AuvEstimate,
+    tau: f64,
+    noise: RangeNoise,
+    covs: Vec<Option<[f64; 3]>>,
+}
+
+impl CovarianceTracker {
+    pub fn new(n: usize, start: AuvEstimate, tau: f64, noise: RangeNoise) -> Self {
+        CovarianceTracker { start, tau, noise, covs: vec![None; n] }
+    }
+
+    /// A ping from `cna` at AUV `k` (at `auv`), received with probability `p_received`.
+    pub fn ping(&mut self, k: usize, cna: &Vec3, auv: &Vec3, p_received: f64) {
+        let q_tau = self.start.process_noise * self.tau;
+        self.covs[k] = Some(match self.covs[k] {
+            None => self.start.cov,
+            Some(prev) => {
+                let p = p_received.clamp(0.0, 1.0);
+                expected_posterior(&prev, q_tau, [cna.x, cna.y, cna.z], [auv.x, auv.y, auv.z], &self.noise, |_| p)
+            }
+        });
+    }
+
+    /// No ping this period: the covariance grows by q·τ per axis.
+    pub fn silent(&mut self, k: usize) {
+        let q_tau = self.start.process_noise * self.tau;
+        if let Some(c) = self.covs[k].as_mut() {
+            c[0] += q_tau;
+            c[2] += q_tau;
+        }
+    }
+
+    pub fn estimate(&self, k: usize) -> Option<AuvEstimate> {
+        self.covs[k].map(|cov| AuvEstimate { cov, process_noise: self.start.process_noise })
+    }
+}
+
 /// How the planner's decisions went.
 #[derive(Debug, Clone, Default, PartialEq, Serialize)]
 pub struct PlannerStats {
@@ -77,10 +124,21 @@ pub struct PlannerStats {
 /// The success likelihood the planner assumes for a ping over a given slant distance.
 pub type PingLikelihood = Box<dyn Fn(f64) -> f64 + Send>;
 
+/// The ping likelihood as the planner's link model.
+struct LikelihoodLink<'a>(&'a PingLikelihood);
+
+impl LinkModel for LikelihoodLink<'_> {
+    fn success(&self, slant_range_m: f64) -> f64 {
+        (self.0)(slant_range_m).clamp(0.0, 1.0)
+    }
+}
+
 /// The underway look-ahead planner behind [`CnaPolicy`].
 pub struct PlannerPolicy {
     planner: LookAheadPlanner,
     tracker: ErrorTracker,
+    /// The filters' covariances, under the estimator-aware cost only.
+    covariances: Option<CovarianceTracker>,
     lost_pings: Option<PingLikelihood>,
     stats: PlannerStats,
     levels_total: u64,
@@ -103,20 +161,37 @@ impl AuvForecast for Known<'_> {
 
 impl PlannerPolicy {
     /// `n` survey AUVs; `lost_pings` = Some(likelihood) models lost pings, None is the thesis.
+    /// `filters` (the AUVs' initial covariance and process noise, and the range noise they
+    /// assume) is required by the estimator-aware cost and ignored by Hudson's.
     pub fn new(
         cfg: PlannerConfig,
         n: usize,
         sigma0: f64,
         eps0: f64,
         lost_pings: Option<PingLikelihood>,
+        filters: Option<(AuvEstimate, RangeNoise)>,
     ) -> Result<Self, PlanError> {
         let tracker = ErrorTracker::new(n, cfg.error, cfg.motion.tau, sigma0, eps0);
+        let covariances = match (cfg.cost, filters) {
+            (CostSpec::Hudson, _) => None,
+            (CostSpec::Estimator(_), Some((start, noise))) => {
+                Some(CovarianceTracker::new(n, start, cfg.motion.tau, noise))
+            }
+            (CostSpec::Estimator(_), None) => {
+                return Err(PlanError::Input("the estimator-aware cost needs the AUVs' filter settings".into()))
+            }
+        };
         let stats = PlannerStats {
             levels_requested: cfg.look_ahead + 1,
             min_levels_searched: usize::MAX,
             ..PlannerStats::default()
         };
-        Ok(PlannerPolicy { planner: LookAheadPlanner::new(cfg)?, tracker, lost_pings, stats, levels_total: 0 })
+        // Only the estimator-aware cost reads the link (sampling it costs a few thousand calls).
+        let planner = match (&lost_pings, cfg.cost) {
+            (Some(f), CostSpec::Estimator(_)) => LookAheadPlanner::with_link(cfg, &LikelihoodLink(f))?,
+            _ => LookAheadPlanner::new(cfg)?,
+        };
+        Ok(PlannerPolicy { planner, tracker, covariances, lost_pings, stats, levels_total: 0 })
     }
 
     pub fn stats(&self) -> PlannerStats {
@@ -136,7 +211,11 @@ impl PlannerPolicy {
 
 impl CnaPolicy for PlannerPolicy {
     fn name(&self) -> &'static str {
-        "planner"
+        if self.covariances.is_some() {
+            "planner-estimator"
+        } else {
+            "planner"
+        }
     }
 
     /// Called right after the CNA's broadcast at `ctx.t`: first the broadcast's effect on the
@@ -150,9 +229,17 @@ impl CnaPolicy for PlannerPolicy {
                 Some(p) => {
                     let likelihood = self.lost_pings.as_ref().map_or(1.0, |f| f((p - ctx.cna.pos).norm()));
                     self.tracker.ping(k, &ctx.cna.pos, &p, likelihood);
+                    if let Some(c) = self.covariances.as_mut() {
+                        c.ping(k, &ctx.cna.pos, &p, likelihood);
+                    }
                     known.push(k);
                 }
-                None => self.tracker.silent(k),
+                None => {
+                    self.tracker.silent(k);
+                    if let Some(c) = self.covariances.as_mut() {
+                        c.silent(k);
+                    }
+                }
             }
         }
         if known.is_empty() {
@@ -160,8 +247,16 @@ impl CnaPolicy for PlannerPolicy {
             return CnaCommand::Hold;
         }
         let errors: Vec<AuvError> = known.iter().filter_map(|&k| self.tracker.error(k).copied()).collect();
+        let estimates: Vec<AuvEstimate> =
+            self.covariances.as_ref().map_or(Vec::new(), |c| known.iter().filter_map(|&k| c.estimate(k)).collect());
         let forecast = Known { inner: ctx.fleet, index: &known };
-        match self.planner.decide(&PlanInput { t: ctx.t, cna: ctx.cna, errors: &errors, forecast: &forecast }) {
+        match self.planner.decide(&PlanInput {
+            t: ctx.t,
+            cna: ctx.cna,
+            errors: &errors,
+            estimates: &estimates,
+            forecast: &forecast,
+        }) {
             Ok(d) => {
                 if d.levels_searched < d.levels_requested {
                     self.stats.deadline_misses += 1;
@@ -198,6 +293,7 @@ mod tests {
                 cna: CnaKind::Asc {},
             },
             error: ErrorModel::default(),
+            cost: coopnav_plan::CostSpec::Hudson,
             limits: DistanceLimits::default(),
             penalties: PenaltyCase::C1.penalties(),
             search: SearchConfig { deadline: Deadline::None, parallel: false, ..SearchConfig::default() },
@@ -206,7 +302,7 @@ mod tests {
 
     #[test]
     fn plans_over_known_auvs_and_tracks_their_errors() {
-        let mut p = PlannerPolicy::new(cfg(), 2, 1.0, 1.0, None).unwrap();
+        let mut p = PlannerPolicy::new(cfg(), 2, 1.0, 1.0, None, None).unwrap();
         // AUV 1 never heard from: the planner still plans for AUV 0.
         let fleet = FnForecast { n: 2, f: |k: usize, t: f64| (k == 0).then(|| Vec3::new(300.0, 1.5 * t, 20.0)) };
         let cna = CnaPose { pos: Vec3::new(0.0, 0.0, 0.0), heading: Heading::from_radians(0.0), pitch: 0.0 };
@@ -235,5 +331,31 @@ mod tests {
         silent.ping(0, &c, &a, 1.0);
         silent.silent(0);
         assert!((silent.error(0).unwrap().eps2 - (1.0 + 3.0)).abs() < 1e-12);
+    }
+
+    #[test]
+    fn the_estimator_planner_tracks_covariances_and_needs_the_filter_settings() {
+        let est = PlannerConfig { cost: CostSpec::Estimator(coopnav_plan::EstimatorSpec::default()), ..cfg() };
+        assert!(PlannerPolicy::new(est, 2, 1.0, 1.0, None, None).is_err());
+        let start = AuvEstimate { cov: [16.0, 0.0, 16.0], process_noise: 0.1 };
+        let mut p = PlannerPolicy::new(est, 2, 1.0, 1.0, None, Some((start, RangeNoise::default()))).unwrap();
+        assert_eq!(p.name(), "planner-estimator");
+        let fleet = FnForecast { n: 2, f: |k: usize, t: f64| Some(Vec3::new(300.0 + 200.0 * k as f64, 1.5 * t, 20.0)) };
+        let cna = CnaPose { pos: Vec3::new(0.0, 0.0, 0.0), heading: Heading::from_radians(0.0), pitch: 0.0 };
+        for step in 0..4 {
+            let ctx = PolicyContext { t: 30.0 * step as f64, tau: 30.0, cna, speed: 2.0, fleet: &fleet };
+            assert!(matches!(p.decide(&ctx), CnaCommand::GoTo(_)));
+        }
+        // Three pings after the start: the radial variance collapses, the trace falls below 2·16.
+        let c = p.covariances.as_ref().unwrap().estimate(0).unwrap().cov;
+        assert!(c[0] + c[2] < 32.0, "{c:?}");
+        // A lost ping is pure growth: q·τ per axis.
+        let mut t = CovarianceTracker::new(1, start, 30.0, RangeNoise::default());
+        let (cna, auv) = (Vec3::zeros(), Vec3::new(100.0, 0.0, 0.0));
+        t.ping(0, &cna, &auv, 1.0);
+        t.ping(0, &cna, &auv, 0.0);
+        assert_eq!(t.estimate(0).unwrap().cov, [19.0, 0.0, 19.0]);
+        t.silent(0);
+        assert_eq!(t.estimate(0).unwrap().cov, [22.0, 0.0, 22.0]);
     }
 }

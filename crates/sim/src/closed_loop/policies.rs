@@ -8,12 +8,13 @@ use crate::predeploy::runner;
 use crate::predeploy::scenario::Mission;
 use coopnav_acomms::{Receiver, TransmissionLoss};
 use coopnav_core::{CompassDeg, Heading, Vec3};
-use coopnav_plan::{CnaPose, Deadline, LookAheadPlanner, PlanError};
+use coopnav_plan::{AuvEstimate, CnaPose, CostSpec, Deadline, EstimatorSpec, LookAheadPlanner, PlanError, RangeNoise};
 use thiserror::Error;
 
-/// Every policy name, the planner first.
-pub const POLICY_NAMES: [&str; 8] =
-    ["planner", "none", "racetrack", "zigzag", "centroid", "trail", "relay", "open-loop"];
+/// Every policy name, the planners first: `planner` scores with Hudson's model, `planner-estimator`
+/// with the survey AUVs' filter covariances (issue 10).
+pub const POLICY_NAMES: [&str; 9] =
+    ["planner", "planner-estimator", "none", "racetrack", "zigzag", "centroid", "trail", "relay", "open-loop"];
 
 #[derive(Debug, Error)]
 pub enum PolicyError {
@@ -102,13 +103,19 @@ fn build(name: &str, sc: &Scenario, planned: Option<&TimedWaypoints>) -> Result<
     let n = sc.fleet.n_auvs;
     let plan_err = |source| PolicyError::Plan { name: name.to_string(), source };
     let baseline: Box<dyn CnaPolicy> = match name {
-        "planner" => {
+        "planner" | "planner-estimator" => {
             let p = &sc.planner;
             let likelihood: Option<PingLikelihood> = p.model_lost_pings.then(|| {
                 let (tl, success, rate) = (sc.comms.tl, sc.comms.success.clone(), sc.comms.cna_rate);
                 Box::new(move |d: f64| success.p_success(rate, tl.at_distance(d))) as PingLikelihood
             });
-            let policy = PlannerPolicy::new(sc.planner_config(), n, p.sigma0, p.eps0, likelihood).map_err(plan_err)?;
+            let (start, noise) = filter_model(sc);
+            let mut cfg = sc.planner_config();
+            if name == "planner-estimator" {
+                cfg.cost = CostSpec::Estimator(EstimatorSpec { range_noise: noise, ..EstimatorSpec::default() });
+            }
+            let policy =
+                PlannerPolicy::new(cfg, n, p.sigma0, p.eps0, likelihood, Some((start, noise))).map_err(plan_err)?;
             return Ok(Policy::Planner(Box::new(policy)));
         }
         "none" => Box::new(NoCna),
@@ -124,6 +131,18 @@ fn build(name: &str, sc: &Scenario, planned: Option<&TimedWaypoints>) -> Result<
         _ => return Err(PolicyError::Unknown { name: name.to_string() }),
     };
     Ok(Policy::Baseline(baseline))
+}
+
+/// The survey AUVs' filter as the estimator-aware planner models it: the initial horizontal
+/// covariance and process noise per second (the filter's per-step Q over its step; the mean of
+/// east and north), and its range noise σ² = (c·σ_t)² + floor + (r·σ_c/c)² as σ₀ and k per km.
+fn filter_model(sc: &Scenario) -> (AuvEstimate, RangeNoise) {
+    let f = &sc.filter;
+    let q = 0.5 * (f.q[0] + f.q[1]) / f.step_s;
+    let n = &f.range_noise;
+    let sigma_m = ((n.sound_speed * n.sigma_time).powi(2) + n.floor).sqrt();
+    let per_km_m = 1000.0 * n.sigma_sound_speed / n.sound_speed;
+    (AuvEstimate { cov: [f.p0[0], 0.0, f.p0[1]], process_noise: q }, RangeNoise { sigma_m, per_km_m })
 }
 
 /// The pre-deployment plan on the nominal survey tracks (no current, no nav error), flown by time.

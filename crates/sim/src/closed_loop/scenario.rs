@@ -469,6 +469,7 @@ impl Scenario {
                 cna: self.cna.auv.as_ref().map_or(CnaKind::Asc {}, |a| CnaKind::auv(a.pitch_options)),
             },
             error: p.error,
+            cost: coopnav_plan::CostSpec::Hudson,
             limits: p.limits,
             penalties: PenaltyCase::from_id(&p.penalty_case).unwrap_or(PenaltyCase::C1).penalties(),
             search: SearchConfig { parallel: p.parallel, deadline: p.deadline, ..SearchConfig::default() },

@@ -59,6 +59,7 @@ fn planner(s: &Setup, tau: f64, case: PenaltyCase) -> PlannerConfig {
         look_ahead: s.l,
         motion: MotionConfig { speed: s.speed, tau, heading_options: s.a, max_turn_rate_deg_s: 4.0, cna: s.cna() },
         error: ErrorModel::default(),
+        cost: coopnav_plan::CostSpec::Hudson,
         limits: DistanceLimits::default(),
         penalties: case.penalties(),
         // Many runs go in parallel, so each decision searches on one thread; no deadline (offline).

@@ -228,6 +228,7 @@ impl Scenario {
             look_ahead: p.look_ahead,
             motion: p.motion,
             error: p.error,
+            cost: coopnav_plan::CostSpec::Hudson,
             limits: p.limits,
             penalties: self.penalties(file)?,
             search: p.search,

@@ -1,0 +1,108 @@
+//! The per-AUV cost models the tree search runs on, behind one small trait: how one survey AUV's
+//! error state moves through one look-ahead level (a τ step ending with a ping from the CNA's new
+//! pose), what that level costs, and a lower bound on the levels below a node (branch-and-bound).
+//!
+//! Two models: [`HudsonCost`], the isotropic tangential model of Hudson eq. (1) (`error_model`),
+//! and `estimator::EstimatorCost`, the survey AUVs' own EKF covariances.
+
+use crate::error_model::{tangential_update, ErrorModel};
+
+/// One per-AUV cost model. Implementations must make `bound_rest` and `level_floors` true lower
+/// bounds of what `update` produces along any path, or branch-and-bound stops being exact.
+pub(crate) trait CostModel: Sync {
+    /// One AUV's error state at a node.
+    type State: Copy + Send + Sync;
+
+    /// AUV `k`'s state after one level ending with a ping from `cna` to the AUV at `auv`, and
+    /// its cost term.
+    fn update(&self, k: usize, parent: &Self::State, cna: [f64; 3], auv: [f64; 3]) -> (Self::State, f64);
+
+    /// Joins one AUV's term into a level's raw cost (sum, or max for worst-AUV).
+    fn combine(&self, acc: f64, term: f64) -> f64;
+
+    /// Lower bounds on AUV `k`'s cost terms at each level below a node, combined into `out`
+    /// (`out[i]` is the i-th level below). The node has the CNA at `cna` and the AUV at `auv`;
+    /// `reach` yields, per level below, how far the CNA–AUV line of sight can move in that level.
+    fn bound_rest(
+        &self,
+        k: usize,
+        state: &Self::State,
+        cna: [f64; 3],
+        auv: [f64; 3],
+        reach: impl Iterator<Item = f64>,
+        out: &mut [f64],
+    );
+
+    /// Path-independent lower bounds on the raw cost of each level 0..depth from the root states.
+    fn level_floors(&self, root: &[Self::State], depth: usize) -> Vec<f64>;
+}
+
+/// Hudson's state of one AUV: tangential variance ε² and the line of sight of the last range.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Tangential {
+    pub eps2: f64,
+    pub los: [f64; 3],
+}
+
+/// Hudson eq. (1) with the per-AUV radial variances σ² of this decision.
+pub(crate) struct HudsonCost {
+    pub model: ErrorModel,
+    pub sigma2: Vec<f64>,
+    pub alpha_tau: f64,
+}
+
+impl CostModel for HudsonCost {
+    type State = Tangential;
+
+    #[inline(always)]
+    fn update(&self, k: usize, parent: &Tangential, cna: [f64; 3], auv: [f64; 3]) -> (Tangential, f64) {
+        let los = self.model.los(cna, auv);
+        let (eps2, los) = tangential_update(self.sigma2[k], parent.eps2, &parent.los, los, self.alpha_tau);
+        (Tangential { eps2, los }, self.model.cost_term(self.sigma2[k], eps2))
+    }
+
+    #[inline(always)]
+    fn combine(&self, acc: f64, term: f64) -> f64 {
+        acc + term
+    }
+
+    /// The line of sight to AUV k can turn by at most asin(r/D) in a level when it moves by
+    /// r ≤ reach and is D ≥ |los| − (earlier reaches) long, so sin²Δθ ≤ S = (r/D)² (or 1), and
+    /// eq. (1a) gives ε'² ≥ σ²·S + ε²·(1 − S) + ατ when ε² > σ² (else ε² + ατ).
+    fn bound_rest(
+        &self,
+        k: usize,
+        state: &Tangential,
+        _cna: [f64; 3],
+        _auv: [f64; 3],
+        reach: impl Iterator<Item = f64>,
+        out: &mut [f64],
+    ) {
+        let s2 = self.sigma2[k];
+        let mut x = state.eps2;
+        let l = state.los;
+        let mut dist = (l[0] * l[0] + l[1] * l[1] + l[2] * l[2]).sqrt();
+        for (slot, r) in out.iter_mut().zip(reach) {
+            let smax = if dist > r { (r / dist) * (r / dist) } else { 1.0 };
+            x = if s2 < x { s2 * smax + x * (1.0 - smax) + self.alpha_tau } else { x + self.alpha_tau };
+            *slot += self.model.cost_term(s2, x);
+            dist -= r;
+        }
+    }
+
+    /// ε² at level j is at least m_j with m₀ = min(σ², ε₀²) + ατ and m_{j+1} = min(σ², m_j) + ατ
+    /// (eq. 1a is a convex combination of σ² and ε² plus ατ).
+    fn level_floors(&self, root: &[Tangential], depth: usize) -> Vec<f64> {
+        let mut m: Vec<f64> = root.iter().map(|s| s.eps2).collect();
+        (0..depth)
+            .map(|_| {
+                let mut f = 0.0;
+                for (mk, &s2) in m.iter_mut().zip(&self.sigma2) {
+                    *mk = mk.min(s2) + self.alpha_tau;
+                    f += self.model.cost_term(s2, *mk);
+                }
+                f
+            })
+            .collect()
+    }
+}

@@ -1,0 +1,526 @@
+//! The estimator-aware cost (issue 10): the planner scores a CNA path by the horizontal position
+//! covariances the survey AUVs' own EKFs would hold, instead of Hudson's isotropic model.
+//!
+//! Derivation, per AUV and look-ahead level of τ seconds (P = [[a, b], [b, c]] east/north, m²):
+//! 1. Prediction: P̃ = P + q·τ·I, with q (m²/s) the horizontal process noise the AUV's filter
+//!    adds per second and axis (reported with P, [`AuvEstimate`]).
+//! 2. Ping from the CNA at p to the AUV at x, slant range r = |x − p|. The range's Jacobian with
+//!    respect to the AUV's horizontal position is h = (x − p)_xy / r (|h| ≤ 1: a CNA right above
+//!    the AUV tells it nothing horizontally, which is the 3-D geometry). Range noise variance
+//!    R(r) = σ₀² + (k·r/1000)² ([`RangeNoise`]). The EKF update is
+//!    P⁺ = P̃ − P̃hhᵀP̃ / (hᵀP̃h + R).
+//! 3. The packet arrives with probability p_s(r) (the acoustic link's model, passed in as a
+//!    [`LinkModel`]); the expected posterior is E = (1 − p_s)·P̃ + p_s·P⁺
+//!    = P̃ − p_s·P̃hhᵀP̃ / (hᵀP̃h + R).
+//! 4. Level cost over the N AUVs ([`Aggregate`]): Σ tr E (default), max tr E (worst AUV), or
+//!    Σ ln(1 + det E / 1 m⁴) (log-det, shifted by one so costs stay ≥ 0 as the penalties and the
+//!    search require). The path cost is the sum of the level costs, as for Hudson's model.
+//!
+//! Lower bound for branch-and-bound (the levels below a node; derivation in [`EkfCost::bound_rest`]):
+//! by operator convexity of the inverse, E ⪰ (P̃⁻¹ + p_s·hhᵀ/R)⁻¹ ⪰ (P̃⁻¹ + hhᵀ/R_min)⁻¹, so the
+//! information Y = E⁻¹ is bounded above by a diagonal matrix in the frame of the node's line of
+//! sight, propagated level by level; the ping directions below the node lie in a cone whose
+//! half-angle is set by how far the line of sight can move (AUV motion plus CNA step per level).
+//! Invented parameters (R's defaults) are marked; digest: hudson §2.2 (the model it replaces),
+//! gill §3 (the filter it models).
+
+use crate::cost_model::CostModel;
+use crate::PlanError;
+use serde::{Deserialize, Serialize};
+use std::sync::Arc;
+
+/// How the per-AUV covariances of a level are joined into its cost.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum Aggregate {
+    /// Σ_k tr P_k (m²).
+    #[default]
+    TraceSum,
+    /// max_k tr P_k (m²).
+    WorstAuv,
+    /// Σ_k ln(1 + det P_k / 1 m⁴).
+    LogDet,
+}
+
+/// Range noise the planner assumes, as a standard deviation growing with distance:
+/// σ(r)² = σ₀² + (k·r/1000)². Invented defaults (issue 10): σ₀ = 0.15 m (the closed loop's range
+/// channel), k = 1 m per km (a 0.07 % sound-speed error).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RangeNoise {
+    /// σ₀, m (> 0).
+    #[serde(default = "default_sigma")]
+    pub sigma_m: f64,
+    /// k, m of standard deviation per km of range (≥ 0).
+    #[serde(default = "default_per_km")]
+    pub per_km_m: f64,
+}
+
+fn default_sigma() -> f64 {
+    0.15
+}
+fn default_per_km() -> f64 {
+    1.0
+}
+
+impl Default for RangeNoise {
+    fn default() -> Self {
+        RangeNoise { sigma_m: default_sigma(), per_km_m: default_per_km() }
+    }
+}
+
+impl RangeNoise {
+    /// R(r), m²; non-decreasing in r (the bound relies on it).
+    #[inline(always)]
+    pub fn variance(&self, range_m: f64) -> f64 {
+        let grow = self.per_km_m * range_m * 1e-3;
+        self.sigma_m * self.sigma_m + grow * grow
+    }
+}
+
+/// The estimator-aware cost's settings (`[planner.cost] kind = "estimator"`).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, Default)]
+#[serde(deny_unknown_fields)]
+pub struct EstimatorSpec {
+    #[serde(default)]
+    pub aggregate: Aggregate,
+    #[serde(default)]
+    pub range_noise: RangeNoise,
+}
+
+impl EstimatorSpec {
+    pub fn validate(&self, field: &str) -> Result<(), PlanError> {
+        let RangeNoise { sigma_m, per_km_m } = self.range_noise;
+        if sigma_m > 0.0 && sigma_m.is_finite() && per_km_m >= 0.0 && per_km_m.is_finite() {
+            Ok(())
+        } else {
+            Err(PlanError::Invalid {
+                field: format!("{field}.range_noise"),
+                allowed: "sigma_m > 0 and per_km_m >= 0 (metres)".into(),
+                value: format!("sigma_m {sigma_m}, per_km_m {per_km_m}"),
+            })
+        }
+    }
+}
+
+/// One survey AUV's navigation uncertainty as its filter reports it.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct AuvEstimate {
+    /// Horizontal position covariance [P_ee, P_en, P_nn], m².
+    pub cov: [f64; 3],
+    /// Horizontal process noise q per axis, m²/s (the covariance grows by q·τ·I per step).
+    pub process_noise: f64,
+}
+
+impl AuvEstimate {
+    fn validate(&self, k: usize) -> Result<(), PlanError> {
+        let [a, b, c] = self.cov;
+        let finite = self.cov.iter().all(|x| x.is_finite()) && self.process_noise.is_finite();
+        if finite && a >= 0.0 && c >= 0.0 && b * b <= a * c * (1.0 + 1e-9) && self.process_noise >= 0.0 {
+            Ok(())
+        } else {
+            Err(PlanError::Input(format!(
+                "AUV {k}: covariance {:?} and process noise {} are not a positive semi-definite covariance and a \
+                 non-negative noise",
+                self.cov, self.process_noise
+            )))
+        }
+    }
+}
+
+/// The acoustic link as the planner needs it: probability that a ping over `slant_range_m`
+/// arrives (in [0, 1]). The sim crate wires the acoustic crate's model in; `()` is a perfect link.
+pub trait LinkModel {
+    fn success(&self, slant_range_m: f64) -> f64;
+}
+
+impl LinkModel for () {
+    fn success(&self, _: f64) -> f64 {
+        1.0
+    }
+}
+
+/// A link model sampled every [`LinkTable::STEP_M`] up to [`LinkTable::MAX_M`] and interpolated
+/// linearly (the last value holds beyond), so the search never calls back into the link model.
+#[derive(Debug, Clone, PartialEq)]
+pub struct LinkTable {
+    p: Arc<[f64]>,
+}
+
+impl LinkTable {
+    pub const STEP_M: f64 = 5.0;
+    pub const MAX_M: f64 = 20_000.0;
+
+    pub fn sample(link: &dyn LinkModel) -> Result<Self, PlanError> {
+        let count = (Self::MAX_M / Self::STEP_M) as usize + 1;
+        let mut p = Vec::with_capacity(count);
+        for i in 0..count {
+            let r = i as f64 * Self::STEP_M;
+            let s = link.success(r);
+            if !(0.0..=1.0).contains(&s) {
+                return Err(PlanError::Input(format!(
+                    "link model: success probability {s} at {r} m is outside [0, 1]"
+                )));
+            }
+            p.push(s);
+        }
+        Ok(LinkTable { p: p.into() })
+    }
+
+    /// A perfect link.
+    pub fn perfect() -> Self {
+        LinkTable { p: vec![1.0, 1.0].into() }
+    }
+
+    #[inline(always)]
+    pub fn success(&self, r: f64) -> f64 {
+        let x = r / Self::STEP_M;
+        let i = x as usize;
+        if i + 1 >= self.p.len() {
+            return self.p[self.p.len() - 1];
+        }
+        let f = x - i as f64;
+        self.p[i] + (self.p[i + 1] - self.p[i]) * f
+    }
+}
+
+/// Steps 1–3 of the module's derivation: the expected covariance [P_ee, P_en, P_nn] after τ of
+/// growth (`q_tau` per axis) and a ping from `cna` to the AUV at `auv` that arrives with
+/// probability `success(slant range)`. Shared by the planner's cost and the closed loop's model
+/// of the AUVs' filters, so both use one formula.
+#[inline(always)]
+pub fn expected_posterior(
+    cov: &[f64; 3],
+    q_tau: f64,
+    cna: [f64; 3],
+    auv: [f64; 3],
+    noise: &RangeNoise,
+    success: impl Fn(f64) -> f64,
+) -> [f64; 3] {
+    let (mut a, mut b, mut c) = (cov[0] + q_tau, cov[1], cov[2] + q_tau);
+    let d = [auv[0] - cna[0], auv[1] - cna[1], auv[2] - cna[2]];
+    let r2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
+    if r2 > 1e-12 {
+        let r = r2.sqrt();
+        let (h0, h1) = (d[0] / r, d[1] / r);
+        let (ph0, ph1) = (a * h0 + b * h1, b * h0 + c * h1);
+        let innovation = h0 * ph0 + h1 * ph1 + noise.variance(r);
+        let gain = success(r) / innovation;
+        a -= gain * ph0 * ph0;
+        b -= gain * ph0 * ph1;
+        c -= gain * ph1 * ph1;
+    }
+    [a, b, c]
+}
+
+/// How much the tangential information is inflated to make the node's information diagonal in
+/// its line-of-sight frame (any value > 0 keeps the bound valid; small keeps the tangential
+/// part, which dominates, tight).
+const TANGENTIAL_SLACK: f64 = 0.02;
+
+/// The estimator-aware model of one decision.
+pub(crate) struct EkfCost {
+    pub spec: EstimatorSpec,
+    /// q_k·τ per AUV, m².
+    pub q_tau: Vec<f64>,
+    pub link: LinkTable,
+}
+
+impl EkfCost {
+    pub fn new(spec: EstimatorSpec, estimates: &[AuvEstimate], tau: f64, link: LinkTable) -> Result<Self, PlanError> {
+        for (k, e) in estimates.iter().enumerate() {
+            e.validate(k)?;
+        }
+        Ok(EkfCost { spec, q_tau: estimates.iter().map(|e| e.process_noise * tau).collect(), link })
+    }
+
+    #[inline(always)]
+    fn term(&self, trace: f64, det: f64) -> f64 {
+        match self.spec.aggregate {
+            Aggregate::TraceSum | Aggregate::WorstAuv => trace,
+            Aggregate::LogDet => det.max(0.0).ln_1p(),
+        }
+    }
+}
+
+impl CostModel for EkfCost {
+    type State = [f64; 3];
+
+    #[inline(always)]
+    fn update(&self, k: usize, parent: &[f64; 3], cna: [f64; 3], auv: [f64; 3]) -> ([f64; 3], f64) {
+        let link = &self.link;
+        let [a, b, c] =
+            expected_posterior(parent, self.q_tau[k], cna, auv, &self.spec.range_noise, |r| link.success(r));
+        ([a, b, c], self.term(a + c, a * c - b * b))
+    }
+
+    #[inline(always)]
+    fn combine(&self, acc: f64, term: f64) -> f64 {
+        match self.spec.aggregate {
+            Aggregate::WorstAuv => acc.max(term),
+            Aggregate::TraceSum | Aggregate::LogDet => acc + term,
+        }
+    }
+
+    /// In the frame (u, t) of the node's horizontal line of sight u (t ⟂ u):
+    /// - the node's information Y = P⁻¹ ⪯ diag(Y_uu + Y_ut²/(ρ·Y_tt), (1 + ρ)·Y_tt) (ρ > 0:
+    ///   diag − Y = [[Y_ut²/(ρY_tt), −Y_ut], [−Y_ut, ρY_tt]] has zero determinant and is ⪰ 0);
+    /// - prediction: Y ⪯ D ⇒ (Y⁻¹ + qτI)⁻¹ ⪯ (D⁻¹ + qτI)⁻¹, diagonal;
+    /// - ping: after m levels the line of sight has moved by at most Δ = Σ reach, so its direction
+    ///   is within sin δ ≤ s = Δ/D_h of u (D_h the node's horizontal distance; s = 1 when Δ ≥ D_h),
+    ///   and hhᵀ ⪯ ĥĥᵀ = [[cos², cos·sin], [cos·sin, sin²]] ⪯ diag(1 + κ, s²(1 + 1/κ)) for any κ > 0
+    ///   (the same determinant argument); κ = √s keeps both the radial and the tangential part
+    ///   near their true size when s is small. Or ĥĥᵀ ⪯ I, whichever has the smaller tangential
+    ///   entry; R ≥ R(max(0, D − Δ)) with D the node's slant distance (R grows with range) and
+    ///   p_s ≤ 1;
+    /// - E ⪰ D⁻¹ then gives tr E ≥ tr D⁻¹ and det E ≥ det D⁻¹.
+    fn bound_rest(
+        &self,
+        k: usize,
+        state: &[f64; 3],
+        cna: [f64; 3],
+        auv: [f64; 3],
+        reach: impl Iterator<Item = f64>,
+        out: &mut [f64],
+    ) {
+        let q = self.q_tau[k];
+        let (dx, dy, dz) = (auv[0] - cna[0], auv[1] - cna[1], auv[2] - cna[2]);
+        let horizontal = (dx * dx + dy * dy).sqrt();
+        let slant = (horizontal * horizontal + dz * dz).sqrt();
+        let u = if horizontal > 1e-9 { [dx / horizontal, dy / horizontal] } else { [1.0, 0.0] };
+        let (mut v_u, mut v_t) = diagonal_floor(state, u);
+        let mut eigen = EigenFloor::of(state);
+        let mut moved = 0.0;
+        for (slot, r) in out.iter_mut().zip(reach) {
+            moved += r;
+            let s = if horizontal > moved { moved / horizontal } else { 1.0 };
+            let root_s = s.sqrt();
+            let tangential = s * s + s * root_s;
+            let (add_u, add_t) = if tangential < 1.0 { (1.0 + root_s, tangential) } else { (1.0, 1.0) };
+            let r_min = self.spec.range_noise.variance((slant - moved).max(0.0));
+            v_u = 1.0 / (1.0 / (v_u + q) + add_u / r_min);
+            v_t = 1.0 / (1.0 / (v_t + q) + add_t / r_min);
+            let (trace, det) = eigen.step(q, r_min);
+            *slot = self.combine(*slot, self.term((v_u + v_t).max(trace), (v_u * v_t).max(det)));
+        }
+    }
+
+    /// The eigenvalue chain ([`EigenFloor`]) from each root covariance, with R ≥ R(0) at every
+    /// level.
+    fn level_floors(&self, root: &[[f64; 3]], depth: usize) -> Vec<f64> {
+        let r_min = self.spec.range_noise.variance(0.0);
+        let mut chains: Vec<EigenFloor> = root.iter().map(EigenFloor::of).collect();
+        (0..depth)
+            .map(|_| {
+                let mut f = 0.0;
+                for (k, chain) in chains.iter_mut().enumerate() {
+                    let (trace, det) = chain.step(self.q_tau[k], r_min);
+                    f = self.combine(f, self.term(trace, det));
+                }
+                f
+            })
+            .collect()
+    }
+}
+
+/// Lower bounds (v_u, v_t) with P ⪰ diag(v_u, v_t) in the frame (u, t = u rotated +90°), from
+/// the diagonal upper bound of P⁻¹ (see `bound_rest`). A singular P gets (0, 0).
+fn diagonal_floor(p: &[f64; 3], u: [f64; 2]) -> (f64, f64) {
+    let [a, b, c] = *p;
+    let det = a * c - b * b;
+    if !(det > 0.0) {
+        return (0.0, 0.0);
+    }
+    let t = [-u[1], u[0]];
+    let p_uu = u[0] * (a * u[0] + b * u[1]) + u[1] * (b * u[0] + c * u[1]);
+    let p_tt = t[0] * (a * t[0] + b * t[1]) + t[1] * (b * t[0] + c * t[1]);
+    let p_ut = u[0] * (a * t[0] + b * t[1]) + u[1] * (b * t[0] + c * t[1]);
+    // Y = P⁻¹ in the frame: Y_uu = p_tt/det, Y_tt = p_uu/det, Y_ut = −p_ut/det.
+    let (y_uu, y_tt, y_ut) = (p_tt / det, p_uu / det, p_ut / det);
+    if y_ut == 0.0 {
+        return (1.0 / y_uu, 1.0 / y_tt);
+    }
+    let y_uu_max = y_uu + y_ut * y_ut / (TANGENTIAL_SLACK * y_tt);
+    (1.0 / y_uu_max, 1.0 / ((1.0 + TANGENTIAL_SLACK) * y_tt))
+}
+
+/// Lower bounds m₁ (larger) and m₂ (smaller) on the eigenvalues λ₁ ≥ λ₂ of an AUV's covariance,
+/// whatever the ping directions. One level: prediction adds qτ to both; then E = P̃ − (rank-one
+/// ⪰ 0) with |h| ≤ 1, p_s ≤ 1, R ≥ R_min gives
+/// - tr E ≥ tr P̃ − λ₁²/(λ₁ + R) = λ₂ + λ₁R/(λ₁ + R) (the reduction hᵀP̃²h/(hᵀP̃h + R) is largest
+///   along the major axis), increasing in λ₁ and λ₂;
+/// - λ₁(E) ≥ λ₂(P̃) (interlacing) and λ₁(E) ≥ tr E / 2;
+/// - λ₂(E) ≥ 1/(1/λ₂ + 1/R) (E ⪰ (P̃⁻¹ + hhᵀ/R)⁻¹ by operator convexity, whose information is at
+///   most 1/λ₂ + 1/R in any direction);
+/// - det E = λ₁(E)·λ₂(E) ≥ m₁'·m₂'.
+///
+/// It is tight for the next level (one rank-one update), which is where most nodes are cut.
+#[derive(Debug, Clone, Copy)]
+struct EigenFloor {
+    m1: f64,
+    m2: f64,
+}
+
+impl EigenFloor {
+    fn of(p: &[f64; 3]) -> Self {
+        let (m1, m2) = eigenvalues(p);
+        EigenFloor { m1, m2 }
+    }
+
+    /// Advances one level; returns the bounds on (tr E, det E).
+    #[inline(always)]
+    fn step(&mut self, q_tau: f64, r_min: f64) -> (f64, f64) {
+        let (l1, l2) = (self.m1 + q_tau, self.m2 + q_tau);
+        let trace = l2 + l1 * r_min / (l1 + r_min);
+        self.m2 = l2 * r_min / (l2 + r_min);
+        self.m1 = l2.max(0.5 * trace);
+        (trace, self.m1 * self.m2)
+    }
+}
+
+/// Eigenvalues of the symmetric 2×2 [[a, b], [b, c]], larger first, clamped at 0.
+fn eigenvalues(p: &[f64; 3]) -> (f64, f64) {
+    let [a, b, c] = *p;
+    let mean = 0.5 * (a + c);
+    let radius = (0.25 * (a - c) * (a - c) + b * b).sqrt();
+    ((mean + radius).max(0.0), (mean - radius).max(0.0))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    fn model(aggregate: Aggregate, q_tau: Vec<f64>, link: LinkTable) -> EkfCost {
+        EkfCost { spec: EstimatorSpec { aggregate, range_noise: RangeNoise::default() }, q_tau, link }
+    }
+
+    #[test]
+    fn a_ping_is_the_ekf_range_update() {
+        // P = [[4, 1], [1, 2]], AUV at (300, 400, 0) from the CNA: h = (0.6, 0.8), P̃h = (3.2, 2.2),
+        // hᵀP̃h = 3.68, R = 0.15² + 0.5² = 0.2725, innovation 3.9525.
+        let m = model(Aggregate::TraceSum, vec![0.0], LinkTable::perfect());
+        let (p, cost) = m.update(0, &[4.0, 1.0, 2.0], [0.0; 3], [300.0, 400.0, 0.0]);
+        let want = [4.0 - 10.24 / 3.9525, 1.0 - 7.04 / 3.9525, 2.0 - 4.84 / 3.9525];
+        for i in 0..3 {
+            assert!((p[i] - want[i]).abs() < 1e-12, "{p:?} vs {want:?}");
+        }
+        assert!((cost - (want[0] + want[2])).abs() < 1e-12);
+    }
+
+    #[test]
+    fn a_lost_ping_leaves_only_the_growth_and_half_a_ping_half_the_reduction() {
+        struct Never;
+        impl LinkModel for Never {
+            fn success(&self, _: f64) -> f64 {
+                0.0
+            }
+        }
+        struct Half;
+        impl LinkModel for Half {
+            fn success(&self, _: f64) -> f64 {
+                0.5
+            }
+        }
+        let start = [4.0, 1.0, 2.0];
+        let (cna, auv) = ([0.0; 3], [300.0, 400.0, 50.0]);
+        let lost =
+            model(Aggregate::TraceSum, vec![0.5], LinkTable::sample(&Never).unwrap()).update(0, &start, cna, auv);
+        assert_eq!(lost.0, [4.5, 1.0, 2.5]);
+        let full = model(Aggregate::TraceSum, vec![0.5], LinkTable::perfect()).update(0, &start, cna, auv).1;
+        let half =
+            model(Aggregate::TraceSum, vec![0.5], LinkTable::sample(&Half).unwrap()).update(0, &start, cna, auv).1;
+        assert!((half - 0.5 * (full + lost.1)).abs() < 1e-12);
+    }
+
+    #[test]
+    fn a_cna_overhead_teaches_nothing_horizontally() {
+        let m = model(Aggregate::TraceSum, vec![0.0], LinkTable::perfect());
+        let (p, _) = m.update(0, &[4.0, 1.0, 2.0], [10.0, 20.0, 0.0], [10.0, 20.0, 90.0]);
+        assert_eq!(p, [4.0, 1.0, 2.0]);
+    }
+
+    #[test]
+    fn far_pings_are_noisier_and_bad_settings_are_named() {
+        let n = RangeNoise::default();
+        assert!(n.variance(2000.0) > n.variance(500.0));
+        let bad = EstimatorSpec { range_noise: RangeNoise { sigma_m: 0.0, per_km_m: 1.0 }, ..Default::default() };
+        let e = bad.validate("planner.cost").unwrap_err().to_string();
+        assert!(e.contains("planner.cost.range_noise") && e.contains("sigma_m > 0"), "{e}");
+        let e = EkfCost::new(
+            EstimatorSpec::default(),
+            &[AuvEstimate { cov: [1.0, 2.0, 1.0], process_noise: 0.1 }],
+            10.0,
+            LinkTable::perfect(),
+        )
+        .err()
+        .unwrap()
+        .to_string();
+        assert!(e.contains("AUV 0") && e.contains("positive semi-definite"), "{e}");
+    }
+
+    #[test]
+    fn the_link_table_interpolates_and_holds_its_last_value() {
+        struct Linear;
+        impl LinkModel for Linear {
+            fn success(&self, r: f64) -> f64 {
+                (1.0 - r / 40_000.0).max(0.0)
+            }
+        }
+        let t = LinkTable::sample(&Linear).unwrap();
+        assert!((t.success(1234.5) - (1.0 - 1234.5 / 40_000.0)).abs() < 1e-12);
+        assert_eq!(t.success(1e9), 0.5);
+        struct Broken;
+        impl LinkModel for Broken {
+            fn success(&self, _: f64) -> f64 {
+                1.5
+            }
+        }
+        assert!(LinkTable::sample(&Broken).is_err());
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig { cases: 2000, ..ProptestConfig::default() })]
+
+        /// The bound below a node never exceeds the cost of any path below it: the CNA takes
+        /// random steps of at most `step` while the AUV moves on a line, and the levels' costs
+        /// are compared with `bound_rest` given the same reaches.
+        #[test]
+        fn the_bound_below_a_node_is_never_above_a_real_path(
+            ve in 0.01f64..50.0, vn in 0.01f64..50.0, rho in -0.99f64..0.99, q in 0.0f64..3.0,
+            agg in 0usize..3, auv0 in (-800.0f64..800.0, -800.0f64..800.0, 0.0f64..150.0),
+            vel in (-3.0f64..3.0, -3.0f64..3.0), step in 1.0f64..60.0,
+            moves in prop::collection::vec((-3.2f64..3.2, 0.0f64..1.0, -1.0f64..1.0), 1..8),
+        ) {
+            let aggregate = [Aggregate::TraceSum, Aggregate::WorstAuv, Aggregate::LogDet][agg];
+            let m = model(aggregate, vec![q], LinkTable::perfect());
+            let p0 = [ve, rho * (ve * vn).sqrt(), vn];
+            let mut cna = [0.0, 0.0, 20.0];
+            let mut auv = [auv0.0, auv0.1, auv0.2];
+            let mut bound = vec![0.0; moves.len()];
+            let mut reach = Vec::new();
+            let mut actual = Vec::new();
+            let (node_cna, node_auv) = (cna, auv);
+            let mut p = p0;
+            for &(heading, frac, dz) in &moves {
+                let len = step * frac;
+                let dz = dz * len;
+                let horizontal = (len * len - dz * dz).max(0.0).sqrt();
+                cna = [cna[0] + horizontal * heading.cos(), cna[1] + horizontal * heading.sin(), cna[2] + dz];
+                auv = [auv[0] + vel.0, auv[1] + vel.1, auv[2]];
+                reach.push((vel.0 * vel.0 + vel.1 * vel.1).sqrt() + step);
+                let (next, term) = m.update(0, &p, cna, auv);
+                p = next;
+                actual.push(term);
+            }
+            m.bound_rest(0, &p0, node_cna, node_auv, reach.into_iter(), &mut bound);
+            for (j, (b, a)) in bound.iter().zip(&actual).enumerate() {
+                prop_assert!(*b <= *a * (1.0 + 1e-9) + 1e-12, "level {}: bound {} above cost {}", j, b, a);
+            }
+            let floors = m.level_floors(&[p0], moves.len());
+            for (j, (f, a)) in floors.iter().zip(&actual).enumerate() {
+                prop_assert!(*f <= *a * (1.0 + 1e-9) + 1e-12, "level {}: floor {} above cost {}", j, f, a);
+            }
+        }
+    }
+}
