@@ -52,7 +52,7 @@ pub struct Args {
     #[arg(long)]
     bathymetry: Option<PathBuf>,
     /// Output directory (default: a fresh runs/channel-N).
-    #[arg(short, long)]
+    #[arg(short, long = "output", alias = "out")]
     out: Option<PathBuf>,
     /// Replace an existing output directory.
     #[arg(long)]

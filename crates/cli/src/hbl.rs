@@ -61,8 +61,10 @@ pub enum Command {
         /// Post-processing TOML (auv coefficients, acoustic_time_offset_s, slant_range, ...).
         #[arg(long)]
         config: Option<PathBuf>,
-        #[arg(long)]
+        /// Output directory.
+        #[arg(short, long = "output", alias = "out")]
         out: PathBuf,
+        /// Replace the output directory if it exists.
         #[arg(long)]
         force: bool,
     },
@@ -88,8 +90,9 @@ pub struct Common {
     #[arg(long, default_value_t = 1)]
     seed: u64,
     /// Output directory.
-    #[arg(long)]
+    #[arg(short, long = "output", alias = "out")]
     out: PathBuf,
+    /// Replace the output directory if it exists.
     #[arg(long)]
     force: bool,
 }
@@ -288,13 +291,18 @@ fn tune_cmd(c: &Common, spec_path: &Path) -> Result<()> {
     dir.write_json("summary.json", &r)?;
     let out = dir.finish()?;
     println!(
-        "cost {:.4} → {:.4} after {} iterations: {:?}; wrote {}",
+        "cost {:.4} → {:.4} after {} iterations; wrote {}",
         r.start_cost,
         r.best_cost,
         r.iterations,
-        r.coefficients,
         out.display()
     );
+    println!("{:<24} {:>12}", "coefficient", "tuned value");
+    for (coefficient, value) in &r.coefficients {
+        // The name as the spec file spells it (serde's snake_case), not the Rust variant.
+        let name = serde_json::to_value(coefficient)?;
+        println!("{:<24} {value:>12.6}", name.as_str().unwrap_or_default());
+    }
     Ok(())
 }
 
@@ -330,6 +338,7 @@ fn postprocess(log: &Path, config: Option<&Path>, out: &Path, force: bool) -> Re
     dir.write_bytes("estimates.csv", csv)?;
     dir.write_json("summary.json", &result.summary)?;
     let out = dir.finish()?;
-    println!("{:?}; wrote {}", result.summary, out.display());
+    println!("{}", serde_json::to_string_pretty(&result.summary)?);
+    println!("wrote {}", out.display());
     Ok(())
 }
