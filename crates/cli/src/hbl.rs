@@ -1,11 +1,14 @@
 //! `coopnav hbl simulate|montecarlo|grid|tune|postprocess`: the Gill hybrid-baseline tools.
 
+use crate::input;
 use anyhow::{Context, Result};
+use coopnav_core::limits;
 use coopnav_nav::post::{self, PostConfig};
 use coopnav_sim::hbl::grid::{self, GridSpec};
 use coopnav_sim::hbl::tune::{tune, Coefficient, Objective, TuneSpec};
 use coopnav_sim::hbl::{monte_carlo_profiled, plot, run, Scenario};
 use coopnav_sim::output::{Manifest, RunDir};
+use coopnav_sim::work;
 
 /// x_rel bin of the Monte Carlo error profile (m).
 const PROFILE_BIN_M: f64 = 5.0;
@@ -95,6 +98,9 @@ pub struct Common {
     /// Replace the output directory if it exists.
     #[arg(long)]
     force: bool,
+    /// Run even when the estimated work or memory is above coopnav's limits (coopnav_core::limits).
+    #[arg(long)]
+    allow_large: bool,
 }
 
 fn read(path: &Path) -> Result<String> {
@@ -103,7 +109,7 @@ fn read(path: &Path) -> Result<String> {
 
 fn scenario(c: &Common) -> Result<Scenario> {
     match &c.config {
-        Some(p) => Scenario::from_toml(&read(p)?).with_context(|| format!("in {}", p.display())),
+        Some(p) => Scenario::from_toml(&input::read(p, c.allow_large)?).with_context(|| format!("in {}", p.display())),
         None => Ok(Scenario::default()),
     }
 }
@@ -169,6 +175,7 @@ fn example(kind: ExampleKind) -> Result<()> {
 fn simulate(c: &Common, index: u64) -> Result<()> {
     let sc = scenario(c)?;
     let cycle = sc.resolved_cycle()?;
+    limits::check(work::hbl_runs(&sc, 1.0, "one run", true), c.allow_large)?;
     let (metrics, trace) = run(&sc, &cycle, coopnav_core::run_seed(c.seed, index), true);
     let trace = trace.context("the simulator returned no trace")?;
     let dir = RunDir::create(&c.out, c.force)?;
@@ -215,6 +222,7 @@ fn simulate(c: &Common, index: u64) -> Result<()> {
 fn montecarlo(c: &Common, runs: usize) -> Result<()> {
     let sc = scenario(c)?;
     sc.validate()?;
+    limits::check(work::hbl_runs(&sc, runs as f64, "--runs", false), c.allow_large)?;
     let pb = bar(runs as u64);
     let r = monte_carlo_profiled(&sc, runs, c.seed, PROFILE_BIN_M, &|n| pb.set_position(n))?;
     pb.finish_and_clear();
@@ -262,10 +270,11 @@ fn montecarlo(c: &Common, runs: usize) -> Result<()> {
 fn grid_cmd(c: &Common, grid_path: Option<&Path>) -> Result<()> {
     let sc = scenario(c)?;
     let spec: GridSpec = match grid_path {
-        Some(p) => toml::from_str(&read(p)?).with_context(|| format!("in {}", p.display()))?,
+        Some(p) => toml::from_str(&input::read(p, c.allow_large)?).with_context(|| format!("in {}", p.display()))?,
         None => GridSpec::default(),
     };
     spec.validate()?;
+    limits::check(work::hbl_grid(&sc, &spec), c.allow_large)?;
     let pb = bar(spec.cells().len() as u64);
     let cells = grid::buoy_grid(&sc, &spec, c.seed, &|n| pb.set_position(n))?;
     pb.finish_and_clear();
@@ -284,7 +293,9 @@ fn grid_cmd(c: &Common, grid_path: Option<&Path>) -> Result<()> {
 
 fn tune_cmd(c: &Common, spec_path: &Path) -> Result<()> {
     let sc = scenario(c)?;
-    let spec: TuneSpec = toml::from_str(&read(spec_path)?).with_context(|| format!("in {}", spec_path.display()))?;
+    let spec: TuneSpec = toml::from_str(&input::read(spec_path, c.allow_large)?)
+        .with_context(|| format!("in {}", spec_path.display()))?;
+    limits::check(work::hbl_tune(&sc, &spec), c.allow_large)?;
     let r = tune(&sc, &spec)?;
     let dir = RunDir::create(&c.out, c.force)?;
     manifest(&dir, "hbl tune", spec.seed, json!({ "scenario": sc, "spec": spec }))?;

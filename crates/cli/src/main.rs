@@ -6,6 +6,7 @@ use clap::{Parser, Subcommand};
 mod bench;
 mod channel;
 mod hbl;
+mod input;
 mod nams;
 mod plan;
 mod reproduce;

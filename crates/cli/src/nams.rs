@@ -3,6 +3,7 @@
 //! and `[tl]`), prints the per-cell table and writes a run directory (manifest.json,
 //! summary.json, cells.csv). The file is validated before anything runs.
 
+use crate::input;
 use anyhow::{Context, Result};
 use coopnav_acomms::tl::analytic::Thorp;
 use coopnav_acomms::tl::bellhop::{AcousticEnv, Bellhop};
@@ -27,6 +28,9 @@ pub struct Args {
     /// Replace the output directory if it exists.
     #[arg(long)]
     force: bool,
+    /// Read an experiment file above coopnav's input size limit (coopnav_core::limits).
+    #[arg(long)]
+    allow_large: bool,
     /// Print the thesis experiment (every field at its default) as TOML and exit.
     #[arg(long)]
     example: bool,
@@ -95,7 +99,7 @@ pub fn run(args: Args) -> Result<()> {
         print!("{}", example()?);
         return Ok(());
     };
-    let text = std::fs::read_to_string(config).with_context(|| format!("cannot read {}", config.display()))?;
+    let text = input::read(config, args.allow_large)?;
     let file: File = toml::from_str(&text).with_context(|| format!("{}: invalid experiment file", config.display()))?;
     file.experiment.validate().map_err(|e| anyhow::anyhow!("{}: {e}", config.display()))?;
     let tl = provider(&file.tl, &file.experiment)?;

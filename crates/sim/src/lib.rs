@@ -14,3 +14,4 @@ pub mod policy;
 pub mod predeploy;
 pub mod report;
 pub mod scenario_file;
+pub mod work;
