@@ -2,6 +2,7 @@
 
 use anyhow::Result;
 use clap::{Parser, Subcommand};
+use std::process::ExitCode;
 
 mod bench;
 mod channel;
@@ -47,12 +48,12 @@ enum Command {
 
 /// Errors print as one chain of causes ("what: why: detail"), never a backtrace: a failed
 /// check or a bad file is the user's business, not a crash.
-fn main() -> std::process::ExitCode {
+fn main() -> ExitCode {
     match run() {
-        Ok(()) => std::process::ExitCode::SUCCESS,
+        Ok(code) => code,
         Err(e) => {
             eprintln!("Error: {}", cause_chain(&e));
-            std::process::ExitCode::FAILURE
+            ExitCode::FAILURE
         }
     }
 }
@@ -75,18 +76,29 @@ fn cause_chain(error: &anyhow::Error) -> String {
     line
 }
 
-fn run() -> Result<()> {
+/// Exit status of a run stopped by Ctrl-C or SIGTERM (128 + SIGINT, as shells report it).
+const INTERRUPTED: i32 = 130;
+
+/// Runs the command; `reproduce` chooses its own exit status (see its module).
+fn run() -> Result<ExitCode> {
+    // An interrupted run must not leave its half-written staging directory behind.
+    ctrlc::set_handler(|| {
+        coopnav_sim::output::remove_unfinished_runs();
+        eprintln!("Interrupted: the unfinished run directory was removed");
+        std::process::exit(INTERRUPTED);
+    })?;
     tracing_subscriber::fmt()
         .with_env_filter(tracing_subscriber::EnvFilter::from_default_env())
         .with_writer(std::io::stderr)
         .init();
-    match Cli::parse().command {
-        Command::Reproduce(args) => reproduce::run(args),
+    let done = match Cli::parse().command {
+        Command::Reproduce(args) => return reproduce::run(args),
         Command::Plan(args) => plan::run(args),
         Command::Hbl(cmd) => hbl::run_command(cmd),
         Command::Channel(args) => channel::run(args),
         Command::Nams(args) => nams::run(args),
         Command::Simulate(args) => simulate::run(args),
         Command::Bench(target) => bench::run(target),
-    }
+    };
+    done.map(|()| ExitCode::SUCCESS)
 }

@@ -1,26 +1,61 @@
 //! Run directories: every command that produces results writes one directory holding
 //! `manifest.json` (inputs, seed, version), CSV time series, `summary.json` and SVG plots.
 //!
-//! Writing goes to a hidden staging directory beside the target that is renamed into place by
-//! [`RunDir::finish`], so a run that fails half-way leaves nothing behind, and an existing
-//! directory is replaced only when the caller says `force`.
+//! Writing goes to a hidden staging directory beside the target that is moved into place by
+//! [`RunDir::finish`], so a run that fails half-way, or is interrupted (the binary calls
+//! [`remove_unfinished_runs`] from its Ctrl-C / SIGTERM handler), leaves nothing behind.
+//!
+//! Replacing an existing directory (`force`) is the one place coopnav deletes files, so it is
+//! guarded by [`check_replaceable`]: only a directory coopnav itself wrote (it holds a coopnav
+//! `manifest.json`) or an empty one may be replaced, and never the filesystem root, the home
+//! directory, the working directory or any directory that contains it. The old directory is
+//! moved aside and deleted only after the new run is in place.
 
 use crate::plot::PlotError;
 use serde::Serialize;
 use std::fs;
 use std::path::{Path, PathBuf};
+use std::sync::Mutex;
 use thiserror::Error;
+
+/// The file that marks a directory as a coopnav run (and so replaceable under `force`).
+pub const MANIFEST: &str = "manifest.json";
 
 #[derive(Debug, Error)]
 pub enum OutputError {
     #[error("output directory {0} already exists; choose another with -o or pass --force to replace it")]
     Exists(PathBuf),
+    #[error("refusing to replace {path} (--force replaces only a run directory coopnav wrote): {reason}")]
+    Unsafe { path: PathBuf, reason: UnsafeTarget },
+    #[error("output path {0} has no final directory name; name the directory to write")]
+    Unnamed(PathBuf),
     #[error("cannot write {path}: {source}")]
     Io { path: PathBuf, source: std::io::Error },
     #[error("cannot write CSV {path}: {source}")]
     Csv { path: PathBuf, source: csv::Error },
     #[error("cannot serialise {path} as JSON: {source}")]
     Json { path: PathBuf, source: serde_json::Error },
+}
+
+/// Why an existing path may not be replaced.
+#[derive(Debug, Clone, PartialEq, Eq, Error)]
+pub enum UnsafeTarget {
+    #[error("it is the filesystem root")]
+    Root,
+    #[error("it is the home directory")]
+    Home,
+    #[error("it is the current working directory")]
+    WorkingDirectory,
+    #[error("it contains the current working directory")]
+    AncestorOfWorkingDirectory,
+    #[error("it contains the home directory")]
+    AncestorOfHome,
+    #[error("it is a symbolic link")]
+    Symlink,
+    #[error("it is not a directory")]
+    NotADirectory,
+    #[error("it is not empty and holds no coopnav {MANIFEST}, so coopnav did not write it")]
+    NotACoopnavRun,
 }
 
 /// Why a run directory could not be written, whatever the run type.
@@ -38,6 +73,84 @@ fn io_err(path: &Path) -> impl FnOnce(std::io::Error) -> OutputError + '_ {
     move |source| OutputError::Io { path: path.to_path_buf(), source }
 }
 
+/// Checks that the existing `target` may be replaced by a new run, without touching it.
+pub fn check_replaceable(target: &Path) -> Result<(), OutputError> {
+    let unsafe_target = |reason| OutputError::Unsafe { path: target.to_path_buf(), reason };
+    let meta = fs::symlink_metadata(target).map_err(io_err(target))?;
+    if meta.file_type().is_symlink() {
+        return Err(unsafe_target(UnsafeTarget::Symlink));
+    }
+    let resolved = fs::canonicalize(target).map_err(io_err(target))?;
+    if let Some(reason) = protected_reason(&resolved) {
+        return Err(unsafe_target(reason));
+    }
+    if !meta.is_dir() {
+        return Err(unsafe_target(UnsafeTarget::NotADirectory));
+    }
+    if is_empty_dir(&resolved)? || holds_coopnav_manifest(&resolved) {
+        Ok(())
+    } else {
+        Err(unsafe_target(UnsafeTarget::NotACoopnavRun))
+    }
+}
+
+/// Why the canonical path `dir` is never replaced, whatever it holds.
+fn protected_reason(dir: &Path) -> Option<UnsafeTarget> {
+    if dir.parent().is_none() {
+        return Some(UnsafeTarget::Root);
+    }
+    let canonical = |p: PathBuf| fs::canonicalize(p).ok();
+    if let Some(cwd) = std::env::current_dir().ok().and_then(canonical) {
+        if cwd == dir {
+            return Some(UnsafeTarget::WorkingDirectory);
+        }
+        if cwd.starts_with(dir) {
+            return Some(UnsafeTarget::AncestorOfWorkingDirectory);
+        }
+    }
+    if let Some(home) = std::env::var_os("HOME").map(PathBuf::from).and_then(canonical) {
+        if home == dir {
+            return Some(UnsafeTarget::Home);
+        }
+        if home.starts_with(dir) {
+            return Some(UnsafeTarget::AncestorOfHome);
+        }
+    }
+    None
+}
+
+fn is_empty_dir(dir: &Path) -> Result<bool, OutputError> {
+    Ok(fs::read_dir(dir).map_err(io_err(dir))?.next().is_none())
+}
+
+/// True when `dir/manifest.json` is a JSON object whose `tool` is "coopnav".
+fn holds_coopnav_manifest(dir: &Path) -> bool {
+    let Ok(text) = fs::read_to_string(dir.join(MANIFEST)) else { return false };
+    serde_json::from_str::<serde_json::Value>(&text)
+        .map(|v| v.get("tool").and_then(|t| t.as_str()) == Some(TOOL))
+        .unwrap_or(false)
+}
+
+const TOOL: &str = "coopnav";
+
+/// Staging directories of runs in progress, so an interrupted process can remove them.
+static UNFINISHED: Mutex<Vec<PathBuf>> = Mutex::new(Vec::new());
+
+fn unfinished() -> std::sync::MutexGuard<'static, Vec<PathBuf>> {
+    // A poisoned list is still a list of paths; losing it would leave staging directories behind.
+    UNFINISHED.lock().unwrap_or_else(|poisoned| poisoned.into_inner())
+}
+
+/// Removes the staging directory of every run still in progress. Called from the binary's
+/// interrupt handler: afterwards no run of this process can land, as the list stays locked
+/// until `finish` (which moves staging into place under the same lock) fails to find its
+/// directory.
+pub fn remove_unfinished_runs() {
+    for staging in unfinished().drain(..) {
+        let _ = fs::remove_dir_all(staging);
+    }
+}
+
 /// What produced a run: written as `manifest.json`.
 #[derive(Debug, Clone, Serialize)]
 pub struct Manifest {
@@ -52,36 +165,46 @@ pub struct Manifest {
 
 impl Manifest {
     pub fn new(command: impl Into<String>, seed: Option<u64>, inputs: serde_json::Value) -> Self {
-        Manifest { tool: "coopnav", version: env!("CARGO_PKG_VERSION"), command: command.into(), seed, inputs }
+        Manifest { tool: TOOL, version: env!("CARGO_PKG_VERSION"), command: command.into(), seed, inputs }
     }
 }
 
 /// A run directory being written.
 #[derive(Debug)]
 pub struct RunDir {
+    /// Where the run lands, as the user named it (for messages).
     target: PathBuf,
+    /// The same place with its parent resolved, for the file operations.
+    resolved: PathBuf,
     staging: PathBuf,
     force: bool,
     finished: bool,
 }
 
 impl RunDir {
-    /// Starts writing a run that will land at `target`. Fails at once if `target` exists and
-    /// `force` is false.
+    /// Starts writing a run that will land at `target`. Fails at once, before any work, if
+    /// `target` exists and is not an empty directory, unless `force` is set and
+    /// [`check_replaceable`] allows replacing it.
     pub fn create(target: impl Into<PathBuf>, force: bool) -> Result<Self, OutputError> {
         let target = target.into();
-        if target.exists() && !force {
-            return Err(OutputError::Exists(target));
-        }
-        let name = target.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_else(|| "run".into());
+        check_target(&target, force)?;
+        let name = target
+            .file_name()
+            .filter(|n| !matches!(Path::new(n).components().next(), Some(std::path::Component::ParentDir)))
+            .ok_or_else(|| OutputError::Unnamed(target.clone()))?
+            .to_owned();
         let parent = target.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
         fs::create_dir_all(parent).map_err(io_err(parent))?;
-        let staging = parent.join(format!(".{name}.partial-{}", std::process::id()));
+        let parent = fs::canonicalize(parent).map_err(io_err(parent))?;
+        let resolved = parent.join(&name);
+        let staging = parent.join(format!(".{}.partial-{}", name.to_string_lossy(), std::process::id()));
+        let mut live = unfinished();
         if staging.exists() {
             fs::remove_dir_all(&staging).map_err(io_err(&staging))?;
         }
         fs::create_dir(&staging).map_err(io_err(&staging))?;
-        Ok(RunDir { target, staging, force, finished: false })
+        live.push(staging.clone());
+        Ok(RunDir { target, resolved, staging, force, finished: false })
     }
 
     /// Starts a run under `base` with the first free name among `stem`, `stem-2`, `stem-3`, ...
@@ -131,17 +254,54 @@ impl RunDir {
         w.flush().map_err(io_err(&path))
     }
 
-    /// Moves the finished run into place (replacing an existing target only under `force`).
+    /// Moves the finished run into place. An existing target (checked again: it may have changed
+    /// while the run was computed) is moved aside first and deleted only once the new run is in
+    /// place, so a failure leaves the old run intact.
     pub fn finish(mut self) -> Result<PathBuf, OutputError> {
-        if self.target.exists() {
-            if !self.force {
-                return Err(OutputError::Exists(self.target.clone()));
-            }
-            fs::remove_dir_all(&self.target).map_err(io_err(&self.target))?;
+        check_target(&self.target, self.force)?;
+        let mut live = unfinished();
+        let Some(index) = live.iter().position(|p| *p == self.staging) else {
+            return Err(OutputError::Io {
+                path: self.staging.clone(),
+                source: std::io::Error::new(std::io::ErrorKind::Interrupted, "the run was interrupted"),
+            });
+        };
+        let aside = self.aside_path();
+        let replacing = self.resolved.exists();
+        if replacing {
+            fs::rename(&self.resolved, &aside).map_err(io_err(&self.target))?;
         }
-        fs::rename(&self.staging, &self.target).map_err(io_err(&self.target))?;
+        if let Err(e) = fs::rename(&self.staging, &self.resolved) {
+            if replacing {
+                let _ = fs::rename(&aside, &self.resolved);
+            }
+            return Err(io_err(&self.target)(e));
+        }
+        live.swap_remove(index);
         self.finished = true;
+        if replacing {
+            fs::remove_dir_all(&aside).map_err(io_err(&aside))?;
+        }
         Ok(self.target.clone())
+    }
+
+    fn aside_path(&self) -> PathBuf {
+        let name = self.resolved.file_name().unwrap_or_default().to_string_lossy();
+        self.resolved.with_file_name(format!(".{name}.replaced-{}", std::process::id()))
+    }
+}
+
+/// An existing target is reused only when it may be replaced (see [`check_replaceable`]) and
+/// is either empty or `force` is set.
+fn check_target(target: &Path, force: bool) -> Result<(), OutputError> {
+    if fs::symlink_metadata(target).is_err() {
+        return Ok(());
+    }
+    check_replaceable(target)?;
+    if force || is_empty_dir(target)? {
+        Ok(())
+    } else {
+        Err(OutputError::Exists(target.to_path_buf()))
     }
 }
 
@@ -150,6 +310,8 @@ impl Drop for RunDir {
         if !self.finished {
             // A run that did not finish leaves nothing behind; failure to clean up is not worth
             // masking the original error for.
+            let mut live = unfinished();
+            live.retain(|p| *p != self.staging);
             let _ = fs::remove_dir_all(&self.staging);
         }
     }
@@ -182,17 +344,81 @@ mod tests {
         assert_eq!(fs::read_to_string(target.join("ts.csv")).unwrap(), "t,err\n0.0,1.5\n");
     }
 
+    fn write_files(dir: &Path, names: &[&str]) {
+        fs::create_dir_all(dir).unwrap();
+        for name in names {
+            fs::write(dir.join(name), "user data").unwrap();
+        }
+    }
+
+    fn unsafe_reason(result: Result<RunDir, OutputError>) -> UnsafeTarget {
+        match result {
+            Err(OutputError::Unsafe { reason, .. }) => reason,
+            other => panic!("expected a refusal, got {other:?}"),
+        }
+    }
+
     #[test]
-    fn existing_target_needs_force() {
+    fn a_coopnav_run_is_replaced_only_with_force() {
         let tmp = tempfile::tempdir().unwrap();
         let target = tmp.path().join("run");
-        fs::create_dir(&target).unwrap();
-        fs::write(target.join("old.txt"), "old").unwrap();
+        let first = RunDir::create(&target, false).unwrap();
+        first.write_json(MANIFEST, &Manifest::new("test", None, serde_json::json!({}))).unwrap();
+        first.write_text("old.txt", "old").unwrap();
+        first.finish().unwrap();
         assert!(matches!(RunDir::create(&target, false), Err(OutputError::Exists(_))));
         let run = RunDir::create(&target, true).unwrap();
         run.write_text("new.txt", "new").unwrap();
         run.finish().unwrap();
         assert!(target.join("new.txt").exists() && !target.join("old.txt").exists());
+        let leftovers: Vec<_> = fs::read_dir(tmp.path()).unwrap().map(|e| e.unwrap().file_name()).collect();
+        assert_eq!(leftovers, ["run"], "no staging or set-aside directory may remain");
+    }
+
+    #[test]
+    fn force_never_replaces_a_directory_coopnav_did_not_write() {
+        let tmp = tempfile::tempdir().unwrap();
+        let target = tmp.path().join("mine");
+        write_files(&target, &["thesis.tex", "data.csv"]);
+        // A manifest.json that some other tool wrote does not make a directory ours.
+        fs::write(target.join(MANIFEST), r#"{"tool": "other"}"#).unwrap();
+        for force in [false, true] {
+            assert_eq!(unsafe_reason(RunDir::create(&target, force)), UnsafeTarget::NotACoopnavRun);
+        }
+        let file = tmp.path().join("notes.txt");
+        fs::write(&file, "x").unwrap();
+        assert_eq!(unsafe_reason(RunDir::create(&file, true)), UnsafeTarget::NotADirectory);
+        assert_eq!(fs::read_dir(&target).unwrap().count(), 3);
+        assert_eq!(fs::read_to_string(&file).unwrap(), "x");
+    }
+
+    #[test]
+    fn the_root_and_symlinks_are_refused_before_anything_is_written() {
+        assert_eq!(
+            match check_replaceable(Path::new("/")) {
+                Err(OutputError::Unsafe { reason, .. }) => reason,
+                other => panic!("expected a refusal, got {other:?}"),
+            },
+            UnsafeTarget::Root
+        );
+        let tmp = tempfile::tempdir().unwrap();
+        let real = tmp.path().join("real");
+        write_files(&real, &[]);
+        let link = tmp.path().join("link");
+        std::os::unix::fs::symlink(&real, &link).unwrap();
+        assert_eq!(unsafe_reason(RunDir::create(&link, true)), UnsafeTarget::Symlink);
+        assert_eq!(fs::read_dir(tmp.path()).unwrap().count(), 2, "no staging directory was made");
+    }
+
+    #[test]
+    fn an_empty_directory_is_used_without_force() {
+        let tmp = tempfile::tempdir().unwrap();
+        let target = tmp.path().join("empty");
+        fs::create_dir(&target).unwrap();
+        let run = RunDir::create(&target, false).unwrap();
+        run.write_text("a.txt", "a").unwrap();
+        run.finish().unwrap();
+        assert!(target.join("a.txt").is_file());
     }
 
     #[test]
