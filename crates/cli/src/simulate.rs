@@ -72,7 +72,7 @@ pub fn run(args: Args) -> Result<()> {
 fn single(sc: &Scenario, spec: &PolicySpec, stem: &str, args: &Args) -> Result<()> {
     let dir = args.scenario.run_dir(stem)?;
     let mut policy = spec.build(sc)?;
-    let result = closed_loop::run(sc, &mut policy, sc.seed, true, &Faults::default());
+    let result = closed_loop::run_traced(sc, &mut policy, sc.seed, &Faults::default());
     let out = write_run(dir, sc, &result, &std::env::args().collect::<Vec<_>>().join(" "))
         .context("writing the run directory")?;
     println!(

@@ -13,7 +13,7 @@ fn benches(c: &mut Criterion) {
         g.bench_function(name, |b| {
             b.iter(|| {
                 let mut p = spec.build(&sc).expect("builds");
-                run(&sc, &mut p, 1, false, &Faults::default())
+                run(&sc, &mut p, 1, &Faults::default(), &mut ())
             })
         });
     }

@@ -1,12 +1,14 @@
 //! coopnav-sim: the fast-time world that joins the planner, the navigation filters and the
 //! acoustic link.
 //!
-//! It owns scenario files, the world loop, metrics, Monte Carlo and the experiments that
-//! reproduce the theses' tables (see [`experiments`]).
+//! It owns scenario files, the mission [`engine`] and the [`models`] it plugs in, metrics, Monte
+//! Carlo and the experiments that reproduce the theses' tables (see [`experiments`]).
 
 pub mod closed_loop;
+pub mod engine;
 pub mod experiments;
 pub mod hbl;
+pub mod models;
 pub mod nams;
 pub mod output;
 pub mod plot;

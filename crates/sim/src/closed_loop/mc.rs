@@ -5,7 +5,7 @@
 
 use super::policies::{PolicyError, PolicySpec};
 use super::scenario::Scenario;
-use super::world::{run, Faults, RunResult, Timing};
+use crate::engine::{run, Faults, RunResult, Timing};
 use crate::hbl::mc::{t_975, Stats};
 use coopnav_core::run_seed;
 use rayon::prelude::*;
@@ -42,6 +42,10 @@ pub struct PolicySummary {
     pub limit_violation: f64,
     pub deadline_misses: u64,
     pub healthy: bool,
+    /// Mean NEES over every AUV and run (2 for consistent filters), and the AUV filters the NEES
+    /// check flagged as diverged, over all runs.
+    pub nees_mean: f64,
+    pub diverged: usize,
     /// Per-run fleet mean errors, in run order.
     pub runs: Vec<f64>,
 }
@@ -80,17 +84,14 @@ pub fn monte_carlo(
         .par_iter()
         .map(|&(p, i)| {
             let mut policy = specs[p].build(sc)?;
-            let r = run(sc, &mut policy, run_seed(sc.seed, i as u64), false, &Faults::default());
+            let r = run(sc, &mut policy, run_seed(sc.seed, i as u64), &Faults::default(), &mut ());
             progress(done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1);
             Ok(r)
         })
         .collect::<Result<Vec<RunResult>, PolicyError>>()?;
     let mut timing = Timing::default();
     for r in &results {
-        timing.planner_s += r.timing.planner_s;
-        timing.filters_s += r.timing.filters_s;
-        timing.channel_s += r.timing.channel_s;
-        timing.total_s += r.timing.total_s;
+        timing.add(&r.timing);
     }
     let summaries: Vec<PolicySummary> =
         results.chunks(runs.max(1)).zip(&specs).map(|(rs, s)| summarise(&s.name, rs)).collect();
@@ -136,6 +137,8 @@ fn summarise(name: &str, rs: &[RunResult]) -> PolicySummary {
         limit_violation: avg(&|r| r.auvs.iter().map(|a| a.limit_violation).sum::<f64>() / r.auvs.len().max(1) as f64),
         deadline_misses: rs.iter().filter_map(|r| r.planner.as_ref()).map(|p| p.deadline_misses).sum(),
         healthy: rs.iter().all(|r| r.fleet.healthy),
+        nees_mean: avg(&|r| r.auvs.iter().map(|a| a.health.nees_mean).sum::<f64>() / r.auvs.len().max(1) as f64),
+        diverged: rs.iter().map(|r| r.fleet.diverged).sum(),
         runs,
     }
 }

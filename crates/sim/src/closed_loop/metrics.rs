@@ -1,6 +1,6 @@
 //! Per-run metrics of the closed loop: each survey AUV's *true* navigation error statistics
 //! (mean, RMS, max, 95th percentile, CEP50 over time) beside the planner's modelled error,
-//! ranges and packets per link, CNA–AUV distances and limit violations.
+//! ranges and packets per link, CNA–AUV distances and limit violations, and filter health.
 
 use serde::{Deserialize, Serialize};
 
@@ -92,6 +92,26 @@ pub struct AuvMetrics {
     pub distance_max: f64,
     /// Fraction of samples outside the planner's [min, max] distance limits.
     pub limit_violation: f64,
+    /// The filter's consistency against the truth.
+    pub health: FilterHealth,
+}
+
+/// One filter's consistency over a run: its own σ beside the true error, NEES (horizontal
+/// position, every second) and NIS (every range update) against their χ² bounds.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct FilterHealth {
+    /// Mean of the filter's horizontal 1-σ, m.
+    pub sigma_mean: f64,
+    /// RMS true error over RMS σ (about 1 for a consistent filter; ≫ 1 when overconfident).
+    pub error_to_sigma: f64,
+    /// Mean NEES (2 degrees of freedom: 2 for a consistent filter).
+    pub nees_mean: f64,
+    /// Fraction of seconds with NEES inside its 95 % bound (0.95 for a consistent filter).
+    pub nees_in_95: f64,
+    pub nis_mean: Option<f64>,
+    pub nis_in_95: Option<f64>,
+    /// When the NEES had stayed above its 99.9 % bound for the divergence window, if it did.
+    pub diverged_at_s: Option<f64>,
 }
 
 /// Summary of the whole fleet.
@@ -102,4 +122,6 @@ pub struct FleetMetrics {
     pub modelled_mean: Option<f64>,
     /// Every filter state finite throughout.
     pub healthy: bool,
+    /// AUVs whose filter the NEES check flagged as diverged.
+    pub diverged: usize,
 }

@@ -2,7 +2,7 @@
 //! (the underway look-ahead planner or a baseline), the survey AUVs' OWTT navigation filters and
 //! the acoustic link act on each other, judged on the survey AUVs' *true* navigation error.
 //!
-//! [`scenario`] reads the TOML file, [`world::run`] runs one mission, [`mc`] compares policies
+//! [`scenario`] reads the TOML file, [`crate::engine::run`] runs one mission, [`mc`] compares policies
 //! over seeded Monte Carlo runs, and [`output`] writes a run directory with plots and a report.
 
 pub mod mc;
@@ -11,13 +11,12 @@ pub mod output;
 pub mod planner_policy;
 pub mod policies;
 pub mod scenario;
-pub mod world;
 
+pub use crate::engine::{run, run_traced, Faults, RunResult, Timing};
 pub use mc::{comparison_table, monte_carlo, Comparison, PolicySummary};
 pub use planner_policy::{ErrorTracker, PlannerPolicy, PlannerStats};
 pub use policies::{Policy, PolicyError, PolicySpec, POLICY_NAMES};
 pub use scenario::{Scenario, ScenarioError, EXAMPLE};
-pub use world::{run, Faults, RunResult, Timing};
 
 #[cfg(test)]
 mod tests;

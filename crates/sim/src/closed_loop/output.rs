@@ -3,7 +3,7 @@
 //! and a self-contained report.html that shows every plot inline.
 
 use super::scenario::Scenario;
-use super::world::{RunResult, Trace};
+use crate::engine::{RunResult, Trace, TraceRow};
 use crate::output::{Manifest, RunDir, WriteError};
 use crate::plot::{line_svg, track_svg, Labels, PlotError, Series};
 use crate::report::HtmlReport;
@@ -33,7 +33,7 @@ pub fn write_run(dir: RunDir, sc: &Scenario, result: &RunResult, command: &str) 
 }
 
 fn plots(n: usize, tr: &Trace) -> Result<Vec<String>, PlotError> {
-    let per_auv = |f: &dyn Fn(&super::world::TraceRow) -> (f64, f64), k: usize| {
+    let per_auv = |f: &dyn Fn(&TraceRow) -> (f64, f64), k: usize| {
         tr.rows.iter().filter(|r| r.auv == k).map(f).collect::<Vec<_>>()
     };
     let mut tracks = Vec::new();
@@ -116,6 +116,39 @@ fn report(sc: &Scenario, r: &RunResult, svgs: &[String]) -> String {
             "limit viol. %",
         ],
         &rows,
+    );
+    h.heading("Filter health (against the truth)");
+    let health: Vec<Vec<String>> = r
+        .auvs
+        .iter()
+        .map(|a| {
+            let f = &a.health;
+            vec![
+                a.name.clone(),
+                fmt(a.error.rms),
+                fmt(f.sigma_mean),
+                fmt(f.error_to_sigma),
+                fmt(f.nees_mean),
+                format!("{:.1}", 100.0 * f.nees_in_95),
+                f.nis_mean.map_or("-".into(), fmt),
+                fmt(a.distance_mean),
+                f.diverged_at_s.map_or("no".into(), |t| format!("yes, at {t:.0} s")),
+            ]
+        })
+        .collect();
+    h.table(
+        &[
+            "AUV",
+            "true RMS [m]",
+            "filter σ [m]",
+            "RMS/σ",
+            "NEES mean (2 = consistent)",
+            "NEES in 95 % bound %",
+            "NIS mean (1)",
+            "CNA dist [m]",
+            "diverged",
+        ],
+        &health,
     );
     if let Some(p) = &r.planner {
         h.paragraph(&format!(

@@ -2,9 +2,13 @@
 //! lawnmowers, the CNA, the acoustic link, sensors and filters, and the planner. Validated
 //! before anything runs; every error names the file, the field and what is allowed.
 
-use crate::hbl::config::Sensors;
+pub use crate::engine::health::Health;
+use crate::models::channel::Channel;
+use crate::models::finish::Finish;
+use crate::models::schedule::{longest_air, payload_problem, Fit, Schedule};
 pub use crate::scenario_file::ScenarioError;
-use crate::scenario_file::{self, overlay};
+use crate::scenario_file::{self, overlay, Problems};
+use coopnav_acomms::node_report::{BODY_BITS, HEADER_BITS};
 use coopnav_acomms::selector::AdaptiveConfig;
 use coopnav_acomms::tl::analytic::Thorp;
 use coopnav_acomms::{Rate, SuccessModel};
@@ -17,8 +21,9 @@ use coopnav_plan::{
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 
-/// The embedded default mission (`coopnav simulate` with no scenario, `--example`).
-pub const EXAMPLE: &str = include_str!("example.toml");
+/// The embedded default mission (`coopnav simulate` with no scenario, `--example`): the
+/// library's `scenarios/default.toml`.
+pub const EXAMPLE: &str = include_str!("../../../../scenarios/default.toml");
 
 /// The whole file.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -34,12 +39,43 @@ pub struct Scenario {
     pub cna: Cna,
     #[serde(default)]
     pub comms: Comms,
+    /// The acoustic channel as the sea plays it (truth), apart from what `[filter]` assumes.
     #[serde(default)]
-    pub sensors: Sensors,
-    /// The survey AUVs' filter; its range noise is also the truth's (plus `comms.extra_range_sd`).
+    pub channel: Channel,
+    #[serde(default)]
+    pub sensors: AuvSensors,
+    /// The survey AUVs' filter: what it assumes (the truth is `[channel]` and `[sensors]`).
     #[serde(default = "default_filter", deserialize_with = "filter_over_default")]
     pub filter: AuvParams,
     pub planner: Planner,
+    #[serde(default)]
+    pub health: Health,
+}
+
+/// The survey AUVs' dead-reckoning sensors as they truly are (digest §5.5 values by default).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct AuvSensors {
+    /// Speed-through-water noise SD, m/s.
+    pub speed_sd: f64,
+    /// Step SD of the compass-bias random walk over integer headings, deg.
+    pub compass_bias_step_deg: f64,
+    /// Independent per-degree bias values instead of a random walk.
+    pub compass_bias_iid: bool,
+    pub compass_white_deg: f64,
+    pub yaw_rate_white_deg_s: f64,
+}
+
+impl Default for AuvSensors {
+    fn default() -> Self {
+        AuvSensors {
+            speed_sd: 0.05,
+            compass_bias_step_deg: 0.047,
+            compass_bias_iid: false,
+            compass_white_deg: 0.5,
+            yaw_rate_white_deg_s: 0.05,
+        }
+    }
 }
 
 /// The closed loop's channel keeps 0.15 m range noise at zero range (σ_τ = 0.1 ms, the model its
@@ -86,6 +122,9 @@ pub struct Fleet {
     /// SD of the initial position fix (GPS before diving), m.
     #[serde(default = "one")]
     pub init_position_sd: f64,
+    /// What a survey AUV does once its lawnmower is flown.
+    #[serde(default)]
+    pub finish: Finish,
 }
 
 fn default_seafloor() -> f64 {
@@ -133,8 +172,8 @@ fn default_turn_rate() -> f64 {
     4.0
 }
 
-/// The acoustic link: TDMA over one period τ (CNA broadcast in slot 0, then one status slot per
-/// AUV), fixed WHOI rates per direction, analytic TL and the Table 4/5 success engine.
+/// The acoustic link: the TDMA schedule over one period τ, fixed WHOI rates per direction (or the
+/// adaptive selector for the status messages), analytic TL and the Table 4/5 success engine.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct Comms {
@@ -149,10 +188,12 @@ pub struct Comms {
     pub status_adaptive: Option<AdaptiveConfig>,
     pub tl: Thorp,
     pub success: SuccessModel,
-    pub sound_speed: f64,
-    /// SD of the true range error per range, m, on top of the filter's modelled noise (0 = the
-    /// truth noise equals the filter's model).
-    pub extra_range_sd: f64,
+    /// Who transmits when within each cycle of τ.
+    pub schedule: Schedule,
+    /// Idle time a slot keeps after its packet's air time and longest travel time, s.
+    pub slot_guard_s: f64,
+    /// Longest range a slot must allow the packet to travel, m.
+    pub max_range_m: f64,
 }
 
 impl Default for Comms {
@@ -164,8 +205,9 @@ impl Default for Comms {
             status_adaptive: None,
             tl: Thorp::default(),
             success: SuccessModel::default(),
-            sound_speed: 1500.0,
-            extra_range_sd: 0.0,
+            schedule: Schedule::default(),
+            slot_guard_s: 0.1,
+            max_range_m: 1000.0,
         }
     }
 }
@@ -229,139 +271,178 @@ impl Scenario {
         scenario_file::load(file, Self::validate)
     }
 
-    /// Checks every field against its allowed range.
+    /// Checks every field against its allowed range and reports every bad one at once.
     pub fn validate(&self, file: &Path) -> Result<(), ScenarioError> {
-        let bad = |field: &str, value: String, allowed: &str| ScenarioError::invalid(file, field, value, allowed);
-        let positive = |field: &str, v: f64| {
-            if v.is_finite() && v > 0.0 {
-                Ok(())
-            } else {
-                Err(bad(field, v.to_string(), "a finite number > 0"))
-            }
-        };
-        let non_negative = |field: &str, v: f64| {
-            if v.is_finite() && v >= 0.0 {
-                Ok(())
-            } else {
-                Err(bad(field, v.to_string(), "a finite number >= 0"))
-            }
-        };
-        positive("duration_s", self.duration_s)?;
-        if !(self.dt > 0.0 && self.dt <= 1.0) {
-            return Err(bad("dt", self.dt.to_string(), "0 < dt <= 1 s"));
+        let mut p = Problems::new(file);
+        p.positive("duration_s", self.duration_s);
+        p.check("dt", self.dt, |v| v > 0.0 && v <= 1.0, "0 < dt <= 1 s");
+        self.validate_fleet(&mut p);
+        self.validate_cna(&mut p);
+        self.validate_comms(&mut p);
+        self.validate_sensors(&mut p);
+        if let Err(e) = self.filter.validate("filter.") {
+            p.push("filter", e.to_string(), "see the message");
         }
+        p.check("health.divergence_window_s", self.health.divergence_window_s, |v| v > 0.0, "a finite number > 0");
+        self.validate_planner(&mut p);
+        p.finish()
+    }
+
+    fn validate_fleet(&self, p: &mut Problems) {
         let f = &self.fleet;
         if !(1..=8).contains(&f.n_auvs) {
-            return Err(bad("fleet.n_auvs", f.n_auvs.to_string(), "1..=8"));
+            p.push("fleet.n_auvs", f.n_auvs.to_string(), "1..=8");
         }
-        positive("fleet.lane_length", f.lane_length)?;
-        positive("fleet.lane_spacing", f.lane_spacing)?;
+        p.positive("fleet.lane_length", f.lane_length);
+        p.positive("fleet.lane_spacing", f.lane_spacing);
         if f.lanes == 0 {
-            return Err(bad("fleet.lanes", "0".into(), ">= 1"));
+            p.push("fleet.lanes", "0", ">= 1");
         }
-        non_negative("fleet.block_offset", f.block_offset)?;
-        if !(f.speed > 0.0 && f.speed <= 3.0) {
-            return Err(bad("fleet.speed", f.speed.to_string(), "0 < speed <= 3 m/s"));
-        }
-        positive("fleet.seafloor_depth", f.seafloor_depth)?;
+        p.non_negative("fleet.block_offset", f.block_offset);
+        p.check("fleet.lane_heading_compass_deg", f.lane_heading_compass_deg, |_| true, "a finite number");
+        p.check("fleet.speed", f.speed, |v| v > 0.0 && v <= 3.0, "0 < speed <= 3 m/s");
+        p.positive("fleet.seafloor_depth", f.seafloor_depth);
         match f.depth {
-            DepthTarget::Depth { depth } if !(depth >= 0.0 && depth < f.seafloor_depth) => {
-                return Err(bad("fleet.depth.depth", depth.to_string(), "0 <= depth < fleet.seafloor_depth"))
-            }
-            DepthTarget::Altitude { altitude } if !(altitude > 0.0 && altitude < f.seafloor_depth) => {
-                return Err(bad("fleet.depth.altitude", altitude.to_string(), "0 < altitude < fleet.seafloor_depth"))
-            }
-            _ => {}
+            DepthTarget::Depth { depth } => p.check(
+                "fleet.depth.depth",
+                depth,
+                |v| v >= 0.0 && v < f.seafloor_depth,
+                "0 <= depth < fleet.seafloor_depth",
+            ),
+            DepthTarget::Altitude { altitude } => p.check(
+                "fleet.depth.altitude",
+                altitude,
+                |v| v > 0.0 && v < f.seafloor_depth,
+                "0 < altitude < fleet.seafloor_depth",
+            ),
         }
         if let Some(shelf) = &f.shelf {
-            Bathymetry::shelf(shelf)
-                .map_err(|e| bad("fleet.shelf", e.to_string(), "a valid shelf (extent, spacing, depths > 0)"))?;
+            if let Err(e) = Bathymetry::shelf(shelf) {
+                p.push("fleet.shelf", e.to_string(), "a valid shelf (extent, spacing, depths > 0)");
+            }
             let shallowest = shelf.shallow.min(shelf.deep);
             let clear = match f.depth {
                 DepthTarget::Depth { depth } => depth < shallowest,
                 DepthTarget::Altitude { altitude } => altitude < shallowest,
             };
             if !clear {
-                return Err(bad(
-                    "fleet.depth",
-                    format!("{:?}", f.depth),
-                    "shallower than the shelf's shallowest water",
-                ));
+                p.push("fleet.depth", format!("{:?}", f.depth), "shallower than the shelf's shallowest water");
             }
         }
         if !(f.current.0.is_finite() && f.current.1.is_finite() && f.current.0.hypot(f.current.1) < f.speed) {
-            return Err(bad("fleet.current", format!("{:?}", f.current), "finite, slower than fleet.speed"));
+            p.push("fleet.current", format!("{:?}", f.current), "finite, slower than fleet.speed");
         }
-        non_negative("fleet.init_position_sd", f.init_position_sd)?;
-        for (field, v) in [
-            ("fleet.origin", f.origin.0.abs().max(f.origin.1.abs())),
-            ("cna.x", self.cna.x.abs()),
-            ("cna.y", self.cna.y.abs()),
-        ] {
-            if !(v < 10_000.0) {
-                return Err(bad(field, v.to_string(), "coordinates within ±10 000 m (status message range ±16 000 m)"));
-            }
+        p.non_negative("fleet.init_position_sd", f.init_position_sd);
+        p.extend(f.finish.problems("fleet.finish."));
+        for (field, v) in [("fleet.origin[0]", f.origin.0), ("fleet.origin[1]", f.origin.1)] {
+            p.check(field, v, |v| v.abs() < 10_000.0, "within ±10 000 m (status message range ±16 000 m)");
         }
         // Every survey waypoint must fit the status message's ±16 000 m fields (with room for drift).
-        let extent = (0..f.n_auvs)
+        let extent = (0..f.n_auvs.min(8))
             .flat_map(|k| self.lawnmower(k).waypoints())
             .map(|(x, y)| x.abs().max(y.abs()))
             .fold(0.0, f64::max);
         if !(extent < 15_000.0) {
-            return Err(bad(
+            p.push(
                 "fleet",
                 format!("survey reaching {extent:.0} m from the origin"),
                 "every lawnmower within ±15 000 m (status message fields are ±16 000 m)",
-            ));
+            );
         }
-        positive("cna.speed", self.cna.speed)?;
-        if let Some(a) = &self.cna.auv {
+    }
+
+    fn validate_cna(&self, p: &mut Problems) {
+        let c = &self.cna;
+        for (field, v) in [("cna.x", c.x), ("cna.y", c.y)] {
+            p.check(field, v, |v| v.abs() < 10_000.0, "within ±10 000 m (status message range ±16 000 m)");
+        }
+        p.check("cna.heading_compass_deg", c.heading_compass_deg, |_| true, "a finite number");
+        p.positive("cna.speed", c.speed);
+        p.positive("cna.max_turn_rate_deg_s", c.max_turn_rate_deg_s);
+        p.non_negative("cna.gps_sd", c.gps_sd);
+        if let Some(a) = &c.auv {
             if a.pitch_options == 0 {
-                return Err(bad("cna.auv.pitch_options", "0".into(), ">= 1"));
+                p.push("cna.auv.pitch_options", "0", ">= 1");
             }
-            if !(a.depth >= 0.0 && a.depth < 100.0) {
-                return Err(bad(
-                    "cna.auv.depth",
-                    a.depth.to_string(),
-                    "0 <= depth < 100 m (the planner's AUV-CNA depth limits)",
-                ));
-            }
-            non_negative("cna.auv.nav_diffusion", a.nav_diffusion)?;
+            p.check(
+                "cna.auv.depth",
+                a.depth,
+                |v| (0.0..100.0).contains(&v),
+                "0 <= depth < 100 m (the planner's AUV-CNA depth limits)",
+            );
+            p.non_negative("cna.auv.nav_diffusion", a.nav_diffusion);
         }
-        positive("cna.max_turn_rate_deg_s", self.cna.max_turn_rate_deg_s)?;
-        non_negative("cna.gps_sd", self.cna.gps_sd)?;
+    }
+
+    fn validate_comms(&self, p: &mut Problems) {
         let c = &self.comms;
-        if !(5.0..=600.0).contains(&c.tau) {
-            return Err(bad("comms.tau", c.tau.to_string(), "5..=600 s"));
-        }
+        p.check("comms.tau", c.tau, |v| (5.0..=600.0).contains(&v), "5..=600 s");
         if self.dt > c.tau {
-            return Err(bad("dt", self.dt.to_string(), "<= comms.tau"));
+            p.push("dt", self.dt.to_string(), "<= comms.tau");
         }
         for (field, rate) in [("comms.cna_rate", c.cna_rate), ("comms.status_rate", c.status_rate)] {
             if rate.spec().deprecated {
-                return Err(bad(field, rate.to_string(), "0, 1, 4 or 5 (rates 2 and 3 are deprecated)"));
+                p.push(field, rate.to_string(), "0, 1, 4 or 5 (rates 2 and 3 are deprecated)");
             }
         }
-        if let Some(a) = &c.status_adaptive {
-            a.validate().map_err(|e| bad("comms.status_adaptive", e, "see the message"))?;
+        let status_rates: Vec<Rate> = match &c.status_adaptive {
+            Some(a) => {
+                if let Err(e) = a.validate() {
+                    p.push("comms.status_adaptive", e, "see the message");
+                }
+                Rate::usable().to_vec()
+            }
+            None => vec![c.status_rate],
+        };
+        // The status message, and the CNA's broadcast: its position report with one ack bit per AUV.
+        let status_bytes = (HEADER_BITS + BODY_BITS).div_ceil(8) as usize;
+        let broadcast_bytes = status_bytes + self.fleet.n_auvs.div_ceil(8);
+        p.extend(payload_problem("comms.cna_rate", c.cna_rate, broadcast_bytes));
+        for rate in &status_rates {
+            p.extend(payload_problem("comms.status_rate", *rate, status_bytes));
         }
-        positive("comms.sound_speed", c.sound_speed)?;
-        non_negative("comms.extra_range_sd", c.extra_range_sd)?;
-        positive("comms.tl.k", c.tl.k)?;
-        positive("comms.tl.freq_hz", c.tl.freq_hz)?;
-        self.filter.validate("filter.").map_err(|e| bad("filter", e.to_string(), "see the message"))?;
-        let p = &self.planner;
-        positive("planner.sigma0", p.sigma0)?;
-        non_negative("planner.eps0", p.eps0)?;
-        if p.start_after_reports == 0 {
-            return Err(bad("planner.start_after_reports", "0".into(), ">= 1"));
+        p.positive("comms.tl.k", c.tl.k);
+        p.positive("comms.tl.freq_hz", c.tl.freq_hz);
+        p.non_negative("comms.slot_guard_s", c.slot_guard_s);
+        p.positive("comms.max_range_m", c.max_range_m);
+        p.extend(self.channel.range_error.problems("channel.range_error."));
+        p.extend(self.channel.sound_speed.problems("channel.sound_speed."));
+        p.extend(self.channel.clocks.problems("channel.clocks."));
+        p.extend(self.channel.collisions.problems("channel.collisions."));
+        if p.is_empty() {
+            let fit = Fit {
+                tau: c.tau,
+                n_auvs: self.fleet.n_auvs,
+                cna_air_s: longest_air([c.cna_rate]),
+                status_air_s: longest_air(status_rates),
+                travel_s: c.max_range_m / self.channel.sound_speed.slowest(),
+                guard_s: c.slot_guard_s,
+            };
+            p.extend(c.schedule.problems("comms.schedule.", &fit));
         }
-        if PenaltyCase::from_id(&p.penalty_case).is_none() {
+    }
+
+    fn validate_sensors(&self, p: &mut Problems) {
+        let s = &self.sensors;
+        p.non_negative("sensors.speed_sd", s.speed_sd);
+        p.check("sensors.compass_bias_step_deg", s.compass_bias_step_deg, |v| (0.0..=10.0).contains(&v), "0..=10 deg");
+        p.check("sensors.compass_white_deg", s.compass_white_deg, |v| (0.0..=30.0).contains(&v), "0..=30 deg");
+        p.check("sensors.yaw_rate_white_deg_s", s.yaw_rate_white_deg_s, |v| (0.0..=10.0).contains(&v), "0..=10 deg/s");
+    }
+
+    fn validate_planner(&self, p: &mut Problems) {
+        let pl = &self.planner;
+        p.positive("planner.sigma0", pl.sigma0);
+        p.non_negative("planner.eps0", pl.eps0);
+        if pl.start_after_reports == 0 {
+            p.push("planner.start_after_reports", "0", ">= 1");
+        }
+        if PenaltyCase::from_id(&pl.penalty_case).is_none() {
             let ids: Vec<&str> = PenaltyCase::ALL.iter().map(|c| c.id()).collect();
-            return Err(bad("planner.penalty_case", p.penalty_case.clone(), &ids.join(", ")));
+            p.push("planner.penalty_case", pl.penalty_case.clone(), ids.join(", "));
+        } else if let Err(e) = self.planner_config().validate() {
+            p.push("planner", e.to_string(), "see the message");
         }
-        self.planner_config().validate().map_err(|e| bad("planner", e.to_string(), "see the message"))?;
-        Ok(())
     }
 
     /// The seafloor: the shelf if given, else a flat bottom at `seafloor_depth`.
@@ -480,6 +561,46 @@ mod tests {
         assert_eq!(s.filter.q, plain.filter.q);
         let e = err(&format!("{EXAMPLE}\n[filter.range_noise]\nsigma_tim = 1e-3\n"));
         assert!(e.contains("sigma_tim"), "{e}");
+    }
+
+    /// NaN, infinite and negative sensor noise, a bad channel model and a bad finish behaviour:
+    /// every one named with its path in one error, and the sensors' unused keys are refused.
+    #[test]
+    fn every_bad_field_is_reported_at_once() {
+        let text = EXAMPLE
+            .replace("speed_sd = 0.05", "speed_sd = nan")
+            .replace("compass_white_deg = 0.5", "compass_white_deg = -0.5")
+            .replace("yaw_rate_white_deg_s = 0.05", "yaw_rate_white_deg_s = inf")
+            .replace("p_outlier = 0.0555", "p_outlier = -0.1")
+            .replace("capture_margin_db = 6.0", "capture_margin_db = -1.0")
+            .replace("radius_m = 50.0", "radius_m = 0.0")
+            .replace("divergence_window_s = 60.0", "divergence_window_s = nan");
+        let e = err(&text);
+        for field in [
+            "sensors.speed_sd",
+            "sensors.compass_white_deg",
+            "sensors.yaw_rate_white_deg_s",
+            "channel.range_error.p_outlier",
+            "channel.collisions.capture_margin_db",
+            "fleet.finish.radius_m",
+            "health.divergence_window_s",
+        ] {
+            assert!(e.contains(&format!("field {field} = ")), "{field} missing from: {e}");
+        }
+        assert!(e.contains("7 bad fields") && e.contains("s.toml"), "{e}");
+        let e = err(&EXAMPLE.replace("yaw_rate_white_deg_s = 0.05", "yaw_rate_white_deg_s = 0.05\ndgps_sd = 0.1"));
+        assert!(e.contains("dgps_sd"), "{e}");
+        let e = err(&EXAMPLE.replace("p_outlier = 0.0555", "p_outliers = 0.0555"));
+        assert!(e.contains("p_outliers"), "{e}");
+    }
+
+    /// Eight AUVs with τ = 30 s leave 3.3 s per slot, less than rate 0's 3.9 s of air time; τ = 44 s fits.
+    #[test]
+    fn a_schedule_that_cannot_fit_is_refused() {
+        let e = err(&EXAMPLE.replace("n_auvs = 3", "n_auvs = 8"));
+        assert!(e.contains("comms.schedule.slot 1 (auv0") && e.contains("air time 3.90 s"), "{e}");
+        let longer = EXAMPLE.replace("n_auvs = 3", "n_auvs = 8").replace("tau = 30.0", "tau = 44.0");
+        Scenario::parse(&longer, Path::new("s.toml")).unwrap();
     }
 
     #[test]

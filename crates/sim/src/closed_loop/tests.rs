@@ -16,7 +16,11 @@ fn short(n: usize, duration: f64) -> Scenario {
 
 fn one_run(sc: &Scenario, policy: &str, seed: u64, record: bool, faults: &Faults) -> RunResult {
     let mut p = PolicySpec::new(policy, sc).unwrap().build(sc).unwrap();
-    run(sc, &mut p, seed, record, faults)
+    if record {
+        run_traced(sc, &mut p, seed, faults)
+    } else {
+        run(sc, &mut p, seed, faults, &mut ())
+    }
 }
 
 #[test]

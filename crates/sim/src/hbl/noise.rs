@@ -3,7 +3,7 @@
 //! fixed pattern whatever the configuration, so MSBL, HBL One and HBL Two runs with the same
 //! seed see the same noise (common random numbers).
 
-use super::config::{Acoustic, Buoy, Drift, Sensors};
+use super::config::{Acoustic, Buoy, Drift};
 use rand::Rng;
 use rand_chacha::ChaCha8Rng;
 use rand_distr::StandardNormal;
@@ -35,13 +35,13 @@ pub struct CompassBias {
 }
 
 impl CompassBias {
-    pub fn draw(s: &Sensors, rng: &mut ChaCha8Rng) -> Self {
-        let step = s.compass_bias_step_deg.to_radians();
+    pub fn draw(step_deg: f64, iid: bool, rng: &mut ChaCha8Rng) -> Self {
+        let step = step_deg.to_radians();
         let mut acc = 0.0;
         let table = (0..360)
             .map(|_| {
                 let d = normal(rng) * step;
-                if s.compass_bias_iid {
+                if iid {
                     d
                 } else {
                     acc += d;
@@ -125,6 +125,7 @@ impl BuoyMotion {
 
 #[cfg(test)]
 mod tests {
+    use super::super::config::Sensors;
     use super::*;
     use coopnav_core::SeedStream;
 
@@ -190,7 +191,8 @@ mod tests {
 
     #[test]
     fn compass_map_is_continuous_for_a_walk() {
-        let m = CompassBias::draw(&Sensors::default(), &mut SeedStream::new(9).rng(5));
+        let s = Sensors::default();
+        let m = CompassBias::draw(s.compass_bias_step_deg, s.compass_bias_iid, &mut SeedStream::new(9).rng(5));
         let d = (m.at(0.0) - m.at(0.0175)).abs();
         assert!(d < 0.047f64.to_radians() * 5.0);
     }

@@ -233,7 +233,11 @@ impl<'a> World<'a> {
             assignment: sc.configuration.assign(cycle),
             ship_zone: sc.quantisation.ship_zone(),
             buoy_zone: sc.quantisation.buoy_zone(),
-            compass: CompassBias::draw(&sc.sensors, &mut rng(stream::COMPASS_MAP)),
+            compass: CompassBias::draw(
+                sc.sensors.compass_bias_step_deg,
+                sc.sensors.compass_bias_iid,
+                &mut rng(stream::COMPASS_MAP),
+            ),
             buoy_motion,
             clock_rate,
             rng: Streams {

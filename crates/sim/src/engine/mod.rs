@@ -1,0 +1,279 @@
+//! The one mission engine. It owns the loop only: every truth step runs the named phases of
+//! [`phases`] in order — decide, advance, transmit, deliver, sense, observe — and reports what
+//! it saw to an [`Observer`]. The vehicles are in [`vehicles`], packets in flight and their fate
+//! in [`inflight`], filter consistency in [`health`]; the models it plugs in (channel truth,
+//! schedule, finish behaviour) in [`crate::models`].
+//!
+//! Today it runs the closed-loop scenario: survey AUVs on lawnmowers with OWTT EKFs, one CNA
+//! (ASC or AUV) steered by a [`crate::policy::CnaPolicy`], the comms schedule of the scenario.
+
+pub mod health;
+mod inflight;
+pub mod observe;
+mod phases;
+mod vehicles;
+
+use crate::closed_loop::metrics::{AuvMetrics, ErrorStats, FleetMetrics, LinkStats};
+use crate::closed_loop::planner_policy::{ErrorTracker, PlannerStats};
+use crate::closed_loop::policies::{cna_start, Policy};
+use crate::closed_loop::scenario::Scenario;
+use crate::models::channel::Clock;
+use crate::models::schedule::Slot;
+use coopnav_core::{Bathymetry, SeedStream, Vec3};
+use coopnav_plan::predict::UnderwayPredictor;
+use coopnav_plan::AuvForecast;
+use inflight::InFlight;
+pub use observe::{CommsEvent, Observer, Trace, TraceRow};
+use phases::Payload;
+use rand_chacha::ChaCha8Rng;
+use serde::Serialize;
+use std::time::Instant;
+use vehicles::{stream, Craft, SurveyAuv};
+
+/// Links forced to lose every packet (failure studies and tests).
+#[derive(Debug, Clone, Default)]
+pub struct Faults {
+    /// AUVs whose packets (both directions) are all lost from `silent_from_s` on.
+    pub silent_auvs: Vec<usize>,
+    pub silent_from_s: f64,
+}
+
+/// Wall-clock time per phase (not part of the deterministic results).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]
+pub struct Timing {
+    /// CNA decisions, including the planner.
+    pub decide_s: f64,
+    /// Truth kinematics of every vehicle.
+    pub advance_s: f64,
+    /// Slots due: encoding, channel draws, travel times.
+    pub transmit_s: f64,
+    /// Packets' fates and the range updates they carry.
+    pub deliver_s: f64,
+    /// Filter predictions and sensor updates.
+    pub sense_s: f64,
+    /// Metrics and the observer.
+    pub observe_s: f64,
+    pub total_s: f64,
+}
+
+impl Timing {
+    pub fn add(&mut self, o: &Timing) {
+        self.decide_s += o.decide_s;
+        self.advance_s += o.advance_s;
+        self.transmit_s += o.transmit_s;
+        self.deliver_s += o.deliver_s;
+        self.sense_s += o.sense_s;
+        self.observe_s += o.observe_s;
+        self.total_s += o.total_s;
+    }
+}
+
+/// Everything one run produced.
+#[derive(Debug, Clone, Serialize)]
+pub struct RunResult {
+    pub policy: String,
+    pub seed: u64,
+    pub auvs: Vec<AuvMetrics>,
+    pub fleet: FleetMetrics,
+    pub planner: Option<PlannerStats>,
+    /// The recorded time series ([`run_traced`] only).
+    #[serde(skip)]
+    pub trace: Option<Trace>,
+    #[serde(skip)]
+    pub timing: Timing,
+}
+
+/// The CNA predictors as a forecast, hiding AUVs with fewer than the required reports (A14).
+pub struct FleetView<'a> {
+    pub predictors: &'a [UnderwayPredictor],
+    pub min_reports: usize,
+}
+
+impl AuvForecast for FleetView<'_> {
+    fn n_auvs(&self) -> usize {
+        self.predictors.len()
+    }
+    fn position(&self, k: usize, t: f64) -> Option<Vec3> {
+        let p = self.predictors.get(k)?;
+        (p.reports_received() >= self.min_reports).then(|| p.position_at(t)).flatten()
+    }
+}
+
+/// The CNA: its craft, its own navigation, its clock, and what it knows of the fleet.
+struct Cna {
+    craft: Craft,
+    /// Its broadcast position minus its truth (GPS error for an ASC, a random walk for an AUV),
+    /// drawn at each decision and held over the cycle.
+    nav_error: (f64, f64),
+    rng_gps: ChaCha8Rng,
+    rng_nav: ChaCha8Rng,
+    clock: Clock,
+    predictors: Vec<UnderwayPredictor>,
+    model: ErrorTracker,
+    /// Status slots received since its last broadcast, per AUV (its one-bit-per-AUV ack).
+    acked: Vec<Vec<u64>>,
+}
+
+/// Per-AUV sums for the run's metrics.
+#[derive(Default)]
+struct AuvTally {
+    errors: Vec<f64>,
+    distances: Vec<f64>,
+    violations: u64,
+    modelled: Vec<f64>,
+    down: LinkStats,
+    up: LinkStats,
+    applied: u64,
+    health: health::Tally,
+}
+
+/// One run's state.
+struct Engine<'a> {
+    sc: &'a Scenario,
+    policy: &'a mut Policy,
+    faults: &'a Faults,
+    bathy: Bathymetry,
+    slots: Vec<Slot>,
+    auvs: Vec<SurveyAuv>,
+    cna: Cna,
+    air: InFlight<Payload>,
+    next_decision: u64,
+    /// Index of the next slot over the whole run (cycle = index / slots per cycle).
+    next_slot: u64,
+    status_sent: Vec<u64>,
+    tallies: Vec<AuvTally>,
+    finite: bool,
+}
+
+/// Runs `policy` over scenario `sc` with run seed `seed`, reporting to `obs`.
+pub fn run(sc: &Scenario, policy: &mut Policy, seed: u64, faults: &Faults, obs: &mut dyn Observer) -> RunResult {
+    let t_start = Instant::now();
+    let mut engine = Engine::new(sc, policy, seed, faults);
+    let mut timing = Timing::default();
+    let steps = (sc.duration_s / sc.dt).round() as u64;
+    for step in 0..steps {
+        engine.step(step, &mut timing, obs);
+    }
+    timing.total_s = t_start.elapsed().as_secs_f64();
+    engine.finish(seed, timing)
+}
+
+/// [`run`] keeping the whole time series in the result.
+pub fn run_traced(sc: &Scenario, policy: &mut Policy, seed: u64, faults: &Faults) -> RunResult {
+    let mut trace = Trace::default();
+    let mut r = run(sc, policy, seed, faults, &mut trace);
+    r.trace = Some(trace);
+    r
+}
+
+impl<'a> Engine<'a> {
+    fn new(sc: &'a Scenario, policy: &'a mut Policy, seed: u64, faults: &'a Faults) -> Self {
+        let streams = SeedStream::new(seed);
+        let n = sc.fleet.n_auvs;
+        let bathy = sc.bathymetry();
+        let auvs: Vec<SurveyAuv> = (0..n).map(|k| SurveyAuv::new(sc, k, &streams, &bathy)).collect();
+        let start = cna_start(sc);
+        let cfg = sc.planner_config();
+        let cna = Cna {
+            craft: Craft { pos: start.pos, prev: start.pos, heading: start.heading.radians(), target: None },
+            nav_error: (0.0, 0.0),
+            rng_gps: streams.rng(stream::CNA_GPS),
+            rng_nav: streams.rng(stream::CNA_NAV),
+            clock: sc.channel.clocks.draw(&mut streams.rng(stream::CNA_CLOCK)),
+            predictors: (0..n).map(|_| UnderwayPredictor::new(sc.predictor_config())).collect(),
+            model: ErrorTracker::new(n, cfg.error, sc.comms.tau, sc.planner.sigma0, sc.planner.eps0),
+            acked: vec![Vec::new(); n],
+        };
+        Engine {
+            sc,
+            policy,
+            faults,
+            bathy,
+            slots: sc.comms.schedule.slots(sc.comms.tau, n),
+            auvs,
+            cna,
+            air: InFlight::new(sc.channel.collisions.capture_margin_db),
+            next_decision: 0,
+            next_slot: 0,
+            status_sent: vec![0; n],
+            tallies: (0..n).map(|_| AuvTally::default()).collect(),
+            finite: true,
+        }
+    }
+
+    /// One truth step from `step · dt`, phase by phase, each timed.
+    fn step(&mut self, step: u64, timing: &mut Timing, obs: &mut dyn Observer) {
+        let t = step as f64 * self.sc.dt;
+        let t_next = t + self.sc.dt;
+        let mut clock = Instant::now();
+        let mut lap = |slot: &mut f64| {
+            let now = Instant::now();
+            *slot += (now - clock).as_secs_f64();
+            clock = now;
+        };
+        self.decide(t_next);
+        lap(&mut timing.decide_s);
+        self.advance();
+        lap(&mut timing.advance_s);
+        self.transmit(t, t_next);
+        lap(&mut timing.transmit_s);
+        self.deliver(t_next, obs);
+        lap(&mut timing.deliver_s);
+        self.sense(t_next);
+        lap(&mut timing.sense_s);
+        let per_second = ((1.0 / self.sc.dt).round() as u64).max(1);
+        if (step + 1) % per_second == 0 {
+            self.observe(t_next, obs);
+        }
+        lap(&mut timing.observe_s);
+    }
+
+    fn silent(&self, k: usize, t: f64) -> bool {
+        t >= self.faults.silent_from_s && self.faults.silent_auvs.contains(&k)
+    }
+
+    fn finish(self, seed: u64, timing: Timing) -> RunResult {
+        let auvs: Vec<AuvMetrics> = self.tallies.iter().enumerate().map(|(k, a)| metrics(k, a)).collect();
+        let pooled: Vec<f64> = self.tallies.iter().flat_map(|a| a.errors.iter().copied()).collect();
+        let modelled: Vec<f64> = self.tallies.iter().flat_map(|a| a.modelled.iter().copied()).collect();
+        let diverged = auvs.iter().filter(|a| a.health.diverged_at_s.is_some()).count();
+        RunResult {
+            policy: self.policy.as_policy().name().to_string(),
+            seed,
+            auvs,
+            fleet: FleetMetrics {
+                error: ErrorStats::of(&pooled),
+                modelled_mean: mean(&modelled),
+                healthy: self.finite,
+                diverged,
+            },
+            planner: self.policy.planner_stats(),
+            trace: None,
+            timing,
+        }
+    }
+}
+
+fn mean(v: &[f64]) -> Option<f64> {
+    (!v.is_empty()).then(|| v.iter().sum::<f64>() / v.len() as f64)
+}
+
+fn metrics(k: usize, a: &AuvTally) -> AuvMetrics {
+    let n = a.distances.len().max(1) as f64;
+    AuvMetrics {
+        name: format!("auv{k}"),
+        error: ErrorStats::of(&a.errors),
+        modelled_mean: mean(&a.modelled),
+        downlink: a.down,
+        ranges_applied: a.applied,
+        uplink: a.up,
+        distance_mean: a.distances.iter().sum::<f64>() / n,
+        distance_min: a.distances.iter().copied().fold(f64::INFINITY, f64::min),
+        distance_max: a.distances.iter().copied().fold(0.0, f64::max),
+        limit_violation: a.violations as f64 / n,
+        health: a.health.summary(),
+    }
+}
+
+#[cfg(test)]
+mod tests;

@@ -1,0 +1,72 @@
+//! What the engine reports as it runs, and the one recorded time series. The engine calls an
+//! [`Observer`] once per second of mission time and once per packet whose fate is known; the
+//! caller keeps what it wants (`()` keeps nothing, [`Trace`] keeps everything).
+
+use coopnav_core::Vec3;
+use serde::Serialize;
+
+/// One row of the time series (every second, per AUV).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct TraceRow {
+    pub t: f64,
+    pub auv: usize,
+    pub true_x: f64,
+    pub true_y: f64,
+    /// True depth, m.
+    pub true_z: f64,
+    pub est_x: f64,
+    pub est_y: f64,
+    pub error: f64,
+    /// Filter's horizontal 1-σ (√(P_EE + P_NN)), m.
+    pub est_sd: f64,
+    /// Normalised estimation error squared of the horizontal position (2 degrees of freedom).
+    pub nees: f64,
+    /// The planner's modelled error, m (empty before the model starts).
+    pub modelled: Option<f64>,
+    pub cna_x: f64,
+    pub cna_y: f64,
+    pub distance: f64,
+}
+
+/// One packet on the comms timeline.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct CommsEvent {
+    /// Transmission time, s.
+    pub t: f64,
+    /// "down" = CNA broadcast to the AUV, "up" = the AUV's status to the CNA.
+    pub direction: &'static str,
+    pub auv: usize,
+    pub received: bool,
+    /// Why a packet was lost: "channel" (the success draw) or "collision or half-duplex" (empty
+    /// when received).
+    pub lost_to: &'static str,
+}
+
+/// Hooks the engine calls; every one defaults to doing nothing.
+pub trait Observer {
+    /// After the step ending at `t`, once per second: the CNA's true position and one row per AUV.
+    fn on_sample(&mut self, _t: f64, _cna: Vec3, _rows: &[TraceRow]) {}
+    /// A packet whose fate is known (at the end of its arrival).
+    fn on_packet(&mut self, _event: &CommsEvent) {}
+}
+
+impl Observer for () {}
+
+/// Recorded time series.
+#[derive(Debug, Clone, Default)]
+pub struct Trace {
+    pub rows: Vec<TraceRow>,
+    pub comms: Vec<CommsEvent>,
+    /// CNA true track (t, x, y) every second.
+    pub cna: Vec<(f64, f64, f64)>,
+}
+
+impl Observer for Trace {
+    fn on_sample(&mut self, t: f64, cna: Vec3, rows: &[TraceRow]) {
+        self.rows.extend_from_slice(rows);
+        self.cna.push((t, cna.x, cna.y));
+    }
+    fn on_packet(&mut self, event: &CommsEvent) {
+        self.comms.push(*event);
+    }
+}

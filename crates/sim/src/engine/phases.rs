@@ -1,0 +1,335 @@
+//! The phases of one engine step, in the order [`super::Engine::step`] runs them:
+//! decide (the CNA's policy every τ), advance (truth of every vehicle), transmit (the slots due:
+//! encode, channel draw, travel time, into the water), deliver (packets whose arrival ended, in
+//! time order, with their fate), sense (filter prediction and dead-reckoning sensors) and observe
+//! (metrics and the observer, once per second).
+
+use super::health::nees_2d;
+use super::inflight::Arrival;
+use super::observe::{CommsEvent, Observer, TraceRow};
+use super::vehicles::lerp;
+use super::{Engine, FleetView};
+use crate::closed_loop::policies::{receiver, tl_between};
+use crate::hbl::noise::normal;
+use crate::models::channel::air_time;
+use crate::models::finish::Finish;
+use crate::models::schedule::Owner;
+use crate::policy::{CnaCommand, PolicyContext};
+use coopnav_acomms::node_report::NodeReport;
+use coopnav_acomms::selector::{Choice, Outcome};
+use coopnav_acomms::Rate;
+use coopnav_core::{Heading, Vec3};
+use coopnav_nav::{RangeMeasurement, UpdateOutcome};
+use coopnav_plan::predict::StatusReport;
+use coopnav_plan::CnaPose;
+
+/// What a packet carries to its addressee.
+pub enum Payload {
+    /// The CNA's broadcast: its position as it knows it, the travel time the receiver measured
+    /// (None: decoded without a usable range), and the statuses it acknowledges.
+    Broadcast { rate: Rate, fix: Vec3, travel_time: Option<f64>, acked: Vec<u64>, decoded: bool },
+    /// A survey AUV's status message through the wire format.
+    Status { rate: Rate, slot_id: u64, bytes: Vec<u8>, decoded: bool },
+}
+
+impl Engine<'_> {
+    /// The CNA's decision at each m·τ: its position fix, the planner model's pings, the policy.
+    pub(super) fn decide(&mut self, t_next: f64) {
+        let tau = self.sc.comms.tau;
+        if (self.next_decision as f64) * tau >= t_next - 1e-9 {
+            return;
+        }
+        let t_dec = self.next_decision as f64 * tau;
+        self.next_decision += 1;
+        let fix = self.cna_fix(t_dec);
+        let transmits = self.policy.as_policy().transmits();
+        let cna = &mut self.cna;
+        for k in 0..self.auvs.len() {
+            if !transmits {
+                cna.model.silent(k);
+                continue;
+            }
+            let min_reports = self.sc.planner.start_after_reports;
+            let seen =
+                cna.predictors[k].position_at(t_dec).filter(|_| cna.predictors[k].reports_received() >= min_reports);
+            if let Some(p) = seen {
+                cna.model.ping(k, &fix, &p, 1.0);
+            }
+        }
+        for (k, tally) in self.tallies.iter_mut().enumerate() {
+            if let Some(e) = cna.model.total(k) {
+                tally.modelled.push(e);
+            }
+        }
+        let fleet = FleetView { predictors: &cna.predictors, min_reports: self.sc.planner.start_after_reports };
+        let pose = CnaPose { pos: fix, heading: Heading::from_radians(cna.craft.heading), pitch: 0.0 };
+        let ctx = PolicyContext { t: t_dec, tau, cna: pose, speed: self.sc.cna.speed, fleet: &fleet };
+        let here = cna.craft.pos;
+        cna.craft.target = match self.policy.as_policy().decide(&ctx) {
+            // The command is relative to the fix the policy saw.
+            CnaCommand::GoTo(p) => Some(Vec3::new(here.x + p.x - fix.x, here.y + p.y - fix.y, p.z)),
+            CnaCommand::Hold => None,
+        };
+    }
+
+    /// Draws the CNA's navigation error for this cycle and returns its position fix.
+    fn cna_fix(&mut self, t_dec: f64) -> Vec3 {
+        let cna = &mut self.cna;
+        cna.nav_error = match &self.sc.cna.auv {
+            None => {
+                let sd = self.sc.cna.gps_sd;
+                (sd * normal(&mut cna.rng_gps), sd * normal(&mut cna.rng_gps))
+            }
+            Some(a) => {
+                let sd = (a.nav_diffusion * if t_dec > 0.0 { self.sc.comms.tau } else { 0.0 }).sqrt();
+                (cna.nav_error.0 + sd * normal(&mut cna.rng_nav), cna.nav_error.1 + sd * normal(&mut cna.rng_nav))
+            }
+        };
+        let p = cna.craft.pos;
+        Vec3::new(p.x + cna.nav_error.0, p.y + cna.nav_error.1, p.z)
+    }
+
+    /// Truth: the CNA craft, then every survey AUV (after its finish behaviour's action).
+    pub(super) fn advance(&mut self) {
+        let sc = self.sc;
+        self.cna.craft.step(sc.cna.speed, sc.cna.max_turn_rate_deg_s.to_radians(), sc.dt);
+        for a in self.auvs.iter_mut() {
+            let action = sc.fleet.finish.act(a.ctrl.is_complete(), a.ekf.position(), a.station);
+            a.step_truth(sc, &self.bathy, action);
+        }
+    }
+
+    /// Every slot starting in [t, t_next): its owner transmits.
+    pub(super) fn transmit(&mut self, t: f64, t_next: f64) {
+        let per_cycle = self.slots.len() as u64;
+        if per_cycle == 0 {
+            return;
+        }
+        loop {
+            let slot = self.slots[(self.next_slot % per_cycle) as usize];
+            let t_tx = (self.next_slot / per_cycle) as f64 * self.sc.comms.tau + slot.start_s;
+            if t_tx >= t_next - 1e-9 {
+                return;
+            }
+            self.next_slot += 1;
+            let frac = ((t_tx - t) / self.sc.dt).clamp(0.0, 1.0);
+            match slot.owner {
+                Owner::Cna => self.broadcast(t_tx, frac),
+                Owner::Auv(j) => self.send_status(j, t_tx, frac),
+            }
+        }
+    }
+
+    /// The CNA's broadcast: one packet, an arrival (with its own range) at every survey AUV.
+    fn broadcast(&mut self, t_tx: f64, frac: f64) {
+        if !self.policy.as_policy().transmits() {
+            return;
+        }
+        let sc = self.sc;
+        let rate = sc.comms.cna_rate;
+        let air = air_time(rate);
+        let from = lerp(self.cna.craft.prev, self.cna.craft.pos, frac);
+        let fix = Vec3::new(from.x + self.cna.nav_error.0, from.y + self.cna.nav_error.1, from.z);
+        self.air.transmit(Owner::Cna, t_tx, t_tx + air);
+        for k in 0..self.auvs.len() {
+            let silent = self.silent(k, t_tx);
+            let a = &mut self.auvs[k];
+            let (p0, v) = (lerp(a.prev, a.truth, frac), a.velocity(sc.dt));
+            let tt = sc.channel.sound_speed.travel_time(from, |d| p0 + v * d);
+            let tl = tl_between(sc, &from, &p0);
+            let decoded = sc.comms.success.draw(rate, tl, receiver(false), &mut a.rng_down).frame0() && !silent;
+            // Drawn whatever the fate, so packet losses do not shift the stream.
+            let error = sc.channel.range_error.draw(sc.filter.range_noise.variance(tt), &mut a.rng_range);
+            let clocks = a.clock.error_at(t_tx + tt) - self.cna.clock.error_at(t_tx);
+            let travel_time = error.map(|e| tt + e + clocks);
+            let acked = self.cna.acked[k].clone();
+            let payload = Payload::Broadcast { rate, fix, travel_time, acked, decoded };
+            self.air.push(arrival(Owner::Cna, Owner::Auv(k), t_tx, tt, air, tl, Some(payload)));
+        }
+        self.cna.acked.iter_mut().for_each(Vec::clear);
+    }
+
+    /// Survey AUV `j`'s status slot: its selector picks the rate (or silence); the message goes
+    /// through the wire format to the CNA, and reaches the other AUVs as interference.
+    fn send_status(&mut self, j: usize, t_tx: f64, frac: f64) {
+        let sc = self.sc;
+        let slot_id = self.status_sent[j];
+        self.status_sent[j] += 1;
+        let silent = self.silent(j, t_tx);
+        let a = &mut self.auvs[j];
+        let (ex, ey) = a.ekf.position();
+        let distance = a.cna_heard.map(|c| (c.x - ex).hypot(c.y - ey));
+        let Choice::Transmit(rate) = a.selector.choose(slot_id, distance) else { return };
+        let bytes = match a.status(j, t_tx).encode() {
+            Ok(b) => b,
+            Err(e) => {
+                tracing::warn!(t = t_tx, auv = j, error = %e, "status message cannot be encoded; not sent");
+                return;
+            }
+        };
+        a.unacked.push(slot_id);
+        let air = air_time(rate);
+        let from = lerp(a.prev, a.truth, frac);
+        let craft = &self.cna.craft;
+        let (c0, cv) = (lerp(craft.prev, craft.pos, frac), (craft.pos - craft.prev) * (1.0 / sc.dt));
+        let tt = sc.channel.sound_speed.travel_time(from, |d| c0 + cv * d);
+        let tl = tl_between(sc, &from, &c0);
+        let decoded = sc.comms.success.draw(rate, tl, receiver(true), &mut a.rng_up).frame0() && !silent;
+        self.air.transmit(Owner::Auv(j), t_tx, t_tx + air);
+        let payload = Payload::Status { rate, slot_id, bytes, decoded };
+        self.air.push(arrival(Owner::Auv(j), Owner::Cna, t_tx, tt, air, tl, Some(payload)));
+        for (m, other) in self.auvs.iter().enumerate().filter(|(m, _)| *m != j) {
+            let (p0, v) = (lerp(other.prev, other.truth, frac), other.velocity(sc.dt));
+            let tt = sc.channel.sound_speed.travel_time(from, |d| p0 + v * d);
+            let tl = tl_between(sc, &from, &p0);
+            self.air.push(arrival(Owner::Auv(j), Owner::Auv(m), t_tx, tt, air, tl, None));
+        }
+    }
+
+    /// Every addressed packet whose arrival ended by `t_next`, in time order.
+    pub(super) fn deliver(&mut self, t_next: f64, obs: &mut dyn Observer) {
+        for (meta, payload, survived) in self.air.due(t_next) {
+            match (payload, meta.to) {
+                (Payload::Broadcast { rate, fix, travel_time, acked, decoded }, Owner::Auv(k)) => {
+                    let received = decoded && survived;
+                    self.tallies[k].down.record(rate.index(), received);
+                    obs.on_packet(&event(&meta, "down", k, decoded, survived));
+                    if received {
+                        self.hear_broadcast(k, &meta, fix, travel_time, &acked);
+                    }
+                }
+                (Payload::Status { rate, slot_id, bytes, decoded }, Owner::Auv(_) | Owner::Cna) => {
+                    let Owner::Auv(j) = meta.from else { continue };
+                    let message = (decoded && survived).then(|| NodeReport::decode(&bytes)).and_then(Result::ok);
+                    self.tallies[j].up.record(rate.index(), message.is_some());
+                    obs.on_packet(&event(&meta, "up", j, decoded, survived));
+                    if let Some(m) = message {
+                        self.cna.acked[j].push(slot_id);
+                        self.cna.predictors[j].receive(StatusReport {
+                            t: resolve_time(m.time_of_day, meta.t_tx),
+                            pos: Vec3::new(m.x, m.y, m.depth),
+                            speed: m.speed,
+                            heading: m.heading,
+                            waypoints: m.waypoints,
+                        });
+                    }
+                }
+                (Payload::Broadcast { .. }, Owner::Cna) => {}
+            }
+        }
+    }
+
+    /// AUV `k` decoded a broadcast at the end of its arrival: the acknowledgements feed its rate
+    /// selector, and the range updates its filter. The range was measured at the start of the
+    /// arrival; the modem driver moves the transponder by the AUV's own dead-reckoned motion over
+    /// the decode delay, so the filter can apply it now.
+    fn hear_broadcast(&mut self, k: usize, meta: &Arrival<()>, fix: Vec3, travel_time: Option<f64>, acked: &[u64]) {
+        let sc = self.sc;
+        let a = &mut self.auvs[k];
+        let outcomes: Vec<Outcome> =
+            a.unacked.drain(..).map(|slot| Outcome { slot, success: acked.contains(&slot) }).collect();
+        a.selector.feedback(&outcomes, true);
+        a.cna_heard = Some(fix);
+        let Some(travel_time) = travel_time else { return };
+        a.ekf.predict_to(meta.end, a.yaw_measured);
+        let x = a.ekf.state();
+        let delay = meta.end - meta.start;
+        let shift = Vec3::new(x[2] * x[3].cos() * delay, x[2] * x[3].sin() * delay, 0.0);
+        let m = RangeMeasurement {
+            range: sc.filter.range_noise.sound_speed * travel_time,
+            travel_time,
+            transponder: fix + shift,
+        };
+        match a.ekf.update_range(&m, Some(a.truth.z)) {
+            UpdateOutcome::Applied { nis } => {
+                self.tallies[k].applied += 1;
+                self.tallies[k].health.nis(nis);
+            }
+            UpdateOutcome::Gated { nis } => self.tallies[k].health.nis(nis),
+            UpdateOutcome::Unusable => {}
+        }
+    }
+
+    /// Filters to `t_next`: prediction, speed and compass; a surfaced AUV's GPS once a second.
+    pub(super) fn sense(&mut self, t_next: f64) {
+        let whole_second = (t_next - t_next.round()).abs() < 1e-6;
+        for a in self.auvs.iter_mut() {
+            a.ekf.predict_to(t_next, a.yaw_measured);
+            a.sense(self.sc);
+            if let Finish::Surface { gps_sd_m, .. } = self.sc.fleet.finish {
+                if whole_second && a.at_surface() {
+                    a.gps_fix(gps_sd_m);
+                }
+            }
+        }
+    }
+
+    /// Once a second: true error, the filter's σ and NEES, distances, and the observer.
+    pub(super) fn observe(&mut self, t: f64, obs: &mut dyn Observer) {
+        let limits = self.sc.planner.limits;
+        let cna = self.cna.craft.pos;
+        let mut rows = Vec::with_capacity(self.auvs.len());
+        for (k, (a, tally)) in self.auvs.iter().zip(self.tallies.iter_mut()).enumerate() {
+            self.finite &= a.finite();
+            let (ex, ey) = a.ekf.position();
+            let p = a.ekf.ekf().p();
+            let (dx, dy) = (ex - a.truth.x, ey - a.truth.y);
+            let sigma = (p[(0, 0)] + p[(1, 1)]).max(0.0).sqrt();
+            let nees = nees_2d(dx, dy, p[(0, 0)], p[(0, 1)], p[(1, 1)]);
+            let error = dx.hypot(dy);
+            let d = (a.truth.x - cna.x).hypot(a.truth.y - cna.y);
+            tally.errors.push(error);
+            tally.distances.push(d);
+            tally.violations += u64::from(d < limits.min || d > limits.max);
+            tally.health.sample(&self.sc.health, t, error, sigma, nees);
+            rows.push(TraceRow {
+                t,
+                auv: k,
+                true_x: a.truth.x,
+                true_y: a.truth.y,
+                true_z: a.truth.z,
+                est_x: ex,
+                est_y: ey,
+                error,
+                est_sd: sigma,
+                nees,
+                modelled: self.cna.model.total(k),
+                cna_x: cna.x,
+                cna_y: cna.y,
+                distance: d,
+            });
+        }
+        obs.on_sample(t, cna, &rows);
+    }
+}
+
+fn arrival(
+    from: Owner,
+    to: Owner,
+    t_tx: f64,
+    travel: f64,
+    air: f64,
+    tl: f64,
+    payload: Option<Payload>,
+) -> Arrival<Payload> {
+    Arrival { from, to, t_tx, start: t_tx + travel, end: t_tx + travel + air, level_db: -tl, payload }
+}
+
+fn event(meta: &Arrival<()>, direction: &'static str, auv: usize, decoded: bool, survived: bool) -> CommsEvent {
+    let lost_to = match (decoded, survived) {
+        (true, true) => "",
+        (false, _) => "channel",
+        (true, false) => "collision or half-duplex",
+    };
+    CommsEvent { t: meta.t_tx, direction, auv, received: decoded && survived, lost_to }
+}
+
+/// Resolves a time of day (s) to the absolute time nearest `t_now`.
+fn resolve_time(time_of_day: u32, t_now: f64) -> f64 {
+    let day = 86_400.0;
+    let base = (t_now / day).floor() * day + time_of_day as f64;
+    [base - day, base, base + day]
+        .into_iter()
+        .min_by(|a, b| (a - t_now).abs().total_cmp(&(b - t_now).abs()))
+        .unwrap_or(base)
+}

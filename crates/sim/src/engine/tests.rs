@@ -1,0 +1,114 @@
+//! The engine end to end: finished vehicles, collisions and half-duplex through a hand-built
+//! schedule, and the NEES check against a filter given the wrong noise model.
+
+use super::*;
+use crate::closed_loop::PolicySpec;
+use crate::models::finish::Finish;
+use crate::models::schedule::{Schedule, SlotSpec};
+
+/// One AUV on a short lawnmower (two 300 m lanes, done after about 480 s), then `duration` s.
+fn short_survey(finish: Finish, duration: f64) -> Scenario {
+    let mut sc = Scenario::example().with_auvs(1);
+    (sc.fleet.lanes, sc.fleet.lane_length, sc.duration_s) = (2, 300.0, duration);
+    sc.fleet.finish = finish;
+    sc.planner.look_ahead = 3;
+    sc.planner.deadline = coopnav_plan::Deadline::None;
+    sc.cna.x = 150.0;
+    sc.validate(std::path::Path::new("t")).unwrap();
+    sc
+}
+
+fn traced(sc: &Scenario, policy: &str, seed: u64) -> (RunResult, Trace) {
+    let mut p = PolicySpec::new(policy, sc).unwrap().build(sc).unwrap();
+    let mut trace = Trace::default();
+    let r = run(sc, &mut p, seed, &Faults::default(), &mut trace);
+    (r, trace)
+}
+
+fn error_at(trace: &Trace, auv: usize, t: f64) -> f64 {
+    trace.rows.iter().find(|r| r.auv == auv && (r.t - t).abs() < 0.5).map(|r| r.error).unwrap()
+}
+
+/// Dead reckoning alone, so only the finished vehicle's motion model drives the error: its
+/// growth after the mission is the current's 0.05 m/s, not the survey speed of 1.5 m/s that a
+/// vehicle telling its filter it still cruises would give.
+#[test]
+fn a_finished_auvs_dead_reckoning_sees_its_true_motion() {
+    for finish in [Finish::Hold { radius_m: 30.0 }, Finish::Loiter { radius_m: 50.0 }] {
+        let (_, trace) = traced(&short_survey(finish, 1500.0), "none", 3);
+        let growth = (error_at(&trace, 0, 1500.0) - error_at(&trace, 0, 900.0)) / 600.0;
+        assert!(growth < 0.15, "{finish:?}: error grows {growth:.3} m/s after the mission");
+    }
+}
+
+#[test]
+fn a_finished_survey_auvs_error_stays_bounded() {
+    let cases = [
+        (Finish::Loiter { radius_m: 50.0 }, 20.0),
+        (Finish::Hold { radius_m: 30.0 }, 20.0),
+        (Finish::Surface { ascent_rate_m_s: 0.5, gps_sd_m: 3.0 }, 10.0),
+    ];
+    for (finish, bound) in cases {
+        let (r, trace) = traced(&short_survey(finish, 2400.0), "planner", 5);
+        assert!(r.fleet.healthy, "{finish:?}");
+        let late = trace.rows.iter().filter(|x| x.t >= 1200.0).map(|x| x.error).fold(0.0, f64::max);
+        assert!(late < bound, "{finish:?}: error reaches {late:.1} m after the mission");
+        let end = trace.rows.last().unwrap();
+        if let Finish::Surface { .. } = finish {
+            assert_eq!(end.true_z, 0.0, "surfaced");
+        } else {
+            assert!(end.true_z > 10.0, "{finish:?} stays at depth");
+        }
+    }
+}
+
+/// Two AUVs given the same status slot: every status collides at the CNA, while the CNA's
+/// broadcasts in their own slot still arrive.
+#[test]
+fn two_statuses_in_one_slot_collide_at_the_cna() {
+    let mut sc = Scenario::example().with_auvs(2);
+    sc.duration_s = 600.0;
+    sc.channel.collisions.capture_margin_db = None;
+    let slot = |who: &str, start_s| SlotSpec { who: who.into(), start_s, length_s: 10.0 };
+    sc.comms.schedule = Schedule::Tdma { slots: vec![slot("cna", 0.0), slot("auv0", 10.0), slot("auv1", 10.0)] };
+    let (r, trace) = traced(&sc, "centroid", 2);
+    for a in &r.auvs {
+        assert!(a.uplink.sent >= 18 && a.uplink.received == 0, "{:?}", a.uplink);
+        assert!(a.downlink.received > a.downlink.sent / 2, "{:?}", a.downlink);
+    }
+    assert!(trace.comms.iter().any(|e| e.direction == "up" && e.lost_to == "collision or half-duplex"));
+}
+
+/// An AUV whose status slot starts with the CNA's broadcast is transmitting when the broadcast
+/// arrives: it hears none, the other AUV hears them.
+#[test]
+fn a_modem_transmitting_hears_no_broadcast() {
+    let mut sc = Scenario::example().with_auvs(2);
+    sc.duration_s = 600.0;
+    let slot = |who: &str, start_s| SlotSpec { who: who.into(), start_s, length_s: 10.0 };
+    sc.comms.schedule = Schedule::Tdma { slots: vec![slot("cna", 0.0), slot("auv0", 0.0), slot("auv1", 10.0)] };
+    let (r, _) = traced(&sc, "centroid", 2);
+    assert!(r.auvs[0].downlink.sent >= 19 && r.auvs[0].downlink.received == 0, "{:?}", r.auvs[0].downlink);
+    assert!(r.auvs[1].downlink.received > 0, "{:?}", r.auvs[1].downlink);
+    assert_eq!(r.auvs[0].ranges_applied, 0);
+}
+
+/// A filter told its dead reckoning and ranges are ten times better than they are is finite
+/// throughout, but the NEES check flags it; the scenario's own filter is not flagged.
+#[test]
+fn the_nees_check_flags_a_filter_given_a_wrong_noise_model() {
+    let mut sc = Scenario::example().with_auvs(2);
+    sc.duration_s = 1800.0;
+    let (good, _) = traced(&sc, "centroid", 4);
+    sc.filter.q = sc.filter.q.map(|q| q / 100.0);
+    sc.filter.range_noise.sigma_sound_speed /= 10.0;
+    sc.filter.range_noise.sigma_time /= 10.0;
+    let (wrong, _) = traced(&sc, "centroid", 4);
+    assert!(wrong.fleet.healthy, "finite throughout");
+    assert_eq!(wrong.fleet.diverged, 2, "{:?}", wrong.auvs.iter().map(|a| a.health).collect::<Vec<_>>());
+    assert_eq!(good.fleet.diverged, 0, "{:?}", good.auvs.iter().map(|a| a.health).collect::<Vec<_>>());
+    for (g, w) in good.auvs.iter().zip(&wrong.auvs) {
+        assert!(w.health.nees_mean > 10.0 * g.health.nees_mean, "{:?} vs {:?}", w.health, g.health);
+        assert!(w.health.nees_in_95 < g.health.nees_in_95);
+    }
+}

@@ -1,0 +1,239 @@
+//! The engine's vehicles: a survey AUV (its controller steering on its own estimate, its truth,
+//! its filter, its sensors' noise streams and its modem's state) and the CNA craft.
+
+use crate::closed_loop::scenario::Scenario;
+use crate::hbl::noise::{normal, CompassBias};
+use crate::models::channel::Clock;
+use crate::models::finish::Action;
+use coopnav_acomms::node_report::{NodeReport, VehicleType};
+use coopnav_acomms::selector::{AdaptiveBins, FixedRate, RatePolicy};
+use coopnav_core::{
+    wrap_pi, Bathymetry, DepthTarget, Heading, Iver2, Iver2Params, Iver2State, SeedStream, Vec3, Waypoint,
+};
+use coopnav_nav::{AuvEkf, Gate};
+use nalgebra::{SMatrix, SVector};
+use rand_chacha::ChaCha8Rng;
+
+/// Stream ids of one run: the CNA's, and a block of ten per survey AUV.
+pub mod stream {
+    pub const CNA_GPS: u64 = 1;
+    pub const CNA_NAV: u64 = 2;
+    pub const CNA_CLOCK: u64 = 3;
+    pub const AUV_BASE: u64 = 100;
+    pub const INIT: u64 = 0;
+    pub const SPEED: u64 = 1;
+    pub const COMPASS_MAP: u64 = 2;
+    pub const COMPASS_WHITE: u64 = 3;
+    pub const YAW_RATE: u64 = 4;
+    pub const RANGE: u64 = 5;
+    pub const DOWNLINK: u64 = 6;
+    pub const UPLINK: u64 = 7;
+    pub const CLOCK: u64 = 8;
+    pub const GPS: u64 = 9;
+}
+
+/// A survey AUV.
+pub struct SurveyAuv {
+    pub ctrl: Iver2,
+    /// True position at the end of the last step, and at its start.
+    pub truth: Vec3,
+    pub prev: Vec3,
+    pub ekf: AuvEkf,
+    pub clock: Clock,
+    /// Yaw rate measured over the current step (the filter's prediction input).
+    pub yaw_measured: f64,
+    compass: CompassBias,
+    rng_speed: ChaCha8Rng,
+    rng_white: ChaCha8Rng,
+    rng_yaw: ChaCha8Rng,
+    rng_gps: ChaCha8Rng,
+    pub rng_range: ChaCha8Rng,
+    pub rng_down: ChaCha8Rng,
+    pub rng_up: ChaCha8Rng,
+    /// Rate selection for the status messages, and the status slots it still waits to hear about.
+    pub selector: Box<dyn RatePolicy>,
+    pub unacked: Vec<u64>,
+    /// Last CNA position heard (from its broadcast).
+    pub cna_heard: Option<Vec3>,
+    /// Propulsion off (a finished vehicle holding or surfacing).
+    adrift: bool,
+    /// Its last survey waypoint: where a finished vehicle loiters or holds station.
+    pub station: (f64, f64),
+}
+
+impl SurveyAuv {
+    pub fn new(sc: &Scenario, k: usize, streams: &SeedStream, bathy: &Bathymetry) -> Self {
+        let rng = |id: u64| streams.rng(stream::AUV_BASE + 10 * k as u64 + id);
+        let lawn = sc.lawnmower(k);
+        let pts = lawn.waypoints();
+        let start = pts[0];
+        let heading = pts.get(1).map_or(0.0, |b| (b.1 - start.1).atan2(b.0 - start.0));
+        let waypoints: Vec<Waypoint> =
+            pts.iter().map(|&(x, y)| Waypoint { x, y, target: sc.fleet.depth, speed: sc.fleet.speed }).collect();
+        let bottom = bathy.depth_at(start.0, start.1);
+        let z0 = match sc.fleet.depth {
+            DepthTarget::Depth { depth } => depth,
+            DepthTarget::Altitude { altitude } => bottom - altitude,
+        };
+        let truth = Vec3::new(start.0, start.1, z0);
+        let mut r_init = rng(stream::INIT);
+        let sd = sc.fleet.init_position_sd;
+        let (ex, ey) = (start.0 + sd * normal(&mut r_init), start.1 + sd * normal(&mut r_init));
+        let mut state = Iver2State::at_rest(Vec3::new(ex, ey, z0), Heading::from_radians(heading));
+        state.altitude = bottom - z0;
+        let s = &sc.sensors;
+        SurveyAuv {
+            ctrl: Iver2::new(Iver2Params::default(), state, waypoints),
+            truth,
+            prev: truth,
+            ekf: AuvEkf::new(0.0, ex, ey, 0.0, heading, sc.filter.clone()),
+            clock: sc.channel.clocks.draw(&mut rng(stream::CLOCK)),
+            yaw_measured: 0.0,
+            compass: CompassBias::draw(s.compass_bias_step_deg, s.compass_bias_iid, &mut rng(stream::COMPASS_MAP)),
+            rng_speed: rng(stream::SPEED),
+            rng_white: rng(stream::COMPASS_WHITE),
+            rng_yaw: rng(stream::YAW_RATE),
+            rng_gps: rng(stream::GPS),
+            rng_range: rng(stream::RANGE),
+            rng_down: rng(stream::DOWNLINK),
+            rng_up: rng(stream::UPLINK),
+            selector: match &sc.comms.status_adaptive {
+                Some(cfg) => Box::new(AdaptiveBins::new(cfg.clone()).expect("validated adaptive config")),
+                None => Box::new(FixedRate { rate: sc.comms.status_rate }),
+            },
+            unacked: Vec::new(),
+            cna_heard: None,
+            adrift: false,
+            station: pts.last().copied().unwrap_or(start),
+        }
+    }
+
+    /// True velocity over ground in the last step.
+    pub fn velocity(&self, dt: f64) -> Vec3 {
+        (self.truth - self.prev) * (1.0 / dt)
+    }
+
+    /// Applies the finish behaviour's action, then one truth step: the controller steers from
+    /// the filter's estimate; the truth moves by the same displacement plus the current.
+    pub fn step_truth(&mut self, sc: &Scenario, bathy: &Bathymetry, action: Action) {
+        let (ex, ey) = self.ekf.position();
+        self.ctrl.state.pos.x = ex;
+        self.ctrl.state.pos.y = ey;
+        self.adrift = false;
+        match action {
+            Action::Continue => {}
+            Action::Steer(points) => {
+                let last = self.ctrl.waypoints().last().copied();
+                let (target, speed) = last.map_or((sc.fleet.depth, sc.fleet.speed), |w| (w.target, w.speed));
+                let waypoints = points.into_iter().map(|(x, y)| Waypoint { x, y, target, speed }).collect();
+                self.ctrl = Iver2::new(self.ctrl.params, self.ctrl.state, waypoints);
+            }
+            Action::Drift => self.propulsion_off(),
+            Action::Ascend(rate) => {
+                self.propulsion_off();
+                self.ctrl.state.pos.z = (self.ctrl.state.pos.z - rate * sc.dt).max(0.0);
+            }
+        }
+        self.prev = self.truth;
+        let before = self.ctrl.state.pos;
+        self.ctrl.step(bathy);
+        let d = self.ctrl.state.pos - before;
+        self.truth.x += d.x + sc.fleet.current.0 * sc.dt;
+        self.truth.y += d.y + sc.fleet.current.1 * sc.dt;
+        self.truth.z = self.ctrl.state.pos.z;
+        self.yaw_measured =
+            self.ctrl.state.yaw_rate + sc.sensors.yaw_rate_white_deg_s.to_radians() * normal(&mut self.rng_yaw);
+    }
+
+    /// The vehicle stops through the water (an instant stop: the IVER2 model has no coast-down).
+    fn propulsion_off(&mut self) {
+        let s = &mut self.ctrl.state;
+        (s.speed, s.yaw_rate, s.lin_accel, s.vertical_speed) = (0.0, 0.0, 0.0, 0.0);
+        self.adrift = true;
+    }
+
+    pub fn at_surface(&self) -> bool {
+        self.adrift && self.truth.z <= 0.0
+    }
+
+    /// Speed and compass updates at the filter's current time.
+    pub fn sense(&mut self, sc: &Scenario) {
+        let s = &sc.sensors;
+        let psi = self.ctrl.state.heading.radians();
+        self.ekf.update_speed(self.ctrl.state.speed + s.speed_sd * normal(&mut self.rng_speed));
+        self.ekf.update_heading(wrap_pi(
+            psi + self.compass.at(psi) + s.compass_white_deg.to_radians() * normal(&mut self.rng_white),
+        ));
+    }
+
+    /// A GPS fix of the horizontal position (σ `sd` per axis), as a surfaced AUV takes.
+    pub fn gps_fix(&mut self, sd: f64) {
+        let (ex, ey) = self.ekf.position();
+        let fix = (self.truth.x + sd * normal(&mut self.rng_gps), self.truth.y + sd * normal(&mut self.rng_gps));
+        let mut h = SMatrix::<f64, 2, 5>::zeros();
+        (h[(0, 0)], h[(1, 1)]) = (1.0, 1.0);
+        let r = SMatrix::<f64, 2, 2>::identity() * (sd * sd);
+        self.ekf.ekf_mut().update(SVector::<f64, 2>::new(fix.0 - ex, fix.1 - ey), h, r, &Gate::OFF);
+    }
+
+    pub fn finite(&self) -> bool {
+        self.ekf.state().iter().all(|v| v.is_finite()) && self.ekf.ekf().p().iter().all(|v| v.is_finite())
+    }
+
+    /// The Appendix C status message from the AUV's own estimate and its next three waypoints.
+    pub fn status(&self, k: usize, t: f64) -> NodeReport {
+        let x = self.ekf.state();
+        let next = self.ctrl.next_waypoint();
+        let waypoints = self.ctrl.waypoints().iter().skip(next).take(3).map(|w| (w.x, w.y)).collect();
+        NodeReport {
+            src_id: (k + 1) as u8,
+            time_of_day: (t.rem_euclid(86_400.0)) as u32,
+            vehicle: VehicleType::Auv,
+            x: x[0],
+            y: x[1],
+            speed: x[2].clamp(-2.0, 9.0),
+            heading: Heading::from_radians(x[3]),
+            waypoints,
+            front_seat_error: 0,
+            front_mode: 0,
+            leak: false,
+            depth: self.truth.z.clamp(-1.0, 203.0),
+            altitude: self.ctrl.state.altitude.clamp(-1.0, 203.0),
+            battery: 100.0 * (1.0 - t / 86_400.0).clamp(0.0, 1.0),
+        }
+    }
+}
+
+pub fn lerp(a: Vec3, b: Vec3, f: f64) -> Vec3 {
+    a + (b - a) * f
+}
+
+/// The CNA craft: steers to its commanded point at transit speed with a turn-rate limit and holds
+/// station on arrival; an AUV CNA also moves towards the commanded depth, pitch-limited.
+pub struct Craft {
+    pub pos: Vec3,
+    pub prev: Vec3,
+    pub heading: f64,
+    pub target: Option<Vec3>,
+}
+
+impl Craft {
+    pub fn step(&mut self, speed: f64, max_rate: f64, dt: f64) {
+        self.prev = self.pos;
+        let Some(goal) = self.target else { return };
+        // Depth changes at most at the speed's vertical share at the 30° pitch limit (digest A5).
+        let dz_max = speed * dt * 0.5;
+        self.pos.z += (goal.z - self.pos.z).clamp(-dz_max, dz_max);
+        let (dx, dy) = (goal.x - self.pos.x, goal.y - self.pos.y);
+        let dist = dx.hypot(dy);
+        if dist <= speed * dt {
+            self.pos.x = goal.x;
+            self.pos.y = goal.y;
+            return;
+        }
+        let turn = wrap_pi(dy.atan2(dx) - self.heading).clamp(-max_rate * dt, max_rate * dt);
+        self.heading = wrap_pi(self.heading + turn);
+        self.pos.x += speed * dt * self.heading.cos();
+        self.pos.y += speed * dt * self.heading.sin();
+    }
+}

@@ -1,0 +1,375 @@
+//! The acoustic channel as the sea plays it (the truth side; what the filters assume is the
+//! scenario's `[filter]`, configured apart): packet air time per WHOI rate, the range error the
+//! sea adds, travel time along a sound-speed profile, per-vehicle clocks and the collision rule.
+//! Defaults make the truth differ from the filter's model as the sea does: Gill's error mixture
+//! with outliers instead of the filter's Gaussian, and a layered profile instead of 1500 m/s.
+
+use crate::hbl::config::Acoustic;
+use crate::hbl::noise::{draw_reception, normal, Reception};
+use coopnav_acomms::Rate;
+use coopnav_core::Vec3;
+use rand_chacha::ChaCha8Rng;
+use serde::{Deserialize, Serialize};
+
+/// Sound speed at which Gill's range errors (m) were measured; converts them to time errors.
+const GILL_NOMINAL_SOUND_SPEED: f64 = 1500.0;
+
+/// Time a packet at `rate` occupies the water: the rate table's nominal packet duration (Nams
+/// Table 2), which covers all of the rate's frames — the modem always sends whole frames.
+pub fn air_time(rate: Rate) -> f64 {
+    rate.spec().duration
+}
+
+/// Bytes a packet at `rate` can carry (frames × frame bytes).
+pub fn capacity(rate: Rate) -> usize {
+    rate.spec().packet_bytes()
+}
+
+/// The whole `[channel]` table.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct Channel {
+    pub range_error: RangeError,
+    pub sound_speed: SoundSpeed,
+    pub clocks: Clocks,
+    pub collisions: Collisions,
+}
+
+impl Default for Channel {
+    fn default() -> Self {
+        Channel {
+            range_error: RangeError::gill(),
+            sound_speed: SoundSpeed::summer(),
+            clocks: Clocks::default(),
+            collisions: Collisions::default(),
+        }
+    }
+}
+
+/// The range error the sea adds to a decoded broadcast's travel time.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
+pub enum RangeError {
+    /// The filter's own Gaussian (its `range_noise` variance) plus `extra_sd` metres: the truth
+    /// as the filter believes it (for studies that want a matched filter).
+    Gaussian { extra_sd: f64 },
+    /// Gill's reception mixture (gill digest §5.4), conditioned on a decoded packet.
+    GillMixture(Mixture),
+}
+
+/// Gill's range errors of a decoded packet: slightly long or short by up to `slight_max_m`, or an
+/// outlier `outlier_min_m`–`outlier_max_m` long; the shares sum to at most 1, and the rest is a
+/// packet decoded without a usable range. Drawn by the HBL world's sampler (two uniforms a draw).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Mixture {
+    pub p_slightly_long: f64,
+    pub p_slightly_short: f64,
+    pub p_outlier: f64,
+    pub slight_max_m: f64,
+    pub outlier_min_m: f64,
+    pub outlier_max_m: f64,
+}
+
+impl Mixture {
+    fn as_acoustic(&self) -> Acoustic {
+        Acoustic {
+            p_slightly_long: self.p_slightly_long,
+            p_slightly_short: self.p_slightly_short,
+            p_outlier: self.p_outlier,
+            p_drop: (1.0 - self.p_slightly_long - self.p_slightly_short - self.p_outlier).max(0.0),
+            slight_max_m: self.slight_max_m,
+            outlier_min_m: self.outlier_min_m,
+            outlier_max_m: self.outlier_max_m,
+            ..Acoustic::default()
+        }
+    }
+
+    fn problems(&self, prefix: &str) -> Vec<(String, String, String)> {
+        let mut out = Vec::new();
+        let mut need = |field: &str, v: f64, ok: bool, allowed: &str| {
+            if !(v.is_finite() && ok) {
+                out.push((format!("{prefix}{field}"), v.to_string(), allowed.to_string()));
+            }
+        };
+        for (field, p) in [
+            ("p_slightly_long", self.p_slightly_long),
+            ("p_slightly_short", self.p_slightly_short),
+            ("p_outlier", self.p_outlier),
+        ] {
+            need(field, p, (0.0..=1.0).contains(&p), "a probability in [0, 1]");
+        }
+        let sum = self.p_slightly_long + self.p_slightly_short + self.p_outlier;
+        need("p_slightly_long + p_slightly_short + p_outlier", sum, sum <= 1.0 + 1e-9, "a sum <= 1");
+        need("slight_max_m", self.slight_max_m, self.slight_max_m >= 0.0, "a finite number >= 0");
+        need("outlier_min_m", self.outlier_min_m, self.outlier_min_m >= 0.0, "a finite number >= 0");
+        need("outlier_max_m", self.outlier_max_m, self.outlier_max_m >= self.outlier_min_m, ">= outlier_min_m");
+        out
+    }
+}
+
+impl RangeError {
+    /// Gill's shares (0.50 / 0.35 / 0.05 of all messages, 0.10 dropped) renormalised to the
+    /// decoded ones, since the success model already draws the drops.
+    pub fn gill() -> Self {
+        let a = Acoustic::default();
+        let kept = 1.0 - a.p_drop;
+        RangeError::GillMixture(Mixture {
+            p_slightly_long: a.p_slightly_long / kept,
+            p_slightly_short: a.p_slightly_short / kept,
+            p_outlier: a.p_outlier / kept,
+            slight_max_m: a.slight_max_m,
+            outlier_min_m: a.outlier_min_m,
+            outlier_max_m: a.outlier_max_m,
+        })
+    }
+
+    /// The travel-time error (s) of one decoded range, or None when the range is unusable.
+    /// `filter_variance` is the filter's range variance (m²) at this travel time.
+    pub fn draw(&self, filter_variance: f64, rng: &mut ChaCha8Rng) -> Option<f64> {
+        match self {
+            RangeError::Gaussian { extra_sd } => {
+                let sd = (filter_variance + extra_sd * extra_sd).sqrt();
+                Some(sd * normal(rng) / GILL_NOMINAL_SOUND_SPEED)
+            }
+            RangeError::GillMixture(m) => match draw_reception(&m.as_acoustic(), rng) {
+                Reception::Received(metres) => Some(metres / GILL_NOMINAL_SOUND_SPEED),
+                Reception::Dropped => None,
+            },
+        }
+    }
+
+    /// Every bad field, as (field under `prefix`, value, allowed).
+    pub fn problems(&self, prefix: &str) -> Vec<(String, String, String)> {
+        match self {
+            RangeError::Gaussian { extra_sd } if !(extra_sd.is_finite() && *extra_sd >= 0.0) => {
+                vec![(format!("{prefix}extra_sd"), extra_sd.to_string(), "a finite number >= 0".into())]
+            }
+            RangeError::Gaussian { .. } => Vec::new(),
+            RangeError::GillMixture(m) => m.problems(prefix),
+        }
+    }
+}
+
+/// The true sound speed. Travel time follows a straight ray between the two depths at the
+/// harmonic-mean speed of the layers it crosses (no refraction: an invented simplification, no
+/// thesis gives the ray model), so ranges the filters compute at their nominal speed carry the
+/// real bias.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
+pub enum SoundSpeed {
+    Constant {
+        c: f64,
+    },
+    /// (depth m, speed m/s) points, depth increasing; linear between, constant beyond.
+    Profile {
+        points: Vec<[f64; 2]>,
+    },
+}
+
+impl SoundSpeed {
+    /// A shallow summer profile: warm mixed layer over a thermocline (invented, typical of
+    /// temperate coastal water in summer).
+    pub fn summer() -> Self {
+        SoundSpeed::Profile { points: vec![[0.0, 1510.0], [10.0, 1509.0], [30.0, 1492.0], [100.0, 1488.0]] }
+    }
+
+    /// Speed at depth `z`.
+    pub fn at(&self, z: f64) -> f64 {
+        match self {
+            SoundSpeed::Constant { c } => *c,
+            SoundSpeed::Profile { points } => {
+                let i = points.partition_point(|p| p[0] <= z);
+                match (i.checked_sub(1).and_then(|j| points.get(j)), points.get(i)) {
+                    (Some(a), Some(b)) => a[1] + (b[1] - a[1]) * (z - a[0]) / (b[0] - a[0]),
+                    (Some(a), None) => a[1],
+                    (None, Some(b)) => b[1],
+                    (None, None) => GILL_NOMINAL_SOUND_SPEED,
+                }
+            }
+        }
+    }
+
+    /// Harmonic-mean speed between depths `z1` and `z2` (the speed at the depth when equal).
+    pub fn mean_between(&self, z1: f64, z2: f64) -> f64 {
+        let (lo, hi) = (z1.min(z2), z1.max(z2));
+        if hi - lo < 1e-6 {
+            return self.at(lo);
+        }
+        let mut knots = vec![lo];
+        if let SoundSpeed::Profile { points } = self {
+            knots.extend(points.iter().map(|p| p[0]).filter(|&z| z > lo && z < hi));
+        }
+        knots.push(hi);
+        // ∫ dz / c(z) over each linear piece: Δz · ln(c_b / c_a) / (c_b − c_a).
+        let slowness: f64 = knots
+            .windows(2)
+            .map(|w| {
+                let (ca, cb) = (self.at(w[0]), self.at(w[1]));
+                let dz = w[1] - w[0];
+                if (cb - ca).abs() < 1e-9 {
+                    dz / ca
+                } else {
+                    dz * (cb / ca).ln() / (cb - ca)
+                }
+            })
+            .sum();
+        (hi - lo) / slowness
+    }
+
+    /// Slowest speed anywhere (the longest travel time a schedule must allow for).
+    pub fn slowest(&self) -> f64 {
+        match self {
+            SoundSpeed::Constant { c } => *c,
+            SoundSpeed::Profile { points } => points.iter().map(|p| p[1]).fold(f64::INFINITY, f64::min),
+        }
+    }
+
+    /// Travel time from `from` to a receiver at `to(dt)` `dt` seconds after transmission: the
+    /// receiver moves during the flight (one fixed-point iteration suffices at vehicle speeds).
+    pub fn travel_time(&self, from: Vec3, to: impl Fn(f64) -> Vec3) -> f64 {
+        let c = |p: Vec3| self.mean_between(from.z, p.z);
+        let first = to(0.0);
+        let tt0 = (first - from).norm() / c(first);
+        let later = to(tt0);
+        (later - from).norm() / c(later)
+    }
+
+    pub fn problems(&self, prefix: &str) -> Vec<(String, String, String)> {
+        let speed_ok = |c: f64| c.is_finite() && (1300.0..=1700.0).contains(&c);
+        match self {
+            SoundSpeed::Constant { c } if !speed_ok(*c) => {
+                vec![(format!("{prefix}c"), c.to_string(), "1300..=1700 m/s".into())]
+            }
+            SoundSpeed::Constant { .. } => Vec::new(),
+            SoundSpeed::Profile { points } => {
+                let mut out = Vec::new();
+                if points.is_empty() {
+                    out.push((format!("{prefix}points"), "[]".into(), "at least one [depth, speed] point".into()));
+                }
+                for (i, p) in points.iter().enumerate() {
+                    if !(p[0].is_finite() && p[0] >= 0.0) {
+                        out.push((format!("{prefix}points[{i}][0]"), p[0].to_string(), "a depth >= 0 m".into()));
+                    }
+                    if !speed_ok(p[1]) {
+                        out.push((format!("{prefix}points[{i}][1]"), p[1].to_string(), "1300..=1700 m/s".into()));
+                    }
+                    if i > 0 && !(p[0] > points[i - 1][0]) {
+                        out.push((
+                            format!("{prefix}points[{i}][0]"),
+                            p[0].to_string(),
+                            "depths strictly increasing".into(),
+                        ));
+                    }
+                }
+                out
+            }
+        }
+    }
+}
+
+/// Each vehicle's clock: a fixed offset ~ N(0, offset_sd_s) and a drift rate ~ N(0, drift_sd_ppm)
+/// drawn per run (invented defaults: perfect clocks; Gill's measured drift is 162 ± 203 µs/h,
+/// gill digest §5.4, about 0.05 ppm). OWTT ranges see the receiver's minus the sender's error.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct Clocks {
+    pub offset_sd_s: f64,
+    pub drift_sd_ppm: f64,
+}
+
+/// One vehicle's drawn clock.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Clock {
+    offset: f64,
+    drift: f64,
+}
+
+impl Clocks {
+    /// Draws one vehicle's clock: always two normals, whatever the configuration.
+    pub fn draw(&self, rng: &mut ChaCha8Rng) -> Clock {
+        let (a, b) = (normal(rng), normal(rng));
+        Clock { offset: self.offset_sd_s * a, drift: self.drift_sd_ppm * 1e-6 * b }
+    }
+
+    pub fn problems(&self, prefix: &str) -> Vec<(String, String, String)> {
+        let mut out = Vec::new();
+        for (field, v, max) in [("offset_sd_s", self.offset_sd_s, 1.0), ("drift_sd_ppm", self.drift_sd_ppm, 100.0)] {
+            if !(v.is_finite() && (0.0..=max).contains(&v)) {
+                out.push((format!("{prefix}{field}"), v.to_string(), format!("0..={max}")));
+            }
+        }
+        out
+    }
+}
+
+impl Clock {
+    /// The clock's error (reading minus true time) at true time `t`, s.
+    pub fn error_at(&self, t: f64) -> f64 {
+        self.offset + self.drift * t
+    }
+}
+
+/// Overlapping arrivals at one receiver are lost; with a capture margin, the one stronger than
+/// every overlapping arrival by at least that many dB survives (the others are still lost).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct Collisions {
+    pub capture_margin_db: Option<f64>,
+}
+
+impl Collisions {
+    pub fn problems(&self, prefix: &str) -> Vec<(String, String, String)> {
+        match self.capture_margin_db {
+            Some(m) if !(m.is_finite() && m >= 0.0) => {
+                vec![(format!("{prefix}capture_margin_db"), m.to_string(), "a finite number >= 0 dB".into())]
+            }
+            _ => Vec::new(),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use coopnav_core::SeedStream;
+
+    #[test]
+    fn a_layered_profile_biases_ranges_at_the_nominal_speed() {
+        let s = SoundSpeed::summer();
+        assert_eq!(s.at(0.0), 1510.0);
+        assert_eq!(s.at(20.0), 1500.5);
+        assert_eq!(s.at(500.0), 1488.0);
+        let mean = s.mean_between(0.0, 20.0);
+        assert!(mean > 1500.5 && mean < 1510.0, "{mean}");
+        let tt = s.travel_time(Vec3::new(0.0, 0.0, 0.0), |_| Vec3::new(1000.0, 0.0, 20.0));
+        // The range a filter computes at 1500 m/s is short of the true 1000.2 m by metres.
+        let bias = (1000.0f64.hypot(20.0)) - 1500.0 * tt;
+        assert!(bias > 2.0 && bias < 6.0, "{bias}");
+        assert_eq!(SoundSpeed::Constant { c: 1480.0 }.mean_between(3.0, 50.0), 1480.0);
+    }
+
+    #[test]
+    fn the_truth_range_noise_differs_from_the_filters_gaussian() {
+        let filter_variance = 0.15f64.powi(2);
+        let mut rng = SeedStream::new(3).rng(1);
+        let gill: Vec<f64> = (0..20_000).filter_map(|_| RangeError::gill().draw(filter_variance, &mut rng)).collect();
+        let gauss: Vec<f64> = (0..20_000)
+            .filter_map(|_| RangeError::Gaussian { extra_sd: 0.0 }.draw(filter_variance, &mut rng))
+            .collect();
+        let metres = |v: &[f64]| v.iter().map(|t| t * 1500.0).collect::<Vec<_>>();
+        let (gill, gauss) = (metres(&gill), metres(&gauss));
+        let beyond = |v: &[f64], m: f64| v.iter().filter(|e| e.abs() > m).count() as f64 / v.len() as f64;
+        // The Gaussian never reaches 5 m at σ = 0.15 m; Gill's mixture does 1 time in 18.
+        assert_eq!(beyond(&gauss, 5.0 - 1e-9), 0.0);
+        assert!((beyond(&gill, 5.0 - 1e-9) - 0.05 / 0.9).abs() < 0.01);
+        let rms = (gauss.iter().map(|e| e * e).sum::<f64>() / gauss.len() as f64).sqrt();
+        assert!((rms - 0.15).abs() < 0.01, "{rms}");
+    }
+
+    #[test]
+    fn air_time_and_capacity_follow_the_rate_table() {
+        assert_eq!((air_time(Rate::R0), capacity(Rate::R0)), (3.90, 32));
+        assert_eq!((air_time(Rate::R5), capacity(Rate::R5)), (3.04, 2048));
+    }
+}

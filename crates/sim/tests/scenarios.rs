@@ -1,0 +1,42 @@
+//! Every file of the scenario library (`scenarios/*.toml` at the repository root) loads,
+//! validates and runs, reduced to a short mission with a shallow planner.
+
+use coopnav_sim::closed_loop::{run, Faults, PolicySpec, Scenario};
+use std::path::PathBuf;
+
+fn library() -> Vec<PathBuf> {
+    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../scenarios");
+    let mut files: Vec<PathBuf> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|x| x == "toml"))
+        .collect();
+    files.sort();
+    files
+}
+
+#[test]
+fn every_scenario_in_the_library_loads_and_runs_reduced() {
+    let files = library();
+    assert!(files.len() >= 3, "{files:?}");
+    let names: Vec<String> = files.iter().map(|f| f.file_name().unwrap().to_string_lossy().into_owned()).collect();
+    assert!(names.contains(&"default.toml".to_string()) && names.contains(&"full-stack.toml".to_string()));
+    for file in files {
+        let mut sc = Scenario::load(&file).unwrap_or_else(|e| panic!("{e}"));
+        sc.duration_s = sc.duration_s.min(600.0);
+        sc.planner.look_ahead = sc.planner.look_ahead.min(3);
+        sc.planner.deadline = coopnav_plan::Deadline::None;
+        let mut policy = PolicySpec::new("planner", &sc).unwrap().build(&sc).unwrap();
+        let r = run(&sc, &mut policy, sc.seed, &Faults::default(), &mut ());
+        let name = file.display();
+        assert!(r.fleet.healthy && r.fleet.error.mean.is_finite(), "{name}");
+        assert_eq!(r.auvs.len(), sc.fleet.n_auvs, "{name}");
+        assert!(r.auvs.iter().all(|a| a.ranges_applied > 0 && a.uplink.received > 0), "{name}: {:?}", r.auvs);
+    }
+}
+
+#[test]
+fn the_embedded_default_mission_is_the_library_file() {
+    let file = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../scenarios/default.toml");
+    assert_eq!(std::fs::read_to_string(file).unwrap(), coopnav_sim::closed_loop::EXAMPLE);
+}
