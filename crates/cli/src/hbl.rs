@@ -214,6 +214,7 @@ fn simulate(c: &Common, index: u64) -> Result<()> {
         plot::error_vs_xrel(&trace.rows, (sc.geometry.zone_min, sc.geometry.zone_max))?,
     )?;
     dir.write_json("summary.json", &metrics)?;
+    coopnav_sim::moos_export::write_moos_files(&dir, &coopnav_sim::moos_export::hbl_run(&sc, &trace))?;
     let out = dir.finish()?;
     println!("zone error {:.3} m; wrote {}", metrics.zone_error.unwrap_or(f64::NAN), out.display());
     Ok(())

@@ -13,6 +13,7 @@ mod plan;
 mod reproduce;
 mod scenario_args;
 mod simulate;
+mod view;
 
 #[derive(Parser)]
 #[command(
@@ -41,6 +42,8 @@ enum Command {
     /// Closed-loop mission: CNA policy, survey-AUV OWTT filters and the acoustic link together
     /// (no scenario: the embedded default mission; --runs: Monte Carlo comparison of policies).
     Simulate(simulate::Args),
+    /// Write a run directory's interactive replay.html (time slider, tracks, pulses, errors).
+    View(view::Args),
     /// Benchmarks, printed as JSON.
     #[command(subcommand)]
     Bench(bench::Target),
@@ -98,6 +101,7 @@ fn run() -> Result<ExitCode> {
         Command::Channel(args) => channel::run(args),
         Command::Nams(args) => nams::run(args),
         Command::Simulate(args) => simulate::run(args),
+        Command::View(args) => view::run(args),
         Command::Bench(target) => bench::run(target),
     };
     done.map(|()| ExitCode::SUCCESS)

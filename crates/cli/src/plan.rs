@@ -1,19 +1,34 @@
-//! `coopnav plan [scenario.toml] [-o dir] [--force] [--example]`: pre-deployment planning of a
-//! whole mission. Without a scenario it plans the embedded example; without -o it writes a fresh
-//! directory under runs/ (runs/plan-<name>, runs/plan-<name>-2, ...).
+//! `coopnav plan [scenario.toml] [-o dir] [--force] [--example] [--moos [--moos-origin LAT,LON]]`:
+//! pre-deployment planning of a whole mission. Without a scenario it plans the embedded example;
+//! without -o it writes a fresh directory under runs/ (runs/plan-<name>, runs/plan-<name>-2, ...).
+//! `--moos` adds MOOS-IvP mission files for the CNA (cna.moos, cna.bhv) to the run directory.
 
 use crate::scenario_args::{Loaded, ScenarioArgs, ScenarioCommand};
-use anyhow::{Context, Result};
+use anyhow::{anyhow, Context, Result};
 use coopnav_core::limits::Estimate;
+use coopnav_core::LatLon;
+use coopnav_moos::mission::EXAMPLE_ORIGIN_DEG;
 use coopnav_plan::LookAheadPlanner;
+use coopnav_sim::moos_export;
 use coopnav_sim::predeploy::{self, output::write_run, Scenario, EXAMPLE};
 use coopnav_sim::scenario_file::Validate;
 use coopnav_sim::work;
 use indicatif::{ProgressBar, ProgressStyle};
 use std::io::IsTerminal;
 
-/// `coopnav plan`'s arguments: just the shared scenario arguments.
-pub type Args = ScenarioArgs<Plan>;
+#[derive(clap::Args)]
+pub struct Args {
+    /// Also write MOOS-IvP mission files that fly the planned CNA path (cna.moos, cna.bhv).
+    #[arg(long)]
+    moos: bool,
+    /// LatOrigin,LongOrigin of the mission files, degrees (default: MOOS-IvP's example origin,
+    /// 42.358456,-71.087589).
+    #[arg(long, value_name = "LAT,LON", requires = "moos")]
+    moos_origin: Option<String>,
+    /// Scenario file, -o, --force, --example.
+    #[command(flatten)]
+    scenario: ScenarioArgs<Plan>,
+}
 
 /// What `coopnav plan` reads: a pre-deployment scenario.
 pub enum Plan {}
@@ -30,14 +45,26 @@ impl ScenarioCommand for Plan {
     const WORK: fn(&Scenario) -> Vec<Estimate> = work::predeploy;
 }
 
+/// The `--moos-origin` value, or MOOS-IvP's example origin.
+fn moos_origin(text: Option<&str>) -> Result<LatLon> {
+    let Some(text) = text else {
+        return Ok(LatLon::new(EXAMPLE_ORIGIN_DEG.0, EXAMPLE_ORIGIN_DEG.1)?);
+    };
+    let bad = || anyhow!("--moos-origin {text:?}: expected LAT,LON in degrees, e.g. 42.358456,-71.087589");
+    let (lat, lon) = text.split_once(',').ok_or_else(bad)?;
+    let (lat, lon) = (lat.trim().parse().map_err(|_| bad())?, lon.trim().parse().map_err(|_| bad())?);
+    LatLon::new(lat, lon).with_context(|| format!("--moos-origin {text:?}"))
+}
+
 pub fn run(args: Args) -> Result<()> {
-    if args.print_example() {
+    if args.scenario.print_example() {
         return Ok(());
     }
-    let Loaded { scenario, file, base, stem } = args.load()?;
+    let Loaded { scenario, file, base, stem } = args.scenario.load()?;
     // Everything is validated before any output is created.
     let mission = scenario.build(&file, &base)?;
-    let dir = args.run_dir(&stem)?;
+    let origin = args.moos.then(|| moos_origin(args.moos_origin.as_deref())).transpose()?;
+    let dir = args.scenario.run_dir(&stem)?;
     let mut planner = LookAheadPlanner::new(mission.planner)?;
     let bar = if std::io::stderr().is_terminal() {
         ProgressBar::new(predeploy::step_count(&mission))
@@ -47,6 +74,11 @@ pub fn run(args: Args) -> Result<()> {
     bar.set_style(ProgressStyle::with_template("{bar:40} {pos}/{len} decisions [{elapsed_precise} < {eta_precise}]")?);
     let result = predeploy::run(&mission, &mut planner, &|s| bar.set_position(s))?;
     bar.finish_and_clear();
+    if let Some(origin) = origin {
+        let files = moos_export::plan_mission(&mission, &result, origin);
+        dir.write_text(&files.moos_name, &files.moos)?;
+        dir.write_text(&files.bhv_name, &files.bhv)?;
+    }
     let inputs = serde_json::json!({ "scenario_file": file.display().to_string(), "scenario": scenario });
     let out = write_run(dir, &mission, inputs, &result).context("writing the run directory")?;
     let s = &result.summary;

@@ -1,9 +1,18 @@
 //! coopnav-moos: the bridge between coopnav and the MOOS-IvP tools marine-robotics users already run
 //! (alogview, pMarineViewer, the alog grep/clip utilities).
 //!
-//! It owns the `.alog` text format (reading and writing, [`alog`]). It knows nothing about
-//! simulators or filters: callers turn their own records into alog entries and back.
+//! It owns the `.alog` text format (reading and writing, [`alog`]), a run as those tools see it
+//! ([`run`]: vehicle tracks, acoustic pulses, planned legs) and its export as an alog
+//! ([`export`]), MOOS mission files for a planned CNA path ([`mission`]), and the interactive replay page built from an alog ([`replay`]). It knows nothing about simulators or filters: callers fill in a [`RunLog`] from
+//! their own records.
 
 pub mod alog;
+pub mod export;
+pub mod mission;
+pub mod replay;
+pub mod run;
 
 pub use alog::{read_alog, read_alog_file, Alog, AlogEntry, AlogError, AlogWriter};
+pub use export::{write_run_alog, ExportError};
+pub use mission::{mission_files, MissionFiles, MissionSpec, Waypoint};
+pub use run::{Leg, Pulse, PulseKind, Role, RunLog, Sample, Vehicle, SIMULATED_LOG_START};

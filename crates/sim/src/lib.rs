@@ -9,6 +9,7 @@ pub mod engine;
 pub mod experiments;
 pub mod hbl;
 pub mod models;
+pub mod moos_export;
 pub mod nams;
 pub mod output;
 pub mod plot;

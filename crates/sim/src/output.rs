@@ -67,6 +67,10 @@ pub enum WriteError {
     Plot(#[from] PlotError),
     #[error("the run was not recorded (no time series to write)")]
     NotRecorded,
+    #[error("cannot export the run as a MOOS alog: {0}")]
+    Alog(#[from] coopnav_moos::ExportError),
+    #[error("cannot build the replay page: {0}")]
+    Replay(#[from] coopnav_moos::replay::ReplayError),
 }
 
 fn io_err(path: &Path) -> impl FnOnce(std::io::Error) -> OutputError + '_ {

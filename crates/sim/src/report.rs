@@ -21,6 +21,12 @@ impl HtmlReport {
         self
     }
 
+    /// A paragraph holding one link to a file beside the report.
+    pub fn link(&mut self, href: &str, text: &str) -> &mut Self {
+        let _ = writeln!(self.body, "<p><a href=\"{}\">{}</a></p>", escape(href), escape(text));
+        self
+    }
+
     pub fn paragraph(&mut self, text: &str) -> &mut Self {
         let _ = writeln!(self.body, "<p>{}</p>", escape(text));
         self

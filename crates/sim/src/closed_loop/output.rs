@@ -28,6 +28,7 @@ pub fn write_run(dir: RunDir, sc: &Scenario, result: &RunResult, command: &str) 
     for ((file, _), svg) in PLOTS.iter().zip(&svgs) {
         dir.write_text(file, svg)?;
     }
+    crate::moos_export::write_moos_files(&dir, &crate::moos_export::closed_loop_run(sc, result)?)?;
     dir.write_text("report.html", &report(sc, result, &svgs))?;
     Ok(dir.finish()?)
 }
@@ -80,6 +81,7 @@ fn report(sc: &Scenario, r: &RunResult, svgs: &[String]) -> String {
         "{} survey AUVs, ASC CNA at {} m/s, τ = {} s, {} s mission, seed {}. Errors are the survey AUVs' TRUE navigation errors (EKF estimate minus truth).",
         sc.fleet.n_auvs, sc.cna.speed, sc.comms.tau, sc.duration_s, r.seed
     ));
+    h.link(coopnav_moos::replay::FILE, "Interactive replay (tracks, 1σ/2σ circles, pulses, error against time)");
     h.heading("Per AUV");
     let fmt = |v: f64| format!("{v:.2}");
     let rows: Vec<Vec<String>> = r

@@ -107,6 +107,7 @@ pub fn write_run(
     dir.write_json("summary.json", &result.summary)?;
     dir.write_json("manifest.json", &Manifest::new("plan", None, inputs))?;
     write_plots(&dir, mission, result)?;
+    crate::moos_export::write_moos_files(&dir, &crate::moos_export::plan_run(mission, result))?;
     Ok(dir.finish()?)
 }
 
