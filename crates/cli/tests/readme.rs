@@ -13,6 +13,8 @@ use std::path::Path;
 const NOT_RUN: &[(&str, &str)] = &[
     ("cargo test --workspace", "this test suite itself"),
     ("bash scripts/install-bellhop.sh", "installs an external program; .ci/run runs it"),
+    ("bash scripts/install-pymoos.sh", "installs an external program; .ci/run runs it"),
+    ("bash scripts/install-chromium.sh", "installs an external program; .ci/run runs it"),
 ];
 
 /// A README command run in a smaller form: its arguments as the README writes them, the
