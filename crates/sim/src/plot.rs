@@ -24,11 +24,26 @@ impl PlotError {
 pub struct Series {
     pub name: String,
     pub points: Vec<(f64, f64)>,
+    /// Palette index; by default the series' position, so every line differs.
+    pub colour: Option<usize>,
+    /// Dashed rather than solid: how a plot tells an estimate from the truth of the same vehicle.
+    pub dashed: bool,
 }
 
 impl Series {
     pub fn new(name: impl Into<String>, points: Vec<(f64, f64)>) -> Self {
-        Series { name: name.into(), points }
+        Series { name: name.into(), points, colour: None, dashed: false }
+    }
+
+    /// Draws in palette colour `k`, so related series (one vehicle's truth and estimate) match.
+    pub fn colour(mut self, k: usize) -> Self {
+        self.colour = Some(k);
+        self
+    }
+
+    pub fn dashed(mut self) -> Self {
+        self.dashed = true;
+        self
     }
 }
 
@@ -41,16 +56,21 @@ pub struct Labels<'a> {
 }
 
 const SIZE: (u32, u32) = (900, 600);
+/// Height of the plotting area in pixels (the figure less caption, margins and x labels).
+const PLOT_HEIGHT_PX: f64 = 600.0 - 40.0 - 24.0 - 40.0;
+/// Height of one legend row, and of the legend box's padding, in pixels.
+const LEGEND_ROW_PX: f64 = 20.0;
 
 /// A line plot of every series against a shared x axis.
 pub fn line_svg(labels: Labels, series: &[Series]) -> Result<String, PlotError> {
     let (x, y) = bounds(series);
-    draw(labels, series, x, y)
+    draw(labels, series, x, with_legend_headroom(y, series))
 }
 
 /// A track plot (y north against x east) with equal metres per pixel on both axes.
 pub fn track_svg(labels: Labels, series: &[Series]) -> Result<String, PlotError> {
-    let (mut x, mut y) = bounds(series);
+    let (x, y) = bounds(series);
+    let (mut x, mut y) = (x, with_legend_headroom(y, series));
     let aspect = f64::from(SIZE.0) / f64::from(SIZE.1);
     let (w, h) = (x.1 - x.0, y.1 - y.0);
     if w / h < aspect {
@@ -72,6 +92,21 @@ fn bounds(series: &[Series]) -> ((f64, f64), (f64, f64)) {
         y = (y.0.min(p.1), y.1.max(p.1));
     }
     (padded(x), padded(y))
+}
+
+/// Raises the top of the y range so the legend (upper right) sits above every line instead of
+/// covering one.
+fn with_legend_headroom((lo, hi): (f64, f64), series: &[Series]) -> (f64, f64) {
+    if !has_legend(series) {
+        return (lo, hi);
+    }
+    let legend_px = LEGEND_ROW_PX * (series.len() as f64 + 1.0);
+    let fraction = (legend_px / PLOT_HEIGHT_PX).min(0.75);
+    (lo, hi + (hi - lo) * fraction / (1.0 - fraction))
+}
+
+fn has_legend(series: &[Series]) -> bool {
+    series.len() > 1 || series.iter().any(|s| !s.name.is_empty())
 }
 
 fn padded((lo, hi): (f64, f64)) -> (f64, f64) {
@@ -97,16 +132,23 @@ fn draw(labels: Labels, series: &[Series], x: (f64, f64), y: (f64, f64)) -> Resu
             .map_err(|e| fail(&e))?;
         chart.configure_mesh().x_desc(labels.x).y_desc(labels.y).draw().map_err(|e| fail(&e))?;
         for (i, s) in series.iter().enumerate() {
-            let color = Palette99::pick(i).to_rgba();
-            chart
-                .draw_series(LineSeries::new(s.points.iter().copied(), color.stroke_width(2)))
-                .map_err(|e| fail(&e))?
-                .label(s.name.as_str())
-                .legend(move |(lx, ly)| PathElement::new(vec![(lx, ly), (lx + 18, ly)], color.stroke_width(2)));
+            let style = Palette99::pick(s.colour.unwrap_or(i)).to_rgba().stroke_width(2);
+            let points = s.points.iter().copied();
+            let drawn = if s.dashed {
+                chart.draw_series(DashedLineSeries::new(points, 6, 4, style))
+            } else {
+                chart.draw_series(LineSeries::new(points, style))
+            };
+            let dashed = s.dashed;
+            drawn.map_err(|e| fail(&e))?.label(s.name.as_str()).legend(move |(lx, ly)| {
+                let sample = if dashed { vec![(lx, ly), (lx + 6, ly)] } else { vec![(lx, ly), (lx + 18, ly)] };
+                PathElement::new(sample, style)
+            });
         }
-        if series.len() > 1 || series.iter().any(|s| !s.name.is_empty()) {
+        if has_legend(series) {
             chart
                 .configure_series_labels()
+                .position(SeriesLabelPosition::UpperRight)
                 .background_style(WHITE.mix(0.8))
                 .border_style(BLACK)
                 .draw()
@@ -130,6 +172,51 @@ mod tests {
         for text in ["error vs time", "auv-1", "auv-2", "t [s]"] {
             assert!(svg.contains(text), "missing {text}");
         }
+    }
+
+    /// The legend box's bottom edge and the highest point of any data line, in SVG pixels (y down).
+    fn legend_bottom_and_data_top(svg: &str) -> (f64, f64) {
+        // The legend background is the one semi-transparent rectangle.
+        let legend = svg.split("<rect").find(|r| r.contains("opacity=\"0.8\"")).expect("a legend box");
+        let attr = |name: &str| -> f64 {
+            legend.split(&format!(" {name}=\"")).nth(1).and_then(|v| v.split('"').next()).unwrap().parse().unwrap()
+        };
+        // Data lines are drawn 2 px wide (axes and ticks 1 px); legend samples sit inside the box.
+        let data_ys = svg
+            .split("<polyline")
+            .filter(|p| p.contains("stroke-width=\"2\""))
+            .filter_map(|p| p.split("points=\"").nth(1)?.split('"').next())
+            .flat_map(|pts| pts.split_whitespace())
+            .filter_map(|xy| {
+                Some((xy.split(',').next()?.parse::<f64>().ok()?, xy.split(',').nth(1)?.parse::<f64>().ok()?))
+            })
+            .filter(|&(x, _)| x < attr("x"))
+            .map(|(_, y)| y);
+        (attr("y") + attr("height"), data_ys.fold(f64::INFINITY, f64::min))
+    }
+
+    #[test]
+    fn the_legend_sits_above_every_line() {
+        let s: Vec<Series> =
+            (0..6).map(|k| Series::new(format!("auv{k}"), vec![(0.0, 0.0), (10.0, 9.0 + k as f64)])).collect();
+        let labels = Labels { title: "t", x: "x", y: "y" };
+        for svg in [line_svg(labels, &s).unwrap(), track_svg(labels, &s).unwrap()] {
+            let (legend_bottom, data_top) = legend_bottom_and_data_top(&svg);
+            assert!(legend_bottom < data_top, "legend bottom {legend_bottom} px covers data reaching {data_top} px");
+        }
+    }
+
+    #[test]
+    fn a_series_can_share_a_colour_and_be_dashed() {
+        let s = [
+            Series::new("auv0 true", vec![(0.0, 0.0), (1.0, 1.0)]).colour(3),
+            Series::new("auv0 estimated", vec![(0.0, 0.1), (1.0, 1.1)]).colour(3).dashed(),
+        ];
+        let svg = line_svg(Labels { title: "t", x: "x", y: "y" }, &s).unwrap();
+        let colour = Palette99::pick(3).to_rgba();
+        let hex = format!("#{:02X}{:02X}{:02X}", colour.0, colour.1, colour.2);
+        assert!(svg.matches(&hex).count() >= 4, "both series and both legend samples in {hex}");
+        assert!(svg.matches("<polyline").count() > 2, "the dashed series is drawn as several segments");
     }
 
     #[test]

@@ -27,6 +27,14 @@ impl HtmlReport {
         self
     }
 
+    /// Says what made the report: the command line as run (it names the scenario file) and its
+    /// seed. The coopnav version is on every report (see [`HtmlReport::render`]).
+    pub fn provenance(&mut self, command: &str, seed: Option<u64>) -> &mut Self {
+        let seed = seed.map_or(String::new(), |s| format!(" · seed {s}"));
+        let _ = writeln!(self.body, "<p class=\"provenance\">Run: <code>{}</code>{seed}</p>", escape(command));
+        self
+    }
+
     pub fn paragraph(&mut self, text: &str) -> &mut Self {
         let _ = writeln!(self.body, "<p>{}</p>", escape(text));
         self
@@ -71,8 +79,9 @@ impl HtmlReport {
 
     pub fn render(&self) -> String {
         format!(
-            "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n<title>{title}</title>\n<style>{STYLE}</style>\n</head>\n<body>\n<h1>{title}</h1>\n{body}</body>\n</html>\n",
+            "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n<title>{title}</title>\n<style>{STYLE}</style>\n</head>\n<body>\n<h1>{title}</h1>\n{body}<footer>coopnav {version}</footer>\n</body>\n</html>\n",
             title = escape(&self.title),
+            version = env!("CARGO_PKG_VERSION"),
             body = self.body
         )
     }
@@ -125,5 +134,17 @@ mod tests {
             assert!(!html.contains(fetches), "report must be self-contained, found {fetches}");
         }
         assert_eq!(r.figures(), &["error.svg".to_string()]);
+    }
+
+    #[test]
+    fn every_report_names_its_version_and_the_command_that_made_it() {
+        let mut r = HtmlReport::new("Run");
+        assert!(r.render().contains(&format!("coopnav {}", env!("CARGO_PKG_VERSION"))));
+        r.provenance("coopnav simulate scenarios/full-stack.toml -o <x>", Some(7));
+        let html = r.render();
+        assert!(
+            html.contains("<code>coopnav simulate scenarios/full-stack.toml -o &lt;x&gt;</code> · seed 7"),
+            "{html}"
+        );
     }
 }

@@ -11,9 +11,9 @@ use std::path::PathBuf;
 
 /// The plots every run directory holds: (file, caption).
 pub const PLOTS: [(&str, &str); 3] = [
-    ("tracks.svg", "True (solid) and estimated tracks of every survey AUV, and the CNA's track"),
-    ("error.svg", "True navigation error of each survey AUV over time, beside the planner's modelled error"),
-    ("comms.svg", "Comms timeline: cumulative packets received per link (down = CNA broadcast, up = status)"),
+    ("tracks.svg", "Tracks of every survey AUV, true (solid) and estimated (dashed, same colour), and the CNA's track"),
+    ("error.svg", "True navigation error of each survey AUV over time (solid), beside the planner's modelled error (dashed, same colour)"),
+    ("comms.svg", "Comms timeline: cumulative packets received per AUV, CNA broadcast down (solid) and status up (dashed, same colour)"),
 ];
 
 /// Writes `result` (recorded with a trace) into `dir` and finishes it.
@@ -29,7 +29,7 @@ pub fn write_run(dir: RunDir, sc: &Scenario, result: &RunResult, command: &str) 
         dir.write_text(file, svg)?;
     }
     crate::moos_export::write_moos_files(&dir, &crate::moos_export::closed_loop_run(sc, result)?)?;
-    dir.write_text("report.html", &report(sc, result, &svgs))?;
+    dir.write_text("report.html", &report(sc, result, &svgs, command))?;
     Ok(dir.finish()?)
 }
 
@@ -39,21 +39,21 @@ fn plots(n: usize, tr: &Trace) -> Result<Vec<String>, PlotError> {
     };
     let mut tracks = Vec::new();
     for k in 0..n {
-        tracks.push(Series::new(format!("auv{k} true"), per_auv(&|r| (r.true_x, r.true_y), k)));
-        tracks.push(Series::new(format!("auv{k} estimated"), per_auv(&|r| (r.est_x, r.est_y), k)));
+        tracks.push(Series::new(format!("auv{k} true"), per_auv(&|r| (r.true_x, r.true_y), k)).colour(k));
+        tracks.push(Series::new(format!("auv{k} estimated"), per_auv(&|r| (r.est_x, r.est_y), k)).colour(k).dashed());
     }
-    tracks.push(Series::new("CNA", tr.cna.iter().map(|c| (c.1, c.2)).collect()));
+    tracks.push(Series::new("CNA", tr.cna.iter().map(|c| (c.1, c.2)).collect()).colour(n));
     let mut errors = Vec::new();
     for k in 0..n {
-        errors.push(Series::new(format!("auv{k} true error"), per_auv(&|r| (r.t, r.error), k)));
+        errors.push(Series::new(format!("auv{k} true error"), per_auv(&|r| (r.t, r.error), k)).colour(k));
         let modelled: Vec<(f64, f64)> =
             tr.rows.iter().filter(|r| r.auv == k).filter_map(|r| r.modelled.map(|m| (r.t, m))).collect();
         if !modelled.is_empty() {
-            errors.push(Series::new(format!("auv{k} modelled"), modelled));
+            errors.push(Series::new(format!("auv{k} modelled"), modelled).colour(k).dashed());
         }
     }
     let mut comms = Vec::new();
-    for dir in ["down", "up"] {
+    for (dir, dashed) in [("down", false), ("up", true)] {
         for k in 0..n {
             let mut count = 0.0;
             let pts = tr
@@ -65,7 +65,8 @@ fn plots(n: usize, tr: &Trace) -> Result<Vec<String>, PlotError> {
                     (e.t, count)
                 })
                 .collect();
-            comms.push(Series::new(format!("{dir} auv{k}"), pts));
+            let line = Series::new(format!("{dir} auv{k}"), pts).colour(k);
+            comms.push(if dashed { line.dashed() } else { line });
         }
     }
     Ok(vec![
@@ -75,8 +76,9 @@ fn plots(n: usize, tr: &Trace) -> Result<Vec<String>, PlotError> {
     ])
 }
 
-fn report(sc: &Scenario, r: &RunResult, svgs: &[String]) -> String {
+fn report(sc: &Scenario, r: &RunResult, svgs: &[String], command: &str) -> String {
     let mut h = HtmlReport::new(format!("coopnav closed-loop mission: policy {}", r.policy));
+    h.provenance(command, Some(r.seed));
     h.paragraph(&format!(
         "{} survey AUVs, ASC CNA at {} m/s, τ = {} s, {} s mission, seed {}. Errors are the survey AUVs' TRUE navigation errors (EKF estimate minus truth).",
         sc.fleet.n_auvs, sc.cna.speed, sc.comms.tau, sc.duration_s, r.seed

@@ -16,22 +16,45 @@ fn ramp(v: f64, lo: f64, hi: f64) -> RGBColor {
     RGBColor((40.0 + 215.0 * f) as u8, (60.0 + 80.0 * (1.0 - (2.0 * f - 1.0).abs())) as u8, (255.0 * (1.0 - f)) as u8)
 }
 
-/// Heat map of mean zone error per buoy cell (`spacing` = cell size in m).
+/// Quantile of the colour scale's top: cells above it share the top colour, so one outlying
+/// cell (a buoy placed where the AUV diverges) does not wash every other cell out to blue.
+const SCALE_TOP_QUANTILE: f64 = 0.95;
+
+/// The heat map's colour range: the lowest finite cell to the [`SCALE_TOP_QUANTILE`] quantile
+/// (nearest rank), and how many cells lie above that top.
+fn colour_range(values: &[f64]) -> ((f64, f64), usize) {
+    let mut v: Vec<f64> = values.iter().copied().filter(|x| x.is_finite()).collect();
+    v.sort_by(f64::total_cmp);
+    let (Some(&lo), Some(&max)) = (v.first(), v.last()) else { return ((0.0, 1.0), 0) };
+    let rank = ((SCALE_TOP_QUANTILE * v.len() as f64).ceil() as usize).clamp(1, v.len());
+    let hi = if v[rank - 1] > lo { v[rank - 1] } else { max };
+    ((lo, hi), v.iter().filter(|&&x| x > hi).count())
+}
+
+const HEAT_SIZE: (u32, u32) = (820, 440);
+const BAR_WIDTH: u32 = 110;
+
+/// Heat map of mean zone error per buoy cell (`spacing` = cell size in m), with a colour bar.
 pub fn heat_map(cells: &[GridCell], spacing: f64) -> Result<String, PlotError> {
     const TITLE: &str = "Mean AUV zone error by buoy position";
     let err = |e: &dyn std::fmt::Display| PlotError::new(TITLE, e);
+    let means: Vec<f64> = cells.iter().map(|c| c.zone_error.mean).collect();
+    let ((lo, hi), above) = colour_range(&means);
+    let caption = match above {
+        0 => format!("{TITLE} (m)"),
+        n => format!("{TITLE} (m; {n} cell(s) above {hi:.2} m in the top colour)"),
+    };
     let mut svg = String::new();
     {
-        let root = SVGBackend::with_string(&mut svg, (720, 420)).into_drawing_area();
+        let root = SVGBackend::with_string(&mut svg, HEAT_SIZE).into_drawing_area();
         root.fill(&WHITE).map_err(|e| err(&e))?;
+        let (map_area, bar_area) = root.split_horizontally(HEAT_SIZE.0 - BAR_WIDTH);
         let (xs, ys): (Vec<f64>, Vec<f64>) = cells.iter().map(|c| (c.x, c.y)).unzip();
-        let lo = cells.iter().map(|c| c.zone_error.mean).fold(f64::INFINITY, f64::min);
-        let hi = cells.iter().map(|c| c.zone_error.mean).fold(f64::NEG_INFINITY, f64::max);
         let h = spacing / 2.0;
         let min = |v: &[f64]| v.iter().copied().fold(f64::INFINITY, f64::min);
         let max = |v: &[f64]| v.iter().copied().fold(f64::NEG_INFINITY, f64::max);
-        let mut chart = ChartBuilder::on(&root)
-            .caption(format!("{TITLE} ({lo:.2}–{hi:.2} m, blue = low)"), ("sans-serif", 16))
+        let mut chart = ChartBuilder::on(&map_area)
+            .caption(caption, ("sans-serif", 15))
             .margin(10)
             .x_label_area_size(35)
             .y_label_area_size(45)
@@ -43,8 +66,44 @@ pub fn heat_map(cells: &[GridCell], spacing: f64) -> Result<String, PlotError> {
                 Rectangle::new([(c.x - h, c.y - h), (c.x + h, c.y + h)], ramp(c.zone_error.mean, lo, hi).filled())
             }))
             .map_err(|e| err(&e))?;
+        colour_bar(&bar_area, lo, hi).map_err(|e| err(&e))?;
     }
     Ok(svg)
+}
+
+/// The ramp from `lo` to `hi` as a vertical bar with its values labelled (m).
+fn colour_bar<DB: DrawingBackend>(
+    area: &DrawingArea<DB, plotters::coord::Shift>,
+    lo: f64,
+    hi: f64,
+) -> Result<(), String>
+where
+    DB::ErrorType: 'static,
+{
+    const STEPS: usize = 64;
+    let top = if hi > lo { hi } else { lo + 1.0 };
+    let mut bar = ChartBuilder::on(area)
+        .margin_top(40)
+        .margin_bottom(45)
+        .margin_right(10)
+        .y_label_area_size(55)
+        .build_cartesian_2d(0.0..1.0, lo..top)
+        .map_err(|e| e.to_string())?;
+    bar.configure_mesh()
+        .disable_x_mesh()
+        .disable_y_mesh()
+        .disable_x_axis()
+        .y_desc("zone error (m)")
+        .y_labels(6)
+        .draw()
+        .map_err(|e| e.to_string())?;
+    let step = (top - lo) / STEPS as f64;
+    bar.draw_series((0..STEPS).map(|i| {
+        let v = lo + step * i as f64;
+        Rectangle::new([(0.0, v), (1.0, v + step)], ramp(v + step / 2.0, lo, top).filled())
+    }))
+    .map_err(|e| e.to_string())?;
+    Ok(())
 }
 
 /// True and estimated AUV tracks, the ship and (when there is one) the buoy.
@@ -119,6 +178,33 @@ mod tests {
         assert!(msbl.iter().all(|r| r.buoy_true.is_none()));
         let svg = tracks(&msbl).unwrap();
         assert!(legend(&svg, "ship") && !legend(&svg, "buoy"));
+    }
+
+    fn cell(x: f64, mean: f64) -> GridCell {
+        GridCell { x, y: 0.0, zone_error: crate::hbl::mc::Stats { n: 1, mean, sd: 0.0, se: 0.0 } }
+    }
+
+    /// Distinct fill colours of the map's cells (the colour bar's rectangles come after them).
+    fn cell_fills(svg: &str, n: usize) -> std::collections::BTreeSet<String> {
+        svg.split("<rect")
+            .filter(|r| r.contains("fill=\"#") && !r.contains("#FFFFFF"))
+            .take(n)
+            .filter_map(|r| r.split("fill=\"").nth(1)?.split('"').next().map(str::to_string))
+            .collect()
+    }
+
+    #[test]
+    fn one_outlying_cell_does_not_wash_out_the_heat_map() {
+        // 40 ordinary cells from 1 to 2 m and one diverged cell at 100 m.
+        let mut cells: Vec<GridCell> = (0..40).map(|i| cell(10.0 * f64::from(i), 1.0 + f64::from(i) / 39.0)).collect();
+        cells.push(cell(400.0, 100.0));
+        let svg = heat_map(&cells, 10.0).unwrap();
+        let distinct = cell_fills(&svg, 40).len();
+        assert!(distinct >= 20, "the ordinary cells use only {distinct} colours");
+        // Nearest rank of the 95 % quantile of 41 cells is the 39th: the 2 m cell and the outlier lie above.
+        assert!(svg.contains("2 cell(s) above 1.97 m") && svg.contains("zone error (m)"), "caption and colour bar");
+        assert_eq!(colour_range(&[3.0, f64::NAN, 1.0, 2.0]), ((1.0, 3.0), 0));
+        assert_eq!(colour_range(&[]), ((0.0, 1.0), 0));
     }
 
     #[test]
