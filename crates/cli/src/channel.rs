@@ -5,6 +5,7 @@ use anyhow::{Context, Result};
 use coopnav_acomms::tl::analytic::Thorp;
 use coopnav_acomms::tl::bellhop::{AcousticEnv, Bellhop};
 use coopnav_acomms::{Rate, SuccessModel, TransmissionLoss};
+use coopnav_core::limits::{self, Estimate, MAX_POINTS};
 use coopnav_core::{Bathymetry, Shelf, Vec3};
 use coopnav_sim::output::{Manifest, RunDir};
 use coopnav_sim::plot::{line_svg, Labels, Series};
@@ -52,11 +53,14 @@ pub struct Args {
     #[arg(long)]
     bathymetry: Option<PathBuf>,
     /// Output directory (default: a fresh runs/channel-N).
-    #[arg(short, long)]
+    #[arg(short, long = "output", alias = "out")]
     out: Option<PathBuf>,
     /// Replace an existing output directory.
     #[arg(long)]
     force: bool,
+    /// Run even when the estimated work or memory is above coopnav's limits (coopnav_core::limits).
+    #[arg(long)]
+    allow_large: bool,
 }
 
 #[derive(Serialize)]
@@ -78,6 +82,8 @@ pub fn run(args: Args) -> Result<()> {
     );
     anyhow::ensure!((0.0..=60.0).contains(&args.noise_db), "--noise-db {} must be in [0, 60]", args.noise_db);
     anyhow::ensure!(args.k > 0.0 && args.k <= 4.0, "--k {} must be in (0, 4]", args.k);
+    let ranges = Estimate::new("table rows", "--max-range / --step", args.max_range / args.step, MAX_POINTS);
+    limits::check([ranges], args.allow_large)?;
     let bathy = match &args.bathymetry {
         Some(p) => Bathymetry::load(p)?,
         None => Bathymetry::shelf(&Shelf::default())?,

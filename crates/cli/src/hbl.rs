@@ -1,12 +1,15 @@
 //! `coopnav hbl simulate|montecarlo|grid|tune|postprocess`: the Gill hybrid-baseline tools.
 
 use crate::alog_import;
+use crate::input;
 use anyhow::{Context, Result};
+use coopnav_core::limits;
 use coopnav_nav::post::{self, PostConfig};
 use coopnav_sim::hbl::grid::{self, GridSpec};
 use coopnav_sim::hbl::tune::{tune, Coefficient, Objective, TuneSpec};
 use coopnav_sim::hbl::{monte_carlo_profiled, plot, run, Scenario};
 use coopnav_sim::output::{Manifest, RunDir};
+use coopnav_sim::work;
 
 /// x_rel bin of the Monte Carlo error profile (m).
 const PROFILE_BIN_M: f64 = 5.0;
@@ -65,8 +68,10 @@ pub enum Command {
         /// Post-processing TOML (auv coefficients, acoustic_time_offset_s, slant_range, ...).
         #[arg(long)]
         config: Option<PathBuf>,
-        #[arg(long)]
+        /// Output directory.
+        #[arg(short, long = "output", alias = "out")]
         out: PathBuf,
+        /// Replace the output directory if it exists.
         #[arg(long)]
         force: bool,
         /// Refuse the log (exit non-zero, write nothing) when any row would not be used as logged:
@@ -98,10 +103,14 @@ pub struct Common {
     #[arg(long, default_value_t = 1)]
     seed: u64,
     /// Output directory.
-    #[arg(long)]
+    #[arg(short, long = "output", alias = "out")]
     out: PathBuf,
+    /// Replace the output directory if it exists.
     #[arg(long)]
     force: bool,
+    /// Run even when the estimated work or memory is above coopnav's limits (coopnav_core::limits).
+    #[arg(long)]
+    allow_large: bool,
 }
 
 fn read(path: &Path) -> Result<String> {
@@ -110,7 +119,7 @@ fn read(path: &Path) -> Result<String> {
 
 fn scenario(c: &Common) -> Result<Scenario> {
     match &c.config {
-        Some(p) => Scenario::from_toml(&read(p)?).with_context(|| format!("in {}", p.display())),
+        Some(p) => Scenario::from_toml(&input::read(p, c.allow_large)?).with_context(|| format!("in {}", p.display())),
         None => Ok(Scenario::default()),
     }
 }
@@ -180,6 +189,7 @@ fn example(kind: ExampleKind) -> Result<()> {
 fn simulate(c: &Common, index: u64) -> Result<()> {
     let sc = scenario(c)?;
     let cycle = sc.resolved_cycle()?;
+    limits::check(work::hbl_runs(&sc, 1.0, "one run", true), c.allow_large)?;
     let (metrics, trace) = run(&sc, &cycle, coopnav_core::run_seed(c.seed, index), true);
     let trace = trace.context("the simulator returned no trace")?;
     let dir = RunDir::create(&c.out, c.force)?;
@@ -227,6 +237,7 @@ fn simulate(c: &Common, index: u64) -> Result<()> {
 fn montecarlo(c: &Common, runs: usize) -> Result<()> {
     let sc = scenario(c)?;
     sc.validate()?;
+    limits::check(work::hbl_runs(&sc, runs as f64, "--runs", false), c.allow_large)?;
     let pb = bar(runs as u64);
     let r = monte_carlo_profiled(&sc, runs, c.seed, PROFILE_BIN_M, &|n| pb.set_position(n))?;
     pb.finish_and_clear();
@@ -274,10 +285,11 @@ fn montecarlo(c: &Common, runs: usize) -> Result<()> {
 fn grid_cmd(c: &Common, grid_path: Option<&Path>) -> Result<()> {
     let sc = scenario(c)?;
     let spec: GridSpec = match grid_path {
-        Some(p) => toml::from_str(&read(p)?).with_context(|| format!("in {}", p.display()))?,
+        Some(p) => toml::from_str(&input::read(p, c.allow_large)?).with_context(|| format!("in {}", p.display()))?,
         None => GridSpec::default(),
     };
     spec.validate()?;
+    limits::check(work::hbl_grid(&sc, &spec), c.allow_large)?;
     let pb = bar(spec.cells().len() as u64);
     let cells = grid::buoy_grid(&sc, &spec, c.seed, &|n| pb.set_position(n))?;
     pb.finish_and_clear();
@@ -296,20 +308,27 @@ fn grid_cmd(c: &Common, grid_path: Option<&Path>) -> Result<()> {
 
 fn tune_cmd(c: &Common, spec_path: &Path) -> Result<()> {
     let sc = scenario(c)?;
-    let spec: TuneSpec = toml::from_str(&read(spec_path)?).with_context(|| format!("in {}", spec_path.display()))?;
+    let spec: TuneSpec = toml::from_str(&input::read(spec_path, c.allow_large)?)
+        .with_context(|| format!("in {}", spec_path.display()))?;
+    limits::check(work::hbl_tune(&sc, &spec), c.allow_large)?;
     let r = tune(&sc, &spec)?;
     let dir = RunDir::create(&c.out, c.force)?;
     manifest(&dir, "hbl tune", spec.seed, json!({ "scenario": sc, "spec": spec }))?;
     dir.write_json("summary.json", &r)?;
     let out = dir.finish()?;
     println!(
-        "cost {:.4} → {:.4} after {} iterations: {:?}; wrote {}",
+        "cost {:.4} → {:.4} after {} iterations; wrote {}",
         r.start_cost,
         r.best_cost,
         r.iterations,
-        r.coefficients,
         out.display()
     );
+    println!("{:<24} {:>12}", "coefficient", "tuned value");
+    for (coefficient, value) in &r.coefficients {
+        // The name as the spec file spells it (serde's snake_case), not the Rust variant.
+        let name = serde_json::to_value(coefficient)?;
+        println!("{:<24} {value:>12.6}", name.as_str().unwrap_or_default());
+    }
     Ok(())
 }
 

@@ -2,11 +2,13 @@
 
 use anyhow::Result;
 use clap::{Parser, Subcommand};
+use std::process::ExitCode;
 
 mod alog_import;
 mod bench;
 mod channel;
 mod hbl;
+mod input;
 mod nams;
 mod plan;
 mod post_report;
@@ -51,20 +53,39 @@ enum Command {
 
 /// Errors print as one chain of causes ("what: why: detail"), never a backtrace: a failed
 /// check or a bad file is the user's business, not a crash.
-fn main() -> std::process::ExitCode {
+fn main() -> ExitCode {
     match run() {
-        Ok(()) => std::process::ExitCode::SUCCESS,
+        Ok(code) => code,
         Err(e) => {
-            eprintln!("Error: {e:#}");
-            std::process::ExitCode::FAILURE
+            eprintln!("Error: {}", cause_chain(&e));
+            ExitCode::FAILURE
         }
     }
+}
+
+/// The error and its causes joined by ": ", each text once: a library error whose message
+/// already ends with its source's text (thiserror's `"...: {0}"` beside `#[from]`) would
+/// otherwise print that text twice.
+fn cause_chain(error: &anyhow::Error) -> String {
+    let mut line = String::new();
+    for cause in error.chain() {
+        let text = cause.to_string();
+        if line.ends_with(&text) {
+            continue;
+        }
+        if !line.is_empty() {
+            line.push_str(": ");
+        }
+        line.push_str(&text);
+    }
+    line
 }
 
 /// Exit status of a run stopped by Ctrl-C or SIGTERM (128 + SIGINT, as shells report it).
 const INTERRUPTED: i32 = 130;
 
-fn run() -> Result<()> {
+/// Runs the command; `reproduce` chooses its own exit status (see its module).
+fn run() -> Result<ExitCode> {
     // An interrupted run must not leave its half-written staging directory behind.
     ctrlc::set_handler(|| {
         coopnav_sim::output::remove_unfinished_runs();
@@ -75,8 +96,8 @@ fn run() -> Result<()> {
         .with_env_filter(tracing_subscriber::EnvFilter::from_default_env())
         .with_writer(std::io::stderr)
         .init();
-    match Cli::parse().command {
-        Command::Reproduce(args) => reproduce::run(args),
+    let done = match Cli::parse().command {
+        Command::Reproduce(args) => return reproduce::run(args),
         Command::Plan(args) => plan::run(args),
         Command::Hbl(cmd) => hbl::run_command(cmd),
         Command::Channel(args) => channel::run(args),
@@ -84,5 +105,6 @@ fn run() -> Result<()> {
         Command::Simulate(args) => simulate::run(args),
         Command::View(args) => view::run(args),
         Command::Bench(target) => bench::run(target),
-    }
+    };
+    done.map(|()| ExitCode::SUCCESS)
 }

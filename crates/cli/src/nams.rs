@@ -3,6 +3,7 @@
 //! and `[tl]`), prints the per-cell table and writes a run directory (manifest.json,
 //! summary.json, cells.csv). The file is validated before anything runs.
 
+use crate::input;
 use anyhow::{Context, Result};
 use coopnav_acomms::tl::analytic::Thorp;
 use coopnav_acomms::tl::bellhop::{AcousticEnv, Bellhop};
@@ -18,14 +19,21 @@ use std::sync::Arc;
 
 #[derive(clap::Args)]
 pub struct Args {
-    /// Experiment file (TOML).
-    #[arg(long)]
-    config: PathBuf,
+    /// Experiment file (TOML); `--example` prints one.
+    #[arg(long, required_unless_present = "example")]
+    config: Option<PathBuf>,
     /// Output directory (default: a fresh runs/nams-N).
-    #[arg(short, long)]
+    #[arg(short, long = "output", alias = "out")]
     out: Option<PathBuf>,
+    /// Replace the output directory if it exists.
     #[arg(long)]
     force: bool,
+    /// Read an experiment file above coopnav's input size limit (coopnav_core::limits).
+    #[arg(long)]
+    allow_large: bool,
+    /// Print the thesis experiment (every field at its default) as TOML and exit.
+    #[arg(long)]
+    example: bool,
 }
 
 /// Transmission-loss model of the experiment.
@@ -76,12 +84,24 @@ fn provider(tl: &TlChoice, cfg: &ExperimentConfig) -> Result<Box<dyn Transmissio
     })
 }
 
+/// The thesis experiment as a commented TOML file.
+fn example() -> Result<String> {
+    Ok(format!(
+        "# coopnav Nams rate-selection experiment for `nams --config` (the thesis set-up).\n\
+         # Every field is at its default and optional: keep only what you change. Units and sources:\n\
+         # the rustdoc of coopnav_sim::nams::ExperimentConfig (`cargo doc --open`).\n{}",
+        toml::to_string_pretty(&File::default())?
+    ))
+}
+
 pub fn run(args: Args) -> Result<()> {
-    let text =
-        std::fs::read_to_string(&args.config).with_context(|| format!("cannot read {}", args.config.display()))?;
-    let file: File =
-        toml::from_str(&text).with_context(|| format!("{}: invalid experiment file", args.config.display()))?;
-    file.experiment.validate().map_err(|e| anyhow::anyhow!("{}: {e}", args.config.display()))?;
+    let Some(config) = args.config.as_ref().filter(|_| !args.example) else {
+        print!("{}", example()?);
+        return Ok(());
+    };
+    let text = input::read(config, args.allow_large)?;
+    let file: File = toml::from_str(&text).with_context(|| format!("{}: invalid experiment file", config.display()))?;
+    file.experiment.validate().map_err(|e| anyhow::anyhow!("{}: {e}", config.display()))?;
     let tl = provider(&file.tl, &file.experiment)?;
     let run = match &args.out {
         Some(p) => RunDir::create(p, args.force)?,

@@ -5,14 +5,16 @@
 
 use crate::scenario_args::{Loaded, ScenarioArgs, ScenarioCommand};
 use anyhow::{anyhow, Context, Result};
+use coopnav_core::limits::Estimate;
 use coopnav_core::LatLon;
 use coopnav_moos::mission::EXAMPLE_ORIGIN_DEG;
 use coopnav_plan::LookAheadPlanner;
 use coopnav_sim::moos_export;
-use coopnav_sim::predeploy::{self, output::write_run, Scenario, ScenarioError, EXAMPLE};
+use coopnav_sim::predeploy::{self, output::write_run, Scenario, EXAMPLE};
+use coopnav_sim::scenario_file::Validate;
+use coopnav_sim::work;
 use indicatif::{ProgressBar, ProgressStyle};
 use std::io::IsTerminal;
-use std::path::Path;
 
 #[derive(clap::Args)]
 pub struct Args {
@@ -39,8 +41,8 @@ impl ScenarioCommand for Plan {
     const EXAMPLE: &'static str = EXAMPLE;
     const EMBEDDED: &'static str = "example";
     const RUN_PREFIX: &'static str = "plan";
-    const PARSE: fn(&str, &Path) -> Result<Scenario, ScenarioError> = Scenario::parse;
-    const LOAD: fn(&Path) -> Result<Scenario, ScenarioError> = Scenario::load;
+    const VALIDATE: Validate<Scenario> = Scenario::validate;
+    const WORK: fn(&Scenario) -> Vec<Estimate> = work::predeploy;
 }
 
 /// The `--moos-origin` value, or MOOS-IvP's example origin.

@@ -1,18 +1,22 @@
 //! The arguments every scenario-driven command shares (`coopnav plan`, `coopnav simulate`): the
-//! scenario file, `-o/--output`, `--force` and `--example`, and what they mean — print the
-//! embedded scenario, read the file or else the embedded scenario, and open the run directory
+//! scenario file, `-o/--output`, `--force`, `--allow-large` and `--example`, and what they mean —
+//! print the embedded scenario, read the file (its size checked first) or else the embedded
+//! scenario, and open the run directory
 //! (the one given, or a fresh `runs/<prefix>-<name>`). Each command says what differs in a
 //! [`ScenarioCommand`].
 
+use crate::input;
 use anyhow::Result;
+use coopnav_core::limits::{self, Estimate};
 use coopnav_sim::output::RunDir;
-use coopnav_sim::scenario_file::ScenarioError;
+use coopnav_sim::scenario_file::{self, Validate};
+use serde::de::DeserializeOwned;
 use std::marker::PhantomData;
 use std::path::{Path, PathBuf};
 
 /// What one scenario-driven command reads and how its shared arguments are described.
 pub trait ScenarioCommand {
-    type Scenario;
+    type Scenario: DeserializeOwned;
     /// Help of the scenario argument, of `-o` and of `--example`.
     const SCENARIO_HELP: &'static str;
     const OUTPUT_HELP: &'static str;
@@ -23,9 +27,10 @@ pub trait ScenarioCommand {
     const EMBEDDED: &'static str;
     /// Fresh run directories are `runs/<RUN_PREFIX>-<scenario name>`.
     const RUN_PREFIX: &'static str;
-    /// The scenario type's parser (TOML text, its name) and file loader, both validating.
-    const PARSE: fn(&str, &Path) -> Result<Self::Scenario, ScenarioError>;
-    const LOAD: fn(&Path) -> Result<Self::Scenario, ScenarioError>;
+    /// The scenario type's validation (`file` names it in messages).
+    const VALIDATE: Validate<Self::Scenario>;
+    /// The sizes the scenario asks for, checked before validation (which may build tables).
+    const WORK: fn(&Self::Scenario) -> Vec<Estimate>;
 }
 
 #[derive(clap::Args)]
@@ -36,6 +41,8 @@ pub struct ScenarioArgs<C: ScenarioCommand> {
     output: Option<PathBuf>,
     #[arg(long, help = "Replace the output directory if it exists")]
     force: bool,
+    #[arg(long, help = "Run even when the estimated work or memory is above coopnav's limits (coopnav_core::limits)")]
+    allow_large: bool,
     #[arg(long, help = C::EXAMPLE_HELP)]
     example: bool,
     #[arg(skip)]
@@ -62,11 +69,16 @@ impl<C: ScenarioCommand> ScenarioArgs<C> {
         self.example
     }
 
+    /// `--allow-large`: the work limits are lifted.
+    pub fn allow_large(&self) -> bool {
+        self.allow_large
+    }
+
     /// Reads and validates the scenario file, or the embedded scenario when none is given.
     pub fn load(&self) -> Result<Loaded<C::Scenario>> {
         Ok(match &self.scenario {
             Some(path) => Loaded {
-                scenario: (C::LOAD)(path)?,
+                scenario: self.parse(&input::read(path, self.allow_large)?, path)?,
                 file: path.clone(),
                 base: path.parent().map(Path::to_path_buf).unwrap_or_default(),
                 stem: path.file_stem().map_or("scenario".into(), |s| s.to_string_lossy().into_owned()),
@@ -74,13 +86,21 @@ impl<C: ScenarioCommand> ScenarioArgs<C> {
             None => {
                 let file = PathBuf::from(format!("<embedded {}>", C::EMBEDDED));
                 Loaded {
-                    scenario: (C::PARSE)(C::EXAMPLE, &file)?,
+                    scenario: self.parse(C::EXAMPLE, &file)?,
                     file,
                     base: PathBuf::from("."),
                     stem: C::EMBEDDED.to_string(),
                 }
             }
         })
+    }
+
+    /// Parses `text` (read from `file`), checks its sizes against the work limits, validates it.
+    fn parse(&self, text: &str, file: &Path) -> Result<C::Scenario> {
+        let scenario = scenario_file::parse(text, file, |_, _| Ok(()))?;
+        limits::check((C::WORK)(&scenario), self.allow_large)?;
+        (C::VALIDATE)(&scenario, file)?;
+        Ok(scenario)
     }
 
     /// Opens the run directory: `-o` (replaced only with `--force`), or a fresh

@@ -5,12 +5,13 @@
 
 use crate::scenario_args::{Loaded, ScenarioArgs, ScenarioCommand};
 use anyhow::{bail, Context, Result};
-use coopnav_sim::closed_loop::{
-    self, comparison_table, output::write_run, Faults, PolicySpec, Scenario, ScenarioError, EXAMPLE,
-};
+use coopnav_core::limits::{self, Estimate};
+use coopnav_sim::closed_loop::{self, comparison_table, output::write_run, Faults, PolicySpec, Scenario, EXAMPLE};
+use coopnav_sim::scenario_file::Validate;
+use coopnav_sim::work;
 use indicatif::{ProgressBar, ProgressStyle};
 use std::io::IsTerminal;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 #[derive(clap::Args)]
 pub struct Args {
@@ -43,8 +44,9 @@ impl ScenarioCommand for Simulate {
     const EXAMPLE: &'static str = EXAMPLE;
     const EMBEDDED: &'static str = "default";
     const RUN_PREFIX: &'static str = "sim";
-    const PARSE: fn(&str, &Path) -> Result<Scenario, ScenarioError> = Scenario::parse;
-    const LOAD: fn(&Path) -> Result<Scenario, ScenarioError> = Scenario::load;
+    const VALIDATE: Validate<Scenario> = Scenario::validate;
+    /// One run; `--runs` is checked once the policies are known.
+    const WORK: fn(&Scenario) -> Vec<Estimate> = |scenario| work::closed_loop(scenario, 1, 1);
 }
 
 pub fn run(args: Args) -> Result<()> {
@@ -57,6 +59,9 @@ pub fn run(args: Args) -> Result<()> {
     }
     // Every policy name is checked before any work starts.
     let specs = args.policy.iter().map(|p| PolicySpec::new(p, &scenario)).collect::<Result<Vec<_>, _>>()?;
+    if let Some(runs) = args.runs {
+        limits::check(work::closed_loop(&scenario, runs, specs.len()), args.scenario.allow_large())?;
+    }
     match args.runs {
         Some(0) => bail!("--runs must be at least 1"),
         Some(runs) => compare(&scenario, &args.policy, runs, args.json.as_ref()),

@@ -2,16 +2,9 @@
 //! `--example` prints a scenario that runs, and a bad scenario fails naming the field and writes
 //! nothing.
 
-use std::process::Command;
+mod common;
 
-fn coopnav(dir: &std::path::Path, args: &[&str]) -> std::process::Output {
-    Command::new(env!("CARGO_BIN_EXE_coopnav"))
-        .args(args)
-        .current_dir(dir)
-        .env("RUST_BACKTRACE", "0")
-        .output()
-        .expect("runs the binary")
-}
+use common::coopnav;
 
 #[test]
 fn default_mission_writes_a_fresh_run_directory() {

@@ -4,7 +4,8 @@
 //! math-convention headings inside, compass headings only at the edge), seeded randomness that
 //! keeps Monte Carlo runs bit-identical on any thread count, and survey missions (waypoints,
 //! lawnmower patterns, time-stamped tracks with linear interpolation), and WGS-84 geodesy (lat/lon
-//! ↔ ECEF ↔ local east/north/up) for field logs.
+//! ↔ ECEF ↔ local east/north/up) for field logs, and the work limits every input is checked
+//! against before it is run.
 //! It deliberately knows nothing about planners, filters or modems.
 
 pub mod angle;
@@ -12,6 +13,7 @@ pub mod bathymetry;
 pub mod geodesy;
 pub mod geometry;
 pub mod kinematics;
+pub mod limits;
 pub mod mission;
 pub mod rng;
 

@@ -17,3 +17,4 @@ pub mod policy;
 pub mod predeploy;
 pub mod report;
 pub mod scenario_file;
+pub mod work;

@@ -34,6 +34,8 @@ pub enum GridError {
 }
 
 impl GridSpec {
+    /// Checks each field; the grid's size is checked against the work limits by
+    /// `coopnav_sim::work::hbl_grid`.
     pub fn validate(&self) -> Result<(), GridError> {
         let bad = |field, value, allowed| Err(GridError::Spec { field, value, allowed });
         if !(self.spacing.is_finite() && self.spacing > 0.0) {
@@ -48,14 +50,21 @@ impl GridSpec {
         if self.runs_per_cell < 2 {
             return bad("runs_per_cell", self.runs_per_cell as f64, "must be ≥ 2");
         }
-        if self.cells().len() > 10_000 {
-            return bad("spacing", self.spacing, "gives more than 10 000 cells; use a coarser spacing");
-        }
         Ok(())
     }
+    /// The last index of an axis (its points are lo + i·step, i = 0..=n), as a float so that a
+    /// huge count is checked before anything is allocated.
+    fn axis_last(lo: f64, hi: f64, step: f64) -> f64 {
+        ((hi - lo) / step + 1e-9).floor()
+    }
     fn axis(lo: f64, hi: f64, step: f64) -> Vec<f64> {
-        let n = ((hi - lo) / step + 1e-9).floor() as usize;
+        let n = Self::axis_last(lo, hi, step) as usize;
         (0..=n).map(|i| lo + i as f64 * step).collect()
+    }
+    /// The number of cells [`GridSpec::cells`] would hold, computed without building them.
+    pub fn cell_count(&self) -> f64 {
+        let points = |r: [f64; 2]| Self::axis_last(r[0], r[1], self.spacing) + 1.0;
+        points(self.x) * points(self.y)
     }
     pub fn xs(&self) -> Vec<f64> {
         Self::axis(self.x[0], self.x[1], self.spacing)
@@ -123,6 +132,8 @@ mod tests {
     fn cells_cover_the_box() {
         let g = GridSpec { x: [0.0, 20.0], y: [0.0, 10.0], spacing: 10.0, runs_per_cell: 2 };
         assert_eq!(g.cells(), vec![[0.0, 0.0], [10.0, 0.0], [20.0, 0.0], [0.0, 10.0], [10.0, 10.0], [20.0, 10.0]]);
+        assert_eq!(g.cell_count(), 6.0);
+        assert_eq!(GridSpec { spacing: 0.001, ..g.clone() }.cell_count(), 20_001.0 * 10_001.0);
         let bad = GridSpec { spacing: 0.0, ..g.clone() };
         assert!(bad.validate().unwrap_err().to_string().contains("spacing"));
         let bad = GridSpec { runs_per_cell: 1, ..g };

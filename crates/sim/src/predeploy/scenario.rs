@@ -136,7 +136,7 @@ pub struct Mission {
 }
 
 /// Sampling interval of generated lawnmower tracks, s (linear between samples, exact on lanes).
-const LAWNMOWER_DT: f64 = 1.0;
+pub(crate) const LAWNMOWER_DT: f64 = 1.0;
 
 impl Scenario {
     /// Parses TOML text and checks every field that needs no track file; `file` names it in

@@ -1,0 +1,161 @@
+//! Work and memory are bounded before they are spent (issue 11 item 2): each input that asks for
+//! hours of work or gigabytes of memory is refused at once, exit 1, with a message naming the
+//! fields, the estimate and `--allow-large`. Each probe's CPU time and peak memory are measured
+//! with /usr/bin/time when it is installed (otherwise only its wall time and message are checked).
+
+mod common;
+
+use common::coopnav;
+use std::path::Path;
+use std::process::Command;
+use std::time::{Duration, Instant};
+
+/// CPU seconds and peak resident memory one refused probe may use.
+const MAX_CPU_S: f64 = 1.0;
+const MAX_PEAK_KB: u64 = 100_000;
+/// Wall time, generous for a loaded machine: the CPU bound above is the real check.
+const MAX_WALL: Duration = Duration::from_secs(5);
+
+/// Runs `coopnav ARGS` in `dir` and checks it is refused quickly and cheaply, naming `fields`.
+fn refused(dir: &Path, args: &[&str], fields: &[&str]) {
+    let time = Path::new("/usr/bin/time");
+    let usage = dir.join("usage.txt");
+    let start = Instant::now();
+    let out = if time.is_file() {
+        Command::new(time)
+            .args(["-f", "%U %S %M", "-o"])
+            .arg(&usage)
+            .arg(env!("CARGO_BIN_EXE_coopnav"))
+            .args(args)
+            .current_dir(dir)
+            .env("RUST_BACKTRACE", "0")
+            .output()
+            .unwrap()
+    } else {
+        eprintln!("note: /usr/bin/time is absent: CPU time and peak memory not measured");
+        coopnav(dir, args)
+    };
+    let wall = start.elapsed();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{args:?}: {err}");
+    assert!(err.contains("too large to run") && err.contains("--allow-large"), "{args:?}: {err}");
+    for field in fields {
+        assert!(err.contains(field), "{args:?} does not name {field}: {err}");
+    }
+    assert!(wall < MAX_WALL, "{args:?} took {wall:?}");
+    if time.is_file() {
+        let text = std::fs::read_to_string(&usage).unwrap();
+        let v: Vec<&str> = text.split_whitespace().rev().take(3).collect();
+        let (peak_kb, sys, user): (u64, f64, f64) =
+            (v[0].parse().unwrap(), v[1].parse().unwrap(), v[2].parse().unwrap());
+        assert!(user + sys < MAX_CPU_S, "{args:?} used {} s CPU", user + sys);
+        assert!(peak_kb < MAX_PEAK_KB, "{args:?} peaked at {peak_kb} kB");
+    }
+    assert!(!dir.join("out").exists(), "{args:?} wrote its output directory");
+}
+
+/// The embedded example of `command` (`plan` or `simulate`) with `from` replaced by `to`,
+/// written to `file` in `dir`.
+fn edited_example(dir: &Path, command: &str, file: &str, from: &str, to: &str) {
+    let text = String::from_utf8(coopnav(dir, &[command, "--example"]).stdout).unwrap();
+    assert!(text.contains(from), "the {command} example no longer holds {from:?}");
+    std::fs::write(dir.join(file), text.replacen(from, to, 1)).unwrap();
+}
+
+#[test]
+fn plan_heading_options_1e9() {
+    let tmp = tempfile::tempdir().unwrap();
+    edited_example(tmp.path(), "plan", "s.toml", "heading_options = 5", "heading_options = 1000000000");
+    refused(tmp.path(), &["plan", "s.toml", "-o", "out"], &["planner.heading_options", "planner leaves"]);
+}
+
+#[test]
+fn plan_lanes_1e9() {
+    let tmp = tempfile::tempdir().unwrap();
+    edited_example(tmp.path(), "plan", "s.toml", "lanes = 3", "lanes = 1000000000");
+    refused(tmp.path(), &["plan", "s.toml", "-o", "out"], &["auv[0].lawnmower lanes", "track samples"]);
+}
+
+#[test]
+fn plan_tau_1e_minus_6() {
+    let tmp = tempfile::tempdir().unwrap();
+    edited_example(tmp.path(), "plan", "s.toml", "tau = 10.0", "tau = 0.000001");
+    refused(tmp.path(), &["plan", "s.toml", "-o", "out"], &["planner.motion.tau", "planner decisions"]);
+}
+
+#[test]
+fn plan_look_ahead_16() {
+    let tmp = tempfile::tempdir().unwrap();
+    edited_example(tmp.path(), "plan", "s.toml", "look_ahead = 4", "look_ahead = 16");
+    refused(tmp.path(), &["plan", "s.toml", "-o", "out"], &["planner.look_ahead", "1.526e11"]);
+}
+
+#[test]
+fn plan_with_1e5_auvs() {
+    let tmp = tempfile::tempdir().unwrap();
+    let example = String::from_utf8(coopnav(tmp.path(), &["plan", "--example"]).stdout).unwrap();
+    let head = &example[..example.find("[[auv]]").unwrap()];
+    let auv = r#"{ name = "a", lawnmower = { origin = [0.0, 0.0], lane_heading_compass_deg = 0.0, lane_length = 600.0, spacing = -50.0, lanes = 3, speed = 1.5, depth = { kind = "constant", depth = 90.0 } } }"#;
+    let auvs = vec![auv; 100_000].join(",\n");
+    std::fs::write(tmp.path().join("s.toml"), format!("{head}auv = [\n{auvs}\n]\n")).unwrap();
+    refused(tmp.path(), &["plan", "s.toml", "-o", "out"], &["input file (bytes)", "s.toml"]);
+}
+
+#[test]
+fn simulate_duration_1e9() {
+    let tmp = tempfile::tempdir().unwrap();
+    edited_example(tmp.path(), "simulate", "s.toml", "duration_s = 3600.0", "duration_s = 1e9");
+    refused(tmp.path(), &["simulate", "s.toml", "-o", "out"], &["duration_s / dt", "vehicle-steps"]);
+}
+
+#[test]
+fn simulate_runs_1e9() {
+    let tmp = tempfile::tempdir().unwrap();
+    refused(tmp.path(), &["simulate", "--runs", "1000000000", "-o", "out"], &["--runs", "vehicle-steps"]);
+}
+
+#[test]
+fn simulate_lanes_and_heading_options_1e9() {
+    let tmp = tempfile::tempdir().unwrap();
+    edited_example(tmp.path(), "simulate", "s.toml", "lanes = 6", "lanes = 1000000000");
+    refused(tmp.path(), &["simulate", "s.toml", "-o", "out"], &["fleet.lanes"]);
+    edited_example(tmp.path(), "simulate", "s.toml", "heading_options = 5", "heading_options = 1000000000");
+    refused(tmp.path(), &["simulate", "s.toml", "-o", "out"], &["planner.heading_options"]);
+}
+
+#[test]
+fn hbl_dt_1e_minus_9() {
+    let tmp = tempfile::tempdir().unwrap();
+    std::fs::write(tmp.path().join("h.toml"), "dt = 1e-9\n").unwrap();
+    refused(tmp.path(), &["hbl", "simulate", "--config", "h.toml", "-o", "out"], &["max_duration_s / dt"]);
+}
+
+#[test]
+fn hbl_montecarlo_runs_1e9() {
+    let tmp = tempfile::tempdir().unwrap();
+    refused(tmp.path(), &["hbl", "montecarlo", "--runs", "1000000000", "-o", "out"], &["--runs"]);
+}
+
+#[test]
+fn hbl_grid_spacing_1mm() {
+    let tmp = tempfile::tempdir().unwrap();
+    std::fs::write(tmp.path().join("g.toml"), "spacing = 0.001\n").unwrap();
+    refused(tmp.path(), &["hbl", "grid", "--grid", "g.toml", "-o", "out"], &["grid x, y, spacing", "grid cells"]);
+}
+
+#[test]
+fn channel_step_1e_minus_6() {
+    let tmp = tempfile::tempdir().unwrap();
+    refused(tmp.path(), &["channel", "--step", "1e-6", "-o", "out"], &["--max-range / --step"]);
+}
+
+#[test]
+fn allow_large_lifts_the_limit() {
+    let tmp = tempfile::tempdir().unwrap();
+    let example = String::from_utf8(coopnav(tmp.path(), &["plan", "--example"]).stdout).unwrap();
+    let padding = "# padding\n".repeat(110_000);
+    std::fs::write(tmp.path().join("s.toml"), format!("{padding}{example}")).unwrap();
+    refused(tmp.path(), &["plan", "s.toml", "-o", "out"], &["input file (bytes)"]);
+    let out = coopnav(tmp.path(), &["plan", "s.toml", "-o", "out", "--allow-large"]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+}

@@ -1,0 +1,53 @@
+//! One grammar across commands: every command that writes a directory takes `-o/--output`, and
+//! an error prints once, as one cause chain, with no repeated text.
+
+mod common;
+
+use common::coopnav;
+
+#[test]
+fn every_directory_writer_takes_dash_o_output() {
+    let tmp = tempfile::tempdir().unwrap();
+    let commands: &[&[&str]] = &[
+        &["plan"],
+        &["simulate"],
+        &["channel"],
+        &["nams"],
+        &["hbl", "simulate"],
+        &["hbl", "montecarlo"],
+        &["hbl", "grid"],
+        &["hbl", "tune"],
+        &["hbl", "postprocess"],
+    ];
+    for command in commands {
+        let help = coopnav(tmp.path(), &[command, &["--help"][..]].concat());
+        let text = String::from_utf8_lossy(&help.stdout);
+        assert!(text.contains("-o, --output <"), "{command:?} --help:\n{text}");
+    }
+}
+
+#[test]
+fn an_error_prints_once_as_a_cause_chain() {
+    let tmp = tempfile::tempdir().unwrap();
+    std::fs::write(tmp.path().join("bad.toml"), "no_such_field = 1\n").unwrap();
+    let out = coopnav(tmp.path(), &["hbl", "simulate", "--config", "bad.toml", "-o", "run"]);
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(err.matches("unknown field `no_such_field`").count(), 1, "{err}");
+    assert_eq!(err.matches("Error:").count(), 1, "{err}");
+    assert!(err.contains("bad.toml"), "{err}");
+    assert!(!tmp.path().join("run").exists());
+}
+
+#[test]
+fn summaries_print_no_rust_debug_structs() {
+    let tmp = tempfile::tempdir().unwrap();
+    assert!(coopnav(tmp.path(), &["hbl", "simulate", "-o", "sim"]).status.success());
+    let out = coopnav(tmp.path(), &["hbl", "postprocess", "--log", "sim/log.csv", "-o", "post"]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let text = String::from_utf8_lossy(&out.stdout);
+    let summary: &str = text.split("wrote").next().unwrap();
+    let json: serde_json::Value = serde_json::from_str(summary).expect("the summary prints as JSON");
+    assert!(json["ranges_applied"].as_u64().unwrap() > 0, "{text}");
+    assert!(!text.contains("PostSummary"), "{text}");
+}

@@ -1,0 +1,183 @@
+//! Work estimates of every runnable set-up (pre-deployment plan, closed loop, HBL simulate, Monte
+//! Carlo, grid and tuning), computed from the validated input alone, before any track, tree or
+//! table is built, and checked with [`coopnav_core::limits`]. Kept apart from validation: a value
+//! can be valid and still too large to run without `--allow-large`.
+//!
+//! The byte figures are rough upper bounds of what each command holds at once (per-row sizes
+//! below), enough to tell a mission from a typo that asks for gigabytes.
+
+use crate::hbl::grid::GridSpec;
+use crate::hbl::tune::TuneSpec;
+use crate::{closed_loop, hbl, predeploy};
+use coopnav_core::limits::{
+    Estimate, MAX_BYTES, MAX_PLANNER_LEAVES, MAX_PLANNER_UPDATES, MAX_POINTS, MAX_VEHICLE_STEPS,
+};
+use coopnav_plan::{CnaKind, MotionConfig};
+
+/// Bytes of one stored track sample (t, x, y, z).
+const TRACK_SAMPLE_BYTES: f64 = 32.0;
+/// Bytes of one recorded per-AUV row (planner step record, closed-loop time-series row).
+const RECORD_ROW_BYTES: f64 = 200.0;
+/// Vehicles an HBL world steps: the survey AUV, the ship and the buoy.
+const HBL_VEHICLES: f64 = 3.0;
+
+/// A lawnmower's duration (s) from its description: lanes plus the turns between them.
+fn lawnmower_duration(lanes: usize, lane_length: f64, spacing: f64, speed: f64) -> f64 {
+    lanes as f64 * (lane_length.abs() + spacing.abs()) / speed
+}
+
+/// The planner's tree per decision and its work over `decisions` with `n_auvs` survey AUVs.
+fn planner(prefix: &str, options: f64, look_ahead: usize, decisions: f64, n_auvs: usize) -> [Estimate; 2] {
+    let leaves = options.powf(look_ahead as f64);
+    [
+        Estimate::new(
+            "planner leaves per decision",
+            format!("{prefix}heading_options (x pitch_options) ^ {prefix}look_ahead"),
+            leaves,
+            MAX_PLANNER_LEAVES,
+        ),
+        Estimate::new(
+            "planner AUV-node updates",
+            format!("decisions x leaves x survey AUVs ({prefix}look_ahead, tau, mission length, AUVs)"),
+            decisions * leaves * n_auvs as f64,
+            MAX_PLANNER_UPDATES,
+        ),
+    ]
+}
+
+fn motion_options(m: &MotionConfig) -> f64 {
+    let pitch = match m.cna {
+        CnaKind::Auv { pitch_options, .. } => pitch_options,
+        CnaKind::Asc {} => 1,
+    };
+    m.heading_options as f64 * pitch as f64
+}
+
+/// A pre-deployment plan: track samples per lawnmower, decisions, tree size, memory.
+pub fn predeploy(sc: &predeploy::Scenario) -> Vec<Estimate> {
+    let mut out = Vec::new();
+    let mut shortest = f64::INFINITY;
+    let mut samples = 0.0;
+    for (i, a) in sc.auv.iter().enumerate() {
+        if let Some(m) = &a.lawnmower {
+            let duration = lawnmower_duration(m.lanes, m.lane_length, m.spacing, m.speed);
+            let n = duration / predeploy::scenario::LAWNMOWER_DT;
+            out.push(Estimate::new(
+                "track samples",
+                format!("auv[{i}].lawnmower lanes, lane_length, spacing, speed"),
+                n,
+                MAX_POINTS,
+            ));
+            shortest = shortest.min(duration);
+            samples += n;
+        }
+    }
+    let start = sc.mission.start_time.unwrap_or(0.0);
+    let span = sc.mission.end_time.map_or(shortest, |end| end - start);
+    let motion = &sc.planner.motion;
+    let decisions = span / motion.tau;
+    out.push(Estimate::new("planner decisions", "mission length / planner.motion.tau", decisions, MAX_POINTS));
+    out.extend(planner("planner.", motion_options(motion), sc.planner.look_ahead, decisions, sc.auv.len()));
+    let bytes = samples * TRACK_SAMPLE_BYTES + decisions * sc.auv.len() as f64 * RECORD_ROW_BYTES;
+    out.push(Estimate::new("memory (bytes)", "number of [[auv]], track lengths, planner.motion.tau", bytes, MAX_BYTES));
+    out
+}
+
+/// A closed-loop set-up run `runs` times for each of `policies` policies (1 and 1: one run).
+pub fn closed_loop(sc: &closed_loop::Scenario, runs: usize, policies: usize) -> Vec<Estimate> {
+    let f = &sc.fleet;
+    let vehicles = (f.n_auvs + 1) as f64;
+    let runs_total = runs as f64 * policies as f64;
+    let pitch = sc.cna.auv.as_ref().map_or(1, |a| a.pitch_options);
+    let options = sc.planner.heading_options as f64 * pitch as f64;
+    let decisions = sc.duration_s / sc.comms.tau;
+    let mut out = vec![
+        Estimate::new(
+            "simulated vehicle-steps",
+            "duration_s / dt x (fleet.n_auvs + 1) x --runs x policies",
+            sc.duration_s / sc.dt * vehicles * runs_total,
+            MAX_VEHICLE_STEPS,
+        ),
+        Estimate::new(
+            "lawnmower waypoints",
+            "fleet.lanes x fleet.n_auvs",
+            2.0 * f.lanes as f64 * f.n_auvs as f64,
+            MAX_POINTS,
+        ),
+        Estimate::new(
+            "memory of one recorded run (bytes)",
+            "duration_s x fleet.n_auvs (one row per second and AUV)",
+            sc.duration_s * f.n_auvs as f64 * RECORD_ROW_BYTES,
+            MAX_BYTES,
+        ),
+    ];
+    out.extend(planner("planner.", options, sc.planner.look_ahead, decisions * runs_total, f.n_auvs));
+    out
+}
+
+/// `runs` HBL runs of `sc` (`runs_fields` says where the count comes from); `recorded`: one run
+/// keeps its whole trace and log.
+pub fn hbl_runs(sc: &hbl::Scenario, runs: f64, runs_fields: &str, recorded: bool) -> Vec<Estimate> {
+    let steps = sc.max_duration_s / sc.dt;
+    let mut out = vec![Estimate::new(
+        "simulated vehicle-steps",
+        format!("max_duration_s / dt x {runs_fields}"),
+        steps * HBL_VEHICLES * runs,
+        MAX_VEHICLE_STEPS,
+    )];
+    if recorded {
+        out.push(Estimate::new(
+            "memory of the trace (bytes)",
+            "max_duration_s / dt",
+            steps * RECORD_ROW_BYTES,
+            MAX_BYTES,
+        ));
+    }
+    out
+}
+
+/// The buoy-location grid: its cells, and every cell's Monte Carlo.
+pub fn hbl_grid(sc: &hbl::Scenario, spec: &GridSpec) -> Vec<Estimate> {
+    let cells = spec.cell_count();
+    let mut out = vec![Estimate::new("grid cells", "grid x, y, spacing", cells, MAX_POINTS)];
+    out.extend(hbl_runs(sc, cells * spec.runs_per_cell as f64, "grid cells x runs_per_cell", false));
+    out
+}
+
+/// Nelder–Mead tuning: at most `max_iters` iterations of up to n + 1 evaluations (a shrink), each a
+/// Monte Carlo of `runs` runs.
+pub fn hbl_tune(sc: &hbl::Scenario, spec: &TuneSpec) -> Vec<Estimate> {
+    let evaluations = (spec.max_iters as f64 + 1.0) * (spec.coefficients.len() as f64 + 1.0);
+    hbl_runs(sc, evaluations * spec.runs as f64, "tune runs x (max_iters + 1) x (coefficients + 1)", false)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use coopnav_core::limits::check;
+    use std::path::Path;
+
+    #[test]
+    fn embedded_scenarios_pass_and_typos_are_refused() {
+        let plan = predeploy::Scenario::parse(predeploy::EXAMPLE, Path::new("example")).unwrap();
+        assert!(check(predeploy(&plan), false).is_ok());
+        let mut wide = plan.clone();
+        wide.planner.motion.heading_options = 1_000_000_000;
+        let e = check(predeploy(&wide), false).unwrap_err().to_string();
+        assert!(e.contains("planner.heading_options") && e.contains("--allow-large"), "{e}");
+
+        let sim = closed_loop::Scenario::parse(closed_loop::EXAMPLE, Path::new("default")).unwrap();
+        assert!(check(closed_loop(&sim, 100, 3), false).is_ok());
+        let long = closed_loop::Scenario { duration_s: 1e9, ..sim };
+        assert!(check(closed_loop(&long, 1, 1), false).unwrap_err().to_string().contains("duration_s / dt"));
+
+        let hbl = hbl::Scenario::default();
+        assert!(check(hbl_runs(&hbl, 250.0, "--runs", false), false).is_ok());
+        assert!(check(hbl_grid(&hbl, &GridSpec::default()), false).is_ok());
+        let fine = hbl::Scenario { dt: 1e-9, ..hbl::Scenario::default() };
+        assert!(check(hbl_runs(&fine, 1.0, "1 run", true), false)
+            .unwrap_err()
+            .to_string()
+            .contains("max_duration_s / dt"));
+    }
+}
