@@ -7,6 +7,8 @@ use std::process::ExitCode;
 mod alog_import;
 mod bench;
 mod channel;
+#[cfg(test)]
+mod fuzz;
 mod hbl;
 mod input;
 mod nams;

@@ -54,7 +54,7 @@ impl Default for TlChoice {
 
 #[derive(Debug, Default, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
-struct File {
+pub(crate) struct File {
     experiment: ExperimentConfig,
     tl: TlChoice,
 }
@@ -85,7 +85,7 @@ fn provider(tl: &TlChoice, cfg: &ExperimentConfig) -> Result<Box<dyn Transmissio
 }
 
 /// The thesis experiment as a commented TOML file.
-fn example() -> Result<String> {
+pub(crate) fn example() -> Result<String> {
     Ok(format!(
         "# coopnav Nams rate-selection experiment for `nams --config` (the thesis set-up).\n\
          # Every field is at its default and optional: keep only what you change. Units and sources:\n\
@@ -94,14 +94,20 @@ fn example() -> Result<String> {
     ))
 }
 
+/// Parses and validates an experiment file (`name` labels the errors).
+pub(crate) fn parse_file(text: &str, name: &str) -> Result<File> {
+    let file: File = toml::from_str(text).with_context(|| format!("{name}: invalid experiment file"))?;
+    file.experiment.validate().map_err(|e| anyhow::anyhow!("{name}: {e}"))?;
+    Ok(file)
+}
+
 pub fn run(args: Args) -> Result<()> {
     let Some(config) = args.config.as_ref().filter(|_| !args.example) else {
         print!("{}", example()?);
         return Ok(());
     };
     let text = input::read(config, args.allow_large)?;
-    let file: File = toml::from_str(&text).with_context(|| format!("{}: invalid experiment file", config.display()))?;
-    file.experiment.validate().map_err(|e| anyhow::anyhow!("{}: {e}", config.display()))?;
+    let file = parse_file(&text, &config.display().to_string())?;
     let tl = provider(&file.tl, &file.experiment)?;
     let run = match &args.out {
         Some(p) => RunDir::create(p, args.force)?,
