@@ -12,6 +12,10 @@ use std::path::Path;
 /// The README lines that are not coopnav commands, and why the test does not run them.
 const NOT_RUN: &[(&str, &str)] = &[
     ("cargo test --workspace", "this test suite itself"),
+    (
+        "COOPNAV_FUZZ_N=1000000 cargo test --release -p coopnav-cli --bin coopnav fuzz -- --ignored --nocapture",
+        "the long fuzz run; `cargo test` runs its targets with fewer inputs",
+    ),
     ("bash scripts/install-bellhop.sh", "installs an external program; .ci/run runs it"),
     ("bash scripts/install-pymoos.sh", "installs an external program; .ci/run runs it"),
     ("bash scripts/install-chromium.sh", "installs an external program; .ci/run runs it"),
