@@ -11,7 +11,7 @@ use crate::{alog_import, nams};
 use coopnav_acomms::node_report::{NodeReport, VehicleType};
 use coopnav_acomms::status::{CovFrame0, CovStatus, CovarianceReport, Frame0, NextWaypoint, StatusMessage};
 use coopnav_acomms::tracker::{HeaderEntry, MaskWidth, TrackingHeader};
-use coopnav_core::{CompassDeg, Heading, Vec3};
+use coopnav_core::{Bathymetry, CompassDeg, Heading, Vec3};
 use coopnav_nav::codec::{Direction, MiniPacket, Sentence};
 use coopnav_nav::cycle::Cycle;
 use coopnav_nav::post::{self, PostConfig};
@@ -64,6 +64,8 @@ const TARGETS: &[Target] = &[
     Target { name: "post-processing config", seed: post_config_seed, parse: post_config_parse },
     Target { name: "nams experiment", seed: nams_seed, parse: nams_parse },
     Target { name: "track csv", seed: track_seed, parse: track_parse },
+    Target { name: "bathymetry ascii grid", seed: ascii_grid_seed, parse: ascii_grid_parse },
+    Target { name: "bathymetry csv", seed: bathymetry_csv_seed, parse: bathymetry_csv_parse },
     Target { name: "post-processing log csv", seed: post_log_seed, parse: post_log_parse },
     Target { name: "alog reader", seed: alog_seed, parse: alog_parse },
     Target { name: "post-processing alog import", seed: alog_seed, parse: alog_import_parse },
@@ -126,6 +128,20 @@ fn track_seed() -> Vec<u8> {
 }
 fn track_parse(b: &[u8]) -> bool {
     predeploy::tracks::parse_track_csv(&text(b), Path::new("fuzz.csv")).is_ok()
+}
+
+fn ascii_grid_seed() -> Vec<u8> {
+    b"ncols 3\nnrows 2\nxllcorner 0\nyllcorner -20\ncellsize 10\nNODATA_value -9999\n50 51 52\n53 54 55\n".to_vec()
+}
+fn ascii_grid_parse(b: &[u8]) -> bool {
+    Bathymetry::parse_ascii_grid(&text(b), "fuzz.asc").is_ok()
+}
+
+fn bathymetry_csv_seed() -> Vec<u8> {
+    b"x,y,depth\n0,0,50\n10,0,51\n0,10,52\n10,10,53\n".to_vec()
+}
+fn bathymetry_csv_parse(b: &[u8]) -> bool {
+    Bathymetry::parse_csv(&text(b), "fuzz.csv").is_ok()
 }
 
 fn post_log_seed() -> Vec<u8> {
@@ -342,6 +358,13 @@ fn fuzz_all(count: usize) {
         }
     }
     assert!(panics.is_empty(), "parsers panicked:\n{}", panics.join("\n"));
+}
+
+/// Found by the ascii-grid target: `nrows 1e308` reserved a row vector of that size and aborted.
+#[test]
+fn ascii_grid_with_absurd_nrows_is_an_error() {
+    let text = "ncols 3\nnrows 1e308\nxllcorner 0\nyllcorner -20\ncellsize 10\n50 51 52\n";
+    assert!(Bathymetry::parse_ascii_grid(text, "huge.asc").is_err());
 }
 
 #[test]

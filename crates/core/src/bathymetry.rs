@@ -175,7 +175,8 @@ impl Bathymetry {
         };
         let (x0, y0) = (half("xllcorner", "xllcenter")?, half("yllcorner", "yllcenter")?);
         let nodata = get("nodata_value");
-        let mut rows: Vec<Vec<f64>> = Vec::with_capacity(ny);
+        // Grown by the rows read, not reserved from the header: `nrows` may be absurd (1e308).
+        let mut rows: Vec<Vec<f64>> = Vec::new();
         for (n, l) in lines {
             let row = l
                 .split_whitespace()
