@@ -101,7 +101,7 @@ pub fn run(args: Args) -> Result<()> {
     };
     let text = input::read(config, args.allow_large)?;
     let file: File = toml::from_str(&text).with_context(|| format!("{}: invalid experiment file", config.display()))?;
-    file.experiment.validate().map_err(|e| anyhow::anyhow!("{}: {e}", config.display()))?;
+    file.experiment.validate_file(config, "experiment")?;
     let tl = provider(&file.tl, &file.experiment)?;
     let run = match &args.out {
         Some(p) => RunDir::create(p, args.force)?,
