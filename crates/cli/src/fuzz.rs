@@ -120,7 +120,7 @@ fn nams_seed() -> Vec<u8> {
     nams::example().expect("the Nams example serialises").into()
 }
 fn nams_parse(b: &[u8]) -> bool {
-    nams::parse_file(&text(b), "fuzz.toml").is_ok()
+    nams::parse_file(&text(b), Path::new("fuzz.toml")).is_ok()
 }
 
 fn track_seed() -> Vec<u8> {

@@ -14,7 +14,7 @@ use coopnav_sim::nams::{run_experiment, ExperimentConfig};
 use coopnav_sim::output::{Manifest, RunDir};
 use indicatif::ProgressBar;
 use serde::{Deserialize, Serialize};
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 #[derive(clap::Args)]
@@ -94,10 +94,10 @@ pub(crate) fn example() -> Result<String> {
     ))
 }
 
-/// Parses and validates an experiment file (`name` labels the errors).
-pub(crate) fn parse_file(text: &str, name: &str) -> Result<File> {
-    let file: File = toml::from_str(text).with_context(|| format!("{name}: invalid experiment file"))?;
-    file.experiment.validate().map_err(|e| anyhow::anyhow!("{name}: {e}"))?;
+/// Parses and validates an experiment file (`path` names it in errors).
+pub(crate) fn parse_file(text: &str, path: &Path) -> Result<File> {
+    let file: File = toml::from_str(text).with_context(|| format!("{}: invalid experiment file", path.display()))?;
+    file.experiment.validate_file(path, "experiment")?;
     Ok(file)
 }
 
@@ -107,7 +107,7 @@ pub fn run(args: Args) -> Result<()> {
         return Ok(());
     };
     let text = input::read(config, args.allow_large)?;
-    let file = parse_file(&text, &config.display().to_string())?;
+    let file = parse_file(&text, config)?;
     let tl = provider(&file.tl, &file.experiment)?;
     let run = match &args.out {
         Some(p) => RunDir::create(p, args.force)?,

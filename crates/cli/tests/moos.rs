@@ -80,6 +80,9 @@ fn the_simulate_alog_holds_every_vehicle_track_of_the_time_series() {
         close(field(estimate, "X"), num(row, "est_x"), 5e-4, "estimated x");
         close(field(estimate, "Y"), num(row, "est_y"), 5e-4, "estimated y");
         close(field(estimate, "NAV_SD"), num(row, "est_sd"), 5e-4, "filter sigma");
+        for (alog, csv) in [("NAV_PEE", "p_ee"), ("NAV_PEN", "p_en"), ("NAV_PNN", "p_nn")] {
+            close(field(estimate, alog), num(row, csv), 5e-5 + 1e-9 * num(row, csv).abs(), "filter covariance");
+        }
         close(field(cna, "X"), num(row, "cna_x"), 5e-4, "cna x");
         close(field(cna, "Y"), num(row, "cna_y"), 5e-4, "cna y");
         assert_eq!((truth.field("GROUP"), estimate.field("GROUP")), (Some("truth"), Some("estimate")));

@@ -4,7 +4,7 @@
 //! | alog variable | when | value |
 //! |---|---|---|
 //! | `COOPNAV_SCENARIO`, `COOPNAV_COMMAND`, `COOPNAV_VERSION` | t = 0 | the run's description |
-//! | `NODE_REPORT` | every whole second of each vehicle's track | `NAME`, `X`, `Y`, `LAT`/`LON` (only with an origin), `SPD`, `HDG`, `DEP`, `TIME`, `TYPE`, `GROUP`, and `NAV_SD` for estimates |
+//! | `NODE_REPORT` | every whole second of each vehicle's track | `NAME`, `X`, `Y`, `LAT`/`LON` (only with an origin), `SPD`, `HDG`, `DEP`, `TIME`, `TYPE`, `GROUP`, and for estimates `NAV_SD` (1σ, m) and, where the run has it, `NAV_PEE`/`NAV_PEN`/`NAV_PNN` (horizontal covariance, m²) |
 //! | `VIEW_RANGE_PULSE` | each ranging broadcast | ring centred on the sender at `t`, `radius` = distance to the receiver |
 //! | `VIEW_COMMS_PULSE` | each data packet | beam from sender (`sx`,`sy`) to receiver (`tx`,`ty`) |
 //! | `VIEW_SEGLIST` | each leg the planner chose | `pts={x,y,depth:…}`, label `cna_leg` |
@@ -119,6 +119,9 @@ fn node_report(run: &RunLog, vehicle: &Vehicle, s: &Sample, (speed, heading): (f
     if let (Role::Estimate, Some(sd)) = (vehicle.role, s.sd) {
         let _ = write!(v, ",NAV_SD={sd:.3}");
     }
+    if let (Role::Estimate, Some([ee, en, nn])) = (vehicle.role, s.cov) {
+        let _ = write!(v, ",NAV_PEE={ee:.4},NAV_PEN={en:.4},NAV_PNN={nn:.4}");
+    }
     v
 }
 
@@ -172,7 +175,8 @@ mod tests {
     use coopnav_core::{Geodetic, LatLon, LocalFrame};
 
     fn track(name: &str, role: Role, points: &[(f64, f64, f64)]) -> Vehicle {
-        let samples = points.iter().map(|&(t, x, y)| Sample { t, x, y, depth: 30.0, sd: Some(2.5) }).collect();
+        let samples =
+            points.iter().map(|&(t, x, y)| Sample { t, x, y, depth: 30.0, sd: Some(2.5), cov: None }).collect();
         Vehicle { name: name.into(), role, kind: "auv", samples }
     }
 

@@ -1,11 +1,11 @@
 //! The interactive mission replay: one self-contained `replay.html` (no network, no CDN) built
 //! from a run's alog. It shows every vehicle's true and estimated track with the filter's 1σ and
-//! 2σ circles, the CNA and the leg it is flying, pings and packets as pulses (received solid
+//! 2σ ellipses (circles when the run gives only σ), the CNA and the leg it is flying, pings and packets as pulses (received solid
 //! green, lost dashed red), each survey AUV's error against time linked to a time slider with
 //! play / pause / speed, and the scenario and coopnav version.
 //!
 //! Any alog with NODE_REPORTs replays; coopnav's own carry `GROUP` (truth / estimate / cna) and
-//! `NAV_SD` (see [`crate::export`]). The page honours `#t=SECONDS` in its URL and keeps a table of
+//! `NAV_SD` or the covariance `NAV_PEE`/`NAV_PEN`/`NAV_PNN` (see [`crate::export`]). The page honours `#t=SECONDS` in its URL and keeps a table of
 //! the positions it draws (`id="pos-NAME"`), so a headless browser can check what it shows.
 //!
 //! Size: tracks are decimated to at most [`MAX_SAMPLES`] points in all and quantised to
@@ -28,6 +28,8 @@ pub const MAX_SAMPLES: usize = 60_000;
 /// Resolution of positions, radii and σ in the page, m; of times, s.
 pub const QUANTUM_M: f64 = 0.1;
 const QUANTUM_S: f64 = 0.1;
+/// Quantum of the covariance entries, m² (a 0.1 m σ is 1 quantum).
+const QUANTUM_VAR: f64 = 0.01;
 
 #[derive(Debug, Error)]
 pub enum ReplayError {
@@ -73,7 +75,7 @@ pub fn from_alog(log: &Alog) -> Result<String, ReplayError> {
     let meta = |variable: &'static str| log.postings(variable).next().map_or("unknown", |e| e.value.as_str());
     let _ = write!(
         data,
-        "\"scenario\":{},\"command\":{},\"version\":{},\"q\":{QUANTUM_M},\"qt\":{QUANTUM_S},",
+        "\"scenario\":{},\"command\":{},\"version\":{},\"q\":{QUANTUM_M},\"qt\":{QUANTUM_S},\"qv\":{QUANTUM_VAR},",
         json_string(meta("COOPNAV_SCENARIO")),
         json_string(meta("COOPNAV_COMMAND")),
         json_string(meta("COOPNAV_VERSION"))
@@ -114,6 +116,10 @@ fn tracks(log: &Alog) -> Result<BTreeMap<String, Track>, ReplayError> {
             y: number("Y")?,
             depth: optional("DEP").unwrap_or(0.0),
             sd: optional("NAV_SD"),
+            cov: match (optional("NAV_PEE"), optional("NAV_PEN"), optional("NAV_PNN")) {
+                (Some(ee), Some(en), Some(nn)) => Some([ee, en, nn]),
+                _ => None,
+            },
         };
         let track = tracks.entry(name.to_string()).or_insert_with(|| Track {
             group: e.field("GROUP").map_or_else(|| guess_group(name).to_string(), str::to_lowercase),
@@ -190,6 +196,12 @@ fn write_track(out: &mut String, name: &str, track: &Track, stride: usize) {
     if kept.iter().all(|s| s.sd.is_some()) && !kept.is_empty() {
         out.push_str(",\"sd\":");
         write_list(out, kept.iter().map(|s| quantised(s.sd.unwrap_or(0.0), QUANTUM_M)));
+    }
+    if kept.iter().all(|s| s.cov.is_some()) && !kept.is_empty() {
+        for (i, key) in ["pee", "pen", "pnn"].into_iter().enumerate() {
+            let _ = write!(out, ",\"{key}\":");
+            write_list(out, kept.iter().map(|s| quantised(s.cov.map_or(0.0, |c| c[i]), QUANTUM_VAR)));
+        }
     }
     out.push('}');
 }
@@ -299,9 +311,11 @@ mod tests {
     use crate::export::write_run_alog;
     use crate::run::{Pulse, PulseKind, RunLog, Vehicle};
 
+    /// A track along x; estimates carry a covariance (σ_E 1.1 m, σ_N 1.5 m, correlated).
     fn track(name: &str, role: Role, seconds: usize, dx: f64) -> Vehicle {
+        let cov = (role == Role::Estimate).then_some([1.21, 0.4, 2.25]);
         let samples = (0..=seconds)
-            .map(|s| Sample { t: s as f64, x: dx * s as f64, y: 0.0, depth: 0.0, sd: Some(1.5) })
+            .map(|s| Sample { t: s as f64, x: dx * s as f64, y: 0.0, depth: 0.0, sd: Some(1.5), cov })
             .collect();
         Vehicle { name: name.into(), role, kind: "auv", samples }
     }
@@ -354,6 +368,13 @@ mod tests {
         let html = page(&run(10, 1));
         // The estimate runs 0.1 m/s ahead: error 0.1 m per second, in 0.1 m units 0..10.
         assert!(html.contains("\"errors\":[{\"name\":\"auv1\",\"t\":[0,10,20,30,40,50,60,70,80,90,100],\"e\":[0,1,2,3,4,5,6,7,8,9,10]}]"), "{}", &html[html.find("\"errors\"").unwrap()..][..200]);
+    }
+
+    #[test]
+    fn estimates_carry_their_covariance_for_the_ellipses() {
+        let html = page(&run(2, 1));
+        assert!(html.contains("\"pee\":[121,121,121],\"pen\":[40,40,40],\"pnn\":[225,225,225]"), "{html}");
+        assert_eq!(html.matches("\"pee\"").count(), 1, "only the estimate has a covariance");
     }
 
     #[test]

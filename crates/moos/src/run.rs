@@ -46,6 +46,9 @@ pub struct Sample {
     pub depth: f64,
     /// The filter's horizontal 1σ (√(P_EE + P_NN)), m, for estimates.
     pub sd: Option<f64>,
+    /// The filter's horizontal covariance [P_EE, P_EN, P_NN], m², for estimates that report it
+    /// (drawn as 1σ/2σ ellipses; linear interpolation of covariances stays positive semi-definite).
+    pub cov: Option<[f64; 3]>,
 }
 
 /// One vehicle's track, samples in time order.
@@ -130,7 +133,11 @@ pub fn sample_at(s: &[Sample], t: f64) -> Option<Sample> {
         (Some(u), Some(v)) => Some(lerp(u, v)),
         _ => None,
     };
-    Some(Sample { t, x: lerp(a.x, b.x), y: lerp(a.y, b.y), depth: lerp(a.depth, b.depth), sd })
+    let cov = match (a.cov, b.cov) {
+        (Some(u), Some(v)) => Some([lerp(u[0], v[0]), lerp(u[1], v[1]), lerp(u[2], v[2])]),
+        _ => None,
+    };
+    Some(Sample { t, x: lerp(a.x, b.x), y: lerp(a.y, b.y), depth: lerp(a.depth, b.depth), sd, cov })
 }
 
 #[cfg(test)]
@@ -138,7 +145,7 @@ mod tests {
     use super::*;
 
     fn straight() -> Vehicle {
-        let sample = |t: f64, x: f64| Sample { t, x, y: -x, depth: 2.0 * x, sd: Some(t) };
+        let sample = |t: f64, x: f64| Sample { t, x, y: -x, depth: 2.0 * x, sd: Some(t), cov: None };
         Vehicle {
             name: "auv1".into(),
             role: Role::Truth,

@@ -31,7 +31,12 @@ fn version() -> String {
 }
 
 fn sample(t: f64, x: f64, y: f64, depth: f64) -> Sample {
-    Sample { t, x, y, depth, sd: None }
+    Sample { t, x, y, depth, sd: None, cov: None }
+}
+
+/// A closed-loop estimate with the filter's σ and horizontal covariance (drawn as ellipses).
+fn estimate_sample(r: &crate::engine::TraceRow) -> Sample {
+    Sample { sd: Some(r.est_sd), cov: Some([r.p_ee, r.p_en, r.p_nn]), ..sample(r.t, r.est_x, r.est_y, r.true_z) }
 }
 
 fn vehicle(name: String, role: Role, kind: &'static str, samples: Vec<Sample>) -> Vehicle {
@@ -52,8 +57,7 @@ pub fn closed_loop_run(sc: &closed_loop::Scenario, result: &ClosedLoopResult) ->
     for k in 0..sc.fleet.n_auvs {
         let rows = || trace.rows.iter().filter(move |r| r.auv == k);
         let truth = rows().map(|r| sample(r.t, r.true_x, r.true_y, r.true_z)).collect();
-        let estimate =
-            rows().map(|r| Sample { sd: Some(r.est_sd), ..sample(r.t, r.est_x, r.est_y, r.true_z) }).collect();
+        let estimate = rows().map(estimate_sample).collect();
         vehicles.push(vehicle(auv_name(k), Role::Truth, "auv", truth));
         vehicles.push(vehicle(format!("{}_est", auv_name(k)), Role::Estimate, "auv", estimate));
     }

@@ -83,7 +83,7 @@ fn report(sc: &Scenario, r: &RunResult, svgs: &[String], command: &str) -> Strin
         "{} survey AUVs, ASC CNA at {} m/s, τ = {} s, {} s mission, seed {}. Errors are the survey AUVs' TRUE navigation errors (EKF estimate minus truth).",
         sc.fleet.n_auvs, sc.cna.speed, sc.comms.tau, sc.duration_s, r.seed
     ));
-    h.link(coopnav_moos::replay::FILE, "Interactive replay (tracks, 1σ/2σ circles, pulses, error against time)");
+    h.link(coopnav_moos::replay::FILE, "Interactive replay (tracks, 1σ/2σ ellipses, pulses, error against time)");
     h.heading("Per AUV");
     let fmt = |v: f64| format!("{v:.2}");
     let rows: Vec<Vec<String>> = r

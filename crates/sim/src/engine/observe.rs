@@ -19,6 +19,10 @@ pub struct TraceRow {
     pub error: f64,
     /// Filter's horizontal 1-σ (√(P_EE + P_NN)), m.
     pub est_sd: f64,
+    /// Filter's horizontal covariance, m² (east, east–north, north): its error ellipse.
+    pub p_ee: f64,
+    pub p_en: f64,
+    pub p_nn: f64,
     /// Normalised estimation error squared of the horizontal position (2 degrees of freedom).
     pub nees: f64,
     /// The planner's modelled error, m (empty before the model starts).

@@ -1,10 +1,12 @@
 //! Scenarios (thesis Table 6), behaviours (§5.4: three controls and the adaptive selector) and the
 //! experiment configuration, validated before anything runs.
 
+use crate::scenario_file::{Problems, ScenarioError};
 use coopnav_acomms::selector::{AdaptiveBins, AdaptiveConfig, Alternating, FixedRate, RatePolicy};
 use coopnav_acomms::{Rate, Receiver, SuccessModel, Tdma};
 use coopnav_core::{Iver2Params, Shelf};
 use serde::{Deserialize, Serialize};
+use std::path::Path;
 
 /// One mission environment.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -50,19 +52,21 @@ impl Scenario {
         }
     }
 
-    fn validate(&self) -> Result<(), String> {
-        let f = |name: &str, v: f64, lo: f64, hi: f64| {
-            if (lo..=hi).contains(&v) {
-                Ok(())
-            } else {
-                Err(format!("{}: {name} = {v} must be in [{lo}, {hi}]", self.name))
-            }
+    /// Adds every out-of-range field to `problems`; `at` is this scenario's path in the file.
+    fn collect_problems(&self, at: &str, problems: &mut Problems) {
+        let mut in_range = |name: &str, v: f64, lo: f64, hi: f64| {
+            problems.check(
+                &format!("{at}.{name}"),
+                v,
+                |v| (lo..=hi).contains(&v),
+                &format!("a number in [{lo}, {hi}]"),
+            );
         };
-        f("square", self.square, 10.0, 20_000.0)?;
-        f("lane_spacing", self.lane_spacing, 1.0, self.square)?;
-        f("noise_db", self.noise_db, 0.0, 60.0)?;
-        f("altitude", self.altitude, 0.5, 100.0)?;
-        f("speed", self.speed, 0.1, 5.0)
+        in_range("square", self.square, 10.0, 20_000.0);
+        in_range("lane_spacing", self.lane_spacing, 1.0, self.square);
+        in_range("noise_db", self.noise_db, 0.0, 60.0);
+        in_range("altitude", self.altitude, 0.5, 100.0);
+        in_range("speed", self.speed, 0.1, 5.0);
     }
 }
 
@@ -152,30 +156,101 @@ impl Default for ExperimentConfig {
 }
 
 impl ExperimentConfig {
-    /// Checks every field before anything runs; the message names the field and allowed range.
+    /// Checks every field before anything runs; the message names every bad field and its allowed range.
     pub fn validate(&self) -> Result<(), String> {
-        if self.scenarios.is_empty() || self.behaviours.is_empty() {
-            return Err("scenarios and behaviours must each list at least one entry".into());
+        self.validate_file(Path::new("experiment configuration"), "experiment").map_err(|e| e.to_string())
+    }
+
+    /// As [`ExperimentConfig::validate`], for a file (`file`) holding this configuration in table `table`.
+    pub fn validate_file(&self, file: &Path, table: &str) -> Result<(), ScenarioError> {
+        let mut problems = Problems::new(file);
+        self.collect_problems(table, &mut problems);
+        problems.finish()
+    }
+
+    fn collect_problems(&self, t: &str, problems: &mut Problems) {
+        if self.scenarios.is_empty() {
+            problems.push(format!("{t}.scenarios"), "[]", "at least one scenario");
+        }
+        if self.behaviours.is_empty() {
+            problems.push(format!("{t}.behaviours"), "[]", "at least one behaviour");
         }
         if !(1..=100_000).contains(&self.repetitions) {
-            return Err(format!("repetitions = {} must be in [1, 100000]", self.repetitions));
+            problems.push(format!("{t}.repetitions"), self.repetitions.to_string(), "an integer in [1, 100000]");
         }
-        for s in &self.scenarios {
-            s.validate()?;
+        for (i, s) in self.scenarios.iter().enumerate() {
+            s.collect_problems(&format!("{t}.scenarios[{i}]"), problems);
         }
-        for b in &self.behaviours {
-            b.policy()?;
-        }
-        if let Some(t) = self.max_time {
-            if t.is_nan() || t <= 0.0 {
-                return Err(format!("max_time = {t} must be > 0 s"));
+        for (i, b) in self.behaviours.iter().enumerate() {
+            if let Err(e) = b.policy() {
+                problems.push(format!("{t}.behaviours[{i}]"), "rejected", e);
             }
         }
-        self.success.validate()?;
-        self.vehicle.validate()?;
-        if !(self.tdma.base_slot > 0.0 && self.tdma.rate5_slot > 0.0 && self.tdma.ack_extra >= 0.0) {
-            return Err("tdma slot lengths must be > 0 s and ack_extra ≥ 0 s".into());
+        if let Some(max_time) = self.max_time {
+            problems.positive(&format!("{t}.max_time"), max_time);
         }
-        Ok(())
+        // The acomms and vehicle models check themselves and name their first bad field.
+        if let Err(e) = self.success.validate() {
+            problems.push(format!("{t}.success"), "rejected", e);
+        }
+        if let Err(e) = self.vehicle.validate() {
+            problems.push(format!("{t}.vehicle"), "rejected", e);
+        }
+        problems.positive(&format!("{t}.tdma.base_slot"), self.tdma.base_slot);
+        problems.positive(&format!("{t}.tdma.rate5_slot"), self.tdma.rate5_slot);
+        problems.non_negative(&format!("{t}.tdma.ack_extra"), self.tdma.ack_extra);
+        self.collect_shelf_problems(&format!("{t}.shelf"), problems);
+    }
+
+    /// Depths and extents must be finite, the grid spacing positive (the extent's order is the
+    /// bathymetry's own check).
+    fn collect_shelf_problems(&self, at: &str, problems: &mut Problems) {
+        let s = &self.shelf;
+        let finite = [
+            ("shallow", s.shallow),
+            ("deep", s.deep),
+            ("x_shallow", s.x_shallow),
+            ("x_deep", s.x_deep),
+            ("x_min", s.x_min),
+            ("x_max", s.x_max),
+            ("y_min", s.y_min),
+            ("y_max", s.y_max),
+        ];
+        for (name, v) in finite {
+            problems.check(&format!("{at}.{name}"), v, |_| true, "a finite number");
+        }
+        problems.positive(&format!("{at}.spacing"), s.spacing);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_thesis_experiment_is_valid() {
+        ExperimentConfig::default().validate().unwrap();
+    }
+
+    #[test]
+    fn every_bad_field_is_named_at_once() {
+        let text = "repetitions = 0\nmax_time = -5.0\n[tdma]\nbase_slot = nan\n[shelf]\nspacing = -1.0\n\
+                    [[scenarios]]\nname = \"a\"\nsquare = 500.0\nlane_spacing = 50.0\nnoise_db = nan\n\
+                    altitude = -2.0\nspeed = 99.0\n";
+        let cfg: ExperimentConfig = toml::from_str(text).unwrap();
+        let e = cfg.validate_file(Path::new("exp.toml"), "experiment").unwrap_err().to_string();
+        for field in [
+            "exp.toml",
+            "experiment.repetitions = 0",
+            "experiment.max_time = -5",
+            "experiment.tdma.base_slot = NaN",
+            "experiment.shelf.spacing = -1",
+            "experiment.scenarios[0].noise_db = NaN: allowed a number in [0, 60]",
+            "experiment.scenarios[0].altitude = -2",
+            "experiment.scenarios[0].speed = 99: allowed a number in [0.1, 5]",
+        ] {
+            assert!(e.contains(field), "{field} missing from: {e}");
+        }
+        assert!(e.contains("7 bad fields"), "{e}");
     }
 }
