@@ -6,7 +6,8 @@
 //! [`CovStatus`] (issue 10), which starts with a 3-bit version (1) and adds the sender's
 //! horizontal position covariance as an error ellipse ([`CovarianceReport`], 3 bytes), so a CNA
 //! can plan on the survey AUVs' own estimators. Both travel in a frame 0 through the same
-//! [`StatusCodec`] trait.
+//! [`StatusCodec`] trait. [`CovTrailer`] carries the same version and ellipse in 4 bytes after
+//! another message (the closed loop's Appendix C node report).
 
 use crate::codec::{BitReader, BitWriter, Bounded, DecodeError, EncodeError};
 use crate::tracker::{MaskWidth, TrackingHeader};
@@ -291,6 +292,40 @@ impl StatusCodec for CovStatus {
     }
 }
 
+/// The covariance trailer: the same version field (1) and [`CovarianceReport`] as [`CovStatus`],
+/// in their own 4 bytes after a complete message (the closed loop appends it to the Appendix C
+/// node report, whose bytes stay the thesis's). A receiver that reads only the thesis message
+/// stops before it; one that knows version 1 gets the sender's error ellipse.
+pub struct CovTrailer;
+
+impl CovTrailer {
+    /// Bytes a trailer takes: 3 + 3·8 + 8 bits, padded to whole bytes.
+    pub const BYTES: usize = 4;
+
+    pub fn encode(cov: &CovarianceReport) -> Result<Vec<u8>, EncodeError> {
+        let mut w = BitWriter::new();
+        w.put(VERSION, COV_VERSION)?;
+        cov.encode_into(&mut w)?;
+        Ok(w.finish())
+    }
+
+    /// Reads a trailer of exactly [`Self::BYTES`] bytes (a truncated, padded or other-version
+    /// trailer is an error naming the field).
+    pub fn decode(bytes: &[u8]) -> Result<CovarianceReport, DecodeError> {
+        let mut r = BitReader::new(bytes);
+        let version = r.get(VERSION)?;
+        if version != COV_VERSION {
+            return Err(DecodeError::Invalid {
+                field: VERSION.name,
+                message: format!("version {version} is not known (this codec reads version {COV_VERSION})"),
+            });
+        }
+        let cov = CovarianceReport::decode_from(&mut r)?;
+        r.finish()?;
+        Ok(cov)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -373,6 +408,27 @@ mod tests {
         assert!(e.contains("status.sigma_minor_code"), "{e}");
         let huge = CovarianceReport { sigma_major: 2e4, ..ellipse };
         assert!(cov_frame(huge).encode(MaskWidth::Narrow, 32).is_err());
+    }
+
+    #[test]
+    fn the_covariance_trailer_round_trips_in_four_bytes_and_rejects_malformed_ones() {
+        let ellipse = CovarianceReport { sigma_major: 25.0, sigma_minor: 0.4, orientation: 1.2 };
+        let b = CovTrailer::encode(&ellipse).unwrap();
+        assert_eq!(b.len(), CovTrailer::BYTES);
+        let back = CovTrailer::decode(&b).unwrap();
+        // Log-spaced codes: 254 steps over six decades, about 2.8 % per step.
+        assert!((back.sigma_major / 25.0 - 1.0).abs() < 0.03 && (back.sigma_minor / 0.4 - 1.0).abs() < 0.03);
+        assert!((back.orientation - 1.2f64.to_degrees().round().to_radians()).abs() < 1e-12);
+        assert!(matches!(CovTrailer::decode(&b[..3]), Err(DecodeError::Truncated { .. })));
+        let mut long = b.clone();
+        long.push(0);
+        assert!(matches!(CovTrailer::decode(&long), Err(DecodeError::Oversized { .. })));
+        let mut other = BitWriter::new();
+        other.put(VERSION, 2).unwrap();
+        ellipse.encode_into(&mut other).unwrap();
+        let e = CovTrailer::decode(&other.finish()).unwrap_err().to_string();
+        assert!(e.contains("status.version") && e.contains("version 2"), "{e}");
+        assert!(CovTrailer::encode(&CovarianceReport { sigma_major: 2e4, ..ellipse }).is_err());
     }
 
     fn cov_frame_thesis(f: &CovFrame0) -> Frame0 {

@@ -12,9 +12,9 @@
 //! 3. The packet arrives with probability p_s(r) (the acoustic link's model, passed in as a
 //!    [`LinkModel`]); the expected posterior is E = (1 − p_s)·P̃ + p_s·P⁺
 //!    = P̃ − p_s·P̃hhᵀP̃ / (hᵀP̃h + R).
-//! 4. Level cost over the N AUVs ([`Aggregate`]): Σ tr E (default), max tr E (worst AUV), or
+//! 4. Level cost over the N AUVs ([`Aggregate`]): Σ tr E (default), max tr E (worst AUV),
 //!    Σ ln(1 + det E / 1 m⁴) (log-det, shifted by one so costs stay ≥ 0 as the penalties and the
-//!    search require). The path cost is the sum of the level costs, as for Hudson's model.
+//!    search require), or Σ √tr E (the sum of 1-σ, m). The path cost is the sum of the level costs, as for Hudson's model.
 //!
 //! Lower bound for branch-and-bound (the levels below a node; derivation in [`EkfCost::bound_rest`]):
 //! by operator convexity of the inverse, E ⪰ (P̃⁻¹ + p_s·hhᵀ/R)⁻¹ ⪰ (P̃⁻¹ + hhᵀ/R_min)⁻¹, so the
@@ -40,6 +40,9 @@ pub enum Aggregate {
     WorstAuv,
     /// Σ_k ln(1 + det P_k / 1 m⁴).
     LogDet,
+    /// Σ_k √(tr P_k) (m): the sum of the AUVs' horizontal 1-σ, on the scale of the fleet's mean
+    /// error, so one AUV with a huge variance does not outweigh the rest as in the trace sum.
+    SigmaSum,
 }
 
 /// Range noise the planner assumes, as a standard deviation growing with distance:
@@ -239,6 +242,8 @@ impl EkfCost {
         match self.spec.aggregate {
             Aggregate::TraceSum | Aggregate::WorstAuv => trace,
             Aggregate::LogDet => det.max(0.0).ln_1p(),
+            // Increasing in the trace, so a lower bound on the trace bounds it too.
+            Aggregate::SigmaSum => trace.max(0.0).sqrt(),
         }
     }
 }
@@ -258,7 +263,7 @@ impl CostModel for EkfCost {
     fn combine(&self, acc: f64, term: f64) -> f64 {
         match self.spec.aggregate {
             Aggregate::WorstAuv => acc.max(term),
-            Aggregate::TraceSum | Aggregate::LogDet => acc + term,
+            Aggregate::TraceSum | Aggregate::LogDet | Aggregate::SigmaSum => acc + term,
         }
     }
 

@@ -53,8 +53,14 @@ impl WaypointUse {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum BeyondWaypoints {
+    /// Stop at the last reported waypoint (the default). Past it the CNA knows nothing of the
+    /// AUV's plan, and a straight-line guess grows without bound while the AUV stays unheard:
+    /// on the mission engine a silenced AUV's extrapolation drew the CNA hundreds of metres off
+    /// (issue 10). Holding the last known point bounds the prediction by the plan the AUV sent.
+    /// With no waypoint reported, the AUV is held at its reported position.
+    Stop,
     /// Keep going along the last leg into the last waypoint ([I]: an AUV that reached a waypoint
-    /// rarely keeps the heading it reported on the way to the first one). The default.
+    /// rarely keeps the heading it reported on the way to the first one).
     LastLeg,
     /// The last reported heading, as the thesis's text reads (digest A13).
     ReportedHeading,
@@ -77,7 +83,7 @@ impl Default for PredictorConfig {
     fn default() -> Self {
         PredictorConfig {
             waypoints: WaypointUse::All,
-            beyond: BeyondWaypoints::LastLeg,
+            beyond: BeyondWaypoints::Stop,
             stopped_speed: 0.05,
             max_report_age: 600.0,
         }
@@ -150,6 +156,9 @@ impl UnderwayPredictor {
             remaining -= leg;
             from = to;
         }
+        if self.config.beyond == BeyondWaypoints::Stop {
+            return from;
+        }
         let direction = match (self.config.beyond, used) {
             (BeyondWaypoints::LastLeg, [.., a, b]) => (b.1 - a.1).atan2(b.0 - a.0),
             (BeyondWaypoints::LastLeg, [only]) if (only.0, only.1) != start => {
@@ -200,7 +209,7 @@ mod tests {
 
     #[test]
     fn follows_waypoints_at_reported_speed_then_straight_on() {
-        let mut p = UnderwayPredictor::new(PredictorConfig::default());
+        let mut p = UnderwayPredictor::new(PredictorConfig { beyond: BeyondWaypoints::LastLeg, ..Default::default() });
         p.receive(report(100.0, 2.0, vec![(100.0, 0.0), (100.0, 50.0)]));
         assert!(close(p.position_at(150.0).unwrap(), 100.0, 0.0, 12.0));
         assert!(close(p.position_at(160.0).unwrap(), 100.0, 20.0, 12.0));
@@ -228,11 +237,24 @@ mod tests {
 
     #[test]
     fn no_waypoints_extrapolates_along_heading_and_stopped_stays() {
-        let mut p = UnderwayPredictor::new(PredictorConfig::default());
+        let mut p = UnderwayPredictor::new(PredictorConfig { beyond: BeyondWaypoints::LastLeg, ..Default::default() });
         p.receive(report(0.0, 1.5, vec![]));
         assert!(close(p.position_at(10.0).unwrap(), 15.0, 0.0, 12.0));
         p.receive(report(20.0, 0.0, vec![(500.0, 0.0)]));
         assert!(close(p.position_at(100.0).unwrap(), 0.0, 0.0, 12.0));
+    }
+
+    #[test]
+    fn by_default_the_prediction_stops_at_the_last_reported_waypoint() {
+        let mut p = UnderwayPredictor::new(PredictorConfig::default());
+        p.receive(report(100.0, 2.0, vec![(100.0, 0.0), (100.0, 50.0)]));
+        assert!(close(p.position_at(160.0).unwrap(), 100.0, 20.0, 12.0));
+        // An hour unheard: still at the last waypoint, not 7 km further north.
+        for t in [200.0, 3700.0] {
+            assert!(close(p.position_at(t).unwrap(), 100.0, 50.0, 12.0));
+        }
+        p.receive(report(200.0, 1.5, vec![]));
+        assert!(close(p.position_at(900.0).unwrap(), 0.0, 0.0, 12.0));
     }
 
     #[test]

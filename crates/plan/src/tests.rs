@@ -73,7 +73,7 @@ prop_compose! {
                   seeds in prop::collection::vec((-1500.0f64..1500.0, -1500.0f64..1500.0, 0.0f64..120.0, -3.1f64..3.1, 0.5f64..3.0), 5),
                   slant in any::<bool>(), tangential in any::<bool>(),
                   covs in prop::collection::vec((0.1f64..30.0, 0.1f64..30.0, -0.95f64..0.95, 0.0f64..0.2), 5),
-                  estimator in any::<bool>(), aggregate in 0usize..3, sigma_m in 0.05f64..3.0, per_km_m in 0.0f64..5.0,
+                  estimator in any::<bool>(), aggregate in 0usize..4, sigma_m in 0.05f64..3.0, per_km_m in 0.0f64..5.0,
                   link_mid in 300.0f64..3000.0) -> Instance {
         let cna = if auv_cna { CnaKind::auv(b) } else { CnaKind::Asc {} };
         let m = a * if auv_cna { b } else { 1 };
@@ -91,7 +91,7 @@ prop_compose! {
         let eps = seeds[..n].iter().map(|s| s.4).collect();
         let estimates = covs[..n].iter().map(|&(ve, vn, rho, q)| AuvEstimate { cov: [ve, rho * (ve * vn).sqrt(), vn], process_noise: q }).collect();
         if estimator {
-            let aggregate = [Aggregate::TraceSum, Aggregate::WorstAuv, Aggregate::LogDet][aggregate];
+            let aggregate = [Aggregate::TraceSum, Aggregate::WorstAuv, Aggregate::LogDet, Aggregate::SigmaSum][aggregate];
             cfg.cost = CostSpec::Estimator(EstimatorSpec { aggregate, range_noise: RangeNoise { sigma_m, per_km_m } });
         }
         Instance { cfg, cna: CnaPose { pos: Vec3::new(0.0, 0.0, z), heading: Heading::from_radians(heading), pitch: 0.0 }, starts, vels, eps, estimates, link_mid }

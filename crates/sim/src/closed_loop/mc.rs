@@ -50,12 +50,13 @@ pub struct PolicySummary {
     pub runs: Vec<f64>,
 }
 
-/// Planner minus a baseline, paired by run (negative = the planner is better).
+/// The reference policy (the first one compared, normally a planner) minus a baseline, paired
+/// by run (negative = the reference is better).
 #[derive(Debug, Clone, Serialize)]
 pub struct Paired {
     pub baseline: String,
     pub difference: Ci,
-    /// The planner's mean is lower and the CI excludes zero.
+    /// The reference's mean is lower and the CI excludes zero.
     pub planner_better: bool,
 }
 
@@ -70,7 +71,8 @@ pub struct Comparison {
     pub timing: Timing,
 }
 
-/// Runs every policy `runs` times. `progress(done)` is called after each run.
+/// Runs every policy `runs` times and pairs the first policy (the reference) with each other
+/// one. `progress(done)` is called after each run.
 pub fn monte_carlo(
     sc: &Scenario,
     policies: &[String],
@@ -95,12 +97,11 @@ pub fn monte_carlo(
     }
     let summaries: Vec<PolicySummary> =
         results.chunks(runs.max(1)).zip(&specs).map(|(rs, s)| summarise(&s.name, rs)).collect();
-    let paired = match summaries.iter().find(|s| s.policy == "planner") {
-        Some(planner) => summaries
+    let paired = match summaries.split_first() {
+        Some((reference, others)) => others
             .iter()
-            .filter(|s| s.policy != "planner")
             .map(|b| {
-                let d: Vec<f64> = planner.runs.iter().zip(&b.runs).map(|(p, q)| p - q).collect();
+                let d: Vec<f64> = reference.runs.iter().zip(&b.runs).map(|(p, q)| p - q).collect();
                 let ci = Ci::of(&d);
                 Paired { baseline: b.policy.clone(), difference: ci, planner_better: ci.high < 0.0 }
             })
@@ -168,7 +169,8 @@ pub fn comparison_table(c: &Comparison) -> String {
         );
     }
     if !c.paired.is_empty() {
-        out += "planner minus baseline (paired by run, m; negative = planner better):\n";
+        let reference = c.policies.first().map_or("", |s| s.policy.as_str());
+        out += &format!("{reference} minus baseline (paired by run, m; negative = {reference} better):\n");
         for p in &c.paired {
             out += &format!(
                 "  vs {:<10} {:>7.2} [{:>6.2}, {:>6.2}] {}\n",
@@ -177,9 +179,9 @@ pub fn comparison_table(c: &Comparison) -> String {
                 p.difference.low,
                 p.difference.high,
                 if p.planner_better {
-                    "planner better"
+                    "reference better"
                 } else if p.difference.low > 0.0 {
-                    "planner WORSE"
+                    "reference WORSE"
                 } else {
                     "no significant difference"
                 }

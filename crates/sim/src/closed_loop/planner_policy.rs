@@ -5,7 +5,7 @@
 //! Under the estimator-aware cost it also keeps a model of each AUV's filter covariance
 //! ([`CovarianceTracker`]), stepped by the same expected EKF update the planner scores with.
 
-use crate::policy::{CnaCommand, CnaPolicy, PolicyContext};
+use crate::policy::{CnaCommand, CnaPolicy, PolicyContext, ReportedCov};
 use coopnav_core::Vec3;
 use coopnav_plan::Planner as _;
 use coopnav_plan::{
@@ -63,40 +63,56 @@ impl ErrorTracker {
     }
 }
 
-/// The CNA's model of each survey AUV's horizontal filter covariance: it starts at the filter's
-/// initial covariance when the AUV is first pinged, grows by q·τ per axis each period and takes
-/// the expected range update of each ping (`coopnav_plan::expected_posterior`).
+/// The CNA's model of each survey AUV's horizontal filter covariance. The AUVs report their
+/// filter's covariance in every status message; at each decision the model starts from the
+/// newest report it has not used yet, grown by the filter's process noise q over the report's
+/// age (the filter's own prediction), else from its previous value grown by q·τ; then it takes
+/// the expected range update of this period's ping (`coopnav_plan::expected_posterior`). Before
+/// any report it starts at the filter's initial covariance.
 #[derive(Debug, Clone)]
 pub struct CovarianceTracker {
     start: AuvEstimate,
     tau: f64,
     noise: RangeNoise,
     covs: Vec<Option<[f64; 3]>>,
+    /// Send time of the newest report each AUV's model was restarted from.
+    used: Vec<f64>,
 }
 
 impl CovarianceTracker {
     pub fn new(n: usize, start: AuvEstimate, tau: f64, noise: RangeNoise) -> Self {
-        CovarianceTracker { start, tau, noise, covs: vec![None; n] }
+        CovarianceTracker { start, tau, noise, covs: vec![None; n], used: vec![f64::NEG_INFINITY; n] }
     }
 
-    /// A ping from `cna` at AUV `k` (at `auv`), received with probability `p_received`.
-    pub fn ping(&mut self, k: usize, cna: &Vec3, auv: &Vec3, p_received: f64) {
-        let q_tau = self.start.process_noise * self.tau;
-        self.covs[k] = Some(match self.covs[k] {
+    /// AUV `k`'s covariance before this period's ping at time `t`, and the growth still to add.
+    fn prior(&mut self, k: usize, t: f64, reported: Option<ReportedCov>) -> Option<([f64; 3], f64)> {
+        let q = self.start.process_noise;
+        match reported.filter(|r| r.t > self.used[k]) {
+            Some(r) => {
+                self.used[k] = r.t;
+                Some((r.cov, q * (t - r.t).max(0.0)))
+            }
+            None => self.covs[k].map(|c| (c, q * self.tau)),
+        }
+    }
+
+    /// A ping at time `t` from `cna` at AUV `k` (at `auv`), received with probability
+    /// `p_received`; `reported` is the AUV's newest covariance report.
+    pub fn ping(&mut self, k: usize, t: f64, reported: Option<ReportedCov>, link: (&Vec3, &Vec3, f64)) {
+        let (cna, auv, p_received) = link;
+        let p = p_received.clamp(0.0, 1.0);
+        self.covs[k] = Some(match self.prior(k, t, reported) {
             None => self.start.cov,
-            Some(prev) => {
-                let p = p_received.clamp(0.0, 1.0);
-                expected_posterior(&prev, q_tau, [cna.x, cna.y, cna.z], [auv.x, auv.y, auv.z], &self.noise, |_| p)
+            Some((prior, grow)) => {
+                expected_posterior(&prior, grow, [cna.x, cna.y, cna.z], [auv.x, auv.y, auv.z], &self.noise, |_| p)
             }
         });
     }
 
-    /// No ping this period: the covariance grows by q·τ per axis.
-    pub fn silent(&mut self, k: usize) {
-        let q_tau = self.start.process_noise * self.tau;
-        if let Some(c) = self.covs[k].as_mut() {
-            c[0] += q_tau;
-            c[2] += q_tau;
+    /// No ping this period: the covariance only grows (from a newer report if there is one).
+    pub fn silent(&mut self, k: usize, t: f64, reported: Option<ReportedCov>) {
+        if let Some(([a, b, c], grow)) = self.prior(k, t, reported) {
+            self.covs[k] = Some([a + grow, b, c + grow]);
         }
     }
 
@@ -125,7 +141,7 @@ pub struct PlannerStats {
 pub type PingLikelihood = Box<dyn Fn(f64) -> f64 + Send>;
 
 /// The ping likelihood as the planner's link model.
-struct LikelihoodLink<'a>(&'a PingLikelihood);
+pub(crate) struct LikelihoodLink<'a>(pub &'a PingLikelihood);
 
 impl LinkModel for LikelihoodLink<'_> {
     fn success(&self, slant_range_m: f64) -> f64 {
@@ -230,14 +246,14 @@ impl CnaPolicy for PlannerPolicy {
                     let likelihood = self.lost_pings.as_ref().map_or(1.0, |f| f((p - ctx.cna.pos).norm()));
                     self.tracker.ping(k, &ctx.cna.pos, &p, likelihood);
                     if let Some(c) = self.covariances.as_mut() {
-                        c.ping(k, &ctx.cna.pos, &p, likelihood);
+                        c.ping(k, ctx.t, ctx.reported(k), (&ctx.cna.pos, &p, likelihood));
                     }
                     known.push(k);
                 }
                 None => {
                     self.tracker.silent(k);
                     if let Some(c) = self.covariances.as_mut() {
-                        c.silent(k);
+                        c.silent(k, ctx.t, ctx.reported(k));
                     }
                 }
             }
@@ -307,7 +323,7 @@ mod tests {
         let fleet = FnForecast { n: 2, f: |k: usize, t: f64| (k == 0).then(|| Vec3::new(300.0, 1.5 * t, 20.0)) };
         let cna = CnaPose { pos: Vec3::new(0.0, 0.0, 0.0), heading: Heading::from_radians(0.0), pitch: 0.0 };
         for step in 0..4 {
-            let ctx = PolicyContext { t: 30.0 * step as f64, tau: 30.0, cna, speed: 2.0, fleet: &fleet };
+            let ctx = PolicyContext { t: 30.0 * step as f64, tau: 30.0, cna, speed: 2.0, fleet: &fleet, reported: &[] };
             assert!(matches!(p.decide(&ctx), CnaCommand::GoTo(_)));
         }
         assert!(p.tracker().total(0).unwrap() > 1.0);
@@ -343,7 +359,7 @@ mod tests {
         let fleet = FnForecast { n: 2, f: |k: usize, t: f64| Some(Vec3::new(300.0 + 200.0 * k as f64, 1.5 * t, 20.0)) };
         let cna = CnaPose { pos: Vec3::new(0.0, 0.0, 0.0), heading: Heading::from_radians(0.0), pitch: 0.0 };
         for step in 0..4 {
-            let ctx = PolicyContext { t: 30.0 * step as f64, tau: 30.0, cna, speed: 2.0, fleet: &fleet };
+            let ctx = PolicyContext { t: 30.0 * step as f64, tau: 30.0, cna, speed: 2.0, fleet: &fleet, reported: &[] };
             assert!(matches!(p.decide(&ctx), CnaCommand::GoTo(_)));
         }
         // Three pings after the start: the radial variance collapses, the trace falls below 2·16.
@@ -352,10 +368,20 @@ mod tests {
         // A lost ping is pure growth: q·τ per axis.
         let mut t = CovarianceTracker::new(1, start, 30.0, RangeNoise::default());
         let (cna, auv) = (Vec3::zeros(), Vec3::new(100.0, 0.0, 0.0));
-        t.ping(0, &cna, &auv, 1.0);
-        t.ping(0, &cna, &auv, 0.0);
+        t.ping(0, 0.0, None, (&cna, &auv, 1.0));
+        t.ping(0, 30.0, None, (&cna, &auv, 0.0));
         assert_eq!(t.estimate(0).unwrap().cov, [19.0, 0.0, 19.0]);
-        t.silent(0);
+        t.silent(0, 60.0, None);
         assert_eq!(t.estimate(0).unwrap().cov, [22.0, 0.0, 22.0]);
+        // A report restarts the model from the filter's own covariance, grown by q over its age
+        // (10 s: 1 m² per axis), once: the same report is not used twice.
+        let report = ReportedCov { t: 80.0, cov: [50.0, 5.0, 2.0] };
+        t.silent(0, 90.0, Some(report));
+        assert_eq!(t.estimate(0).unwrap().cov, [51.0, 5.0, 3.0]);
+        t.silent(0, 120.0, Some(report));
+        assert_eq!(t.estimate(0).unwrap().cov, [54.0, 5.0, 6.0]);
+        // A lost ping after a report: pure growth from the report.
+        t.ping(0, 150.0, Some(ReportedCov { t: 140.0, cov: [4.0, 0.0, 9.0] }), (&cna, &auv, 0.0));
+        assert_eq!(t.estimate(0).unwrap().cov, [5.0, 0.0, 10.0]);
     }
 }

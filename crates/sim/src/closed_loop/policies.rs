@@ -1,20 +1,35 @@
 //! Which CNA policy a closed-loop run uses, by name: the underway planner or one of the
 //! baselines of [`crate::policy`], configured from the scenario (survey area, fleet, CNA start).
 
-use super::planner_policy::{PingLikelihood, PlannerPolicy, PlannerStats};
+use super::planner_policy::{LikelihoodLink, PingLikelihood, PlannerPolicy, PlannerStats};
 use super::scenario::Scenario;
-use crate::policy::{Centroid, CnaPolicy, FixedPattern, MidpointRelay, NoCna, Rect, TimedWaypoints, Trail};
+use crate::policy::{
+    Centroid, CnaPolicy, FixedPattern, GreedyFisher, MidpointRelay, NoCna, Rect, TimedWaypoints, Trail,
+};
 use crate::predeploy::runner;
 use crate::predeploy::scenario::Mission;
 use coopnav_acomms::{Receiver, TransmissionLoss};
 use coopnav_core::{CompassDeg, Heading, Vec3};
-use coopnav_plan::{AuvEstimate, CnaPose, CostSpec, Deadline, EstimatorSpec, LookAheadPlanner, PlanError, RangeNoise};
+use coopnav_plan::{
+    AuvEstimate, CnaPose, CostSpec, Deadline, EstimatorSpec, LinkTable, LookAheadPlanner, PlanError, RangeNoise,
+};
 use thiserror::Error;
 
 /// Every policy name, the planners first: `planner` scores with Hudson's model, `planner-estimator`
-/// with the survey AUVs' filter covariances (issue 10).
-pub const POLICY_NAMES: [&str; 9] =
-    ["planner", "planner-estimator", "none", "racetrack", "zigzag", "centroid", "trail", "relay", "open-loop"];
+/// with the survey AUVs' filter covariances (issue 10); `greedy-fisher` is the one-step
+/// Fisher-information baseline.
+pub const POLICY_NAMES: [&str; 10] = [
+    "planner",
+    "planner-estimator",
+    "none",
+    "racetrack",
+    "zigzag",
+    "centroid",
+    "trail",
+    "relay",
+    "open-loop",
+    "greedy-fisher",
+];
 
 #[derive(Debug, Error)]
 pub enum PolicyError {
@@ -105,14 +120,14 @@ fn build(name: &str, sc: &Scenario, planned: Option<&TimedWaypoints>) -> Result<
     let baseline: Box<dyn CnaPolicy> = match name {
         "planner" | "planner-estimator" => {
             let p = &sc.planner;
-            let likelihood: Option<PingLikelihood> = p.model_lost_pings.then(|| {
-                let (tl, success, rate) = (sc.comms.tl, sc.comms.success.clone(), sc.comms.cna_rate);
-                Box::new(move |d: f64| success.p_success(rate, tl.at_distance(d))) as PingLikelihood
-            });
+            // The estimator-aware cost always weights a ping by the link model; Hudson's planner
+            // only when asked (the thesis assumes every ping arrives).
+            let estimator = name == "planner-estimator";
+            let likelihood = (p.model_lost_pings || estimator).then(|| modem_likelihood(sc));
             let (start, noise) = filter_model(sc);
             let mut cfg = sc.planner_config();
-            if name == "planner-estimator" {
-                cfg.cost = CostSpec::Estimator(EstimatorSpec { range_noise: noise, ..EstimatorSpec::default() });
+            if estimator {
+                cfg.cost = CostSpec::Estimator(EstimatorSpec { range_noise: noise, aggregate: p.estimator_aggregate });
             }
             let policy =
                 PlannerPolicy::new(cfg, n, p.sigma0, p.eps0, likelihood, Some((start, noise))).map_err(plan_err)?;
@@ -124,6 +139,10 @@ fn build(name: &str, sc: &Scenario, planned: Option<&TimedWaypoints>) -> Result<
         "centroid" => Box::new(Centroid),
         "trail" => Box::new(Trail { auv: n / 2, range: TRAIL_RANGE, angle: std::f64::consts::PI }),
         "relay" => Box::new(MidpointRelay { base: (sc.cna.x, sc.cna.y), auv: n / 2 }),
+        "greedy-fisher" => {
+            let link = LinkTable::sample(&LikelihoodLink(&modem_likelihood(sc))).map_err(plan_err)?;
+            Box::new(GreedyFisher::new(n, link, filter_model(sc).1))
+        }
         "open-loop" => match planned {
             Some(p) => Box::new(p.clone()),
             None => Box::new(open_loop(sc).map_err(plan_err)?),
@@ -131,6 +150,13 @@ fn build(name: &str, sc: &Scenario, planned: Option<&TimedWaypoints>) -> Result<
         _ => return Err(PolicyError::Unknown { name: name.to_string() }),
     };
     Ok(Policy::Baseline(baseline))
+}
+
+/// The downlink's success probability over a slant distance, as a real CNA can know it: the
+/// modem's rate and success curves and the TL model it is configured with (never the draws).
+fn modem_likelihood(sc: &Scenario) -> PingLikelihood {
+    let (tl, success, rate) = (sc.comms.tl, sc.comms.success.clone(), sc.comms.cna_rate);
+    Box::new(move |d: f64| success.p_success(rate, tl.at_distance(d)))
 }
 
 /// The survey AUVs' filter as the estimator-aware planner models it: the initial horizontal

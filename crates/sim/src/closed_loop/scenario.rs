@@ -10,13 +10,14 @@ pub use crate::scenario_file::ScenarioError;
 use crate::scenario_file::{self, overlay, Problems};
 use coopnav_acomms::node_report::{BODY_BITS, HEADER_BITS};
 use coopnav_acomms::selector::AdaptiveConfig;
+use coopnav_acomms::status::CovTrailer;
 use coopnav_acomms::tl::analytic::Thorp;
 use coopnav_acomms::{Rate, SuccessModel};
 use coopnav_core::{Bathymetry, CompassDeg, DepthTarget, Heading, Lawnmower, Shelf};
 use coopnav_nav::{AuvParams, RangeNoise};
 use coopnav_plan::predict::{PredictorConfig, WaypointUse};
 use coopnav_plan::{
-    CnaKind, Deadline, DistanceLimits, ErrorModel, MotionConfig, PenaltyCase, PlannerConfig, SearchConfig,
+    Aggregate, CnaKind, Deadline, DistanceLimits, ErrorModel, MotionConfig, PenaltyCase, PlannerConfig, SearchConfig,
 };
 use serde::{Deserialize, Serialize};
 use std::path::Path;
@@ -248,6 +249,9 @@ pub struct Planner {
     pub eps0: f64,
     #[serde(default)]
     pub predictor: PredictorConfig,
+    /// How `planner-estimator` joins the AUVs' covariances into a level's cost.
+    #[serde(default)]
+    pub estimator_aggregate: Aggregate,
 }
 
 fn default_case() -> String {
@@ -394,9 +398,11 @@ impl Scenario {
             }
             None => vec![c.status_rate],
         };
-        // The status message, and the CNA's broadcast: its position report with one ack bit per AUV.
-        let status_bytes = (HEADER_BITS + BODY_BITS).div_ceil(8) as usize;
-        let broadcast_bytes = status_bytes + self.fleet.n_auvs.div_ceil(8);
+        // The status message (node report and covariance trailer), and the CNA's broadcast: its
+        // position report with one ack bit per AUV.
+        let report_bytes = (HEADER_BITS + BODY_BITS).div_ceil(8) as usize;
+        let status_bytes = report_bytes + CovTrailer::BYTES;
+        let broadcast_bytes = report_bytes + self.fleet.n_auvs.div_ceil(8);
         p.extend(payload_problem("comms.cna_rate", c.cna_rate, broadcast_bytes));
         for rate in &status_rates {
             p.extend(payload_problem("comms.status_rate", *rate, status_bytes));

@@ -19,6 +19,7 @@ use crate::closed_loop::policies::{cna_start, Policy};
 use crate::closed_loop::scenario::Scenario;
 use crate::models::channel::Clock;
 use crate::models::schedule::Slot;
+use crate::policy::ReportedCov;
 use coopnav_core::{Bathymetry, SeedStream, Vec3};
 use coopnav_plan::predict::UnderwayPredictor;
 use coopnav_plan::AuvForecast;
@@ -112,6 +113,8 @@ struct Cna {
     model: ErrorTracker,
     /// Status slots received since its last broadcast, per AUV (its one-bit-per-AUV ack).
     acked: Vec<Vec<u64>>,
+    /// The newest covariance each AUV reported (the status message's trailer).
+    reported: Vec<Option<ReportedCov>>,
 }
 
 /// Per-AUV sums for the run's metrics.
@@ -183,6 +186,7 @@ impl<'a> Engine<'a> {
             predictors: (0..n).map(|_| UnderwayPredictor::new(sc.predictor_config())).collect(),
             model: ErrorTracker::new(n, cfg.error, sc.comms.tau, sc.planner.sigma0, sc.planner.eps0),
             acked: vec![Vec::new(); n],
+            reported: vec![None; n],
         };
         Engine {
             sc,

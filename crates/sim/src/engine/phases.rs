@@ -8,15 +8,19 @@ use super::health::nees_2d;
 use super::inflight::Arrival;
 use super::observe::{CommsEvent, Decision, Observer, TraceRow};
 use super::vehicles::lerp;
+use super::vehicles::SurveyAuv;
 use super::{Engine, FleetView};
 use crate::closed_loop::policies::{receiver, tl_between};
 use crate::hbl::noise::normal;
 use crate::models::channel::air_time;
 use crate::models::finish::Finish;
 use crate::models::schedule::Owner;
+use crate::policy::ReportedCov;
 use crate::policy::{CnaCommand, PolicyContext};
+use coopnav_acomms::codec::{DecodeError, EncodeError};
 use coopnav_acomms::node_report::NodeReport;
 use coopnav_acomms::selector::{Choice, Outcome};
+use coopnav_acomms::status::{CovTrailer, CovarianceReport};
 use coopnav_acomms::Rate;
 use coopnav_core::{Heading, Vec3};
 use coopnav_nav::{RangeMeasurement, UpdateOutcome};
@@ -63,7 +67,14 @@ impl Engine<'_> {
         }
         let fleet = FleetView { predictors: &cna.predictors, min_reports: self.sc.planner.start_after_reports };
         let pose = CnaPose { pos: fix, heading: Heading::from_radians(cna.craft.heading), pitch: 0.0 };
-        let ctx = PolicyContext { t: t_dec, tau, cna: pose, speed: self.sc.cna.speed, fleet: &fleet };
+        let ctx = PolicyContext {
+            t: t_dec,
+            tau,
+            cna: pose,
+            speed: self.sc.cna.speed,
+            fleet: &fleet,
+            reported: &cna.reported,
+        };
         let here = cna.craft.pos;
         cna.craft.target = match self.policy.as_policy().decide(&ctx) {
             // The command is relative to the fix the policy saw.
@@ -161,7 +172,7 @@ impl Engine<'_> {
         let (ex, ey) = a.ekf.position();
         let distance = a.cna_heard.map(|c| (c.x - ex).hypot(c.y - ey));
         let Choice::Transmit(rate) = a.selector.choose(slot_id, distance) else { return };
-        let bytes = match a.status(j, t_tx).encode() {
+        let bytes = match status_with_covariance(a, j, t_tx) {
             Ok(b) => b,
             Err(e) => {
                 tracing::warn!(t = t_tx, auv = j, error = %e, "status message cannot be encoded; not sent");
@@ -201,13 +212,15 @@ impl Engine<'_> {
                 }
                 (Payload::Status { rate, slot_id, bytes, decoded }, Owner::Auv(_) | Owner::Cna) => {
                     let Owner::Auv(j) = meta.from else { continue };
-                    let message = (decoded && survived).then(|| NodeReport::decode(&bytes)).and_then(Result::ok);
+                    let message = (decoded && survived).then(|| read_status(&bytes)).and_then(Result::ok);
                     self.tallies[j].up.record(rate.index(), message.is_some());
                     obs.on_packet(&event(&meta, "up", j, decoded, survived));
-                    if let Some(m) = message {
+                    if let Some((m, cov)) = message {
+                        let t = resolve_time(m.time_of_day, meta.t_tx);
                         self.cna.acked[j].push(slot_id);
+                        self.cna.reported[j] = Some(ReportedCov { t, cov: cov.to_cov() });
                         self.cna.predictors[j].receive(StatusReport {
-                            t: resolve_time(m.time_of_day, meta.t_tx),
+                            t,
                             pos: Vec3::new(m.x, m.y, m.depth),
                             speed: m.speed,
                             heading: m.heading,
@@ -326,6 +339,22 @@ fn event(meta: &Arrival<()>, direction: &'static str, auv: usize, decoded: bool,
         (true, false) => "collision or half-duplex",
     };
     CommsEvent { t: meta.t_tx, direction, auv, received: decoded && survived, lost_to }
+}
+
+/// A survey AUV's status: the Appendix C node report from its estimate, then the covariance
+/// trailer with its filter's horizontal covariance (issue 10: the CNA plans on what the AUVs'
+/// filters report, not on a model of them).
+fn status_with_covariance(a: &SurveyAuv, k: usize, t: f64) -> Result<Vec<u8>, EncodeError> {
+    let p = a.ekf.ekf().p();
+    let mut bytes = a.status(k, t).encode()?;
+    bytes.extend(CovTrailer::encode(&CovarianceReport::from_cov([p[(0, 0)], p[(0, 1)], p[(1, 1)]]))?);
+    Ok(bytes)
+}
+
+/// Splits a received status into its node report and covariance trailer and decodes both.
+fn read_status(bytes: &[u8]) -> Result<(NodeReport, CovarianceReport), DecodeError> {
+    let split = bytes.len().saturating_sub(CovTrailer::BYTES);
+    Ok((NodeReport::decode(&bytes[..split])?, CovTrailer::decode(&bytes[split..])?))
 }
 
 /// Resolves a time of day (s) to the absolute time nearest `t_now`.

@@ -210,6 +210,7 @@ mod tests {
             cna: CnaPose { pos: Vec3::new(pos.0, pos.1, 0.0), heading: Heading::from_radians(0.0), pitch: 0.0 },
             speed: 2.0,
             fleet,
+            reported: &[],
         }
     }
 

@@ -6,8 +6,10 @@
 //! positions (from their status messages), never the AUVs' true positions.
 
 mod baselines;
+mod greedy;
 
 pub use baselines::{Centroid, FixedPattern, MidpointRelay, NoCna, Rect, TimedWaypoints, Trail};
+pub use greedy::GreedyFisher;
 
 use coopnav_core::Vec3;
 use coopnav_plan::{AuvForecast, CnaPose};
@@ -24,12 +26,29 @@ pub struct PolicyContext<'a> {
     pub speed: f64,
     /// The survey AUVs' predicted positions (from their status messages).
     pub fleet: &'a dyn AuvForecast,
+    /// The newest covariance each AUV's filter reported in its status message (indexed like
+    /// `fleet`; shorter, or `None`, where none arrived).
+    pub reported: &'a [Option<ReportedCov>],
+}
+
+/// A survey AUV's horizontal position covariance as its own filter reported it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ReportedCov {
+    /// When the AUV sent it, s.
+    pub t: f64,
+    /// [P_ee, P_en, P_nn], m² (after the status codec's quantisation).
+    pub cov: [f64; 3],
 }
 
 impl PolicyContext<'_> {
     /// Predicted positions of every AUV heard from, at time `t`.
     pub fn predicted_all(&self, t: f64) -> Vec<Vec3> {
         (0..self.fleet.n_auvs()).filter_map(|k| self.fleet.position(k, t)).collect()
+    }
+
+    /// AUV `k`'s newest reported covariance, if any arrived.
+    pub fn reported(&self, k: usize) -> Option<ReportedCov> {
+        self.reported.get(k).copied().flatten()
     }
 }
 
