@@ -219,14 +219,14 @@ pub fn expected_posterior(
 const TANGENTIAL_SLACK: f64 = 0.02;
 
 /// How many cone chains `EkfCost::bound_rest` runs side by side, one per κ of [`cone_kappas`].
-const CONE_CHAINS: usize = 3;
+const CONE_CHAINS: usize = 4;
 
-/// The κ of each cone chain when the line of sight may have turned by sin δ ≤ s: √s, 1 and 1/√s
-/// (s is kept above 1e-12 so 1/√s stays finite).
+/// The κ of each cone chain when the line of sight may have turned by sin δ ≤ s: √s, 1, 1/√s and
+/// 1/s (s is kept above 1e-12 so they stay finite).
 #[inline(always)]
 fn cone_kappas(s: f64) -> [f64; CONE_CHAINS] {
     let root = s.max(1e-12).sqrt();
-    [root, 1.0, 1.0 / root]
+    [root, 1.0, 1.0 / root, 1.0 / (root * root)]
 }
 
 /// The estimator-aware model of one decision.
@@ -283,9 +283,9 @@ impl CostModel for EkfCost {
     ///   (the same determinant argument). Every κ gives a valid chain, and the best κ depends on
     ///   how much the radial part matters against the tangential one (far AUVs with noisy ranges:
     ///   small κ; nearer ones with precise ranges: large κ), so [`CONE_CHAINS`] chains run side by
-    ///   side with κ = √s, 1 and 1/√s ([`cone_kappas`]) and each level takes the largest bound.
-    ///   Or ĥĥᵀ ⪯ I, whichever has the smaller tangential entry; R ≥ R(max(0, D − Δ)) with D the node's slant distance (R grows with range) and
-    ///   p_s ≤ 1;
+    ///   side with κ = √s, 1, 1/√s and 1/s ([`cone_kappas`]) and each level takes the largest
+    ///   bound. Or ĥĥᵀ ⪯ I, whichever has the smaller tangential entry; R ≥ R(max(0, D − Δ)) with
+    ///   D the node's slant distance (R grows with range) and p_s ≤ 1;
     /// - E ⪰ D⁻¹ then gives tr E ≥ tr D⁻¹ and det E ≥ det D⁻¹.
     fn bound_rest(
         &self,
