@@ -546,7 +546,8 @@ fn t61(opts: &ReproOptions) -> Result<ReproReport, ExperimentError> {
         .filter(|r| r.setup.a == 2 && r.setup.l == 0)
         .map(|r| r.summary.rms_error)
         .fold(f64::INFINITY, f64::min);
-    let worst = rows.iter().map(|r| r.summary.rms_error).fold(0.0, f64::max);
+    let worst_row = rows.last().unwrap_or(best);
+    let worst = worst_row.summary.rms_error;
     let checks = vec![
         Check::new(
             "best RMS error near the thesis's 2.22 m (band 2.20-2.32 m)",
@@ -567,6 +568,15 @@ fn t61(opts: &ReproOptions) -> Result<ReproReport, ExperimentError> {
             "A = 2, L = 0 (greedy, +-120 deg) is far from the best",
             greedy2 > best.summary.rms_error + 0.2,
             format!("best A = 2, L = 0 RMS {greedy2:.2} m; worst run {worst:.2} m (thesis 3.06-3.72)"),
+        ),
+        Check::new(
+            "the worst set-up stays within the thesis's worst RMS (A = 2, L = 0: 3.06-3.72 m at every speed)",
+            worst <= 3.72 + 0.05,
+            format!("ours worst {worst:.2} m with {}", worst_row.setup.label()),
+        )
+        .known_deviation(
+            "not explained yet (issue 10): the thesis's survey path (the Halifax trials' lawnmower) is lost and ours is \
+             invented (digest 5.4); the best rows match (2.22 m floor) but the greedy two-option rows do not",
         ),
     ];
     Ok(ReproReport {
