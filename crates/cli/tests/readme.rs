@@ -6,7 +6,7 @@
 
 mod common;
 
-use common::coopnav;
+use common::{coopnav, edited_example};
 use std::path::Path;
 
 /// The README's test command, the second of its two commands; `.ci/run` must run exactly this.
@@ -128,12 +128,7 @@ fn run(dir: &Path, args: &str, stdout_file: Option<&str>) -> Vec<u8> {
 }
 
 fn make_input(dir: &Path, (command, file, edits): (&str, &str, &[(&str, &str)])) {
-    let mut text = String::from_utf8(run(dir, command, None)).unwrap();
-    for (from, to) in edits {
-        assert!(text.contains(from), "`coopnav {command}` no longer prints {from:?}: update REDUCED");
-        text = text.replace(from, to);
-    }
-    std::fs::write(dir.join(file), text).unwrap();
+    edited_example(dir, &command.split_whitespace().collect::<Vec<_>>(), file, edits);
 }
 
 #[test]
