@@ -403,7 +403,12 @@ impl Scenario {
             p.probability(name, v);
         }
         let total = a.p_slightly_long + a.p_slightly_short + a.p_outlier + a.p_drop;
-        p.require("acoustic.p_* (sum)", total, (total - 1.0).abs() < 1e-9, "the four probabilities summing to 1");
+        p.require(
+            "acoustic.p_* (sum)",
+            total,
+            (total - 1.0).abs() < 1e-9,
+            "p_slightly_long + p_slightly_short + p_outlier + p_drop, which must sum to 1",
+        );
         p.non_negative("acoustic.slight_max_m", a.slight_max_m);
         p.non_negative("acoustic.outlier_min_m", a.outlier_min_m);
         p.require(
