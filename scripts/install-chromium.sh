@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Installs Chromium from Debian's packages for coopnav's real-browser test of replay.html
-# (crates/cli/tests/replay_browser.rs opens it headless). Quiet and idempotent: does nothing when
+# (crates/cli/tests/moos.rs opens it headless). Quiet and idempotent: does nothing when
 # /usr/bin/chromium already runs.
 set -euo pipefail
 if [ -x /usr/bin/chromium ] && /usr/bin/chromium --version >/dev/null 2>&1; then

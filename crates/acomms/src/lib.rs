@@ -13,6 +13,7 @@ pub mod status;
 pub mod success;
 pub mod tl;
 pub mod tracker;
+pub mod workload;
 
 pub use rates::{Rate, RateSpec, Tdma};
 pub use success::{Receiver, Reception, SuccessModel};

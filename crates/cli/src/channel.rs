@@ -6,6 +6,7 @@ use coopnav_acomms::tl::analytic::Thorp;
 use coopnav_acomms::tl::bellhop::{AcousticEnv, Bellhop};
 use coopnav_acomms::{Rate, SuccessModel, TransmissionLoss};
 use coopnav_core::limits::{self, Estimate, MAX_POINTS};
+use coopnav_core::validation::{InvalidFields, Problems};
 use coopnav_core::{Bathymetry, Shelf, Vec3};
 use coopnav_sim::output::{Manifest, RunDir};
 use coopnav_sim::plot::{line_svg, Labels, Series};
@@ -73,15 +74,25 @@ struct Row {
     p_rate5: f64,
 }
 
+impl Args {
+    /// Checks every number and reports every bad one at once.
+    fn validate(&self) -> Result<(), InvalidFields> {
+        let mut p = Problems::new();
+        p.check("--k", self.k, |k| k > 0.0 && k <= 4.0, "in (0, 4]");
+        p.check("--noise-db", self.noise_db, |v| (0.0..=60.0).contains(&v), "in [0, 60] dB");
+        p.finite("--x", self.x);
+        p.finite("--y", self.y);
+        p.non_negative("--source-depth", self.source_depth);
+        p.non_negative("--receiver-depth", self.receiver_depth);
+        p.finite("--bearing-deg", self.bearing_deg);
+        p.positive("--step", self.step);
+        p.require("--max-range", self.max_range, self.max_range >= self.step, "a finite number ≥ --step");
+        p.finish()
+    }
+}
+
 pub fn run(args: Args) -> Result<()> {
-    anyhow::ensure!(
-        args.step > 0.0 && args.max_range >= args.step,
-        "--step must be > 0 and ≤ --max-range (got {} and {})",
-        args.step,
-        args.max_range
-    );
-    anyhow::ensure!((0.0..=60.0).contains(&args.noise_db), "--noise-db {} must be in [0, 60]", args.noise_db);
-    anyhow::ensure!(args.k > 0.0 && args.k <= 4.0, "--k {} must be in (0, 4]", args.k);
+    args.validate().context("coopnav channel arguments")?;
     let ranges = Estimate::new("table rows", "--max-range / --step", args.max_range / args.step, MAX_POINTS);
     limits::check([ranges], args.allow_large)?;
     let bathy = match &args.bathymetry {

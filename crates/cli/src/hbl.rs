@@ -78,6 +78,9 @@ pub enum Command {
         /// rows before `init`, a second `init`, ranges without a fresh transponder fix, gated ranges.
         #[arg(long)]
         strict: bool,
+        /// Run even when the estimated work or memory is above coopnav's limits (coopnav_core::limits).
+        #[arg(long)]
+        allow_large: bool,
     },
 }
 
@@ -113,10 +116,6 @@ pub struct Common {
     allow_large: bool,
 }
 
-fn read(path: &Path) -> Result<String> {
-    std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))
-}
-
 fn scenario(c: &Common) -> Result<Scenario> {
     match &c.config {
         Some(p) => Scenario::from_toml(&input::read(p, c.allow_large)?).with_context(|| format!("in {}", p.display())),
@@ -142,8 +141,8 @@ pub fn run_command(cmd: Command) -> Result<()> {
         Command::Montecarlo { common, runs } => montecarlo(&common, runs),
         Command::Grid { common, grid } => grid_cmd(&common, grid.as_deref()),
         Command::Tune { common, spec } => tune_cmd(&common, &spec),
-        Command::Postprocess { log, alog_map, config, out, force, strict } => {
-            postprocess(&log, alog_map.as_deref(), config.as_deref(), &out, force, strict)
+        Command::Postprocess { log, alog_map, config, out, force, strict, allow_large } => {
+            postprocess(&log, alog_map.as_deref(), config.as_deref(), &out, force, strict, allow_large)
         }
         Command::Example { kind } => example(kind),
     }
@@ -288,7 +287,8 @@ fn grid_cmd(c: &Common, grid_path: Option<&Path>) -> Result<()> {
         Some(p) => toml::from_str(&input::read(p, c.allow_large)?).with_context(|| format!("in {}", p.display()))?,
         None => GridSpec::default(),
     };
-    spec.validate()?;
+    spec.validate()
+        .with_context(|| grid_path.map_or("the default grid spec".into(), |p| format!("in {}", p.display())))?;
     limits::check(work::hbl_grid(&sc, &spec), c.allow_large)?;
     let pb = bar(spec.cells().len() as u64);
     let cells = grid::buoy_grid(&sc, &spec, c.seed, &|n| pb.set_position(n))?;
@@ -310,6 +310,7 @@ fn tune_cmd(c: &Common, spec_path: &Path) -> Result<()> {
     let sc = scenario(c)?;
     let spec: TuneSpec = toml::from_str(&input::read(spec_path, c.allow_large)?)
         .with_context(|| format!("in {}", spec_path.display()))?;
+    spec.validate().with_context(|| format!("in {}", spec_path.display()))?;
     limits::check(work::hbl_tune(&sc, &spec), c.allow_large)?;
     let r = tune(&sc, &spec)?;
     let dir = RunDir::create(&c.out, c.force)?;
@@ -339,11 +340,16 @@ fn postprocess(
     out: &Path,
     force: bool,
     strict: bool,
+    allow_large: bool,
 ) -> Result<()> {
     let cfg = match config {
-        Some(p) => PostConfig::from_toml(&read(p)?).with_context(|| format!("in {}", p.display()))?,
+        Some(p) => {
+            PostConfig::from_toml(&input::read(p, allow_large)?).with_context(|| format!("in {}", p.display()))?
+        }
         None => PostConfig::default(),
     };
+    let log_bytes = std::fs::metadata(log).with_context(|| format!("cannot read {}", log.display()))?.len();
+    limits::check([work::postprocess_log(&log.display().to_string(), log_bytes)], allow_large)?;
     let entries = if log.extension().is_some_and(|e| e == "alog") {
         let alog = coopnav_moos::read_alog_file(log)?;
         alog_import::entries(&alog, &alog_import::mapping(alog_map)?)
@@ -355,6 +361,7 @@ fn postprocess(
         let file = std::fs::File::open(log).with_context(|| format!("opening {}", log.display()))?;
         post::read_log(file, cfg.frame().as_ref()).with_context(|| format!("in {}", log.display()))?
     };
+    limits::check(work::postprocess(&entries, &cfg), allow_large)?;
     let result = post::postprocess(&entries, &cfg)?;
     let warnings = result.summary.warnings();
     if strict && !warnings.is_empty() {

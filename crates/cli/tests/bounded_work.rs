@@ -5,7 +5,7 @@
 
 mod common;
 
-use common::coopnav;
+use common::{coopnav, edited_example};
 use std::path::Path;
 use std::process::Command;
 use std::time::{Duration, Instant};
@@ -54,39 +54,36 @@ fn refused(dir: &Path, args: &[&str], fields: &[&str]) {
     assert!(!dir.join("out").exists(), "{args:?} wrote its output directory");
 }
 
-/// The embedded example of `command` (`plan` or `simulate`) with `from` replaced by `to`,
-/// written to `file` in `dir`.
-fn edited_example(dir: &Path, command: &str, file: &str, from: &str, to: &str) {
-    let text = String::from_utf8(coopnav(dir, &[command, "--example"]).stdout).unwrap();
-    assert!(text.contains(from), "the {command} example no longer holds {from:?}");
-    std::fs::write(dir.join(file), text.replacen(from, to, 1)).unwrap();
-}
-
 #[test]
 fn plan_heading_options_1e9() {
     let tmp = tempfile::tempdir().unwrap();
-    edited_example(tmp.path(), "plan", "s.toml", "heading_options = 5", "heading_options = 1000000000");
+    edited_example(
+        tmp.path(),
+        &["plan", "--example"],
+        "s.toml",
+        &[("heading_options = 5", "heading_options = 1000000000")],
+    );
     refused(tmp.path(), &["plan", "s.toml", "-o", "out"], &["planner.heading_options", "planner leaves"]);
 }
 
 #[test]
 fn plan_lanes_1e9() {
     let tmp = tempfile::tempdir().unwrap();
-    edited_example(tmp.path(), "plan", "s.toml", "lanes = 3", "lanes = 1000000000");
+    edited_example(tmp.path(), &["plan", "--example"], "s.toml", &[("lanes = 3", "lanes = 1000000000")]);
     refused(tmp.path(), &["plan", "s.toml", "-o", "out"], &["auv[0].lawnmower lanes", "track samples"]);
 }
 
 #[test]
 fn plan_tau_1e_minus_6() {
     let tmp = tempfile::tempdir().unwrap();
-    edited_example(tmp.path(), "plan", "s.toml", "tau = 10.0", "tau = 0.000001");
+    edited_example(tmp.path(), &["plan", "--example"], "s.toml", &[("tau = 10.0", "tau = 0.000001")]);
     refused(tmp.path(), &["plan", "s.toml", "-o", "out"], &["planner.motion.tau", "planner decisions"]);
 }
 
 #[test]
 fn plan_look_ahead_16() {
     let tmp = tempfile::tempdir().unwrap();
-    edited_example(tmp.path(), "plan", "s.toml", "look_ahead = 4", "look_ahead = 16");
+    edited_example(tmp.path(), &["plan", "--example"], "s.toml", &[("look_ahead = 4", "look_ahead = 16")]);
     refused(tmp.path(), &["plan", "s.toml", "-o", "out"], &["planner.look_ahead", "1.526e11"]);
 }
 
@@ -104,7 +101,7 @@ fn plan_with_1e5_auvs() {
 #[test]
 fn simulate_duration_1e9() {
     let tmp = tempfile::tempdir().unwrap();
-    edited_example(tmp.path(), "simulate", "s.toml", "duration_s = 3600.0", "duration_s = 1e9");
+    edited_example(tmp.path(), &["simulate", "--example"], "s.toml", &[("duration_s = 3600.0", "duration_s = 1e9")]);
     refused(tmp.path(), &["simulate", "s.toml", "-o", "out"], &["duration_s / dt", "vehicle-steps"]);
 }
 
@@ -117,9 +114,14 @@ fn simulate_runs_1e9() {
 #[test]
 fn simulate_lanes_and_heading_options_1e9() {
     let tmp = tempfile::tempdir().unwrap();
-    edited_example(tmp.path(), "simulate", "s.toml", "lanes = 6", "lanes = 1000000000");
+    edited_example(tmp.path(), &["simulate", "--example"], "s.toml", &[("lanes = 6", "lanes = 1000000000")]);
     refused(tmp.path(), &["simulate", "s.toml", "-o", "out"], &["fleet.lanes"]);
-    edited_example(tmp.path(), "simulate", "s.toml", "heading_options = 5", "heading_options = 1000000000");
+    edited_example(
+        tmp.path(),
+        &["simulate", "--example"],
+        "s.toml",
+        &[("heading_options = 5", "heading_options = 1000000000")],
+    );
     refused(tmp.path(), &["simulate", "s.toml", "-o", "out"], &["planner.heading_options"]);
 }
 
@@ -147,6 +149,20 @@ fn hbl_grid_spacing_1mm() {
 fn channel_step_1e_minus_6() {
     let tmp = tempfile::tempdir().unwrap();
     refused(tmp.path(), &["channel", "--step", "1e-6", "-o", "out"], &["--max-range / --step"]);
+}
+
+/// A relative-time log whose rows are 500 s apart (each silence under `max_gap_s`, so each is
+/// predicted in `auv.step_s` pieces) over 11.6 days: 10⁷ filter steps, ≈ 13 GB of history.
+#[test]
+fn hbl_postprocess_log_spanning_11_days() {
+    let tmp = tempfile::tempdir().unwrap();
+    let rows: String = (1..=2000).map(|i| format!("{},speed,,1,,,\n", 500 * i)).collect();
+    std::fs::write(tmp.path().join("log.csv"), format!("t,kind,src,v1,v2,v3,v4\n0,init,,0,0,1,90\n{rows}")).unwrap();
+    refused(
+        tmp.path(),
+        &["hbl", "postprocess", "--log", "log.csv", "-o", "out"],
+        &["memory of the filter history", "max_gap_s", "auv.step_s"],
+    );
 }
 
 #[test]

@@ -1,32 +1,26 @@
 //! The `coopnav hbl` subcommands end to end: a run directory is written whole, bad input exits
 //! non-zero and writes nothing, and a simulated log post-processes.
 
-use std::process::Command;
+mod common;
 
-fn coopnav(args: &[&str]) -> std::process::Output {
-    Command::new(env!("CARGO_BIN_EXE_coopnav")).args(args).output().expect("run coopnav")
-}
+use common::coopnav;
 
 #[test]
 fn simulate_then_postprocess() {
     let tmp = tempfile::tempdir().unwrap();
     let sim = tmp.path().join("sim");
-    let out = coopnav(&["hbl", "simulate", "--seed", "4", "--out", sim.to_str().unwrap()]);
+    let out = coopnav(tmp.path(), &["hbl", "simulate", "--seed", "4", "--out", sim.to_str().unwrap()]);
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     for f in ["manifest.json", "summary.json", "trace.csv", "log.csv", "tracks.svg", "error_vs_xrel.svg"] {
         assert!(sim.join(f).exists(), "missing {f}");
     }
-    let again = coopnav(&["hbl", "simulate", "--out", sim.to_str().unwrap()]);
+    let again = coopnav(tmp.path(), &["hbl", "simulate", "--out", sim.to_str().unwrap()]);
     assert!(!again.status.success(), "must refuse to overwrite without --force");
     let post = tmp.path().join("post");
-    let out = coopnav(&[
-        "hbl",
-        "postprocess",
-        "--log",
-        sim.join("log.csv").to_str().unwrap(),
-        "--out",
-        post.to_str().unwrap(),
-    ]);
+    let out = coopnav(
+        tmp.path(),
+        &["hbl", "postprocess", "--log", sim.join("log.csv").to_str().unwrap(), "--out", post.to_str().unwrap()],
+    );
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let summary = std::fs::read_to_string(post.join("summary.json")).unwrap();
     assert!(summary.contains("mean_smoothed_error"));
@@ -38,7 +32,7 @@ fn simulate_then_postprocess() {
 fn simulate_run_replays_a_monte_carlo_run() {
     let tmp = tempfile::tempdir().unwrap();
     let mc = tmp.path().join("mc");
-    let out = coopnav(&["hbl", "montecarlo", "--runs", "4", "--seed", "9", "--out", mc.to_str().unwrap()]);
+    let out = coopnav(tmp.path(), &["hbl", "montecarlo", "--runs", "4", "--seed", "9", "--out", mc.to_str().unwrap()]);
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     for f in ["runs.csv", "profile.csv", "profile.svg", "summary.json"] {
         assert!(mc.join(f).exists(), "missing {f}");
@@ -46,7 +40,7 @@ fn simulate_run_replays_a_monte_carlo_run() {
     let runs = std::fs::read_to_string(mc.join("runs.csv")).unwrap();
     let zone_of_run_2: f64 = runs.lines().nth(3).unwrap().split(',').nth(1).unwrap().parse().unwrap();
     let sim = tmp.path().join("sim");
-    let out = coopnav(&["hbl", "simulate", "--seed", "9", "--run", "2", "--out", sim.to_str().unwrap()]);
+    let out = coopnav(tmp.path(), &["hbl", "simulate", "--seed", "9", "--run", "2", "--out", sim.to_str().unwrap()]);
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let summary: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(sim.join("summary.json")).unwrap()).unwrap();
@@ -58,7 +52,7 @@ fn simulate_run_replays_a_monte_carlo_run() {
 fn examples_load_back() {
     let tmp = tempfile::tempdir().unwrap();
     let write = |kind: &str| {
-        let out = coopnav(&["hbl", "example", kind]);
+        let out = coopnav(tmp.path(), &["hbl", "example", kind]);
         assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
         let path = tmp.path().join(format!("{kind}.toml"));
         std::fs::write(&path, &out.stdout).unwrap();
@@ -66,30 +60,27 @@ fn examples_load_back() {
     };
     let (scenario, post) = (write("scenario"), write("post"));
     let mc = tmp.path().join("mc");
-    let out = coopnav(&[
-        "hbl",
-        "montecarlo",
-        "--runs",
-        "3",
-        "--config",
-        scenario.to_str().unwrap(),
-        "--out",
-        mc.to_str().unwrap(),
-    ]);
+    let out = coopnav(
+        tmp.path(),
+        &["hbl", "montecarlo", "--runs", "3", "--config", scenario.to_str().unwrap(), "--out", mc.to_str().unwrap()],
+    );
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let sim = tmp.path().join("sim");
-    assert!(coopnav(&["hbl", "simulate", "--out", sim.to_str().unwrap()]).status.success());
+    assert!(coopnav(tmp.path(), &["hbl", "simulate", "--out", sim.to_str().unwrap()]).status.success());
     let pp = tmp.path().join("pp");
-    let out = coopnav(&[
-        "hbl",
-        "postprocess",
-        "--log",
-        sim.join("log.csv").to_str().unwrap(),
-        "--config",
-        post.to_str().unwrap(),
-        "--out",
-        pp.to_str().unwrap(),
-    ]);
+    let out = coopnav(
+        tmp.path(),
+        &[
+            "hbl",
+            "postprocess",
+            "--log",
+            sim.join("log.csv").to_str().unwrap(),
+            "--config",
+            post.to_str().unwrap(),
+            "--out",
+            pp.to_str().unwrap(),
+        ],
+    );
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
 }
 
@@ -99,16 +90,10 @@ fn bad_config_exits_nonzero_and_writes_nothing() {
     let cfg = tmp.path().join("bad.toml");
     std::fs::write(&cfg, "[acoustic]\np_drop = 0.7\n").unwrap();
     let out_dir = tmp.path().join("mc");
-    let out = coopnav(&[
-        "hbl",
-        "montecarlo",
-        "--runs",
-        "4",
-        "--config",
-        cfg.to_str().unwrap(),
-        "--out",
-        out_dir.to_str().unwrap(),
-    ]);
+    let out = coopnav(
+        tmp.path(),
+        &["hbl", "montecarlo", "--runs", "4", "--config", cfg.to_str().unwrap(), "--out", out_dir.to_str().unwrap()],
+    );
     assert!(!out.status.success());
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("bad.toml") && err.contains("sum to 1"), "{err}");
@@ -116,7 +101,8 @@ fn bad_config_exits_nonzero_and_writes_nothing() {
     let log = tmp.path().join("log.csv");
     std::fs::write(&log, "t,kind,src,v1,v2,v3,v4\n0,init,,0,0,0.85,90\n1,range,99,0.1,,,\n").unwrap();
     let post = tmp.path().join("post");
-    let out = coopnav(&["hbl", "postprocess", "--log", log.to_str().unwrap(), "--out", post.to_str().unwrap()]);
+    let out =
+        coopnav(tmp.path(), &["hbl", "postprocess", "--log", log.to_str().unwrap(), "--out", post.to_str().unwrap()]);
     assert!(!out.status.success());
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("line 3") && err.contains("99"), "{err}");
@@ -130,28 +116,33 @@ fn geodetic_log_needs_the_origin_to_postprocess() {
     let sc = tmp.path().join("sc.toml");
     std::fs::write(&sc, format!("[log]\ngeodetic_origin = {origin}\nbuoy_fix_storage = \"f32_lost_bit\"\n")).unwrap();
     let sim = tmp.path().join("sim");
-    let out = coopnav(&["hbl", "simulate", "--config", sc.to_str().unwrap(), "--out", sim.to_str().unwrap()]);
+    let out =
+        coopnav(tmp.path(), &["hbl", "simulate", "--config", sc.to_str().unwrap(), "--out", sim.to_str().unwrap()]);
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let log = sim.join("log.csv");
     assert!(std::fs::read_to_string(&log).unwrap().contains(",buoy_fix_ll,"));
     let post = tmp.path().join("post");
-    let out = coopnav(&["hbl", "postprocess", "--log", log.to_str().unwrap(), "--out", post.to_str().unwrap()]);
+    let out =
+        coopnav(tmp.path(), &["hbl", "postprocess", "--log", log.to_str().unwrap(), "--out", post.to_str().unwrap()]);
     assert!(!out.status.success());
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("log.csv") && err.contains("line 2") && err.contains("origin = {"), "{err}");
     assert!(!post.exists());
     let cfg = tmp.path().join("post.toml");
     std::fs::write(&cfg, format!("origin = {origin}\n")).unwrap();
-    let out = coopnav(&[
-        "hbl",
-        "postprocess",
-        "--log",
-        log.to_str().unwrap(),
-        "--config",
-        cfg.to_str().unwrap(),
-        "--out",
-        post.to_str().unwrap(),
-    ]);
+    let out = coopnav(
+        tmp.path(),
+        &[
+            "hbl",
+            "postprocess",
+            "--log",
+            log.to_str().unwrap(),
+            "--config",
+            cfg.to_str().unwrap(),
+            "--out",
+            post.to_str().unwrap(),
+        ],
+    );
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     assert!(std::fs::read_to_string(post.join("summary.json")).unwrap().contains("mean_smoothed_error"));
 }

@@ -201,13 +201,9 @@ fn view_rewrites_the_replay_and_refuses_bad_run_directories() {
     assert!(!broken.join("replay.html").exists(), "nothing written");
 }
 
-/// Chromium, when installed (scripts/install-chromium.sh); the reason otherwise.
-fn chromium() -> Result<PathBuf, String> {
-    let path = PathBuf::from(std::env::var("COOPNAV_CHROMIUM").unwrap_or_else(|_| "/usr/bin/chromium".into()));
-    match Command::new(&path).arg("--version").output() {
-        Ok(o) if o.status.success() => Ok(path),
-        _ => Err(format!("{} does not run; install it with scripts/install-chromium.sh", path.display())),
-    }
+/// Chromium, as crates/cli/build.rs found it (the test is ignored when it did not).
+fn chromium() -> PathBuf {
+    PathBuf::from(option_env!("COOPNAV_CHROMIUM_FOUND").expect("build.rs sets it with cfg chromium_installed"))
 }
 
 /// Loads `page#fragment` headless; `extra` picks the output (`--dump-dom`, `--screenshot=…`).
@@ -244,14 +240,9 @@ fn drawn_position(dom: &str, name: &str) -> (f64, f64) {
 }
 
 #[test]
+#[cfg_attr(not(chromium_installed), ignore = "Chromium is not installed: run scripts/install-chromium.sh")]
 fn the_replay_shows_the_run_positions_in_a_real_browser() {
-    let chromium = match chromium() {
-        Ok(path) => path,
-        Err(reason) => {
-            eprintln!("SKIPPED the_replay_shows_the_run_positions_in_a_real_browser: {reason}");
-            return;
-        }
-    };
+    let chromium = chromium();
     let tmp = tempfile::tempdir().unwrap();
     let run = short_simulation(tmp.path());
     let rows = csv_rows(&run.join("timeseries.csv"));
@@ -295,14 +286,9 @@ fn the_replay_shows_the_run_positions_in_a_real_browser() {
     eprintln!("screenshot: {}", shot.display());
 }
 
-/// The Python that has pymoos2 (scripts/install-pymoos.sh), or why there is none.
-fn pymoos_python() -> Result<PathBuf, String> {
-    let default = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../tools/pymoos/bin/python");
-    let python = std::env::var_os("COOPNAV_PYMOOS_PYTHON").map_or(default, PathBuf::from);
-    match Command::new(&python).args(["-c", "import pymoos2.core.MissionReader"]).output() {
-        Ok(o) if o.status.success() => Ok(python),
-        _ => Err(format!("{} cannot import pymoos2; install it with scripts/install-pymoos.sh", python.display())),
-    }
+/// The Python that has pymoos2, as crates/cli/build.rs found it (the test is ignored when it did not).
+fn pymoos_python() -> PathBuf {
+    PathBuf::from(option_env!("COOPNAV_PYMOOS_FOUND").expect("build.rs sets it with cfg pymoos_installed"))
 }
 
 /// Reads the mission files with pymoos2: the .moos with its MissionReader (globals and each
@@ -342,14 +328,9 @@ fn constant_depths(bhv: &str) -> Vec<f64> {
 }
 
 #[test]
+#[cfg_attr(not(pymoos_installed), ignore = "pymoos2 is not installed: run scripts/install-pymoos.sh")]
 fn plan_mission_files_parse_with_pymoos2_and_fly_the_planned_points() {
-    let python = match pymoos_python() {
-        Ok(p) => p,
-        Err(reason) => {
-            eprintln!("SKIPPED plan_mission_files_parse_with_pymoos2_and_fly_the_planned_points: {reason}");
-            return;
-        }
-    };
+    let python = pymoos_python();
     let tmp = tempfile::tempdir().unwrap();
     let example = String::from_utf8(coopnav(&["plan", "--example"]).stdout).unwrap();
     let auv = tmp.path().join("auv.toml");

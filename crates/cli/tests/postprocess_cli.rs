@@ -1,11 +1,9 @@
 //! `coopnav hbl postprocess` never drops rows in silence: rows it does not use are warnings on
 //! stderr, and under `--strict` an error that writes nothing.
 
-use std::process::Command;
+mod common;
 
-fn coopnav(args: &[&str]) -> std::process::Output {
-    Command::new(env!("CARGO_BIN_EXE_coopnav")).args(args).output().expect("run coopnav")
-}
+use common::coopnav;
 
 #[test]
 fn unused_rows_warn_and_strict_refuses_them() {
@@ -26,7 +24,7 @@ fn unused_rows_warn_and_strict_refuses_them() {
         }
         a.into_iter().map(String::from).collect::<Vec<_>>()
     };
-    let run = |a: Vec<String>| coopnav(&a.iter().map(String::as_str).collect::<Vec<_>>());
+    let run = |a: Vec<String>| coopnav(tmp.path(), &a.iter().map(String::as_str).collect::<Vec<_>>());
     let out = run(args(&post, false));
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let err = String::from_utf8_lossy(&out.stderr);
@@ -48,14 +46,14 @@ fn unused_rows_warn_and_strict_refuses_them() {
 fn run_directory_holds_residuals_and_the_latlon_track() {
     let tmp = tempfile::tempdir().unwrap();
     let sim = tmp.path().join("sim");
-    let out = coopnav(&["hbl", "simulate", "--out", sim.to_str().unwrap()]);
+    let out = coopnav(tmp.path(), &["hbl", "simulate", "--out", sim.to_str().unwrap()]);
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let cfg = tmp.path().join("post.toml");
     std::fs::write(&cfg, "origin = { lat_deg = 47.97, lon_deg = -116.5 }\n").unwrap();
     let post = tmp.path().join("post");
     let log = sim.join("log.csv");
     let (log, cfg, dir) = (log.to_str().unwrap(), cfg.to_str().unwrap(), post.to_str().unwrap());
-    let out = coopnav(&["hbl", "postprocess", "--log", log, "--config", cfg, "--out", dir]);
+    let out = coopnav(tmp.path(), &["hbl", "postprocess", "--log", log, "--config", cfg, "--out", dir]);
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let summary: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(post.join("summary.json")).unwrap()).unwrap();
@@ -115,12 +113,12 @@ fn as_alog(csv: &str) -> String {
 fn an_alog_postprocesses_like_the_csv_log() {
     let tmp = tempfile::tempdir().unwrap();
     let sim = tmp.path().join("sim");
-    assert!(coopnav(&["hbl", "simulate", "--out", sim.to_str().unwrap()]).status.success());
+    assert!(coopnav(tmp.path(), &["hbl", "simulate", "--out", sim.to_str().unwrap()]).status.success());
     let csv = sim.join("log.csv");
     let alog = tmp.path().join("sim.alog");
     std::fs::write(&alog, as_alog(&std::fs::read_to_string(&csv).unwrap())).unwrap();
     let map = tmp.path().join("map.toml");
-    let out = coopnav(&["hbl", "example", "alog-map"]);
+    let out = coopnav(tmp.path(), &["hbl", "example", "alog-map"]);
     std::fs::write(&map, &out.stdout).unwrap();
     let summary = |log: &std::path::Path, name: &str| {
         let dir = tmp.path().join(name);
@@ -128,7 +126,7 @@ fn an_alog_postprocesses_like_the_csv_log() {
         if name == "alog" {
             args.extend(["--alog-map", map.to_str().unwrap()]);
         }
-        let out = coopnav(&args);
+        let out = coopnav(tmp.path(), &args);
         assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
         let text = std::fs::read_to_string(dir.join("summary.json")).unwrap();
         serde_json::from_str::<serde_json::Value>(&text).unwrap()
@@ -156,7 +154,10 @@ fn bad_alog_entries_are_named() {
         let log = tmp.path().join("bad.alog");
         std::fs::write(&log, format!("{head}{bad}")).unwrap();
         let dir = tmp.path().join("out");
-        let out = coopnav(&["hbl", "postprocess", "--log", log.to_str().unwrap(), "--out", dir.to_str().unwrap()]);
+        let out = coopnav(
+            tmp.path(),
+            &["hbl", "postprocess", "--log", log.to_str().unwrap(), "--out", dir.to_str().unwrap()],
+        );
         assert!(!out.status.success());
         let err = String::from_utf8_lossy(&out.stderr);
         assert!(err.contains(said) && err.contains("bad.alog"), "{bad:?}: {err}");
@@ -165,6 +166,7 @@ fn bad_alog_entries_are_named() {
     let log = tmp.path().join("none.alog");
     std::fs::write(&log, "0.000 NAV_X a 1\n1.000 NAV_Y a 2\n").unwrap();
     let dir = tmp.path().join("out");
-    let out = coopnav(&["hbl", "postprocess", "--log", log.to_str().unwrap(), "--out", dir.to_str().unwrap()]);
+    let out =
+        coopnav(tmp.path(), &["hbl", "postprocess", "--log", log.to_str().unwrap(), "--out", dir.to_str().unwrap()]);
     assert!(String::from_utf8_lossy(&out.stderr).contains("both NAV_X and NAV_Y"));
 }

@@ -6,12 +6,15 @@
 
 mod common;
 
-use common::coopnav;
+use common::{coopnav, edited_example};
 use std::path::Path;
+
+/// The README's test command, the second of its two commands; `.ci/run` must run exactly this.
+const TEST_COMMAND: &str = "cargo test --workspace --release";
 
 /// The README lines that are not coopnav commands, and why the test does not run them.
 const NOT_RUN: &[(&str, &str)] = &[
-    ("cargo test --workspace", "this test suite itself"),
+    (TEST_COMMAND, "this test suite itself"),
     (
         "COOPNAV_FUZZ_N=1000000 cargo test --release -p coopnav-cli --bin coopnav fuzz -- --ignored --nocapture",
         "the long fuzz run; `cargo test` runs its targets with fewer inputs",
@@ -125,12 +128,7 @@ fn run(dir: &Path, args: &str, stdout_file: Option<&str>) -> Vec<u8> {
 }
 
 fn make_input(dir: &Path, (command, file, edits): (&str, &str, &[(&str, &str)])) {
-    let mut text = String::from_utf8(run(dir, command, None)).unwrap();
-    for (from, to) in edits {
-        assert!(text.contains(from), "`coopnav {command}` no longer prints {from:?}: update REDUCED");
-        text = text.replace(from, to);
-    }
-    std::fs::write(dir.join(file), text).unwrap();
+    edited_example(dir, &command.split_whitespace().collect::<Vec<_>>(), file, edits);
 }
 
 #[test]
@@ -163,4 +161,15 @@ fn every_readme_command_runs() {
     let stale: Vec<_> = REDUCED.iter().zip(&used).filter(|(_, u)| !**u).map(|(r, _)| r.readme).collect();
     assert!(stale.is_empty(), "REDUCED entries matching no README line: {stale:?}");
     assert!(ran >= 20, "only {ran} README commands found");
+}
+
+/// CI runs the README's test command as written (so a newcomer's run and CI's are the same
+/// build), and no other `cargo test`.
+#[test]
+fn ci_runs_the_readme_test_command() {
+    let first_test_line = readme_commands().into_iter().find(|l| l.starts_with("cargo test"));
+    assert_eq!(first_test_line.as_deref(), Some(TEST_COMMAND), "the README's first test command");
+    let ci = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("../../.ci/run")).unwrap();
+    let ci_tests: Vec<&str> = ci.lines().map(str::trim).filter(|l| l.starts_with("cargo test")).collect();
+    assert_eq!(ci_tests, [TEST_COMMAND], ".ci/run's cargo test lines");
 }

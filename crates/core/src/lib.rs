@@ -5,7 +5,7 @@
 //! keeps Monte Carlo runs bit-identical on any thread count, and survey missions (waypoints,
 //! lawnmower patterns, time-stamped tracks with linear interpolation), and WGS-84 geodesy (lat/lon
 //! ↔ ECEF ↔ local east/north/up) for field logs, and the work limits every input is checked
-//! against before it is run.
+//! against before it is run, and the collector that reports every bad field of an input at once.
 //! It deliberately knows nothing about planners, filters or modems.
 
 pub mod angle;
@@ -16,6 +16,7 @@ pub mod kinematics;
 pub mod limits;
 pub mod mission;
 pub mod rng;
+pub mod validation;
 
 pub use angle::{wrap_pi, CompassDeg, Degrees, Heading, Radians};
 pub use bathymetry::{Bathymetry, BathymetryError, Shelf};

@@ -11,10 +11,10 @@
 
 use crate::ekf::{Ekf, Gate, UpdateOutcome};
 use crate::range::{RangeMeasurement, RangeNoise};
+use coopnav_core::validation::{CheckFields, InvalidFields, Problems};
 use coopnav_core::{wrap_pi, Vec3};
 use nalgebra::{SMatrix, SVector};
 use serde::{Deserialize, Serialize};
-use thiserror::Error;
 
 pub type AuvState = SVector<f64, 5>;
 pub const E: usize = 0;
@@ -43,10 +43,10 @@ impl Default for CurrentParams {
     }
 }
 
-impl CurrentParams {
-    pub fn validate(&self, prefix: &str) -> Result<(), ParamError> {
-        check_positive(&format!("{prefix}p0"), self.p0)?;
-        check_non_negative(&format!("{prefix}q"), self.q)
+impl CheckFields for CurrentParams {
+    fn check_fields(&self, prefix: &str, p: &mut Problems) {
+        p.positive(&format!("{prefix}p0"), self.p0);
+        p.non_negative(&format!("{prefix}q"), self.q);
     }
 }
 
@@ -84,45 +84,23 @@ impl Default for AuvParams {
     }
 }
 
-#[derive(Debug, Error, PartialEq)]
-pub enum ParamError {
-    #[error("{field} = {value}: must be a finite number > 0")]
-    NotPositive { field: String, value: f64 },
-    #[error("{field} = {value}: must be a finite number ≥ 0")]
-    Negative { field: String, value: f64 },
-    #[error("{field} = {value}: must be a finite number")]
-    NotFinite { field: String, value: f64 },
-}
+/// Bad filter coefficients: every bad field, named with its prefix.
+pub type ParamError = InvalidFields;
 
-pub(crate) fn check_positive(field: &str, value: f64) -> Result<(), ParamError> {
-    if value.is_finite() && value > 0.0 {
-        Ok(())
-    } else {
-        Err(ParamError::NotPositive { field: field.to_string(), value })
-    }
-}
-
-pub(crate) fn check_non_negative(field: &str, value: f64) -> Result<(), ParamError> {
-    if value.is_finite() && value >= 0.0 {
-        Ok(())
-    } else {
-        Err(ParamError::Negative { field: field.to_string(), value })
-    }
-}
-
-impl AuvParams {
-    /// Checks every coefficient; the error names the field (prefixed by `prefix`).
-    pub fn validate(&self, prefix: &str) -> Result<(), ParamError> {
-        check_positive(&format!("{prefix}step_s"), self.step_s)?;
+/// Checks every coefficient; each problem names the field (prefixed by `prefix`).
+impl CheckFields for AuvParams {
+    fn check_fields(&self, prefix: &str, p: &mut Problems) {
+        p.positive(&format!("{prefix}step_s"), self.step_s);
         for (i, v) in self.p0.iter().enumerate() {
-            check_positive(&format!("{prefix}p0[{i}]"), *v)?;
+            p.positive(&format!("{prefix}p0[{i}]"), *v);
         }
         for (i, v) in self.q.iter().enumerate() {
-            check_non_negative(&format!("{prefix}q[{i}]"), *v)?;
+            p.non_negative(&format!("{prefix}q[{i}]"), *v);
         }
-        check_positive(&format!("{prefix}sigma_speed"), self.sigma_speed)?;
-        check_positive(&format!("{prefix}sigma_heading"), self.sigma_heading)?;
-        self.range_noise.validate(&format!("{prefix}range_noise."))
+        p.positive(&format!("{prefix}sigma_speed"), self.sigma_speed);
+        p.positive(&format!("{prefix}sigma_heading"), self.sigma_heading);
+        self.range_noise.check_fields(&format!("{prefix}range_noise."), p);
+        self.range_gate.check_fields(&format!("{prefix}range_gate."), p);
     }
 }
 
@@ -366,6 +344,10 @@ mod tests {
     fn bad_params_name_the_field() {
         let mut p = AuvParams::default();
         p.q[2] = -1.0;
-        assert_eq!(p.validate("auv.").unwrap_err().to_string(), "auv.q[2] = -1: must be a finite number ≥ 0");
+        p.sigma_speed = f64::NAN;
+        assert_eq!(
+            p.validate("auv.").unwrap_err().to_string(),
+            "2 bad fields:\n  field auv.q[2] = -1: allowed a finite number >= 0\n  field auv.sigma_speed = NaN: allowed a finite number > 0"
+        );
     }
 }

@@ -3,6 +3,7 @@
 //! update, symmetrisation), angle-wrapped state components, innovation gating, and the optional
 //! history of x⁻, P⁻, x⁺, P⁺, F that the RTS smoother needs.
 
+use coopnav_core::validation::{CheckFields, Problems};
 use coopnav_core::wrap_pi;
 use nalgebra::{SMatrix, SVector};
 use serde::{Deserialize, Serialize};
@@ -20,6 +21,17 @@ pub struct Gate {
 
 impl Gate {
     pub const OFF: Gate = Gate { max_abs_residual: None, max_nis: None };
+}
+
+impl CheckFields for Gate {
+    fn check_fields(&self, prefix: &str, p: &mut Problems) {
+        if let Some(v) = self.max_abs_residual {
+            p.positive(&format!("{prefix}max_abs_residual"), v);
+        }
+        if let Some(v) = self.max_nis {
+            p.positive(&format!("{prefix}max_nis"), v);
+        }
+    }
 }
 
 /// What happened to one measurement.

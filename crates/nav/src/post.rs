@@ -30,15 +30,13 @@
 //! (top of a second). `init` is the filter's starting estimate (the first one is used);
 //! `truth` rows (topside AUV fixes) are only used to score the result.
 
-use crate::auv::{
-    check_non_negative, check_positive, transition, AuvEkf, AuvParams, CurrentParams, ParamError, BIAS, CURRENT_E,
-    CURRENT_N, PSI,
-};
+use crate::auv::{transition, AuvEkf, AuvParams, CurrentParams, ParamError, BIAS, CURRENT_E, CURRENT_N, PSI};
 use crate::cycle::Transmitter;
 use crate::ekf::{Gate, Step, UpdateOutcome};
 use crate::range::RangeMeasurement;
 use crate::smoother::{rts, urts, SmoothError, Smoothed, SmootherKind};
 use crate::surface::Outriggers;
+use coopnav_core::validation::{CheckFields, Problems};
 use coopnav_core::{wrap_pi, CompassDeg, GeodesyError, Geodetic, Heading, LatLon, LocalFrame, Vec3};
 use serde::{Deserialize, Serialize};
 use std::io::Read;
@@ -70,8 +68,6 @@ pub enum PostError {
     NoInit,
     #[error("post-processing config: {0}")]
     Param(#[from] ParamError),
-    #[error("post-processing config: auv.range_gate is not used here; set the top-level range_gate instead")]
-    AuvGate,
     #[error("post-processing config: {0}")]
     Toml(#[from] toml::de::Error),
     #[error("smoother: {0}")]
@@ -264,10 +260,10 @@ impl Default for FixMatching {
     }
 }
 
-impl FixMatching {
-    fn validate(&self) -> Result<(), ParamError> {
-        check_non_negative("fixes.match_tolerance_s", self.match_tolerance_s)?;
-        check_positive("fixes.max_age_s", self.max_age_s)
+impl CheckFields for FixMatching {
+    fn check_fields(&self, prefix: &str, p: &mut Problems) {
+        p.non_negative(&format!("{prefix}match_tolerance_s"), self.match_tolerance_s);
+        p.positive(&format!("{prefix}max_age_s"), self.max_age_s);
     }
 }
 
@@ -342,28 +338,24 @@ impl PostConfig {
         c.validate()?;
         Ok(c)
     }
+    /// Checks every field and reports every bad one at once.
     pub fn validate(&self) -> Result<(), PostError> {
-        self.auv.validate("auv.")?;
+        let mut p = Problems::new();
+        self.auv.check_fields("auv.", &mut p);
         if self.auv.range_gate != Gate::OFF {
-            return Err(PostError::AuvGate);
+            p.push("auv.range_gate", "a gate", "none here: set the top-level range_gate instead");
         }
         if let AuvModel::Current(c) = &self.model {
-            c.validate("model.")?;
+            c.check_fields("model.", &mut p);
         }
-        check_non_negative("transponder_sd_m", self.transponder_sd_m)?;
-        check_positive("max_gap_s", self.max_gap_s)?;
-        self.fixes.validate()?;
-        if !(self.buoy_depth.is_finite() && self.buoy_depth >= 0.0) {
-            return Err(ParamError::Negative { field: "buoy_depth".into(), value: self.buoy_depth }.into());
-        }
-        if !self.acoustic_time_offset_s.is_finite() {
-            return Err(ParamError::NotFinite {
-                field: "acoustic_time_offset_s".into(),
-                value: self.acoustic_time_offset_s,
-            }
-            .into());
-        }
-        Ok(())
+        self.range_gate.check_fields("range_gate.", &mut p);
+        p.positive("max_gap_s", self.max_gap_s);
+        p.non_negative("transponder_sd_m", self.transponder_sd_m);
+        p.finite("acoustic_time_offset_s", self.acoustic_time_offset_s);
+        self.outriggers.check_fields("outriggers.", &mut p);
+        self.fixes.check_fields("fixes.", &mut p);
+        p.non_negative("buoy_depth", self.buoy_depth);
+        Ok(p.finish()?)
     }
     /// The local frame of `_ll` log rows, if an origin is configured.
     pub fn frame(&self) -> Option<LocalFrame> {

@@ -2,7 +2,7 @@
 //! position at transmit time, and the range-dependent noise σ²_r = τ²σ_c² + c²σ_τ² (digest §3.2
 //! and §10 A3: the thesis's labels are swapped; this is the dimensionally consistent form).
 
-use crate::auv::{check_non_negative, check_positive, ParamError};
+use coopnav_core::validation::{CheckFields, Problems};
 use coopnav_core::Vec3;
 use serde::{Deserialize, Serialize};
 
@@ -55,16 +55,23 @@ impl RangeNoise {
         let t = travel_time.abs();
         t * t * self.sigma_sound_speed.powi(2) + (self.sound_speed * self.sigma_time).powi(2) + self.floor
     }
+}
 
-    pub fn validate(&self, prefix: &str) -> Result<(), ParamError> {
-        check_non_negative(&format!("{prefix}sigma_sound_speed"), self.sigma_sound_speed)?;
-        check_non_negative(&format!("{prefix}sigma_time"), self.sigma_time)?;
-        check_positive(&format!("{prefix}sound_speed"), self.sound_speed)?;
-        check_non_negative(&format!("{prefix}floor"), self.floor)?;
-        if self.variance(0.0) <= 0.0 {
-            return Err(ParamError::NotPositive { field: format!("{prefix}sigma_time or {prefix}floor"), value: 0.0 });
+impl CheckFields for RangeNoise {
+    fn check_fields(&self, prefix: &str, p: &mut Problems) {
+        p.non_negative(&format!("{prefix}sigma_sound_speed"), self.sigma_sound_speed);
+        p.non_negative(&format!("{prefix}sigma_time"), self.sigma_time);
+        p.positive(&format!("{prefix}sound_speed"), self.sound_speed);
+        p.non_negative(&format!("{prefix}floor"), self.floor);
+        let all_finite =
+            [self.sigma_sound_speed, self.sigma_time, self.sound_speed, self.floor].iter().all(|v| v.is_finite());
+        if all_finite && self.variance(0.0) <= 0.0 {
+            p.push(
+                format!("{prefix}sigma_time or {prefix}floor"),
+                "0",
+                "one of them > 0 (a zero-length range needs noise)",
+            );
         }
-        Ok(())
     }
 }
 

@@ -4,8 +4,8 @@
 //! is signed and never clamped: the buoy filter uses it as a 1-D north/south drift (digest A18).
 //! Also the ship's port/starboard outrigger transponder geometry.
 
-use crate::auv::{check_non_negative, check_positive, ParamError};
 use crate::ekf::{Ekf, Gate, UpdateOutcome};
+use coopnav_core::validation::{CheckFields, Problems};
 use coopnav_core::{wrap_pi, Vec3};
 use nalgebra::{SMatrix, SVector};
 use serde::{Deserialize, Serialize};
@@ -78,15 +78,24 @@ impl SurfaceParams {
             (1.40625 * deg).powi(2) / 12.0 + (0.5 * deg).powi(2),
         ]
     }
+}
 
-    pub fn validate(&self, prefix: &str) -> Result<(), ParamError> {
-        check_positive(&format!("{prefix}step_s"), self.step_s)?;
+impl CheckFields for SurfaceParams {
+    fn check_fields(&self, prefix: &str, p: &mut Problems) {
+        p.positive(&format!("{prefix}step_s"), self.step_s);
         for i in 0..4 {
-            check_positive(&format!("{prefix}p0[{i}]"), self.p0[i])?;
-            check_non_negative(&format!("{prefix}q[{i}]"), self.q[i])?;
-            check_positive(&format!("{prefix}r[{i}]"), self.r[i])?;
+            p.positive(&format!("{prefix}p0[{i}]"), self.p0[i]);
+            p.non_negative(&format!("{prefix}q[{i}]"), self.q[i]);
+            p.positive(&format!("{prefix}r[{i}]"), self.r[i]);
         }
-        Ok(())
+    }
+}
+
+impl CheckFields for Outriggers {
+    fn check_fields(&self, prefix: &str, p: &mut Problems) {
+        p.non_negative(&format!("{prefix}separation"), self.separation);
+        p.finite(&format!("{prefix}along_offset"), self.along_offset);
+        p.non_negative(&format!("{prefix}depth"), self.depth);
     }
 }
 

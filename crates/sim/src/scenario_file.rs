@@ -4,7 +4,6 @@
 //! found and what is allowed.
 
 use crate::predeploy::tracks::TrackLoadError;
-use coopnav_plan::PlanError;
 use serde::de::DeserializeOwned;
 use serde::Serialize;
 use std::path::{Path, PathBuf};
@@ -22,13 +21,22 @@ pub enum ScenarioError {
     Invalid { file: PathBuf, field: String, value: String, allowed: String },
     #[error("scenario {file}: {} bad fields:{}", problems.len(), problems.iter().map(|p| format!("\n  {p}")).collect::<String>())]
     Several { file: PathBuf, problems: Vec<Problem> },
-    #[error("scenario {file}: {cause}")]
-    Planner { file: PathBuf, cause: PlanError },
     #[error("scenario {file}: auv[{index}] track: {cause}")]
     Track { file: PathBuf, index: usize, cause: TrackLoadError },
 }
 
 impl ScenarioError {
+    /// The bad fields of `file`: one as [`ScenarioError::Invalid`], more as `Several`.
+    pub fn fields(file: &Path, InvalidFields(mut problems): InvalidFields) -> Self {
+        match problems.len() {
+            1 => {
+                let p = problems.remove(0);
+                ScenarioError::Invalid { file: file.to_path_buf(), field: p.field, value: p.value, allowed: p.allowed }
+            }
+            _ => ScenarioError::Several { file: file.to_path_buf(), problems },
+        }
+    }
+
     /// A field of `file` holds `value` where only `allowed` is.
     pub fn invalid(
         file: &Path,
@@ -45,72 +53,38 @@ impl ScenarioError {
     }
 }
 
-/// One bad field: where, what was found, what is allowed.
-#[derive(Debug, Clone, PartialEq)]
-pub struct Problem {
-    pub field: String,
-    pub value: String,
-    pub allowed: String,
-}
+pub use coopnav_core::validation::Problem;
+use coopnav_core::validation::{self, InvalidFields};
 
-impl std::fmt::Display for Problem {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(f, "field {} = {}: allowed {}", self.field, self.value, self.allowed)
-    }
-}
-
-/// Collects every bad field of a file, so one run of the validator reports them all.
+/// Collects every bad field of a scenario file (the checks are core's [`validation::Problems`]),
+/// so one run of the validator reports them all, naming the file.
 #[derive(Debug)]
 pub struct Problems {
     file: PathBuf,
-    list: Vec<Problem>,
+    found: validation::Problems,
+}
+
+impl std::ops::Deref for Problems {
+    type Target = validation::Problems;
+    fn deref(&self) -> &Self::Target {
+        &self.found
+    }
+}
+
+impl std::ops::DerefMut for Problems {
+    fn deref_mut(&mut self) -> &mut Self::Target {
+        &mut self.found
+    }
 }
 
 impl Problems {
     pub fn new(file: &Path) -> Self {
-        Problems { file: file.to_path_buf(), list: Vec::new() }
-    }
-
-    pub fn push(&mut self, field: impl Into<String>, value: impl Into<String>, allowed: impl Into<String>) {
-        self.list.push(Problem { field: field.into(), value: value.into(), allowed: allowed.into() });
-    }
-
-    /// Adds (field, value, allowed) triples, as the models' `problems()` return them.
-    pub fn extend(&mut self, found: impl IntoIterator<Item = (String, String, String)>) {
-        for (field, value, allowed) in found {
-            self.push(field, value, allowed);
-        }
-    }
-
-    /// `value` must be finite and inside `ok`; `allowed` says so in words.
-    pub fn check(&mut self, field: &str, value: f64, ok: impl FnOnce(f64) -> bool, allowed: &str) {
-        if !(value.is_finite() && ok(value)) {
-            self.push(field, value.to_string(), allowed);
-        }
-    }
-
-    pub fn positive(&mut self, field: &str, value: f64) {
-        self.check(field, value, |v| v > 0.0, "a finite number > 0");
-    }
-
-    pub fn non_negative(&mut self, field: &str, value: f64) {
-        self.check(field, value, |v| v >= 0.0, "a finite number >= 0");
-    }
-
-    pub fn is_empty(&self) -> bool {
-        self.list.is_empty()
+        Problems { file: file.to_path_buf(), found: validation::Problems::new() }
     }
 
     /// Ok when nothing was found; one problem as [`ScenarioError::Invalid`], more as `Several`.
-    pub fn finish(mut self) -> Result<(), ScenarioError> {
-        match self.list.len() {
-            0 => Ok(()),
-            1 => {
-                let p = self.list.remove(0);
-                Err(ScenarioError::Invalid { file: self.file, field: p.field, value: p.value, allowed: p.allowed })
-            }
-            _ => Err(ScenarioError::Several { file: self.file, problems: self.list }),
-        }
+    pub fn finish(self) -> Result<(), ScenarioError> {
+        self.found.finish().map_err(|fields| ScenarioError::fields(&self.file, fields))
     }
 }
 

@@ -1,5 +1,5 @@
 //! Work estimates of every runnable set-up (pre-deployment plan, closed loop, HBL simulate, Monte
-//! Carlo, grid and tuning), computed from the validated input alone, before any track, tree or
+//! Carlo, grid, tuning and post-processing), computed from the validated input alone, before any track, tree or
 //! table is built, and checked with [`coopnav_core::limits`]. Kept apart from validation: a value
 //! can be valid and still too large to run without `--allow-large`.
 //!
@@ -12,6 +12,9 @@ use crate::{closed_loop, hbl, predeploy};
 use coopnav_core::limits::{
     Estimate, MAX_BYTES, MAX_PLANNER_LEAVES, MAX_PLANNER_UPDATES, MAX_POINTS, MAX_VEHICLE_STEPS,
 };
+use coopnav_nav::ekf::Step;
+use coopnav_nav::post::{AuvModel, Entry, PostConfig, PostSample};
+use coopnav_nav::smoother::Smoothed;
 use coopnav_plan::{CnaKind, MotionConfig};
 
 /// Bytes of one stored track sample (t, x, y, z).
@@ -151,11 +154,76 @@ pub fn hbl_tune(sc: &hbl::Scenario, spec: &TuneSpec) -> Vec<Estimate> {
     hbl_runs(sc, evaluations * spec.runs as f64, "tune runs x (max_iters + 1) x (coefficients + 1)", false)
 }
 
+/// Shortest row of a post-processing log, bytes (`0,speed,,1,,,` and its newline; an `.alog`
+/// line is longer): bounds the rows a log file of a given size can hold.
+const MIN_LOG_ROW_BYTES: f64 = 12.0;
+
+/// A post-processing log file of `bytes` bytes, before it is read: the memory its rows take once
+/// parsed.
+pub fn postprocess_log(path: &str, bytes: u64) -> Estimate {
+    Estimate::new(
+        "memory of the parsed log rows (bytes)",
+        format!("the size of {path}"),
+        bytes as f64 / MIN_LOG_ROW_BYTES * std::mem::size_of::<Entry>() as f64,
+        MAX_BYTES,
+    )
+}
+
+/// Post-processing the parsed `entries`: the filter steps they ask for (a silence up to
+/// `max_gap_s` is predicted in `auv.step_s` pieces, a longer one in a single step) and the memory
+/// of the history, smoothed states and samples kept for every step.
+pub fn postprocess(entries: &[Entry], cfg: &PostConfig) -> Vec<Estimate> {
+    let mut times: Vec<f64> = entries.iter().map(|e| e.t).collect();
+    times.sort_by(f64::total_cmp);
+    let predictions: f64 = times
+        .windows(2)
+        .map(|w| match w[1] - w[0] {
+            gap if gap > cfg.max_gap_s => 1.0,
+            gap => (gap / cfg.auv.step_s).ceil(),
+        })
+        .sum();
+    let steps = predictions + times.len() as f64;
+    let per_step = match cfg.model {
+        AuvModel::Thesis => post_step_bytes::<5>(),
+        AuvModel::Current(_) => post_step_bytes::<7>(),
+    };
+    let fields = "the log's time span (silences up to max_gap_s) / auv.step_s";
+    vec![
+        Estimate::new("post-processing filter steps", fields, steps, MAX_VEHICLE_STEPS),
+        Estimate::new("memory of the filter history and smoothed track (bytes)", fields, steps * per_step, MAX_BYTES),
+    ]
+}
+
+/// Bytes kept per post-processing step with `M` states: the filter's recorded step, its
+/// smoothed state and the output sample.
+fn post_step_bytes<const M: usize>() -> f64 {
+    (std::mem::size_of::<Step<M>>() + std::mem::size_of::<Smoothed<M>>() + std::mem::size_of::<PostSample>()) as f64
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
     use coopnav_core::limits::check;
     use std::path::Path;
+
+    #[test]
+    fn postprocessing_is_bounded_by_the_logs_time_span_and_size() {
+        use coopnav_nav::post::Record;
+        let cfg = PostConfig::default();
+        let rows = |spacing: f64| -> Vec<Entry> {
+            (0..2000).map(|i| Entry { t: i as f64 * spacing, record: Record::Speed(1.0) }).collect()
+        };
+        // 2000 rows 1 s apart: 2·10⁴ steps of 0.1 s, far below the limits.
+        assert!(check(postprocess(&rows(1.0), &cfg), false).is_ok());
+        // 500 s apart (under max_gap_s): 10⁷ steps, gigabytes of history.
+        let e = check(postprocess(&rows(500.0), &cfg), false).unwrap_err().to_string();
+        assert!(e.contains("memory of the filter history") && e.contains("auv.step_s"), "{e}");
+        // 1000 s apart (over max_gap_s): one step per silence, as the filter runs it.
+        assert!(check(postprocess(&rows(1000.0), &cfg), false).is_ok());
+        assert!(check([postprocess_log("log.csv", 10_000_000)], false).is_ok());
+        let e = check([postprocess_log("log.csv", 1_000_000_000)], false).unwrap_err().to_string();
+        assert!(e.contains("the size of log.csv"), "{e}");
+    }
 
     #[test]
     fn embedded_scenarios_pass_and_typos_are_refused() {

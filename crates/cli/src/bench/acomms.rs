@@ -2,12 +2,13 @@
 //! encode/decode throughput, and one BELLHOP run against a cached-grid lookup.
 
 use anyhow::Result;
-use coopnav_acomms::status::{Frame0, NextWaypoint, StatusMessage};
+use coopnav_acomms::status::Frame0;
 use coopnav_acomms::tl::bellhop::{AcousticEnv, Bellhop};
 use coopnav_acomms::tl::cached::{CachedGrid, GridSpec};
-use coopnav_acomms::tracker::{MaskWidth, Tracker};
-use coopnav_acomms::{Rate, Reception, TransmissionLoss};
-use coopnav_core::{Bathymetry, Heading, Shelf, Vec3};
+use coopnav_acomms::tracker::MaskWidth;
+use coopnav_acomms::workload::{sample_frame0, TrackerExchange};
+use coopnav_acomms::TransmissionLoss;
+use coopnav_core::{Bathymetry, Shelf, Vec3};
 use coopnav_sim::experiments::nams::default_tl;
 use coopnav_sim::nams::{run_experiment, ExperimentConfig, ExperimentResult};
 use indicatif::{ProgressBar, ProgressStyle};
@@ -69,21 +70,7 @@ fn rate(budget: f64, mut f: impl FnMut()) -> f64 {
 }
 
 fn tracker() -> Result<Value> {
-    // A steady exchange: 3 unconfirmed receptions in the header, the usual status message.
-    let mut tr = Tracker::new(0, 2, MaskWidth::Narrow, 11);
-    for k in [1u64, 3, 5] {
-        tr.on_receive(k, 1, Reception { frames: 7, n_frames: 3 }, None);
-    }
-    let header = tr.on_transmit(6, Rate::R1);
-    let frame = Frame0 {
-        header,
-        status: StatusMessage {
-            pos: Vec3::new(123.4, 456.7, 28.2),
-            heading: Heading::from_radians(0.7),
-            speed: 1.54,
-            next: NextWaypoint::Id(7),
-        },
-    };
+    let frame = sample_frame0();
     let bytes = frame.encode(MaskWidth::Narrow, 64)?;
     let enc = rate(0.5, || {
         black_box(black_box(&frame).encode(MaskWidth::Narrow, 64).ok());
@@ -91,16 +78,9 @@ fn tracker() -> Result<Value> {
     let dec = rate(0.5, || {
         black_box(Frame0::decode(black_box(&bytes), MaskWidth::Narrow).ok());
     });
-    // Tracker bookkeeping: one transmit and one receive per iteration in a two-vehicle exchange.
-    let (mut a, mut b, mut k) =
-        (Tracker::new(0, 2, MaskWidth::Narrow, 11), Tracker::new(1, 2, MaskWidth::Narrow, 11), 0u64);
-    let cycle = rate(0.5, || {
-        let h = a.on_transmit(k, Rate::R1);
-        b.on_receive(k, 0, Reception { frames: 7, n_frames: 3 }, Some(&h));
-        let h = b.on_transmit(k + 1, Rate::R1);
-        a.on_receive(k + 1, 1, Reception { frames: 7, n_frames: 3 }, Some(&h));
-        k += 2;
-    });
+    // Tracker bookkeeping: one transmit and one receive per vehicle per iteration.
+    let mut exchange = TrackerExchange::default();
+    let cycle = rate(0.5, || exchange.step());
     Ok(
         json!({"frame0_bytes": bytes.len(), "header_entries": frame.header.entries.len(), "encode_per_s": enc, "decode_per_s": dec, "tracker_exchanges_per_s": cycle}),
     )

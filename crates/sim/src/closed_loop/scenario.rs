@@ -13,6 +13,7 @@ use coopnav_acomms::selector::AdaptiveConfig;
 use coopnav_acomms::status::CovTrailer;
 use coopnav_acomms::tl::analytic::Thorp;
 use coopnav_acomms::{Rate, SuccessModel};
+use coopnav_core::validation::CheckFields;
 use coopnav_core::{Bathymetry, CompassDeg, DepthTarget, Heading, Lawnmower, Shelf};
 use coopnav_nav::{AuvParams, RangeNoise};
 use coopnav_plan::predict::{PredictorConfig, WaypointUse};
@@ -284,9 +285,7 @@ impl Scenario {
         self.validate_cna(&mut p);
         self.validate_comms(&mut p);
         self.validate_sensors(&mut p);
-        if let Err(e) = self.filter.validate("filter.") {
-            p.push("filter", e.to_string(), "see the message");
-        }
+        self.filter.check_fields("filter.", &mut p);
         p.check("health.divergence_window_s", self.health.divergence_window_s, |v| v > 0.0, "a finite number > 0");
         self.validate_planner(&mut p);
         p.finish()

@@ -2,32 +2,23 @@
 //! reconstructions as defaults, read from TOML (`deny_unknown_fields`) and validated before a run.
 
 use super::log_format::LogFormat;
+use coopnav_core::validation::{CheckFields, InvalidFields, Problems};
 use coopnav_nav::codec::Zone;
 use coopnav_nav::cycle::{Configuration, Cycle, CycleError};
-use coopnav_nav::{AuvParams, Outriggers, ParamError, SurfaceParams};
+use coopnav_nav::{AuvParams, Outriggers, SurfaceParams};
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
 #[derive(Debug, Error)]
 pub enum ConfigError {
-    #[error("scenario field '{field}' = {value}: {allowed}")]
-    Range { field: String, value: f64, allowed: &'static str },
     #[error("scenario: {0}")]
-    Param(#[from] ParamError),
+    Fields(#[from] InvalidFields),
     #[error("scenario: {0}")]
     Cycle(#[from] CycleError),
     #[error("scenario file: {0}")]
     Toml(#[from] toml::de::Error),
     #[error("scenario field 'log.buoy_fix_storage' = {0:?} needs log.geodetic_origin (the rounding happens in latitude/longitude); add `geodetic_origin = {{ lat_deg = ..., lon_deg = ... }}` or use \"f64\"")]
     LogStorage(coopnav_core::LatLonStorage),
-}
-
-fn check(field: &str, value: f64, ok: bool, allowed: &'static str) -> Result<(), ConfigError> {
-    if value.is_finite() && ok {
-        Ok(())
-    } else {
-        Err(ConfigError::Range { field: field.to_string(), value, allowed })
-    }
 }
 
 /// Where the transponder position used for a range is taken (digest §10 A6).
@@ -362,34 +353,34 @@ impl Scenario {
         Ok(c)
     }
 
-    /// Checks every field; the error names it and the allowed range.
+    /// Checks every field and reports every bad one at once, each named with its allowed range.
     pub fn validate(&self) -> Result<(), ConfigError> {
-        const POS: &str = "must be a finite number > 0";
-        const NONNEG: &str = "must be a finite number ≥ 0";
-        const PROB: &str = "must be a probability in [0, 1]";
-        check("dt", self.dt, self.dt > 0.0 && self.dt <= 2.0, "must be in (0, 2] s")?;
-        check("max_duration_s", self.max_duration_s, self.max_duration_s > self.dt, "must exceed dt")?;
+        let mut p = Problems::new();
+        p.require("dt", self.dt, self.dt > 0.0 && self.dt <= 2.0, "in (0, 2] s");
+        p.require("max_duration_s", self.max_duration_s, self.max_duration_s > self.dt, "> dt");
         let g = &self.geometry;
-        check("geometry.auv_speed", g.auv_speed, g.auv_speed > 0.0 && g.auv_speed <= 4.0, "must be in (0, 4] m/s")?;
-        check("geometry.ship_speed", g.ship_speed, g.ship_speed > 0.0 && g.ship_speed <= 4.0, "must be in (0, 4] m/s")?;
-        check(
+        p.require("geometry.auv_speed", g.auv_speed, g.auv_speed > 0.0 && g.auv_speed <= 4.0, "in (0, 4] m/s");
+        p.require("geometry.ship_speed", g.ship_speed, g.ship_speed > 0.0 && g.ship_speed <= 4.0, "in (0, 4] m/s");
+        p.require(
             "geometry.ship_start_x",
             g.ship_start_x,
             g.ship_start_x > g.auv_start_x,
-            "must be east of geometry.auv_start_x",
-        )?;
-        check("geometry.zone_max", g.zone_max, g.zone_max > g.zone_min, "must exceed geometry.zone_min")?;
-        check("geometry.end_margin", g.end_margin, g.end_margin >= 0.0, NONNEG)?;
-        check("geometry.approach_m", g.approach_m, g.approach_m >= 0.0, NONNEG)?;
-        check("geometry.path_y", g.path_y, true, NONNEG)?;
-        check("init.position_sd", self.init.position_sd, self.init.position_sd >= 0.0, NONNEG)?;
-        check("init.speed_sd", self.init.speed_sd, self.init.speed_sd >= 0.0, NONNEG)?;
-        check("init.heading_sd_rad", self.init.heading_sd_rad, self.init.heading_sd_rad >= 0.0, NONNEG)?;
+            "> geometry.auv_start_x (east of it)",
+        );
+        p.require("geometry.zone_max", g.zone_max, g.zone_max > g.zone_min, "> geometry.zone_min");
+        p.non_negative("geometry.end_margin", g.end_margin);
+        p.non_negative("geometry.approach_m", g.approach_m);
+        p.finite("geometry.auv_start_x", g.auv_start_x);
+        p.finite("geometry.zone_min", g.zone_min);
+        p.finite("geometry.path_y", g.path_y);
+        p.non_negative("init.position_sd", self.init.position_sd);
+        p.non_negative("init.speed_sd", self.init.speed_sd);
+        p.non_negative("init.heading_sd_rad", self.init.heading_sd_rad);
         let c = &self.control;
-        check("control.lookahead_m", c.lookahead_m, c.lookahead_m > 0.0, POS)?;
-        check("control.heading_gain", c.heading_gain, c.heading_gain > 0.0, POS)?;
-        check("control.auv_max_rate_deg_s", c.auv_max_rate_deg_s, c.auv_max_rate_deg_s > 0.0, POS)?;
-        check("control.ship_max_rate_deg_s", c.ship_max_rate_deg_s, c.ship_max_rate_deg_s > 0.0, POS)?;
+        p.positive("control.lookahead_m", c.lookahead_m);
+        p.positive("control.heading_gain", c.heading_gain);
+        p.positive("control.auv_max_rate_deg_s", c.auv_max_rate_deg_s);
+        p.positive("control.ship_max_rate_deg_s", c.ship_max_rate_deg_s);
         let s = &self.sensors;
         for (name, v) in [
             ("sensors.speed_sd", s.speed_sd),
@@ -400,7 +391,7 @@ impl Scenario {
             ("sensors.ship_speed_sd", s.ship_speed_sd),
             ("sensors.ship_heading_sd_deg", s.ship_heading_sd_deg),
         ] {
-            check(name, v, v >= 0.0, NONNEG)?;
+            p.non_negative(name, v);
         }
         let a = &self.acoustic;
         for (name, v) in [
@@ -409,57 +400,62 @@ impl Scenario {
             ("acoustic.p_outlier", a.p_outlier),
             ("acoustic.p_drop", a.p_drop),
         ] {
-            check(name, v, (0.0..=1.0).contains(&v), PROB)?;
+            p.probability(name, v);
         }
         let total = a.p_slightly_long + a.p_slightly_short + a.p_outlier + a.p_drop;
-        check("acoustic.p_* (sum)", total, (total - 1.0).abs() < 1e-9, "the four probabilities must sum to 1")?;
-        check("acoustic.slight_max_m", a.slight_max_m, a.slight_max_m >= 0.0, NONNEG)?;
-        check("acoustic.outlier_min_m", a.outlier_min_m, a.outlier_min_m >= 0.0, NONNEG)?;
-        check(
+        p.require(
+            "acoustic.p_* (sum)",
+            total,
+            (total - 1.0).abs() < 1e-9,
+            "p_slightly_long + p_slightly_short + p_outlier + p_drop, which must sum to 1",
+        );
+        p.non_negative("acoustic.slight_max_m", a.slight_max_m);
+        p.non_negative("acoustic.outlier_min_m", a.outlier_min_m);
+        p.require(
             "acoustic.outlier_max_m",
             a.outlier_max_m,
             a.outlier_max_m >= a.outlier_min_m,
-            "must be ≥ acoustic.outlier_min_m",
-        )?;
-        check(
+            "≥ acoustic.outlier_min_m",
+        );
+        p.require(
             "acoustic.sound_speed",
             a.sound_speed,
             a.sound_speed >= 1300.0 && a.sound_speed <= 1700.0,
-            "must be in [1300, 1700] m/s",
-        )?;
+            "in [1300, 1700] m/s",
+        );
         let cf = a.sound_speed + a.filter_sound_speed_bias;
-        check(
+        p.require(
             "acoustic.filter_sound_speed_bias",
             a.filter_sound_speed_bias,
             (1300.0..=1700.0).contains(&cf),
-            "sound speed + bias must stay in [1300, 1700] m/s",
-        )?;
-        check("acoustic.clock_drift_mean_us_h", a.clock_drift_mean_us_h, true, NONNEG)?;
-        check("acoustic.clock_drift_sd_us_h", a.clock_drift_sd_us_h, a.clock_drift_sd_us_h >= 0.0, NONNEG)?;
+            "sound_speed + bias in [1300, 1700] m/s",
+        );
+        p.finite("acoustic.clock_drift_mean_us_h", a.clock_drift_mean_us_h);
+        p.non_negative("acoustic.clock_drift_sd_us_h", a.clock_drift_sd_us_h);
         let b = &self.buoy;
-        check(
+        p.require(
             "buoy.region_x[1]",
             b.region_x[1],
             b.region_x[1] >= b.region_x[0] && b.region_x[0].is_finite(),
-            "must be ≥ buoy.region_x[0]",
-        )?;
-        check(
+            "≥ buoy.region_x[0]",
+        );
+        p.require(
             "buoy.region_y[1]",
             b.region_y[1],
             b.region_y[1] >= b.region_y[0] && b.region_y[0].is_finite(),
-            "must be ≥ buoy.region_y[0]",
-        )?;
+            "≥ buoy.region_y[0]",
+        );
         if let Some([x, y]) = b.fixed {
-            check("buoy.fixed[0]", x, true, "must be finite")?;
-            check("buoy.fixed[1]", y, true, "must be finite")?;
+            p.finite("buoy.fixed[0]", x);
+            p.finite("buoy.fixed[1]", y);
         }
-        check("buoy.drift_mean", b.drift_mean, b.drift_mean >= 0.0, NONNEG)?;
-        check("buoy.drift_sd", b.drift_sd, b.drift_sd >= 0.0, NONNEG)?;
-        check("buoy.circular_fraction", b.circular_fraction, (0.0..=1.0).contains(&b.circular_fraction), PROB)?;
-        check("buoy.circular_radius", b.circular_radius, b.circular_radius > 0.0, POS)?;
-        check("buoy.init_sd", b.init_sd, b.init_sd >= 0.0, NONNEG)?;
-        check("buoy.broadcast_bias[0]", b.broadcast_bias[0], true, "must be finite")?;
-        check("buoy.broadcast_bias[1]", b.broadcast_bias[1], true, "must be finite")?;
+        p.non_negative("buoy.drift_mean", b.drift_mean);
+        p.non_negative("buoy.drift_sd", b.drift_sd);
+        p.probability("buoy.circular_fraction", b.circular_fraction);
+        p.positive("buoy.circular_radius", b.circular_radius);
+        p.non_negative("buoy.init_sd", b.init_sd);
+        p.finite("buoy.broadcast_bias[0]", b.broadcast_bias[0]);
+        p.finite("buoy.broadcast_bias[1]", b.broadcast_bias[1]);
         let q = &self.quantisation;
         for (name, v) in [
             ("quantisation.ship_resolution[0]", q.ship_resolution[0]),
@@ -467,13 +463,19 @@ impl Scenario {
             ("quantisation.buoy_resolution[0]", q.buoy_resolution[0]),
             ("quantisation.buoy_resolution[1]", q.buoy_resolution[1]),
         ] {
-            check(name, v, v > 0.0, POS)?;
+            p.positive(name, v);
         }
-        check("quantisation.centre_e", q.centre_e, true, "must be finite")?;
-        check("quantisation.north_min", q.north_min, true, "must be finite")?;
-        self.filters.auv.validate("filters.auv.")?;
-        self.filters.ship.validate("filters.ship.")?;
-        self.filters.buoy.validate("filters.buoy.")?;
+        p.finite("quantisation.centre_e", q.centre_e);
+        p.finite("quantisation.north_min", q.north_min);
+        if let Some([e, n]) = q.buoy_centre {
+            p.finite("quantisation.buoy_centre[0]", e);
+            p.finite("quantisation.buoy_centre[1]", n);
+        }
+        self.filters.auv.check_fields("filters.auv.", &mut p);
+        self.filters.ship.check_fields("filters.ship.", &mut p);
+        self.filters.buoy.check_fields("filters.buoy.", &mut p);
+        self.filters.outriggers.check_fields("filters.outriggers.", &mut p);
+        p.finish()?;
         self.log.validate()?;
         self.resolved_cycle()?;
         Ok(())
@@ -508,7 +510,7 @@ mod tests {
     #[test]
     fn bad_scenarios_name_the_field() {
         let e = |t: &str| Scenario::from_toml(t).unwrap_err().to_string();
-        assert!(e("dt = -1.0\n").contains("'dt'"));
+        assert!(e("dt = -1.0\n").contains("field dt = -1"));
         assert!(e("[acoustic]\np_drop = 0.5\n").contains("sum to 1"));
         assert!(e("[geometry]\nauv_speed = 9.0\n").contains("geometry.auv_speed"));
         assert!(e("[buoy]\nregion_y = [50.0, 10.0]\n").contains("buoy.region_y[1]"));

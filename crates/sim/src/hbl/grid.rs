@@ -4,6 +4,7 @@
 
 use super::config::{Drift, Scenario};
 use super::mc::{monte_carlo, McError, Stats};
+use coopnav_core::validation::{InvalidFields, Problems};
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
@@ -25,8 +26,8 @@ impl Default for GridSpec {
 
 #[derive(Debug, Error)]
 pub enum GridError {
-    #[error("grid field '{field}' = {value}: {allowed}")]
-    Spec { field: &'static str, value: f64, allowed: &'static str },
+    #[error("grid spec: {0}")]
+    Fields(#[from] InvalidFields),
     #[error(transparent)]
     Mc(#[from] McError),
     #[error("grid CSV: {0}")]
@@ -37,20 +38,16 @@ impl GridSpec {
     /// Checks each field; the grid's size is checked against the work limits by
     /// `coopnav_sim::work::hbl_grid`.
     pub fn validate(&self) -> Result<(), GridError> {
-        let bad = |field, value, allowed| Err(GridError::Spec { field, value, allowed });
-        if !(self.spacing.is_finite() && self.spacing > 0.0) {
-            return bad("spacing", self.spacing, "must be > 0 m");
-        }
-        if !(self.x[0].is_finite() && self.x[1] >= self.x[0]) {
-            return bad("x[1]", self.x[1], "must be finite and ≥ x[0]");
-        }
-        if !(self.y[0].is_finite() && self.y[1] >= self.y[0]) {
-            return bad("y[1]", self.y[1], "must be finite and ≥ y[0]");
+        let mut p = Problems::new();
+        p.positive("spacing", self.spacing);
+        for (axis, [lo, hi]) in [("x", self.x), ("y", self.y)] {
+            p.finite(&format!("{axis}[0]"), lo);
+            p.require(&format!("{axis}[1]"), hi, hi >= lo, &format!("a finite number ≥ {axis}[0]"));
         }
         if self.runs_per_cell < 2 {
-            return bad("runs_per_cell", self.runs_per_cell as f64, "must be ≥ 2");
+            p.push("runs_per_cell", self.runs_per_cell.to_string(), "≥ 2 (a cell's Monte Carlo needs 2 runs)");
         }
-        Ok(())
+        Ok(p.finish()?)
     }
     /// The last index of an axis (its points are lo + i·step, i = 0..=n), as a float so that a
     /// huge count is checked before anything is allocated.

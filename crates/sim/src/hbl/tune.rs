@@ -6,6 +6,7 @@ use super::config::Scenario;
 use super::mc::{monte_carlo, McError};
 use argmin::core::{CostFunction, Executor, State};
 use argmin::solver::neldermead::NelderMead;
+use coopnav_core::validation::{InvalidFields, Problems};
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
@@ -143,6 +144,24 @@ pub struct TuneSpec {
     pub seed: u64,
 }
 
+impl TuneSpec {
+    /// Checks every field and reports every bad one at once (the Monte Carlo's size is checked
+    /// against the work limits by `coopnav_sim::work`).
+    pub fn validate(&self) -> Result<(), InvalidFields> {
+        let mut p = Problems::new();
+        if self.coefficients.is_empty() {
+            p.push("coefficients", "[]", "at least one of auv_q_en, buoy_p_en, buoy_p_speed, buoy_p_heading, buoy_q_en, buoy_q_speed, buoy_q_heading, auv_q_speed, auv_q_heading, auv_q_bias, auv_range_sigma_time, auv_sigma_speed, auv_sigma_heading, ship_q_en, ship_q_speed, ship_q_heading");
+        }
+        if self.runs < 2 {
+            p.push("runs", self.runs.to_string(), "≥ 2 (each cost is a Monte Carlo)");
+        }
+        if self.max_iters == 0 {
+            p.push("max_iters", "0", "≥ 1");
+        }
+        p.finish()
+    }
+}
+
 fn default_runs() -> usize {
     50
 }
@@ -155,12 +174,10 @@ fn default_seed() -> u64 {
 
 #[derive(Debug, Error)]
 pub enum TuneError {
-    #[error("tune: coefficients is empty; name at least one (auv_q_en, buoy_p_en, buoy_p_speed, buoy_p_heading, buoy_q_en, buoy_q_speed, buoy_q_heading, auv_q_speed, auv_q_heading, auv_q_bias, auv_range_sigma_time, auv_sigma_speed, auv_sigma_heading, ship_q_en, ship_q_speed, ship_q_heading)")]
-    NoCoefficients,
+    #[error("tune spec: {0}")]
+    Fields(#[from] InvalidFields),
     #[error("tune: {name} starts at {value}, outside its bounds [0, {upper}] (Table 2)")]
     StartOutOfBounds { name: String, value: f64, upper: f64 },
-    #[error("tune: max_iters = 0; at least one iteration is needed")]
-    NoIterations,
     #[error(transparent)]
     Mc(#[from] McError),
     #[error("tune: the optimiser failed: {0}")]
@@ -214,12 +231,7 @@ impl CostFunction for Problem<'_> {
 
 /// Tunes the chosen coefficients of `base`, starting from their current values.
 pub fn tune(base: &Scenario, spec: &TuneSpec) -> Result<TuneResult, TuneError> {
-    if spec.coefficients.is_empty() {
-        return Err(TuneError::NoCoefficients);
-    }
-    if spec.max_iters == 0 {
-        return Err(TuneError::NoIterations);
-    }
+    spec.validate()?;
     base.validate().map_err(McError::from)?;
     let start: Vec<f64> = spec
         .coefficients
@@ -302,8 +314,11 @@ mod tests {
     #[test]
     fn bad_specs_are_refused() {
         let base = Scenario::default();
-        let spec = TuneSpec { coefficients: vec![], objective: Objective::AuvZone, runs: 4, max_iters: 2, seed: 1 };
-        assert!(matches!(tune(&base, &spec), Err(TuneError::NoCoefficients)));
+        let spec = TuneSpec { coefficients: vec![], objective: Objective::AuvZone, runs: 1, max_iters: 0, seed: 1 };
+        let e = tune(&base, &spec).unwrap_err().to_string();
+        for field in ["coefficients = []", "runs = 1", "max_iters = 0"] {
+            assert!(e.contains(&format!("field {field}: allowed")), "{field} not named in: {e}");
+        }
         let mut off = base.clone();
         Coefficient::BuoyPEn.set(&mut off, 85.0);
         let spec = TuneSpec {

@@ -3,11 +3,13 @@
 //! `deny_unknown_fields` and validated before anything runs; errors name the file and the field.
 
 use super::tracks::{load_track_csv, TrackLoadError};
-use crate::scenario_file;
 pub use crate::scenario_file::ScenarioError;
+use crate::scenario_file::{self, Problem, Problems};
+use coopnav_core::validation::{CheckFields, InvalidFields};
 use coopnav_core::{CompassDeg, DepthProfile, Heading, Lawnmower, Track, Vec3};
 use coopnav_plan::{
-    CnaPose, DistanceLimits, ErrorModel, MotionConfig, PenaltyCase, PenaltyFn, PenaltyPair, PlannerConfig, SearchConfig,
+    CnaPose, DistanceLimits, ErrorModel, MotionConfig, PenaltyCase, PenaltyFn, PenaltyPair, PlanError, PlannerConfig,
+    SearchConfig,
 };
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
@@ -108,6 +110,28 @@ pub struct LawnmowerSpec {
     pub depth: DepthProfile,
 }
 
+impl CheckFields for LawnmowerSpec {
+    fn check_fields(&self, prefix: &str, p: &mut coopnav_core::validation::Problems) {
+        p.finite(&format!("{prefix}origin[0]"), self.origin.0);
+        p.finite(&format!("{prefix}origin[1]"), self.origin.1);
+        p.finite(&format!("{prefix}lane_heading_compass_deg"), self.lane_heading_compass_deg);
+        p.positive(&format!("{prefix}lane_length"), self.lane_length);
+        p.finite(&format!("{prefix}spacing"), self.spacing);
+        if self.lanes == 0 {
+            p.push(format!("{prefix}lanes"), "0", ">= 1");
+        }
+        p.positive(&format!("{prefix}speed"), self.speed);
+        match self.depth {
+            DepthProfile::Constant { depth } => p.finite(&format!("{prefix}depth.depth"), depth),
+            DepthProfile::Sinusoid { mean, amplitude, period } => {
+                p.finite(&format!("{prefix}depth.mean"), mean);
+                p.finite(&format!("{prefix}depth.amplitude"), amplitude);
+                p.positive(&format!("{prefix}depth.period"), period);
+            }
+        }
+    }
+}
+
 impl LawnmowerSpec {
     pub fn to_lawnmower(&self) -> Lawnmower {
         Lawnmower {
@@ -149,37 +173,59 @@ impl Scenario {
         scenario_file::load(file, Self::validate)
     }
 
-    /// Checks the planner settings, the CNA pose and each AUV's settings (the track files and the
-    /// mission span they allow are checked by [`Scenario::build`]).
+    /// Checks the planner settings, the CNA pose, the mission span and each AUV's settings, and
+    /// reports every bad field at once (the track files and the mission span they allow are
+    /// checked by [`Scenario::build`]).
     pub fn validate(&self, file: &Path) -> Result<(), ScenarioError> {
-        self.planner_config(file)?
-            .validate()
-            .map_err(|cause| ScenarioError::Planner { file: file.to_path_buf(), cause })?;
+        let mut p = Problems::new(file);
+        self.validate_planner(&mut p);
         let c = &self.cna;
-        if ![c.x, c.y, c.depth, c.heading_compass_deg, c.pitch_deg].iter().all(|v| v.is_finite()) {
-            let value = format!(
-                "{{ x = {}, y = {}, depth = {}, heading_compass_deg = {}, pitch_deg = {} }}",
-                c.x, c.y, c.depth, c.heading_compass_deg, c.pitch_deg
-            );
-            return Err(ScenarioError::invalid(
-                file,
-                "cna",
-                value,
-                "finite numbers for x, y, depth, heading_compass_deg and pitch_deg",
-            ));
+        for (name, v) in [
+            ("cna.x", c.x),
+            ("cna.y", c.y),
+            ("cna.depth", c.depth),
+            ("cna.heading_compass_deg", c.heading_compass_deg),
+            ("cna.pitch_deg", c.pitch_deg),
+        ] {
+            p.finite(name, v);
+        }
+        for (name, t) in [("mission.start_time", self.mission.start_time), ("mission.end_time", self.mission.end_time)]
+        {
+            if let Some(t) = t {
+                p.finite(name, t);
+            }
         }
         if self.auv.is_empty() {
-            return Err(ScenarioError::invalid(file, "auv", "no [[auv]]", "at least one [[auv]]"));
+            p.push("auv", "no [[auv]]", "at least one [[auv]]");
         }
         for (i, a) in self.auv.iter().enumerate() {
-            for (name, v) in [("sigma0", a.sigma0), ("eps0", a.eps0)] {
-                if !(v.is_finite() && v > 0.0) {
-                    return Err(ScenarioError::invalid(file, format!("auv[{i}].{name}"), v.to_string(), "> 0 m"));
-                }
+            p.positive(&format!("auv[{i}].sigma0"), a.sigma0);
+            p.positive(&format!("auv[{i}].eps0"), a.eps0);
+            match (&a.lawnmower, &a.track_csv) {
+                (Some(m), None) => m.check_fields(&format!("auv[{i}].lawnmower."), &mut p),
+                (None, Some(_)) => {}
+                (lawnmower, _) => p.push(
+                    format!("auv[{i}].lawnmower/track_csv"),
+                    if lawnmower.is_some() { "both" } else { "neither" },
+                    "exactly one of [auv.lawnmower] or track_csv",
+                ),
             }
-            Self::source(i, a, file)?;
         }
-        Ok(())
+        p.finish()
+    }
+
+    /// The penalty choice, then the planner's own checks (which stop at its first bad setting),
+    /// named as the file names them.
+    fn validate_planner(&self, p: &mut Problems) {
+        let penalties = match self.penalties() {
+            Ok(penalties) => penalties,
+            Err(problem) => return p.push(problem.field, problem.value, problem.allowed),
+        };
+        match self.planner_config_with(penalties).validate() {
+            Ok(()) => {}
+            Err(PlanError::Invalid { field, allowed, value }) => p.push(planner_field(&field), value, allowed),
+            Err(other) => p.push("planner", other.to_string(), "a valid planner configuration"),
+        }
     }
 
     /// Validates everything and builds the mission (tracks read relative to `base_dir`).
@@ -223,74 +269,69 @@ impl Scenario {
     }
 
     fn planner_config(&self, file: &Path) -> Result<PlannerConfig, ScenarioError> {
+        let penalties = self.penalties().map_err(|p| ScenarioError::fields(file, InvalidFields(vec![p])))?;
+        Ok(self.planner_config_with(penalties))
+    }
+
+    fn planner_config_with(&self, penalties: PenaltyPair) -> PlannerConfig {
         let p = &self.planner;
-        Ok(PlannerConfig {
+        PlannerConfig {
             look_ahead: p.look_ahead,
             motion: p.motion,
             error: p.error,
             cost: coopnav_plan::CostSpec::Hudson,
             limits: p.limits,
-            penalties: self.penalties(file)?,
+            penalties,
             search: p.search,
-        })
-    }
-
-    fn penalties(&self, file: &Path) -> Result<PenaltyPair, ScenarioError> {
-        let p = &self.planner.penalty;
-        match (&p.case, p.primary, p.look_ahead) {
-            (Some(id), None, None) => PenaltyCase::from_id(id).map(PenaltyCase::penalties).ok_or_else(|| {
-                let ids: Vec<&str> = PenaltyCase::ALL.iter().map(|c| c.id()).collect();
-                ScenarioError::invalid(file, "planner.penalty.case", format!("'{id}'"), ids.join(", "))
-            }),
-            (None, Some(primary), Some(look_ahead)) => Ok(PenaltyPair { primary, look_ahead }),
-            _ => Err(ScenarioError::invalid(
-                file,
-                "planner.penalty",
-                given(p),
-                "either case = \"<Table 5.2 case>\" or both primary and look_ahead",
-            )),
         }
     }
 
-    /// AUV `i`'s track source, checked: exactly one of a sound lawnmower or a track CSV.
-    fn source<'a>(i: usize, a: &'a AuvSpec, file: &Path) -> Result<TrackSource<'a>, ScenarioError> {
-        let invalid = |f: &str, value: String, allowed: &str| {
-            ScenarioError::invalid(file, format!("auv[{i}].{f}"), value, allowed)
-        };
-        match (&a.lawnmower, &a.track_csv) {
-            (Some(m), None) => {
-                if !(m.speed.is_finite() && m.speed > 0.0) {
-                    return Err(invalid("lawnmower.speed", m.speed.to_string(), "> 0 m/s"));
-                }
-                if !(m.lane_length.is_finite() && m.lane_length > 0.0) || m.lanes == 0 || !m.spacing.is_finite() {
-                    let value = format!("lane_length {}, lanes {}, spacing {}", m.lane_length, m.lanes, m.spacing);
-                    return Err(invalid("lawnmower", value, "lane_length > 0 m, lanes >= 1 and spacing finite"));
-                }
-                match m.depth {
-                    DepthProfile::Sinusoid { period, .. } if period.is_nan() || period <= 0.0 => {
-                        Err(invalid("lawnmower.depth.period", period.to_string(), "> 0 s"))
-                    }
-                    _ => Ok(TrackSource::Lawnmower(m)),
-                }
-            }
-            (None, Some(path)) => Ok(TrackSource::Csv(path)),
-            (lawnmower, _) => {
-                let value = if lawnmower.is_some() { "both" } else { "neither" };
-                Err(invalid("lawnmower/track_csv", value.into(), "exactly one of [auv.lawnmower] or track_csv"))
-            }
+    fn penalties(&self) -> Result<PenaltyPair, Problem> {
+        let p = &self.planner.penalty;
+        let problem = |field: &str, value: String, allowed: String| Problem { field: field.into(), value, allowed };
+        match (&p.case, p.primary, p.look_ahead) {
+            (Some(id), None, None) => PenaltyCase::from_id(id).map(PenaltyCase::penalties).ok_or_else(|| {
+                let ids: Vec<&str> = PenaltyCase::ALL.iter().map(|c| c.id()).collect();
+                problem("planner.penalty.case", format!("'{id}'"), ids.join(", "))
+            }),
+            (None, Some(primary), Some(look_ahead)) => Ok(PenaltyPair { primary, look_ahead }),
+            _ => Err(problem(
+                "planner.penalty",
+                given(p),
+                "either case = \"<Table 5.2 case>\" or both primary and look_ahead".into(),
+            )),
         }
     }
 
     /// AUV `i`'s track (CSV paths relative to `base_dir`).
     fn track(i: usize, a: &AuvSpec, file: &Path, base_dir: &Path) -> Result<Track, ScenarioError> {
         let track_err = |cause| ScenarioError::Track { file: file.to_path_buf(), index: i, cause };
-        match Self::source(i, a, file)? {
-            TrackSource::Lawnmower(m) => m
+        match (&a.lawnmower, &a.track_csv) {
+            (Some(m), _) => m
                 .to_lawnmower()
                 .track(LAWNMOWER_DT)
                 .map_err(|e| track_err(TrackLoadError::Track { path: PathBuf::from("<lawnmower>"), source: e })),
-            TrackSource::Csv(path) => load_track_csv(&base_dir.join(path)).map_err(track_err),
+            (None, Some(path)) => load_track_csv(&base_dir.join(path)).map_err(track_err),
+            (None, None) => Err(ScenarioError::invalid(
+                file,
+                format!("auv[{i}].lawnmower/track_csv"),
+                "neither",
+                "exactly one of [auv.lawnmower] or track_csv",
+            )),
         }
+    }
+}
+
+/// A planner setting's name in the file: the motion settings sit under `planner.motion`, the
+/// penalty pair under `planner.penalty`.
+fn planner_field(field: &str) -> String {
+    const MOTION: [&str; 4] = ["speed", "tau", "heading_options", "max_turn_rate_deg_s"];
+    if MOTION.contains(&field) || field.starts_with("cna.") {
+        format!("planner.motion.{field}")
+    } else if let Some(rest) = field.strip_prefix("penalties.") {
+        format!("planner.penalty.{rest}")
+    } else {
+        format!("planner.{field}")
     }
 }
 
@@ -306,10 +347,4 @@ fn given(p: &PenaltySpec) -> String {
     } else {
         keys.join(" and ")
     }
-}
-
-/// Where an AUV's a-priori track comes from.
-enum TrackSource<'a> {
-    Lawnmower(&'a LawnmowerSpec),
-    Csv(&'a Path),
 }

@@ -1,0 +1,59 @@
+//! Tells the tests which optional external programs are installed, so a test that needs an absent
+//! one is reported as ignored, with its reason, instead of passing (issue 11 item 6):
+//! - cfg `chromium_installed`: `$COOPNAV_CHROMIUM`, else /usr/bin/chromium, runs `--version`
+//!   (scripts/install-chromium.sh);
+//! - cfg `pymoos_installed`: `$COOPNAV_PYMOOS_PYTHON`, else tools/pymoos/bin/python, imports
+//!   pymoos2 (scripts/install-pymoos.sh).
+//!
+//! The program found is handed to the tests as `COOPNAV_CHROMIUM_FOUND` / `COOPNAV_PYMOOS_FOUND`,
+//! so they run exactly what was detected. `.ci/run` installs both before building; after
+//! installing one by hand, touch this file.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+/// An optional program: its cfg, the variable naming it, where it is by default, and the
+/// arguments of a quick run that succeeds only when it is usable.
+struct Optional {
+    cfg: &'static str,
+    env: &'static str,
+    found_env: &'static str,
+    default: PathBuf,
+    probe: &'static [&'static str],
+}
+
+fn main() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+    let optionals = [
+        Optional {
+            cfg: "chromium_installed",
+            env: "COOPNAV_CHROMIUM",
+            found_env: "COOPNAV_CHROMIUM_FOUND",
+            default: PathBuf::from("/usr/bin/chromium"),
+            probe: &["--version"],
+        },
+        Optional {
+            cfg: "pymoos_installed",
+            env: "COOPNAV_PYMOOS_PYTHON",
+            found_env: "COOPNAV_PYMOOS_FOUND",
+            default: root.join("tools/pymoos/bin/python"),
+            probe: &["-c", "import pymoos2.core.MissionReader"],
+        },
+    ];
+    println!("cargo:rerun-if-changed=build.rs");
+    for o in &optionals {
+        detect(o);
+    }
+}
+
+fn detect(o: &Optional) {
+    println!("cargo::rustc-check-cfg=cfg({})", o.cfg);
+    println!("cargo:rerun-if-env-changed={}", o.env);
+    let program = std::env::var_os(o.env).map_or_else(|| o.default.clone(), PathBuf::from);
+    let runs = Command::new(&program).args(o.probe).output().is_ok_and(|out| out.status.success());
+    if runs {
+        println!("cargo:rerun-if-changed={}", program.display());
+        println!("cargo:rustc-cfg={}", o.cfg);
+        println!("cargo:rustc-env={}={}", o.found_env, program.display());
+    }
+}
