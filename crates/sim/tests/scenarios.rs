@@ -15,24 +15,45 @@ fn library() -> Vec<PathBuf> {
     files
 }
 
+/// Whether the file's transmission loss runs the real BELLHOP (`[comms] tl.kind = "bellhop…"`).
+fn uses_bellhop(file: &PathBuf) -> bool {
+    let value: toml::Value = toml::from_str(&std::fs::read_to_string(file).unwrap()).unwrap();
+    value
+        .get("comms")
+        .and_then(|c| c.get("tl"))
+        .and_then(|t| t.get("kind"))
+        .and_then(|k| k.as_str())
+        .is_some_and(|k| k.starts_with("bellhop"))
+}
+
+fn runs_reduced(file: &PathBuf) {
+    let mut sc = Scenario::load(file).unwrap_or_else(|e| panic!("{e}"));
+    sc.duration_s = sc.duration_s.min(600.0);
+    sc.planner.look_ahead = sc.planner.look_ahead.min(3);
+    sc.planner.deadline = coopnav_plan::Deadline::None;
+    let mut policy = PolicySpec::new("planner", &sc).unwrap().build(&sc).unwrap();
+    let r = run(&sc, &mut policy, sc.seed, &Faults::default(), &mut ());
+    let name = file.display();
+    assert!(r.fleet.healthy && r.fleet.error.mean.is_finite(), "{name}");
+    assert_eq!(r.auvs.len(), sc.fleet.n_auvs, "{name}");
+    assert!(r.auvs.iter().all(|a| a.ranges_applied > 0 && a.uplink.received > 0), "{name}: {:?}", r.auvs);
+}
+
 #[test]
 fn every_scenario_in_the_library_loads_and_runs_reduced() {
     let files = library();
     assert!(files.len() >= 3, "{files:?}");
     let names: Vec<String> = files.iter().map(|f| f.file_name().unwrap().to_string_lossy().into_owned()).collect();
     assert!(names.contains(&"default.toml".to_string()) && names.contains(&"full-stack.toml".to_string()));
-    for file in files {
-        let mut sc = Scenario::load(&file).unwrap_or_else(|e| panic!("{e}"));
-        sc.duration_s = sc.duration_s.min(600.0);
-        sc.planner.look_ahead = sc.planner.look_ahead.min(3);
-        sc.planner.deadline = coopnav_plan::Deadline::None;
-        let mut policy = PolicySpec::new("planner", &sc).unwrap().build(&sc).unwrap();
-        let r = run(&sc, &mut policy, sc.seed, &Faults::default(), &mut ());
-        let name = file.display();
-        assert!(r.fleet.healthy && r.fleet.error.mean.is_finite(), "{name}");
-        assert_eq!(r.auvs.len(), sc.fleet.n_auvs, "{name}");
-        assert!(r.auvs.iter().all(|a| a.ranges_applied > 0 && a.uplink.received > 0), "{name}: {:?}", r.auvs);
-    }
+    files.iter().filter(|f| !uses_bellhop(f)).for_each(runs_reduced);
+}
+
+#[test]
+#[cfg_attr(not(bellhop_installed), ignore = "BELLHOP is not installed: run scripts/install-bellhop.sh")]
+fn every_bellhop_scenario_in_the_library_loads_and_runs_reduced() {
+    let files: Vec<PathBuf> = library().into_iter().filter(uses_bellhop).collect();
+    assert!(!files.is_empty(), "the full-stack example uses the BELLHOP grid");
+    files.iter().for_each(runs_reduced);
 }
 
 #[test]

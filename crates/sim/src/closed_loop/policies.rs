@@ -6,7 +6,7 @@ use super::scenario::Scenario;
 use crate::policy::{Centroid, CnaPolicy, FixedPattern, MidpointRelay, NoCna, Rect, TimedWaypoints, Trail};
 use crate::predeploy::runner;
 use crate::predeploy::scenario::Mission;
-use coopnav_acomms::{Receiver, TransmissionLoss};
+use coopnav_acomms::Receiver;
 use coopnav_core::{CompassDeg, Heading, Vec3};
 use coopnav_plan::{AuvEstimate, CnaPose, CostSpec, Deadline, EstimatorSpec, LookAheadPlanner, PlanError, RangeNoise};
 use thiserror::Error;
@@ -106,7 +106,7 @@ fn build(name: &str, sc: &Scenario, planned: Option<&TimedWaypoints>) -> Result<
         "planner" | "planner-estimator" => {
             let p = &sc.planner;
             let likelihood: Option<PingLikelihood> = p.model_lost_pings.then(|| {
-                let (tl, success, rate) = (sc.comms.tl, sc.comms.success.clone(), sc.comms.cna_rate);
+                let (tl, success, rate) = (sc.comms.tl.assumed(), sc.comms.success.clone(), sc.comms.cna_rate);
                 Box::new(move |d: f64| success.p_success(rate, tl.at_distance(d))) as PingLikelihood
             });
             let (start, noise) = filter_model(sc);
@@ -137,7 +137,7 @@ fn build(name: &str, sc: &Scenario, planned: Option<&TimedWaypoints>) -> Result<
 /// covariance and process noise per second (the filter's per-step Q over its step; the mean of
 /// east and north), and its range noise σ² = (c·σ_t)² + floor + (r·σ_c/c)² as σ₀ and k per km.
 fn filter_model(sc: &Scenario) -> (AuvEstimate, RangeNoise) {
-    let f = &sc.filter;
+    let f = &sc.filter.params;
     let q = 0.5 * (f.q[0] + f.q[1]) / f.step_s;
     let n = &f.range_noise;
     let sigma_m = ((n.sound_speed * n.sigma_time).powi(2) + n.floor).sqrt();
@@ -170,12 +170,6 @@ fn open_loop(sc: &Scenario) -> Result<TimedWaypoints, PlanError> {
     Ok(TimedWaypoints {
         waypoints: run.decisions.iter().enumerate().map(|(i, d)| ((i + 1) as f64 * tau, d.next.pos)).collect(),
     })
-}
-
-/// The link model the world uses (kept here so the planner's lost-ping likelihood and the
-/// world's draws agree): TL between two points.
-pub fn tl_between(sc: &Scenario, a: &Vec3, b: &Vec3) -> f64 {
-    sc.comms.tl.tl(a, b).unwrap_or(coopnav_acomms::tl::TL_CEILING)
 }
 
 /// Receiver type of a link's far end.
