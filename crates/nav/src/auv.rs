@@ -9,10 +9,10 @@
 //! enough to reach 8°. Headings inside are math convention (0 = east, counter-clockwise), so E
 //! advances with cos ψ and N with sin ψ; the thesis writes the same model clockwise from north.
 
-use crate::ekf::{Ekf, Gate, UpdateOutcome};
+use crate::ekf::{wrap_angle, Ekf, Gate, UpdateOutcome};
 use crate::range::{RangeMeasurement, RangeNoise};
 use coopnav_core::validation::{CheckFields, InvalidFields, Problems};
-use coopnav_core::{wrap_pi, Vec3};
+use coopnav_core::Vec3;
 use nalgebra::{SMatrix, SVector};
 use serde::{Deserialize, Serialize};
 
@@ -47,6 +47,26 @@ impl CheckFields for CurrentParams {
     fn check_fields(&self, prefix: &str, p: &mut Problems) {
         p.positive(&format!("{prefix}p0"), self.p0);
         p.non_negative(&format!("{prefix}q"), self.q);
+    }
+}
+
+/// The AUV filter's state vector: `{ kind = "thesis" }` (5 states) or `{ kind = "current", p0, q }`
+/// (7, with a water current).
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case")]
+pub enum AuvModel {
+    /// [E, N, S, ψ, b]: the thesis's filter (digest §3.2).
+    #[default]
+    Thesis,
+    /// [E, N, S, ψ, b, c_E, c_N]: with a water current (issue 12, field logs).
+    Current(CurrentParams),
+}
+
+impl CheckFields for AuvModel {
+    fn check_fields(&self, prefix: &str, p: &mut Problems) {
+        if let AuvModel::Current(c) = self {
+            c.check_fields(prefix, p);
+        }
     }
 }
 
@@ -116,23 +136,33 @@ pub fn transition<const M: usize>(x: &SVector<f64, M>, h: f64, turn: f64) -> SVe
         next[E] += h * x[CURRENT_E];
         next[N] += h * x[CURRENT_N];
     }
-    next[PSI] = wrap_pi(x[PSI] + turn);
+    next[PSI] = wrap_angle(x[PSI] + turn);
     next
 }
 
 /// ∂transition/∂x at `x` (digest §3.2, F^A).
 pub fn transition_jacobian<const M: usize>(x: &SVector<f64, M>, h: f64) -> SMatrix<f64, M, M> {
-    let (sin, cos) = x[PSI].sin_cos();
     let mut f = SMatrix::<f64, M, M>::identity();
-    f[(E, S)] = h * cos;
-    f[(E, PSI)] = -h * x[S] * sin;
-    f[(N, S)] = h * sin;
-    f[(N, PSI)] = h * x[S] * cos;
-    if M > CURRENT_N {
-        f[(E, CURRENT_E)] = h;
-        f[(N, CURRENT_N)] = h;
+    for (i, j, v) in transition_jacobian_entries(x, h) {
+        f[(i, j)] += v;
     }
     f
+}
+
+/// The non-identity entries (row, column, value) of [`transition_jacobian`]: four, six with the
+/// current states (zero-valued when `M` = 5, so the array has one length).
+fn transition_jacobian_entries<const M: usize>(x: &SVector<f64, M>, h: f64) -> [(usize, usize, f64); 6] {
+    let (sin, cos) = x[PSI].sin_cos();
+    let drift = if M > CURRENT_N { h } else { 0.0 };
+    let (ce, cn) = if M > CURRENT_N { (CURRENT_E, CURRENT_N) } else { (E, N) };
+    [
+        (E, S, h * cos),
+        (E, PSI, -h * x[S] * sin),
+        (N, S, h * sin),
+        (N, PSI, h * x[S] * cos),
+        (E, ce, drift),
+        (N, cn, drift),
+    ]
 }
 
 /// The AUV navigation filter with `M` = 5 (thesis) or 7 (with current) states.
@@ -197,10 +227,10 @@ impl<const M: usize> AuvEkf<M> {
             return false;
         }
         let x = *self.ekf.x();
-        let (x_new, f) = (transition(&x, h, h * yaw_rate), transition_jacobian(&x, h));
-        let q_step = SVector::<f64, M>::from_fn(|i, _| self.params.q.get(i).copied().unwrap_or(self.extra_q));
-        let q = SMatrix::<f64, M, M>::from_diagonal(&q_step) * (h / self.params.step_s);
-        self.ekf.predict(t, x_new, f, q)
+        let x_new = transition(&x, h, h * yaw_rate);
+        let scale = h / self.params.step_s;
+        let q = SVector::<f64, M>::from_fn(|i, _| self.params.q.get(i).copied().unwrap_or(self.extra_q) * scale);
+        self.ekf.predict_sparse(t, x_new, &transition_jacobian_entries(&x, h), &q)
     }
 
     /// Speed-sensor update (m/s).
@@ -216,7 +246,7 @@ impl<const M: usize> AuvEkf<M> {
         let mut h = SMatrix::<f64, 1, M>::zeros();
         h[PSI] = 1.0;
         h[BIAS] = 1.0;
-        let y = wrap_pi(measured - self.ekf.x()[PSI] - self.ekf.x()[BIAS]);
+        let y = wrap_angle(measured - self.ekf.x()[PSI] - self.ekf.x()[BIAS]);
         self.ekf.update_scalar(y, h, self.params.sigma_heading.powi(2), &Gate::OFF)
     }
 
@@ -262,10 +292,95 @@ impl<const M: usize> AuvEkf<M> {
     }
 }
 
+/// An AUV filter of either state vector, chosen at run time by an [`AuvModel`]: what a
+/// simulator holds for each vehicle. The engine reads the navigation states (E, N, S, ψ), the
+/// horizontal covariance block and the current estimate, whichever the model.
+#[derive(Debug, Clone)]
+pub enum AuvFilter {
+    Thesis(AuvEkf<5>),
+    Current(AuvEkf<7>),
+}
+
+/// Calls `$body` with `$f` bound to the filter, whichever its state vector.
+macro_rules! each_model {
+    ($self:expr, $f:ident => $body:expr) => {
+        match $self {
+            AuvFilter::Thesis($f) => $body,
+            AuvFilter::Current($f) => $body,
+        }
+    };
+}
+
+impl AuvFilter {
+    /// As [`AuvEkf::new`], with the state vector of `model`.
+    pub fn new(model: &AuvModel, t0: f64, e: f64, n: f64, speed: f64, psi: f64, params: AuvParams) -> Self {
+        match model {
+            AuvModel::Thesis => AuvFilter::Thesis(AuvEkf::new(t0, e, n, speed, psi, params)),
+            AuvModel::Current(c) => AuvFilter::Current(AuvEkf::with_current(t0, e, n, speed, psi, params, *c)),
+        }
+    }
+
+    pub fn position(&self) -> (f64, f64) {
+        each_model!(self, f => f.position())
+    }
+    /// Estimated speed through the water (m/s) and math heading ψ (rad).
+    pub fn speed_heading(&self) -> (f64, f64) {
+        each_model!(self, f => (f.state()[S], f.state()[PSI]))
+    }
+    /// Estimated water current (east, north) m/s: zero for the thesis model.
+    pub fn current(&self) -> (f64, f64) {
+        match self {
+            AuvFilter::Thesis(_) => (0.0, 0.0),
+            AuvFilter::Current(f) => (f.state()[CURRENT_E], f.state()[CURRENT_N]),
+        }
+    }
+    /// The horizontal covariance block [P_EE, P_EN, P_NN].
+    pub fn position_cov(&self) -> [f64; 3] {
+        each_model!(self, f => {
+            let p = f.ekf().p();
+            [p[(E, E)], p[(E, N)], p[(N, N)]]
+        })
+    }
+    pub fn is_finite(&self) -> bool {
+        each_model!(self, f => f.state().iter().chain(f.ekf().p().iter()).all(|v| v.is_finite()))
+    }
+    pub fn predict_to(&mut self, t: f64, yaw_rate: f64) -> bool {
+        each_model!(self, f => f.predict_to(t, yaw_rate))
+    }
+    pub fn update_speed(&mut self, measured: f64) -> UpdateOutcome {
+        each_model!(self, f => f.update_speed(measured))
+    }
+    pub fn update_heading(&mut self, measured: f64) -> UpdateOutcome {
+        each_model!(self, f => f.update_heading(measured))
+    }
+    pub fn update_range(&mut self, m: &RangeMeasurement, auv_depth: Option<f64>) -> UpdateOutcome {
+        each_model!(self, f => f.update_range(m, auv_depth))
+    }
+    /// A horizontal position fix (e, n) with σ `sd` per axis (GPS at the surface): two scalar
+    /// updates, exact for the diagonal noise.
+    pub fn update_position_fix(&mut self, fix: (f64, f64), sd: f64) -> [UpdateOutcome; 2] {
+        each_model!(self, f => [
+            f.update_axis(E, fix.0, sd * sd),
+            f.update_axis(N, fix.1, sd * sd),
+        ])
+    }
+}
+
+impl<const M: usize> AuvEkf<M> {
+    /// A direct measurement of state `i` with variance `r`.
+    fn update_axis(&mut self, i: usize, measured: f64, r: f64) -> UpdateOutcome {
+        let mut h = SMatrix::<f64, 1, M>::zeros();
+        h[i] = 1.0;
+        let y = measured - self.ekf.x()[i];
+        self.ekf.update_scalar(y, h, r, &Gate::OFF)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::ekf::is_positive_definite;
+    use coopnav_core::wrap_pi;
 
     fn meas(range: f64, at: Vec3) -> RangeMeasurement {
         RangeMeasurement { range, travel_time: range / 1500.0, transponder: at }

@@ -141,10 +141,95 @@ impl<const N: usize> Ekf<N> {
         true
     }
 
+    /// Prediction to time `t` with a transition Jacobian F = I + G, G given by its non-zero
+    /// entries (row, column, value), and a diagonal process noise: the same P⁻ = F P Fᵀ + Q as
+    /// [`Self::predict`] (up to rounding), computed as two sparse row/column passes instead of
+    /// two dense N×N products — the filter-rate predictions of a fleet are most of a run's time.
+    pub fn predict_sparse(
+        &mut self,
+        t: f64,
+        x_new: SVector<f64, N>,
+        g: &[(usize, usize, f64)],
+        q_diag: &SVector<f64, N>,
+    ) -> bool {
+        let g_ok = g.iter().all(|&(i, j, v)| i < N && j < N && v.is_finite());
+        if !(t.is_finite() && g_ok && all_finite(x_new.as_slice()) && all_finite(q_diag.as_slice())) {
+            return false;
+        }
+        // A = F P = P + G P (rows of G read the old P), then P⁻ = A Fᵀ = A + A Gᵀ (columns).
+        let old = self.p;
+        for &(i, j, v) in g {
+            for c in 0..N {
+                self.p[(i, c)] += v * old[(j, c)];
+            }
+        }
+        let a = self.p;
+        for &(i, j, v) in g {
+            for r in 0..N {
+                self.p[(r, i)] += v * a[(r, j)];
+            }
+        }
+        for i in 0..N {
+            self.p[(i, i)] += q_diag[i];
+        }
+        symmetrise_in_place(&mut self.p);
+        self.x = x_new;
+        self.wrap_state();
+        self.t = t;
+        self.predicts += 1;
+        if let Some(h) = self.history.as_mut() {
+            let mut f = SMatrix::<f64, N, N>::identity();
+            g.iter().for_each(|&(i, j, v)| f[(i, j)] += v);
+            let q = SMatrix::<f64, N, N>::from_diagonal(q_diag);
+            h.push(Step { t, f, q, x_prior: self.x, p_prior: self.p, x_post: self.x, p_post: self.p });
+        }
+        true
+    }
+
     /// Scalar update: `innovation` = z − h(x⁻) (already wrapped by the caller if it is an angle),
-    /// `h` the Jacobian row, `r` the measurement variance.
+    /// `h` the Jacobian row, `r` the measurement variance. The Joseph form of [`Self::update`]
+    /// with the gain a rank-one correction: (I − k h) P (I − k h)ᵀ + r k kᵀ is computed as
+    /// B = P − k (P hᵀ)ᵀ, then B − (B hᵀ) kᵀ + r k kᵀ, O(N²) instead of dense N×N products
+    /// (equal up to rounding).
     pub fn update_scalar(&mut self, innovation: f64, h: SMatrix<f64, 1, N>, r: f64, gate: &Gate) -> UpdateOutcome {
-        self.update(SVector::<f64, 1>::new(innovation), h, SMatrix::<f64, 1, 1>::new(r), gate)
+        if !(innovation.is_finite() && all_finite(h.as_slice()) && r.is_finite()) {
+            return UpdateOutcome::Unusable;
+        }
+        // Written as loops over the fixed size: this runs twice per AUV per filter step.
+        let mut pht = [0.0; N];
+        for (i, v) in pht.iter_mut().enumerate() {
+            *v = (0..N).map(|j| self.p[(i, j)] * h[j]).sum();
+        }
+        let s = (0..N).map(|j| h[j] * pht[j]).sum::<f64>() + r;
+        if !(s > 0.0 && s.is_finite()) {
+            return UpdateOutcome::Unusable;
+        }
+        let nis = innovation * innovation / s;
+        let residual_ok = gate.max_abs_residual.map_or(true, |b| innovation.abs() <= b);
+        let nis_ok = gate.max_nis.map_or(true, |b| nis <= b);
+        if !(residual_ok && nis_ok) {
+            return UpdateOutcome::Gated { nis };
+        }
+        let k = pht.map(|v| v / s);
+        // B = P − k (P hᵀ)ᵀ, then P⁺ = B − (B hᵀ) kᵀ + r k kᵀ.
+        let mut p_new = self.p;
+        for i in 0..N {
+            for j in 0..N {
+                p_new[(i, j)] -= k[i] * pht[j];
+            }
+        }
+        let mut bht = [0.0; N];
+        for (i, v) in bht.iter_mut().enumerate() {
+            *v = (0..N).map(|j| p_new[(i, j)] * h[j]).sum();
+        }
+        for i in 0..N {
+            for j in 0..N {
+                p_new[(i, j)] += (r * k[i] - bht[i]) * k[j];
+            }
+        }
+        symmetrise_in_place(&mut p_new);
+        let x_new = self.x + SVector::<f64, N>::from(k) * innovation;
+        self.commit(x_new, p_new).map_or(UpdateOutcome::Unusable, |()| UpdateOutcome::Applied { nis })
     }
 
     /// Vector update of M measurements with innovation y, Jacobian H and noise covariance R, in
@@ -173,8 +258,13 @@ impl<const N: usize> Ekf<N> {
         let i_kh = SMatrix::<f64, N, N>::identity() - k * h;
         let p_new = symmetrise(i_kh * self.p * i_kh.transpose() + k * r * k.transpose());
         let x_new = self.x + k * y;
+        self.commit(x_new, p_new).map_or(UpdateOutcome::Unusable, |()| UpdateOutcome::Applied { nis })
+    }
+
+    /// Takes an update's posterior unless it is non-finite; records it in the history.
+    fn commit(&mut self, x_new: SVector<f64, N>, p_new: SMatrix<f64, N, N>) -> Option<()> {
         if !(all_finite(x_new.as_slice()) && all_finite(p_new.as_slice())) {
-            return UpdateOutcome::Unusable;
+            return None;
         }
         self.x = x_new;
         self.p = p_new;
@@ -184,13 +274,13 @@ impl<const N: usize> Ekf<N> {
             last.x_post = self.x;
             last.p_post = self.p;
         }
-        UpdateOutcome::Applied { nis }
+        Some(())
     }
 
     fn wrap_state(&mut self) {
         for (i, is_angle) in self.angles.iter().enumerate() {
             if *is_angle {
-                self.x[i] = wrap_pi(self.x[i]);
+                self.x[i] = wrap_angle(self.x[i]);
             }
         }
     }
@@ -209,6 +299,27 @@ pub fn state_difference<const N: usize>(
         }
     }
     d
+}
+
+/// An angle wrapped to (-π, π]: as [`wrap_pi`], but one already inside is returned untouched
+/// (wrap_pi's remainder would round it, and costs a division the filter pays every step).
+pub fn wrap_angle(a: f64) -> f64 {
+    if a > -std::f64::consts::PI && a <= std::f64::consts::PI {
+        a
+    } else {
+        wrap_pi(a)
+    }
+}
+
+/// [`symmetrise`] in place, mirroring the averaged upper triangle.
+fn symmetrise_in_place<const N: usize>(m: &mut SMatrix<f64, N, N>) {
+    for i in 0..N {
+        for j in i + 1..N {
+            let v = 0.5 * (m[(i, j)] + m[(j, i)]);
+            m[(i, j)] = v;
+            m[(j, i)] = v;
+        }
+    }
 }
 
 /// (M + Mᵀ)/2: removes the round-off asymmetry that would otherwise accumulate.
@@ -283,6 +394,31 @@ mod tests {
         assert_eq!(h[1].x_prior[0], 1.0);
         assert!(h[1].x_post[0] > 1.0);
         assert!(h[1].p_post[(0, 0)] < h[1].p_prior[(0, 0)]);
+    }
+
+    #[test]
+    fn fast_paths_equal_the_dense_algebra() {
+        let p0 = SMatrix::<f64, 3, 3>::new(4.0, 0.5, -0.2, 0.5, 2.0, 0.3, -0.2, 0.3, 1.0);
+        let (mut dense, mut fast) =
+            (Ekf::new(0.0, SVector::zeros(), p0, [false; 3]), Ekf::new(0.0, SVector::zeros(), p0, [false; 3]));
+        let g = [(0, 1, 0.1), (0, 2, -0.3), (1, 2, 0.05)];
+        let mut f = SMatrix::<f64, 3, 3>::identity();
+        g.iter().for_each(|&(i, j, v)| f[(i, j)] += v);
+        let q = SVector::<f64, 3>::new(0.01, 0.02, 0.0);
+        let x = SVector::<f64, 3>::new(1.0, 2.0, 3.0);
+        assert!(dense.predict(1.0, x, f, SMatrix::from_diagonal(&q)));
+        assert!(fast.predict_sparse(1.0, x, &g, &q));
+        assert!((dense.p() - fast.p()).abs().max() < 1e-12, "{} vs {}", dense.p(), fast.p());
+        let h = SMatrix::<f64, 1, 3>::new(0.6, 0.0, 0.8);
+        let UpdateOutcome::Applied { nis: nis_dense } =
+            dense.update(SVector::<f64, 1>::new(0.7), h, SMatrix::<f64, 1, 1>::new(0.5), &Gate::OFF)
+        else {
+            panic!()
+        };
+        let UpdateOutcome::Applied { nis } = fast.update_scalar(0.7, h, 0.5, &Gate::OFF) else { panic!() };
+        assert!((nis - nis_dense).abs() < 1e-12);
+        assert!((dense.p() - fast.p()).abs().max() < 1e-12 && (dense.x() - fast.x()).abs().max() < 1e-12);
+        assert!(!fast.predict_sparse(2.0, x, &[(3, 0, 1.0)], &q), "an entry outside the matrix is refused");
     }
 
     #[test]

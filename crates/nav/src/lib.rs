@@ -12,7 +12,7 @@ pub mod range;
 pub mod smoother;
 pub mod surface;
 
-pub use auv::{AuvEkf, AuvParams, CurrentParams, ParamError};
+pub use auv::{AuvEkf, AuvFilter, AuvModel, AuvParams, CurrentParams, ParamError};
 pub use ekf::{Ekf, Gate, UpdateOutcome};
 pub use range::{RangeMeasurement, RangeNoise};
 pub use surface::{Outriggers, Side, StateKind, SurfaceEkf, SurfaceParams};

@@ -30,7 +30,7 @@
 //! (top of a second). `init` is the filter's starting estimate (the first one is used);
 //! `truth` rows (topside AUV fixes) are only used to score the result.
 
-use crate::auv::{transition, AuvEkf, AuvParams, CurrentParams, ParamError, BIAS, CURRENT_E, CURRENT_N, PSI};
+use crate::auv::{transition, AuvEkf, AuvParams, ParamError, BIAS, CURRENT_E, CURRENT_N, PSI};
 use crate::cycle::Transmitter;
 use crate::ekf::{Gate, Step, UpdateOutcome};
 use crate::range::RangeMeasurement;
@@ -267,16 +267,8 @@ impl CheckFields for FixMatching {
     }
 }
 
-/// The post-processing filter's state vector.
-#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
-#[serde(tag = "kind", rename_all = "snake_case")]
-pub enum AuvModel {
-    /// [E, N, S, ψ, b]: the thesis's filter (digest §3.2).
-    #[default]
-    Thesis,
-    /// [E, N, S, ψ, b, c_E, c_N]: with a water current (issue 12, field logs).
-    Current(CurrentParams),
-}
+/// The post-processing filter's state vector (the model lives beside the filter, in `auv`).
+pub use crate::auv::AuvModel;
 
 /// Post-processing settings.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]

@@ -8,7 +8,7 @@ use crate::policy::{
 };
 use crate::predeploy::runner;
 use crate::predeploy::scenario::Mission;
-use coopnav_acomms::{Receiver, TransmissionLoss};
+use coopnav_acomms::Receiver;
 use coopnav_core::{CompassDeg, Heading, Vec3};
 use coopnav_plan::{
     AuvEstimate, CnaPose, CostSpec, Deadline, EstimatorSpec, LinkTable, LookAheadPlanner, PlanError, RangeNoise,
@@ -155,7 +155,7 @@ fn build(name: &str, sc: &Scenario, planned: Option<&TimedWaypoints>) -> Result<
 /// The downlink's success probability over a slant distance, as a real CNA can know it: the
 /// modem's rate and success curves and the TL model it is configured with (never the draws).
 fn modem_likelihood(sc: &Scenario) -> PingLikelihood {
-    let (tl, success, rate) = (sc.comms.tl, sc.comms.success.clone(), sc.comms.cna_rate);
+    let (tl, success, rate) = (sc.comms.tl.assumed(), sc.comms.success.clone(), sc.comms.cna_rate);
     Box::new(move |d: f64| success.p_success(rate, tl.at_distance(d)))
 }
 
@@ -163,7 +163,7 @@ fn modem_likelihood(sc: &Scenario) -> PingLikelihood {
 /// covariance and process noise per second (the filter's per-step Q over its step; the mean of
 /// east and north), and its range noise σ² = (c·σ_t)² + floor + (r·σ_c/c)² as σ₀ and k per km.
 fn filter_model(sc: &Scenario) -> (AuvEstimate, RangeNoise) {
-    let f = &sc.filter;
+    let f = &sc.filter.params;
     let q = 0.5 * (f.q[0] + f.q[1]) / f.step_s;
     let n = &f.range_noise;
     let sigma_m = ((n.sound_speed * n.sigma_time).powi(2) + n.floor).sqrt();
@@ -196,12 +196,6 @@ fn open_loop(sc: &Scenario) -> Result<TimedWaypoints, PlanError> {
     Ok(TimedWaypoints {
         waypoints: run.decisions.iter().enumerate().map(|(i, d)| ((i + 1) as f64 * tau, d.next.pos)).collect(),
     })
-}
-
-/// The link model the world uses (kept here so the planner's lost-ping likelihood and the
-/// world's draws agree): TL between two points.
-pub fn tl_between(sc: &Scenario, a: &Vec3, b: &Vec3) -> f64 {
-    sc.comms.tl.tl(a, b).unwrap_or(coopnav_acomms::tl::TL_CEILING)
 }
 
 /// Receiver type of a link's far end.

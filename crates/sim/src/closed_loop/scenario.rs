@@ -4,18 +4,19 @@
 
 pub use crate::engine::health::Health;
 use crate::models::channel::Channel;
+use crate::models::filter::FilterSpec;
 use crate::models::finish::Finish;
 use crate::models::schedule::{longest_air, payload_problem, Fit, Schedule};
+use crate::models::tl::TlModel;
 pub use crate::scenario_file::ScenarioError;
 use crate::scenario_file::{self, overlay, Problems};
 use coopnav_acomms::node_report::{BODY_BITS, HEADER_BITS};
 use coopnav_acomms::selector::AdaptiveConfig;
 use coopnav_acomms::status::CovTrailer;
-use coopnav_acomms::tl::analytic::Thorp;
 use coopnav_acomms::{Rate, SuccessModel};
 use coopnav_core::validation::CheckFields;
 use coopnav_core::{Bathymetry, CompassDeg, DepthTarget, Heading, Lawnmower, Shelf};
-use coopnav_nav::{AuvParams, RangeNoise};
+use coopnav_nav::{AuvModel, AuvParams, RangeNoise};
 use coopnav_plan::predict::{PredictorConfig, WaypointUse};
 use coopnav_plan::{
     Aggregate, CnaKind, Deadline, DistanceLimits, ErrorModel, MotionConfig, PenaltyCase, PlannerConfig, SearchConfig,
@@ -48,7 +49,7 @@ pub struct Scenario {
     pub sensors: AuvSensors,
     /// The survey AUVs' filter: what it assumes (the truth is `[channel]` and `[sensors]`).
     #[serde(default = "default_filter", deserialize_with = "filter_over_default")]
-    pub filter: AuvParams,
+    pub filter: FilterSpec,
     pub planner: Planner,
     #[serde(default)]
     pub health: Health,
@@ -82,12 +83,25 @@ impl Default for AuvSensors {
 
 /// The closed loop's channel keeps 0.15 m range noise at zero range (σ_τ = 0.1 ms, the model its
 /// reproductions were measured with), not the nav default matched to Gill's outlier mixture.
-fn default_filter() -> AuvParams {
-    AuvParams { range_noise: RangeNoise { sigma_time: 1e-4, ..RangeNoise::default() }, ..AuvParams::default() }
+///
+/// Position process noise: Gill's Table 3 Q_E = Q_N = 0.255448 m² was tuned per step of an
+/// unknown Δt (gill digest §10 A1); read per 0.1 s step it grows σ by 2.55 m²/s per axis, and on
+/// the default mission the filters were conservative (NEES mean 0.50–0.82 against the consistent
+/// 2, σ 25–32 m against mean errors of 9–11 m). A fifth of it, [`CLOSED_LOOP_Q_EN`], measured
+/// NEES 1.5–2.7 there with the same true error (issue 9 item 4); invented, configurable as
+/// `[filter] q`.
+fn default_filter() -> FilterSpec {
+    let thesis = AuvParams::default();
+    let q = [CLOSED_LOOP_Q_EN, CLOSED_LOOP_Q_EN, thesis.q[2], thesis.q[3], thesis.q[4]];
+    let params = AuvParams { range_noise: RangeNoise { sigma_time: 1e-4, ..RangeNoise::default() }, q, ..thesis };
+    FilterSpec { model: AuvModel::Thesis, params }
 }
 
+/// Position process noise of the closed loop's filters, m² per 0.1 s step (see [`default_filter`]).
+pub const CLOSED_LOOP_Q_EN: f64 = 0.2 * 0.255448;
+
 /// A `[filter]` table overrides only the fields it names.
-fn filter_over_default<'de, D: serde::Deserializer<'de>>(d: D) -> Result<AuvParams, D::Error> {
+fn filter_over_default<'de, D: serde::Deserializer<'de>>(d: D) -> Result<FilterSpec, D::Error> {
     use serde::Deserialize;
     overlay(&default_filter(), toml::Value::deserialize(d)?).map_err(serde::de::Error::custom)
 }
@@ -188,7 +202,9 @@ pub struct Comms {
     /// from its estimated distance to the CNA; the CNA's next broadcast acknowledges (one bit per
     /// AUV) the statuses it received since its last one.
     pub status_adaptive: Option<AdaptiveConfig>,
-    pub tl: Thorp,
+    /// Transmission loss as the sea plays it (a named model; without `kind`, analytic).
+    #[serde(deserialize_with = "crate::models::tl::kind_defaults_to_analytic")]
+    pub tl: TlModel,
     pub success: SuccessModel,
     /// Who transmits when within each cycle of τ.
     pub schedule: Schedule,
@@ -205,7 +221,7 @@ impl Default for Comms {
             cna_rate: Rate::R0,
             status_rate: Rate::R0,
             status_adaptive: None,
-            tl: Thorp::default(),
+            tl: TlModel::default(),
             success: SuccessModel::default(),
             schedule: Schedule::default(),
             slot_guard_s: 0.1,
@@ -288,6 +304,17 @@ impl Scenario {
         self.filter.check_fields("filter.", &mut p);
         p.check("health.divergence_window_s", self.health.divergence_window_s, |v| v > 0.0, "a finite number > 0");
         self.validate_planner(&mut p);
+        if p.is_empty() && !matches!(self.comms.tl, TlModel::Analytic(_)) {
+            // The BELLHOP kinds need the program, and a grid is computed (or read from the disk
+            // cache) here, once, so that a run never finds it missing.
+            if let Err(e) = self.comms.tl.provider(self) {
+                p.push(
+                    "comms.tl",
+                    e.to_string(),
+                    "BELLHOP installed (scripts/install-bellhop.sh) and a grid it can compute",
+                );
+            }
+        }
         p.finish()
     }
 
@@ -406,8 +433,7 @@ impl Scenario {
         for rate in &status_rates {
             p.extend(payload_problem("comms.status_rate", *rate, status_bytes));
         }
-        p.positive("comms.tl.k", c.tl.k);
-        p.positive("comms.tl.freq_hz", c.tl.freq_hz);
+        p.extend(c.tl.problems("comms.tl."));
         p.non_negative("comms.slot_guard_s", c.slot_guard_s);
         p.positive("comms.max_range_m", c.max_range_m);
         p.extend(self.channel.range_error.problems("channel.range_error."));
@@ -564,10 +590,10 @@ mod tests {
     #[test]
     fn partial_filter_tables_keep_the_closed_loop_channel() {
         let plain = Scenario::parse(EXAMPLE, Path::new("e.toml")).unwrap();
-        assert_eq!(plain.filter.range_noise.sigma_time, 1e-4);
+        assert_eq!(plain.filter.params.range_noise.sigma_time, 1e-4);
         let s = Scenario::parse(&format!("{EXAMPLE}\n[filter]\nsigma_speed = 0.2\n"), Path::new("f.toml")).unwrap();
-        assert_eq!((s.filter.sigma_speed, s.filter.range_noise.sigma_time), (0.2, 1e-4));
-        assert_eq!(s.filter.q, plain.filter.q);
+        assert_eq!((s.filter.params.sigma_speed, s.filter.params.range_noise.sigma_time), (0.2, 1e-4));
+        assert_eq!(s.filter.params.q, plain.filter.params.q);
         let e = err(&format!("{EXAMPLE}\n[filter.range_noise]\nsigma_tim = 1e-3\n"));
         assert!(e.contains("sigma_tim"), "{e}");
     }

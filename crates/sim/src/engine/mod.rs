@@ -20,6 +20,7 @@ use crate::closed_loop::scenario::Scenario;
 use crate::models::channel::Clock;
 use crate::models::schedule::Slot;
 use crate::policy::ReportedCov;
+use coopnav_acomms::tl::{TlError, TransmissionLoss, TL_CEILING};
 use coopnav_core::{Bathymetry, SeedStream, Vec3};
 use coopnav_plan::predict::UnderwayPredictor;
 use coopnav_plan::AuvForecast;
@@ -28,6 +29,7 @@ pub use observe::{CommsEvent, Decision, Observer, Trace, TraceRow};
 use phases::Payload;
 use rand_chacha::ChaCha8Rng;
 use serde::Serialize;
+use std::sync::Arc;
 use std::time::Instant;
 use vehicles::{stream, Craft, SurveyAuv};
 
@@ -140,6 +142,8 @@ struct Engine<'a> {
     auvs: Vec<SurveyAuv>,
     cna: Cna,
     air: InFlight<Payload>,
+    /// The scenario's transmission-loss model, built once for the run.
+    tl: Arc<dyn TransmissionLoss>,
     next_decision: u64,
     /// Index of the next slot over the whole run (cycle = index / slots per cycle).
     next_slot: u64,
@@ -197,6 +201,11 @@ impl<'a> Engine<'a> {
             auvs,
             cna,
             air: InFlight::new(sc.channel.collisions.capture_margin_db),
+            tl: sc.comms.tl.provider(sc).unwrap_or_else(|e| {
+                // Validation builds the provider first, so this is a scenario built in code.
+                tracing::error!(error = %e, "transmission loss unavailable: every packet is lost");
+                Arc::new(Unavailable)
+            }),
             next_decision: 0,
             next_slot: 0,
             status_sent: vec![0; n],
@@ -232,6 +241,11 @@ impl<'a> Engine<'a> {
         lap(&mut timing.observe_s);
     }
 
+    /// Transmission loss from `a` to `b`, dB; the ceiling (a lost packet) when the model fails.
+    fn tl_db(&self, a: &Vec3, b: &Vec3) -> f64 {
+        self.tl.tl(a, b).unwrap_or(TL_CEILING)
+    }
+
     fn silent(&self, k: usize, t: f64) -> bool {
         t >= self.faults.silent_from_s && self.faults.silent_auvs.contains(&k)
     }
@@ -255,6 +269,15 @@ impl<'a> Engine<'a> {
             trace: None,
             timing,
         }
+    }
+}
+
+/// A transmission-loss model that could not be built: every packet is lost.
+struct Unavailable;
+
+impl TransmissionLoss for Unavailable {
+    fn tl(&self, _: &Vec3, _: &Vec3) -> Result<f64, TlError> {
+        Err(TlError::Invalid("the scenario's transmission-loss model could not be built".into()))
     }
 }
 

@@ -10,7 +10,7 @@ use super::observe::{CommsEvent, Decision, Observer, TraceRow};
 use super::vehicles::lerp;
 use super::vehicles::SurveyAuv;
 use super::{Engine, FleetView};
-use crate::closed_loop::policies::{receiver, tl_between};
+use crate::closed_loop::policies::receiver;
 use crate::hbl::noise::normal;
 use crate::models::channel::air_time;
 use crate::models::finish::Finish;
@@ -145,13 +145,14 @@ impl Engine<'_> {
         self.air.transmit(Owner::Cna, t_tx, t_tx + air);
         for k in 0..self.auvs.len() {
             let silent = self.silent(k, t_tx);
+            let p0 = lerp(self.auvs[k].prev, self.auvs[k].truth, frac);
+            let tl = self.tl_db(&from, &p0);
             let a = &mut self.auvs[k];
-            let (p0, v) = (lerp(a.prev, a.truth, frac), a.velocity(sc.dt));
+            let v = a.velocity(sc.dt);
             let tt = sc.channel.sound_speed.travel_time(from, |d| p0 + v * d);
-            let tl = tl_between(sc, &from, &p0);
             let decoded = sc.comms.success.draw(rate, tl, receiver(false), &mut a.rng_down).frame0() && !silent;
             // Drawn whatever the fate, so packet losses do not shift the stream.
-            let error = sc.channel.range_error.draw(sc.filter.range_noise.variance(tt), &mut a.rng_range);
+            let error = sc.channel.range_error.draw(sc.filter.params.range_noise.variance(tt), &mut a.rng_range);
             let clocks = a.clock.error_at(t_tx + tt) - self.cna.clock.error_at(t_tx);
             let travel_time = error.map(|e| tt + e + clocks);
             let acked = self.cna.acked[k].clone();
@@ -180,20 +181,21 @@ impl Engine<'_> {
             }
         };
         a.unacked.push(slot_id);
-        let air = air_time(rate);
         let from = lerp(a.prev, a.truth, frac);
         let craft = &self.cna.craft;
         let (c0, cv) = (lerp(craft.prev, craft.pos, frac), (craft.pos - craft.prev) * (1.0 / sc.dt));
+        let tl = self.tl_db(&from, &c0);
+        let air = air_time(rate);
         let tt = sc.channel.sound_speed.travel_time(from, |d| c0 + cv * d);
-        let tl = tl_between(sc, &from, &c0);
-        let decoded = sc.comms.success.draw(rate, tl, receiver(true), &mut a.rng_up).frame0() && !silent;
+        let rng_up = &mut self.auvs[j].rng_up;
+        let decoded = sc.comms.success.draw(rate, tl, receiver(true), rng_up).frame0() && !silent;
         self.air.transmit(Owner::Auv(j), t_tx, t_tx + air);
         let payload = Payload::Status { rate, slot_id, bytes, decoded };
         self.air.push(arrival(Owner::Auv(j), Owner::Cna, t_tx, tt, air, tl, Some(payload)));
         for (m, other) in self.auvs.iter().enumerate().filter(|(m, _)| *m != j) {
             let (p0, v) = (lerp(other.prev, other.truth, frac), other.velocity(sc.dt));
             let tt = sc.channel.sound_speed.travel_time(from, |d| p0 + v * d);
-            let tl = tl_between(sc, &from, &p0);
+            let tl = self.tl_db(&from, &p0);
             self.air.push(arrival(Owner::Auv(j), Owner::Auv(m), t_tx, tt, air, tl, None));
         }
     }
@@ -246,11 +248,12 @@ impl Engine<'_> {
         a.cna_heard = Some(fix);
         let Some(travel_time) = travel_time else { return };
         a.ekf.predict_to(meta.end, a.yaw_measured);
-        let x = a.ekf.state();
+        let (speed, psi) = a.ekf.speed_heading();
+        let (ce, cn) = a.ekf.current();
         let delay = meta.end - meta.start;
-        let shift = Vec3::new(x[2] * x[3].cos() * delay, x[2] * x[3].sin() * delay, 0.0);
+        let shift = Vec3::new((speed * psi.cos() + ce) * delay, (speed * psi.sin() + cn) * delay, 0.0);
         let m = RangeMeasurement {
-            range: sc.filter.range_noise.sound_speed * travel_time,
+            range: sc.filter.params.range_noise.sound_speed * travel_time,
             travel_time,
             transponder: fix + shift,
         };
@@ -286,10 +289,10 @@ impl Engine<'_> {
         for (k, (a, tally)) in self.auvs.iter().zip(self.tallies.iter_mut()).enumerate() {
             self.finite &= a.finite();
             let (ex, ey) = a.ekf.position();
-            let p = a.ekf.ekf().p();
+            let [p_ee, p_en, p_nn] = a.ekf.position_cov();
             let (dx, dy) = (ex - a.truth.x, ey - a.truth.y);
-            let sigma = (p[(0, 0)] + p[(1, 1)]).max(0.0).sqrt();
-            let nees = nees_2d(dx, dy, p[(0, 0)], p[(0, 1)], p[(1, 1)]);
+            let sigma = (p_ee + p_nn).max(0.0).sqrt();
+            let nees = nees_2d(dx, dy, p_ee, p_en, p_nn);
             let error = dx.hypot(dy);
             let d = (a.truth.x - cna.x).hypot(a.truth.y - cna.y);
             tally.errors.push(error);
@@ -306,9 +309,9 @@ impl Engine<'_> {
                 est_y: ey,
                 error,
                 est_sd: sigma,
-                p_ee: p[(0, 0)],
-                p_en: p[(0, 1)],
-                p_nn: p[(1, 1)],
+                p_ee,
+                p_en,
+                p_nn,
                 nees,
                 modelled: self.cna.model.total(k),
                 cna_x: cna.x,
@@ -345,9 +348,8 @@ fn event(meta: &Arrival<()>, direction: &'static str, auv: usize, decoded: bool,
 /// trailer with its filter's horizontal covariance (issue 10: the CNA plans on what the AUVs'
 /// filters report, not on a model of them).
 fn status_with_covariance(a: &SurveyAuv, k: usize, t: f64) -> Result<Vec<u8>, EncodeError> {
-    let p = a.ekf.ekf().p();
     let mut bytes = a.status(k, t).encode()?;
-    bytes.extend(CovTrailer::encode(&CovarianceReport::from_cov([p[(0, 0)], p[(0, 1)], p[(1, 1)]]))?);
+    bytes.extend(CovTrailer::encode(&CovarianceReport::from_cov(a.ekf.position_cov()))?);
     Ok(bytes)
 }
 

@@ -100,9 +100,9 @@ fn the_nees_check_flags_a_filter_given_a_wrong_noise_model() {
     let mut sc = Scenario::example().with_auvs(2);
     sc.duration_s = 1800.0;
     let (good, _) = traced(&sc, "centroid", 4);
-    sc.filter.q = sc.filter.q.map(|q| q / 100.0);
-    sc.filter.range_noise.sigma_sound_speed /= 10.0;
-    sc.filter.range_noise.sigma_time /= 10.0;
+    sc.filter.params.q = sc.filter.params.q.map(|q| q / 100.0);
+    sc.filter.params.range_noise.sigma_sound_speed /= 10.0;
+    sc.filter.params.range_noise.sigma_time /= 10.0;
     let (wrong, _) = traced(&sc, "centroid", 4);
     assert!(wrong.fleet.healthy, "finite throughout");
     assert_eq!(wrong.fleet.diverged, 2, "{:?}", wrong.auvs.iter().map(|a| a.health).collect::<Vec<_>>());

@@ -10,8 +10,7 @@ use coopnav_acomms::selector::{AdaptiveBins, FixedRate, RatePolicy};
 use coopnav_core::{
     wrap_pi, Bathymetry, DepthTarget, Heading, Iver2, Iver2Params, Iver2State, SeedStream, Vec3, Waypoint,
 };
-use coopnav_nav::{AuvEkf, Gate};
-use nalgebra::{SMatrix, SVector};
+use coopnav_nav::AuvFilter;
 use rand_chacha::ChaCha8Rng;
 
 /// Stream ids of one run: the CNA's, and a block of ten per survey AUV.
@@ -38,7 +37,7 @@ pub struct SurveyAuv {
     /// True position at the end of the last step, and at its start.
     pub truth: Vec3,
     pub prev: Vec3,
-    pub ekf: AuvEkf,
+    pub ekf: AuvFilter,
     pub clock: Clock,
     /// Yaw rate measured over the current step (the filter's prediction input).
     pub yaw_measured: f64,
@@ -86,7 +85,7 @@ impl SurveyAuv {
             ctrl: Iver2::new(Iver2Params::default(), state, waypoints),
             truth,
             prev: truth,
-            ekf: AuvEkf::new(0.0, ex, ey, 0.0, heading, sc.filter.clone()),
+            ekf: AuvFilter::new(&sc.filter.model, 0.0, ex, ey, 0.0, heading, sc.filter.params.clone()),
             clock: sc.channel.clocks.draw(&mut rng(stream::CLOCK)),
             yaw_measured: 0.0,
             compass: CompassBias::draw(s.compass_bias_step_deg, s.compass_bias_iid, &mut rng(stream::COMPASS_MAP)),
@@ -168,31 +167,28 @@ impl SurveyAuv {
 
     /// A GPS fix of the horizontal position (σ `sd` per axis), as a surfaced AUV takes.
     pub fn gps_fix(&mut self, sd: f64) {
-        let (ex, ey) = self.ekf.position();
         let fix = (self.truth.x + sd * normal(&mut self.rng_gps), self.truth.y + sd * normal(&mut self.rng_gps));
-        let mut h = SMatrix::<f64, 2, 5>::zeros();
-        (h[(0, 0)], h[(1, 1)]) = (1.0, 1.0);
-        let r = SMatrix::<f64, 2, 2>::identity() * (sd * sd);
-        self.ekf.ekf_mut().update(SVector::<f64, 2>::new(fix.0 - ex, fix.1 - ey), h, r, &Gate::OFF);
+        self.ekf.update_position_fix(fix, sd);
     }
 
     pub fn finite(&self) -> bool {
-        self.ekf.state().iter().all(|v| v.is_finite()) && self.ekf.ekf().p().iter().all(|v| v.is_finite())
+        self.ekf.is_finite()
     }
 
     /// The Appendix C status message from the AUV's own estimate and its next three waypoints.
     pub fn status(&self, k: usize, t: f64) -> NodeReport {
-        let x = self.ekf.state();
+        let (ex, ey) = self.ekf.position();
+        let (speed, psi) = self.ekf.speed_heading();
         let next = self.ctrl.next_waypoint();
         let waypoints = self.ctrl.waypoints().iter().skip(next).take(3).map(|w| (w.x, w.y)).collect();
         NodeReport {
             src_id: (k + 1) as u8,
             time_of_day: (t.rem_euclid(86_400.0)) as u32,
             vehicle: VehicleType::Auv,
-            x: x[0],
-            y: x[1],
-            speed: x[2].clamp(-2.0, 9.0),
-            heading: Heading::from_radians(x[3]),
+            x: ex,
+            y: ey,
+            speed: speed.clamp(-2.0, 9.0),
+            heading: Heading::from_radians(psi),
             waypoints,
             front_seat_error: 0,
             front_mode: 0,

@@ -1,0 +1,339 @@
+//! Transmission loss as the sea plays it (`[comms] tl`), a named model: `analytic` (spreading +
+//! Thorp absorption), `bellhop` (one real BELLHOP run per arrival, over the scenario's bathymetry
+//! and sound-speed profile: the reference, slow) or `bellhop_grid` (BELLHOP fields from a lattice
+//! of source positions over the mission area, computed once per scenario, cached on disk keyed
+//! by every input, and interpolated: what Monte Carlo runs use). A table without `kind` is
+//! `analytic` (the files written before the models existed).
+//!
+//! The planner's lost-ping likelihood keeps an analytic model ([`TlModel::assumed`]): what the
+//! CNA believes, apart from the truth.
+
+use crate::closed_loop::policies::cna_start;
+use crate::closed_loop::scenario::Scenario;
+use crate::models::channel::SoundSpeed;
+use coopnav_acomms::tl::analytic::Thorp;
+use coopnav_acomms::tl::bellhop::{AcousticEnv, Bellhop};
+use coopnav_acomms::tl::cached::{AnchorLattice, CachedGrid, GridSpec, LatticeSpec};
+use coopnav_acomms::tl::{TlError, TransmissionLoss};
+use serde::{Deserialize, Serialize};
+use std::collections::HashMap;
+use std::hash::{Hash, Hasher};
+use std::path::PathBuf;
+use std::sync::{Arc, Mutex, OnceLock};
+
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
+pub enum TlModel {
+    /// k·10·log10(d) + Thorp absorption (`k`, `freq_hz`).
+    Analytic(Thorp),
+    /// A BELLHOP run for every arrival, at the true geometry.
+    Bellhop,
+    /// Cached BELLHOP fields on a lattice of source positions.
+    BellhopGrid(GridModel),
+}
+
+impl Default for TlModel {
+    fn default() -> Self {
+        TlModel::Analytic(Thorp::default())
+    }
+}
+
+/// The `bellhop_grid` layout. Invented defaults, measured against direct runs (acomms
+/// `tl::cached` tests): they keep the grid within 1 dB of a direct run.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct GridModel {
+    /// Bearings per anchor, evenly spaced.
+    pub bearings: usize,
+    pub range_step_m: f64,
+    pub depth_step_m: f64,
+    /// Distance between neighbouring source anchors.
+    pub anchor_spacing_m: f64,
+    /// The lattice covers the survey blocks and the CNA's start, widened by this much.
+    pub margin_m: f64,
+    /// Directory of the disk cache (default: `coopnav-tl` in the system temporary directory).
+    pub cache_dir: Option<PathBuf>,
+}
+
+impl Default for GridModel {
+    fn default() -> Self {
+        GridModel {
+            bearings: 16,
+            range_step_m: 10.0,
+            depth_step_m: 2.0,
+            anchor_spacing_m: 500.0,
+            margin_m: 500.0,
+            cache_dir: None,
+        }
+    }
+}
+
+/// Largest number of BELLHOP fields a grid may ask for (anchors × bearings): about an hour of
+/// one core at a kilometre's range.
+pub const MAX_GRID_FIELDS: usize = 20_000;
+
+impl TlModel {
+    /// What the CNA's planner assumes: the analytic model itself, or the default analytic model
+    /// for the BELLHOP kinds.
+    pub fn assumed(&self) -> Thorp {
+        match self {
+            TlModel::Analytic(t) => *t,
+            TlModel::Bellhop | TlModel::BellhopGrid(_) => Thorp::default(),
+        }
+    }
+
+    /// Every bad field, as (field under `prefix`, value, allowed).
+    pub fn problems(&self, prefix: &str) -> Vec<(String, String, String)> {
+        let mut out = Vec::new();
+        let mut need = |field: &str, v: f64, ok: bool, allowed: &str| {
+            if !(v.is_finite() && ok) {
+                out.push((format!("{prefix}{field}"), v.to_string(), allowed.to_string()));
+            }
+        };
+        match self {
+            TlModel::Analytic(t) => {
+                need("k", t.k, t.k > 0.0, "a finite number > 0");
+                need("freq_hz", t.freq_hz, t.freq_hz > 0.0, "a finite number > 0");
+            }
+            TlModel::Bellhop => {}
+            TlModel::BellhopGrid(g) => {
+                need("bearings", g.bearings as f64, (1..=360).contains(&g.bearings), "1..=360");
+                need("range_step_m", g.range_step_m, g.range_step_m >= 1.0, ">= 1 m");
+                need("depth_step_m", g.depth_step_m, g.depth_step_m >= 0.5, ">= 0.5 m");
+                need("anchor_spacing_m", g.anchor_spacing_m, g.anchor_spacing_m >= 50.0, ">= 50 m");
+                need("margin_m", g.margin_m, g.margin_m >= 0.0, ">= 0 m");
+            }
+        }
+        out
+    }
+
+    /// The provider a run uses. BELLHOP kinds need the program; a grid is computed at most once
+    /// per process and once per machine (disk cache), whichever run asks first.
+    pub fn provider(&self, sc: &Scenario) -> Result<Arc<dyn TransmissionLoss>, TlError> {
+        match self {
+            TlModel::Analytic(t) => Ok(Arc::new(*t)),
+            TlModel::Bellhop => Ok(Arc::new(Bellhop::new(environment(sc))?)),
+            TlModel::BellhopGrid(g) => grid(g, sc).map(|l| l as Arc<dyn TransmissionLoss>),
+        }
+    }
+}
+
+/// A `tl` table without `kind` is the analytic model.
+pub fn kind_defaults_to_analytic<'de, D: serde::Deserializer<'de>>(d: D) -> Result<TlModel, D::Error> {
+    use serde::de::Error;
+    let mut value = toml::Value::deserialize(d)?;
+    if let Some(t) = value.as_table_mut().filter(|t| !t.contains_key("kind")) {
+        t.insert("kind".into(), toml::Value::String("analytic".into()));
+    }
+    value.try_into().map_err(D::Error::custom)
+}
+
+/// The thesis's acoustic environment (nams digest §4.5: mud half-space, 25 kHz, BT-1 pattern) over
+/// the scenario's bathymetry, with the scenario's true sound-speed profile.
+fn environment(sc: &Scenario) -> AcousticEnv {
+    let mut env = AcousticEnv::nams(Arc::new(sc.bathymetry()));
+    env.ssp = match &sc.channel.sound_speed {
+        SoundSpeed::Constant { c } => vec![(0.0, *c)],
+        s @ SoundSpeed::Profile { points } => {
+            let below = points.iter().filter(|p| p[0] > 0.0).map(|p| (p[0], p[1]));
+            std::iter::once((0.0, s.at(0.0))).chain(below).collect()
+        }
+    };
+    env
+}
+
+/// Everything a grid depends on, as the disk cache's key.
+#[derive(Serialize)]
+struct GridInputs<'a> {
+    format: u32,
+    bathymetry: &'a coopnav_core::Bathymetry,
+    ssp: &'a [(f64, f64)],
+    freq_hz: f64,
+    beam: &'a [(f64, f64)],
+    lattice: &'a LatticeSpec,
+    spec: &'a GridSpec,
+    bellhop_bytes: u64,
+}
+
+fn grid(g: &GridModel, sc: &Scenario) -> Result<Arc<AnchorLattice>, TlError> {
+    let env = environment(sc);
+    let (lattice, spec) = layout(g, sc);
+    let fields = lattice.nx * lattice.ny * spec.bearings;
+    if fields > MAX_GRID_FIELDS {
+        return Err(TlError::Invalid(format!(
+            "the grid needs {fields} BELLHOP runs ({} × {} anchors × {} bearings), more than {MAX_GRID_FIELDS}: \
+             widen anchor_spacing_m or lower bearings",
+            lattice.nx, lattice.ny, spec.bearings
+        )));
+    }
+    let exe = Bellhop::locate()?;
+    let inputs = GridInputs {
+        format: 1,
+        bathymetry: &env.bathymetry,
+        ssp: &env.ssp,
+        freq_hz: env.freq_hz,
+        beam: &env.beam,
+        lattice: &lattice,
+        spec: &spec,
+        bellhop_bytes: std::fs::metadata(&exe).map(|m| m.len()).unwrap_or(0),
+    };
+    let key_text = serde_json::to_string(&inputs).map_err(|e| TlError::Invalid(e.to_string()))?;
+    let mut hasher = std::collections::hash_map::DefaultHasher::new();
+    key_text.hash(&mut hasher);
+    let key = format!("{:016x}", hasher.finish());
+    static MEMO: OnceLock<Mutex<HashMap<String, Arc<AnchorLattice>>>> = OnceLock::new();
+    let memo = MEMO.get_or_init(Default::default);
+    // Held while computing, so concurrent runs of one scenario compute it once.
+    let mut memo = memo.lock().unwrap_or_else(|e| e.into_inner());
+    if let Some(l) = memo.get(&key) {
+        return Ok(l.clone());
+    }
+    let dir = g.cache_dir.clone().unwrap_or_else(|| std::env::temp_dir().join("coopnav-tl"));
+    let path = dir.join(format!("grid-{key}.bin"));
+    let lattice_grids = match disk::read(&path, &key_text, &lattice, &spec) {
+        Some(l) => l,
+        None => {
+            tracing::info!(fields, path = %path.display(), "computing the BELLHOP grid");
+            let l = AnchorLattice::build(&Bellhop::with_exe(exe, env)?, lattice, spec, &|_| {})?;
+            if let Err(e) = disk::write(&dir, &path, &key_text, &l) {
+                tracing::warn!(path = %path.display(), error = %e, "BELLHOP grid not cached on disk");
+            }
+            l
+        }
+    };
+    let l = Arc::new(lattice_grids);
+    memo.insert(key, l.clone());
+    Ok(l)
+}
+
+/// The anchors over the survey blocks and the CNA start (widened by the margin), and the field
+/// each one holds: to 1.2 × the schedule's longest range, over the deepest water there.
+fn layout(g: &GridModel, sc: &Scenario) -> (LatticeSpec, GridSpec) {
+    let start = cna_start(sc).pos;
+    let points = (0..sc.fleet.n_auvs).flat_map(|k| sc.lawnmower(k).waypoints()).chain([(start.x, start.y)]);
+    let (mut lo, mut hi) = ((f64::INFINITY, f64::INFINITY), (f64::NEG_INFINITY, f64::NEG_INFINITY));
+    for (x, y) in points {
+        (lo, hi) = ((lo.0.min(x), lo.1.min(y)), (hi.0.max(x), hi.1.max(y)));
+    }
+    let (lo, hi) = ((lo.0 - g.margin_m, lo.1 - g.margin_m), (hi.0 + g.margin_m, hi.1 + g.margin_m));
+    let count = |span: f64| (span / g.anchor_spacing_m).ceil() as usize + 1;
+    let lattice = LatticeSpec {
+        origin: lo,
+        spacing: g.anchor_spacing_m,
+        nx: count(hi.0 - lo.0),
+        ny: count(hi.1 - lo.1),
+        source_depth: start.z,
+    };
+    let max_range = (1.2 * sc.comms.max_range_m / g.range_step_m).ceil() * g.range_step_m;
+    let max_depth = (sc.bathymetry().max_depth() / g.depth_step_m).ceil() * g.depth_step_m;
+    let spec =
+        GridSpec { bearings: g.bearings, range_step: g.range_step_m, max_range, depth_step: g.depth_step_m, max_depth };
+    (lattice, spec)
+}
+
+/// The disk cache: one file per grid, its key text on the first line (checked on reading, so a
+/// hash collision or a changed format recomputes), then every field's f32 values, little-endian.
+mod disk {
+    use super::*;
+    use std::io::Write;
+
+    pub fn read(
+        path: &std::path::Path,
+        key_text: &str,
+        lattice: &LatticeSpec,
+        spec: &GridSpec,
+    ) -> Option<AnchorLattice> {
+        let bytes = std::fs::read(path).ok()?;
+        let newline = bytes.iter().position(|&b| b == b'\n')?;
+        if &bytes[..newline] != key_text.as_bytes() {
+            return None;
+        }
+        let values: Vec<f32> =
+            bytes[newline + 1..].chunks_exact(4).map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]])).collect();
+        let per_field = values.len() / (lattice.nx * lattice.ny * spec.bearings).max(1);
+        let mut fields = values.chunks(per_field.max(1)).map(<[f32]>::to_vec);
+        let grids = lattice
+            .anchors()
+            .into_iter()
+            .map(|a| CachedGrid::from_fields(a, spec.clone(), fields.by_ref().take(spec.bearings).collect()))
+            .collect::<Result<Vec<_>, _>>()
+            .ok()?;
+        AnchorLattice::from_grids(lattice.clone(), grids).ok()
+    }
+
+    pub fn write(
+        dir: &std::path::Path,
+        path: &std::path::Path,
+        key_text: &str,
+        l: &AnchorLattice,
+    ) -> std::io::Result<()> {
+        std::fs::create_dir_all(dir)?;
+        // Written beside, then renamed: a reader never sees half a file.
+        let mut tmp = tempfile::NamedTempFile::new_in(dir)?;
+        tmp.write_all(key_text.as_bytes())?;
+        tmp.write_all(b"\n")?;
+        for v in l.grids().iter().flat_map(|g| g.fields()).flatten() {
+            tmp.write_all(&v.to_le_bytes())?;
+        }
+        tmp.persist(path).map(|_| ()).map_err(|e| e.error)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[derive(Debug, Deserialize)]
+    struct Holder {
+        #[serde(deserialize_with = "kind_defaults_to_analytic")]
+        tl: TlModel,
+    }
+
+    fn parse(text: &str) -> Result<TlModel, String> {
+        toml::from_str::<Holder>(text).map(|h| h.tl).map_err(|e| e.to_string())
+    }
+
+    #[test]
+    fn each_kind_parses_and_a_table_without_kind_is_analytic() {
+        assert_eq!(
+            parse("tl = { k = 2.0, freq_hz = 12000.0 }").unwrap(),
+            TlModel::Analytic(Thorp { k: 2.0, freq_hz: 12_000.0 })
+        );
+        assert_eq!(parse("tl = { kind = \"bellhop\" }").unwrap(), TlModel::Bellhop);
+        let grid = parse("tl = { kind = \"bellhop_grid\", bearings = 32 }").unwrap();
+        assert_eq!(grid, TlModel::BellhopGrid(GridModel { bearings: 32, ..GridModel::default() }));
+        assert!(parse("tl = { kind = \"bellhop_grid\", bearing = 32 }").unwrap_err().contains("bearing"));
+        assert!(parse("tl = { kind = \"ray\" }").unwrap_err().contains("ray"));
+        // The planner keeps an analytic belief whatever the sea does.
+        assert_eq!(grid.assumed(), Thorp::default());
+    }
+
+    #[test]
+    fn bad_fields_are_all_named() {
+        let bad = TlModel::BellhopGrid(GridModel { bearings: 0, anchor_spacing_m: 10.0, ..GridModel::default() });
+        let fields: Vec<String> = bad.problems("comms.tl.").into_iter().map(|p| p.0).collect();
+        assert_eq!(fields, ["comms.tl.bearings", "comms.tl.anchor_spacing_m"]);
+        assert!(TlModel::Analytic(Thorp { k: -1.0, freq_hz: 25_000.0 }).problems("t.")[0].0 == "t.k");
+    }
+
+    #[test]
+    fn the_lattice_covers_the_fleet_and_the_grid_the_schedules_range() {
+        let sc = Scenario::example();
+        let (lattice, spec) = layout(&GridModel::default(), &sc);
+        let far = lattice.anchor_extent();
+        for k in 0..sc.fleet.n_auvs {
+            for (x, y) in sc.lawnmower(k).waypoints() {
+                assert!(x >= lattice.origin.0 && y >= lattice.origin.1 && x <= far.0 && y <= far.1, "({x}, {y})");
+            }
+        }
+        assert!(spec.max_range >= sc.comms.max_range_m && spec.max_depth >= sc.bathymetry().max_depth());
+        assert_eq!(lattice.source_depth, 0.0, "the ASC's depth");
+    }
+
+    #[test]
+    fn the_environment_carries_the_scenarios_profile_from_the_surface() {
+        let mut sc = Scenario::example();
+        sc.channel.sound_speed = SoundSpeed::Profile { points: vec![[5.0, 1500.0], [50.0, 1480.0]] };
+        assert_eq!(environment(&sc).ssp, vec![(0.0, 1500.0), (5.0, 1500.0), (50.0, 1480.0)]);
+    }
+}
