@@ -4,6 +4,7 @@ use crate::alog_import;
 use crate::input;
 use anyhow::{Context, Result};
 use coopnav_core::limits;
+use coopnav_nav::fieldlog::{FieldLog, TimeBase};
 use coopnav_nav::post::{self, PostConfig};
 use coopnav_sim::hbl::grid::{self, GridSpec};
 use coopnav_sim::hbl::tune::{tune, Coefficient, Objective, TuneSpec};
@@ -344,18 +345,20 @@ fn postprocess(
         Some(p) => PostConfig::from_toml(&read(p)?).with_context(|| format!("in {}", p.display()))?,
         None => PostConfig::default(),
     };
-    let entries = if log.extension().is_some_and(|e| e == "alog") {
+    let field_log = if log.extension().is_some_and(|e| e == "alog") {
         let alog = coopnav_moos::read_alog_file(log)?;
-        alog_import::entries(&alog, &alog_import::mapping(alog_map)?)
-            .with_context(|| format!("in {}", log.display()))?
+        let rows = alog_import::rows(&alog, &alog_import::mapping(alog_map)?, cfg.buoy_depth)
+            .with_context(|| format!("in {}", log.display()))?;
+        FieldLog { time: TimeBase::Relative, rows }
     } else {
         if let Some(m) = alog_map {
             anyhow::bail!("--alog-map {} is for an .alog log; {} is not one", m.display(), log.display());
         }
         let file = std::fs::File::open(log).with_context(|| format!("opening {}", log.display()))?;
-        post::read_log(file, cfg.frame().as_ref()).with_context(|| format!("in {}", log.display()))?
+        post::read_any_log(file, &cfg).with_context(|| format!("in {}", log.display()))?
     };
-    let result = post::postprocess(&entries, &cfg)?;
+    let rows = &field_log.rows;
+    let result = post::postprocess_rows(rows, &cfg)?;
     let warnings = result.summary.warnings();
     if strict && !warnings.is_empty() {
         anyhow::bail!("{} (--strict): {}", log.display(), warnings.join("; "));
@@ -364,7 +367,12 @@ fn postprocess(
         eprintln!("warning: {}: {w}", log.display());
     }
     let dir = RunDir::create(out, force)?;
-    manifest(&dir, "hbl postprocess", 0, json!({ "log": log, "config": cfg }))?;
+    let time_origin_unix = match field_log.time {
+        TimeBase::Unix { origin } => Some(origin),
+        TimeBase::Relative => None,
+    };
+    // Output times are seconds since the log's origin; a Unix log's origin is recorded here.
+    manifest(&dir, "hbl postprocess", 0, json!({ "log": log, "config": cfg, "time_origin_unix": time_origin_unix }))?;
     let mut csv = String::from(
         "t,filt_e,filt_n,filt_sd_e,filt_sd_n,smooth_e,smooth_n,smooth_sd_e,smooth_sd_n,true_e,true_n,\
          smooth_heading_bias_deg,smooth_current_e,smooth_current_n\n",
@@ -391,9 +399,12 @@ fn postprocess(
         ));
     }
     dir.write_bytes("estimates.csv", csv)?;
-    let mut res = String::from("t,modem_id,applied,innovation_m,smoothed_residual_m,nis\n");
+    let mut res = String::from("t,beacon,applied,innovation_m,innovation_sd_m,smoothed_residual_m,nis\n");
     for r in &result.residuals {
-        res.push_str(&format!("{},{},{},{},{},{}\n", r.t, r.modem_id, r.applied, r.innovation, r.smoothed, r.nis));
+        res.push_str(&format!(
+            "{},{},{},{},{},{},{}\n",
+            r.t, r.beacon, r.applied, r.innovation, r.innovation_sd, r.smoothed, r.nis
+        ));
     }
     dir.write_bytes("residuals.csv", res)?;
     if let Some(frame) = cfg.frame() {
@@ -407,7 +418,7 @@ fn postprocess(
         dir.write_bytes("smoothed_ll.csv", ll)?;
     }
     dir.write_json("summary.json", &result.summary)?;
-    dir.write_bytes("report.html", crate::post_report::render(&entries, &result)?)?;
+    dir.write_bytes("report.html", crate::post_report::render(rows, &result)?)?;
     let out = dir.finish()?;
     println!("{}\nwrote {}", serde_json::to_string_pretty(&result.summary)?, out.display());
     Ok(())

@@ -7,6 +7,7 @@ pub mod auv;
 pub mod codec;
 pub mod cycle;
 pub mod ekf;
+pub mod fieldlog;
 pub mod post;
 pub mod range;
 pub mod smoother;
