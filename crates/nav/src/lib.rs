@@ -9,9 +9,11 @@ pub mod cycle;
 pub mod ekf;
 pub mod fieldlog;
 pub mod post;
+pub mod post_tune;
 pub mod range;
 pub mod smoother;
 pub mod surface;
+pub mod synthetic;
 
 pub use auv::{AuvEkf, AuvParams, CurrentParams, ParamError};
 pub use ekf::{Ekf, Gate, UpdateOutcome};
