@@ -6,6 +6,7 @@ use anyhow::{Context, Result};
 use coopnav_core::limits;
 use coopnav_nav::fieldlog::{FieldLog, TimeBase};
 use coopnav_nav::post::{self, PostConfig};
+use coopnav_nav::post_tune::{self, Scored, TuneOptions, TuneReport};
 use coopnav_sim::hbl::grid::{self, GridSpec};
 use coopnav_sim::hbl::tune::{tune, Coefficient, Objective, TuneSpec};
 use coopnav_sim::hbl::{monte_carlo_profiled, plot, run, Scenario};
@@ -79,6 +80,17 @@ pub enum Command {
         /// rows before `init`, a second `init`, ranges without a fresh transponder fix, gated ranges.
         #[arg(long)]
         strict: bool,
+        /// Tune range σ, E/N process noise, speed scale and compass bias from the log itself
+        /// (innovation likelihood, Nelder–Mead), print before/after with the held-out-range
+        /// residuals, write tune.json and tuned_config.toml, and post-process with the tuned values.
+        #[arg(long)]
+        tune: bool,
+        /// With --tune: leave every k-th range out of the filter and predict it (cross-validation).
+        #[arg(long, default_value_t = 5)]
+        hold_out_every: usize,
+        /// With --tune: Nelder–Mead iterations at most.
+        #[arg(long, default_value_t = 80)]
+        tune_iters: u64,
     },
 }
 
@@ -143,8 +155,9 @@ pub fn run_command(cmd: Command) -> Result<()> {
         Command::Montecarlo { common, runs } => montecarlo(&common, runs),
         Command::Grid { common, grid } => grid_cmd(&common, grid.as_deref()),
         Command::Tune { common, spec } => tune_cmd(&common, &spec),
-        Command::Postprocess { log, alog_map, config, out, force, strict } => {
-            postprocess(&log, alog_map.as_deref(), config.as_deref(), &out, force, strict)
+        Command::Postprocess { log, alog_map, config, out, force, strict, tune, hold_out_every, tune_iters } => {
+            let tune = tune.then_some(TuneOptions { hold_out_every, max_iters: tune_iters });
+            postprocess(&log, alog_map.as_deref(), config.as_deref(), &out, force, strict, tune)
         }
         Command::Example { kind } => example(kind),
     }
@@ -340,8 +353,9 @@ fn postprocess(
     out: &Path,
     force: bool,
     strict: bool,
+    tune_options: Option<TuneOptions>,
 ) -> Result<()> {
-    let cfg = match config {
+    let mut cfg = match config {
         Some(p) => PostConfig::from_toml(&read(p)?).with_context(|| format!("in {}", p.display()))?,
         None => PostConfig::default(),
     };
@@ -358,6 +372,15 @@ fn postprocess(
         post::read_any_log(file, &cfg).with_context(|| format!("in {}", log.display()))?
     };
     let rows = &field_log.rows;
+    let tuned = match tune_options {
+        Some(opts) => {
+            let report = post_tune::tune(rows, &cfg, &opts)?;
+            print_tuning(&report);
+            cfg = report.config.clone();
+            Some(report)
+        }
+        None => None,
+    };
     let result = post::postprocess_rows(rows, &cfg)?;
     let warnings = result.summary.warnings();
     if strict && !warnings.is_empty() {
@@ -418,8 +441,42 @@ fn postprocess(
         dir.write_bytes("smoothed_ll.csv", ll)?;
     }
     dir.write_json("summary.json", &result.summary)?;
+    if let Some(report) = &tuned {
+        dir.write_json("tune.json", report)?;
+        dir.write_bytes("tuned_config.toml", toml::to_string_pretty(&cfg)?)?;
+    }
     dir.write_bytes("report.html", crate::post_report::render(rows, &result)?)?;
     let out = dir.finish()?;
     println!("{}\nwrote {}", serde_json::to_string_pretty(&result.summary)?, out.display());
     Ok(())
+}
+
+/// The tuning's before/after table: values, likelihood, in-sample and held-out residual RMS.
+fn print_tuning(r: &TuneReport) {
+    let o = |v: Option<f64>| v.map_or("–".to_string(), |x| format!("{x:.3}"));
+    let line = |name: &str, s: &Scored| {
+        let v = &s.values;
+        println!(
+            "{name:<7} {:>10.3} {:>10.3e} {:>8.4} {:>9.3} {:>12.2} {:>10} {:>10} {:>10} {:>10}",
+            v.range_sd_m,
+            v.q_en,
+            v.speed_scale,
+            v.heading_bias_deg,
+            s.log_likelihood,
+            o(s.in_sample_rms_filter_m),
+            o(s.in_sample_rms_smoothed_m),
+            o(s.held_out_rms_filter_m),
+            o(s.held_out_rms_smoothed_m)
+        )
+    };
+    println!(
+        "tuning: {} iterations, {} filter runs; every {}th range held out",
+        r.iterations, r.evaluations, r.hold_out_every
+    );
+    println!(
+        "{:<7} {:>10} {:>10} {:>8} {:>9} {:>12} {:>10} {:>10} {:>10} {:>10}",
+        "", "range_sd", "q_en", "speed_k", "bias_deg", "loglik", "in_filt_m", "in_smth_m", "out_filt_m", "out_smth_m"
+    );
+    line("before", &r.before);
+    line("after", &r.after);
 }
