@@ -4,7 +4,9 @@ use crate::alog_import;
 use crate::input;
 use anyhow::{Context, Result};
 use coopnav_core::limits;
+use coopnav_nav::fieldlog::{FieldLog, TimeBase};
 use coopnav_nav::post::{self, PostConfig};
+use coopnav_nav::post_tune::{self, Scored, TuneOptions, TuneReport};
 use coopnav_sim::hbl::grid::{self, GridSpec};
 use coopnav_sim::hbl::tune::{tune, Coefficient, Objective, TuneSpec};
 use coopnav_sim::hbl::{monte_carlo_profiled, plot, run, Scenario};
@@ -81,6 +83,17 @@ pub enum Command {
         /// Run even when the estimated work or memory is above coopnav's limits (coopnav_core::limits).
         #[arg(long)]
         allow_large: bool,
+        /// Tune range σ, E/N process noise, speed scale and compass bias from the log itself
+        /// (innovation likelihood, Nelder–Mead), print before/after with the held-out-range
+        /// residuals, write tune.json and tuned_config.toml, and post-process with the tuned values.
+        #[arg(long)]
+        tune: bool,
+        /// With --tune: leave every k-th range out of the filter and predict it (cross-validation).
+        #[arg(long, default_value_t = 5)]
+        hold_out_every: usize,
+        /// With --tune: Nelder–Mead iterations at most.
+        #[arg(long, default_value_t = 80)]
+        tune_iters: u64,
     },
 }
 
@@ -141,8 +154,20 @@ pub fn run_command(cmd: Command) -> Result<()> {
         Command::Montecarlo { common, runs } => montecarlo(&common, runs),
         Command::Grid { common, grid } => grid_cmd(&common, grid.as_deref()),
         Command::Tune { common, spec } => tune_cmd(&common, &spec),
-        Command::Postprocess { log, alog_map, config, out, force, strict, allow_large } => {
-            postprocess(&log, alog_map.as_deref(), config.as_deref(), &out, force, strict, allow_large)
+        Command::Postprocess {
+            log,
+            alog_map,
+            config,
+            out,
+            force,
+            strict,
+            allow_large,
+            tune,
+            hold_out_every,
+            tune_iters,
+        } => {
+            let tune = tune.then_some(TuneOptions { hold_out_every, max_iters: tune_iters });
+            postprocess(&log, alog_map.as_deref(), config.as_deref(), &out, force, strict, allow_large, tune)
         }
         Command::Example { kind } => example(kind),
     }
@@ -341,8 +366,9 @@ fn postprocess(
     force: bool,
     strict: bool,
     allow_large: bool,
+    tune_options: Option<TuneOptions>,
 ) -> Result<()> {
-    let cfg = match config {
+    let mut cfg = match config {
         Some(p) => {
             PostConfig::from_toml(&input::read(p, allow_large)?).with_context(|| format!("in {}", p.display()))?
         }
@@ -350,19 +376,30 @@ fn postprocess(
     };
     let log_bytes = std::fs::metadata(log).with_context(|| format!("cannot read {}", log.display()))?.len();
     limits::check([work::postprocess_log(&log.display().to_string(), log_bytes)], allow_large)?;
-    let entries = if log.extension().is_some_and(|e| e == "alog") {
+    let field_log = if log.extension().is_some_and(|e| e == "alog") {
         let alog = coopnav_moos::read_alog_file(log)?;
-        alog_import::entries(&alog, &alog_import::mapping(alog_map)?)
-            .with_context(|| format!("in {}", log.display()))?
+        let rows = alog_import::rows(&alog, &alog_import::mapping(alog_map)?, cfg.buoy_depth)
+            .with_context(|| format!("in {}", log.display()))?;
+        FieldLog { time: TimeBase::Relative, rows }
     } else {
         if let Some(m) = alog_map {
             anyhow::bail!("--alog-map {} is for an .alog log; {} is not one", m.display(), log.display());
         }
         let file = std::fs::File::open(log).with_context(|| format!("opening {}", log.display()))?;
-        post::read_log(file, cfg.frame().as_ref()).with_context(|| format!("in {}", log.display()))?
+        post::read_any_log(file, &cfg).with_context(|| format!("in {}", log.display()))?
     };
-    limits::check(work::postprocess(&entries, &cfg), allow_large)?;
-    let result = post::postprocess(&entries, &cfg)?;
+    let rows = &field_log.rows;
+    limits::check(work::postprocess(rows, &cfg), allow_large)?;
+    let tuned = match tune_options {
+        Some(opts) => {
+            let report = post_tune::tune(rows, &cfg, &opts)?;
+            print_tuning(&report);
+            cfg = report.config.clone();
+            Some(report)
+        }
+        None => None,
+    };
+    let result = post::postprocess_rows(rows, &cfg)?;
     let warnings = result.summary.warnings();
     if strict && !warnings.is_empty() {
         anyhow::bail!("{} (--strict): {}", log.display(), warnings.join("; "));
@@ -371,7 +408,12 @@ fn postprocess(
         eprintln!("warning: {}: {w}", log.display());
     }
     let dir = RunDir::create(out, force)?;
-    manifest(&dir, "hbl postprocess", 0, json!({ "log": log, "config": cfg }))?;
+    let time_origin_unix = match field_log.time {
+        TimeBase::Unix { origin } => Some(origin),
+        TimeBase::Relative => None,
+    };
+    // Output times are seconds since the log's origin; a Unix log's origin is recorded here.
+    manifest(&dir, "hbl postprocess", 0, json!({ "log": log, "config": cfg, "time_origin_unix": time_origin_unix }))?;
     let mut csv = String::from(
         "t,filt_e,filt_n,filt_sd_e,filt_sd_n,smooth_e,smooth_n,smooth_sd_e,smooth_sd_n,true_e,true_n,\
          smooth_heading_bias_deg,smooth_current_e,smooth_current_n\n",
@@ -398,9 +440,12 @@ fn postprocess(
         ));
     }
     dir.write_bytes("estimates.csv", csv)?;
-    let mut res = String::from("t,modem_id,applied,innovation_m,smoothed_residual_m,nis\n");
+    let mut res = String::from("t,beacon,applied,innovation_m,innovation_sd_m,smoothed_residual_m,nis\n");
     for r in &result.residuals {
-        res.push_str(&format!("{},{},{},{},{},{}\n", r.t, r.modem_id, r.applied, r.innovation, r.smoothed, r.nis));
+        res.push_str(&format!(
+            "{},{},{},{},{},{},{}\n",
+            r.t, r.beacon, r.applied, r.innovation, r.innovation_sd, r.smoothed, r.nis
+        ));
     }
     dir.write_bytes("residuals.csv", res)?;
     if let Some(frame) = cfg.frame() {
@@ -414,8 +459,42 @@ fn postprocess(
         dir.write_bytes("smoothed_ll.csv", ll)?;
     }
     dir.write_json("summary.json", &result.summary)?;
-    dir.write_bytes("report.html", crate::post_report::render(&entries, &result)?)?;
+    if let Some(report) = &tuned {
+        dir.write_json("tune.json", report)?;
+        dir.write_bytes("tuned_config.toml", toml::to_string_pretty(&cfg)?)?;
+    }
+    dir.write_bytes("report.html", crate::post_report::render(rows, &result)?)?;
     let out = dir.finish()?;
     println!("{}\nwrote {}", serde_json::to_string_pretty(&result.summary)?, out.display());
     Ok(())
+}
+
+/// The tuning's before/after table: values, likelihood, in-sample and held-out residual RMS.
+fn print_tuning(r: &TuneReport) {
+    let o = |v: Option<f64>| v.map_or("–".to_string(), |x| format!("{x:.3}"));
+    let line = |name: &str, s: &Scored| {
+        let v = &s.values;
+        println!(
+            "{name:<7} {:>10.3} {:>10.3e} {:>8.4} {:>9.3} {:>12.2} {:>10} {:>10} {:>10} {:>10}",
+            v.range_sd_m,
+            v.q_en,
+            v.speed_scale,
+            v.heading_bias_deg,
+            s.log_likelihood,
+            o(s.in_sample_rms_filter_m),
+            o(s.in_sample_rms_smoothed_m),
+            o(s.held_out_rms_filter_m),
+            o(s.held_out_rms_smoothed_m)
+        )
+    };
+    println!(
+        "tuning: {} iterations, {} filter runs; every {}th range held out",
+        r.iterations, r.evaluations, r.hold_out_every
+    );
+    println!(
+        "{:<7} {:>10} {:>10} {:>8} {:>9} {:>12} {:>10} {:>10} {:>10} {:>10}",
+        "", "range_sd", "q_en", "speed_k", "bias_deg", "loglik", "in_filt_m", "in_smth_m", "out_filt_m", "out_smth_m"
+    );
+    line("before", &r.before);
+    line("after", &r.after);
 }

@@ -4,9 +4,11 @@
 //! error inside its ±2σ band when the log has truth rows.
 
 use anyhow::Result;
-use coopnav_nav::post::{Entry, PostResult, Record};
+use coopnav_nav::fieldlog::{LogRow, Observation};
+use coopnav_nav::post::PostResult;
 use coopnav_sim::plot::{line_svg, track_svg, Labels, Series};
 use coopnav_sim::report::HtmlReport;
+use std::collections::BTreeMap;
 
 /// Points drawn per series at most: a day at 10 Hz would make a plot of megabytes.
 const MAX_POINTS: usize = 4000;
@@ -24,8 +26,8 @@ fn opt(v: Option<f64>) -> String {
     v.map_or("–".into(), |x| format!("{x:.3}"))
 }
 
-/// The report of one post-processing run over `entries`.
-pub fn render(entries: &[Entry], result: &PostResult) -> Result<String> {
+/// The report of one post-processing run over the log's `rows`.
+pub fn render(log_rows: &[LogRow], result: &PostResult) -> Result<String> {
     let s = &result.summary;
     let mut r = HtmlReport::new("coopnav hbl postprocess");
     r.heading("Summary");
@@ -59,20 +61,22 @@ pub fn render(entries: &[Entry], result: &PostResult) -> Result<String> {
     for w in s.warnings() {
         r.paragraph(&format!("Warning: {w}."));
     }
-    let fixes = |buoy: bool| {
-        thin(entries.iter().filter_map(|e| match e.record {
-            Record::BuoyFix { e, n } if buoy => Some((e, n)),
-            Record::ShipFix { e, n, .. } if !buoy => Some((e, n)),
-            _ => None,
-        }))
-    };
+    // Each beacon's fixes (the version-1 ship under its own name).
+    let mut fixes: BTreeMap<String, Vec<(f64, f64)>> = BTreeMap::new();
+    for row in log_rows {
+        let (name, e, n) = match row.obs {
+            Observation::BeaconFix { beacon, e, n, .. } => (format!("beacon {beacon} fixes"), e, n),
+            Observation::ShipFix { e, n, .. } => ("ship fixes".to_string(), e, n),
+            _ => continue,
+        };
+        fixes.entry(name).or_default().push((e, n));
+    }
     let mut track = vec![
         Series::new("smoothed", thin(result.samples.iter().map(|p| (p.smoothed[0], p.smoothed[1])))),
         Series::new("filtered", thin(result.samples.iter().map(|p| (p.filtered[0], p.filtered[1])))),
-        Series::new("buoy fixes", fixes(true)),
-        Series::new("ship fixes", fixes(false)),
-        Series::new("truth", thin(result.samples.iter().filter_map(|p| p.truth.map(|t| (t[0], t[1]))))),
     ];
+    track.extend(fixes.into_iter().map(|(name, points)| Series::new(name, thin(points.into_iter()))));
+    track.push(Series::new("truth", thin(result.samples.iter().filter_map(|p| p.truth.map(|t| (t[0], t[1]))))));
     track.retain(|t| !t.points.is_empty());
     let labels = Labels { title: "AUV track and transponder fixes", x: "east (m)", y: "north (m)" };
     r.figure(

@@ -9,7 +9,7 @@
 //! enough to reach 8°. Headings inside are math convention (0 = east, counter-clockwise), so E
 //! advances with cos ψ and N with sin ψ; the thesis writes the same model clockwise from north.
 
-use crate::ekf::{wrap_angle, Ekf, Gate, UpdateOutcome};
+use crate::ekf::{propagate_covariance, wrap_angle, Ekf, Gate, UpdateOutcome};
 use crate::range::{RangeMeasurement, RangeNoise};
 use coopnav_core::validation::{CheckFields, InvalidFields, Problems};
 use coopnav_core::Vec3;
@@ -165,6 +165,25 @@ fn transition_jacobian_entries<const M: usize>(x: &SVector<f64, M>, h: f64) -> [
     ]
 }
 
+/// The frame of a logged velocity over ground.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum VelocityFrame {
+    /// (forward, starboard) in the vehicle's frame.
+    Body,
+    /// (east, north).
+    Earth,
+}
+
+/// A range update's outcome with its innovation (m) and innovation variance S (m²), the terms
+/// of the innovation likelihood.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RangeUpdate {
+    pub outcome: UpdateOutcome,
+    pub innovation: f64,
+    pub variance: f64,
+}
+
 /// The AUV navigation filter with `M` = 5 (thesis) or 7 (with current) states.
 #[derive(Debug, Clone)]
 pub struct AuvEkf<const M: usize = 5> {
@@ -228,26 +247,111 @@ impl<const M: usize> AuvEkf<M> {
         }
         let x = *self.ekf.x();
         let x_new = transition(&x, h, h * yaw_rate);
-        let scale = h / self.params.step_s;
-        let q = SVector::<f64, M>::from_fn(|i, _| self.params.q.get(i).copied().unwrap_or(self.extra_q) * scale);
+        let q = self.step_q(h);
         self.ekf.predict_sparse(t, x_new, &transition_jacobian_entries(&x, h), &q)
+    }
+
+    /// The prediction from `x` over `h` seconds at heading rate `yaw_rate`: the propagated mean,
+    /// the Jacobian F and the process noise Q, as the forward pass uses them (its covariance step
+    /// is [`Self::prior_covariance`]).
+    pub fn prediction(
+        &self,
+        x: &SVector<f64, M>,
+        h: f64,
+        yaw_rate: f64,
+    ) -> (SVector<f64, M>, SMatrix<f64, M, M>, SMatrix<f64, M, M>) {
+        let q = SMatrix::<f64, M, M>::from_diagonal(&self.step_q(h));
+        (transition(x, h, h * yaw_rate), transition_jacobian(x, h), q)
+    }
+
+    /// The prior covariance of the step from the filtered (`x`, `p`) over `h` seconds: the same
+    /// sparse arithmetic as [`Self::predict_to`], so a smoother that stores only filtered states
+    /// recomputes each prior bit for bit.
+    pub fn prior_covariance(&self, x: &SVector<f64, M>, p: &SMatrix<f64, M, M>, h: f64) -> SMatrix<f64, M, M> {
+        let mut p = *p;
+        propagate_covariance(&mut p, &transition_jacobian_entries(x, h), &self.step_q(h));
+        p
+    }
+
+    /// The process noise of an `h`-second step, per state (Q is given per nominal step).
+    fn step_q(&self, h: f64) -> SVector<f64, M> {
+        let scale = h / self.params.step_s;
+        SVector::<f64, M>::from_fn(|i, _| self.params.q.get(i).copied().unwrap_or(self.extra_q) * scale)
     }
 
     /// Speed-sensor update (m/s).
     pub fn update_speed(&mut self, measured: f64) -> UpdateOutcome {
+        self.update_speed_sd(measured, self.params.sigma_speed)
+    }
+
+    /// Speed update with its own SD (m/s), e.g. from a log row.
+    pub fn update_speed_sd(&mut self, measured: f64, sd: f64) -> UpdateOutcome {
         let mut h = SMatrix::<f64, 1, M>::zeros();
         h[S] = 1.0;
         let y = measured - self.ekf.x()[S];
-        self.ekf.update_scalar(y, h, self.params.sigma_speed.powi(2), &Gate::OFF)
+        self.ekf.update_scalar(y, h, sd.powi(2), &Gate::OFF)
     }
 
     /// Compass update: the compass reads ψ + b (math convention, rad).
     pub fn update_heading(&mut self, measured: f64) -> UpdateOutcome {
+        self.update_heading_sd(measured, self.params.sigma_heading)
+    }
+
+    /// Compass update with its own SD (rad).
+    pub fn update_heading_sd(&mut self, measured: f64, sd: f64) -> UpdateOutcome {
         let mut h = SMatrix::<f64, 1, M>::zeros();
         h[PSI] = 1.0;
         h[BIAS] = 1.0;
         let y = wrap_angle(measured - self.ekf.x()[PSI] - self.ekf.x()[BIAS]);
-        self.ekf.update_scalar(y, h, self.params.sigma_heading.powi(2), &Gate::OFF)
+        self.ekf.update_scalar(y, h, sd.powi(2), &Gate::OFF)
+    }
+
+    /// Position fix of the vehicle itself (GPS at the surface), SD `sd` m on each axis.
+    pub fn update_position(&mut self, e: f64, n: f64, sd: f64) -> UpdateOutcome {
+        let mut h = SMatrix::<f64, 2, M>::zeros();
+        h[(0, E)] = 1.0;
+        h[(1, N)] = 1.0;
+        let x = self.ekf.x();
+        let y = nalgebra::Vector2::new(e - x[E], n - x[N]);
+        self.ekf.update(y, h, nalgebra::Matrix2::identity() * (sd * sd), &Gate::OFF)
+    }
+
+    /// Velocity over ground (a DVL in bottom lock), SD `sd` m/s per component. Over ground the
+    /// vehicle moves at S(cos ψ, sin ψ) through the water plus the current (7 states); the body
+    /// frame turns that by the compass heading θ = ψ + b: forward = v·(cos θ, sin θ), starboard =
+    /// v·(sin θ, −cos θ) (math convention, starboard is to the right).
+    pub fn update_velocity(&mut self, frame: VelocityFrame, measured: [f64; 2], sd: f64) -> UpdateOutcome {
+        let x = self.ekf.x();
+        let (sin, cos) = x[PSI].sin_cos();
+        // Earth-frame velocity and its Jacobian rows.
+        let mut ve = x[S] * cos;
+        let mut vn = x[S] * sin;
+        let (mut je, mut jn) = (SMatrix::<f64, 1, M>::zeros(), SMatrix::<f64, 1, M>::zeros());
+        (je[S], je[PSI], jn[S], jn[PSI]) = (cos, -x[S] * sin, sin, x[S] * cos);
+        if M > CURRENT_N {
+            ve += x[CURRENT_E];
+            vn += x[CURRENT_N];
+            (je[CURRENT_E], jn[CURRENT_N]) = (1.0, 1.0);
+        }
+        let (predicted, h) = match frame {
+            VelocityFrame::Earth => ([ve, vn], [je, jn]),
+            VelocityFrame::Body => {
+                let (st, ct) = (x[PSI] + x[BIAS]).sin_cos();
+                let (fwd, stbd) = (ve * ct + vn * st, ve * st - vn * ct);
+                let (mut jf, mut js) = (je * ct + jn * st, je * st - jn * ct);
+                // Both rotate with θ = ψ + b.
+                for i in [PSI, BIAS] {
+                    jf[i] += -ve * st + vn * ct;
+                    js[i] += ve * ct + vn * st;
+                }
+                ([fwd, stbd], [jf, js])
+            }
+        };
+        let mut hm = SMatrix::<f64, 2, M>::zeros();
+        hm.set_row(0, &h[0]);
+        hm.set_row(1, &h[1]);
+        let y = nalgebra::Vector2::new(measured[0] - predicted[0], measured[1] - predicted[1]);
+        self.ekf.update(y, hm, nalgebra::Matrix2::identity() * (sd * sd), &Gate::OFF)
     }
 
     /// OWTT range update (eq. 9). `auv_depth` = Some(z) uses the 3-D slant range to the
@@ -265,23 +369,48 @@ impl<const M: usize> AuvEkf<M> {
         auv_depth: Option<f64>,
         transponder_sd: f64,
     ) -> UpdateOutcome {
+        let range_variance = self.params.range_noise.variance(m.travel_time);
+        let gate = self.params.range_gate;
+        self.update_range_with(m, auv_depth, range_variance, transponder_sd, &gate).outcome
+    }
+
+    /// The range update with the range variance (m²), the transponder's horizontal SD (m, each
+    /// axis) and the gate given by the caller (a log row with its own σ, a tuned noise).
+    pub fn update_range_with(
+        &mut self,
+        m: &RangeMeasurement,
+        auv_depth: Option<f64>,
+        range_variance: f64,
+        transponder_sd: f64,
+        gate: &Gate,
+    ) -> RangeUpdate {
+        let Some((predicted, h)) = self.range_jacobian(&m.transponder, auv_depth) else {
+            return RangeUpdate { outcome: UpdateOutcome::Unusable, innovation: f64::NAN, variance: f64::NAN };
+        };
+        let mut r = range_variance;
+        if transponder_sd > 0.0 {
+            r += transponder_sd.powi(2) * (h[E] * h[E] + h[N] * h[N]);
+        }
+        let innovation = m.range - predicted;
+        let variance = (h * self.ekf.p() * h.transpose())[(0, 0)] + r;
+        RangeUpdate { outcome: self.ekf.update_scalar(innovation, h, r, gate), innovation, variance }
+    }
+
+    /// The predicted range to a transponder and its Jacobian row; None directly overhead in 2-D,
+    /// where the range has no gradient (no information, no update).
+    pub fn range_jacobian(&self, transponder: &Vec3, auv_depth: Option<f64>) -> Option<(f64, SMatrix<f64, 1, M>)> {
         let x = self.ekf.x();
-        let de = x[E] - m.transponder.x;
-        let dn = x[N] - m.transponder.y;
-        let dz = auv_depth.map_or(0.0, |z| z - m.transponder.z);
+        let de = x[E] - transponder.x;
+        let dn = x[N] - transponder.y;
+        let dz = auv_depth.map_or(0.0, |z| z - transponder.z);
         let predicted = (de * de + dn * dn + dz * dz).sqrt();
-        // Directly overhead in 2-D the range has no gradient: no information, no update.
         if !(predicted > 1e-6) {
-            return UpdateOutcome::Unusable;
+            return None;
         }
         let mut h = SMatrix::<f64, 1, M>::zeros();
         h[E] = de / predicted;
         h[N] = dn / predicted;
-        let mut r = self.params.range_noise.variance(m.travel_time);
-        if transponder_sd > 0.0 {
-            r += transponder_sd.powi(2) * (h[E] * h[E] + h[N] * h[N]);
-        }
-        self.ekf.update_scalar(m.range - predicted, h, r, &self.params.range_gate)
+        Some((predicted, h))
     }
 
     /// Predicted range from the current estimate to a transponder (for residual bookkeeping).

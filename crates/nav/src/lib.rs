@@ -7,10 +7,13 @@ pub mod auv;
 pub mod codec;
 pub mod cycle;
 pub mod ekf;
+pub mod fieldlog;
 pub mod post;
+pub mod post_tune;
 pub mod range;
 pub mod smoother;
 pub mod surface;
+pub mod synthetic;
 
 pub use auv::{AuvEkf, AuvFilter, AuvModel, AuvParams, CurrentParams, ParamError};
 pub use ekf::{Ekf, Gate, UpdateOutcome};

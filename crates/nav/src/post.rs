@@ -30,16 +30,19 @@
 //! (top of a second). `init` is the filter's starting estimate (the first one is used);
 //! `truth` rows (topside AUV fixes) are only used to score the result.
 
-use crate::auv::{transition, AuvEkf, AuvParams, ParamError, BIAS, CURRENT_E, CURRENT_N, PSI};
+use crate::auv::{transition, AuvEkf, AuvParams, ParamError, BIAS, CURRENT_E, CURRENT_N};
 use crate::cycle::Transmitter;
-use crate::ekf::{Gate, Step, UpdateOutcome};
+use crate::ekf::{Ekf, Gate, UpdateOutcome};
+use crate::fieldlog::{self, BeaconId, FieldLog, Fields, LogRow, Observation, TimeBase};
 use crate::range::RangeMeasurement;
-use crate::smoother::{rts, urts, SmoothError, Smoothed, SmootherKind};
+use crate::smoother::{rts_step, urts_step, wrap, SmoothError, Smoothed, SmootherKind};
 use crate::surface::Outriggers;
 use coopnav_core::validation::{CheckFields, Problems};
-use coopnav_core::{wrap_pi, CompassDeg, GeodesyError, Geodetic, Heading, LatLon, LocalFrame, Vec3};
+use coopnav_core::{wrap_pi, CompassDeg, GeodesyError, Geodetic, Heading, LocalFrame, Vec3};
+use nalgebra::{SMatrix, SVector};
 use serde::{Deserialize, Serialize};
-use std::io::Read;
+use std::collections::BTreeMap;
+use std::io::{BufRead, BufReader, Read};
 use thiserror::Error;
 
 pub const LOG_HEADER: [&str; 7] = ["t", "kind", "src", "v1", "v2", "v3", "v4"];
@@ -64,6 +67,20 @@ pub enum PostError {
     Source { line: u64, src: String },
     #[error("log line {line}: range travel time {value} s must be in [0, 1) (OWTT from the top of the second)")]
     TravelTime { line: u64, value: f64 },
+    #[error("log line 1 is {found:?}; a version-2 log starts with `# coopnav-log 2 time=relative` or `# coopnav-log 2 time=unix` (a version-1 log starts with its column header `t,kind,src,v1,v2,v3,v4`)")]
+    VersionLine { found: String },
+    #[error("log line {line}: {found} fields; every row has the header's {expected} fields (empty ones too)")]
+    FieldCount { line: u64, expected: u64, found: u64 },
+    #[error("log format version {found} is not supported (this coopnav reads version 2, and version 1 without a version line)")]
+    Version { found: u32 },
+    #[error("log line {line}: unknown kind {kind:?} (allowed: init, yaw_rate, speed, dvl_body, dvl_earth, heading, depth, gps, range, beacon_fix, beacon_fixed, ship_fix, truth; init, gps, beacon_fix, beacon_fixed, ship_fix and truth also as _ll in latitude/longitude)")]
+    KindV2 { line: u64, kind: String },
+    #[error("log line {line}: field 'src' = {src:?} of a '{kind}' row is not a beacon id (an integer 0 … 4294967295)")]
+    Beacon { line: u64, kind: String, src: String },
+    #[error("log line {line}: range travel time {value} s must be in (0, {max}] s")]
+    TravelTimeV2 { line: u64, value: f64, max: f64 },
+    #[error("log line {line}: a '{kind}' row takes no sigma (only speed, dvl_*, heading, gps, range and beacon_fix* rows do); leave the field empty")]
+    SigmaNotUsed { line: u64, kind: String },
     #[error("log has no 'init' row: the filter needs a starting estimate")]
     NoInit,
     #[error("post-processing config: {0}")]
@@ -166,26 +183,10 @@ pub fn read_log<R: Read>(input: R, frame: Option<&LocalFrame>) -> Result<Vec<Ent
     let mut entries = Vec::new();
     for row in r.records() {
         let row = row?;
-        let line = row.position().map_or(0, |p| p.line());
-        let num = |i: usize, field: &'static str| -> Result<f64, PostError> {
-            let v = row.get(i).unwrap_or("").trim();
-            match v.parse::<f64>() {
-                Ok(x) if x.is_finite() => Ok(x),
-                _ => Err(PostError::Number { line, field, value: v.to_string() }),
-            }
-        };
+        let f = Fields { row: &row, line: row.position().map_or(0, |p| p.line()) };
+        let (line, num, kind) = (f.line, |i, field| f.num(i, field), f.text(1));
         let t = num(0, "t")?;
-        let kind = row.get(1).unwrap_or("").trim();
-        // v1, v2 of a position row as local (east, north).
-        let pos = || -> Result<(f64, f64), PostError> {
-            let (a, b) = (num(3, "v1")?, num(4, "v2")?);
-            if !kind.ends_with("_ll") {
-                return Ok((a, b));
-            }
-            let f = frame.ok_or_else(|| PostError::NoOrigin { line, kind: kind.to_string() })?;
-            let ll = LatLon::new(a, b).map_err(|source| PostError::LatLon { line, source })?;
-            Ok(f.to_plane(ll))
-        };
+        let pos = || f.position(kind, frame);
         let record = match kind {
             "init" | "init_ll" => {
                 let (e, n) = pos()?;
@@ -225,6 +226,18 @@ pub fn read_log<R: Read>(input: R, frame: Option<&LocalFrame>) -> Result<Vec<Ent
         entries.push(Entry { t, record });
     }
     Ok(entries)
+}
+
+/// Reads a log of either version: version 2 by its first line, else version 1 (its rows mapped
+/// onto the general ones, relative time).
+pub fn read_any_log<R: Read>(input: R, cfg: &PostConfig) -> Result<FieldLog, PostError> {
+    let mut input = BufReader::new(input);
+    let frame = cfg.frame();
+    if fieldlog::is_field_log(input.fill_buf().map_err(csv::Error::from)?) {
+        return fieldlog::read_field_log(input, frame.as_ref());
+    }
+    let entries = read_log(input, frame.as_ref())?;
+    Ok(FieldLog { time: TimeBase::Relative, rows: fieldlog::from_v1(&entries, cfg.buoy_depth) })
 }
 
 /// How a transponder's position at a transmit time between two logged fixes is obtained.
@@ -300,6 +313,15 @@ pub struct PostConfig {
     pub buoy_depth: f64,
     /// Backward pass: `ekf` (EKF-RTS, default) or `unscented` (URTS, the thesis's [25]).
     pub smoother: SmootherKind,
+    /// SD (m, each axis) of a `gps` row without its own σ. Invented default (issue 12): a
+    /// consumer GPS at the surface.
+    pub gps_sd_m: f64,
+    /// SD (m/s, each component) of a `dvl_*` row without its own σ. Invented default (issue 12).
+    pub velocity_sd_m_s: f64,
+    /// Multiplies every `speed` row (a speed log's scale error; `--tune` estimates it).
+    pub speed_scale: f64,
+    /// Subtracted from every `heading` row (deg; a compass offset; `--tune` estimates it).
+    pub heading_bias_deg: f64,
     /// Geodetic origin of the local east/north frame, needed by `_ll` log rows (digest §10 A28).
     /// `_ll` positions are taken at its height above the ellipsoid (the site's water surface).
     pub origin: Option<Geodetic>,
@@ -319,6 +341,10 @@ impl Default for PostConfig {
             fixes: FixMatching::default(),
             buoy_depth: 1.5,
             smoother: SmootherKind::Ekf,
+            gps_sd_m: 3.0,
+            velocity_sd_m_s: 0.05,
+            speed_scale: 1.0,
+            heading_bias_deg: 0.0,
             origin: None,
         }
     }
@@ -343,6 +369,10 @@ impl PostConfig {
         self.range_gate.check_fields("range_gate.", &mut p);
         p.positive("max_gap_s", self.max_gap_s);
         p.non_negative("transponder_sd_m", self.transponder_sd_m);
+        p.positive("gps_sd_m", self.gps_sd_m);
+        p.positive("velocity_sd_m_s", self.velocity_sd_m_s);
+        p.positive("speed_scale", self.speed_scale);
+        p.finite("heading_bias_deg", self.heading_bias_deg);
         p.finite("acoustic_time_offset_s", self.acoustic_time_offset_s);
         self.outriggers.check_fields("outriggers.", &mut p);
         self.fixes.check_fields("fixes.", &mut p);
@@ -376,6 +406,8 @@ pub struct PostSample {
 pub struct PostSummary {
     pub ranges: usize,
     pub ranges_applied: usize,
+    /// Ranges left out of the filter to be predicted (cross-validation), not in the other counts.
+    pub ranges_held_out: usize,
     /// Ranges with no fix of their transponder within `fixes.max_age_s` of the transmit time.
     pub ranges_without_fix: usize,
     /// Ranges rejected by the innovation gate (`auv.range_gate`).
@@ -392,6 +424,12 @@ pub struct PostSummary {
     /// the smoothed track (m).
     pub residual_rms_filter_m: Option<f64>,
     pub residual_rms_smoothed_m: Option<f64>,
+    /// The same for the held-out ranges, which neither pass used: the prediction error.
+    pub held_out_rms_filter_m: Option<f64>,
+    pub held_out_rms_smoothed_m: Option<f64>,
+    /// Σ −½(ln 2πS + y²/S) over the ranges the filter saw (applied or gated, not held out): the
+    /// innovation log-likelihood `--tune` maximises.
+    pub range_log_likelihood: f64,
     pub truth_points: usize,
     pub mean_filtered_error: Option<f64>,
     pub mean_smoothed_error: Option<f64>,
@@ -440,11 +478,15 @@ pub struct PostResult {
 pub struct RangeResidual {
     /// Receive time (s, after `acoustic_time_offset_s`).
     pub t: f64,
-    pub modem_id: u8,
-    /// False when the gate rejected it.
+    pub beacon: BeaconId,
+    /// False when the gate rejected it or it was held out.
     pub applied: bool,
+    /// Left out of the filter on purpose (cross-validation): only predicted.
+    pub held_out: bool,
     /// Against the filter's prediction just before the update (the innovation).
     pub innovation: f64,
+    /// √S, the innovation's predicted SD (m).
+    pub innovation_sd: f64,
     /// Against the smoothed track at the same step.
     pub smoothed: f64,
     /// Normalised innovation squared y²/S (χ² with 1 degree of freedom when consistent).
@@ -457,39 +499,53 @@ fn rms(values: impl Iterator<Item = f64>) -> Option<f64> {
     (n > 0).then(|| (sum / n as f64).sqrt())
 }
 
-/// One logged fix of a transponder's vehicle: position and (ship) heading, math radians.
+/// One logged fix of a beacon's vehicle: position, depth, (ship) heading in math radians, and the
+/// row's horizontal SD if it gave one.
 #[derive(Debug, Clone, Copy, PartialEq)]
 struct Fix {
     t: f64,
     e: f64,
     n: f64,
+    z: f64,
     psi: f64,
+    sd: Option<f64>,
 }
 
 impl Fix {
     fn lerp(&self, b: &Fix, t: f64) -> Fix {
         let f = (t - self.t) / (b.t - self.t);
+        // The less certain of the two fixes bounds the interpolated one.
+        let sd = match (self.sd, b.sd) {
+            (Some(x), Some(y)) => Some(x.max(y)),
+            (x, y) => x.or(y),
+        };
         Fix {
             t,
             e: self.e + f * (b.e - self.e),
             n: self.n + f * (b.n - self.n),
+            z: self.z + f * (b.z - self.z),
             psi: self.psi + f * wrap_pi(b.psi - self.psi),
+            sd,
         }
     }
 }
 
-/// A vehicle's fixes in time order, matched to transmit times by [`FixMatching`].
+/// A vehicle's fixes in time order, matched to transmit times by [`FixMatching`]; a moored
+/// (`fixed`) beacon's nearest fix holds at every time.
 #[derive(Debug, Default)]
-struct Track(Vec<Fix>);
+struct Track {
+    fixes: Vec<Fix>,
+    fixed: bool,
+}
 
 impl Track {
     /// The vehicle at time `t`, or None when no fix is fresh enough.
     fn at(&self, t: f64, m: &FixMatching) -> Option<Fix> {
-        let i = self.0.partition_point(|f| f.t <= t);
-        let (before, after) = (i.checked_sub(1).map(|k| &self.0[k]), self.0.get(i));
+        let i = self.fixes.partition_point(|f| f.t <= t);
+        let (before, after) = (i.checked_sub(1).map(|k| &self.fixes[k]), self.fixes.get(i));
         let age = |f: &Fix| (f.t - t).abs();
         let nearest = [before, after].into_iter().flatten().min_by(|a, b| age(a).total_cmp(&age(b)))?;
-        if age(nearest) <= m.match_tolerance_s {
+        if self.fixed || age(nearest) <= m.match_tolerance_s {
             return Some(*nearest);
         }
         match (m.between, before, after) {
@@ -500,109 +556,230 @@ impl Track {
     }
 }
 
-/// Positions of the surface transponders over time, from logged fixes.
+/// Every beacon's track, and the version-1 ship whose outriggers are beacons 14 and 15.
 #[derive(Debug, Default)]
-struct Fixes {
+struct Beacons {
+    tracks: BTreeMap<BeaconId, Track>,
     ship: Track,
-    buoy: Track,
+}
+
+impl Beacons {
+    fn from_rows(rows: &[LogRow], order: &[usize]) -> Beacons {
+        let mut b = Beacons::default();
+        for row in order.iter().map(|&i| &rows[i]) {
+            match row.obs {
+                Observation::ShipFix { e, n, compass_deg } => {
+                    b.ship.fixes.push(Fix { t: row.t, e, n, z: 0.0, psi: math_heading(compass_deg), sd: None })
+                }
+                Observation::BeaconFix { beacon, e, n, depth, fixed } => {
+                    let track = b.tracks.entry(beacon).or_default();
+                    track.fixed |= fixed;
+                    track.fixes.push(Fix { t: row.t, e, n, z: depth, psi: 0.0, sd: row.sigma });
+                }
+                _ => {}
+            }
+        }
+        b
+    }
+
+    /// Where `beacon` was at `t` and its horizontal SD if its fix gave one.
+    fn at(&self, beacon: BeaconId, t: f64, cfg: &PostConfig) -> Option<(Vec3, Option<f64>)> {
+        if let Some(track) = self.tracks.get(&beacon) {
+            return track.at(t, &cfg.fixes).map(|f| (Vec3::new(f.e, f.n, f.z), f.sd));
+        }
+        match u8::try_from(beacon).ok().and_then(Transmitter::from_modem_id) {
+            Some(Transmitter::Ship(side)) => {
+                self.ship.at(t, &cfg.fixes).map(|x| (cfg.outriggers.position(side, x.e, x.n, x.psi), None))
+            }
+            _ => None,
+        }
+    }
 }
 
 fn math_heading(compass_deg: f64) -> f64 {
     Heading::from(CompassDeg(compass_deg)).radians()
 }
 
-/// Runs the post-processing EKF and the RTS smoother over a log.
+/// Runs the post-processing EKF and the RTS smoother over a version-1 log.
 pub fn postprocess(entries: &[Entry], cfg: &PostConfig) -> Result<PostResult, PostError> {
+    postprocess_rows(&fieldlog::from_v1(entries, cfg.buoy_depth), cfg)
+}
+
+/// Runs the post-processing EKF and the RTS smoother over general log rows.
+pub fn postprocess_rows(rows: &[LogRow], cfg: &PostConfig) -> Result<PostResult, PostError> {
+    run(rows, cfg, Pass { smooth: true, hold_out_every: 0 })
+}
+
+/// What one pass over a log computes.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct Pass {
+    /// Record the compact history and run the backward pass (false: forward filter only).
+    pub smooth: bool,
+    /// Leave every k-th range out of the filter and only predict it (0: use every range).
+    pub hold_out_every: usize,
+}
+
+/// One pass of the filter (and smoother) over the rows, processed in time order.
+pub(crate) fn run(rows: &[LogRow], cfg: &PostConfig, pass: Pass) -> Result<PostResult, PostError> {
     cfg.validate()?;
-    let mut events: Vec<Entry> = entries
+    let time = |r: &LogRow| match r.obs {
+        Observation::Range { .. } => r.t + cfg.acoustic_time_offset_s,
+        _ => r.t,
+    };
+    // Time order as indices: the rows are not copied (a day's log is millions of rows).
+    let mut order: Vec<usize> = (0..rows.len()).collect();
+    order.sort_by(|&a, &b| time(&rows[a]).total_cmp(&time(&rows[b])));
+    let (t0, init) = order
         .iter()
-        .map(|e| match e.record {
-            Record::Range { .. } => Entry { t: e.t + cfg.acoustic_time_offset_s, record: e.record },
-            _ => *e,
-        })
-        .collect();
-    events.sort_by(|a, b| a.t.total_cmp(&b.t));
-    let (t0, init) = events
-        .iter()
-        .find_map(|e| match e.record {
-            Record::Init { e: x, n, speed, compass_deg } => Some((e.t, (x, n, speed, compass_deg))),
+        .find_map(|&i| match rows[i].obs {
+            Observation::Init { e, n, speed, compass_deg } => Some((time(&rows[i]), (e, n, speed, compass_deg))),
             _ => None,
         })
         .ok_or(PostError::NoInit)?;
-    let mut fixes = Fixes::default();
-    for e in &events {
-        match e.record {
-            Record::ShipFix { e: x, n, compass_deg } => {
-                fixes.ship.0.push(Fix { t: e.t, e: x, n, psi: math_heading(compass_deg) })
-            }
-            Record::BuoyFix { e: x, n } => fixes.buoy.0.push(Fix { t: e.t, e: x, n, psi: 0.0 }),
-            _ => {}
-        }
-    }
+    let beacons = Beacons::from_rows(rows, &order);
     let summary = PostSummary {
-        rows_before_init: events.iter().filter(|e| e.t < t0).count(),
-        extra_inits: events.iter().filter(|e| e.t >= t0 && matches!(e.record, Record::Init { .. })).count() - 1,
+        rows_before_init: order.iter().filter(|&&i| time(&rows[i]) < t0).count(),
+        extra_inits: order
+            .iter()
+            .filter(|&&i| time(&rows[i]) >= t0 && matches!(rows[i].obs, Observation::Init { .. }))
+            .count()
+            - 1,
         ..PostSummary::default()
     };
     let params = AuvParams { range_gate: cfg.range_gate, ..cfg.auv.clone() };
     let (e0, n0, speed0, psi0) = (init.0, init.1, init.2, math_heading(init.3));
-    let run = Run { events: &events, fixes: &fixes, cfg, t0 };
+    let events = order.iter().map(|&i| (time(&rows[i]), &rows[i])).filter(|(t, _)| *t >= t0);
+    let run = Run { beacons: &beacons, cfg, pass };
     match cfg.model {
-        AuvModel::Thesis => run.filter(AuvEkf::new(t0, e0, n0, speed0, psi0, params), summary),
-        AuvModel::Current(c) => run.filter(AuvEkf::with_current(t0, e0, n0, speed0, psi0, params, c), summary),
+        AuvModel::Thesis => run.filter(AuvEkf::new(t0, e0, n0, speed0, psi0, params), events, summary),
+        AuvModel::Current(c) => run.filter(AuvEkf::with_current(t0, e0, n0, speed0, psi0, params, c), events, summary),
     }
+}
+
+/// The filtered states of every step, packed: per step t, the heading rate of the prediction
+/// into it, x⁺ and the upper triangle of P⁺ (lossless: the filter keeps P exactly symmetric).
+/// The priors, F and Q are recomputed in the backward pass by the same code as forward, so the
+/// smoother gets bit-identical inputs at 22 numbers (176 B) a step for 5 states instead of 111.
+pub struct CompactHistory<const M: usize> {
+    data: Vec<f64>,
+}
+
+impl<const M: usize> CompactHistory<M> {
+    const STRIDE: usize = 2 + M + M * (M + 1) / 2;
+
+    /// Bytes kept per step, with the output sample: what the work limits estimate memory with.
+    pub const STEP_BYTES: usize = Self::STRIDE * std::mem::size_of::<f64>() + std::mem::size_of::<PostSample>();
+
+    fn len(&self) -> usize {
+        self.data.len() / Self::STRIDE
+    }
+    /// Records the filter's state: a new step when its time moved, else the same step updated.
+    fn record(&mut self, ekf: &Ekf<M>, yaw_rate: f64) {
+        let same_step = self.len() > 0 && self.data[self.data.len() - Self::STRIDE] == ekf.t();
+        if same_step {
+            let at = self.data.len() - Self::STRIDE;
+            self.data.truncate(at + 2);
+        } else {
+            self.data.extend([ekf.t(), yaw_rate]);
+        }
+        self.data.extend(ekf.x().iter());
+        let p = ekf.p();
+        for j in 0..M {
+            self.data.extend((0..=j).map(|i| p[(i, j)]));
+        }
+    }
+    /// Step k: its time, the heading rate into it, and the filtered estimate.
+    fn get(&self, k: usize) -> (f64, f64, Smoothed<M>) {
+        let d = &self.data[k * Self::STRIDE..(k + 1) * Self::STRIDE];
+        let x = SVector::<f64, M>::from_column_slice(&d[2..2 + M]);
+        let mut p = SMatrix::<f64, M, M>::zeros();
+        let mut it = d[2 + M..].iter();
+        for j in 0..M {
+            for i in 0..=j {
+                let v = it.next().copied().unwrap_or(f64::NAN);
+                p[(i, j)] = v;
+                p[(j, i)] = v;
+            }
+        }
+        (d[0], d[1], Smoothed { t: d[0], x, p })
+    }
+}
+
+/// A range that reached the filter, with what the smoothed residual needs.
+struct RangeSeen {
+    residual: RangeResidual,
+    step: usize,
+    range: f64,
+    at: Vec3,
+    auv_depth: Option<f64>,
 }
 
 /// One post-processing pass over time-sorted events, for either state vector.
 struct Run<'a> {
-    events: &'a [Entry],
-    fixes: &'a Fixes,
+    beacons: &'a Beacons,
     cfg: &'a PostConfig,
-    t0: f64,
+    pass: Pass,
 }
 
+/// A gate no range passes: a held-out range is predicted (innovation, S, NIS), never applied.
+const HOLD_OUT: Gate = Gate { max_abs_residual: Some(-1.0), max_nis: None };
+
 impl Run<'_> {
-    fn filter<const M: usize>(&self, mut f: AuvEkf<M>, mut summary: PostSummary) -> Result<PostResult, PostError> {
-        let (cfg, fixes) = (self.cfg, self.fixes);
-        f.ekf_mut().record_history();
+    fn filter<'r, const M: usize>(
+        &self,
+        mut f: AuvEkf<M>,
+        events: impl Iterator<Item = (f64, &'r LogRow)>,
+        mut summary: PostSummary,
+    ) -> Result<PostResult, PostError> {
+        let cfg = self.cfg;
+        let mut history = CompactHistory::<M> { data: Vec::new() };
+        let record = |f: &AuvEkf<M>, yaw_rate: f64, history: &mut CompactHistory<M>| {
+            if self.pass.smooth {
+                history.record(f.ekf(), yaw_rate);
+            }
+            history.len().saturating_sub(1)
+        };
+        record(&f, 0.0, &mut history);
         let (mut yaw_rate, mut depth) = (0.0, None);
-        let mut residuals = Vec::new();
+        let mut ranges = Vec::new();
         let mut truth_at: Vec<(usize, [f64; 2])> = Vec::new();
-        for ev in self.events.iter().filter(|e| e.t >= self.t0) {
+        let mut log_likelihood = 0.0;
+        for (t, row) in events {
             // Across a silence longer than max_gap_s one prediction spans it: the history (and
             // memory) grows with the rows, never with the log's time span (issue 11 item 2).
-            if ev.t - f.ekf().t() > cfg.max_gap_s {
+            if t - f.ekf().t() > cfg.max_gap_s {
                 summary.gaps += 1;
-                f.predict_to(ev.t, yaw_rate);
+                if f.predict_to(t, yaw_rate) {
+                    record(&f, yaw_rate, &mut history);
+                }
             }
             // Dynamic step: predict to the event in pieces no longer than the nominal step.
-            while ev.t - f.ekf().t() > 1e-9 {
-                let to = (f.ekf().t() + cfg.auv.step_s).min(ev.t);
+            while t - f.ekf().t() > 1e-9 {
+                let to = (f.ekf().t() + cfg.auv.step_s).min(t);
                 if !f.predict_to(to, yaw_rate) {
                     break;
                 }
+                record(&f, yaw_rate, &mut history);
             }
-            match ev.record {
-                Record::YawRate { compass_deg_s } => yaw_rate = -compass_deg_s.to_radians(),
-                Record::Speed(s) => {
-                    f.update_speed(s);
+            match row.obs {
+                Observation::YawRate { compass_deg_s } => yaw_rate = -compass_deg_s.to_radians(),
+                Observation::Speed(s) => {
+                    f.update_speed_sd(s * cfg.speed_scale, row.sigma.unwrap_or(cfg.auv.sigma_speed));
                 }
-                Record::Heading { compass_deg } => {
-                    f.update_heading(math_heading(compass_deg));
+                Observation::Velocity { frame, v } => {
+                    f.update_velocity(frame, v, row.sigma.unwrap_or(cfg.velocity_sd_m_s));
                 }
-                Record::Depth(z) => depth = Some(z),
-                Record::Range { src, travel_time } => {
+                Observation::Heading { compass_deg } => {
+                    let sd = row.sigma.map_or(cfg.auv.sigma_heading, f64::to_radians);
+                    f.update_heading_sd(math_heading(compass_deg - cfg.heading_bias_deg), sd);
+                }
+                Observation::Gps { e, n } => {
+                    f.update_position(e, n, row.sigma.unwrap_or(cfg.gps_sd_m));
+                }
+                Observation::Depth(z) => depth = Some(z),
+                Observation::Range { beacon, travel_time } => {
                     summary.ranges += 1;
-                    let t_tx = ev.t - travel_time;
-                    let pos = match src {
-                        Transmitter::Ship(side) => {
-                            fixes.ship.at(t_tx, &cfg.fixes).map(|x| cfg.outriggers.position(side, x.e, x.n, x.psi))
-                        }
-                        Transmitter::Buoy => {
-                            fixes.buoy.at(t_tx, &cfg.fixes).map(|x| Vec3::new(x.e, x.n, cfg.buoy_depth))
-                        }
-                    };
-                    let Some(transponder) = pos else {
+                    let Some((transponder, fix_sd)) = self.beacons.at(beacon, t - travel_time, cfg) else {
                         summary.ranges_without_fix += 1;
                         continue;
                     };
@@ -612,107 +789,166 @@ impl Run<'_> {
                         transponder,
                     };
                     let auv_depth = if cfg.slant_range { depth } else { None };
-                    let innovation = m.range - f.predicted_range(&transponder, auv_depth);
-                    let outcome = f.update_range_from_uncertain(&m, auv_depth, cfg.transponder_sd_m);
-                    let step = f.ekf().history().map_or(0, |h| h.len().saturating_sub(1));
-                    if let UpdateOutcome::Applied { nis } | UpdateOutcome::Gated { nis } = outcome {
+                    let k = self.pass.hold_out_every;
+                    let held_out = k > 0 && summary.ranges % k == 0;
+                    let variance = row.sigma.map_or_else(|| cfg.auv.range_noise.variance(travel_time), |s| s * s);
+                    let gate = if held_out { HOLD_OUT } else { cfg.range_gate };
+                    let sd = fix_sd.unwrap_or(cfg.transponder_sd_m);
+                    let up = f.update_range_with(&m, auv_depth, variance, sd, &gate);
+                    let step = record(&f, yaw_rate, &mut history);
+                    if let (UpdateOutcome::Applied { nis } | UpdateOutcome::Gated { nis }, false) =
+                        (up.outcome, held_out)
+                    {
+                        log_likelihood -= 0.5 * ((2.0 * std::f64::consts::PI * up.variance).ln() + nis);
+                    }
+                    if let UpdateOutcome::Applied { nis } | UpdateOutcome::Gated { nis } = up.outcome {
                         let residual = RangeResidual {
-                            t: ev.t,
-                            modem_id: src.modem_id(),
-                            applied: outcome.applied(),
-                            innovation,
+                            t,
+                            beacon,
+                            applied: up.outcome.applied(),
+                            held_out,
+                            innovation: up.innovation,
+                            innovation_sd: up.variance.sqrt(),
                             smoothed: f64::NAN,
                             nis,
                         };
-                        residuals.push((residual, step, m.range, transponder, auv_depth));
+                        ranges.push(RangeSeen { residual, step, range: m.range, at: transponder, auv_depth });
                     }
-                    match outcome {
+                    match up.outcome {
+                        _ if held_out => summary.ranges_held_out += 1,
                         UpdateOutcome::Applied { .. } => summary.ranges_applied += 1,
                         UpdateOutcome::Gated { .. } => summary.ranges_gated += 1,
                         UpdateOutcome::Unusable => summary.ranges_unusable += 1,
                     }
+                    continue;
                 }
-                Record::Truth { e, n } => {
-                    let len = f.ekf().history().map_or(0, |h| h.len());
-                    truth_at.push((len.saturating_sub(1), [e, n]));
+                Observation::Truth { e, n } => {
+                    truth_at.push((history.len().saturating_sub(1), [e, n]));
+                    continue;
                 }
-                Record::Init { .. } | Record::ShipFix { .. } | Record::BuoyFix { .. } => {}
+                Observation::Init { .. } | Observation::ShipFix { .. } | Observation::BeaconFix { .. } => continue,
+            }
+            record(&f, yaw_rate, &mut history);
+        }
+        summary.range_log_likelihood = log_likelihood;
+        let mut samples = Vec::new();
+        if self.pass.smooth {
+            let mut backward = Backward::new(&ranges, &truth_at);
+            samples = self.smooth(&f, &history, &mut backward)?;
+            score(&mut samples, &mut summary, &truth_at, &backward);
+            let smoothed = backward.residual_smoothed;
+            for (seen, smoothed) in ranges.iter_mut().zip(smoothed) {
+                seen.residual.smoothed = smoothed;
             }
         }
-        let history = f.ekf().history().ok_or(SmoothError::NoHistory)?;
-        let smoothed = smooth(history, f.ekf().angles(), cfg.smoother)?;
-        let mut samples: Vec<PostSample> = history
-            .iter()
-            .zip(&smoothed)
-            .map(|(h, s)| PostSample {
-                t: h.t,
-                filtered: [h.x_post[0], h.x_post[1]],
-                filtered_sd: [h.p_post[(0, 0)].sqrt(), h.p_post[(1, 1)].sqrt()],
-                smoothed: [s.x[0], s.x[1]],
-                smoothed_sd: [s.p[(0, 0)].sqrt(), s.p[(1, 1)].sqrt()],
-                smoothed_heading_bias: s.x[BIAS],
-                smoothed_current: (M > CURRENT_N).then(|| [s.x[CURRENT_E], s.x[CURRENT_N]]),
-                truth: None,
-            })
-            .collect();
-        score(&mut samples, &mut summary, &truth_at, history, &smoothed);
-        let residuals = residuals
-            .into_iter()
-            .map(|(r, step, range, at, auv_depth)| {
-                let x = &smoothed[step].x;
-                let dz = auv_depth.map_or(0.0, |z| z - at.z);
-                RangeResidual { smoothed: range - (x[0] - at.x).hypot(x[1] - at.y).hypot(dz), ..r }
-            })
-            .collect::<Vec<_>>();
-        let applied = || residuals.iter().filter(|r| r.applied);
-        summary.residual_rms_filter_m = rms(applied().map(|r| r.innovation));
-        summary.residual_rms_smoothed_m = rms(applied().map(|r| r.smoothed));
+        let residuals: Vec<RangeResidual> = ranges.into_iter().map(|r| r.residual).collect();
+        let used = |held_out: bool| residuals.iter().filter(move |r| r.held_out == held_out && (held_out || r.applied));
+        summary.residual_rms_filter_m = rms(used(false).map(|r| r.innovation));
+        summary.residual_rms_smoothed_m = rms(used(false).map(|r| r.smoothed).filter(|v| !v.is_nan()));
+        summary.held_out_rms_filter_m = rms(used(true).map(|r| r.innovation));
+        summary.held_out_rms_smoothed_m = rms(used(true).map(|r| r.smoothed).filter(|v| !v.is_nan()));
         Ok(PostResult { samples, summary, residuals })
     }
-}
 
-/// The chosen backward pass. The unscented one replays the forward filter's dead reckoning:
-/// each step's interval and heading change are read back from the recorded means.
-fn smooth<const M: usize>(
-    history: &[Step<M>],
-    angles: &[bool; M],
-    kind: SmootherKind,
-) -> Result<Vec<Smoothed<M>>, SmoothError> {
-    match kind {
-        SmootherKind::Ekf => rts(history, angles),
-        SmootherKind::Unscented => urts(history, angles, |k, x| {
-            let (cur, next) = (&history[k], &history[k + 1]);
-            transition(x, next.t - cur.t, wrap_pi(next.x_prior[PSI] - cur.x_post[PSI]))
-        }),
+    /// The backward pass over the compact history (EKF-RTS or unscented RTS), one sample per
+    /// step in time order; ranges and truth points are scored as their steps go by.
+    fn smooth<const M: usize>(
+        &self,
+        f: &AuvEkf<M>,
+        history: &CompactHistory<M>,
+        backward: &mut Backward,
+    ) -> Result<Vec<PostSample>, PostError> {
+        let n = history.len();
+        let angles = f.ekf().angles();
+        let mut samples = Vec::with_capacity(n);
+        let (_, _, mut later) = history.get(n - 1);
+        backward.visit(n - 1, &later, &later);
+        samples.push(sample(&later, &later));
+        for k in (0..n - 1).rev() {
+            let (_, _, filtered) = history.get(k);
+            let (t_next, yaw_next, _) = history.get(k + 1);
+            let h = t_next - filtered.t;
+            let (x_new, jac, q) = f.prediction(&filtered.x, h, yaw_next);
+            let smoothed = match self.cfg.smoother {
+                SmootherKind::Ekf => {
+                    let p_prior = f.prior_covariance(&filtered.x, &filtered.p, h);
+                    rts_step(&filtered, &jac, &wrap(x_new, angles), &p_prior, &later, angles)
+                        .ok_or(SmoothError::Singular(k + 1))?
+                }
+                SmootherKind::Unscented => {
+                    urts_step(&filtered, &q, |x| transition(x, h, h * yaw_next), &later, angles, k)?
+                }
+            };
+            backward.visit(k, &filtered, &smoothed);
+            samples.push(sample(&filtered, &smoothed));
+            later = smoothed;
+        }
+        samples.reverse();
+        Ok(samples)
     }
 }
 
-fn score<const M: usize>(
-    samples: &mut [PostSample],
-    summary: &mut PostSummary,
-    truth_at: &[(usize, [f64; 2])],
-    history: &[Step<M>],
-    smoothed: &[Smoothed<M>],
-) {
-    let nees = |x: &nalgebra::SVector<f64, M>, p: &nalgebra::SMatrix<f64, M, M>, tr: [f64; 2]| {
-        let e = nalgebra::Vector2::new(x[0] - tr[0], x[1] - tr[1]);
-        let pp = p.fixed_view::<2, 2>(0, 0).into_owned();
-        pp.cholesky().map(|c| (e.transpose() * c.solve(&e))[(0, 0)])
-    };
-    let (mut nf, mut ns, mut nn) = (0.0, 0.0, 0usize);
-    let (mut filtered, mut smoothed_errors) = (Vec::new(), Vec::new());
-    for &(i, tr) in truth_at {
-        samples[i].truth = Some(tr);
-        filtered.push((history[i].x_post[0] - tr[0]).hypot(history[i].x_post[1] - tr[1]));
-        smoothed_errors.push((smoothed[i].x[0] - tr[0]).hypot(smoothed[i].x[1] - tr[1]));
-        if let (Some(a), Some(b)) =
-            (nees(&history[i].x_post, &history[i].p_post, tr), nees(&smoothed[i].x, &smoothed[i].p, tr))
-        {
-            nf += a;
-            ns += b;
-            nn += 1;
+fn sample<const M: usize>(filtered: &Smoothed<M>, s: &Smoothed<M>) -> PostSample {
+    PostSample {
+        t: filtered.t,
+        filtered: [filtered.x[0], filtered.x[1]],
+        filtered_sd: [filtered.p[(0, 0)].sqrt(), filtered.p[(1, 1)].sqrt()],
+        smoothed: [s.x[0], s.x[1]],
+        smoothed_sd: [s.p[(0, 0)].sqrt(), s.p[(1, 1)].sqrt()],
+        smoothed_heading_bias: s.x[BIAS],
+        smoothed_current: (M > CURRENT_N).then(|| [s.x[CURRENT_E], s.x[CURRENT_N]]),
+        truth: None,
+    }
+}
+
+/// What the backward pass scores at the steps of ranges and truth points (both lists are in
+/// step order, walked from the end).
+struct Backward<'a> {
+    ranges: &'a [RangeSeen],
+    truth_at: &'a [(usize, [f64; 2])],
+    residual_smoothed: Vec<f64>,
+    /// Per truth point: (filtered error, smoothed error, filtered NEES, smoothed NEES).
+    truth_scores: Vec<(f64, f64, Option<f64>, Option<f64>)>,
+}
+
+impl<'a> Backward<'a> {
+    fn new(ranges: &'a [RangeSeen], truth_at: &'a [(usize, [f64; 2])]) -> Self {
+        Backward {
+            ranges,
+            truth_at,
+            residual_smoothed: vec![f64::NAN; ranges.len()],
+            truth_scores: vec![(f64::NAN, f64::NAN, None, None); truth_at.len()],
         }
     }
+
+    fn visit<const M: usize>(&mut self, k: usize, filtered: &Smoothed<M>, smoothed: &Smoothed<M>) {
+        let x = &smoothed.x;
+        let first = self.ranges.partition_point(|r| r.step < k);
+        for (i, r) in self.ranges.iter().enumerate().skip(first).take_while(|(_, r)| r.step == k) {
+            let dz = r.auv_depth.map_or(0.0, |z| z - r.at.z);
+            self.residual_smoothed[i] = r.range - (x[0] - r.at.x).hypot(x[1] - r.at.y).hypot(dz);
+        }
+        let first = self.truth_at.partition_point(|(s, _)| *s < k);
+        for (i, (_, tr)) in self.truth_at.iter().enumerate().skip(first).take_while(|(_, (s, _))| *s == k) {
+            let err = |x: &SVector<f64, M>| (x[0] - tr[0]).hypot(x[1] - tr[1]);
+            self.truth_scores[i] = (err(&filtered.x), err(x), nees(filtered, *tr), nees(smoothed, *tr));
+        }
+    }
+}
+
+/// 2-D NEES eᵀP⁻¹e of the position against a truth point.
+fn nees<const M: usize>(s: &Smoothed<M>, tr: [f64; 2]) -> Option<f64> {
+    let e = nalgebra::Vector2::new(s.x[0] - tr[0], s.x[1] - tr[1]);
+    let pp = s.p.fixed_view::<2, 2>(0, 0).into_owned();
+    pp.cholesky().map(|c| (e.transpose() * c.solve(&e))[(0, 0)])
+}
+
+fn score(samples: &mut [PostSample], summary: &mut PostSummary, truth_at: &[(usize, [f64; 2])], b: &Backward) {
+    for &(i, tr) in truth_at {
+        samples[i].truth = Some(tr);
+    }
+    let filtered: Vec<f64> = b.truth_scores.iter().map(|s| s.0).collect();
+    let smoothed_errors: Vec<f64> = b.truth_scores.iter().map(|s| s.1).collect();
     summary.truth_points = truth_at.len();
     if !truth_at.is_empty() {
         let k = truth_at.len() as f64;
@@ -723,9 +959,11 @@ fn score<const M: usize>(
     summary.rms_smoothed_error = rms(smoothed_errors.iter().copied());
     summary.max_smoothed_error = smoothed_errors.iter().copied().reduce(f64::max);
     summary.final_smoothed_error = smoothed_errors.last().copied();
-    if nn > 0 {
-        summary.mean_filtered_nees = Some(nf / nn as f64);
-        summary.mean_smoothed_nees = Some(ns / nn as f64);
+    let both: Vec<(f64, f64)> = b.truth_scores.iter().filter_map(|s| Some((s.2?, s.3?))).collect();
+    if !both.is_empty() {
+        let nn = both.len() as f64;
+        summary.mean_filtered_nees = Some(both.iter().map(|s| s.0).sum::<f64>() / nn);
+        summary.mean_smoothed_nees = Some(both.iter().map(|s| s.1).sum::<f64>() / nn);
     }
 }
 

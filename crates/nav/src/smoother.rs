@@ -49,12 +49,27 @@ pub fn rts<const N: usize>(history: &[Step<N>], angles: &[bool; N]) -> Result<Ve
     let mut out = vec![Smoothed { t: last.t, x: last.x_post, p: last.p_post }; history.len()];
     for k in (0..history.len() - 1).rev() {
         let (cur, next) = (&history[k], &history[k + 1]);
-        let chol = next.p_prior.cholesky().ok_or(SmoothError::Singular(k + 1))?;
-        // C = P⁺ Fᵀ (P⁻)⁻¹ = ((P⁻)⁻¹ F P⁺)ᵀ.
-        let c = chol.solve(&(next.f * cur.p_post)).transpose();
-        out[k] = backward_step(cur, &out[k + 1], &next.x_prior, &next.p_prior, &c, angles);
+        let filtered = Smoothed { t: cur.t, x: cur.x_post, p: cur.p_post };
+        out[k] = rts_step(&filtered, &next.f, &next.x_prior, &next.p_prior, &out[k + 1], angles)
+            .ok_or(SmoothError::Singular(k + 1))?;
     }
     Ok(out)
+}
+
+/// One EKF-RTS backward step from the filtered estimate at step k, the next step's transition F
+/// and prior (x⁻, P⁻), and the smoothed next step; None when P⁻ is not invertible.
+pub fn rts_step<const N: usize>(
+    filtered: &Smoothed<N>,
+    f_next: &SMatrix<f64, N, N>,
+    x_prior_next: &SVector<f64, N>,
+    p_prior_next: &SMatrix<f64, N, N>,
+    later: &Smoothed<N>,
+    angles: &[bool; N],
+) -> Option<Smoothed<N>> {
+    let chol = p_prior_next.cholesky()?;
+    // C = P⁺ Fᵀ (P⁻)⁻¹ = ((P⁻)⁻¹ F P⁺)ᵀ.
+    let c = chol.solve(&(f_next * filtered.p)).transpose();
+    Some(backward_step(filtered, later, x_prior_next, p_prior_next, &c, angles))
 }
 
 /// Unscented RTS over a recorded history. `transition(k, x)` is the mean map from step k to
@@ -66,45 +81,60 @@ pub fn urts<const N: usize>(
 ) -> Result<Vec<Smoothed<N>>, SmoothError> {
     let last = history.last().ok_or(SmoothError::NoHistory)?;
     let mut out = vec![Smoothed { t: last.t, x: last.x_post, p: last.p_post }; history.len()];
-    let weight = 1.0 / (2 * N) as f64;
     for k in (0..history.len() - 1).rev() {
         let (cur, next) = (&history[k], &history[k + 1]);
-        let sigma = sigma_points(&cur.x_post, &cur.p_post, angles).ok_or(SmoothError::NotPositiveDefinite(k))?;
-        let moved: Vec<SVector<f64, N>> = sigma.iter().map(|x| transition(k, x)).collect();
-        // Mean of the propagated points, averaged as offsets from the propagated mean state.
-        let centre = transition(k, &cur.x_post);
-        let offset = moved.iter().map(|x| state_difference(x, &centre, angles)).sum::<SVector<f64, N>>() * weight;
-        let x_prior = wrap(centre + offset, angles);
-        let (mut p_prior, mut cross) = (next.q, SMatrix::<f64, N, N>::zeros());
-        for (before, after) in sigma.iter().zip(&moved) {
-            let (a, b) = (state_difference(before, &cur.x_post, angles), state_difference(after, &x_prior, angles));
-            p_prior += b * b.transpose() * weight;
-            cross += a * b.transpose() * weight;
-        }
-        let p_prior = symmetrise(p_prior);
-        let chol = p_prior.cholesky().ok_or(SmoothError::Singular(k + 1))?;
-        // G = D (P⁻)⁻¹ = ((P⁻)⁻¹ Dᵀ)ᵀ.
-        let g = chol.solve(&cross.transpose()).transpose();
-        out[k] = backward_step(cur, &out[k + 1], &x_prior, &p_prior, &g, angles);
+        let filtered = Smoothed { t: cur.t, x: cur.x_post, p: cur.p_post };
+        out[k] = urts_step(&filtered, &next.q, |x| transition(k, x), &out[k + 1], angles, k)?;
     }
     Ok(out)
 }
 
+/// One unscented backward step (step k) from the filtered estimate, the next step's process
+/// noise Q and mean map, and the smoothed next step.
+pub fn urts_step<const N: usize>(
+    filtered: &Smoothed<N>,
+    q_next: &SMatrix<f64, N, N>,
+    transition: impl Fn(&SVector<f64, N>) -> SVector<f64, N>,
+    later: &Smoothed<N>,
+    angles: &[bool; N],
+    k: usize,
+) -> Result<Smoothed<N>, SmoothError> {
+    let weight = 1.0 / (2 * N) as f64;
+    let sigma = sigma_points(&filtered.x, &filtered.p, angles).ok_or(SmoothError::NotPositiveDefinite(k))?;
+    let moved: Vec<SVector<f64, N>> = sigma.iter().map(&transition).collect();
+    // Mean of the propagated points, averaged as offsets from the propagated mean state.
+    let centre = transition(&filtered.x);
+    let offset = moved.iter().map(|x| state_difference(x, &centre, angles)).sum::<SVector<f64, N>>() * weight;
+    let x_prior = wrap(centre + offset, angles);
+    let (mut p_prior, mut cross) = (*q_next, SMatrix::<f64, N, N>::zeros());
+    for (before, after) in sigma.iter().zip(&moved) {
+        let (a, b) = (state_difference(before, &filtered.x, angles), state_difference(after, &x_prior, angles));
+        p_prior += b * b.transpose() * weight;
+        cross += a * b.transpose() * weight;
+    }
+    let p_prior = symmetrise(p_prior);
+    let chol = p_prior.cholesky().ok_or(SmoothError::Singular(k + 1))?;
+    // G = D (P⁻)⁻¹ = ((P⁻)⁻¹ Dᵀ)ᵀ.
+    let g = chol.solve(&cross.transpose()).transpose();
+    Ok(backward_step(filtered, later, &x_prior, &p_prior, &g, angles))
+}
+
 /// The RTS correction shared by both passes, with gain `g`.
 fn backward_step<const N: usize>(
-    cur: &Step<N>,
+    filtered: &Smoothed<N>,
     later: &Smoothed<N>,
     x_prior: &SVector<f64, N>,
     p_prior: &SMatrix<f64, N, N>,
     g: &SMatrix<f64, N, N>,
     angles: &[bool; N],
 ) -> Smoothed<N> {
-    let x = wrap(cur.x_post + g * state_difference(&later.x, x_prior, angles), angles);
-    let p = symmetrise(cur.p_post + g * (later.p - p_prior) * g.transpose());
-    Smoothed { t: cur.t, x, p }
+    let x = wrap(filtered.x + g * state_difference(&later.x, x_prior, angles), angles);
+    let p = symmetrise(filtered.p + g * (later.p - p_prior) * g.transpose());
+    Smoothed { t: filtered.t, x, p }
 }
 
-fn wrap<const N: usize>(mut x: SVector<f64, N>, angles: &[bool; N]) -> SVector<f64, N> {
+/// Angle components re-wrapped to (-π, π].
+pub fn wrap<const N: usize>(mut x: SVector<f64, N>, angles: &[bool; N]) -> SVector<f64, N> {
     for (i, is_angle) in angles.iter().enumerate() {
         if *is_angle {
             x[i] = wrap_pi(x[i]);

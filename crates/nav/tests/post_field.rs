@@ -232,7 +232,7 @@ fn summary_reports_residuals_before_and_after_smoothing_and_error_figures() {
     let (before, after) = (s.residual_rms_filter_m.unwrap(), s.residual_rms_smoothed_m.unwrap());
     assert!(after < before && after < 0.5, "residual RMS {before} m before, {after} m after smoothing");
     assert_eq!(r.residuals.len(), s.ranges_applied + s.ranges_gated);
-    assert!(r.residuals.iter().all(|x| x.modem_id == 13 || x.modem_id == 14));
+    assert!(r.residuals.iter().all(|x| x.beacon == 13 || x.beacon == 14));
     let (mean, rms, max) =
         (s.mean_smoothed_error.unwrap(), s.rms_smoothed_error.unwrap(), s.max_smoothed_error.unwrap());
     assert!(mean <= rms && rms <= max && s.final_smoothed_error.unwrap() <= max, "{s:?}");

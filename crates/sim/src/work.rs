@@ -12,9 +12,8 @@ use crate::{closed_loop, hbl, predeploy};
 use coopnav_core::limits::{
     Estimate, MAX_BYTES, MAX_PLANNER_LEAVES, MAX_PLANNER_UPDATES, MAX_POINTS, MAX_VEHICLE_STEPS,
 };
-use coopnav_nav::ekf::Step;
-use coopnav_nav::post::{AuvModel, Entry, PostConfig, PostSample};
-use coopnav_nav::smoother::Smoothed;
+use coopnav_nav::fieldlog::LogRow;
+use coopnav_nav::post::{AuvModel, CompactHistory, PostConfig};
 use coopnav_plan::{CnaKind, MotionConfig};
 
 /// Bytes of one stored track sample (t, x, y, z).
@@ -164,16 +163,16 @@ pub fn postprocess_log(path: &str, bytes: u64) -> Estimate {
     Estimate::new(
         "memory of the parsed log rows (bytes)",
         format!("the size of {path}"),
-        bytes as f64 / MIN_LOG_ROW_BYTES * std::mem::size_of::<Entry>() as f64,
+        bytes as f64 / MIN_LOG_ROW_BYTES * std::mem::size_of::<LogRow>() as f64,
         MAX_BYTES,
     )
 }
 
-/// Post-processing the parsed `entries`: the filter steps they ask for (a silence up to
+/// Post-processing the parsed log `rows`: the filter steps they ask for (a silence up to
 /// `max_gap_s` is predicted in `auv.step_s` pieces, a longer one in a single step) and the memory
 /// of the history, smoothed states and samples kept for every step.
-pub fn postprocess(entries: &[Entry], cfg: &PostConfig) -> Vec<Estimate> {
-    let mut times: Vec<f64> = entries.iter().map(|e| e.t).collect();
+pub fn postprocess(rows: &[LogRow], cfg: &PostConfig) -> Vec<Estimate> {
+    let mut times: Vec<f64> = rows.iter().map(|r| r.t).collect();
     times.sort_by(f64::total_cmp);
     let predictions: f64 = times
         .windows(2)
@@ -184,20 +183,14 @@ pub fn postprocess(entries: &[Entry], cfg: &PostConfig) -> Vec<Estimate> {
         .sum();
     let steps = predictions + times.len() as f64;
     let per_step = match cfg.model {
-        AuvModel::Thesis => post_step_bytes::<5>(),
-        AuvModel::Current(_) => post_step_bytes::<7>(),
-    };
+        AuvModel::Thesis => CompactHistory::<5>::STEP_BYTES,
+        AuvModel::Current(_) => CompactHistory::<7>::STEP_BYTES,
+    } as f64;
     let fields = "the log's time span (silences up to max_gap_s) / auv.step_s";
     vec![
         Estimate::new("post-processing filter steps", fields, steps, MAX_VEHICLE_STEPS),
         Estimate::new("memory of the filter history and smoothed track (bytes)", fields, steps * per_step, MAX_BYTES),
     ]
-}
-
-/// Bytes kept per post-processing step with `M` states: the filter's recorded step, its
-/// smoothed state and the output sample.
-fn post_step_bytes<const M: usize>() -> f64 {
-    (std::mem::size_of::<Step<M>>() + std::mem::size_of::<Smoothed<M>>() + std::mem::size_of::<PostSample>()) as f64
 }
 
 #[cfg(test)]
@@ -208,10 +201,10 @@ mod tests {
 
     #[test]
     fn postprocessing_is_bounded_by_the_logs_time_span_and_size() {
-        use coopnav_nav::post::Record;
+        use coopnav_nav::fieldlog::Observation;
         let cfg = PostConfig::default();
-        let rows = |spacing: f64| -> Vec<Entry> {
-            (0..2000).map(|i| Entry { t: i as f64 * spacing, record: Record::Speed(1.0) }).collect()
+        let rows = |spacing: f64| -> Vec<LogRow> {
+            (0..2000).map(|i| LogRow { t: i as f64 * spacing, obs: Observation::Speed(1.0), sigma: None }).collect()
         };
         // 2000 rows 1 s apart: 2·10⁴ steps of 0.1 s, far below the limits.
         assert!(check(postprocess(&rows(1.0), &cfg), false).is_ok());

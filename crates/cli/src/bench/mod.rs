@@ -8,6 +8,7 @@ mod acomms;
 mod closed_loop;
 mod hbl;
 mod planner;
+mod post;
 
 #[derive(Subcommand)]
 pub enum Target {
@@ -23,6 +24,9 @@ pub enum Target {
     /// The closed loop: 3 h mission, 5 survey AUVs, τ = 30 s, planner A = 5, L = 5, 10 Hz EKFs;
     /// wall time against the ≤ 1.1 s target, with the planner/filters/channel split.
     ClosedLoop(closed_loop::Args),
+    /// Post-processing (EKF + RTS) of a generated 24 h, 10 Hz, 5-beacon field log (issue 12:
+    /// ≤ 10 s, ≤ 500 MB under `/usr/bin/time -v`); `--tune` times the tuning too (≤ 2 min).
+    Post(post::Args),
 }
 
 pub fn run(target: Target) -> Result<()> {
@@ -31,5 +35,6 @@ pub fn run(target: Target) -> Result<()> {
         Target::Hbl(args) => hbl::run(args),
         Target::Acomms(args) => acomms::run(args),
         Target::ClosedLoop(args) => closed_loop::run(args),
+        Target::Post(args) => post::run(args),
     }
 }

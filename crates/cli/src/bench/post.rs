@@ -1,0 +1,59 @@
+//! `coopnav bench post`: post-processing (EKF + RTS) of a generated field log, by default the
+//! issue-12 target day: 24 h at 10 Hz (yaw rate, speed and heading rows), 5 moving beacons, a
+//! range every 15 s; with `--tune`, the tuning on it too. Peak memory: run under
+//! `/usr/bin/time -v` (generating the log is part of it; its rows are reported).
+
+use anyhow::Result;
+use coopnav_nav::post::{postprocess_rows, PostConfig};
+use coopnav_nav::post_tune::{tune, TuneOptions};
+use coopnav_nav::synthetic::{synthetic_log, SyntheticSpec};
+use serde_json::json;
+use std::time::Instant;
+
+#[derive(clap::Args)]
+pub struct Args {
+    /// Log length (hours).
+    #[arg(long, default_value_t = 24.0)]
+    hours: f64,
+    #[arg(long, default_value_t = 5)]
+    beacons: u32,
+    /// Also time `postprocess --tune` (default options) on the same log.
+    #[arg(long)]
+    tune: bool,
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+}
+
+pub fn run(Args { hours, beacons, tune: with_tune, seed }: Args) -> Result<()> {
+    let spec = SyntheticSpec { duration_s: hours * 3600.0, beacons, seed, ..SyntheticSpec::default() };
+    let start = Instant::now();
+    let rows = synthetic_log(&spec);
+    let generate_s = start.elapsed().as_secs_f64();
+    let cfg = PostConfig::default();
+    let start = Instant::now();
+    let r = postprocess_rows(&rows, &cfg)?;
+    let post_s = start.elapsed().as_secs_f64();
+    let mut out = json!({
+        "target": "post",
+        "hours": hours,
+        "rate_hz": spec.rate_hz,
+        "beacons": beacons,
+        "range_every_s": spec.range_every_s,
+        "rows": rows.len(),
+        "filter_steps": r.samples.len(),
+        "ranges": r.summary.ranges,
+        "generate_seconds": generate_s,
+        "postprocess_seconds": post_s,
+        "rms_smoothed_error_m": r.summary.rms_smoothed_error,
+    });
+    drop(r);
+    if with_tune {
+        let start = Instant::now();
+        let t = tune(&rows, &cfg, &TuneOptions::default())?;
+        out["tune_seconds"] = json!(start.elapsed().as_secs_f64());
+        out["tune_evaluations"] = json!(t.evaluations);
+        out["tune_iterations"] = json!(t.iterations);
+    }
+    println!("{}", serde_json::to_string_pretty(&out)?);
+    Ok(())
+}
