@@ -15,10 +15,24 @@ pub fn to_py<'py>(py: Python<'py>, value: &impl Serialize) -> PyResult<Bound<'py
     py.import("json")?.call_method1("loads", (text,))
 }
 
-/// A Python container (dict, list, numbers, strings) as a JSON value.
+/// A Python container (dict, list, numbers, strings) as a JSON value. Keys holding `None` are
+/// dropped: an absent key is how TOML says "none", and `to_dict()` writes absent options as `None`.
 pub fn to_json(obj: &Bound<'_, PyAny>) -> PyResult<serde_json::Value> {
     let text: String = obj.py().import("json")?.call_method1("dumps", (obj,))?.extract()?;
-    serde_json::from_str(&text).map_err(|e| PyValueError::new_err(e.to_string()))
+    let mut value = serde_json::from_str(&text).map_err(|e| PyValueError::new_err(e.to_string()))?;
+    drop_nulls(&mut value);
+    Ok(value)
+}
+
+fn drop_nulls(value: &mut serde_json::Value) {
+    match value {
+        serde_json::Value::Object(map) => {
+            map.retain(|_, v| !v.is_null());
+            map.values_mut().for_each(drop_nulls);
+        }
+        serde_json::Value::Array(items) => items.iter_mut().for_each(drop_nulls),
+        _ => {}
+    }
 }
 
 /// A TOML text, or a dict turned into one (so both go through the same parser and messages).
