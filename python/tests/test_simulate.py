@@ -119,3 +119,26 @@ def test_a_scenario_round_trips_through_dict_and_toml():
     again = coopnav.Scenario.from_toml(sc.to_toml())
     assert again.to_dict() == sc.to_dict() == coopnav.Scenario.from_dict(sc.to_dict()).to_dict()
     assert sc.source == "<embedded default>" and again.source == "<string>"
+
+
+def test_ctrl_c_stops_a_long_monte_carlo(tmp_path):
+    """SIGINT half a second into a Monte Carlo that takes far longer raises KeyboardInterrupt at
+    once (run in a child interpreter, so the signal cannot reach pytest itself)."""
+    script = tmp_path / "interrupt.py"
+    script.write_text(
+        "import os, signal, threading, time\n"
+        "import coopnav\n"
+        "sc = coopnav.Scenario.example()\n"
+        "threading.Timer(0.5, os.kill, (os.getpid(), signal.SIGINT)).start()\n"
+        "t0 = time.perf_counter()\n"
+        "try:\n"
+        "    coopnav.monte_carlo(sc, ['planner', 'centroid'], 200)\n"
+        "    print('finished')\n"
+        "except KeyboardInterrupt:\n"
+        "    print(f'interrupted after {time.perf_counter() - t0:.2f} s')\n"
+    )
+    done = __import__("subprocess").run([__import__("sys").executable, str(script)], capture_output=True, text=True,
+                                        timeout=120)
+    assert done.stdout.startswith("interrupted after"), done.stdout + done.stderr
+    # 400 one-hour missions take minutes; stopping must take about one engine step.
+    assert float(done.stdout.split()[2]) < 5.0, done.stdout
