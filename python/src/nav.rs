@@ -9,7 +9,7 @@ use crate::value_error;
 use coopnav_core::Vec3;
 use coopnav_nav::post::{self, PostConfig, PostResult, LOG_HEADER};
 use coopnav_nav::{AuvParams, RangeMeasurement, StateKind, SurfaceParams, UpdateOutcome};
-use nalgebra::{SMatrix, SVector};
+use nalgebra::SMatrix;
 use numpy::{PyArray1, PyArray2, PyArrayMethods};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
@@ -25,8 +25,30 @@ fn outcome(o: UpdateOutcome) -> &'static str {
     }
 }
 
-fn state_array<'py, const N: usize>(py: Python<'py>, x: &SVector<f64, N>) -> Bound<'py, PyArray1<f64>> {
-    PyArray1::from_vec(py, x.iter().copied().collect())
+/// A filter class's Python methods: its own (`$own`), plus the getters every filter shares —
+/// `t` (its time, s), `state` (the state vector) and `covariance` (its matrix).
+macro_rules! filter_methods {
+    ($class:ident { $($own:tt)* }) => {
+        #[pymethods]
+        impl $class {
+            $($own)*
+
+            #[getter]
+            fn t(&self) -> f64 {
+                self.inner.ekf().t()
+            }
+
+            #[getter]
+            fn state<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+                PyArray1::from_vec(py, self.inner.ekf().x().iter().copied().collect())
+            }
+
+            #[getter]
+            fn covariance<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
+                covariance_array(py, self.inner.ekf().p())
+            }
+        }
+    };
 }
 
 fn covariance_array<'py, const N: usize>(
@@ -38,14 +60,13 @@ fn covariance_array<'py, const N: usize>(
     Ok(PyArray1::from_vec(py, rows).reshape([N, N])?)
 }
 
-/// The survey AUV's navigation filter (5 states: E, N, speed, heading, compass bias).
+/// The survey AUV's navigation filter; state [E, N, speed, heading, compass bias], covariance 5 × 5.
 #[pyclass(module = "coopnav", name = "AuvEkf")]
 pub struct AuvEkf {
     inner: coopnav_nav::AuvEkf<5>,
 }
 
-#[pymethods]
-impl AuvEkf {
+filter_methods!(AuvEkf {
     /// Starts at time `t0` from position (e, n), `speed` and math `heading` (rad), zero compass
     /// bias; `params` overrides `coopnav_nav::AuvParams` fields (dict or TOML).
     #[new]
@@ -89,25 +110,7 @@ impl AuvEkf {
         let m = RangeMeasurement { range, travel_time, transponder: Vec3::new(x, y, z) };
         outcome(self.inner.update_range_from_uncertain(&m, auv_depth, transponder_sd))
     }
-
-    /// The filter's time, s.
-    #[getter]
-    fn t(&self) -> f64 {
-        self.inner.ekf().t()
-    }
-
-    /// State [E, N, speed, heading, bias].
-    #[getter]
-    fn state<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
-        state_array(py, self.inner.state())
-    }
-
-    /// Covariance, 5 × 5.
-    #[getter]
-    fn covariance<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
-        covariance_array(py, self.inner.ekf().p())
-    }
-}
+});
 
 fn surface_params(params: Option<&Bound<'_, PyAny>>) -> PyResult<SurfaceParams> {
     let Some(p) = params else { return Ok(SurfaceParams::ship()) };
@@ -124,15 +127,14 @@ fn surface_params(params: Option<&Bound<'_, PyAny>>) -> PyResult<SurfaceParams> 
     Ok(params)
 }
 
-/// A surface vehicle's filter (4 states: E, N, speed, heading), as the AUV runs it on the
-/// ship's or buoy's broadcast states.
+/// A surface vehicle's filter, as the AUV runs it on the ship's or buoy's broadcast states;
+/// state [E, N, speed, heading], covariance 4 × 4.
 #[pyclass(module = "coopnav", name = "SurfaceEkf")]
 pub struct SurfaceEkf {
     inner: coopnav_nav::SurfaceEkf,
 }
 
-#[pymethods]
-impl SurfaceEkf {
+filter_methods!(SurfaceEkf {
     /// `params`: "ship" (default), "buoy", or every `coopnav_nav::SurfaceParams` field (dict or TOML).
     #[new]
     #[pyo3(signature = (t0, e, n, speed, heading, params = None))]
@@ -156,24 +158,7 @@ impl SurfaceEkf {
         };
         Ok(outcome(self.inner.update(kind, value)))
     }
-
-    #[getter]
-    fn t(&self) -> f64 {
-        self.inner.ekf().t()
-    }
-
-    /// State [E, N, speed, heading].
-    #[getter]
-    fn state<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
-        state_array(py, self.inner.state())
-    }
-
-    /// Covariance, 4 × 4.
-    #[getter]
-    fn covariance<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
-        covariance_array(py, self.inner.ekf().p())
-    }
-}
+});
 
 /// The log as CSV text: a path's content, or numpy/list columns `t, kind, src, v1..v4` written
 /// in the log format (NaN and None become empty fields), so both are read by the same reader.
