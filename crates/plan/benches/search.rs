@@ -1,26 +1,17 @@
-//! Criterion benches of one planner decision: branch-and-bound on one thread, in parallel, and
-//! brute force, under Hudson's cost (the issue-2 speed targets) and the estimator-aware cost (the
-//! issue-10 targets: N = 5, A = 7, L = 5 and L = 7). Run with short times on the shared machine:
+//! Criterion benches of one planner decision on the standard workloads (`Workload::standard`, the
+//! list `coopnav bench planner` runs too): branch-and-bound on one thread, in parallel (L ≥ 7), and
+//! brute force (up to 10⁶ leaves). Run with short times on the shared machine:
 //! `cargo bench -p coopnav-plan -- --warm-up-time 1 --measurement-time 3`.
 
 use coopnav_plan::workload::Workload;
-use coopnav_plan::{Algorithm, CostSpec, EstimatorSpec};
+use coopnav_plan::Algorithm;
 use criterion::{criterion_group, criterion_main, Criterion};
 
 fn search(c: &mut Criterion) {
     let mut g = c.benchmark_group("decision");
     g.sample_size(10);
-    let estimator = CostSpec::Estimator(EstimatorSpec::default());
-    for w in [
-        Workload { n: 2, a: 5, b: 1, l: 5, gap: 500.0, cost: CostSpec::Hudson },
-        Workload { n: 5, a: 7, b: 1, l: 7, gap: 500.0, cost: CostSpec::Hudson },
-        Workload { n: 5, a: 7, b: 1, l: 7, gap: 100.0, cost: CostSpec::Hudson },
-        Workload { n: 2, a: 5, b: 3, l: 3, gap: 500.0, cost: CostSpec::Hudson },
-        Workload { n: 5, a: 7, b: 1, l: 5, gap: 500.0, cost: estimator },
-        Workload { n: 5, a: 7, b: 1, l: 7, gap: 500.0, cost: estimator },
-    ] {
-        let kind = if w.cost == CostSpec::Hudson { "hudson" } else { "estimator" };
-        let name = format!("{kind}_N{}_A{}_B{}_L{}_gap{}", w.n, w.a, w.b, w.l, w.gap);
+    for w in Workload::standard() {
+        let name = w.name();
         g.bench_function(format!("bnb_1thread/{name}"), |b| {
             b.iter(|| w.decide(Algorithm::BranchAndBound, false).unwrap())
         });

@@ -8,7 +8,9 @@
 use crate::error_model::{tangential_update, ErrorModel};
 
 /// One per-AUV cost model. Implementations must make `bound_rest` and `level_floors` true lower
-/// bounds of what `update` produces along any path, or branch-and-bound stops being exact.
+/// bounds of what `update` produces along any path, keep every cost term ≥ 0 and `combine`
+/// non-decreasing in both arguments (a partly summed level cost is then a lower bound of the
+/// whole, `tree::Cut`), or branch-and-bound stops being exact.
 pub(crate) trait CostModel: Sync {
     /// One AUV's error state at a node.
     type State: Copy + Send + Sync;

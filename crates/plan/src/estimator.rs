@@ -218,6 +218,17 @@ pub fn expected_posterior(
 /// part, which dominates, tight).
 const TANGENTIAL_SLACK: f64 = 0.02;
 
+/// How many cone chains `EkfCost::bound_rest` runs side by side, one per κ of [`cone_kappas`].
+const CONE_CHAINS: usize = 4;
+
+/// The κ of each cone chain when the line of sight may have turned by sin δ ≤ s: √s, 1, 1/√s and
+/// 1/s (s is kept above 1e-12 so they stay finite).
+#[inline(always)]
+fn cone_kappas(s: f64) -> [f64; CONE_CHAINS] {
+    let root = s.max(1e-12).sqrt();
+    [root, 1.0, 1.0 / root, 1.0 / (root * root)]
+}
+
 /// The estimator-aware model of one decision.
 pub(crate) struct EkfCost {
     pub spec: EstimatorSpec,
@@ -269,10 +280,12 @@ impl CostModel for EkfCost {
     /// - ping: after m levels the line of sight has moved by at most Δ = Σ reach, so its direction
     ///   is within sin δ ≤ s = Δ/D_h of u (D_h the node's horizontal distance; s = 1 when Δ ≥ D_h),
     ///   and hhᵀ ⪯ ĥĥᵀ = [[cos², cos·sin], [cos·sin, sin²]] ⪯ diag(1 + κ, s²(1 + 1/κ)) for any κ > 0
-    ///   (the same determinant argument); κ = √s keeps both the radial and the tangential part
-    ///   near their true size when s is small. Or ĥĥᵀ ⪯ I, whichever has the smaller tangential
-    ///   entry; R ≥ R(max(0, D − Δ)) with D the node's slant distance (R grows with range) and
-    ///   p_s ≤ 1;
+    ///   (the same determinant argument). Every κ gives a valid chain, and the best κ depends on
+    ///   how much the radial part matters against the tangential one (far AUVs with noisy ranges:
+    ///   small κ; nearer ones with precise ranges: large κ), so [`CONE_CHAINS`] chains run side by
+    ///   side with κ = √s, 1, 1/√s and 1/s ([`cone_kappas`]) and each level takes the largest
+    ///   bound. Or ĥĥᵀ ⪯ I, whichever has the smaller tangential entry; R ≥ R(max(0, D − Δ)) with
+    ///   D the node's slant distance (R grows with range) and p_s ≤ 1;
     /// - E ⪰ D⁻¹ then gives tr E ≥ tr D⁻¹ and det E ≥ det D⁻¹.
     fn bound_rest(
         &self,
@@ -288,20 +301,23 @@ impl CostModel for EkfCost {
         let horizontal = (dx * dx + dy * dy).sqrt();
         let slant = (horizontal * horizontal + dz * dz).sqrt();
         let u = if horizontal > 1e-9 { [dx / horizontal, dy / horizontal] } else { [1.0, 0.0] };
-        let (mut v_u, mut v_t) = diagonal_floor(state, u);
+        let mut chains = [diagonal_floor(state, u); CONE_CHAINS];
         let mut eigen = EigenFloor::of(state);
         let mut moved = 0.0;
         for (slot, r) in out.iter_mut().zip(reach) {
             moved += r;
             let s = if horizontal > moved { moved / horizontal } else { 1.0 };
-            let root_s = s.sqrt();
-            let tangential = s * s + s * root_s;
-            let (add_u, add_t) = if tangential < 1.0 { (1.0 + root_s, tangential) } else { (1.0, 1.0) };
             let r_min = self.spec.range_noise.variance((slant - moved).max(0.0));
-            v_u = 1.0 / (1.0 / (v_u + q) + add_u / r_min);
-            v_t = 1.0 / (1.0 / (v_t + q) + add_t / r_min);
             let (trace, det) = eigen.step(q, r_min);
-            *slot = self.combine(*slot, self.term((v_u + v_t).max(trace), (v_u * v_t).max(det)));
+            let mut term = self.term(trace, det);
+            for ((v_u, v_t), kappa) in chains.iter_mut().zip(cone_kappas(s)) {
+                let tangential = s * s * (1.0 + 1.0 / kappa);
+                let (add_u, add_t) = if tangential < 1.0 { (1.0 + kappa, tangential) } else { (1.0, 1.0) };
+                *v_u = 1.0 / (1.0 / (*v_u + q) + add_u / r_min);
+                *v_t = 1.0 / (1.0 / (*v_t + q) + add_t / r_min);
+                term = term.max(self.term(*v_u + *v_t, *v_u * *v_t));
+            }
+            *slot = self.combine(*slot, term);
         }
     }
 

@@ -71,15 +71,29 @@ pub struct SearchConfig {
     pub parallel: bool,
     #[serde(default)]
     pub deadline: Deadline,
+    /// Relative tolerance of the tie-break: every level-0 option whose minimum path cost is within
+    /// `tie_tolerance` × the overall minimum of it ties, and the lowest option index wins (so
+    /// mirror-symmetric set-ups are not decided by rounding). Invented (issue 10): 1e-9.
+    #[serde(default = "default_tie_tolerance")]
+    pub tie_tolerance: f64,
 }
 
 fn yes() -> bool {
     true
 }
 
+fn default_tie_tolerance() -> f64 {
+    1e-9
+}
+
 impl Default for SearchConfig {
     fn default() -> Self {
-        SearchConfig { algorithm: Algorithm::default(), parallel: true, deadline: Deadline::default() }
+        SearchConfig {
+            algorithm: Algorithm::default(),
+            parallel: true,
+            deadline: Deadline::default(),
+            tie_tolerance: default_tie_tolerance(),
+        }
     }
 }
 
@@ -142,6 +156,10 @@ impl PlannerConfig {
         }
         self.penalties.primary.validate("penalties.primary")?;
         self.penalties.look_ahead.validate("penalties.look_ahead")?;
+        let tol = self.search.tie_tolerance;
+        if !(0.0..=1e-3).contains(&tol) {
+            return bad("search.tie_tolerance", "0 <= tie_tolerance <= 1e-3 (relative)", tol.to_string());
+        }
         match self.search.deadline {
             Deadline::TauMinus { margin_s } if !(margin_s >= 0.0 && margin_s < self.motion.tau) => {
                 bad("search.deadline.margin_s", "0 <= margin_s < tau", margin_s.to_string())
@@ -205,7 +223,8 @@ pub struct Decision {
     pub motion: MotionOption,
     /// The CNA pose after the step: the next waypoint.
     pub next: CnaPose,
-    /// Minimum path cost over the searched tree (penalised).
+    /// Minimum path cost over the searched tree (penalised). The chosen option's own minimum is
+    /// within `SearchConfig::tie_tolerance` of it.
     pub value: f64,
     /// Tree levels requested (L + 1) and completed.
     pub levels_requested: usize,
@@ -308,6 +327,7 @@ impl LookAheadPlanner {
             reach: reaches(&g.auv, g.n, cfg.motion.speed * cfg.motion.tau),
             auv: g.auv,
             rest_floor: rest_floors(&model.level_floors(&root_state, g.depth)),
+            tie_tolerance: cfg.search.tie_tolerance,
             model,
             root_pose: g.root_pose,
             root_state,
@@ -352,7 +372,7 @@ impl LookAheadPlanner {
         let requested = self.cfg.look_ahead + 1;
         let full = build(requested)?;
         let search = |tree: &Tree<M>, shared: &Shared| match self.cfg.search.algorithm {
-            Algorithm::BruteForce => Some(brute::brute_force(tree)),
+            Algorithm::BruteForce => brute::brute_force(tree, shared),
             Algorithm::BranchAndBound => branch_and_bound(tree, self.cfg.search.parallel, shared),
         };
         let Some(budget) = self.cfg.budget() else {

@@ -3,9 +3,12 @@
 //! top two levels. It returns exactly the brute-force decision and minimum path cost:
 //! - a subtree is cut only when its lower bound (path so far + a bound on the levels below: the
 //!   per-level floor, then the node's own bound) is strictly greater than the best complete
-//!   path known, so no minimum-cost path is ever cut;
-//! - ties between equal minima go to the lowest level-0 option index, and parallel results are
-//!   merged by (value, option), so the result does not depend on thread timing.
+//!   path known times (1 + tie tolerance), so no path within the tie tolerance of the minimum is
+//!   ever cut, and the minimum under every level-0 option that ties is found exactly;
+//! - the decision is `tree::choose` of those per-option minima (lowest option index among the
+//!   ties), the same rule as the brute force; workers' minima are merged per option, so the
+//!   result does not depend on thread timing;
+//! - a node is abandoned part-way through its AUVs once the partial sum is cut (`tree::Cut`).
 //!
 //! The parallel mode orders the (level-0, level-1) subtrees by their lower bound, searches the
 //! most promising one first on the calling thread to get a tight bound, then lets every worker
@@ -13,7 +16,7 @@
 //! Only the node count varies with the thread count.
 
 use crate::cost_model::CostModel;
-use crate::tree::{NodeRef, Tree};
+use crate::tree::{choose, Cut, NodeRef, Tree};
 use crate::SearchOutcome;
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicBool, AtomicU64, AtomicUsize, Ordering};
@@ -58,13 +61,26 @@ impl Shared {
     fn offer(&self, v: f64) {
         self.best_bits.fetch_min(v.to_bits(), Ordering::Relaxed);
     }
+    /// Reads the clock: raises the abort flag once the deadline has passed; true when aborted.
+    pub fn check_clock(&self) -> bool {
+        if let Some(d) = self.deadline {
+            if Instant::now() >= d {
+                self.abort.store(true, Ordering::Relaxed);
+            }
+        }
+        self.abort.load(Ordering::Relaxed)
+    }
 }
 
 /// One worker's search state.
 struct Ctx<'s> {
     shared: &'s Shared,
+    /// The best complete path this worker has seen.
     best: f64,
-    best_root: usize,
+    /// 1 + the tie tolerance: what the best path is inflated by before cutting.
+    slack: f64,
+    /// The best complete path seen under each level-0 option.
+    root_min: Vec<f64>,
     /// The level-0 option of the subtree being searched.
     root: usize,
     nodes: u64,
@@ -73,16 +89,26 @@ struct Ctx<'s> {
 }
 
 impl<'s> Ctx<'s> {
-    fn new(shared: &'s Shared) -> Self {
-        Ctx { shared, best: f64::INFINITY, best_root: usize::MAX, root: usize::MAX, nodes: 0, since_clock: 255 }
+    fn new<M: CostModel>(shared: &'s Shared, tree: &Tree<M>) -> Self {
+        Ctx {
+            shared,
+            best: f64::INFINITY,
+            slack: 1.0 + tree.tie_tolerance,
+            root_min: vec![f64::INFINITY; tree.n_options()],
+            root: usize::MAX,
+            nodes: 0,
+            since_clock: 255,
+        }
     }
+    /// Anything whose lower bound is above this is cut.
     fn bound(&self) -> f64 {
-        self.best.min(self.shared.bound())
+        self.best.min(self.shared.bound()) * self.slack
     }
     fn leaf(&mut self, v: f64) {
-        if v < self.best || (v == self.best && self.root < self.best_root) {
+        let m = &mut self.root_min[self.root];
+        *m = m.min(v);
+        if v < self.best {
             self.best = v;
-            self.best_root = self.root;
             self.shared.offer(v);
         }
     }
@@ -91,36 +117,45 @@ impl<'s> Ctx<'s> {
         self.since_clock += 1;
         if self.since_clock >= 256 {
             self.since_clock = 0;
-            if let Some(d) = self.shared.deadline {
-                if Instant::now() >= d {
-                    self.shared.abort.store(true, Ordering::Relaxed);
-                }
-            }
+            return self.shared.check_clock();
         }
         self.shared.abort.load(Ordering::Relaxed)
     }
-    fn outcome(&self) -> SearchOutcome {
-        SearchOutcome { root_option: self.best_root, value: self.best, nodes: self.nodes }
+    /// Joins another worker's findings into this one's.
+    fn merge(&mut self, other: Ctx) {
+        self.nodes += other.nodes;
+        self.best = self.best.min(other.best);
+        for (m, o) in self.root_min.iter_mut().zip(other.root_min) {
+            *m = m.min(o);
+        }
+    }
+    fn outcome(&self, tree_tolerance: f64) -> SearchOutcome {
+        let (root_option, value) = choose(&self.root_min, tree_tolerance).unwrap_or((usize::MAX, f64::INFINITY));
+        SearchOutcome { root_option, value, nodes: self.nodes }
     }
 }
 
-/// Expands every child of `parent` into `lv` (level `level`) and sorts them cheapest first.
+/// Expands every child of `parent` into `lv` (level `level`), dropping those `cut` removes, and
+/// sorts the rest cheapest first.
 fn expand_all<M: CostModel>(
     tree: &Tree<M>,
     level: usize,
     parent: &NodeRef<M::State>,
     lv: &mut Level<M::State>,
     ctx: &mut Ctx,
+    cut: &Cut,
 ) {
     let n = tree.n;
     lv.order.clear();
-    for &o in tree.level_options(level) {
-        let (p, c) = tree.expand(level, parent, o, &mut lv.state[o * n..(o + 1) * n]);
-        lv.pose[o] = p;
-        lv.cost[o] = c;
-        lv.order.push(o);
+    let options = tree.level_options(level);
+    for &o in options {
+        if let Some((p, c)) = tree.expand_within(level, parent, o, &mut lv.state[o * n..(o + 1) * n], cut) {
+            lv.pose[o] = p;
+            lv.cost[o] = c;
+            lv.order.push(o);
+        }
     }
-    ctx.nodes += lv.order.len() as u64;
+    ctx.nodes += options.len() as u64;
     let cost = &lv.cost;
     // Stable sort keeps index order among equal costs.
     lv.order.sort_by(|&a, &b| cost[a].total_cmp(&cost[b]));
@@ -156,7 +191,8 @@ fn dfs<M: CostModel>(
         return;
     }
     let (lv, deeper) = levels.split_first_mut().expect("one buffer per level");
-    expand_all(tree, level, parent, lv, ctx);
+    let cut = Cut { acc, floor: tree.rest_floor[level], bound: ctx.bound() };
+    expand_all(tree, level, parent, lv, ctx, &cut);
     let n = tree.n;
     for i in 0..lv.order.len() {
         let o = lv.order[i];
@@ -177,9 +213,9 @@ pub(crate) fn branch_and_bound<M: CostModel>(tree: &Tree<M>, parallel: bool, sha
     let out = if parallel && tree.depth >= 2 {
         parallel_search(tree, shared)
     } else {
-        let mut ctx = Ctx::new(shared);
+        let mut ctx = Ctx::new(shared, tree);
         dfs(tree, 0, &tree.root(), 0.0, &mut levels(tree), &mut ctx);
-        ctx.outcome()
+        ctx.outcome(tree.tie_tolerance)
     };
     (!shared.abort.load(Ordering::Relaxed)).then_some(out)
 }
@@ -237,22 +273,22 @@ fn search_subtree<M: CostModel>(
 }
 
 /// Subtrees ordered by bound; the first searched alone for a tight bound, the rest pulled in order
-/// by one worker per rayon thread; results merged by (value, level-0 option).
+/// by one worker per rayon thread; the per-option minima merged.
 fn parallel_search<M: CostModel>(tree: &Tree<M>, shared: &Shared) -> SearchOutcome {
-    let mut first = Ctx::new(shared);
+    let mut first = Ctx::new(shared, tree);
     let mut lv = levels(tree);
     let (top_slot, rest) = lv.split_first_mut().expect("depth >= 2");
-    expand_all(tree, 0, &tree.root(), top_slot, &mut first);
+    expand_all(tree, 0, &tree.root(), top_slot, &mut first, &Cut::NEVER);
     let top = &*top_slot;
     let tasks = subtrees(tree, top);
     first.nodes += tasks.len() as u64;
     search_subtree(tree, top, &tasks[0], rest, &mut first);
     let next = AtomicUsize::new(1);
     let workers = rayon::current_num_threads().max(1);
-    let results: Vec<SearchOutcome> = (0..workers)
+    let results: Vec<Ctx> = (0..workers)
         .into_par_iter()
         .map(|_| {
-            let mut ctx = Ctx::new(shared);
+            let mut ctx = Ctx::new(shared, tree);
             let mut lv = levels(tree);
             loop {
                 let i = next.fetch_add(1, Ordering::Relaxed);
@@ -261,16 +297,11 @@ fn parallel_search<M: CostModel>(tree: &Tree<M>, shared: &Shared) -> SearchOutco
                 }
                 search_subtree(tree, top, &tasks[i], &mut lv[1..], &mut ctx);
             }
-            ctx.outcome()
+            ctx
         })
         .collect();
-    let mut out = first.outcome();
     for r in results {
-        out.nodes += r.nodes;
-        if r.value < out.value || (r.value == out.value && r.root_option < out.root_option) {
-            out.value = r.value;
-            out.root_option = r.root_option;
-        }
+        first.merge(r);
     }
-    out
+    first.outcome(tree.tie_tolerance)
 }

@@ -36,6 +36,39 @@ pub(crate) struct Tree<M: CostModel> {
     /// `reach[j * n + k]` (j ≥ 1): how far AUV k's line of sight can move between levels j−1 and j,
     /// |Δa| + s·τ (AUV displacement plus the CNA's step), metres.
     pub reach: Vec<f64>,
+    /// `SearchConfig::tie_tolerance`: level-0 options within this relative margin of the minimum tie.
+    pub tie_tolerance: f64,
+}
+
+/// When a node being expanded is cut: its path cost so far `acc` plus the raw cost summed over
+/// the AUVs processed so far plus the floor of the levels below already exceeds `bound`. Every
+/// cost term is ≥ 0, `combine` never decreases and every penalty keeps C' ≥ C, so the full,
+/// penalised cost would be cut by the same test (`(acc + c) + floor > bound`, evaluated in the
+/// same order, and floating-point addition is monotone).
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Cut {
+    pub acc: f64,
+    pub floor: f64,
+    pub bound: f64,
+}
+
+impl Cut {
+    /// Never cuts (the brute force and the parallel set-up).
+    pub const NEVER: Cut = Cut { acc: 0.0, floor: 0.0, bound: f64::INFINITY };
+
+    #[inline(always)]
+    fn cuts(&self, raw: f64) -> bool {
+        (self.acc + raw) + self.floor > self.bound
+    }
+}
+
+/// The decision among the level-0 options from the minimum path cost found under each
+/// (`f64::INFINITY` where none was found): the overall minimum V, and the lowest option index whose
+/// minimum is ≤ V·(1 + tolerance). `None` when no path was found.
+pub(crate) fn choose(root_min: &[f64], tolerance: f64) -> Option<(usize, f64)> {
+    let v = root_min.iter().copied().fold(f64::INFINITY, f64::min);
+    let limit = v * (1.0 + tolerance);
+    root_min.iter().position(|&m| m <= limit).map(|o| (o, v))
 }
 
 /// A node's state as the search sees it.
@@ -112,6 +145,20 @@ impl<M: CostModel> Tree<M> {
         opt: usize,
         out: &mut [M::State],
     ) -> (FastPose, f64) {
+        self.expand_within(level, parent, opt, out, &Cut::NEVER).expect("never cut")
+    }
+
+    /// [`Tree::expand`], stopping early (`None`, `out` partly written) once `cut` applies to the
+    /// raw cost summed so far.
+    #[inline(always)]
+    pub fn expand_within(
+        &self,
+        level: usize,
+        parent: &NodeRef<M::State>,
+        opt: usize,
+        out: &mut [M::State],
+        cut: &Cut,
+    ) -> Option<(FastPose, f64)> {
         let pose = self.motion.step(&parent.pose, &self.options[opt]);
         let auv = &self.auv[level * self.n..(level + 1) * self.n];
         let (mut raw, mut dmin2, mut dmax2) = (0.0, f64::INFINITY, 0.0f64);
@@ -124,8 +171,11 @@ impl<M: CostModel> Tree<M> {
             let (state, term) = self.model.update(k, &parent.state[k], pose.p, a);
             out[k] = state;
             raw = self.model.combine(raw, term);
+            if cut.cuts(raw) {
+                return None;
+            }
         }
-        (pose, self.penalise(level, &pose, raw, dmin2, dmax2))
+        Some((pose, self.penalise(level, &pose, raw, dmin2, dmax2)))
     }
 
     #[inline(always)]

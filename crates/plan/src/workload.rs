@@ -5,6 +5,8 @@
 //! τ = 10 s, s = 1.5 m/s, penalty case 1. Invented where the thesis is silent (digest A17, A18).
 //! Under the estimator-aware cost every AUV starts with P = 1 m²·I and q = α/2 per axis (the
 //! same trace growth as Hudson's α), over a perfect link.
+//!
+//! [`Workload::standard`] is the one list both the criterion bench and `coopnav bench planner` run.
 
 use crate::planner::Algorithm;
 use crate::{
@@ -27,6 +29,34 @@ pub struct Workload {
 }
 
 impl Workload {
+    /// The standard workloads: the issue-2 ones under Hudson's cost, then the issue-10 ones under
+    /// the estimator-aware cost (N = 5, A = 7, L = 5 and L = 7, targets 5 ms and 100 ms).
+    pub fn standard() -> Vec<Workload> {
+        let hudson = |n, a, b, l, gap| Workload { n, a, b, l, gap, cost: CostSpec::Hudson };
+        let estimator = |l| Workload { n: 5, a: 7, b: 1, l, gap: 500.0, cost: CostSpec::Estimator(Default::default()) };
+        vec![
+            hudson(2, 5, 1, 5, 500.0),
+            hudson(2, 5, 1, 5, 100.0),
+            hudson(5, 7, 1, 7, 500.0),
+            hudson(5, 7, 1, 7, 100.0),
+            hudson(2, 7, 1, 4, 500.0),
+            hudson(2, 5, 3, 3, 500.0),
+            hudson(2, 4, 5, 3, 500.0),
+            hudson(5, 3, 6, 3, 100.0),
+            estimator(5),
+            estimator(7),
+        ]
+    }
+
+    /// A short name for reports: cost kind and the N, A, B, L and gap of the workload.
+    pub fn name(&self) -> String {
+        let kind = match self.cost {
+            CostSpec::Hudson => "hudson",
+            CostSpec::Estimator(_) => "estimator",
+        };
+        format!("{kind}_N{}_A{}_B{}_L{}_gap{}", self.n, self.a, self.b, self.l, self.gap)
+    }
+
     pub fn config(&self, algorithm: Algorithm, parallel: bool) -> PlannerConfig {
         PlannerConfig {
             look_ahead: self.l,
@@ -41,7 +71,7 @@ impl Workload {
             cost: self.cost,
             limits: DistanceLimits::default(),
             penalties: PenaltyCase::C1.penalties(),
-            search: SearchConfig { algorithm, parallel, deadline: Deadline::None },
+            search: SearchConfig { algorithm, parallel, deadline: Deadline::None, ..SearchConfig::default() },
         }
     }
 

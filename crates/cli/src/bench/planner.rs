@@ -1,10 +1,10 @@
-//! `coopnav bench planner`: one planner decision on the issue-2 workloads and, under the
-//! estimator-aware cost, the issue-10 ones (branch-and-bound on one thread and with rayon against
+//! `coopnav bench planner`: one planner decision on the standard workloads (`Workload::standard`,
+//! the list the criterion bench runs too: branch-and-bound on one thread and with rayon against
 //! brute force), and the nodes expanded over the embedded example mission.
 
 use anyhow::{ensure, Result};
 use coopnav_plan::workload::Workload;
-use coopnav_plan::{Algorithm, CostSpec, EstimatorSpec, LookAheadPlanner};
+use coopnav_plan::{Algorithm, LookAheadPlanner};
 use coopnav_sim::predeploy::{self, EXAMPLE};
 use serde_json::json;
 use std::time::Instant;
@@ -34,20 +34,8 @@ fn time<T>(reps: usize, mut f: impl FnMut() -> Result<T>) -> Result<(f64, T)> {
 
 pub fn run(args: Args) -> Result<()> {
     let (reps, brute_max_leaves) = (args.reps.max(1), args.brute_max_leaves);
-    let estimator = CostSpec::Estimator(EstimatorSpec::default());
-    let workloads = [
-        Workload { n: 2, a: 5, b: 1, l: 5, gap: 500.0, cost: CostSpec::Hudson },
-        Workload { n: 2, a: 5, b: 1, l: 5, gap: 100.0, cost: CostSpec::Hudson },
-        Workload { n: 5, a: 7, b: 1, l: 7, gap: 500.0, cost: CostSpec::Hudson },
-        Workload { n: 5, a: 7, b: 1, l: 7, gap: 100.0, cost: CostSpec::Hudson },
-        Workload { n: 2, a: 7, b: 1, l: 4, gap: 500.0, cost: CostSpec::Hudson },
-        Workload { n: 2, a: 4, b: 5, l: 3, gap: 500.0, cost: CostSpec::Hudson },
-        Workload { n: 5, a: 3, b: 6, l: 3, gap: 100.0, cost: CostSpec::Hudson },
-        Workload { n: 5, a: 7, b: 1, l: 5, gap: 500.0, cost: estimator },
-        Workload { n: 5, a: 7, b: 1, l: 7, gap: 500.0, cost: estimator },
-    ];
     let mut rows = Vec::new();
-    for w in workloads {
+    for w in Workload::standard() {
         let (t_seq, seq) = time(reps, || Ok(w.decide(Algorithm::BranchAndBound, false)?))?;
         let (t_par, par) = time(reps, || Ok(w.decide(Algorithm::BranchAndBound, true)?))?;
         ensure!(
@@ -67,6 +55,7 @@ pub fn run(args: Args) -> Result<()> {
         };
         rows.push(json!({
             "workload": w,
+            "name": w.name(),
             "leaves": w.leaves(),
             "decision": seq.option,
             "min_cost": seq.value,

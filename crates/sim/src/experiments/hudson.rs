@@ -11,13 +11,22 @@
 //!   1 m/s and 90 m, CNA from (140, 0, 0); τ = 30 s; penalty case 1.
 //! - Sec. 5.2: 500 m × 1500 m areas side by side (five lanes 100 m apart, spacing invented),
 //!   constant 90 m depth, CNA speed 1.5 m/s, A = 5 (A18).
+//!
+//! Bearing model (digest A3; issue 10): no one model gives both the Sec. 5.3 and the Table 6.1
+//! results, so each experiment names its own ([`BEARING_53`], [`BEARING_61`]); the configuration
+//! default stays the horizontal bearing (`coopnav_plan::BearingMode`). Measured on the reduced
+//! forms: with the horizontal bearing an AUV CNA scores exactly like the ASC in 5 of the 7 Sec. 5.3
+//! tables (its pitch only shortens its step), and the thesis's CNA-kind ordering holds in 1 (a
+//! tie); with the 3-D bearing it holds in 4, among them all four tables the thesis tops with an AUV
+//! CNA. Table 6.1's best RMS is 2.256 m with the horizontal bearing (thesis 2.22 m) and 2.434 m
+//! with the 3-D one.
 
 use super::{Check, ExperimentError, ReproOptions, ReproReport, Size};
 use crate::predeploy::{self, Mission, Summary};
 use coopnav_core::{DepthProfile, Heading, Lawnmower, Track, Vec3};
 use coopnav_plan::{
-    CnaKind, CnaPose, Deadline, DistanceLimits, ErrorModel, LookAheadPlanner, MotionConfig, PenaltyCase, PlannerConfig,
-    SearchConfig,
+    BearingMode, CnaKind, CnaPose, Deadline, DistanceLimits, ErrorModel, LookAheadPlanner, MotionConfig, PenaltyCase,
+    PlannerConfig, SearchConfig,
 };
 use rayon::prelude::*;
 use serde::Serialize;
@@ -54,11 +63,17 @@ pub struct Row {
     pub summary: Summary,
 }
 
-fn planner(s: &Setup, tau: f64, case: PenaltyCase) -> PlannerConfig {
+/// The Sec. 5.3 sweeps (Tables 5.3–5.9) measure the bearing change in 3-D: the thesis's AUV CNAs
+/// win there because depth changes turn the line of sight (module doc).
+const BEARING_53: BearingMode = BearingMode::Slant3d;
+/// Table 6.1 and the penalty cases keep the horizontal bearing: its 2.22 m floor (module doc).
+const BEARING_61: BearingMode = BearingMode::Horizontal;
+
+fn planner(s: &Setup, tau: f64, case: PenaltyCase, bearing: BearingMode) -> PlannerConfig {
     PlannerConfig {
         look_ahead: s.l,
         motion: MotionConfig { speed: s.speed, tau, heading_options: s.a, max_turn_rate_deg_s: 4.0, cna: s.cna() },
-        error: ErrorModel::default(),
+        error: ErrorModel { bearing, ..ErrorModel::default() },
         cost: coopnav_plan::CostSpec::Hudson,
         limits: DistanceLimits::default(),
         penalties: case.penalties(),
@@ -140,12 +155,22 @@ fn mission(tracks: &[Track], cfg: PlannerConfig, start: Vec3, end_time: Option<f
     }
 }
 
+/// How one sweep is run: decision period, penalty case and bearing model.
+#[derive(Clone, Copy)]
+struct Model {
+    tau: f64,
+    case: PenaltyCase,
+    bearing: BearingMode,
+}
+
+/// Sec. 5.3: τ = 10 s, case 1, 3-D bearing.
+const MODEL_53: Model = Model { tau: 10.0, case: PenaltyCase::C1, bearing: BEARING_53 };
+
 /// Runs every set-up (in parallel, merged in order).
 fn sweep(
     id: &str,
     setups: &[Setup],
-    tau: f64,
-    case: PenaltyCase,
+    model: Model,
     tracks: &[Track],
     start: Vec3,
     end: Option<f64>,
@@ -153,7 +178,7 @@ fn sweep(
     setups
         .par_iter()
         .map(|s| {
-            let m = mission(tracks, planner(s, tau, case), start, end);
+            let m = mission(tracks, planner(s, model.tau, model.case, model.bearing), start, end);
             let mut p = LookAheadPlanner::new(m.planner).map_err(|e| fail(id, e.to_string()))?;
             let r = predeploy::run(&m, &mut p, &|_| {}).map_err(|e| fail(id, e.to_string()))?;
             Ok(Row { setup: *s, summary: r.summary })
@@ -251,30 +276,36 @@ impl SortBy {
 /// Largest tree a Sec. 5.3 sweep decision may have: (A·B)^(L+1). The thesis's MATLAB ran every
 /// combination; in the full form we skip AUV-CNA set-ups above this (recorded as a deviation:
 /// with every combination, up to (9·6)^4 = 8.5 M leaves per decision, one table took > 18 min
-/// on this shared 2-core machine; with this cap, 1.5–3 min).
+/// on this shared 2-core machine; with this cap, 1.5–3 min). The table says how many were
+/// skipped and marks the thesis rows among them.
 const FULL_LEAF_CAP: f64 = 2.2e5;
 
-fn grid_53(size: Size) -> Vec<Setup> {
+/// A sweep's set-ups: those run and those skipped for their tree size.
+struct Grid {
+    run: Vec<Setup>,
+    skipped: Vec<Setup>,
+}
+
+fn grid_53(size: Size) -> Grid {
     let (speeds, a_set, bs, ls): (Vec<f64>, Vec<usize>, Vec<usize>, Vec<usize>) = match size {
         Size::Full => {
             ((1..=8).map(|i| 0.5 * i as f64).collect(), (3..=9).collect(), vec![0, 2, 3, 4, 5, 6], (0..=3).collect())
         }
         Size::Reduced => (vec![1.0, 4.0], vec![3, 5], vec![0, 3], vec![0, 2]),
     };
-    let mut v = Vec::new();
+    let mut grid = Grid { run: Vec::new(), skipped: Vec::new() };
     for &b in &bs {
         for &speed in &speeds {
             for &a in &a_set {
                 for &l in &ls {
                     let leaves = ((a * b.max(1)) as f64).powi(l as i32 + 1);
-                    if leaves <= FULL_LEAF_CAP {
-                        v.push(Setup { b, speed, a, l });
-                    }
+                    let into = if leaves <= FULL_LEAF_CAP { &mut grid.run } else { &mut grid.skipped };
+                    into.push(Setup { b, speed, a, l });
                 }
             }
         }
     }
-    v
+    grid
 }
 
 /// Reduced missions stop after this long, s (full: the whole survey).
@@ -289,14 +320,16 @@ fn table_53(
 ) -> Result<ReproReport, ExperimentError> {
     let tracks = adjacent_lawnmowers(n, AREAS_53, true)?;
     let end = (opts.size == Size::Reduced).then_some(REDUCED_END_53);
-    let setups = grid_53(opts.size);
-    let mut rows = sweep(id, &setups, 10.0, PenaltyCase::C1, &tracks, Vec3::new(140.0, 0.0, 0.0), end)?;
+    let Grid { run: setups, skipped } = grid_53(opts.size);
+    let mut rows = sweep(id, &setups, MODEL_53, &tracks, Vec3::new(140.0, 0.0, 0.0), end)?;
     rows.sort_by(|x, y| sort.key(&x.summary).total_cmp(&sort.key(&y.summary)));
     let mut table = String::new();
     let _ = writeln!(
         table,
-        "{id}: best results, N = {n}, tau = 10 s, canonical geometry (digest A17), {} set-ups",
-        setups.len()
+        "{id}: best results, N = {n}, tau = 10 s, canonical geometry (digest A17), {} set-ups run, {} skipped \
+         (AUV CNA, (A*B)^(L+1) > {FULL_LEAF_CAP} leaves; thesis rows among them marked 'not run')",
+        setups.len(),
+        skipped.len()
     );
     let _ = writeln!(
         table,
@@ -318,15 +351,43 @@ fn table_53(
             })
             .unwrap_or_default();
         let ts = Setup { b: if t.0 { t.3 } else { 0 }, speed: t.1, a: t.2, l: t.4 };
-        let _ = writeln!(table, "{ours:<42}| {} {:>7.1}{:>5.2}{:>5.2}", ts.label(), t.5, t.6, t.7);
+        let not_run = if skipped.contains(&ts) { "  not run" } else { "" };
+        let _ = writeln!(table, "{ours:<42}| {} {:>7.1}{:>5.2}{:>5.2}{not_run}", ts.label(), t.5, t.6, t.7);
     }
-    let checks = checks_53(&rows, &setups, n, 10.0);
+    let mut checks = checks_53(&rows, &setups, n, 10.0);
+    checks.push(cna_kind_order(&rows, sort, thesis));
     Ok(ReproReport {
         id: id.into(),
         table,
         checks,
         data: serde_json::to_value(&rows[..rows.len().min(20)]).unwrap_or_default(),
     })
+}
+
+/// The thesis's top row says whether an AUV CNA or the ASC wins the table; ours must agree: the
+/// best AUV-CNA set-up beats (AUV on top) or does not beat (ASC on top) the best ASC one, by the
+/// table's sort key.
+fn cna_kind_order(rows: &[Row], sort: SortBy, thesis: &[ThesisRow]) -> Check {
+    let best = |auv: bool| {
+        rows.iter().filter(|r| (r.setup.b > 0) == auv).map(|r| sort.key(&r.summary)).fold(f64::INFINITY, f64::min)
+    };
+    let (auv, asc) = (best(true), best(false));
+    let thesis_auv_on_top = thesis[0].0;
+    let ours_auv_on_top = auv < asc;
+    let kind = |on_top: bool| if on_top { "AUV CNA" } else { "ASC" };
+    let check = Check::new(
+        format!("the {} is on top, as in the thesis", kind(thesis_auv_on_top)),
+        ours_auv_on_top == thesis_auv_on_top,
+        format!("ours: best AUV CNA {auv:.3}, best ASC {asc:.3} ({} on top)", kind(ours_auv_on_top)),
+    );
+    if thesis_auv_on_top {
+        return check;
+    }
+    check.known_deviation(
+        "the thesis's ASC wins Tables 5.6, 5.7 and 5.9 narrowly (by 1.8 %, 0.7 % and 7 % in cost); under the 3-D \
+         bearing our AUV CNA wins them by 10-20 % (reduced forms), and under the horizontal bearing it ties the ASC \
+         or wins; no bearing model we have gives both orderings (module doc)",
+    )
 }
 
 fn checks_53(rows: &[Row], setups: &[Setup], n: usize, tau: f64) -> Vec<Check> {
@@ -377,8 +438,7 @@ fn per_auv_trend(opts: &ReproOptions) -> Result<(Vec<f64>, Check), ExperimentErr
             let rows = sweep(
                 "hudson-table-5.3",
                 &setups,
-                10.0,
-                PenaltyCase::C1,
+                MODEL_53,
                 &adjacent_lawnmowers(n, AREAS_53, true)?,
                 Vec3::new(140.0, 0.0, 0.0),
                 end,
@@ -457,7 +517,8 @@ fn t61(opts: &ReproOptions) -> Result<ReproReport, ExperimentError> {
         }
     }
     let tracks = small_lawnmower()?;
-    let mut rows = sweep(id, &setups, 30.0, PenaltyCase::C1, &tracks, Vec3::new(140.0, 0.0, 0.0), None)?;
+    let model = Model { tau: 30.0, case: PenaltyCase::C1, bearing: BEARING_61 };
+    let mut rows = sweep(id, &setups, model, &tracks, Vec3::new(140.0, 0.0, 0.0), None)?;
     rows.sort_by(|x, y| {
         x.summary.rms_error.total_cmp(&y.summary.rms_error).then(x.summary.max_error.total_cmp(&y.summary.max_error))
     });
@@ -485,7 +546,8 @@ fn t61(opts: &ReproOptions) -> Result<ReproReport, ExperimentError> {
         .filter(|r| r.setup.a == 2 && r.setup.l == 0)
         .map(|r| r.summary.rms_error)
         .fold(f64::INFINITY, f64::min);
-    let worst = rows.iter().map(|r| r.summary.rms_error).fold(0.0, f64::max);
+    let worst_row = rows.last().unwrap_or(best);
+    let worst = worst_row.summary.rms_error;
     let checks = vec![
         Check::new(
             "best RMS error near the thesis's 2.22 m (band 2.20-2.32 m)",
@@ -506,6 +568,15 @@ fn t61(opts: &ReproOptions) -> Result<ReproReport, ExperimentError> {
             "A = 2, L = 0 (greedy, +-120 deg) is far from the best",
             greedy2 > best.summary.rms_error + 0.2,
             format!("best A = 2, L = 0 RMS {greedy2:.2} m; worst run {worst:.2} m (thesis 3.06-3.72)"),
+        ),
+        Check::new(
+            "the worst set-up stays within the thesis's worst RMS (A = 2, L = 0: 3.06-3.72 m at every speed)",
+            worst <= 3.72 + 0.05,
+            format!("ours worst {worst:.2} m with {}", worst_row.setup.label()),
+        )
+        .known_deviation(
+            "not explained yet (issue 10): the thesis's survey path (the Halifax trials' lawnmower) is lost and ours is \
+             invented (digest 5.4); the best rows match (2.22 m floor) but the greedy two-option rows do not",
         ),
     ];
     Ok(ReproReport {
@@ -534,7 +605,8 @@ fn penalty_cases(opts: &ReproOptions) -> Result<ReproReport, ExperimentError> {
             .par_iter()
             .map(|&(case, l)| {
                 let s = Setup { b: 0, speed: 1.5, a: 5, l };
-                let r = sweep(id, &[s], 10.0, case, &tracks, Vec3::new(140.0, 0.0, 0.0), end)?;
+                let model = Model { tau: 10.0, case, bearing: BEARING_61 };
+                let r = sweep(id, &[s], model, &tracks, Vec3::new(140.0, 0.0, 0.0), end)?;
                 Ok((case, l, r[0].summary.clone()))
             })
             .collect::<Result<_, ExperimentError>>()?;
@@ -636,7 +708,8 @@ fn far_start_drift(opts: &ReproOptions) -> Result<(f64, f64), ExperimentError> {
     .map_err(|e| fail("drift", e.to_string()))?;
     let run = |case| -> Result<f64, ExperimentError> {
         let s = Setup { b: 0, speed: 1.5, a: 5, l: 0 };
-        let m = mission(std::slice::from_ref(&track), planner(&s, 10.0, case), Vec3::new(1046.0, 0.0, 0.0), None);
+        let cfg = planner(&s, 10.0, case, BEARING_61);
+        let m = mission(std::slice::from_ref(&track), cfg, Vec3::new(1046.0, 0.0, 0.0), None);
         let mut p = LookAheadPlanner::new(m.planner).map_err(|e| fail("drift", e.to_string()))?;
         let r = predeploy::run(&m, &mut p, &|_| {}).map_err(|e| fail("drift", e.to_string()))?;
         let half = r.steps.len() / 2;
