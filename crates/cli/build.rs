@@ -3,9 +3,12 @@
 //! - cfg `chromium_installed`: `$COOPNAV_CHROMIUM`, else /usr/bin/chromium, runs `--version`
 //!   (scripts/install-chromium.sh);
 //! - cfg `pymoos_installed`: `$COOPNAV_PYMOOS_PYTHON`, else tools/pymoos/bin/python, imports
-//!   pymoos2 (scripts/install-pymoos.sh).
+//!   pymoos2 (scripts/install-pymoos.sh);
+//! - cfg `python_package_installed`: `$COOPNAV_PYENV_PYTHON`, else tools/pyenv/bin/python, imports
+//!   coopnav's own Python package and pytest (scripts/install-python.sh).
 //!
-//! The program found is handed to the tests as `COOPNAV_CHROMIUM_FOUND` / `COOPNAV_PYMOOS_FOUND`,
+//! The program found is handed to the tests as `COOPNAV_CHROMIUM_FOUND` / `COOPNAV_PYMOOS_FOUND` /
+//! `COOPNAV_PYENV_FOUND`,
 //! so they run exactly what was detected. `.ci/run` installs both before building; after
 //! installing one by hand, touch this file.
 
@@ -39,8 +42,20 @@ fn main() {
             default: root.join("tools/pymoos/bin/python"),
             probe: &["-c", "import pymoos2.core.MissionReader"],
         },
+        Optional {
+            cfg: "python_package_installed",
+            env: "COOPNAV_PYENV_PYTHON",
+            found_env: "COOPNAV_PYENV_FOUND",
+            default: root.join("tools/pyenv/bin/python"),
+            probe: &["-c", "import coopnav, pytest"],
+        },
     ];
     println!("cargo:rerun-if-changed=build.rs");
+    // Reinstalling the package rewrites this stamp (the venv's python itself does not change).
+    let stamp = root.join("tools/pyenv/coopnav-installed");
+    if stamp.is_file() {
+        println!("cargo:rerun-if-changed={}", stamp.display());
+    }
     for o in &optionals {
         detect(o);
     }

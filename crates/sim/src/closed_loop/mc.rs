@@ -5,7 +5,7 @@
 
 use super::policies::{PolicyError, PolicySpec};
 use super::scenario::Scenario;
-use crate::engine::{run, Faults, RunResult, Timing};
+use crate::engine::{run, Faults, Observer, RunResult, Timing};
 use crate::hbl::mc::{t_975, Stats};
 use coopnav_core::run_seed;
 use rayon::prelude::*;
@@ -79,6 +79,27 @@ pub fn monte_carlo(
     runs: usize,
     progress: &(dyn Fn(u64) + Sync),
 ) -> Result<Comparison, PolicyError> {
+    monte_carlo_until(sc, policies, runs, progress, &|| false)
+}
+
+/// Ends every run at its next step once `stop()` is true (a caller's cancellation).
+struct Until<'a>(&'a (dyn Fn() -> bool + Sync));
+
+impl Observer for Until<'_> {
+    fn stop(&self) -> bool {
+        (self.0)()
+    }
+}
+
+/// [`monte_carlo`] that a caller can cancel: once `stop()` is true every run ends at its next
+/// step, and the (partial) comparison that comes back is to be discarded.
+pub fn monte_carlo_until(
+    sc: &Scenario,
+    policies: &[String],
+    runs: usize,
+    progress: &(dyn Fn(u64) + Sync),
+    stop: &(dyn Fn() -> bool + Sync),
+) -> Result<Comparison, PolicyError> {
     let specs = policies.iter().map(|p| PolicySpec::new(p, sc)).collect::<Result<Vec<_>, _>>()?;
     let jobs: Vec<(usize, usize)> = (0..specs.len()).flat_map(|p| (0..runs).map(move |i| (p, i))).collect();
     let done = std::sync::atomic::AtomicU64::new(0);
@@ -86,7 +107,7 @@ pub fn monte_carlo(
         .par_iter()
         .map(|&(p, i)| {
             let mut policy = specs[p].build(sc)?;
-            let r = run(sc, &mut policy, run_seed(sc.seed, i as u64), &Faults::default(), &mut ());
+            let r = run(sc, &mut policy, run_seed(sc.seed, i as u64), &Faults::default(), &mut Until(stop));
             progress(done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1);
             Ok(r)
         })

@@ -159,6 +159,9 @@ pub fn run(sc: &Scenario, policy: &mut Policy, seed: u64, faults: &Faults, obs: 
     let mut timing = Timing::default();
     let steps = (sc.duration_s / sc.dt).round() as u64;
     for step in 0..steps {
+        if obs.stop() {
+            break;
+        }
         engine.step(step, &mut timing, obs);
     }
     timing.total_s = t_start.elapsed().as_secs_f64();

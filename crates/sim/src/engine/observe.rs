@@ -62,6 +62,11 @@ pub trait Observer {
     fn on_sample(&mut self, _t: f64, _cna: Vec3, _rows: &[TraceRow]) {}
     /// A packet whose fate is known (at the end of its arrival).
     fn on_packet(&mut self, _event: &CommsEvent) {}
+    /// Asked before every truth step: true ends the run there (a caller's cancellation, e.g.
+    /// Ctrl-C in the Python bindings); the result then covers only the steps run.
+    fn stop(&self) -> bool {
+        false
+    }
 }
 
 impl Observer for () {}
