@@ -6,6 +6,7 @@
 
 use crate::convert::{column, columns, or_nan, settings, to_py, toml_text};
 use crate::value_error;
+use coopnav_core::validation::CheckFields;
 use coopnav_core::Vec3;
 use coopnav_nav::post::{self, PostConfig, PostResult, LOG_HEADER};
 use coopnav_nav::{AuvParams, RangeMeasurement, StateKind, SurfaceParams, UpdateOutcome};

@@ -57,7 +57,8 @@ def test_monte_carlo_matches_the_cli_table_and_json(cli, tmp_path):
 
 def test_a_long_simulation_releases_the_gil(tmp_path):
     """While simulate runs in one thread, another Python thread keeps counting."""
-    scenario = coopnav.Scenario.load(short_scenario(tmp_path, duration_s=3600.0, n_auvs=5))
+    # Six hours: long enough to tell even on a quiet machine (the engine does an hour in ~0.05 s).
+    scenario = coopnav.Scenario.load(short_scenario(tmp_path, duration_s=6 * 3600.0, n_auvs=5))
     counts = []
     done = threading.Event()
 
@@ -128,6 +129,8 @@ def test_ctrl_c_stops_a_long_monte_carlo(tmp_path):
     script.write_text(
         "import os, signal, threading, time\n"
         "import coopnav\n"
+        "# A child of a non-interactive shell's background job starts with SIGINT ignored.\n"
+        "signal.signal(signal.SIGINT, signal.default_int_handler)\n"
         "sc = coopnav.Scenario.example()\n"
         "threading.Timer(0.5, os.kill, (os.getpid(), signal.SIGINT)).start()\n"
         "t0 = time.perf_counter()\n"

@@ -13,6 +13,7 @@
 
 use super::{Check, Experiment, ExperimentError, ReproOptions, ReproReport, Size};
 use crate::closed_loop::mc::{Comparison, PolicySummary};
+use crate::closed_loop::policies::POLICY_NAMES;
 use crate::closed_loop::{comparison_table, monte_carlo, Scenario};
 use crate::plot::PlotError;
 use coopnav_plan::Aggregate;
@@ -22,19 +23,14 @@ use std::fmt::Write as _;
 
 const ID: &str = "closed-loop-vs-baselines";
 
-/// The policy judged, first (the reference of every paired difference), then everything it must beat.
-pub const POLICIES: [&str; 10] = [
-    "planner-estimator",
-    "planner",
-    "greedy-fisher",
-    "none",
-    "racetrack",
-    "zigzag",
-    "centroid",
-    "trail",
-    "relay",
-    "open-loop",
-];
+/// The policy judged: the reference of every paired difference.
+const JUDGED: &str = "planner-estimator";
+
+/// The policy judged, first, then every other policy it must beat (all of them, by name).
+pub fn policies() -> Vec<String> {
+    let others = POLICY_NAMES.iter().filter(|&&name| name != JUDGED);
+    std::iter::once(JUDGED).chain(others.copied()).map(str::to_string).collect()
+}
 
 /// Base seed of the runs that chose the planner's aggregate; never an evaluation seed.
 pub const TUNING_SEED: u64 = 1000;
@@ -142,7 +138,7 @@ pub fn evaluate(
             "seed {TUNING_SEED} chose the planner's settings; evaluate on another base seed (--seed)"
         )));
     }
-    let policies: Vec<String> = POLICIES.iter().map(|s| s.to_string()).collect();
+    let policies = policies();
     let mut table = format!(
         "True mean navigation error of the survey AUVs (m), {runs} runs per policy and cell, base seed {seed} \
          (settings chosen on base seed {TUNING_SEED}); planner A=5 L=5, aggregate sigma_sum.\n\
@@ -341,7 +337,7 @@ mod tests {
             assert!(dr.passed, "{}", dr.detail);
         }
         // One check per baseline and cell, plus health per cell.
-        assert_eq!(r.checks.len(), 3 * (POLICIES.len() - 1 + 1));
+        assert_eq!(r.checks.len(), 3 * policies().len());
         assert!(r.table.contains("greedy-fisher") && r.table.contains("open-loop"));
         let lost = r.checks.iter().filter(|c| c.name.contains("beats") && !c.passed).count();
         assert_eq!(r.table.matches("cell not won").count(), lost);
