@@ -46,7 +46,7 @@ const REDUCED: &[Reduced] = &[
     },
     Reduced { readme: "reproduce <id>", run: "reproduce hudson-table-5.8 --reduced", input: None },
     Reduced { readme: "reproduce <id> --reduced", run: "reproduce hudson-table-5.8 --reduced", input: None },
-    Reduced { readme: "bench closed-loop", run: "bench closed-loop --reps 1", input: None },
+    Reduced { readme: "bench closed-loop --tl analytic", run: "bench closed-loop --tl analytic --reps 1", input: None },
     Reduced { readme: "bench planner", run: "bench planner --reps 1 --brute-max-leaves 0", input: None },
     Reduced { readme: "bench hbl", run: "bench hbl --runs 4", input: None },
     Reduced { readme: "bench acomms", run: "bench acomms --reps 1 --no-bellhop", input: None },
