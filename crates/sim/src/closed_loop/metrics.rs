@@ -82,7 +82,10 @@ pub struct AuvMetrics {
     pub modelled_mean: Option<f64>,
     /// CNA broadcasts (ranges): sent towards this AUV and received by it.
     pub downlink: LinkStats,
-    /// Ranges the EKF applied.
+    /// Buoy position broadcasts (ranges, all buoys together): sent towards this AUV and received.
+    #[serde(default)]
+    pub buoy_link: LinkStats,
+    /// Ranges the EKF applied (the CNA's and the buoys').
     pub ranges_applied: u64,
     /// Status messages from this AUV to the CNA.
     pub uplink: LinkStats,

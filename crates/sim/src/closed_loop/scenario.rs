@@ -3,6 +3,7 @@
 //! before anything runs; every error names the file, the field and what is allowed.
 
 pub use crate::engine::health::Health;
+use crate::models::buoy::{BuoySpec, MAX_BUOYS};
 use crate::models::channel::Channel;
 use crate::models::filter::FilterSpec;
 use crate::models::finish::Finish;
@@ -40,6 +41,9 @@ pub struct Scenario {
     pub dt: f64,
     pub fleet: Fleet,
     pub cna: Cna,
+    /// Transponder buoys (`[[buoys]]`): each broadcasts its position in its own slot.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub buoys: Vec<BuoySpec>,
     #[serde(default)]
     pub comms: Comms,
     /// The acoustic channel as the sea plays it (truth), apart from what `[filter]` assumes.
@@ -299,6 +303,7 @@ impl Scenario {
         p.check("dt", self.dt, |v| v > 0.0 && v <= 1.0, "0 < dt <= 1 s");
         self.validate_fleet(&mut p);
         self.validate_cna(&mut p);
+        self.validate_buoys(&mut p);
         self.validate_comms(&mut p);
         self.validate_sensors(&mut p);
         self.filter.check_fields("filter.", &mut p);
@@ -404,6 +409,18 @@ impl Scenario {
         }
     }
 
+    fn validate_buoys(&self, p: &mut Problems) {
+        if self.buoys.len() > MAX_BUOYS {
+            p.push("buoys", format!("{} buoys", self.buoys.len()), format!("at most {MAX_BUOYS}"));
+        }
+        // A buoy's broadcast is a position report.
+        let report_bytes = (HEADER_BITS + BODY_BITS).div_ceil(8) as usize;
+        for (i, b) in self.buoys.iter().enumerate() {
+            p.extend(b.problems(&format!("buoys[{i}].")));
+            p.extend(payload_problem(&format!("buoys[{i}].rate"), b.rate, report_bytes));
+        }
+    }
+
     fn validate_comms(&self, p: &mut Problems) {
         let c = &self.comms;
         p.check("comms.tau", c.tau, |v| (5.0..=600.0).contains(&v), "5..=600 s");
@@ -444,7 +461,9 @@ impl Scenario {
             let fit = Fit {
                 tau: c.tau,
                 n_auvs: self.fleet.n_auvs,
+                n_buoys: self.buoys.len(),
                 cna_air_s: longest_air([c.cna_rate]),
+                buoy_air_s: longest_air(self.buoys.iter().map(|b| b.rate)),
                 status_air_s: longest_air(status_rates),
                 travel_s: c.max_range_m / self.channel.sound_speed.slowest(),
                 guard_s: c.slot_guard_s,

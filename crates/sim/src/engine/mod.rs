@@ -5,7 +5,9 @@
 //! schedule, finish behaviour) in [`crate::models`].
 //!
 //! Today it runs the closed-loop scenario: survey AUVs on lawnmowers with OWTT EKFs, one CNA
-//! (ASC or AUV) steered by a [`crate::policy::CnaPolicy`], the comms schedule of the scenario.
+//! (ASC or AUV) steered by a [`crate::policy::CnaPolicy`], transponder buoys (moored or
+//! drifting) whose position broadcasts the AUVs range to as well, the comms schedule of the
+//! scenario.
 
 pub mod health;
 mod inflight;
@@ -31,7 +33,7 @@ use rand_chacha::ChaCha8Rng;
 use serde::Serialize;
 use std::sync::Arc;
 use std::time::Instant;
-use vehicles::{stream, Craft, SurveyAuv};
+use vehicles::{stream, Buoy, Craft, SurveyAuv};
 
 /// Links forced to lose every packet (failure studies and tests).
 #[derive(Debug, Clone, Default)]
@@ -127,6 +129,7 @@ struct AuvTally {
     violations: u64,
     modelled: Vec<f64>,
     down: LinkStats,
+    buoys: LinkStats,
     up: LinkStats,
     applied: u64,
     health: health::Tally,
@@ -141,6 +144,7 @@ struct Engine<'a> {
     slots: Vec<Slot>,
     auvs: Vec<SurveyAuv>,
     cna: Cna,
+    buoys: Vec<Buoy>,
     air: InFlight<Payload>,
     /// The scenario's transmission-loss model, built once for the run.
     tl: Arc<dyn TransmissionLoss>,
@@ -200,9 +204,10 @@ impl<'a> Engine<'a> {
             policy,
             faults,
             bathy,
-            slots: sc.comms.schedule.slots(sc.comms.tau, n),
+            slots: sc.comms.schedule.slots(sc.comms.tau, n, sc.buoys.len()),
             auvs,
             cna,
+            buoys: (0..sc.buoys.len()).map(|i| Buoy::new(sc, i, &streams)).collect(),
             air: InFlight::new(sc.channel.collisions.capture_margin_db),
             tl: sc.comms.tl.provider(sc).unwrap_or_else(|e| {
                 // Validation builds the provider first, so this is a scenario built in code.
@@ -295,6 +300,7 @@ fn metrics(k: usize, a: &AuvTally) -> AuvMetrics {
         error: ErrorStats::of(&a.errors),
         modelled_mean: mean(&a.modelled),
         downlink: a.down,
+        buoy_link: a.buoys,
         ranges_applied: a.applied,
         uplink: a.up,
         distance_mean: a.distances.iter().sum::<f64>() / n,

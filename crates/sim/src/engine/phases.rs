@@ -1,6 +1,7 @@
 //! The phases of one engine step, in the order [`super::Engine::step`] runs them:
 //! decide (the CNA's policy every τ), advance (truth of every vehicle), transmit (the slots due:
-//! encode, channel draw, travel time, into the water), deliver (packets whose arrival ended, in
+//! the CNA's broadcast, a buoy's position, an AUV's status: encode, channel draw, travel time,
+//! into the water), deliver (packets whose arrival ended, in
 //! time order, with their fate), sense (filter prediction and dead-reckoning sensors) and observe
 //! (metrics and the observer, once per second).
 
@@ -11,8 +12,9 @@ use super::vehicles::lerp;
 use super::vehicles::SurveyAuv;
 use super::{Engine, FleetView};
 use crate::closed_loop::policies::receiver;
+use crate::closed_loop::scenario::Scenario;
 use crate::hbl::noise::normal;
-use crate::models::channel::air_time;
+use crate::models::channel::{air_time, Clock};
 use crate::models::finish::Finish;
 use crate::models::schedule::Owner;
 use crate::policy::ReportedCov;
@@ -26,12 +28,15 @@ use coopnav_core::{Heading, Vec3};
 use coopnav_nav::{RangeMeasurement, UpdateOutcome};
 use coopnav_plan::predict::StatusReport;
 use coopnav_plan::CnaPose;
+use rand_chacha::ChaCha8Rng;
 
 /// What a packet carries to its addressee.
 pub enum Payload {
     /// The CNA's broadcast: its position as it knows it, the travel time the receiver measured
     /// (None: decoded without a usable range), and the statuses it acknowledges.
     Broadcast { rate: Rate, fix: Vec3, travel_time: Option<f64>, acked: Vec<u64>, decoded: bool },
+    /// A buoy's position broadcast: its GPS fix and the travel time the receiver measured.
+    Position { rate: Rate, fix: Vec3, travel_time: Option<f64>, decoded: bool },
     /// A survey AUV's status message through the wire format.
     Status { rate: Rate, slot_id: u64, bytes: Vec<u8>, decoded: bool },
 }
@@ -127,6 +132,7 @@ impl Engine<'_> {
             let frac = ((t_tx - t) / self.sc.dt).clamp(0.0, 1.0);
             match slot.owner {
                 Owner::Cna => self.broadcast(t_tx, frac),
+                Owner::Buoy(b) => self.buoy_broadcast(b, t_tx, frac),
                 Owner::Auv(j) => self.send_status(j, t_tx, frac),
             }
         }
@@ -148,18 +154,40 @@ impl Engine<'_> {
             let p0 = lerp(self.auvs[k].prev, self.auvs[k].truth, frac);
             let tl = self.tl_db(&from, &p0);
             let a = &mut self.auvs[k];
-            let v = a.velocity(sc.dt);
-            let tt = sc.channel.sound_speed.travel_time(from, |d| p0 + v * d);
             let decoded = sc.comms.success.draw(rate, tl, receiver(false), &mut a.rng_down).frame0() && !silent;
-            // Drawn whatever the fate, so packet losses do not shift the stream.
-            let error = sc.channel.range_error.draw(sc.filter.params.range_noise.variance(tt), &mut a.rng_range);
-            let clocks = a.clock.error_at(t_tx + tt) - self.cna.clock.error_at(t_tx);
-            let travel_time = error.map(|e| tt + e + clocks);
+            let (v, clock) = (a.velocity(sc.dt), a.clock);
+            let (tt, travel_time) = measured_travel(sc, from, t_tx, &self.cna.clock, (p0, v, &clock), &mut a.rng_range);
             let acked = self.cna.acked[k].clone();
             let payload = Payload::Broadcast { rate, fix, travel_time, acked, decoded };
             self.air.push(arrival(Owner::Cna, Owner::Auv(k), t_tx, tt, air, tl, Some(payload)));
         }
         self.cna.acked.iter_mut().for_each(Vec::clear);
+    }
+
+    /// Buoy `b`'s slot: its GPS position, one packet, an arrival (with its own range) at every
+    /// survey AUV; it reaches the CNA as interference.
+    fn buoy_broadcast(&mut self, b: usize, t_tx: f64, frac: f64) {
+        let sc = self.sc;
+        let buoy = &mut self.buoys[b];
+        let (rate, from, fix) = (buoy.rate, buoy.position(t_tx), buoy.gps_fix(t_tx));
+        let air = air_time(rate);
+        self.air.transmit(Owner::Buoy(b), t_tx, t_tx + air);
+        for k in 0..self.auvs.len() {
+            let silent = self.silent(k, t_tx);
+            let a = &self.auvs[k];
+            let (p0, v, clock) = (lerp(a.prev, a.truth, frac), a.velocity(sc.dt), a.clock);
+            let tl = self.tl_db(&from, &p0);
+            let buoy = &mut self.buoys[b];
+            let decoded = sc.comms.success.draw(rate, tl, receiver(false), &mut buoy.rng_link).frame0() && !silent;
+            let (tt, travel_time) = measured_travel(sc, from, t_tx, &buoy.clock, (p0, v, &clock), &mut buoy.rng_link);
+            let payload = Payload::Position { rate, fix, travel_time, decoded };
+            self.air.push(arrival(Owner::Buoy(b), Owner::Auv(k), t_tx, tt, air, tl, Some(payload)));
+        }
+        let craft = &self.cna.craft;
+        let (c0, cv) = (lerp(craft.prev, craft.pos, frac), (craft.pos - craft.prev) * (1.0 / sc.dt));
+        let tt = sc.channel.sound_speed.travel_time(from, |d| c0 + cv * d);
+        let tl = self.tl_db(&from, &c0);
+        self.air.push(arrival(Owner::Buoy(b), Owner::Cna, t_tx, tt, air, tl, None));
     }
 
     /// Survey AUV `j`'s status slot: its selector picks the rate (or silence); the message goes
@@ -230,22 +258,37 @@ impl Engine<'_> {
                         });
                     }
                 }
-                (Payload::Broadcast { .. }, Owner::Cna) => {}
+                (Payload::Position { rate, fix, travel_time, decoded }, Owner::Auv(k)) => {
+                    let received = decoded && survived;
+                    self.tallies[k].buoys.record(rate.index(), received);
+                    obs.on_packet(&event(&meta, "buoy", k, decoded, survived));
+                    if received {
+                        self.apply_range(k, &meta, fix, travel_time);
+                    }
+                }
+                (Payload::Broadcast { .. } | Payload::Position { .. }, Owner::Cna | Owner::Buoy(_))
+                | (Payload::Status { .. }, Owner::Buoy(_)) => {}
             }
         }
     }
 
-    /// AUV `k` decoded a broadcast at the end of its arrival: the acknowledgements feed its rate
-    /// selector, and the range updates its filter. The range was measured at the start of the
-    /// arrival; the modem driver moves the transponder by the AUV's own dead-reckoned motion over
-    /// the decode delay, so the filter can apply it now.
+    /// AUV `k` decoded the CNA's broadcast at the end of its arrival: the acknowledgements feed
+    /// its rate selector, and the range updates its filter.
     fn hear_broadcast(&mut self, k: usize, meta: &Arrival<()>, fix: Vec3, travel_time: Option<f64>, acked: &[u64]) {
-        let sc = self.sc;
         let a = &mut self.auvs[k];
         let outcomes: Vec<Outcome> =
             a.unacked.drain(..).map(|slot| Outcome { slot, success: acked.contains(&slot) }).collect();
         a.selector.feedback(&outcomes, true);
         a.cna_heard = Some(fix);
+        self.apply_range(k, meta, fix, travel_time);
+    }
+
+    /// AUV `k`'s filter applies the range of a decoded broadcast from a transponder at `fix`. The
+    /// range was measured at the start of the arrival; the modem driver moves the transponder by
+    /// the AUV's own dead-reckoned motion over the decode delay, so the filter can apply it now.
+    fn apply_range(&mut self, k: usize, meta: &Arrival<()>, fix: Vec3, travel_time: Option<f64>) {
+        let sc = self.sc;
+        let a = &mut self.auvs[k];
         let Some(travel_time) = travel_time else { return };
         a.ekf.predict_to(meta.end, a.yaw_measured);
         let (speed, psi) = a.ekf.speed_heading();
@@ -321,6 +364,24 @@ impl Engine<'_> {
         }
         obs.on_sample(t, cna, &rows);
     }
+}
+
+/// A broadcast from `from`, sent at `t_tx` by a modem with clock `sender`, reaching a receiver at
+/// `p0` moving at `v` with its own clock: the true travel time, and the one the receiver measures
+/// (None: no usable range). The range error is drawn whatever the packet's fate, so losses do
+/// not shift the stream.
+fn measured_travel(
+    sc: &Scenario,
+    from: Vec3,
+    t_tx: f64,
+    sender: &Clock,
+    (p0, v, receiver): (Vec3, Vec3, &Clock),
+    rng_range: &mut ChaCha8Rng,
+) -> (f64, Option<f64>) {
+    let tt = sc.channel.sound_speed.travel_time(from, |d| p0 + v * d);
+    let error = sc.channel.range_error.draw(sc.filter.params.range_noise.variance(tt), rng_range);
+    let clocks = receiver.error_at(t_tx + tt) - sender.error_at(t_tx);
+    (tt, error.map(|e| tt + e + clocks))
 }
 
 fn arrival(

@@ -112,3 +112,44 @@ fn the_nees_check_flags_a_filter_given_a_wrong_noise_model() {
         assert!(w.health.nees_in_95 < g.health.nees_in_95);
     }
 }
+
+/// A moored buoy in the survey block: `buoys[0]` parsed as a scenario file writes it.
+fn with_buoy(mut sc: Scenario, x: f64, y: f64) -> Scenario {
+    sc.buoys = vec![toml::from_str(&format!("x = {x}\ny = {y}")).unwrap()];
+    sc.validate(std::path::Path::new("t")).unwrap();
+    sc
+}
+
+/// With the CNA silent, dead reckoning alone drifts; a moored buoy's position broadcasts give the
+/// AUV ranges that bound its error while it surveys past the buoy. (Holding station afterwards,
+/// the current pushes it along the range circle, which one fixed beacon cannot see.)
+#[test]
+fn a_moored_buoy_bounds_the_error_the_cna_leaves_unserved() {
+    let alone = short_survey(Finish::Hold { radius_m: 30.0 }, 480.0);
+    let buoyed = with_buoy(alone.clone(), 150.0, 150.0);
+    let (r_alone, _) = traced(&alone, "none", 3);
+    let (r_buoy, _) = traced(&buoyed, "none", 3);
+    assert_eq!((r_alone.auvs[0].ranges_applied, r_alone.auvs[0].buoy_link.sent), (0, 0));
+    let link = r_buoy.auvs[0].buoy_link;
+    assert!(link.sent >= 15 && link.received > link.sent / 2, "{link:?}");
+    assert!(r_buoy.auvs[0].ranges_applied > 8, "{}", r_buoy.auvs[0].ranges_applied);
+    let (e_alone, e_buoy) = (&r_alone.auvs[0].error, &r_buoy.auvs[0].error);
+    assert!(e_alone.max > 15.0, "dead reckoning alone drifts: {e_alone:?}");
+    assert!(e_buoy.mean < 0.4 * e_alone.mean && e_buoy.max < 10.0, "with the buoy {e_buoy:?}, without {e_alone:?}");
+    assert_eq!(r_buoy.auvs[0].health.diverged_at_s, None);
+}
+
+/// A buoy given the CNA's slot: its broadcast and the CNA's overlap at the AUV and both are lost.
+#[test]
+fn a_buoy_sharing_the_cnas_slot_collides_with_it() {
+    let mut sc = with_buoy(Scenario::example().with_auvs(1), 900.0, 300.0);
+    sc.duration_s = 600.0;
+    sc.channel.collisions.capture_margin_db = None;
+    let slot = |who: &str, start_s| SlotSpec { who: who.into(), start_s, length_s: 10.0 };
+    sc.comms.schedule = Schedule::Tdma { slots: vec![slot("cna", 0.0), slot("buoy0", 0.0), slot("auv0", 10.0)] };
+    let (r, trace) = traced(&sc, "centroid", 2);
+    let a = &r.auvs[0];
+    assert!(a.downlink.sent >= 19 && a.buoy_link.sent == a.downlink.sent, "{a:?}");
+    assert_eq!((a.downlink.received, a.buoy_link.received, a.ranges_applied), (0, 0, 0), "{a:?}");
+    assert!(trace.comms.iter().any(|e| e.direction == "buoy" && e.lost_to == "collision or half-duplex"));
+}

@@ -1,19 +1,22 @@
 //! The engine's vehicles: a survey AUV (its controller steering on its own estimate, its truth,
-//! its filter, its sensors' noise streams and its modem's state) and the CNA craft.
+//! its filter, its sensors' noise streams and its modem's state), the CNA craft, and the
+//! transponder buoys (their drift, GPS and clock).
 
 use crate::closed_loop::scenario::Scenario;
-use crate::hbl::noise::{normal, CompassBias};
+use crate::hbl::noise::{normal, BuoyMotion, CompassBias};
+use crate::models::buoy::BuoySpec;
 use crate::models::channel::Clock;
 use crate::models::finish::Action;
 use coopnav_acomms::node_report::{NodeReport, VehicleType};
 use coopnav_acomms::selector::{AdaptiveBins, FixedRate, RatePolicy};
+use coopnav_acomms::Rate;
 use coopnav_core::{
     wrap_pi, Bathymetry, DepthTarget, Heading, Iver2, Iver2Params, Iver2State, SeedStream, Vec3, Waypoint,
 };
 use coopnav_nav::AuvFilter;
 use rand_chacha::ChaCha8Rng;
 
-/// Stream ids of one run: the CNA's, and a block of ten per survey AUV.
+/// Stream ids of one run: the CNA's, a block of ten per survey AUV and one per buoy.
 pub mod stream {
     pub const CNA_GPS: u64 = 1;
     pub const CNA_NAV: u64 = 2;
@@ -29,6 +32,12 @@ pub mod stream {
     pub const UPLINK: u64 = 7;
     pub const CLOCK: u64 = 8;
     pub const GPS: u64 = 9;
+    pub const BUOY_BASE: u64 = 10_000;
+    pub const BUOY_MOTION: u64 = 0;
+    pub const BUOY_GPS: u64 = 1;
+    pub const BUOY_CLOCK: u64 = 2;
+    /// The channel draws (fate and range error) of its broadcasts, at every AUV in turn.
+    pub const BUOY_LINK: u64 = 3;
 }
 
 /// A survey AUV.
@@ -231,5 +240,45 @@ impl Craft {
         self.heading = wrap_pi(self.heading + turn);
         self.pos.x += speed * dt * self.heading.cos();
         self.pos.y += speed * dt * self.heading.sin();
+    }
+}
+
+/// A transponder buoy: where it truly is, what its GPS reads and its modem's clock.
+pub struct Buoy {
+    motion: BuoyMotion,
+    depth: f64,
+    gps_sd: f64,
+    pub rate: Rate,
+    pub clock: Clock,
+    rng_gps: ChaCha8Rng,
+    pub rng_link: ChaCha8Rng,
+}
+
+impl Buoy {
+    pub fn new(sc: &Scenario, i: usize, streams: &SeedStream) -> Self {
+        let spec: &BuoySpec = &sc.buoys[i];
+        let rng = |id: u64| streams.rng(stream::BUOY_BASE + 10 * i as u64 + id);
+        Buoy {
+            motion: spec.motion(&mut rng(stream::BUOY_MOTION)),
+            depth: spec.modem_depth_m,
+            gps_sd: spec.gps_sd_m,
+            rate: spec.rate,
+            clock: sc.channel.clocks.draw(&mut rng(stream::BUOY_CLOCK)),
+            rng_gps: rng(stream::BUOY_GPS),
+            rng_link: rng(stream::BUOY_LINK),
+        }
+    }
+
+    /// Its transducer's true position at `t`.
+    pub fn position(&self, t: f64) -> Vec3 {
+        let [x, y] = self.motion.at(t);
+        Vec3::new(x, y, self.depth)
+    }
+
+    /// The position it broadcasts at `t`: its GPS fix.
+    pub fn gps_fix(&mut self, t: f64) -> Vec3 {
+        let p = self.position(t);
+        let (ex, ey) = (self.gps_sd * normal(&mut self.rng_gps), self.gps_sd * normal(&mut self.rng_gps));
+        Vec3::new(p.x + ex, p.y + ey, p.z)
     }
 }

@@ -7,6 +7,7 @@ use super::config::{Acoustic, Buoy, Drift};
 use rand::Rng;
 use rand_chacha::ChaCha8Rng;
 use rand_distr::StandardNormal;
+use serde::{Deserialize, Serialize};
 use std::f64::consts::TAU;
 
 /// Stream ids of one run, one per noise source.
@@ -88,6 +89,17 @@ pub enum BuoyMotion {
     Circular { centre: [f64; 2], radius: f64, phase0: f64, omega: f64 },
 }
 
+/// Gill's Lake Pend Oreille drift statistics (digest §5.5): speed ~ N(mean, sd) clipped at zero,
+/// a uniform direction, and a circle of `circular_radius` with odds `circular_fraction`.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LakeDrift {
+    pub mean_m_s: f64,
+    pub sd_m_s: f64,
+    pub circular_fraction: f64,
+    pub circular_radius_m: f64,
+}
+
 impl BuoyMotion {
     /// Draws initial position and drift; always the same number of draws.
     pub fn draw(b: &Buoy, rng: &mut ChaCha8Rng) -> Self {
@@ -96,18 +108,38 @@ impl BuoyMotion {
             b.region_x[0] + ux * (b.region_x[1] - b.region_x[0]),
             b.region_y[0] + uy * (b.region_y[1] - b.region_y[0]),
         ]);
-        let speed = (b.drift_mean + b.drift_sd * normal(rng)).max(0.0);
-        let (dir, kind, sense): (f64, f64, f64) = (rng.gen::<f64>() * TAU, rng.gen(), rng.gen());
-        if b.drift == Drift::None || speed == 0.0 {
-            return BuoyMotion::Linear { p0, v: [0.0, 0.0] };
+        let lake = LakeDrift {
+            mean_m_s: b.drift_mean,
+            sd_m_s: b.drift_sd,
+            circular_fraction: b.circular_fraction,
+            circular_radius_m: b.circular_radius,
+        };
+        let drifting = BuoyMotion::lake(p0, &lake, rng);
+        match b.drift {
+            Drift::None => BuoyMotion::moored(p0),
+            Drift::Lake => drifting,
         }
-        if kind < b.circular_fraction {
+    }
+
+    pub fn moored(p0: [f64; 2]) -> Self {
+        BuoyMotion::Linear { p0, v: [0.0, 0.0] }
+    }
+
+    /// A drift from `p0` drawn from the lake statistics; always the same number of draws.
+    pub fn lake(p0: [f64; 2], s: &LakeDrift, rng: &mut ChaCha8Rng) -> Self {
+        let speed = (s.mean_m_s + s.sd_m_s * normal(rng)).max(0.0);
+        let (dir, kind, sense): (f64, f64, f64) = (rng.gen::<f64>() * TAU, rng.gen(), rng.gen());
+        if speed == 0.0 {
+            return BuoyMotion::moored(p0);
+        }
+        if kind < s.circular_fraction {
             // The buoy starts on a circle whose tangent is the drift direction.
+            let radius = s.circular_radius_m;
             let sign = if sense < 0.5 { 1.0 } else { -1.0 };
             let to_centre = dir + sign * std::f64::consts::FRAC_PI_2;
-            let centre = [p0[0] + b.circular_radius * to_centre.cos(), p0[1] + b.circular_radius * to_centre.sin()];
+            let centre = [p0[0] + radius * to_centre.cos(), p0[1] + radius * to_centre.sin()];
             let phase0 = (p0[1] - centre[1]).atan2(p0[0] - centre[0]);
-            BuoyMotion::Circular { centre, radius: b.circular_radius, phase0, omega: sign * speed / b.circular_radius }
+            BuoyMotion::Circular { centre, radius, phase0, omega: sign * speed / radius }
         } else {
             BuoyMotion::Linear { p0, v: [speed * dir.cos(), speed * dir.sin()] }
         }

@@ -1,6 +1,7 @@
 //! The comms schedule as data: one TDMA cycle of period τ, a list of slots each owned by the CNA
-//! (its broadcast) or by one survey AUV (its status message). `broadcast_then_status` is Hudson's
-//! preset (the CNA at m·τ, then AUV j at m·τ + (j + 1)·τ/(N + 1)); `tdma` lists the slots.
+//! (its broadcast), a buoy (its position broadcast) or one survey AUV (its status message).
+//! `broadcast_then_status` is Hudson's preset (the CNA at m·τ, then AUV j at m·τ + (j + 1)·τ/(N + 1));
+//! with B buoys their slots follow the CNA's, every slot τ/(1 + B + N); `tdma` lists the slots.
 //! Validation refuses a slot shorter than its packet's air time plus the longest expected travel
 //! time plus a guard, naming the slot, and a message too long for its rate.
 
@@ -12,6 +13,7 @@ use serde::{Deserialize, Serialize};
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Owner {
     Cna,
+    Buoy(usize),
     Auv(usize),
 }
 
@@ -23,7 +25,7 @@ pub struct Slot {
     pub length_s: f64,
 }
 
-/// A slot as written in the file: `who = "cna"` or `who = "auv0"`, `"auv1"`, …
+/// A slot as written in the file: `who = "cna"`, `"buoy0"`, … or `"auv0"`, `"auv1"`, …
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct SlotSpec {
@@ -49,8 +51,10 @@ impl Default for Schedule {
 pub struct Fit {
     pub tau: f64,
     pub n_auvs: usize,
-    /// Longest air time any rate the CNA / an AUV may use takes.
+    pub n_buoys: usize,
+    /// Longest air time any rate the CNA / a buoy / an AUV may use takes.
     pub cna_air_s: f64,
+    pub buoy_air_s: f64,
     pub status_air_s: f64,
     /// Longest expected travel time, s.
     pub travel_s: f64,
@@ -59,11 +63,12 @@ pub struct Fit {
 
 impl Schedule {
     /// The slots of one cycle in start order.
-    pub fn slots(&self, tau: f64, n_auvs: usize) -> Vec<Slot> {
+    pub fn slots(&self, tau: f64, n_auvs: usize, n_buoys: usize) -> Vec<Slot> {
         let mut slots = match self {
             Schedule::BroadcastThenStatus {} => {
-                let length_s = tau / (n_auvs + 1) as f64;
+                let length_s = tau / (1 + n_buoys + n_auvs) as f64;
                 std::iter::once(Owner::Cna)
+                    .chain((0..n_buoys).map(Owner::Buoy))
                     .chain((0..n_auvs).map(Owner::Auv))
                     .enumerate()
                     .map(|(i, owner)| Slot { owner, start_s: i as f64 * length_s, length_s })
@@ -87,12 +92,14 @@ impl Schedule {
             }
             for (i, s) in slots.iter().enumerate() {
                 let field = |f: &str| format!("{prefix}slots[{i}].{f}");
-                match parse_owner(&s.who) {
-                    Some(Owner::Auv(k)) if k >= fit.n_auvs => {
-                        out.push((field("who"), s.who.clone(), format!("cna or auv0..auv{}", fit.n_auvs - 1)))
-                    }
-                    None => out.push((field("who"), s.who.clone(), "cna or auvK (K = 0, 1, …)".into())),
-                    _ => {}
+                let known = match parse_owner(&s.who) {
+                    Some(Owner::Cna) => true,
+                    Some(Owner::Auv(k)) => k < fit.n_auvs,
+                    Some(Owner::Buoy(b)) => b < fit.n_buoys,
+                    None => false,
+                };
+                if !known {
+                    out.push((field("who"), s.who.clone(), owners_allowed(fit)));
                 }
                 if !(s.start_s.is_finite() && s.start_s >= 0.0 && s.length_s.is_finite() && s.length_s > 0.0) {
                     out.push((
@@ -109,7 +116,7 @@ impl Schedule {
                 }
             }
         }
-        let slots = self.slots(fit.tau, fit.n_auvs);
+        let slots = self.slots(fit.tau, fit.n_auvs, fit.n_buoys);
         for (i, pair) in slots.windows(2).enumerate() {
             if pair[0].start_s + pair[0].length_s > pair[1].start_s + 1e-9 {
                 out.push((
@@ -122,6 +129,7 @@ impl Schedule {
         for (i, s) in slots.iter().enumerate() {
             let (who, air) = match s.owner {
                 Owner::Cna => ("cna".to_string(), fit.cna_air_s),
+                Owner::Buoy(b) => (format!("buoy{b}"), fit.buoy_air_s),
                 Owner::Auv(k) => (format!("auv{k}"), fit.status_air_s),
             };
             let need = air + fit.travel_s + fit.guard_s;
@@ -142,9 +150,19 @@ impl Schedule {
 }
 
 fn parse_owner(who: &str) -> Option<Owner> {
+    let numbered = |prefix: &str| who.strip_prefix(prefix)?.parse().ok();
     match who {
         "cna" => Some(Owner::Cna),
-        _ => who.strip_prefix("auv")?.parse().ok().map(Owner::Auv),
+        _ => numbered("auv").map(Owner::Auv).or_else(|| numbered("buoy").map(Owner::Buoy)),
+    }
+}
+
+/// The owners a slot may name, for an error message.
+fn owners_allowed(fit: &Fit) -> String {
+    let auvs = format!("auv0..auv{}", fit.n_auvs.saturating_sub(1));
+    match fit.n_buoys {
+        0 => format!("cna or {auvs}"),
+        b => format!("cna, buoy0..buoy{} or {auvs}", b - 1),
     }
 }
 
@@ -165,17 +183,46 @@ mod tests {
     use super::*;
 
     fn fit(tau: f64, n: usize) -> Fit {
-        Fit { tau, n_auvs: n, cna_air_s: 3.9, status_air_s: 3.9, travel_s: 0.7, guard_s: 0.2 }
+        Fit {
+            tau,
+            n_auvs: n,
+            n_buoys: 0,
+            cna_air_s: 3.9,
+            buoy_air_s: 3.9,
+            status_air_s: 3.9,
+            travel_s: 0.7,
+            guard_s: 0.2,
+        }
     }
 
     #[test]
     fn hudsons_preset_spreads_the_cycle_evenly() {
-        let s = Schedule::default().slots(30.0, 2);
+        let s = Schedule::default().slots(30.0, 2, 0);
         assert_eq!(
             s.iter().map(|s| (s.owner, s.start_s)).collect::<Vec<_>>(),
             [(Owner::Cna, 0.0), (Owner::Auv(0), 10.0), (Owner::Auv(1), 20.0)]
         );
         assert!(Schedule::default().problems("comms.schedule.", &fit(30.0, 5)).is_empty());
+    }
+
+    #[test]
+    fn buoy_slots_follow_the_cnas_and_a_missing_buoy_is_refused() {
+        let s = Schedule::default().slots(40.0, 2, 2);
+        assert_eq!(
+            s.iter().map(|s| (s.owner, s.start_s)).collect::<Vec<_>>(),
+            [
+                (Owner::Cna, 0.0),
+                (Owner::Buoy(0), 8.0),
+                (Owner::Buoy(1), 16.0),
+                (Owner::Auv(0), 24.0),
+                (Owner::Auv(1), 32.0)
+            ]
+        );
+        let slot = |who: &str, start_s| SlotSpec { who: who.into(), start_s, length_s: 10.0 };
+        let tdma = Schedule::Tdma { slots: vec![slot("cna", 0.0), slot("buoy0", 10.0), slot("buoy2", 20.0)] };
+        let p = tdma.problems("s.", &Fit { n_buoys: 2, ..fit(30.0, 1) });
+        assert_eq!(p.len(), 1, "{p:?}");
+        assert_eq!((p[0].0.as_str(), p[0].2.as_str()), ("s.slots[2].who", "cna, buoy0..buoy1 or auv0..auv0"));
     }
 
     #[test]

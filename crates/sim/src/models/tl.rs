@@ -206,11 +206,15 @@ fn grid(g: &GridModel, sc: &Scenario) -> Result<Arc<AnchorLattice>, TlError> {
     Ok(l)
 }
 
-/// The anchors over the survey blocks and the CNA start (widened by the margin), and the field
-/// each one holds: to 1.2 × the schedule's longest range, over the deepest water there.
+/// The anchors over the survey blocks, the CNA start and the buoys' deployments (widened by the
+/// margin), and the field each one holds: to 1.2 × the schedule's longest range, over the
+/// deepest water there.
 fn layout(g: &GridModel, sc: &Scenario) -> (LatticeSpec, GridSpec) {
     let start = cna_start(sc).pos;
-    let points = (0..sc.fleet.n_auvs).flat_map(|k| sc.lawnmower(k).waypoints()).chain([(start.x, start.y)]);
+    let points = (0..sc.fleet.n_auvs)
+        .flat_map(|k| sc.lawnmower(k).waypoints())
+        .chain([(start.x, start.y)])
+        .chain(sc.buoys.iter().map(|b| (b.x, b.y)));
     let (mut lo, mut hi) = ((f64::INFINITY, f64::INFINITY), (f64::NEG_INFINITY, f64::NEG_INFINITY));
     for (x, y) in points {
         (lo, hi) = ((lo.0.min(x), lo.1.min(y)), (hi.0.max(x), hi.1.max(y)));
