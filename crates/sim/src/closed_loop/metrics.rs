@@ -63,6 +63,11 @@ impl LinkStats {
         }
     }
 
+    /// Nothing was sent (a scenario without that link, e.g. without buoys).
+    pub fn is_unused(&self) -> bool {
+        self.sent == 0
+    }
+
     pub fn success(&self) -> f64 {
         if self.sent == 0 {
             0.0
@@ -82,8 +87,9 @@ pub struct AuvMetrics {
     pub modelled_mean: Option<f64>,
     /// CNA broadcasts (ranges): sent towards this AUV and received by it.
     pub downlink: LinkStats,
-    /// Buoy position broadcasts (ranges, all buoys together): sent towards this AUV and received.
-    #[serde(default)]
+    /// Buoy position broadcasts (ranges, all buoys together): sent towards this AUV and received
+    /// (left out of the summary when the scenario has no buoys).
+    #[serde(default, skip_serializing_if = "LinkStats::is_unused")]
     pub buoy_link: LinkStats,
     /// Ranges the EKF applied (the CNA's and the buoys').
     pub ranges_applied: u64,
