@@ -308,13 +308,19 @@ impl CostModel for EkfCost {
         let u = if horizontal > 1e-9 { [dx / horizontal, dy / horizontal] } else { [1.0, 0.0] };
         let mut chains = [diagonal_floor(state, u); CONE_CHAINS];
         let mut eigen = EigenFloor::of(state);
+        let (radial, tangential) = diagonal_floor(state, u);
+        let mut turn = TurnFloor { radial, tangential };
         let mut moved = 0.0;
         for (slot, r) in out.iter_mut().zip(reach) {
+            // The horizontal line of sight is at least `horizontal - moved` long before this level's move.
+            let turn_max = if horizontal > moved + r { (r / (horizontal - moved)).powi(2) } else { 1.0 };
             moved += r;
             let s = if horizontal > moved { moved / horizontal } else { 1.0 };
             let r_min = self.spec.range_noise.variance((slant - moved).max(0.0));
             let (trace, det) = eigen.step(q, r_min);
             let mut term = self.term(trace, det);
+            let (trace, det) = turn.step(q, turn_max, r_min);
+            term = term.max(self.term(trace, det));
             for ((v_u, v_t), kappa) in chains.iter_mut().zip(cone_kappas(s)) {
                 let tangential = s * s * (1.0 + 1.0 / kappa);
                 let (add_u, add_t) = if tangential < 1.0 { (1.0 + kappa, tangential) } else { (1.0, 1.0) };
@@ -396,6 +402,52 @@ impl EigenFloor {
         self.m2 = l2 * r_min / (l2 + r_min);
         self.m1 = l2.max(0.5 * trace);
         (trace, self.m1 * self.m2)
+    }
+}
+
+/// Lower bounds (radial, tangential) with P ⪰ diag(radial, tangential) in the frame of the last
+/// ping's horizontal direction, whatever the path: the bound that follows how fast the line of
+/// sight can turn. One level, with D = diag(radial + qτ, tangential + qτ) = diag(1/α, 1/β):
+/// - the ping's direction turns from the last by Δ with sin²Δ ≤ T (the line of sight moves by at
+///   most the reach r while at least D_h long: T = (r/D_h)², or 1);
+/// - in the frame (h, n) of the new ping, E ⪰ Y⁻¹ with Y = D⁻¹ rotated by Δ plus diag(ι, 0),
+///   ι = 1/R_min (p_s ≤ 1, |h| ≤ 1, R ≥ R_min); with t = sin²Δ: Y_hh = α − t(α − β) + ι,
+///   Y_nn = β + t(α − β), Y_hn² = t(1 − t)(α − β)², so tr Y = α + β + ι and
+///   det Y = αβ + ι·Y_nn(t);
+/// - tr E ≥ tr Y / det Y and det E ≥ 1 / det Y are smallest where Y_nn is largest: t = T when
+///   α > β, else t = 0;
+/// - Y ⪯ diag(Y_hh + Y_hn²/(ρ·Y_nn), (1 + ρ)·Y_nn) (ρ = [`TANGENTIAL_SLACK`], as in
+///   `diagonal_floor`), and over t ≤ T: Y_hh ≤ α + ι + T·max(β − α, 0), Y_nn ≤ β + T·max(α − β, 0)
+///   and Y_hn²/Y_nn = t(1 − t)(α − β)²/(β + t(α − β)) ≤ T(α − β)²/(β + T(α − β)) (increasing in
+///   t), which gives the next level's (radial, tangential) in the new ping's frame.
+///
+/// Near AUVs gain most: their line of sight may leave any cone within a few levels, but it still
+/// turns at most asin(r/D_h) per level, so the tangential variance keeps growing.
+#[derive(Debug, Clone, Copy)]
+struct TurnFloor {
+    radial: f64,
+    tangential: f64,
+}
+
+impl TurnFloor {
+    /// Advances one level with sin²Δ ≤ `turn_max`; returns the bounds on (tr E, det E).
+    #[inline(always)]
+    fn step(&mut self, q_tau: f64, turn_max: f64, r_min: f64) -> (f64, f64) {
+        let (a, b) = (self.radial + q_tau, self.tangential + q_tau);
+        if !(a > 0.0 && b > 0.0) {
+            // A singular floor: nothing is known beyond E ⪰ 0.
+            *self = TurnFloor { radial: 0.0, tangential: 0.0 };
+            return (0.0, 0.0);
+        }
+        let (alpha, beta, iota) = (1.0 / a, 1.0 / b, 1.0 / r_min);
+        let excess = alpha - beta;
+        let y_nn_max = beta + turn_max * excess.max(0.0);
+        let det_y = alpha * beta + iota * y_nn_max;
+        let y_hh_max = alpha + iota + turn_max * (-excess).max(0.0);
+        let cross = turn_max * excess * excess / (beta + turn_max * excess);
+        self.radial = 1.0 / (y_hh_max + cross / TANGENTIAL_SLACK);
+        self.tangential = 1.0 / ((1.0 + TANGENTIAL_SLACK) * y_nn_max);
+        ((alpha + beta + iota) / det_y, 1.0 / det_y)
     }
 }
 
