@@ -24,7 +24,7 @@
 //! Invented parameters (R's defaults) are marked; digest: hudson §2.2 (the model it replaces),
 //! gill §3 (the filter it models).
 
-use crate::cost_model::CostModel;
+use crate::cost_model::{norm, Below, CostModel};
 use crate::PlanError;
 use serde::{Deserialize, Serialize};
 use std::sync::Arc;
@@ -298,25 +298,27 @@ impl CostModel for EkfCost {
         state: &[f64; 3],
         cna: [f64; 3],
         auv: [f64; 3],
-        reach: impl Iterator<Item = f64>,
+        below: impl Iterator<Item = Below>,
         out: &mut [f64],
     ) {
         let q = self.q_tau[k];
-        let (dx, dy, dz) = (auv[0] - cna[0], auv[1] - cna[1], auv[2] - cna[2]);
+        let (dx, dy) = (auv[0] - cna[0], auv[1] - cna[1]);
         let horizontal = (dx * dx + dy * dy).sqrt();
-        let slant = (horizontal * horizontal + dz * dz).sqrt();
         let u = if horizontal > 1e-9 { [dx / horizontal, dy / horizontal] } else { [1.0, 0.0] };
         let mut chains = [diagonal_floor(state, u); CONE_CHAINS];
         let mut eigen = EigenFloor::of(state);
         let (radial, tangential) = diagonal_floor(state, u);
         let mut turn = TurnFloor { radial, tangential };
+        // The horizontal line of sight is at least `before` long before each level's move.
+        let mut before = horizontal;
         let mut moved = 0.0;
-        for (slot, r) in out.iter_mut().zip(reach) {
-            // The horizontal line of sight is at least `horizontal - moved` long before this level's move.
-            let turn_max = if horizontal > moved + r { (r / (horizontal - moved)).powi(2) } else { 1.0 };
-            moved += r;
-            let s = if horizontal > moved { moved / horizontal } else { 1.0 };
-            let r_min = self.spec.range_noise.variance((slant - moved).max(0.0));
+        for (slot, b) in out.iter_mut().zip(below) {
+            let turn_max = if before > b.turn { (b.turn / before).powi(2) } else { 1.0 };
+            moved += b.turn;
+            let los = [b.auv[0] - cna[0], b.auv[1] - cna[1], b.auv[2] - cna[2]];
+            let s = cone_sine(u, los, b.spread).min(if horizontal > moved { moved / horizontal } else { 1.0 });
+            let r_min = self.spec.range_noise.variance((norm(los) - b.spread).max(0.0));
+            before = (los[0] * los[0] + los[1] * los[1]).sqrt() - b.spread;
             let (trace, det) = eigen.step(q, r_min);
             let mut term = self.term(trace, det);
             let (trace, det) = turn.step(q, turn_max, r_min);
@@ -347,6 +349,24 @@ impl CostModel for EkfCost {
                 f
             })
             .collect()
+    }
+}
+
+/// An upper bound on sin δ, δ the angle between the unit `u` and the horizontal part of a line of
+/// sight within `spread` of `los` (1 when δ may reach 90°): δ ≤ angle(u, los) + asin(spread/|los|).
+#[inline(always)]
+fn cone_sine(u: [f64; 2], los: [f64; 3], spread: f64) -> f64 {
+    let len = (los[0] * los[0] + los[1] * los[1]).sqrt();
+    if len <= spread {
+        return 1.0;
+    }
+    let (cos_a, sin_a) = ((u[0] * los[0] + u[1] * los[1]) / len, (u[0] * los[1] - u[1] * los[0]).abs() / len);
+    let sin_b = spread / len;
+    let cos_b = (1.0 - sin_b * sin_b).sqrt();
+    if cos_a * cos_b - sin_a * sin_b <= 0.0 {
+        1.0
+    } else {
+        (sin_a * cos_b + cos_a * sin_b).min(1.0)
     }
 }
 
@@ -556,37 +576,41 @@ mod tests {
         #![proptest_config(ProptestConfig { cases: 2000, ..ProptestConfig::default() })]
 
         /// The bound below a node never exceeds the cost of any path below it: the CNA takes
-        /// random steps of at most `step` while the AUV moves on a line, and the levels' costs
-        /// are compared with `bound_rest` given the same reaches.
+        /// random steps of at most `step` (or, with `circle`, full steps across the line of
+        /// sight, turning it as fast as it can) while the AUV moves on a line, and the levels'
+        /// costs are compared with `bound_rest` given the same reaches.
         #[test]
         fn the_bound_below_a_node_is_never_above_a_real_path(
             ve in 0.01f64..50.0, vn in 0.01f64..50.0, rho in -0.99f64..0.99, q in 0.0f64..3.0,
-            agg in 0usize..3, auv0 in (-800.0f64..800.0, -800.0f64..800.0, 0.0f64..150.0),
+            agg in 0usize..4, auv0 in (-800.0f64..800.0, -800.0f64..800.0, 0.0f64..150.0),
             vel in (-3.0f64..3.0, -3.0f64..3.0), step in 1.0f64..60.0,
-            moves in prop::collection::vec((-3.2f64..3.2, 0.0f64..1.0, -1.0f64..1.0), 1..8),
+            moves in prop::collection::vec((-3.2f64..3.2, 0.0f64..1.0, -1.0f64..1.0), 1..8), circle in any::<bool>(),
         ) {
-            let aggregate = [Aggregate::TraceSum, Aggregate::WorstAuv, Aggregate::LogDet][agg];
+            let aggregate = [Aggregate::TraceSum, Aggregate::WorstAuv, Aggregate::LogDet, Aggregate::SigmaSum][agg];
             let m = model(aggregate, vec![q], LinkTable::perfect());
             let p0 = [ve, rho * (ve * vn).sqrt(), vn];
             let mut cna = [0.0, 0.0, 20.0];
             let mut auv = [auv0.0, auv0.1, auv0.2];
             let mut bound = vec![0.0; moves.len()];
-            let mut reach = Vec::new();
+            let mut below = Vec::new();
             let mut actual = Vec::new();
             let (node_cna, node_auv) = (cna, auv);
             let mut p = p0;
             for &(heading, frac, dz) in &moves {
+                let across = (auv[1] - cna[1]).atan2(auv[0] - cna[0]) + std::f64::consts::FRAC_PI_2;
+                let (heading, frac, dz) = if circle { (across + 0.1 * heading, 1.0, 0.0) } else { (heading, frac, dz) };
                 let len = step * frac;
                 let dz = dz * len;
                 let horizontal = (len * len - dz * dz).max(0.0).sqrt();
                 cna = [cna[0] + horizontal * heading.cos(), cna[1] + horizontal * heading.sin(), cna[2] + dz];
                 auv = [auv[0] + vel.0, auv[1] + vel.1, auv[2]];
-                reach.push((vel.0 * vel.0 + vel.1 * vel.1).sqrt() + step);
+                let (turn, spread) = ((vel.0 * vel.0 + vel.1 * vel.1).sqrt() + step, (below.len() + 1) as f64 * step);
+                below.push(Below { auv, spread, turn });
                 let (next, term) = m.update(0, &p, cna, auv);
                 p = next;
                 actual.push(term);
             }
-            m.bound_rest(0, &p0, node_cna, node_auv, reach.into_iter(), &mut bound);
+            m.bound_rest(0, &p0, node_cna, node_auv, below.into_iter(), &mut bound);
             for (j, (b, a)) in bound.iter().zip(&actual).enumerate() {
                 prop_assert!(*b <= *a * (1.0 + 1e-9) + 1e-12, "level {}: bound {} above cost {}", j, b, a);
             }

@@ -4,7 +4,7 @@
 //!
 //! Path costs are summed from the root down, ((c₀ + c₁) + c₂) + …, in both searches.
 
-use crate::cost_model::CostModel;
+use crate::cost_model::{norm, Below, CostModel};
 use crate::motion::{FastOption, FastPose, MotionConfig};
 use crate::penalty::{Penalty, PenaltyFn, PenaltyPair, Violation};
 use crate::planner::DistanceLimits;
@@ -36,6 +36,8 @@ pub(crate) struct Tree<M: CostModel> {
     /// `reach[j * n + k]` (j ≥ 1): how far AUV k's line of sight can move between levels j−1 and j,
     /// |Δa| + s·τ (AUV displacement plus the CNA's step), metres.
     pub reach: Vec<f64>,
+    /// The CNA's step s·τ (3-D, every option), metres.
+    pub step: f64,
     /// `SearchConfig::tie_tolerance`: level-0 options within this relative margin of the minimum tie.
     pub tie_tolerance: f64,
 }
@@ -104,29 +106,30 @@ impl<M: CostModel> Tree<M> {
 
     /// A lower bound on the summed costs of levels `level`+1 .. depth−1 below `node` (at `level`).
     /// - Cost: the model's own bound per AUV and level (`CostModel::bound_rest`).
-    /// - Distance: the 3-D CNA–AUV distance changes by at most the reach per level, so when
-    ///   some AUV is surely beyond the maximum (or within the minimum) distance at a level, a
-    ///   doubling look-ahead penalty surely applies there. Other penalties count as ×1 (they never
-    ///   lower a cost).
+    /// - Distance: j levels below, the CNA is within j·s·τ of its position at the node and the
+    ///   AUV is where it is predicted, so when some AUV is surely beyond the maximum (or within the
+    ///   minimum) distance at a level, a doubling look-ahead penalty surely applies there. Other
+    ///   penalties count as ×1 (they never lower a cost).
     ///
     /// A relative margin of 1e-9 absorbs rounding.
     pub fn rest_bound(&self, level: usize, node: &NodeRef<M::State>) -> f64 {
         let mut per_level = [0.0f64; MAX_LEVELS];
         let mut violated = [false; MAX_LEVELS];
         let doubling = matches!(self.penalties.look_ahead, PenaltyFn::Doubling {});
-        let auv = &self.auv[level * self.n..(level + 1) * self.n];
+        let n = self.n;
         let p = node.pose.p;
         let (lo, hi) = (self.limits.min, self.limits.max);
-        for (k, a) in auv.iter().enumerate() {
-            let reach = (level + 1..self.depth).map(|j| self.reach[j * self.n + k]);
-            self.model.bound_rest(k, &node.state[k], p, *a, reach, &mut per_level[level + 1..self.depth]);
-            let d3 = ((a[0] - p[0]).powi(2) + (a[1] - p[1]).powi(2) + (a[2] - p[2]).powi(2)).sqrt();
-            let (mut near, mut far) = (d3, d3);
-            for j in level + 1..self.depth {
-                let r = self.reach[j * self.n + k];
-                near -= r;
-                far += r;
-                violated[j] |= near > hi * (1.0 + 1e-9) || far < lo * (1.0 - 1e-9);
+        for k in 0..n {
+            let below = (level + 1..self.depth).map(|j| Below {
+                auv: self.auv[j * n + k],
+                spread: (j - level) as f64 * self.step,
+                turn: self.reach[j * n + k],
+            });
+            let a = self.auv[level * n + k];
+            self.model.bound_rest(k, &node.state[k], p, a, below.clone(), &mut per_level[level + 1..self.depth]);
+            for (j, b) in (level + 1..self.depth).zip(below) {
+                let d = norm([b.auv[0] - p[0], b.auv[1] - p[1], b.auv[2] - p[2]]);
+                violated[j] |= d - b.spread > hi * (1.0 + 1e-9) || d + b.spread < lo * (1.0 - 1e-9);
             }
         }
         let total: f64 = (level + 1..self.depth)
