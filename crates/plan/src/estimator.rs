@@ -417,13 +417,19 @@ impl TurnFloor {
         }
         let (alpha, beta, iota) = (1.0 / a, 1.0 / b, 1.0 / r_min);
         let excess = alpha - beta;
-        let y_nn_max = beta + turn_max * excess.max(0.0);
-        let det_y = alpha * beta + iota * y_nn_max;
+        // Y_nn at the largest turn (≥ min(α, β) > 0), and its largest value over the turns.
+        let y_nn_turned = beta + turn_max * excess;
+        let y_nn_max = y_nn_turned.max(beta);
         let y_hh_max = alpha + iota + turn_max * (-excess).max(0.0);
-        let cross = turn_max * excess * excess / (beta + turn_max * excess);
-        self.radial = 1.0 / (y_hh_max + cross / TANGENTIAL_SLACK);
-        self.tangential = 1.0 / ((1.0 + TANGENTIAL_SLACK) * y_nn_max);
-        ((alpha + beta + iota) / det_y, 1.0 / det_y)
+        // radial = 1/(Y_hh,max + T(α − β)²/(ρ·Y_nn(T))) and tangential = 1/((1 + ρ)·Y_nn,max), both
+        // from one division (it is on the chain's critical path).
+        let radial_den = TANGENTIAL_SLACK * y_nn_turned * y_hh_max + turn_max * excess * excess;
+        let tangential_den = (1.0 + TANGENTIAL_SLACK) * y_nn_max;
+        let inv = 1.0 / (radial_den * tangential_den);
+        self.radial = TANGENTIAL_SLACK * y_nn_turned * tangential_den * inv;
+        self.tangential = radial_den * inv;
+        let inv_det = 1.0 / (alpha * beta + iota * y_nn_max);
+        ((alpha + beta + iota) * inv_det, inv_det)
     }
 }
 

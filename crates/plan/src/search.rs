@@ -173,7 +173,7 @@ fn visit<M: CostModel>(
 ) {
     if level + 1 == tree.depth {
         ctx.leaf(v);
-    } else if v + tree.rest_bound(level, node) <= ctx.bound() {
+    } else if v + tree.rest_bound(level, node, ctx.bound() - v) <= ctx.bound() {
         dfs(tree, level + 1, node, v, deeper, ctx);
     }
 }
@@ -242,7 +242,11 @@ fn subtrees<M: CostModel>(tree: &Tree<M>, top: &Level<M::State>) -> Vec<Subtree>
                 .map(|&c| {
                     let (pose, c1) = tree.expand(1, &parent, c, &mut out);
                     let cost = top.cost[r] + c1;
-                    let below = if tree.depth > 2 { tree.rest_bound(1, &NodeRef { pose, state: &out }) } else { 0.0 };
+                    let below = if tree.depth > 2 {
+                        tree.rest_bound(1, &NodeRef { pose, state: &out }, f64::INFINITY)
+                    } else {
+                        0.0
+                    };
                     Subtree { root: r, child: c, cost, bound: cost + below }
                 })
                 .collect::<Vec<_>>()

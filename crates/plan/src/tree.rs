@@ -111,31 +111,41 @@ impl<M: CostModel> Tree<M> {
     ///   minimum) distance at a level, a doubling look-ahead penalty surely applies there. Other
     ///   penalties count as ×1 (they never lower a cost).
     ///
-    /// A relative margin of 1e-9 absorbs rounding.
-    pub fn rest_bound(&self, level: usize, node: &NodeRef<M::State>) -> f64 {
-        let mut per_level = [0.0f64; MAX_LEVELS];
-        let mut violated = [false; MAX_LEVELS];
-        let doubling = matches!(self.penalties.look_ahead, PenaltyFn::Doubling {});
-        let n = self.n;
-        let p = node.pose.p;
-        let (lo, hi) = (self.limits.min, self.limits.max);
-        for k in 0..n {
-            let below = (level + 1..self.depth).map(|j| Below {
+    /// The AUVs are summed one by one, and the sum so far (a lower bound too: every term is ≥ 0)
+    /// is returned as soon as it exceeds `budget`, so a node that is cut costs less. A relative
+    /// margin of 1e-9 absorbs rounding.
+    pub fn rest_bound(&self, level: usize, node: &NodeRef<M::State>, budget: f64) -> f64 {
+        let (n, p, levels) = (self.n, node.pose.p, level + 1..self.depth);
+        let below = |k: usize| {
+            levels.clone().map(move |j| Below {
                 auv: self.auv[j * n + k],
                 spread: (j - level) as f64 * self.step,
                 turn: self.reach[j * n + k],
-            });
-            let a = self.auv[level * n + k];
-            self.model.bound_rest(k, &node.state[k], p, a, below.clone(), &mut per_level[level + 1..self.depth]);
-            for (j, b) in (level + 1..self.depth).zip(below) {
-                let d = norm([b.auv[0] - p[0], b.auv[1] - p[1], b.auv[2] - p[2]]);
-                violated[j] |= d - b.spread > hi * (1.0 + 1e-9) || d + b.spread < lo * (1.0 - 1e-9);
+            })
+        };
+        let mut weight = [1.0f64; MAX_LEVELS];
+        if matches!(self.penalties.look_ahead, PenaltyFn::Doubling {}) {
+            let (lo, hi) = (self.limits.min, self.limits.max);
+            for k in 0..n {
+                for (w, b) in weight[levels.clone()].iter_mut().zip(below(k)) {
+                    let d = norm([b.auv[0] - p[0], b.auv[1] - p[1], b.auv[2] - p[2]]);
+                    if d - b.spread > hi * (1.0 + 1e-9) || d + b.spread < lo * (1.0 - 1e-9) {
+                        *w = 2.0;
+                    }
+                }
             }
         }
-        let total: f64 = (level + 1..self.depth)
-            .map(|j| if doubling && violated[j] { 2.0 * per_level[j] } else { per_level[j] })
-            .sum();
-        total * (1.0 - 1e-9)
+        let mut per_level = [0.0f64; MAX_LEVELS];
+        let mut total = 0.0;
+        for k in 0..n {
+            let a = self.auv[level * n + k];
+            self.model.bound_rest(k, &node.state[k], p, a, below(k), &mut per_level[levels.clone()]);
+            total = levels.clone().map(|j| weight[j] * per_level[j]).sum::<f64>() * (1.0 - 1e-9);
+            if total > budget {
+                break;
+            }
+        }
+        total
     }
 
     /// Expands `parent` (a node at level − 1, or the root) by option `opt` into a node at `level`:
