@@ -19,6 +19,13 @@ pub(crate) trait CostModel: Sync {
     /// its cost term.
     fn update(&self, k: usize, parent: &Self::State, cna: [f64; 3], auv: [f64; 3]) -> (Self::State, f64);
 
+    /// Cost-to-go beyond the horizon added to AUV `k`'s term at a leaf, from that term (≥ 0). The
+    /// bounds count it as 0, which keeps them lower bounds. Default: none (Hudson's model).
+    #[inline(always)]
+    fn terminal(&self, _leaf_term: f64) -> f64 {
+        0.0
+    }
+
     /// Joins one AUV's term into a level's raw cost (sum, or max for worst-AUV).
     fn combine(&self, acc: f64, term: f64) -> f64;
 

@@ -2,7 +2,8 @@
 //! level, penalties, the per-level cost floor) and the node expansion that both searches share,
 //! so the brute-force reference and the production search evaluate every path bit-identically.
 //!
-//! Path costs are summed from the root down, ((c₀ + c₁) + c₂) + …, in both searches.
+//! Path costs are summed from the root down, ((c₀ + c₁) + c₂) + …, in both searches. On the last
+//! level each AUV's term also carries the model's cost-to-go (`CostModel::terminal`).
 
 use crate::cost_model::CostModel;
 use crate::motion::{FastOption, FastPose, MotionConfig};
@@ -162,6 +163,7 @@ impl<M: CostModel> Tree<M> {
         let pose = self.motion.step(&parent.pose, &self.options[opt]);
         let auv = &self.auv[level * self.n..(level + 1) * self.n];
         let (mut raw, mut dmin2, mut dmax2) = (0.0, f64::INFINITY, 0.0f64);
+        let leaf = level + 1 == self.depth;
         for k in 0..self.n {
             let a = auv[k];
             let d = [a[0] - pose.p[0], a[1] - pose.p[1], a[2] - pose.p[2]];
@@ -169,6 +171,7 @@ impl<M: CostModel> Tree<M> {
             dmin2 = dmin2.min(d2);
             dmax2 = dmax2.max(d2);
             let (state, term) = self.model.update(k, &parent.state[k], pose.p, a);
+            let term = if leaf { term + self.model.terminal(term) } else { term };
             out[k] = state;
             raw = self.model.combine(raw, term);
             if cut.cuts(raw) {

@@ -127,7 +127,12 @@ fn build(name: &str, sc: &Scenario, planned: Option<&TimedWaypoints>) -> Result<
             let (start, noise) = filter_model(sc);
             let mut cfg = sc.planner_config();
             if estimator {
-                cfg.cost = CostSpec::Estimator(EstimatorSpec { range_noise: noise, aggregate: p.estimator_aggregate });
+                cfg.cost = CostSpec::Estimator(EstimatorSpec {
+                    range_noise: noise,
+                    aggregate: p.estimator_aggregate,
+                    bias_per_km_m: p.estimator_bias_per_km.unwrap_or(noise.per_km_m),
+                    terminal_levels: p.estimator_terminal_levels,
+                });
             }
             let policy =
                 PlannerPolicy::new(cfg, n, p.sigma0, p.eps0, likelihood, Some((start, noise))).map_err(plan_err)?;

@@ -269,6 +269,13 @@ pub struct Planner {
     /// How `planner-estimator` joins the AUVs' covariances into a level's cost.
     #[serde(default)]
     pub estimator_aggregate: Aggregate,
+    /// The range bias `planner-estimator` assumes, m of 1-σ per km of range (coopnav_plan
+    /// estimator step 4); default: the filters' configured sound-speed uncertainty, 1000·σ_c/c.
+    #[serde(default)]
+    pub estimator_bias_per_km: Option<f64>,
+    /// Levels of cost-to-go `planner-estimator` counts at each leaf (estimator step 6; 0 = none).
+    #[serde(default)]
+    pub estimator_terminal_levels: f64,
 }
 
 fn default_case() -> String {
@@ -465,6 +472,10 @@ impl Scenario {
         let pl = &self.planner;
         p.positive("planner.sigma0", pl.sigma0);
         p.non_negative("planner.eps0", pl.eps0);
+        p.non_negative("planner.estimator_terminal_levels", pl.estimator_terminal_levels);
+        if let Some(k) = pl.estimator_bias_per_km {
+            p.non_negative("planner.estimator_bias_per_km", k);
+        }
         if pl.start_after_reports == 0 {
             p.push("planner.start_after_reports", "0", ">= 1");
         }
