@@ -27,14 +27,14 @@
 //!    Σ ln(1 + det M / 1 m⁴) (log-det, shifted by one so costs stay ≥ 0 as the penalties and the
 //!    search require), or Σ √tr M (the sum of 1-σ, m). The path cost is the sum of the level costs,
 //!    as for Hudson's model.
-//! 6. Cost-to-go beyond the horizon ([`EkfCost`]'s `terminal`): at a leaf the CNA would go on
+//! 6. Cost-to-go beyond the horizon (`CostModel::terminal_levels`): at a leaf the CNA would go on
 //!    pinging; holding the leaf's range, each further level costs about the leaf's own term (the
 //!    bias part is set by the range alone, and the covariance returns to about the same trace
 //!    after every ping while the line of sight turns), so H more levels add H·(leaf term) per AUV
 //!    (`terminal_levels` = H). It rewards ending the horizon close to the AUVs, whose benefit the
-//!    short horizon otherwise cannot see. It is ≥ 0 and the bounds count it as 0, so they stay
-//!    valid lower bounds; the bias term of step 4 is ≥ 0 and increases every term, so the
-//!    covariance bounds below stay valid for M too.
+//!    short horizon otherwise cannot see. The last level's terms count 1 + H times, and so do its
+//!    bounds (a fixed factor ≥ 1 commutes with sum and max); the bias term of step 4 is ≥ 0 and
+//!    only increases every term, so the covariance bounds below stay valid lower bounds for M.
 //!
 //! Lower bound for branch-and-bound (the levels below a node; derivation in [`EkfCost::bound_rest`]):
 //! by operator convexity of the inverse, E ⪰ (P̃⁻¹ + p_s·hhᵀ/R)⁻¹ ⪰ (P̃⁻¹ + hhᵀ/R_min)⁻¹, so the
@@ -316,9 +316,8 @@ impl CostModel for EkfCost {
     }
 
     /// Step 6: H levels at the leaf's term.
-    #[inline(always)]
-    fn terminal(&self, leaf_term: f64) -> f64 {
-        self.spec.terminal_levels * leaf_term
+    fn terminal_levels(&self) -> f64 {
+        self.spec.terminal_levels
     }
 
     #[inline(always)]
@@ -531,11 +530,11 @@ mod tests {
     }
 
     #[test]
-    fn the_terminal_cost_is_h_leaf_terms_and_settings_are_checked() {
+    fn the_terminal_cost_is_h_levels_and_settings_are_checked() {
         let spec = EstimatorSpec { terminal_levels: 3.0, ..EstimatorSpec::default() };
         let m = EkfCost { spec, q_tau: vec![0.0], link: LinkTable::perfect() };
-        assert_eq!(m.terminal(2.5), 7.5);
-        assert_eq!(model(Aggregate::TraceSum, vec![0.0], LinkTable::perfect()).terminal(2.5), 0.0);
+        assert_eq!(m.terminal_levels(), 3.0);
+        assert_eq!(model(Aggregate::TraceSum, vec![0.0], LinkTable::perfect()).terminal_levels(), 0.0);
         for bad in [
             EstimatorSpec { terminal_levels: -1.0, ..EstimatorSpec::default() },
             EstimatorSpec { bias_per_km_m: f64::NAN, ..EstimatorSpec::default() },

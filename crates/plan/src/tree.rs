@@ -3,7 +3,8 @@
 //! so the brute-force reference and the production search evaluate every path bit-identically.
 //!
 //! Path costs are summed from the root down, ((c₀ + c₁) + c₂) + …, in both searches. On the last
-//! level each AUV's term also carries the model's cost-to-go (`CostModel::terminal`).
+//! level each AUV's term counts 1 + H times, H the model's cost-to-go in levels
+//! (`CostModel::terminal_levels`), in both searches and in the bounds.
 
 use crate::cost_model::CostModel;
 use crate::motion::{FastOption, FastPose, MotionConfig};
@@ -103,6 +104,12 @@ impl<M: CostModel> Tree<M> {
         }
     }
 
+    /// The factor of the last level's terms, 1 + H (`CostModel::terminal_levels`).
+    #[inline(always)]
+    pub fn leaf_weight(&self) -> f64 {
+        1.0 + self.model.terminal_levels()
+    }
+
     /// A lower bound on the summed costs of levels `level`+1 .. depth−1 below `node` (at `level`).
     /// - Cost: the model's own bound per AUV and level (`CostModel::bound_rest`).
     /// - Distance: the 3-D CNA–AUV distance changes by at most the reach per level, so when
@@ -130,6 +137,7 @@ impl<M: CostModel> Tree<M> {
                 violated[j] |= near > hi * (1.0 + 1e-9) || far < lo * (1.0 - 1e-9);
             }
         }
+        per_level[self.depth - 1] *= self.leaf_weight();
         let total: f64 = (level + 1..self.depth)
             .map(|j| if doubling && violated[j] { 2.0 * per_level[j] } else { per_level[j] })
             .sum();
@@ -171,7 +179,7 @@ impl<M: CostModel> Tree<M> {
             dmin2 = dmin2.min(d2);
             dmax2 = dmax2.max(d2);
             let (state, term) = self.model.update(k, &parent.state[k], pose.p, a);
-            let term = if leaf { term + self.model.terminal(term) } else { term };
+            let term = if leaf { term * self.leaf_weight() } else { term };
             out[k] = state;
             raw = self.model.combine(raw, term);
             if cut.cuts(raw) {
@@ -202,10 +210,14 @@ impl<M: CostModel> Tree<M> {
 }
 
 /// `rest_floor` of [`Tree`] from the model's per-level floors: every penalty keeps C' ≥ C, so
-/// the floor of levels l+1.. is the sum of their raw floors. A relative margin of 1e-9 absorbs
-/// rounding.
-pub(crate) fn rest_floors(level_floor: &[f64]) -> Vec<f64> {
-    (0..level_floor.len()).map(|l| level_floor[l + 1..].iter().sum::<f64>() * (1.0 - 1e-9)).collect()
+/// the floor of levels l+1.. is the sum of their raw floors, the last one times `leaf_weight`
+/// (`Tree::leaf_weight`). A relative margin of 1e-9 absorbs rounding.
+pub(crate) fn rest_floors(level_floor: &[f64], leaf_weight: f64) -> Vec<f64> {
+    let mut floor = level_floor.to_vec();
+    if let Some(last) = floor.last_mut() {
+        *last *= leaf_weight;
+    }
+    (0..floor.len()).map(|l| floor[l + 1..].iter().sum::<f64>() * (1.0 - 1e-9)).collect()
 }
 
 /// `reach` of [`Tree`]: per level j ≥ 1 and AUV k, |a_j − a_{j−1}| + s·τ (level 0 unused, 0).
