@@ -19,6 +19,15 @@ pub(crate) trait CostModel: Sync {
     /// its cost term.
     fn update(&self, k: usize, parent: &Self::State, cna: [f64; 3], auv: [f64; 3]) -> (Self::State, f64);
 
+    /// Cost-to-go beyond the horizon as H ≥ 0 further levels at each AUV's leaf term: on the last
+    /// level every term counts 1 + H times. Being a fixed factor, it scales the last level's
+    /// bounds and floor alike (sum and max commute with it), so they stay lower bounds
+    /// (`Tree::leaf_weight`). Default: none (Hudson's model).
+    #[inline(always)]
+    fn terminal_levels(&self) -> f64 {
+        0.0
+    }
+
     /// Joins one AUV's term into a level's raw cost (sum, or max for worst-AUV).
     fn combine(&self, acc: f64, term: f64) -> f64;
 

@@ -12,9 +12,29 @@
 //! 3. The packet arrives with probability p_s(r) (the acoustic link's model, passed in as a
 //!    [`LinkModel`]); the expected posterior is E = (1 − p_s)·P̃ + p_s·P⁺
 //!    = P̃ − p_s·P̃hhᵀP̃ / (hᵀP̃h + R).
-//! 4. Level cost over the N AUVs ([`Aggregate`]): Σ tr E (default), max tr E (worst AUV),
-//!    Σ ln(1 + det E / 1 m⁴) (log-det, shifted by one so costs stay ≥ 0 as the penalties and the
-//!    search require), or Σ √tr E (the sum of 1-σ, m). The path cost is the sum of the level costs, as for Hudson's model.
+//! 4. Range bias the covariance does not see (issue 10 item 3): a sound-speed error δc, the same
+//!    for every ping, makes a range over r off by b = r·δc/c. The filter takes it for noise; after
+//!    a ping its estimate moves along h until the range fits, so its radial error becomes
+//!    g·b + (1 − g)·(the previous radial error), g = hᵀP̃h/(hᵀP̃h + R) close to 1 whenever the
+//!    growth between pings dwarfs R (the closed loop: qτ ≈ 15 m² against R ≈ 1 m²). Repeated pings
+//!    therefore leave a radial error of about the newest range's bias, and a lost ping keeps the
+//!    previous one (taken at nearly the same range: the CNA moves s·τ per level). With the CNA's
+//!    belief δc/c ~ N(0, (k_b/1000)²) (`bias_per_km_m` = k_b, from the configured sound-speed
+//!    uncertainty, never the true sound speed), the expected squared true error is about
+//!    M = E + β(r)²/2·I, β(r) = k_b·r/1000 (isotropic: the bias's direction turns with the line of
+//!    sight). k_b = 0 is the covariance alone.
+//! 5. Level cost over the N AUVs ([`Aggregate`]) of M: Σ tr M (default), max tr M (worst AUV),
+//!    Σ ln(1 + det M / 1 m⁴) (log-det, shifted by one so costs stay ≥ 0 as the penalties and the
+//!    search require), or Σ √tr M (the sum of 1-σ, m). The path cost is the sum of the level costs,
+//!    as for Hudson's model.
+//! 6. Cost-to-go beyond the horizon (`CostModel::terminal_levels`): at a leaf the CNA would go on
+//!    pinging; holding the leaf's range, each further level costs about the leaf's own term (the
+//!    bias part is set by the range alone, and the covariance returns to about the same trace
+//!    after every ping while the line of sight turns), so H more levels add H·(leaf term) per AUV
+//!    (`terminal_levels` = H). It rewards ending the horizon close to the AUVs, whose benefit the
+//!    short horizon otherwise cannot see. The last level's terms count 1 + H times, and so do its
+//!    bounds (a fixed factor ≥ 1 commutes with sum and max); the bias term of step 4 is ≥ 0 and
+//!    only increases every term, so the covariance bounds below stay valid lower bounds for M.
 //!
 //! Lower bound for branch-and-bound (the levels below a node; derivation in [`EkfCost::bound_rest`]):
 //! by operator convexity of the inverse, E ⪰ (P̃⁻¹ + p_s·hhᵀ/R)⁻¹ ⪰ (P̃⁻¹ + hhᵀ/R_min)⁻¹, so the
@@ -89,20 +109,34 @@ pub struct EstimatorSpec {
     pub aggregate: Aggregate,
     #[serde(default)]
     pub range_noise: RangeNoise,
+    /// k_b of step 4: the 1-σ range bias the CNA assumes, m per km of range (≥ 0; 0 = none).
+    #[serde(default)]
+    pub bias_per_km_m: f64,
+    /// H of step 6: levels of cost-to-go counted beyond the horizon at each leaf (≥ 0; 0 = none).
+    #[serde(default)]
+    pub terminal_levels: f64,
 }
 
 impl EstimatorSpec {
     pub fn validate(&self, field: &str) -> Result<(), PlanError> {
         let RangeNoise { sigma_m, per_km_m } = self.range_noise;
-        if sigma_m > 0.0 && sigma_m.is_finite() && per_km_m >= 0.0 && per_km_m.is_finite() {
-            Ok(())
-        } else {
-            Err(PlanError::Invalid {
+        if !(sigma_m > 0.0 && sigma_m.is_finite() && per_km_m >= 0.0 && per_km_m.is_finite()) {
+            return Err(PlanError::Invalid {
                 field: format!("{field}.range_noise"),
                 allowed: "sigma_m > 0 and per_km_m >= 0 (metres)".into(),
                 value: format!("sigma_m {sigma_m}, per_km_m {per_km_m}"),
-            })
+            });
         }
+        for (name, value) in [("bias_per_km_m", self.bias_per_km_m), ("terminal_levels", self.terminal_levels)] {
+            if !(value >= 0.0 && value.is_finite()) {
+                return Err(PlanError::Invalid {
+                    field: format!("{field}.{name}"),
+                    allowed: "a finite number >= 0".into(),
+                    value: value.to_string(),
+                });
+            }
+        }
+        Ok(())
     }
 }
 
@@ -238,6 +272,14 @@ impl EkfCost {
         Ok(EkfCost { spec, q_tau: estimates.iter().map(|e| e.process_noise * tau).collect(), link })
     }
 
+    /// β(r)² of step 4 for a ping from `cna` to the AUV at `auv`, m².
+    #[inline(always)]
+    fn bias_variance(&self, cna: [f64; 3], auv: [f64; 3]) -> f64 {
+        let d = [auv[0] - cna[0], auv[1] - cna[1], auv[2] - cna[2]];
+        let k2 = self.spec.bias_per_km_m * self.spec.bias_per_km_m * 1e-6;
+        k2 * (d[0] * d[0] + d[1] * d[1] + d[2] * d[2])
+    }
+
     #[inline(always)]
     fn term(&self, trace: f64, det: f64) -> f64 {
         match self.spec.aggregate {
@@ -252,12 +294,20 @@ impl EkfCost {
 impl CostModel for EkfCost {
     type State = [f64; 3];
 
+    /// Steps 1–5 of the module's derivation.
     #[inline(always)]
     fn update(&self, k: usize, parent: &[f64; 3], cna: [f64; 3], auv: [f64; 3]) -> ([f64; 3], f64) {
         let link = &self.link;
         let [a, b, c] =
             expected_posterior(parent, self.q_tau[k], cna, auv, &self.spec.range_noise, |r| link.success(r));
-        ([a, b, c], self.term(a + c, a * c - b * b))
+        let half_bias2 = 0.5 * self.bias_variance(cna, auv);
+        let (ma, mc) = (a + half_bias2, c + half_bias2);
+        ([a, b, c], self.term(ma + mc, ma * mc - b * b))
+    }
+
+    /// Step 6: H levels at the leaf's term.
+    fn terminal_levels(&self) -> f64 {
+        self.spec.terminal_levels
     }
 
     #[inline(always)]
@@ -446,8 +496,13 @@ mod tests {
     use super::*;
     use proptest::prelude::*;
 
+    fn biased(aggregate: Aggregate, q_tau: Vec<f64>, bias_per_km_m: f64) -> EkfCost {
+        let spec = EstimatorSpec { aggregate, bias_per_km_m, ..EstimatorSpec::default() };
+        EkfCost { spec, q_tau, link: LinkTable::perfect() }
+    }
+
     fn model(aggregate: Aggregate, q_tau: Vec<f64>, link: LinkTable) -> EkfCost {
-        EkfCost { spec: EstimatorSpec { aggregate, range_noise: RangeNoise::default() }, q_tau, link }
+        EkfCost { spec: EstimatorSpec { aggregate, ..EstimatorSpec::default() }, q_tau, link }
     }
 
     #[test]
@@ -486,6 +541,41 @@ mod tests {
         let half =
             model(Aggregate::TraceSum, vec![0.5], LinkTable::sample(&Half).unwrap()).update(0, &start, cna, auv).1;
         assert!((half - 0.5 * (full + lost.1)).abs() < 1e-12);
+    }
+
+    #[test]
+    fn the_range_bias_adds_beta_squared_to_the_trace_and_grows_with_range() {
+        // k_b = 2 m/km: β(500 m)² = 1 m², β(1000 m)² = 4 m²; the covariance itself is unchanged.
+        let (plain, bias) = (biased(Aggregate::TraceSum, vec![0.0], 0.0), biased(Aggregate::TraceSum, vec![0.0], 2.0));
+        let start = [4.0, 1.0, 2.0];
+        for (auv, beta2) in [([300.0, 400.0, 0.0], 1.0), ([600.0, 800.0, 0.0], 4.0)] {
+            let (p0, c0) = plain.update(0, &start, [0.0; 3], auv);
+            let (p1, c1) = bias.update(0, &start, [0.0; 3], auv);
+            assert_eq!(p0, p1);
+            assert!((c1 - c0 - beta2).abs() < 1e-12, "{c1} - {c0} vs {beta2}");
+        }
+        // Log-det: det(E + β²/2·I) = det E + β²/2·tr E + β⁴/4.
+        let (plain, bias) = (biased(Aggregate::LogDet, vec![0.0], 0.0), biased(Aggregate::LogDet, vec![0.0], 2.0));
+        let (p, c0) = plain.update(0, &start, [0.0; 3], [600.0, 800.0, 0.0]);
+        let det = p[0] * p[2] - p[1] * p[1];
+        let want = (det + 2.0 * (p[0] + p[2]) + 4.0).ln_1p();
+        assert!((bias.update(0, &start, [0.0; 3], [600.0, 800.0, 0.0]).1 - want).abs() < 1e-12);
+        assert!(want > c0);
+    }
+
+    #[test]
+    fn the_terminal_cost_is_h_levels_and_settings_are_checked() {
+        let spec = EstimatorSpec { terminal_levels: 3.0, ..EstimatorSpec::default() };
+        let m = EkfCost { spec, q_tau: vec![0.0], link: LinkTable::perfect() };
+        assert_eq!(m.terminal_levels(), 3.0);
+        assert_eq!(model(Aggregate::TraceSum, vec![0.0], LinkTable::perfect()).terminal_levels(), 0.0);
+        for bad in [
+            EstimatorSpec { terminal_levels: -1.0, ..EstimatorSpec::default() },
+            EstimatorSpec { bias_per_km_m: f64::NAN, ..EstimatorSpec::default() },
+        ] {
+            let e = bad.validate("planner.cost").unwrap_err().to_string();
+            assert!(e.contains("planner.cost.") && e.contains(">= 0"), "{e}");
+        }
     }
 
     #[test]
@@ -544,12 +634,12 @@ mod tests {
         #[test]
         fn the_bound_below_a_node_is_never_above_a_real_path(
             ve in 0.01f64..50.0, vn in 0.01f64..50.0, rho in -0.99f64..0.99, q in 0.0f64..3.0,
-            agg in 0usize..4, auv0 in (-800.0f64..800.0, -800.0f64..800.0, 0.0f64..150.0),
+            agg in 0usize..4, bias in prop_oneof![Just(0.0), 0.0f64..10.0], auv0 in (-800.0f64..800.0, -800.0f64..800.0, 0.0f64..150.0),
             vel in (-3.0f64..3.0, -3.0f64..3.0), step in 1.0f64..60.0,
             moves in prop::collection::vec((-3.2f64..3.2, 0.0f64..1.0, -1.0f64..1.0), 1..8), circle in any::<bool>(),
         ) {
             let aggregate = [Aggregate::TraceSum, Aggregate::WorstAuv, Aggregate::LogDet, Aggregate::SigmaSum][agg];
-            let m = model(aggregate, vec![q], LinkTable::perfect());
+            let m = biased(aggregate, vec![q], bias);
             let p0 = [ve, rho * (ve * vn).sqrt(), vn];
             let mut cna = [0.0, 0.0, 20.0];
             let mut auv = [auv0.0, auv0.1, auv0.2];

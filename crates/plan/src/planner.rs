@@ -327,7 +327,7 @@ impl LookAheadPlanner {
             reach: reaches(&g.auv, g.n, cfg.motion.speed * cfg.motion.tau),
             step: cfg.motion.speed * cfg.motion.tau,
             auv: g.auv,
-            rest_floor: rest_floors(&model.level_floors(&root_state, g.depth)),
+            rest_floor: rest_floors(&model.level_floors(&root_state, g.depth), 1.0 + model.terminal_levels()),
             tie_tolerance: cfg.search.tie_tolerance,
             model,
             root_pose: g.root_pose,

@@ -2,7 +2,9 @@
 //! level, penalties, the per-level cost floor) and the node expansion that both searches share,
 //! so the brute-force reference and the production search evaluate every path bit-identically.
 //!
-//! Path costs are summed from the root down, ((c₀ + c₁) + c₂) + …, in both searches.
+//! Path costs are summed from the root down, ((c₀ + c₁) + c₂) + …, in both searches. On the last
+//! level each AUV's term counts 1 + H times, H the model's cost-to-go in levels
+//! (`CostModel::terminal_levels`), in both searches and in the bounds.
 
 use crate::cost_model::{norm, Below, CostModel};
 use crate::motion::{FastOption, FastPose, MotionConfig};
@@ -104,6 +106,12 @@ impl<M: CostModel> Tree<M> {
         }
     }
 
+    /// The factor of the last level's terms, 1 + H (`CostModel::terminal_levels`).
+    #[inline(always)]
+    pub fn leaf_weight(&self) -> f64 {
+        1.0 + self.model.terminal_levels()
+    }
+
     /// A lower bound on the summed costs of levels `level`+1 .. depth−1 below `node` (at `level`).
     /// - Cost: the model's own bound per AUV and level (`CostModel::bound_rest`).
     /// - Distance: j levels below, the CNA is within j·s·τ of its position at the node and the
@@ -135,6 +143,8 @@ impl<M: CostModel> Tree<M> {
                 }
             }
         }
+        // The last level's terms count 1 + H times (`leaf_weight`), the penalty's ×2 on top.
+        weight[self.depth - 1] *= self.leaf_weight();
         let mut per_level = [0.0f64; MAX_LEVELS];
         let mut total = 0.0;
         for k in 0..n {
@@ -175,6 +185,7 @@ impl<M: CostModel> Tree<M> {
         let pose = self.motion.step(&parent.pose, &self.options[opt]);
         let auv = &self.auv[level * self.n..(level + 1) * self.n];
         let (mut raw, mut dmin2, mut dmax2) = (0.0, f64::INFINITY, 0.0f64);
+        let leaf = level + 1 == self.depth;
         for k in 0..self.n {
             let a = auv[k];
             let d = [a[0] - pose.p[0], a[1] - pose.p[1], a[2] - pose.p[2]];
@@ -182,6 +193,7 @@ impl<M: CostModel> Tree<M> {
             dmin2 = dmin2.min(d2);
             dmax2 = dmax2.max(d2);
             let (state, term) = self.model.update(k, &parent.state[k], pose.p, a);
+            let term = if leaf { term * self.leaf_weight() } else { term };
             out[k] = state;
             raw = self.model.combine(raw, term);
             if cut.cuts(raw) {
@@ -212,10 +224,14 @@ impl<M: CostModel> Tree<M> {
 }
 
 /// `rest_floor` of [`Tree`] from the model's per-level floors: every penalty keeps C' ≥ C, so
-/// the floor of levels l+1.. is the sum of their raw floors. A relative margin of 1e-9 absorbs
-/// rounding.
-pub(crate) fn rest_floors(level_floor: &[f64]) -> Vec<f64> {
-    (0..level_floor.len()).map(|l| level_floor[l + 1..].iter().sum::<f64>() * (1.0 - 1e-9)).collect()
+/// the floor of levels l+1.. is the sum of their raw floors, the last one times `leaf_weight`
+/// (`Tree::leaf_weight`). A relative margin of 1e-9 absorbs rounding.
+pub(crate) fn rest_floors(level_floor: &[f64], leaf_weight: f64) -> Vec<f64> {
+    let mut floor = level_floor.to_vec();
+    if let Some(last) = floor.last_mut() {
+        *last *= leaf_weight;
+    }
+    (0..floor.len()).map(|l| floor[l + 1..].iter().sum::<f64>() * (1.0 - 1e-9)).collect()
 }
 
 /// `reach` of [`Tree`]: per level j ≥ 1 and AUV k, |a_j − a_{j−1}| + s·τ (level 0 unused, 0).
