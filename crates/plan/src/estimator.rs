@@ -34,7 +34,8 @@
 //!    (`terminal_levels` = H). It rewards ending the horizon close to the AUVs, whose benefit the
 //!    short horizon otherwise cannot see. The last level's terms count 1 + H times, and so do its
 //!    bounds (a fixed factor ≥ 1 commutes with sum and max); the bias term of step 4 is ≥ 0 and
-//!    only increases every term, so the covariance bounds below stay valid lower bounds for M.
+//!    only increases every term, so the covariance bounds below stay valid lower bounds for M;
+//!    they add it at the shortest range the CNA can be at (`EkfCost::term_bound`).
 //!
 //! Lower bound for branch-and-bound (the levels below a node; derivation in [`EkfCost::bound_rest`]):
 //! by operator convexity of the inverse, E ⪰ (P̃⁻¹ + p_s·hhᵀ/R)⁻¹ ⪰ (P̃⁻¹ + hhᵀ/R_min)⁻¹, so the
@@ -276,8 +277,23 @@ impl EkfCost {
     #[inline(always)]
     fn bias_variance(&self, cna: [f64; 3], auv: [f64; 3]) -> f64 {
         let d = [auv[0] - cna[0], auv[1] - cna[1], auv[2] - cna[2]];
+        self.bias_variance_at(d[0] * d[0] + d[1] * d[1] + d[2] * d[2])
+    }
+
+    /// β(r)² of step 4 for a squared range `range2`, m².
+    #[inline(always)]
+    fn bias_variance_at(&self, range2: f64) -> f64 {
         let k2 = self.spec.bias_per_km_m * self.spec.bias_per_km_m * 1e-6;
-        k2 * (d[0] * d[0] + d[1] * d[1] + d[2] * d[2])
+        k2 * range2
+    }
+
+    /// A lower bound on a level's term from lower bounds on tr E and det E and the half bias
+    /// variance h = β²/2 at the shortest possible range: M = E + h·I has tr M = tr E + 2h and
+    /// det M = det E + h·tr E + h², both increasing in tr E and det E.
+    #[inline(always)]
+    fn term_bound(&self, trace: f64, det: f64, half_bias2: f64) -> f64 {
+        let h = half_bias2;
+        self.term(trace + 2.0 * h, det + h * trace + h * h)
     }
 
     #[inline(always)]
@@ -325,7 +341,8 @@ impl CostModel for EkfCost {
     ///   (the node's own distance for the first level below);
     /// - [`EigenFloor`]: whatever the ping directions.
     ///
-    /// R ≥ R(max(0, |a − c| − spread)) at each level (R grows with range), p_s ≤ 1 and |h| ≤ 1.
+    /// R ≥ R(max(0, |a − c| − spread)) at each level (R grows with range), p_s ≤ 1 and |h| ≤ 1;
+    /// the bias term of step 4 at that shortest range is added to both (`term_bound`).
     fn bound_rest(
         &self,
         k: usize,
@@ -347,11 +364,13 @@ impl CostModel for EkfCost {
         for (slot, b) in out.iter_mut().zip(below) {
             let turn_max = if before > b.turn { (b.turn / before) * (b.turn / before) } else { 1.0 };
             let los = [b.auv[0] - cna[0], b.auv[1] - cna[1], b.auv[2] - cna[2]];
-            let r_min = self.spec.range_noise.variance((norm(los) - b.spread).max(0.0));
+            let nearest = (norm(los) - b.spread).max(0.0);
+            let (r_min, half_bias2) =
+                (self.spec.range_noise.variance(nearest), 0.5 * self.bias_variance_at(nearest * nearest));
             before = (los[0] * los[0] + los[1] * los[1]).sqrt() - b.spread;
             let (trace, det) = turn.step(q, turn_max, r_min);
             let (eigen_trace, eigen_det) = eigen.step(q, r_min);
-            let term = self.term(trace, det).max(self.term(eigen_trace, eigen_det));
+            let term = self.term_bound(trace, det, half_bias2).max(self.term_bound(eigen_trace, eigen_det, half_bias2));
             *slot = self.combine(*slot, term);
         }
     }
