@@ -94,6 +94,10 @@ pub enum Command {
         /// With --tune: Nelder–Mead iterations at most.
         #[arg(long, default_value_t = 80)]
         tune_iters: u64,
+        /// With --tune: the search averages the dead-reckoning rows over blocks of this many
+        /// seconds and predicts in steps of that length (0: full rate); before/after are full rate.
+        #[arg(long, default_value_t = TuneOptions::default().dead_reckoning_block_s)]
+        tune_block_s: f64,
     },
 }
 
@@ -165,8 +169,13 @@ pub fn run_command(cmd: Command) -> Result<()> {
             tune,
             hold_out_every,
             tune_iters,
+            tune_block_s,
         } => {
-            let tune = tune.then_some(TuneOptions { hold_out_every, max_iters: tune_iters });
+            let tune = tune.then_some(TuneOptions {
+                hold_out_every,
+                max_iters: tune_iters,
+                dead_reckoning_block_s: tune_block_s,
+            });
             postprocess(&log, alog_map.as_deref(), config.as_deref(), &out, force, strict, allow_large, tune)
         }
         Command::Example { kind } => example(kind),

@@ -607,7 +607,7 @@ pub fn postprocess(entries: &[Entry], cfg: &PostConfig) -> Result<PostResult, Po
 
 /// Runs the post-processing EKF and the RTS smoother over general log rows.
 pub fn postprocess_rows(rows: &[LogRow], cfg: &PostConfig) -> Result<PostResult, PostError> {
-    run(rows, cfg, Pass { smooth: true, hold_out_every: 0 })
+    run(rows, cfg, Pass { smooth: true, hold_out_every: 0, prediction_step_s: None })
 }
 
 /// What one pass over a log computes.
@@ -617,6 +617,10 @@ pub(crate) struct Pass {
     pub smooth: bool,
     /// Leave every k-th range out of the filter and only predict it (0: use every range).
     pub hold_out_every: usize,
+    /// Longest prediction piece (s) instead of `auv.step_s`: the tuning's coarse steps over its
+    /// block-averaged dead reckoning. Q stays per `auv.step_s` (a step of h adds Q·h/step_s), so
+    /// the process noise means the same at any piece length.
+    pub prediction_step_s: Option<f64>,
 }
 
 /// One pass of the filter (and smoother) over the rows, processed in time order.
@@ -744,6 +748,7 @@ impl Run<'_> {
         let mut ranges = Vec::new();
         let mut truth_at: Vec<(usize, [f64; 2])> = Vec::new();
         let mut log_likelihood = 0.0;
+        let piece_s = self.pass.prediction_step_s.unwrap_or(cfg.auv.step_s);
         for (t, row) in events {
             // Across a silence longer than max_gap_s one prediction spans it: the history (and
             // memory) grows with the rows, never with the log's time span (issue 11 item 2).
@@ -755,7 +760,7 @@ impl Run<'_> {
             }
             // Dynamic step: predict to the event in pieces no longer than the nominal step.
             while t - f.ekf().t() > 1e-9 {
-                let to = (f.ekf().t() + cfg.auv.step_s).min(t);
+                let to = (f.ekf().t() + piece_s).min(t);
                 if !f.predict_to(to, yaw_rate) {
                     break;
                 }

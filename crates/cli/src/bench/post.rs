@@ -20,11 +20,14 @@ pub struct Args {
     /// Also time `postprocess --tune` (default options) on the same log.
     #[arg(long)]
     tune: bool,
+    /// With --tune: the search's dead-reckoning block (s; 0: full rate).
+    #[arg(long, default_value_t = TuneOptions::default().dead_reckoning_block_s)]
+    tune_block_s: f64,
     #[arg(long, default_value_t = 1)]
     seed: u64,
 }
 
-pub fn run(Args { hours, beacons, tune: with_tune, seed }: Args) -> Result<()> {
+pub fn run(Args { hours, beacons, tune: with_tune, tune_block_s, seed }: Args) -> Result<()> {
     let spec = SyntheticSpec { duration_s: hours * 3600.0, beacons, seed, ..SyntheticSpec::default() };
     let start = Instant::now();
     let rows = synthetic_log(&spec);
@@ -49,10 +52,14 @@ pub fn run(Args { hours, beacons, tune: with_tune, seed }: Args) -> Result<()> {
     drop(r);
     if with_tune {
         let start = Instant::now();
-        let t = tune(&rows, &cfg, &TuneOptions::default())?;
+        let opts = TuneOptions { dead_reckoning_block_s: tune_block_s, ..TuneOptions::default() };
+        let t = tune(&rows, &cfg, &opts)?;
         out["tune_seconds"] = json!(start.elapsed().as_secs_f64());
+        out["tune_block_s"] = json!(tune_block_s);
         out["tune_evaluations"] = json!(t.evaluations);
         out["tune_iterations"] = json!(t.iterations);
+        out["tuned"] = json!(t.after.values);
+        out["tune_log_likelihood_before_after"] = json!([t.before.log_likelihood, t.after.log_likelihood]);
     }
     println!("{}", serde_json::to_string_pretty(&out)?);
     Ok(())
