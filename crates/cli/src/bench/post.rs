@@ -3,11 +3,13 @@
 //! range every 15 s; with `--tune`, the tuning on it too. Peak memory: run under
 //! `/usr/bin/time -v` (generating the log is part of it; its rows are reported).
 
-use anyhow::Result;
+use anyhow::{Context, Result};
+use coopnav_nav::fieldlog::{write_field_log, FieldLog, TimeBase};
 use coopnav_nav::post::{postprocess_rows, PostConfig};
 use coopnav_nav::post_tune::{tune, TuneOptions};
 use coopnav_nav::synthetic::{synthetic_log, SyntheticSpec};
 use serde_json::json;
+use std::path::PathBuf;
 use std::time::Instant;
 
 #[derive(clap::Args)]
@@ -25,13 +27,25 @@ pub struct Args {
     tune_block_s: f64,
     #[arg(long, default_value_t = 1)]
     seed: u64,
+    /// Write the generated log to this file (version 2, relative time) and stop: the input of an
+    /// end-to-end `hbl postprocess` run, e.g. under `/usr/bin/time -v`.
+    #[arg(long)]
+    write_log: Option<PathBuf>,
 }
 
-pub fn run(Args { hours, beacons, tune: with_tune, tune_block_s, seed }: Args) -> Result<()> {
+pub fn run(Args { hours, beacons, tune: with_tune, tune_block_s, seed, write_log }: Args) -> Result<()> {
     let spec = SyntheticSpec { duration_s: hours * 3600.0, beacons, seed, ..SyntheticSpec::default() };
     let start = Instant::now();
     let rows = synthetic_log(&spec);
     let generate_s = start.elapsed().as_secs_f64();
+    if let Some(path) = write_log {
+        let file = std::fs::File::create(&path).with_context(|| format!("creating {}", path.display()))?;
+        let log = FieldLog { time: TimeBase::Relative, rows };
+        write_field_log(std::io::BufWriter::new(file), &log, None)
+            .with_context(|| format!("writing {}", path.display()))?;
+        println!("{}", json!({ "target": "post", "hours": hours, "rows": log.rows.len(), "wrote": path }));
+        return Ok(());
+    }
     let cfg = PostConfig::default();
     let start = Instant::now();
     let r = postprocess_rows(&rows, &cfg)?;
