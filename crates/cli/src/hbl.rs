@@ -388,7 +388,7 @@ fn postprocess(
     limits::check([work::postprocess_log(&log.display().to_string(), log_bytes)], allow_large)?;
     let field_log = if log.extension().is_some_and(|e| e == "alog") {
         let alog = coopnav_moos::read_alog_file(log)?;
-        let rows = alog_import::rows(&alog, &alog_import::mapping(alog_map)?, cfg.buoy_depth)
+        let rows = alog_import::rows(&alog, &alog_import::mapping(alog_map)?, cfg.buoy_depth, cfg.frame().as_ref())
             .with_context(|| format!("in {}", log.display()))?;
         FieldLog { time: TimeBase::Relative, rows }
     } else {
