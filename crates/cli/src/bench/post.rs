@@ -69,6 +69,9 @@ pub fn run(Args { hours, beacons, tune: with_tune, tune_block_s, seed, write_log
         let opts = TuneOptions { dead_reckoning_block_s: tune_block_s, ..TuneOptions::default() };
         let t = tune(&rows, &cfg, &opts)?;
         out["tune_seconds"] = json!(start.elapsed().as_secs_f64());
+        // The machine is shared: the 1-minute load average (Linux) beside the time.
+        let load = std::fs::read_to_string("/proc/loadavg").ok();
+        out["load_average_1m"] = json!(load.and_then(|l| l.split_whitespace().next()?.parse::<f64>().ok()));
         out["tune_block_s"] = json!(tune_block_s);
         out["tune_evaluations"] = json!(t.evaluations);
         out["tune_iterations"] = json!(t.iterations);
