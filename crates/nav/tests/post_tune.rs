@@ -10,18 +10,21 @@ use coopnav_nav::CurrentParams;
 
 /// Known noise far from the defaults (range σ 1.8 m, scale 1, bias 0): range σ 4 m, the speed
 /// log reading 4 % slow, the compass 3° off.
-#[test]
-fn tuning_recovers_the_noise_the_log_was_written_with() {
-    let spec = SyntheticSpec {
+fn known_noise(seed: u64) -> SyntheticSpec {
+    SyntheticSpec {
         duration_s: 3600.0,
         range_every_s: 10.0,
         range_sd_m: 4.0,
         speed_scale: 1.04,
         heading_bias_deg: 3.0,
-        seed: 5,
+        seed,
         ..SyntheticSpec::default()
-    };
-    let rows = synthetic_log(&spec);
+    }
+}
+
+#[test]
+fn tuning_recovers_the_noise_the_log_was_written_with() {
+    let rows = synthetic_log(&known_noise(5));
     let r = tune(&rows, &PostConfig::default(), &TuneOptions::default()).unwrap();
     let (b, a) = (r.before, r.after);
     eprintln!("{}", serde_json_like(&r));
@@ -43,16 +46,7 @@ fn tuning_recovers_the_noise_the_log_was_written_with() {
 /// where the likelihood is flat, so it is compared through the likelihood).
 #[test]
 fn block_averaged_search_agrees_with_the_full_rate_one() {
-    let spec = SyntheticSpec {
-        duration_s: 3600.0,
-        range_every_s: 10.0,
-        range_sd_m: 4.0,
-        speed_scale: 1.04,
-        heading_bias_deg: 3.0,
-        seed: 6,
-        ..SyntheticSpec::default()
-    };
-    let rows = synthetic_log(&spec);
+    let rows = synthetic_log(&known_noise(6));
     let tuned = |block: f64| {
         let opts = TuneOptions { dead_reckoning_block_s: block, ..TuneOptions::default() };
         tune(&rows, &PostConfig::default(), &opts).unwrap().after
