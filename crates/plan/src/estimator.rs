@@ -12,19 +12,40 @@
 //! 3. The packet arrives with probability p_s(r) (the acoustic link's model, passed in as a
 //!    [`LinkModel`]); the expected posterior is E = (1 − p_s)·P̃ + p_s·P⁺
 //!    = P̃ − p_s·P̃hhᵀP̃ / (hᵀP̃h + R).
-//! 4. Level cost over the N AUVs ([`Aggregate`]): Σ tr E (default), max tr E (worst AUV),
-//!    Σ ln(1 + det E / 1 m⁴) (log-det, shifted by one so costs stay ≥ 0 as the penalties and the
-//!    search require), or Σ √tr E (the sum of 1-σ, m). The path cost is the sum of the level costs, as for Hudson's model.
+//! 4. Range bias the covariance does not see (issue 10 item 3): a sound-speed error δc, the same
+//!    for every ping, makes a range over r off by b = r·δc/c. The filter takes it for noise; after
+//!    a ping its estimate moves along h until the range fits, so its radial error becomes
+//!    g·b + (1 − g)·(the previous radial error), g = hᵀP̃h/(hᵀP̃h + R) close to 1 whenever the
+//!    growth between pings dwarfs R (the closed loop: qτ ≈ 15 m² against R ≈ 1 m²). Repeated pings
+//!    therefore leave a radial error of about the newest range's bias, and a lost ping keeps the
+//!    previous one (taken at nearly the same range: the CNA moves s·τ per level). With the CNA's
+//!    belief δc/c ~ N(0, (k_b/1000)²) (`bias_per_km_m` = k_b, from the configured sound-speed
+//!    uncertainty, never the true sound speed), the expected squared true error is about
+//!    M = E + β(r)²/2·I, β(r) = k_b·r/1000 (isotropic: the bias's direction turns with the line of
+//!    sight). k_b = 0 is the covariance alone.
+//! 5. Level cost over the N AUVs ([`Aggregate`]) of M: Σ tr M (default), max tr M (worst AUV),
+//!    Σ ln(1 + det M / 1 m⁴) (log-det, shifted by one so costs stay ≥ 0 as the penalties and the
+//!    search require), or Σ √tr M (the sum of 1-σ, m). The path cost is the sum of the level costs,
+//!    as for Hudson's model.
+//! 6. Cost-to-go beyond the horizon (`CostModel::terminal_levels`): at a leaf the CNA would go on
+//!    pinging; holding the leaf's range, each further level costs about the leaf's own term (the
+//!    bias part is set by the range alone, and the covariance returns to about the same trace
+//!    after every ping while the line of sight turns), so H more levels add H·(leaf term) per AUV
+//!    (`terminal_levels` = H). It rewards ending the horizon close to the AUVs, whose benefit the
+//!    short horizon otherwise cannot see. The last level's terms count 1 + H times, and so do its
+//!    bounds (a fixed factor ≥ 1 commutes with sum and max); the bias term of step 4 is ≥ 0 and
+//!    only increases every term, so the covariance bounds below stay valid lower bounds for M;
+//!    they add it at the shortest range the CNA can be at (`EkfCost::term_bound`).
 //!
 //! Lower bound for branch-and-bound (the levels below a node; derivation in [`EkfCost::bound_rest`]):
 //! by operator convexity of the inverse, E ⪰ (P̃⁻¹ + p_s·hhᵀ/R)⁻¹ ⪰ (P̃⁻¹ + hhᵀ/R_min)⁻¹, so the
-//! information Y = E⁻¹ is bounded above by a diagonal matrix in the frame of the node's line of
-//! sight, propagated level by level; the ping directions below the node lie in a cone whose
-//! half-angle is set by how far the line of sight can move (AUV motion plus CNA step per level).
+//! information Y = E⁻¹ is bounded above by a diagonal matrix in the frame of the last ping's
+//! line of sight, propagated level by level; each level's ping direction turns from the last by
+//! at most asin(reach / distance) (AUV motion plus CNA step against how close the CNA can be).
 //! Invented parameters (R's defaults) are marked; digest: hudson §2.2 (the model it replaces),
 //! gill §3 (the filter it models).
 
-use crate::cost_model::CostModel;
+use crate::cost_model::{norm, Below, CostModel};
 use crate::PlanError;
 use coopnav_core::validation::{CheckFields, Problems};
 use serde::{Deserialize, Serialize};
@@ -90,12 +111,20 @@ pub struct EstimatorSpec {
     pub aggregate: Aggregate,
     #[serde(default)]
     pub range_noise: RangeNoise,
+    /// k_b of step 4: the 1-σ range bias the CNA assumes, m per km of range (≥ 0; 0 = none).
+    #[serde(default)]
+    pub bias_per_km_m: f64,
+    /// H of step 6: levels of cost-to-go counted beyond the horizon at each leaf (≥ 0; 0 = none).
+    #[serde(default)]
+    pub terminal_levels: f64,
 }
 
 impl CheckFields for EstimatorSpec {
     fn check_fields(&self, prefix: &str, p: &mut Problems) {
         p.positive(&format!("{prefix}range_noise.sigma_m"), self.range_noise.sigma_m);
         p.non_negative(&format!("{prefix}range_noise.per_km_m"), self.range_noise.per_km_m);
+        p.non_negative(&format!("{prefix}bias_per_km_m"), self.bias_per_km_m);
+        p.non_negative(&format!("{prefix}terminal_levels"), self.terminal_levels);
     }
 }
 
@@ -209,21 +238,11 @@ pub fn expected_posterior(
     [a, b, c]
 }
 
-/// How much the tangential information is inflated to make the node's information diagonal in
-/// its line-of-sight frame (any value > 0 keeps the bound valid; small keeps the tangential
-/// part, which dominates, tight).
-const TANGENTIAL_SLACK: f64 = 0.02;
-
-/// How many cone chains `EkfCost::bound_rest` runs side by side, one per κ of [`cone_kappas`].
-const CONE_CHAINS: usize = 4;
-
-/// The κ of each cone chain when the line of sight may have turned by sin δ ≤ s: √s, 1, 1/√s and
-/// 1/s (s is kept above 1e-12 so they stay finite).
-#[inline(always)]
-fn cone_kappas(s: f64) -> [f64; CONE_CHAINS] {
-    let root = s.max(1e-12).sqrt();
-    [root, 1.0, 1.0 / root, 1.0 / (root * root)]
-}
+/// How much the tangential information is inflated to make the information diagonal in the
+/// line-of-sight frame (any value > 0 keeps the bound valid; small keeps the tangential part,
+/// which dominates, tight). Measured on the N = 5, A = 7 workloads: 0.005 expands fewer nodes
+/// than 0.001 or 0.02.
+const TANGENTIAL_SLACK: f64 = 0.005;
 
 /// The estimator-aware model of one decision.
 pub(crate) struct EkfCost {
@@ -241,6 +260,29 @@ impl EkfCost {
         Ok(EkfCost { spec, q_tau: estimates.iter().map(|e| e.process_noise * tau).collect(), link })
     }
 
+    /// β(r)² of step 4 for a ping from `cna` to the AUV at `auv`, m².
+    #[inline(always)]
+    fn bias_variance(&self, cna: [f64; 3], auv: [f64; 3]) -> f64 {
+        let d = [auv[0] - cna[0], auv[1] - cna[1], auv[2] - cna[2]];
+        self.bias_variance_at(d[0] * d[0] + d[1] * d[1] + d[2] * d[2])
+    }
+
+    /// β(r)² of step 4 for a squared range `range2`, m².
+    #[inline(always)]
+    fn bias_variance_at(&self, range2: f64) -> f64 {
+        let k2 = self.spec.bias_per_km_m * self.spec.bias_per_km_m * 1e-6;
+        k2 * range2
+    }
+
+    /// A lower bound on a level's term from lower bounds on tr E and det E and the half bias
+    /// variance h = β²/2 at the shortest possible range: M = E + h·I has tr M = tr E + 2h and
+    /// det M = det E + h·tr E + h², both increasing in tr E and det E.
+    #[inline(always)]
+    fn term_bound(&self, trace: f64, det: f64, half_bias2: f64) -> f64 {
+        let h = half_bias2;
+        self.term(trace + 2.0 * h, det + h * trace + h * h)
+    }
+
     #[inline(always)]
     fn term(&self, trace: f64, det: f64) -> f64 {
         match self.spec.aggregate {
@@ -255,12 +297,20 @@ impl EkfCost {
 impl CostModel for EkfCost {
     type State = [f64; 3];
 
+    /// Steps 1–5 of the module's derivation.
     #[inline(always)]
     fn update(&self, k: usize, parent: &[f64; 3], cna: [f64; 3], auv: [f64; 3]) -> ([f64; 3], f64) {
         let link = &self.link;
         let [a, b, c] =
             expected_posterior(parent, self.q_tau[k], cna, auv, &self.spec.range_noise, |r| link.success(r));
-        ([a, b, c], self.term(a + c, a * c - b * b))
+        let half_bias2 = 0.5 * self.bias_variance(cna, auv);
+        let (ma, mc) = (a + half_bias2, c + half_bias2);
+        ([a, b, c], self.term(ma + mc, ma * mc - b * b))
+    }
+
+    /// Step 6: H levels at the leaf's term.
+    fn terminal_levels(&self) -> f64 {
+        self.spec.terminal_levels
     }
 
     #[inline(always)]
@@ -271,50 +321,43 @@ impl CostModel for EkfCost {
         }
     }
 
-    /// In the frame (u, t) of the node's horizontal line of sight u (t ⟂ u):
-    /// - the node's information Y = P⁻¹ ⪯ diag(Y_uu + Y_ut²/(ρ·Y_tt), (1 + ρ)·Y_tt) (ρ > 0:
-    ///   diag − Y = [[Y_ut²/(ρY_tt), −Y_ut], [−Y_ut, ρY_tt]] has zero determinant and is ⪰ 0);
-    /// - prediction: Y ⪯ D ⇒ (Y⁻¹ + qτI)⁻¹ ⪯ (D⁻¹ + qτI)⁻¹, diagonal;
-    /// - ping: after m levels the line of sight has moved by at most Δ = Σ reach, so its direction
-    ///   is within sin δ ≤ s = Δ/D_h of u (D_h the node's horizontal distance; s = 1 when Δ ≥ D_h),
-    ///   and hhᵀ ⪯ ĥĥᵀ = [[cos², cos·sin], [cos·sin, sin²]] ⪯ diag(1 + κ, s²(1 + 1/κ)) for any κ > 0
-    ///   (the same determinant argument). Every κ gives a valid chain, and the best κ depends on
-    ///   how much the radial part matters against the tangential one (far AUVs with noisy ranges:
-    ///   small κ; nearer ones with precise ranges: large κ), so [`CONE_CHAINS`] chains run side by
-    ///   side with κ = √s, 1, 1/√s and 1/s ([`cone_kappas`]) and each level takes the largest
-    ///   bound. Or ĥĥᵀ ⪯ I, whichever has the smaller tangential entry; R ≥ R(max(0, D − Δ)) with
-    ///   D the node's slant distance (R grows with range) and p_s ≤ 1;
-    /// - E ⪰ D⁻¹ then gives tr E ≥ tr D⁻¹ and det E ≥ det D⁻¹.
+    /// Two chains of lower bounds, level by level; each level takes the larger:
+    /// - [`TurnFloor`]: P ⪰ diag(radial, tangential) in the frame of the last ping's horizontal
+    ///   line of sight, starting from the node's (`diagonal_floor`), the line of sight turning per
+    ///   level by at most asin(turn / D_h) where D_h ≥ |(a − c)_h| − spread at the level above
+    ///   (the node's own distance for the first level below);
+    /// - [`EigenFloor`]: whatever the ping directions.
+    ///
+    /// R ≥ R(max(0, |a − c| − spread)) at each level (R grows with range), p_s ≤ 1 and |h| ≤ 1;
+    /// the bias term of step 4 at that shortest range is added to both (`term_bound`).
     fn bound_rest(
         &self,
         k: usize,
         state: &[f64; 3],
         cna: [f64; 3],
         auv: [f64; 3],
-        reach: impl Iterator<Item = f64>,
+        below: impl Iterator<Item = Below>,
         out: &mut [f64],
     ) {
         let q = self.q_tau[k];
-        let (dx, dy, dz) = (auv[0] - cna[0], auv[1] - cna[1], auv[2] - cna[2]);
+        let (dx, dy) = (auv[0] - cna[0], auv[1] - cna[1]);
         let horizontal = (dx * dx + dy * dy).sqrt();
-        let slant = (horizontal * horizontal + dz * dz).sqrt();
         let u = if horizontal > 1e-9 { [dx / horizontal, dy / horizontal] } else { [1.0, 0.0] };
-        let mut chains = [diagonal_floor(state, u); CONE_CHAINS];
+        let (radial, tangential) = diagonal_floor(state, u);
+        let mut turn = TurnFloor { radial, tangential };
         let mut eigen = EigenFloor::of(state);
-        let mut moved = 0.0;
-        for (slot, r) in out.iter_mut().zip(reach) {
-            moved += r;
-            let s = if horizontal > moved { moved / horizontal } else { 1.0 };
-            let r_min = self.spec.range_noise.variance((slant - moved).max(0.0));
-            let (trace, det) = eigen.step(q, r_min);
-            let mut term = self.term(trace, det);
-            for ((v_u, v_t), kappa) in chains.iter_mut().zip(cone_kappas(s)) {
-                let tangential = s * s * (1.0 + 1.0 / kappa);
-                let (add_u, add_t) = if tangential < 1.0 { (1.0 + kappa, tangential) } else { (1.0, 1.0) };
-                *v_u = 1.0 / (1.0 / (*v_u + q) + add_u / r_min);
-                *v_t = 1.0 / (1.0 / (*v_t + q) + add_t / r_min);
-                term = term.max(self.term(*v_u + *v_t, *v_u * *v_t));
-            }
+        // The horizontal line of sight is at least `before` long before each level's move.
+        let mut before = horizontal;
+        for (slot, b) in out.iter_mut().zip(below) {
+            let turn_max = if before > b.turn { (b.turn / before) * (b.turn / before) } else { 1.0 };
+            let los = [b.auv[0] - cna[0], b.auv[1] - cna[1], b.auv[2] - cna[2]];
+            let nearest = (norm(los) - b.spread).max(0.0);
+            let (r_min, half_bias2) =
+                (self.spec.range_noise.variance(nearest), 0.5 * self.bias_variance_at(nearest * nearest));
+            before = (los[0] * los[0] + los[1] * los[1]).sqrt() - b.spread;
+            let (trace, det) = turn.step(q, turn_max, r_min);
+            let (eigen_trace, eigen_det) = eigen.step(q, r_min);
+            let term = self.term_bound(trace, det, half_bias2).max(self.term_bound(eigen_trace, eigen_det, half_bias2));
             *slot = self.combine(*slot, term);
         }
     }
@@ -337,8 +380,10 @@ impl CostModel for EkfCost {
     }
 }
 
-/// Lower bounds (v_u, v_t) with P ⪰ diag(v_u, v_t) in the frame (u, t = u rotated +90°), from
-/// the diagonal upper bound of P⁻¹ (see `bound_rest`). A singular P gets (0, 0).
+/// Lower bounds (v_u, v_t) with P ⪰ diag(v_u, v_t) in the frame (u, t = u rotated +90°): the
+/// information Y = P⁻¹ ⪯ diag(Y_uu + Y_ut²/(ρ·Y_tt), (1 + ρ)·Y_tt) for ρ > 0 (the difference
+/// [[Y_ut²/(ρY_tt), −Y_ut], [−Y_ut, ρY_tt]] has zero determinant and is ⪰ 0), ρ =
+/// [`TANGENTIAL_SLACK`]. A singular P gets (0, 0).
 fn diagonal_floor(p: &[f64; 3], u: [f64; 2]) -> (f64, f64) {
     let [a, b, c] = *p;
     let det = a * c - b * b;
@@ -392,6 +437,58 @@ impl EigenFloor {
     }
 }
 
+/// Lower bounds (radial, tangential) with P ⪰ diag(radial, tangential) in the frame of the last
+/// ping's horizontal direction, whatever the path: the bound that follows how fast the line of
+/// sight can turn. One level, with D = diag(radial + qτ, tangential + qτ) = diag(1/α, 1/β):
+/// - the ping's direction turns from the last by Δ with sin²Δ ≤ T (the line of sight moves by at
+///   most the reach r while at least D_h long: T = (r/D_h)², or 1);
+/// - in the frame (h, n) of the new ping, E ⪰ Y⁻¹ with Y = D⁻¹ rotated by Δ plus diag(ι, 0),
+///   ι = 1/R_min (p_s ≤ 1, |h| ≤ 1, R ≥ R_min); with t = sin²Δ: Y_hh = α − t(α − β) + ι,
+///   Y_nn = β + t(α − β), Y_hn² = t(1 − t)(α − β)², so tr Y = α + β + ι and
+///   det Y = αβ + ι·Y_nn(t);
+/// - tr E ≥ tr Y / det Y and det E ≥ 1 / det Y are smallest where Y_nn is largest: t = T when
+///   α > β, else t = 0;
+/// - Y ⪯ diag(Y_hh + Y_hn²/(ρ·Y_nn), (1 + ρ)·Y_nn) (ρ = [`TANGENTIAL_SLACK`], as in
+///   `diagonal_floor`), and over t ≤ T: Y_hh ≤ α + ι + T·max(β − α, 0), Y_nn ≤ β + T·max(α − β, 0)
+///   and Y_hn²/Y_nn = t(1 − t)(α − β)²/(β + t(α − β)) ≤ T(α − β)²/(β + T(α − β)) (increasing in
+///   t), which gives the next level's (radial, tangential) in the new ping's frame.
+///
+/// Near AUVs gain most: their line of sight may leave any cone within a few levels, but it still
+/// turns at most asin(r/D_h) per level, so the tangential variance keeps growing.
+#[derive(Debug, Clone, Copy)]
+struct TurnFloor {
+    radial: f64,
+    tangential: f64,
+}
+
+impl TurnFloor {
+    /// Advances one level with sin²Δ ≤ `turn_max`; returns the bounds on (tr E, det E).
+    #[inline(always)]
+    fn step(&mut self, q_tau: f64, turn_max: f64, r_min: f64) -> (f64, f64) {
+        let (a, b) = (self.radial + q_tau, self.tangential + q_tau);
+        if !(a > 0.0 && b > 0.0) {
+            // A singular floor: nothing is known beyond E ⪰ 0.
+            *self = TurnFloor { radial: 0.0, tangential: 0.0 };
+            return (0.0, 0.0);
+        }
+        let (alpha, beta, iota) = (1.0 / a, 1.0 / b, 1.0 / r_min);
+        let excess = alpha - beta;
+        // Y_nn at the largest turn (≥ min(α, β) > 0), and its largest value over the turns.
+        let y_nn_turned = beta + turn_max * excess;
+        let y_nn_max = y_nn_turned.max(beta);
+        let y_hh_max = alpha + iota + turn_max * (-excess).max(0.0);
+        // radial = 1/(Y_hh,max + T(α − β)²/(ρ·Y_nn(T))) and tangential = 1/((1 + ρ)·Y_nn,max), both
+        // from one division (it is on the chain's critical path).
+        let radial_den = TANGENTIAL_SLACK * y_nn_turned * y_hh_max + turn_max * excess * excess;
+        let tangential_den = (1.0 + TANGENTIAL_SLACK) * y_nn_max;
+        let inv = 1.0 / (radial_den * tangential_den);
+        self.radial = TANGENTIAL_SLACK * y_nn_turned * tangential_den * inv;
+        self.tangential = radial_den * inv;
+        let inv_det = 1.0 / (alpha * beta + iota * y_nn_max);
+        ((alpha + beta + iota) * inv_det, inv_det)
+    }
+}
+
 /// Eigenvalues of the symmetric 2×2 [[a, b], [b, c]], larger first, clamped at 0.
 fn eigenvalues(p: &[f64; 3]) -> (f64, f64) {
     let [a, b, c] = *p;
@@ -405,8 +502,13 @@ mod tests {
     use super::*;
     use proptest::prelude::*;
 
+    fn biased(aggregate: Aggregate, q_tau: Vec<f64>, bias_per_km_m: f64) -> EkfCost {
+        let spec = EstimatorSpec { aggregate, bias_per_km_m, ..EstimatorSpec::default() };
+        EkfCost { spec, q_tau, link: LinkTable::perfect() }
+    }
+
     fn model(aggregate: Aggregate, q_tau: Vec<f64>, link: LinkTable) -> EkfCost {
-        EkfCost { spec: EstimatorSpec { aggregate, range_noise: RangeNoise::default() }, q_tau, link }
+        EkfCost { spec: EstimatorSpec { aggregate, ..EstimatorSpec::default() }, q_tau, link }
     }
 
     #[test]
@@ -445,6 +547,41 @@ mod tests {
         let half =
             model(Aggregate::TraceSum, vec![0.5], LinkTable::sample(&Half).unwrap()).update(0, &start, cna, auv).1;
         assert!((half - 0.5 * (full + lost.1)).abs() < 1e-12);
+    }
+
+    #[test]
+    fn the_range_bias_adds_beta_squared_to_the_trace_and_grows_with_range() {
+        // k_b = 2 m/km: β(500 m)² = 1 m², β(1000 m)² = 4 m²; the covariance itself is unchanged.
+        let (plain, bias) = (biased(Aggregate::TraceSum, vec![0.0], 0.0), biased(Aggregate::TraceSum, vec![0.0], 2.0));
+        let start = [4.0, 1.0, 2.0];
+        for (auv, beta2) in [([300.0, 400.0, 0.0], 1.0), ([600.0, 800.0, 0.0], 4.0)] {
+            let (p0, c0) = plain.update(0, &start, [0.0; 3], auv);
+            let (p1, c1) = bias.update(0, &start, [0.0; 3], auv);
+            assert_eq!(p0, p1);
+            assert!((c1 - c0 - beta2).abs() < 1e-12, "{c1} - {c0} vs {beta2}");
+        }
+        // Log-det: det(E + β²/2·I) = det E + β²/2·tr E + β⁴/4.
+        let (plain, bias) = (biased(Aggregate::LogDet, vec![0.0], 0.0), biased(Aggregate::LogDet, vec![0.0], 2.0));
+        let (p, c0) = plain.update(0, &start, [0.0; 3], [600.0, 800.0, 0.0]);
+        let det = p[0] * p[2] - p[1] * p[1];
+        let want = (det + 2.0 * (p[0] + p[2]) + 4.0).ln_1p();
+        assert!((bias.update(0, &start, [0.0; 3], [600.0, 800.0, 0.0]).1 - want).abs() < 1e-12);
+        assert!(want > c0);
+    }
+
+    #[test]
+    fn the_terminal_cost_is_h_levels_and_settings_are_checked() {
+        let spec = EstimatorSpec { terminal_levels: 3.0, ..EstimatorSpec::default() };
+        let m = EkfCost { spec, q_tau: vec![0.0], link: LinkTable::perfect() };
+        assert_eq!(m.terminal_levels(), 3.0);
+        assert_eq!(model(Aggregate::TraceSum, vec![0.0], LinkTable::perfect()).terminal_levels(), 0.0);
+        for bad in [
+            EstimatorSpec { terminal_levels: -1.0, ..EstimatorSpec::default() },
+            EstimatorSpec { bias_per_km_m: f64::NAN, ..EstimatorSpec::default() },
+        ] {
+            let e = bad.validate("planner.cost.").unwrap_err().to_string();
+            assert!(e.contains("planner.cost.") && e.contains(">= 0"), "{e}");
+        }
     }
 
     #[test]
@@ -497,37 +634,41 @@ mod tests {
         #![proptest_config(ProptestConfig { cases: 2000, ..ProptestConfig::default() })]
 
         /// The bound below a node never exceeds the cost of any path below it: the CNA takes
-        /// random steps of at most `step` while the AUV moves on a line, and the levels' costs
-        /// are compared with `bound_rest` given the same reaches.
+        /// random steps of at most `step` (or, with `circle`, full steps across the line of
+        /// sight, turning it as fast as it can) while the AUV moves on a line, and the levels'
+        /// costs are compared with `bound_rest` given the same reaches.
         #[test]
         fn the_bound_below_a_node_is_never_above_a_real_path(
             ve in 0.01f64..50.0, vn in 0.01f64..50.0, rho in -0.99f64..0.99, q in 0.0f64..3.0,
-            agg in 0usize..3, auv0 in (-800.0f64..800.0, -800.0f64..800.0, 0.0f64..150.0),
+            agg in 0usize..4, bias in prop_oneof![Just(0.0), 0.0f64..10.0], auv0 in (-800.0f64..800.0, -800.0f64..800.0, 0.0f64..150.0),
             vel in (-3.0f64..3.0, -3.0f64..3.0), step in 1.0f64..60.0,
-            moves in prop::collection::vec((-3.2f64..3.2, 0.0f64..1.0, -1.0f64..1.0), 1..8),
+            moves in prop::collection::vec((-3.2f64..3.2, 0.0f64..1.0, -1.0f64..1.0), 1..8), circle in any::<bool>(),
         ) {
-            let aggregate = [Aggregate::TraceSum, Aggregate::WorstAuv, Aggregate::LogDet][agg];
-            let m = model(aggregate, vec![q], LinkTable::perfect());
+            let aggregate = [Aggregate::TraceSum, Aggregate::WorstAuv, Aggregate::LogDet, Aggregate::SigmaSum][agg];
+            let m = biased(aggregate, vec![q], bias);
             let p0 = [ve, rho * (ve * vn).sqrt(), vn];
             let mut cna = [0.0, 0.0, 20.0];
             let mut auv = [auv0.0, auv0.1, auv0.2];
             let mut bound = vec![0.0; moves.len()];
-            let mut reach = Vec::new();
+            let mut below = Vec::new();
             let mut actual = Vec::new();
             let (node_cna, node_auv) = (cna, auv);
             let mut p = p0;
             for &(heading, frac, dz) in &moves {
+                let across = (auv[1] - cna[1]).atan2(auv[0] - cna[0]) + std::f64::consts::FRAC_PI_2;
+                let (heading, frac, dz) = if circle { (across + 0.1 * heading, 1.0, 0.0) } else { (heading, frac, dz) };
                 let len = step * frac;
                 let dz = dz * len;
                 let horizontal = (len * len - dz * dz).max(0.0).sqrt();
                 cna = [cna[0] + horizontal * heading.cos(), cna[1] + horizontal * heading.sin(), cna[2] + dz];
                 auv = [auv[0] + vel.0, auv[1] + vel.1, auv[2]];
-                reach.push((vel.0 * vel.0 + vel.1 * vel.1).sqrt() + step);
+                let (turn, spread) = ((vel.0 * vel.0 + vel.1 * vel.1).sqrt() + step, (below.len() + 1) as f64 * step);
+                below.push(Below { auv, spread, turn });
                 let (next, term) = m.update(0, &p, cna, auv);
                 p = next;
                 actual.push(term);
             }
-            m.bound_rest(0, &p0, node_cna, node_auv, reach.into_iter(), &mut bound);
+            m.bound_rest(0, &p0, node_cna, node_auv, below.into_iter(), &mut bound);
             for (j, (b, a)) in bound.iter().zip(&actual).enumerate() {
                 prop_assert!(*b <= *a * (1.0 + 1e-9) + 1e-12, "level {}: bound {} above cost {}", j, b, a);
             }

@@ -1,6 +1,7 @@
 //! The full `closed-loop-vs-baselines` evaluation with a chosen number of runs per cell, writing
 //! the table and the plot of the paired differences:
-//! `cargo run --release -p coopnav-sim --example closed_loop_eval -- RUNS SEED OUT_DIR`.
+//! `cargo run --release -p coopnav-sim --example closed_loop_eval -- RUNS SEED OUT_DIR [SCENARIO]`
+//! (SCENARIO: `current` or `sloping-auv-cna`, one of them only; default both).
 
 use coopnav_sim::experiments::closed_loop::{difference_svg, evaluate, setup, Cell};
 use coopnav_sim::experiments::{ReproOptions, Size};
@@ -8,11 +9,17 @@ use std::time::Instant;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args: Vec<String> = std::env::args().skip(1).collect();
-    let [runs, seed, out] = args.as_slice() else {
-        return Err("usage: closed_loop_eval RUNS SEED OUT_DIR".into());
+    let (runs, seed, out, only) = match args.as_slice() {
+        [runs, seed, out] => (runs, seed, out, None),
+        [runs, seed, out, only] => (runs, seed, out, Some(only.as_str())),
+        _ => return Err("usage: closed_loop_eval RUNS SEED OUT_DIR [SCENARIO]".into()),
     };
     let (runs, seed): (usize, u64) = (runs.parse()?, seed.parse()?);
-    let (settings, _, duration) = setup(&ReproOptions { size: Size::Full, seed })?;
+    let (mut settings, _, duration) = setup(&ReproOptions { size: Size::Full, seed })?;
+    settings.retain(|s| only.is_none_or(|name| s.name == name));
+    if settings.is_empty() {
+        return Err(format!("no scenario {only:?} (allowed: current, sloping-auv-cna)").into());
+    }
     let start = Instant::now();
     let report = evaluate(&settings, runs, duration, seed, &|_| {})?;
     let wall = start.elapsed().as_secs_f64();

@@ -11,7 +11,8 @@ use crate::predeploy::scenario::Mission;
 use coopnav_acomms::Receiver;
 use coopnav_core::{CompassDeg, Heading, Vec3};
 use coopnav_plan::{
-    AuvEstimate, CnaPose, CostSpec, Deadline, EstimatorSpec, LinkTable, LookAheadPlanner, PlanError, RangeNoise,
+    AuvEstimate, CnaPose, CostSpec, Deadline, EstimatorSpec, LinkTable, LookAheadPlanner, PenaltyCase, PlanError,
+    RangeNoise,
 };
 use thiserror::Error;
 
@@ -127,7 +128,16 @@ fn build(name: &str, sc: &Scenario, planned: Option<&TimedWaypoints>) -> Result<
             let (start, noise) = filter_model(sc);
             let mut cfg = sc.planner_config();
             if estimator {
-                cfg.cost = CostSpec::Estimator(EstimatorSpec { range_noise: noise, aggregate: p.estimator_aggregate });
+                cfg.cost = CostSpec::Estimator(EstimatorSpec {
+                    range_noise: noise,
+                    aggregate: p.estimator_aggregate,
+                    bias_per_km_m: p.estimator_bias_per_km.unwrap_or(noise.per_km_m),
+                    terminal_levels: p.estimator_terminal_levels,
+                });
+                if let Some(case) = p.estimator_penalty_case.as_deref().and_then(PenaltyCase::from_id) {
+                    cfg.penalties = case.penalties();
+                }
+                cfg.look_ahead = p.estimator_look_ahead.unwrap_or(cfg.look_ahead);
             }
             let policy =
                 PlannerPolicy::new(cfg, n, p.sigma0, p.eps0, likelihood, Some((start, noise))).map_err(plan_err)?;

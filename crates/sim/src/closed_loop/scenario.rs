@@ -270,6 +270,21 @@ pub struct Planner {
     /// How `planner-estimator` joins the AUVs' covariances into a level's cost.
     #[serde(default)]
     pub estimator_aggregate: Aggregate,
+    /// The range bias `planner-estimator` assumes, m of 1-σ per km of range (coopnav_plan
+    /// estimator step 4); default: the filters' configured sound-speed uncertainty, 1000·σ_c/c.
+    #[serde(default)]
+    pub estimator_bias_per_km: Option<f64>,
+    /// Levels of cost-to-go `planner-estimator` counts at each leaf (estimator step 6; 0 = none).
+    #[serde(default)]
+    pub estimator_terminal_levels: f64,
+    /// Table 5.2 penalty case of `planner-estimator` (default: `penalty_case`). Its cost already
+    /// prices what Hudson's distance limits stand for (a far ping is lost and noisy, one from
+    /// overhead teaches nothing horizontally), so case "2" (no penalties) is an option.
+    #[serde(default)]
+    pub estimator_penalty_case: Option<String>,
+    /// L of `planner-estimator` (default: `look_ahead`).
+    #[serde(default)]
+    pub estimator_look_ahead: Option<usize>,
 }
 
 fn default_case() -> String {
@@ -466,12 +481,19 @@ impl Scenario {
         let pl = &self.planner;
         p.positive("planner.sigma0", pl.sigma0);
         p.non_negative("planner.eps0", pl.eps0);
+        p.non_negative("planner.estimator_terminal_levels", pl.estimator_terminal_levels);
+        if let Some(k) = pl.estimator_bias_per_km {
+            p.non_negative("planner.estimator_bias_per_km", k);
+        }
         if pl.start_after_reports == 0 {
             p.push("planner.start_after_reports", "0", ">= 1");
         }
+        let ids = || PenaltyCase::ALL.iter().map(|c| c.id()).collect::<Vec<&str>>().join(", ");
+        if let Some(case) = pl.estimator_penalty_case.as_ref().filter(|c| PenaltyCase::from_id(c).is_none()) {
+            p.push("planner.estimator_penalty_case", case.clone(), ids());
+        }
         if PenaltyCase::from_id(&pl.penalty_case).is_none() {
-            let ids: Vec<&str> = PenaltyCase::ALL.iter().map(|c| c.id()).collect();
-            p.push("planner.penalty_case", pl.penalty_case.clone(), ids.join(", "));
+            p.push("planner.penalty_case", pl.penalty_case.clone(), ids());
         } else if let Err(e) = self.planner_config().validate() {
             match e {
                 PlanError::Invalid(found) => {

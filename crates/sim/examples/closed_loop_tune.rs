@@ -1,0 +1,51 @@
+//! Tuning runs of `closed-loop-vs-baselines` on the TUNING seed only (the evaluation refuses it):
+//! one cell, chosen policies, optional scenario overrides, the comparison table printed.
+//! `cargo run --release -p coopnav-sim --example closed_loop_tune -- RUNS current|sloping-auv-cna N
+//! POLICY,POLICY,... [DURATION_S|-] [section.key=TOML_VALUE ...]`
+//! e.g. `... -- 6 current 3 planner-estimator,centroid,trail - planner.look_ahead=6`.
+
+use coopnav_sim::closed_loop::{comparison_table, monte_carlo, Scenario};
+use coopnav_sim::experiments::closed_loop::{setup, TUNING_SEED};
+use coopnav_sim::experiments::{ReproOptions, Size};
+use std::time::Instant;
+
+type Error = Box<dyn std::error::Error>;
+
+fn main() -> Result<(), Error> {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let [runs, scenario, n, policies, rest @ ..] = args.as_slice() else {
+        return Err("usage: closed_loop_tune RUNS SCENARIO N POLICIES [DURATION_S|-] [section.key=VALUE ...]".into());
+    };
+    let (runs, n): (usize, usize) = (runs.parse()?, n.parse()?);
+    let duration = match rest.first().map(String::as_str) {
+        None | Some("-") => None,
+        Some(d) => Some(d.parse::<f64>()?),
+    };
+    let (settings, _, _) = setup(&ReproOptions { size: Size::Full, seed: TUNING_SEED + 1 })?;
+    let setting =
+        settings.iter().find(|s| s.name == scenario.as_str()).ok_or_else(|| format!("no scenario {scenario}"))?;
+    let mut sc = setting.scenario(n, TUNING_SEED, duration);
+    for assignment in rest.iter().skip(1) {
+        sc = overridden(&sc, assignment)?;
+    }
+    let policies: Vec<String> = policies.split(',').map(str::to_string).collect();
+    let start = Instant::now();
+    let c = monte_carlo(&sc, &policies, runs, &|_| {})?;
+    print!("{}", comparison_table(&c));
+    println!("wall time {:.1} s", start.elapsed().as_secs_f64());
+    Ok(())
+}
+
+/// `sc` with `section.key = value` (a TOML value) set.
+fn overridden(sc: &Scenario, assignment: &str) -> Result<Scenario, Error> {
+    let (path, value) = assignment.split_once('=').ok_or_else(|| format!("{assignment}: expected key=value"))?;
+    let value: toml::Value = toml::from_str::<toml::Table>(&format!("v = {value}"))?["v"].clone();
+    let mut doc = toml::Value::try_from(sc)?;
+    let mut slot = &mut doc;
+    for key in path.split('.') {
+        let table = slot.as_table_mut().ok_or_else(|| format!("{path}: not a table"))?;
+        slot = table.entry(key).or_insert(toml::Value::Table(Default::default()));
+    }
+    *slot = value;
+    Ok(doc.try_into()?)
+}
