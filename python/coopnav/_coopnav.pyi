@@ -77,7 +77,18 @@ def plan(scenario: Scenario) -> Dict[str, Any]:
     """The whole pre-deployment plan (``coopnav plan``): ``steps`` and ``decisions`` (numpy
     columns; per-AUV columns have shape (steps, N)), ``names`` and ``summary``."""
 
-class AuvEkf:
+class _FilterReadout:
+    """What both filter classes expose (a typing-only base: at run time each class has these
+    properties itself)."""
+
+    @property
+    def t(self) -> float: ...
+    @property
+    def state(self) -> FloatArray: ...
+    @property
+    def covariance(self) -> FloatArray: ...
+
+class AuvEkf(_FilterReadout):
     """The survey AUV's OWTT filter: state [E, N, speed, heading, compass bias]."""
 
     def __init__(
@@ -95,14 +106,8 @@ class AuvEkf:
         auv_depth: Optional[float] = None,
         transponder_sd: float = 0.0,
     ) -> str: ...
-    @property
-    def t(self) -> float: ...
-    @property
-    def state(self) -> FloatArray: ...
-    @property
-    def covariance(self) -> FloatArray: ...
 
-class SurfaceEkf:
+class SurfaceEkf(_FilterReadout):
     """A surface vehicle's filter: state [E, N, speed, heading]."""
 
     def __init__(
@@ -111,12 +116,6 @@ class SurfaceEkf:
         """``params``: "ship" (default), "buoy" or every SurfaceParams field."""
     def predict(self, t: float) -> None: ...
     def update(self, kind: Literal["east", "north", "speed", "heading"], value: float) -> str: ...
-    @property
-    def t(self) -> float: ...
-    @property
-    def state(self) -> FloatArray: ...
-    @property
-    def covariance(self) -> FloatArray: ...
 
 def postprocess(log: Union[str, os.PathLike[str], Mapping[str, Sequence[Any]]], config: Optional[Settings] = None) -> Dict[str, Any]:
     """EKF + RTS smoother over a logged mission (``coopnav hbl postprocess``): ``samples``

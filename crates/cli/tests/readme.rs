@@ -173,3 +173,37 @@ fn ci_runs_the_readme_test_command() {
     let ci_tests: Vec<&str> = ci.lines().map(str::trim).filter(|l| l.starts_with("cargo test")).collect();
     assert_eq!(ci_tests, [TEST_COMMAND], ".ci/run's cargo test lines");
 }
+
+/// Every crate the README's main job builds (`cargo run --release`, the `coopnav` binary's normal
+/// dependencies) has the same features in the test command's build (the whole workspace with its
+/// dev-dependencies), so the test step on a fresh clone reuses those units instead of rebuilding
+/// them (issue 11 item 7; the unifying entries are in `crates/cli/Cargo.toml`).
+#[test]
+fn the_test_build_reuses_every_crate_of_the_main_job() {
+    let run = crate_features(&["-p", "coopnav-cli", "-e", "normal,build"]);
+    let test = crate_features(&["--workspace", "-e", "normal,build,dev"]);
+    let differing: Vec<String> = run
+        .iter()
+        .filter(|(krate, features)| test.get(*krate) != Some(*features))
+        .map(|(krate, features)| format!("{krate}: main job [{features}], tests [{}]", test[krate]))
+        .collect();
+    assert!(run.len() > 50, "cargo tree listed only {} crates", run.len());
+    assert!(differing.is_empty(), "crates whose features differ (add them to crates/cli/Cargo.toml): {differing:#?}");
+}
+
+/// `cargo tree` for the workspace: each package (name and version) with its enabled features.
+fn crate_features(selection: &[&str]) -> std::collections::BTreeMap<String, String> {
+    let out = std::process::Command::new(env!("CARGO"))
+        .args(["tree", "--offline", "--locked", "--prefix", "none", "-f", "{p}|{f}"])
+        .args(selection)
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .output()
+        .expect("cargo runs");
+    assert!(out.status.success(), "cargo tree failed: {}", String::from_utf8_lossy(&out.stderr));
+    String::from_utf8(out.stdout)
+        .unwrap()
+        .lines()
+        .filter_map(|line| line.trim_end_matches(" (*)").split_once('|'))
+        .map(|(package, features)| (package.to_string(), features.to_string()))
+        .collect()
+}

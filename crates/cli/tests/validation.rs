@@ -32,6 +32,9 @@ fn plan_scenario_names_every_bad_field() {
         &[
             ("x = 140.0", "x = nan"),
             ("alpha = 0.1", "alpha = -0.1"),
+            ("speed = 3.0", "speed = -3.0"),
+            ("heading_options = 5", "heading_options = 1"),
+            ("min = 100.0", "min = 2000.0"),
             ("name = \"auv1\"", "name = \"auv1\"\nsigma0 = -1.0"),
             ("lane_length = 600.0", "lane_length = -600.0"),
             ("period = 600.0", "period = 0.0"),
@@ -44,6 +47,9 @@ fn plan_scenario_names_every_bad_field() {
         &[
             "cna.x",
             "planner.error.alpha",
+            "planner.motion.speed",
+            "planner.motion.heading_options",
+            "planner.limits",
             "auv[0].sigma0",
             "auv[0].lawnmower.lane_length",
             "auv[1].lawnmower.depth.period",

@@ -46,6 +46,7 @@
 
 use crate::cost_model::CostModel;
 use crate::PlanError;
+use coopnav_core::validation::{CheckFields, Problems};
 use serde::{Deserialize, Serialize};
 use std::sync::Arc;
 
@@ -117,26 +118,12 @@ pub struct EstimatorSpec {
     pub terminal_levels: f64,
 }
 
-impl EstimatorSpec {
-    pub fn validate(&self, field: &str) -> Result<(), PlanError> {
-        let RangeNoise { sigma_m, per_km_m } = self.range_noise;
-        if !(sigma_m > 0.0 && sigma_m.is_finite() && per_km_m >= 0.0 && per_km_m.is_finite()) {
-            return Err(PlanError::Invalid {
-                field: format!("{field}.range_noise"),
-                allowed: "sigma_m > 0 and per_km_m >= 0 (metres)".into(),
-                value: format!("sigma_m {sigma_m}, per_km_m {per_km_m}"),
-            });
-        }
-        for (name, value) in [("bias_per_km_m", self.bias_per_km_m), ("terminal_levels", self.terminal_levels)] {
-            if !(value >= 0.0 && value.is_finite()) {
-                return Err(PlanError::Invalid {
-                    field: format!("{field}.{name}"),
-                    allowed: "a finite number >= 0".into(),
-                    value: value.to_string(),
-                });
-            }
-        }
-        Ok(())
+impl CheckFields for EstimatorSpec {
+    fn check_fields(&self, prefix: &str, p: &mut Problems) {
+        p.positive(&format!("{prefix}range_noise.sigma_m"), self.range_noise.sigma_m);
+        p.non_negative(&format!("{prefix}range_noise.per_km_m"), self.range_noise.per_km_m);
+        p.non_negative(&format!("{prefix}bias_per_km_m"), self.bias_per_km_m);
+        p.non_negative(&format!("{prefix}terminal_levels"), self.terminal_levels);
     }
 }
 
@@ -539,8 +526,8 @@ mod tests {
             EstimatorSpec { terminal_levels: -1.0, ..EstimatorSpec::default() },
             EstimatorSpec { bias_per_km_m: f64::NAN, ..EstimatorSpec::default() },
         ] {
-            let e = bad.validate("planner.cost").unwrap_err().to_string();
-            assert!(e.contains("planner.cost.") && e.contains(">= 0"), "{e}");
+            let e = bad.validate("planner.cost.").unwrap_err().to_string();
+            assert!(e.contains("planner.cost.") && e.contains("allowed a finite number >= 0"), "{e}");
         }
     }
 
@@ -556,8 +543,8 @@ mod tests {
         let n = RangeNoise::default();
         assert!(n.variance(2000.0) > n.variance(500.0));
         let bad = EstimatorSpec { range_noise: RangeNoise { sigma_m: 0.0, per_km_m: 1.0 }, ..Default::default() };
-        let e = bad.validate("planner.cost").unwrap_err().to_string();
-        assert!(e.contains("planner.cost.range_noise") && e.contains("sigma_m > 0"), "{e}");
+        let e = bad.validate("planner.cost.").unwrap_err().to_string();
+        assert!(e.contains("planner.cost.range_noise.sigma_m = 0: allowed a finite number > 0"), "{e}");
         let e = EkfCost::new(
             EstimatorSpec::default(),
             &[AuvEstimate { cov: [1.0, 2.0, 1.0], process_noise: 0.1 }],

@@ -37,8 +37,9 @@ use thiserror::Error;
 
 #[derive(Debug, Error, PartialEq)]
 pub enum PlanError {
-    #[error("invalid planner setting {field} = {value}: allowed {allowed}")]
-    Invalid { field: String, allowed: String, value: String },
+    /// Every bad setting at once, each named as in `PlannerConfig` (`motion.tau`).
+    #[error("invalid planner settings: {0}")]
+    Invalid(#[from] coopnav_core::validation::InvalidFields),
     #[error("invalid planner input: {0}")]
     Input(String),
     #[error("no survey-AUV forecast at t = {t} s: the survey data has ended")]

@@ -5,7 +5,7 @@
 //! positive pitch is nose up, so z' = z − s·τ·sin φ'. The new heading and pitch hold for the
 //! whole step (instantaneous turn, A6).
 
-use crate::PlanError;
+use coopnav_core::validation::{CheckFields, Problems};
 use coopnav_core::{Heading, Vec3};
 use serde::{Deserialize, Serialize};
 
@@ -130,50 +130,39 @@ fn linspace(half_width: f64, n: usize) -> Vec<f64> {
     (0..n).map(|i| -half_width + 2.0 * half_width * i as f64 / (n - 1) as f64).collect()
 }
 
-impl MotionConfig {
-    /// Checks every field; errors name the field and the allowed range.
-    pub fn validate(&self) -> Result<(), PlanError> {
-        let bad = |field: &str, allowed: &str, value: String| {
-            Err(PlanError::Invalid { field: field.into(), allowed: allowed.into(), value })
-        };
-        if !(self.speed.is_finite() && self.speed > 0.0) {
-            return bad("speed", "a finite number > 0 m/s", self.speed.to_string());
-        }
-        if !(self.tau.is_finite() && self.tau > 0.0) {
-            return bad("tau", "a finite number > 0 s", self.tau.to_string());
-        }
+impl CheckFields for MotionConfig {
+    fn check_fields(&self, prefix: &str, p: &mut Problems) {
+        p.check(&format!("{prefix}speed"), self.speed, |v| v > 0.0, "a finite number > 0 m/s");
+        p.check(&format!("{prefix}tau"), self.tau, |v| v > 0.0, "a finite number > 0 s");
         if self.heading_options < 2 {
-            return bad("heading_options", ">= 2", self.heading_options.to_string());
+            p.push(format!("{prefix}heading_options"), self.heading_options.to_string(), ">= 2");
         }
         let swing = self.max_turn_rate_deg_s * self.tau;
         if !(self.max_turn_rate_deg_s.is_finite() && self.max_turn_rate_deg_s > 0.0 && swing < 180.0) {
-            return bad(
-                "max_turn_rate_deg_s",
-                "> 0 with max_turn_rate_deg_s * tau < 180 degrees (so hard left and hard right never overlap)",
+            p.push(
+                format!("{prefix}max_turn_rate_deg_s"),
                 format!("{} (x tau = {swing} deg)", self.max_turn_rate_deg_s),
+                "> 0 with max_turn_rate_deg_s * tau < 180 degrees (so hard left and hard right never overlap)",
             );
         }
         if let CnaKind::Auv { pitch_options, max_pitch_rate_deg_s, max_pitch_deg, min_depth, max_depth } = self.cna {
             if pitch_options < 1 {
-                return bad("cna.pitch_options", ">= 1", pitch_options.to_string());
+                p.push(format!("{prefix}cna.pitch_options"), pitch_options.to_string(), ">= 1");
             }
-            if !(max_pitch_rate_deg_s.is_finite() && max_pitch_rate_deg_s >= 0.0) {
-                return bad("cna.max_pitch_rate_deg_s", ">= 0", max_pitch_rate_deg_s.to_string());
-            }
-            if !(max_pitch_deg > 0.0 && max_pitch_deg < 90.0) {
-                return bad("cna.max_pitch_deg", "in (0, 90)", max_pitch_deg.to_string());
-            }
+            p.non_negative(&format!("{prefix}cna.max_pitch_rate_deg_s"), max_pitch_rate_deg_s);
+            p.check(&format!("{prefix}cna.max_pitch_deg"), max_pitch_deg, |v| v > 0.0 && v < 90.0, "in (0, 90)");
             if !(min_depth.is_finite() && max_depth.is_finite() && min_depth < max_depth) {
-                return bad(
-                    "cna.min_depth/max_depth",
-                    "finite with min_depth < max_depth",
+                p.push(
+                    format!("{prefix}cna.min_depth/max_depth"),
                     format!("{min_depth}/{max_depth}"),
+                    "finite with min_depth < max_depth",
                 );
             }
         }
-        Ok(())
     }
+}
 
+impl MotionConfig {
     /// The A·B options in ascending (Δψ, Δφ) order: the order that breaks ties (A10).
     pub fn options(&self) -> Vec<MotionOption> {
         let psi = linspace((self.max_turn_rate_deg_s * self.tau).to_radians(), self.heading_options);
@@ -255,10 +244,13 @@ mod tests {
 
     #[test]
     fn bad_motion_is_rejected() {
-        assert!(cfg(1, CnaKind::Asc {}).validate().is_err());
-        assert!(MotionConfig { speed: -1.0, ..cfg(3, CnaKind::Asc {}) }.validate().is_err());
-        let e = MotionConfig { tau: 45.0, ..cfg(3, CnaKind::Asc {}) }.validate().unwrap_err();
-        assert!(e.to_string().contains("max_turn_rate_deg_s"), "{e}");
-        assert!(cfg(3, CnaKind::Asc {}).validate().is_ok());
+        assert!(cfg(1, CnaKind::Asc {}).validate("").is_err());
+        assert!(MotionConfig { speed: -1.0, ..cfg(3, CnaKind::Asc {}) }.validate("").is_err());
+        let e = MotionConfig { tau: 45.0, ..cfg(3, CnaKind::Asc {}) }.validate("motion.").unwrap_err();
+        assert!(e.to_string().contains("motion.max_turn_rate_deg_s"), "{e}");
+        assert!(cfg(3, CnaKind::Asc {}).validate("").is_ok());
+        let both = MotionConfig { speed: f64::NAN, heading_options: 1, ..cfg(3, CnaKind::Asc {}) };
+        let fields: Vec<String> = both.validate("").unwrap_err().0.into_iter().map(|p| p.field).collect();
+        assert_eq!(fields, ["speed", "heading_options"]);
     }
 }

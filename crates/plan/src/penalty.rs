@@ -4,9 +4,9 @@
 //! v_TF = max_k d_k − d_max (3-D distances). "Too close" wins when both apply. Each penalty is one
 //! named type behind [`Penalty`]; the generic family is [`ScaledViolation`], per side
 //! `C' = a·C + m·C·v^p + b·v^p`, which holds every Table 5.2 variant as a preset.
-//! Every penalty keeps C' ≥ C (checked by `validate`), which the branch-and-bound bound relies on.
+//! Every penalty keeps C' ≥ C (checked by `check_fields`), which the branch-and-bound bound relies on.
 
-use crate::PlanError;
+use coopnav_core::validation::{CheckFields, Problems};
 use serde::{Deserialize, Serialize};
 
 /// How far the worst AUVs are outside the distance limits (metres, ≥ 0).
@@ -73,19 +73,15 @@ impl SideTerm {
         let vp = if self.power == 1.0 { v } else { v.powf(self.power) };
         self.cost_scale * cost + (self.cost_violation * cost + self.violation) * vp
     }
+}
 
-    fn validate(&self, field: &str) -> Result<(), PlanError> {
-        let ok = self.cost_scale >= 1.0 && self.cost_violation >= 0.0 && self.violation >= 0.0 && self.power >= 1.0;
-        let finite = [self.cost_scale, self.cost_violation, self.violation, self.power].iter().all(|x| x.is_finite());
-        if ok && finite {
-            Ok(())
-        } else {
-            Err(PlanError::Invalid {
-                field: field.into(),
-                allowed: "cost_scale >= 1, cost_violation >= 0, violation >= 0, power >= 1 (a penalty may never lower a cost)".into(),
-                value: format!("{self:?}"),
-            })
-        }
+/// A penalty may never lower a cost, hence the lower limits.
+impl CheckFields for SideTerm {
+    fn check_fields(&self, prefix: &str, p: &mut Problems) {
+        p.check(&format!("{prefix}cost_scale"), self.cost_scale, |v| v >= 1.0, "a finite number >= 1");
+        p.non_negative(&format!("{prefix}cost_violation"), self.cost_violation);
+        p.non_negative(&format!("{prefix}violation"), self.violation);
+        p.check(&format!("{prefix}power"), self.power, |v| v >= 1.0, "a finite number >= 1");
     }
 }
 
@@ -130,15 +126,19 @@ impl Penalty for PenaltyFn {
     }
 }
 
-impl PenaltyFn {
-    pub fn validate(&self, field: &str) -> Result<(), PlanError> {
-        match self {
-            PenaltyFn::Scaled { too_close, too_far } => {
-                too_close.validate(&format!("{field}.too_close"))?;
-                too_far.validate(&format!("{field}.too_far"))
-            }
-            _ => Ok(()),
+impl CheckFields for PenaltyFn {
+    fn check_fields(&self, prefix: &str, p: &mut Problems) {
+        if let PenaltyFn::Scaled { too_close, too_far } = self {
+            too_close.check_fields(&format!("{prefix}too_close."), p);
+            too_far.check_fields(&format!("{prefix}too_far."), p);
         }
+    }
+}
+
+impl CheckFields for PenaltyPair {
+    fn check_fields(&self, prefix: &str, p: &mut Problems) {
+        self.primary.check_fields(&format!("{prefix}primary."), p);
+        self.look_ahead.check_fields(&format!("{prefix}look_ahead."), p);
     }
 }
 
@@ -366,7 +366,7 @@ mod tests {
         for case in PenaltyCase::ALL {
             let pair = case.penalties();
             for p in [pair.primary, pair.look_ahead] {
-                p.validate("p").unwrap();
+                p.validate("p.").unwrap();
                 for v in [Violation::default(), tc(0.3), tf(40.0), both] {
                     assert!(p.apply(3.0, &v) >= 3.0);
                 }
@@ -380,7 +380,7 @@ mod tests {
     #[test]
     fn a_cost_lowering_family_is_rejected() {
         let p = PenaltyFn::Scaled { too_close: side(0.5, 0.0, 1.0, 1.0), too_far: side(1.0, 0.0, 1.0, 1.0) };
-        let e = p.validate("planner.penalty.primary").unwrap_err().to_string();
-        assert!(e.contains("planner.penalty.primary.too_close"), "{e}");
+        let e = p.validate("planner.penalty.primary.").unwrap_err().to_string();
+        assert!(e.contains("planner.penalty.primary.too_close.cost_scale = 0.5"), "{e}");
     }
 }

@@ -15,6 +15,7 @@ use crate::penalty::PenaltyPair;
 use crate::search::{branch_and_bound, Shared};
 use crate::tree::{reaches, rest_floors, Tree};
 use crate::{brute, PlanError, SearchOutcome};
+use coopnav_core::validation::{CheckFields, Problems};
 use coopnav_core::Vec3;
 use serde::{Deserialize, Serialize};
 use std::time::{Duration, Instant};
@@ -130,45 +131,9 @@ pub struct PlannerConfig {
 pub const MAX_LEAVES: f64 = 1e12;
 
 impl PlannerConfig {
+    /// Every bad setting at once (`PlanError::Invalid`), each named by its path in this struct.
     pub fn validate(&self) -> Result<(), PlanError> {
-        self.motion.validate()?;
-        let bad = |field: &str, allowed: &str, value: String| {
-            Err(PlanError::Invalid { field: field.into(), allowed: allowed.into(), value })
-        };
-        let m = self.motion.options().len();
-        let leaves = (m as f64).powi(self.look_ahead as i32 + 1);
-        if m > 4096 || leaves > MAX_LEAVES || self.look_ahead >= crate::tree::MAX_LEVELS {
-            return bad(
-                "look_ahead",
-                "look_ahead <= 63 and (heading_options * pitch_options)^(look_ahead + 1) <= 1e12",
-                format!("{} with {m} options", self.look_ahead),
-            );
-        }
-        if !(self.error.alpha.is_finite() && self.error.alpha >= 0.0) {
-            return bad("error.alpha", ">= 0 m^2/s", self.error.alpha.to_string());
-        }
-        let DistanceLimits { min, max } = self.limits;
-        if !(min.is_finite() && max.is_finite() && min >= 0.0 && min < max) {
-            return bad("limits", "0 <= min < max (metres)", format!("min {min}, max {max}"));
-        }
-        if let CostSpec::Estimator(e) = &self.cost {
-            e.validate("cost")?;
-        }
-        self.penalties.primary.validate("penalties.primary")?;
-        self.penalties.look_ahead.validate("penalties.look_ahead")?;
-        let tol = self.search.tie_tolerance;
-        if !(0.0..=1e-3).contains(&tol) {
-            return bad("search.tie_tolerance", "0 <= tie_tolerance <= 1e-3 (relative)", tol.to_string());
-        }
-        match self.search.deadline {
-            Deadline::TauMinus { margin_s } if !(margin_s >= 0.0 && margin_s < self.motion.tau) => {
-                bad("search.deadline.margin_s", "0 <= margin_s < tau", margin_s.to_string())
-            }
-            Deadline::Seconds { seconds } if !(seconds > 0.0 && seconds.is_finite()) => {
-                bad("search.deadline.seconds", "> 0", seconds.to_string())
-            }
-            _ => Ok(()),
-        }
+        Ok(CheckFields::validate(self, "")?)
     }
 
     fn budget(&self) -> Option<Duration> {
@@ -176,6 +141,48 @@ impl PlannerConfig {
             Deadline::None => None,
             Deadline::TauMinus { margin_s } => Some(Duration::from_secs_f64(self.motion.tau - margin_s)),
             Deadline::Seconds { seconds } => Some(Duration::from_secs_f64(seconds)),
+        }
+    }
+}
+
+impl CheckFields for PlannerConfig {
+    fn check_fields(&self, prefix: &str, p: &mut Problems) {
+        let field = |name: &str| format!("{prefix}{name}");
+        self.motion.check_fields(&field("motion."), p);
+        let m = self.motion.options().len();
+        let leaves = (m as f64).powi(self.look_ahead as i32 + 1);
+        if m > 4096 || leaves > MAX_LEAVES || self.look_ahead >= crate::tree::MAX_LEVELS {
+            p.push(
+                field("look_ahead"),
+                format!("{} with {m} options", self.look_ahead),
+                "look_ahead <= 63 and (heading_options * pitch_options)^(look_ahead + 1) <= 1e12",
+            );
+        }
+        p.non_negative(&field("error.alpha"), self.error.alpha);
+        let DistanceLimits { min, max } = self.limits;
+        if !(min.is_finite() && max.is_finite() && min >= 0.0 && min < max) {
+            p.push(field("limits"), format!("min {min}, max {max}"), "0 <= min < max (metres)");
+        }
+        if let CostSpec::Estimator(e) = &self.cost {
+            e.check_fields(&field("cost."), p);
+        }
+        self.penalties.check_fields(&field("penalties."), p);
+        let tol = self.search.tie_tolerance;
+        p.check(
+            &field("search.tie_tolerance"),
+            tol,
+            |v| (0.0..=1e-3).contains(&v),
+            "0 <= tie_tolerance <= 1e-3 (relative)",
+        );
+        match self.search.deadline {
+            Deadline::TauMinus { margin_s } => p.require(
+                &field("search.deadline.margin_s"),
+                margin_s,
+                margin_s >= 0.0 && margin_s < self.motion.tau,
+                "0 <= margin_s < motion.tau",
+            ),
+            Deadline::Seconds { seconds } => p.positive(&field("search.deadline.seconds"), seconds),
+            Deadline::None => {}
         }
     }
 }

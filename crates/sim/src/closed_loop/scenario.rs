@@ -19,7 +19,8 @@ use coopnav_core::{Bathymetry, CompassDeg, DepthTarget, Heading, Lawnmower, Shel
 use coopnav_nav::{AuvModel, AuvParams, RangeNoise};
 use coopnav_plan::predict::{PredictorConfig, WaypointUse};
 use coopnav_plan::{
-    Aggregate, CnaKind, Deadline, DistanceLimits, ErrorModel, MotionConfig, PenaltyCase, PlannerConfig, SearchConfig,
+    Aggregate, CnaKind, Deadline, DistanceLimits, ErrorModel, MotionConfig, PenaltyCase, PlanError, PlannerConfig,
+    SearchConfig,
 };
 use serde::{Deserialize, Serialize};
 use std::path::Path;
@@ -494,7 +495,12 @@ impl Scenario {
         if PenaltyCase::from_id(&pl.penalty_case).is_none() {
             p.push("planner.penalty_case", pl.penalty_case.clone(), ids());
         } else if let Err(e) = self.planner_config().validate() {
-            p.push("planner", e.to_string(), "see the message");
+            match e {
+                PlanError::Invalid(found) => {
+                    found.0.into_iter().for_each(|bad| p.push(planner_field(&bad.field), bad.value, bad.allowed))
+                }
+                other => p.push("planner", other.to_string(), "a valid planner configuration"),
+            }
         }
     }
 
@@ -582,6 +588,22 @@ impl Scenario {
         s.fleet.n_auvs = n;
         s
     }
+}
+
+/// Where this file sets each `PlannerConfig` setting (`planner_config` assembles it from the CNA,
+/// comms and planner tables; the penalties come from `planner.penalty_case`, a checked preset).
+fn planner_field(field: &str) -> String {
+    let file_name = match field {
+        "motion.speed" => "cna.speed",
+        "motion.tau" => "comms.tau",
+        "motion.max_turn_rate_deg_s" => "cna.max_turn_rate_deg_s",
+        "motion.cna.pitch_options" => "cna.auv.pitch_options",
+        _ => {
+            let own = field.strip_prefix("motion.").or_else(|| field.strip_prefix("search.")).unwrap_or(field);
+            return format!("planner.{own}");
+        }
+    };
+    file_name.to_string()
 }
 
 #[cfg(test)]
@@ -679,7 +701,9 @@ mod tests {
         assert!(e.contains("cna.auv.pitch_options"), "{e}");
         let e = err(&EXAMPLE.replace("lane_length = 800.0", "lane_length = 20000.0"));
         assert!(e.contains("field fleet") && e.contains("15 000"), "{e}");
-        let e = err(&EXAMPLE.replace("heading_options = 5", "heading_options = 1"));
-        assert!(e.contains("planner") && e.contains("heading_options"), "{e}");
+        let e = err(&EXAMPLE
+            .replace("heading_options = 5", "heading_options = 1")
+            .replace("look_ahead = 5", "look_ahead = 70"));
+        assert!(e.contains("field planner.heading_options = 1") && e.contains("field planner.look_ahead = 70"), "{e}");
     }
 }

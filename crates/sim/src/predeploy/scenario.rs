@@ -214,8 +214,7 @@ impl Scenario {
         p.finish()
     }
 
-    /// The penalty choice, then the planner's own checks (which stop at its first bad setting),
-    /// named as the file names them.
+    /// The penalty choice, then the planner's own checks, named as the file names them.
     fn validate_planner(&self, p: &mut Problems) {
         let penalties = match self.penalties() {
             Ok(penalties) => penalties,
@@ -223,7 +222,9 @@ impl Scenario {
         };
         match self.planner_config_with(penalties).validate() {
             Ok(()) => {}
-            Err(PlanError::Invalid { field, allowed, value }) => p.push(planner_field(&field), value, allowed),
+            Err(PlanError::Invalid(found)) => {
+                found.0.into_iter().for_each(|bad| p.push(planner_field(&bad.field), bad.value, bad.allowed))
+            }
             Err(other) => p.push("planner", other.to_string(), "a valid planner configuration"),
         }
     }
@@ -322,13 +323,10 @@ impl Scenario {
     }
 }
 
-/// A planner setting's name in the file: the motion settings sit under `planner.motion`, the
-/// penalty pair under `planner.penalty`.
+/// A planner setting's name in the file: `PlannerConfig`'s own path under `planner`, except the
+/// penalty pair, which sits under `planner.penalty`.
 fn planner_field(field: &str) -> String {
-    const MOTION: [&str; 4] = ["speed", "tau", "heading_options", "max_turn_rate_deg_s"];
-    if MOTION.contains(&field) || field.starts_with("cna.") {
-        format!("planner.motion.{field}")
-    } else if let Some(rest) = field.strip_prefix("penalties.") {
+    if let Some(rest) = field.strip_prefix("penalties.") {
         format!("planner.penalty.{rest}")
     } else {
         format!("planner.{field}")
