@@ -33,19 +33,38 @@ pub(crate) trait CostModel: Sync {
 
     /// Lower bounds on AUV `k`'s cost terms at each level below a node, combined into `out`
     /// (`out[i]` is the i-th level below). The node has the CNA at `cna` and the AUV at `auv`;
-    /// `reach` yields, per level below, how far the CNA–AUV line of sight can move in that level.
+    /// `below` yields what is known of each level below ([`Below`]).
     fn bound_rest(
         &self,
         k: usize,
         state: &Self::State,
         cna: [f64; 3],
         auv: [f64; 3],
-        reach: impl Iterator<Item = f64>,
+        below: impl Iterator<Item = Below>,
         out: &mut [f64],
     );
 
     /// Path-independent lower bounds on the raw cost of each level 0..depth from the root states.
     fn level_floors(&self, root: &[Self::State], depth: usize) -> Vec<f64>;
+}
+
+/// What a bound knows of one AUV at one level below a node: the AUV's path is predicted, the
+/// CNA's is not, but it moves exactly s·τ per level.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Below {
+    /// The AUV's predicted position at that level.
+    pub auv: [f64; 3],
+    /// How far the CNA can be from its position at the node by then: (levels below) · s·τ. So
+    /// the line of sight at that level is within `spread` of `auv − cna`.
+    pub spread: f64,
+    /// How far the line of sight can move within that level: |Δa| + s·τ.
+    pub turn: f64,
+}
+
+/// The 3-D length of a vector.
+#[inline(always)]
+pub(crate) fn norm(v: [f64; 3]) -> f64 {
+    (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt()
 }
 
 /// Hudson's state of one AUV: tangential variance ε² and the line of sight of the last range.
@@ -78,26 +97,26 @@ impl CostModel for HudsonCost {
     }
 
     /// The line of sight to AUV k can turn by at most asin(r/D) in a level when it moves by
-    /// r ≤ reach and is D ≥ |los| − (earlier reaches) long, so sin²Δθ ≤ S = (r/D)² (or 1), and
-    /// eq. (1a) gives ε'² ≥ σ²·S + ε²·(1 − S) + ατ when ε² > σ² (else ε² + ατ).
+    /// r ≤ turn and was D long before (D ≥ |a − c| − spread at the level above, the node's own
+    /// line of sight at the first level below), so sin²Δθ ≤ S = (r/D)² (or 1), and eq. (1a) gives
+    /// ε'² ≥ σ²·S + ε²·(1 − S) + ατ when ε² > σ² (else ε² + ατ).
     fn bound_rest(
         &self,
         k: usize,
         state: &Tangential,
-        _cna: [f64; 3],
+        cna: [f64; 3],
         _auv: [f64; 3],
-        reach: impl Iterator<Item = f64>,
+        below: impl Iterator<Item = Below>,
         out: &mut [f64],
     ) {
         let s2 = self.sigma2[k];
         let mut x = state.eps2;
-        let l = state.los;
-        let mut dist = (l[0] * l[0] + l[1] * l[1] + l[2] * l[2]).sqrt();
-        for (slot, r) in out.iter_mut().zip(reach) {
-            let smax = if dist > r { (r / dist) * (r / dist) } else { 1.0 };
+        let mut dist = norm(state.los);
+        for (slot, b) in out.iter_mut().zip(below) {
+            let smax = if dist > b.turn { (b.turn / dist) * (b.turn / dist) } else { 1.0 };
             x = if s2 < x { s2 * smax + x * (1.0 - smax) + self.alpha_tau } else { x + self.alpha_tau };
             *slot += self.model.cost_term(s2, x);
-            dist -= r;
+            dist = norm(self.model.los(cna, b.auv)) - b.spread;
         }
     }
 

@@ -332,6 +332,7 @@ impl LookAheadPlanner {
             depth: g.depth,
             n: g.n,
             reach: reaches(&g.auv, g.n, cfg.motion.speed * cfg.motion.tau),
+            step: cfg.motion.speed * cfg.motion.tau,
             auv: g.auv,
             rest_floor: rest_floors(&model.level_floors(&root_state, g.depth), 1.0 + model.terminal_levels()),
             tie_tolerance: cfg.search.tie_tolerance,

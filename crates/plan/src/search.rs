@@ -10,10 +10,10 @@
 //!   result does not depend on thread timing;
 //! - a node is abandoned part-way through its AUVs once the partial sum is cut (`tree::Cut`).
 //!
-//! The parallel mode orders the (level-0, level-1) subtrees by their lower bound, searches the
-//! most promising one first on the calling thread to get a tight bound, then lets every worker
-//! pull the remaining subtrees in that order, skipping those the bound already excludes.
-//! Only the node count varies with the thread count.
+//! The parallel mode splits the top two or three levels into tasks ordered by their lower bound,
+//! dives greedily into the most promising one on the calling thread for a first best path, then
+//! lets every worker pull the tasks in that order, sharing the best path found (an atomic) and
+//! skipping tasks it already excludes. Only the node count varies with the thread count.
 
 use crate::cost_model::CostModel;
 use crate::tree::{choose, Cut, NodeRef, Tree};
@@ -86,6 +86,8 @@ struct Ctx<'s> {
     nodes: u64,
     /// Searches entered since the clock was last read (starts at 255: each worker reads it first).
     since_clock: u32,
+    /// Follow only the cheapest child at each level (one path down: a first best path).
+    dive: bool,
 }
 
 impl<'s> Ctx<'s> {
@@ -98,6 +100,7 @@ impl<'s> Ctx<'s> {
             root: usize::MAX,
             nodes: 0,
             since_clock: 255,
+            dive: false,
         }
     }
     /// Anything whose lower bound is above this is cut.
@@ -173,7 +176,7 @@ fn visit<M: CostModel>(
 ) {
     if level + 1 == tree.depth {
         ctx.leaf(v);
-    } else if v + tree.rest_bound(level, node) <= ctx.bound() {
+    } else if v + tree.rest_bound(level, node, ctx.bound() - v) <= ctx.bound() {
         dfs(tree, level + 1, node, v, deeper, ctx);
     }
 }
@@ -205,6 +208,9 @@ fn dfs<M: CostModel>(
         }
         let child = NodeRef { pose: lv.pose[o], state: &lv.state[o * n..(o + 1) * n] };
         visit(tree, level, &child, v, deeper, ctx);
+        if ctx.dive {
+            break;
+        }
     }
 }
 
@@ -220,82 +226,130 @@ pub(crate) fn branch_and_bound<M: CostModel>(tree: &Tree<M>, parallel: bool, sha
     (!shared.abort.load(Ordering::Relaxed)).then_some(out)
 }
 
-/// A (level-0, level-1) subtree of the parallel search, with its path cost and lower bound.
-struct Subtree {
-    root: usize,
-    child: usize,
+/// How many top levels the parallel search splits into tasks: 2, or 3 for trees of 5 levels or
+/// more (7³ = 343 tasks for A = 7: small enough to balance two workers when one subtree holds
+/// most of the work, as the best one does).
+fn split_levels(depth: usize) -> usize {
+    if depth >= 5 {
+        3
+    } else {
+        2
+    }
+}
+
+/// The most levels a task's path names.
+const MAX_SPLIT: usize = 3;
+
+/// One task of the parallel search: the subtree below the node that `path` (options from the
+/// root, `split` of them) leads to, with that node's path cost and lower bound.
+struct Task {
+    path: [usize; MAX_SPLIT],
     cost: f64,
     bound: f64,
 }
 
-/// The (level-0, level-1) subtrees, most promising (lowest bound) first.
-fn subtrees<M: CostModel>(tree: &Tree<M>, top: &Level<M::State>) -> Vec<Subtree> {
-    let n = tree.n;
-    let mut all: Vec<Subtree> = tree
+/// Every task of the top `split` levels, most promising (lowest bound) first; ties in option
+/// order. The level-0 options are enumerated in parallel.
+fn tasks<M: CostModel>(tree: &Tree<M>, split: usize) -> Vec<Task> {
+    let mut all: Vec<Task> = tree
         .root_options
         .par_iter()
         .flat_map_iter(|&r| {
-            let parent = NodeRef { pose: top.pose[r], state: &top.state[r * n..(r + 1) * n] };
-            let mut out = vec![tree.root_state[0]; n];
-            tree.all_options
-                .iter()
-                .map(|&c| {
-                    let (pose, c1) = tree.expand(1, &parent, c, &mut out);
-                    let cost = top.cost[r] + c1;
-                    let below = if tree.depth > 2 { tree.rest_bound(1, &NodeRef { pose, state: &out }) } else { 0.0 };
-                    Subtree { root: r, child: c, cost, bound: cost + below }
-                })
-                .collect::<Vec<_>>()
+            let mut out = Vec::new();
+            let mut buf = vec![tree.root_state[0]; tree.n * split];
+            let mut path = [0; MAX_SPLIT];
+            path[0] = r;
+            enumerate(tree, 0, &tree.root(), 0.0, &mut path, split, &mut buf, &mut out);
+            out
         })
         .collect();
-    all.sort_by(|a, b| a.bound.total_cmp(&b.bound).then(a.root.cmp(&b.root)).then(a.child.cmp(&b.child)));
+    all.sort_by(|a, b| a.bound.total_cmp(&b.bound).then(a.path.cmp(&b.path)));
     all
 }
 
-/// Searches one (level-0, level-1) subtree; `below_top` holds the buffers of levels 1, 2, ….
-fn search_subtree<M: CostModel>(
+/// Expands `path[level]` below `parent`, then every option of the levels down to `split`,
+/// pushing one task per node at level `split − 1`; `buf` holds one node's states per level.
+#[allow(clippy::too_many_arguments)]
+fn enumerate<M: CostModel>(
     tree: &Tree<M>,
-    top: &Level<M::State>,
-    task: &Subtree,
-    below_top: &mut [Level<M::State>],
+    level: usize,
+    parent: &NodeRef<M::State>,
+    acc: f64,
+    path: &mut [usize; MAX_SPLIT],
+    split: usize,
+    buf: &mut [M::State],
+    out: &mut Vec<Task>,
+) {
+    let (here, deeper) = buf.split_at_mut(tree.n);
+    let (pose, c) = tree.expand(level, parent, path[level], here);
+    let (node, cost) = (NodeRef { pose, state: &*here }, acc + c);
+    if level + 1 == split {
+        let below = if split < tree.depth {
+            tree.rest_floor[level].max(tree.rest_bound(level, &node, f64::INFINITY))
+        } else {
+            0.0
+        };
+        out.push(Task { path: *path, cost, bound: cost + below });
+        return;
+    }
+    for &o in tree.level_options(level + 1) {
+        path[level + 1] = o;
+        enumerate(tree, level + 1, &node, cost, path, split, deeper, out);
+    }
+}
+
+/// Searches one task's subtree unless its bound is beaten: re-expands its path into `prefix`
+/// (one node's states per level), then searches below with the buffers of the deeper levels.
+fn search_task<M: CostModel>(
+    tree: &Tree<M>,
+    task: &Task,
+    split: usize,
+    prefix: &mut [M::State],
+    deeper: &mut [Level<M::State>],
     ctx: &mut Ctx,
 ) {
     if task.bound > ctx.bound() || ctx.out_of_time() {
         return;
     }
     let n = tree.n;
-    ctx.root = task.root;
-    let parent = NodeRef { pose: top.pose[task.root], state: &top.state[task.root * n..(task.root + 1) * n] };
-    let (level1, deeper) = below_top.split_first_mut().expect("depth >= 2");
-    let buf = &mut level1.state[..n];
-    let (pose, _) = tree.expand(1, &parent, task.child, buf);
-    visit(tree, 1, &NodeRef { pose, state: buf }, task.cost, deeper, ctx);
+    ctx.root = task.path[0];
+    ctx.nodes += split as u64;
+    let mut pose = tree.root_pose;
+    for level in 0..split {
+        let (above, here) = prefix.split_at_mut(level * n);
+        let parent = if level == 0 { tree.root() } else { NodeRef { pose, state: &above[(level - 1) * n..] } };
+        pose = tree.expand(level, &parent, task.path[level], &mut here[..n]).0;
+    }
+    let node = NodeRef { pose, state: &prefix[(split - 1) * n..split * n] };
+    visit(tree, split - 1, &node, task.cost, deeper, ctx);
 }
 
-/// Subtrees ordered by bound; the first searched alone for a tight bound, the rest pulled in order
-/// by one worker per rayon thread; the per-option minima merged.
+/// The tasks of the top levels ordered by bound; a greedy dive into the first seeds the shared
+/// best path, then one worker per rayon thread pulls the tasks in order, skipping those the
+/// best path already excludes; the per-option minima are merged.
 fn parallel_search<M: CostModel>(tree: &Tree<M>, shared: &Shared) -> SearchOutcome {
-    let mut first = Ctx::new(shared, tree);
-    let mut lv = levels(tree);
-    let (top_slot, rest) = lv.split_first_mut().expect("depth >= 2");
-    expand_all(tree, 0, &tree.root(), top_slot, &mut first, &Cut::NEVER);
-    let top = &*top_slot;
-    let tasks = subtrees(tree, top);
-    first.nodes += tasks.len() as u64;
-    search_subtree(tree, top, &tasks[0], rest, &mut first);
-    let next = AtomicUsize::new(1);
-    let workers = rayon::current_num_threads().max(1);
-    let results: Vec<Ctx> = (0..workers)
+    let split = split_levels(tree.depth).min(tree.depth);
+    let tasks = tasks(tree, split);
+    let worker = || (Ctx::new(shared, tree), vec![tree.root_state[0]; tree.n * split], levels(tree));
+    let (mut first, mut prefix, mut lv) = worker();
+    // The enumeration expanded every node of the top `split` levels.
+    let m = tree.n_options() as u64;
+    first.nodes += tree.root_options.len() as u64 * (0..split as u32).map(|l| m.pow(l)).sum::<u64>();
+    first.dive = true;
+    search_task(tree, &tasks[0], split, &mut prefix, &mut lv[split..], &mut first);
+    first.dive = false;
+    let next = AtomicUsize::new(0);
+    let threads = rayon::current_num_threads().max(1);
+    let results: Vec<Ctx> = (0..threads)
         .into_par_iter()
         .map(|_| {
-            let mut ctx = Ctx::new(shared, tree);
-            let mut lv = levels(tree);
+            let (mut ctx, mut prefix, mut lv) = worker();
             loop {
                 let i = next.fetch_add(1, Ordering::Relaxed);
                 if i >= tasks.len() || shared.abort.load(Ordering::Relaxed) {
                     break;
                 }
-                search_subtree(tree, top, &tasks[i], &mut lv[1..], &mut ctx);
+                search_task(tree, &tasks[i], split, &mut prefix, &mut lv[split..], &mut ctx);
             }
             ctx
         })

@@ -6,7 +6,7 @@
 //! level each AUV's term counts 1 + H times, H the model's cost-to-go in levels
 //! (`CostModel::terminal_levels`), in both searches and in the bounds.
 
-use crate::cost_model::CostModel;
+use crate::cost_model::{norm, Below, CostModel};
 use crate::motion::{FastOption, FastPose, MotionConfig};
 use crate::penalty::{Penalty, PenaltyFn, PenaltyPair, Violation};
 use crate::planner::DistanceLimits;
@@ -38,6 +38,8 @@ pub(crate) struct Tree<M: CostModel> {
     /// `reach[j * n + k]` (j ≥ 1): how far AUV k's line of sight can move between levels j−1 and j,
     /// |Δa| + s·τ (AUV displacement plus the CNA's step), metres.
     pub reach: Vec<f64>,
+    /// The CNA's step s·τ (3-D, every option), metres.
+    pub step: f64,
     /// `SearchConfig::tie_tolerance`: level-0 options within this relative margin of the minimum tie.
     pub tie_tolerance: f64,
 }
@@ -112,36 +114,48 @@ impl<M: CostModel> Tree<M> {
 
     /// A lower bound on the summed costs of levels `level`+1 .. depth−1 below `node` (at `level`).
     /// - Cost: the model's own bound per AUV and level (`CostModel::bound_rest`).
-    /// - Distance: the 3-D CNA–AUV distance changes by at most the reach per level, so when
-    ///   some AUV is surely beyond the maximum (or within the minimum) distance at a level, a
-    ///   doubling look-ahead penalty surely applies there. Other penalties count as ×1 (they never
-    ///   lower a cost).
+    /// - Distance: j levels below, the CNA is within j·s·τ of its position at the node and the
+    ///   AUV is where it is predicted, so when some AUV is surely beyond the maximum (or within the
+    ///   minimum) distance at a level, a doubling look-ahead penalty surely applies there. Other
+    ///   penalties count as ×1 (they never lower a cost).
     ///
-    /// A relative margin of 1e-9 absorbs rounding.
-    pub fn rest_bound(&self, level: usize, node: &NodeRef<M::State>) -> f64 {
-        let mut per_level = [0.0f64; MAX_LEVELS];
-        let mut violated = [false; MAX_LEVELS];
-        let doubling = matches!(self.penalties.look_ahead, PenaltyFn::Doubling {});
-        let auv = &self.auv[level * self.n..(level + 1) * self.n];
-        let p = node.pose.p;
-        let (lo, hi) = (self.limits.min, self.limits.max);
-        for (k, a) in auv.iter().enumerate() {
-            let reach = (level + 1..self.depth).map(|j| self.reach[j * self.n + k]);
-            self.model.bound_rest(k, &node.state[k], p, *a, reach, &mut per_level[level + 1..self.depth]);
-            let d3 = ((a[0] - p[0]).powi(2) + (a[1] - p[1]).powi(2) + (a[2] - p[2]).powi(2)).sqrt();
-            let (mut near, mut far) = (d3, d3);
-            for j in level + 1..self.depth {
-                let r = self.reach[j * self.n + k];
-                near -= r;
-                far += r;
-                violated[j] |= near > hi * (1.0 + 1e-9) || far < lo * (1.0 - 1e-9);
+    /// The AUVs are summed one by one, and the sum so far (a lower bound too: every term is ≥ 0)
+    /// is returned as soon as it exceeds `budget`, so a node that is cut costs less. A relative
+    /// margin of 1e-9 absorbs rounding.
+    pub fn rest_bound(&self, level: usize, node: &NodeRef<M::State>, budget: f64) -> f64 {
+        let (n, p, levels) = (self.n, node.pose.p, level + 1..self.depth);
+        let below = |k: usize| {
+            levels.clone().map(move |j| Below {
+                auv: self.auv[j * n + k],
+                spread: (j - level) as f64 * self.step,
+                turn: self.reach[j * n + k],
+            })
+        };
+        let mut weight = [1.0f64; MAX_LEVELS];
+        if matches!(self.penalties.look_ahead, PenaltyFn::Doubling {}) {
+            let (lo, hi) = (self.limits.min, self.limits.max);
+            for k in 0..n {
+                for (w, b) in weight[levels.clone()].iter_mut().zip(below(k)) {
+                    let d = norm([b.auv[0] - p[0], b.auv[1] - p[1], b.auv[2] - p[2]]);
+                    if d - b.spread > hi * (1.0 + 1e-9) || d + b.spread < lo * (1.0 - 1e-9) {
+                        *w = 2.0;
+                    }
+                }
             }
         }
-        per_level[self.depth - 1] *= self.leaf_weight();
-        let total: f64 = (level + 1..self.depth)
-            .map(|j| if doubling && violated[j] { 2.0 * per_level[j] } else { per_level[j] })
-            .sum();
-        total * (1.0 - 1e-9)
+        // The last level's terms count 1 + H times (`leaf_weight`), the penalty's ×2 on top.
+        weight[self.depth - 1] *= self.leaf_weight();
+        let mut per_level = [0.0f64; MAX_LEVELS];
+        let mut total = 0.0;
+        for k in 0..n {
+            let a = self.auv[level * n + k];
+            self.model.bound_rest(k, &node.state[k], p, a, below(k), &mut per_level[levels.clone()]);
+            total = levels.clone().map(|j| weight[j] * per_level[j]).sum::<f64>() * (1.0 - 1e-9);
+            if total > budget {
+                break;
+            }
+        }
+        total
     }
 
     /// Expands `parent` (a node at level − 1, or the root) by option `opt` into a node at `level`:

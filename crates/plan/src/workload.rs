@@ -10,8 +10,9 @@
 
 use crate::planner::Algorithm;
 use crate::{
-    AuvError, AuvEstimate, CnaKind, CnaPose, CostSpec, Deadline, Decision, DistanceLimits, ErrorModel, FnForecast,
-    LookAheadPlanner, MotionConfig, PenaltyCase, PlanError, PlanInput, Planner, PlannerConfig, SearchConfig,
+    AuvError, AuvEstimate, CnaKind, CnaPose, CostSpec, Deadline, Decision, DistanceLimits, ErrorModel, EstimatorSpec,
+    FnForecast, LookAheadPlanner, MotionConfig, PenaltyCase, PlanError, PlanInput, Planner, PlannerConfig,
+    SearchConfig,
 };
 use coopnav_core::{Heading, Vec3};
 use serde::Serialize;
@@ -30,10 +31,14 @@ pub struct Workload {
 
 impl Workload {
     /// The standard workloads: the issue-2 ones under Hudson's cost, then the issue-10 ones under
-    /// the estimator-aware cost (N = 5, A = 7, L = 5 and L = 7, targets 5 ms and 100 ms).
+    /// the estimator-aware cost (N = 5, A = 7, L = 5 and L = 7, targets 5 ms and 100 ms), the
+    /// last with the range bias and cost-to-go the closed-loop evaluation plans with (6 m/km,
+    /// H = 10 levels).
     pub fn standard() -> Vec<Workload> {
         let hudson = |n, a, b, l, gap| Workload { n, a, b, l, gap, cost: CostSpec::Hudson };
-        let estimator = |l| Workload { n: 5, a: 7, b: 1, l, gap: 500.0, cost: CostSpec::Estimator(Default::default()) };
+        let with = |l, spec| Workload { n: 5, a: 7, b: 1, l, gap: 500.0, cost: CostSpec::Estimator(spec) };
+        let estimator = |l| with(l, EstimatorSpec::default());
+        let biased = EstimatorSpec { bias_per_km_m: 6.0, terminal_levels: 10.0, ..EstimatorSpec::default() };
         vec![
             hudson(2, 5, 1, 5, 500.0),
             hudson(2, 5, 1, 5, 100.0),
@@ -45,14 +50,19 @@ impl Workload {
             hudson(5, 3, 6, 3, 100.0),
             estimator(5),
             estimator(7),
+            with(7, biased),
         ]
     }
 
-    /// A short name for reports: cost kind and the N, A, B, L and gap of the workload.
+    /// A short name for reports: cost kind (with the estimator's bias and cost-to-go when set)
+    /// and the N, A, B, L and gap of the workload.
     pub fn name(&self) -> String {
         let kind = match self.cost {
-            CostSpec::Hudson => "hudson",
-            CostSpec::Estimator(_) => "estimator",
+            CostSpec::Hudson => "hudson".to_string(),
+            CostSpec::Estimator(e) if e.bias_per_km_m > 0.0 || e.terminal_levels > 0.0 => {
+                format!("estimator_bias{}_H{}", e.bias_per_km_m, e.terminal_levels)
+            }
+            CostSpec::Estimator(_) => "estimator".to_string(),
         };
         format!("{kind}_N{}_A{}_B{}_L{}_gap{}", self.n, self.a, self.b, self.l, self.gap)
     }

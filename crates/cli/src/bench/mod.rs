@@ -22,7 +22,7 @@ pub enum Target {
     /// against a cached-grid lookup.
     Acomms(acomms::Args),
     /// The closed loop: 3 h mission, 5 survey AUVs, τ = 30 s, planner A = 5, L = 5, 10 Hz EKFs;
-    /// wall time against the ≤ 1.1 s target, with the planner/filters/channel split.
+    /// wall time against the ≤ 0.22 s target (5×10⁴ × real time, issue 9), split by engine phase.
     ClosedLoop(closed_loop::Args),
     /// Post-processing (EKF + RTS) of a generated 24 h, 10 Hz, 5-beacon field log (issue 12:
     /// ≤ 10 s, ≤ 500 MB under `/usr/bin/time -v`); `--tune` times the tuning too (≤ 2 min).

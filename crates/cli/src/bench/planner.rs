@@ -32,8 +32,17 @@ fn time<T>(reps: usize, mut f: impl FnMut() -> Result<T>) -> Result<(f64, T)> {
     Ok((times[reps / 2], last.expect("reps >= 1")))
 }
 
+/// The machine's 1-, 5- and 15-minute load averages (`/proc/loadavg`; `None` where there is none):
+/// timings on a shared machine mean little without them.
+fn load_average() -> Option<[f64; 3]> {
+    let text = std::fs::read_to_string("/proc/loadavg").ok()?;
+    let mut fields = text.split_whitespace().map(|f| f.parse::<f64>().ok());
+    Some([fields.next()??, fields.next()??, fields.next()??])
+}
+
 pub fn run(args: Args) -> Result<()> {
     let (reps, brute_max_leaves) = (args.reps.max(1), args.brute_max_leaves);
+    let load_before = load_average();
     let mut rows = Vec::new();
     for w in Workload::standard() {
         let (t_seq, seq) = time(reps, || Ok(w.decide(Algorithm::BranchAndBound, false)?))?;
@@ -61,6 +70,7 @@ pub fn run(args: Args) -> Result<()> {
             "min_cost": seq.value,
             "bnb_1_thread": { "seconds": t_seq, "nodes": seq.nodes },
             "bnb_parallel": { "seconds": t_par, "nodes": par.nodes, "threads": rayon_threads() },
+            "parallel_speedup": t_seq / t_par,
             "brute_force": brute,
             "tree_nodes_full": (1..=w.l as u32 + 1).map(|d| ((w.a * w.b) as u64).pow(d)).sum::<u64>(),
         }));
@@ -68,9 +78,13 @@ pub fn run(args: Args) -> Result<()> {
     let missions = [4, 6].into_iter().map(mission_nodes).collect::<Result<Vec<_>>>()?;
     println!(
         "{}",
-        serde_json::to_string_pretty(
-            &json!({ "target": "planner", "reps": reps, "results": rows, "missions": missions })
-        )?
+        serde_json::to_string_pretty(&json!({
+            "target": "planner",
+            "reps": reps,
+            "load_average": { "before": load_before, "after": load_average() },
+            "results": rows,
+            "missions": missions
+        }))?
     );
     Ok(())
 }
