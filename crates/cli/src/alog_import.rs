@@ -9,20 +9,30 @@
 //! | `heading`     | NAV_HEADING    | compass deg                             | `heading`        |
 //! | `depth`       | NAV_DEPTH      | m                                       | `depth`          |
 //! | `yaw_rate`    | NAV_YAW_RATE   | compass deg/s                           | `yaw_rate`       |
-//! | `gps_x/gps_y` | GPS_X, GPS_Y   | local east/north m (same time)          | `truth`          |
+//! | `gps_x/gps_y` | GPS_X, GPS_Y   | local east/north m (same time)          | `gps`            |
+//! | `gps_lat/gps_lon` | GPS_LATITUDE, GPS_LONGITUDE | WGS-84 deg (same time; needs `origin`) | `gps_ll` |
+//! | `dvl_body_forward/dvl_body_starboard` | DVL_BODY_VEL_Y, DVL_BODY_VEL_X | m/s (same time) | `dvl_body` |
+//! | `dvl_earth_east/dvl_earth_north` | DVL_EARTH_VEL_X, DVL_EARTH_VEL_Y | m/s (same time) | `dvl_earth` |
+//! | `truth_x/truth_y` | TRUTH_X, TRUTH_Y | local east/north m (same time)      | `truth`          |
 //! | `range`       | OWTT_RANGE     | `id=13,travel_time=0.2345[,sigma=…]`    | `range`          |
 //! | `beacon_fix`  | BEACON_FIX     | `id=…,x=…,y=…[,depth=…][,sigma=…]`      | `beacon_fix`     |
 //! | `buoy_fix`    | BUOY_FIX       | `x=…,y=…` (beacon 13 at 1.5 m)          | `beacon_fix`     |
 //! | `ship_fix`    | SHIP_FIX       | `x=…,y=…,heading=…` (compass deg)       | `ship_fix`       |
 //!
 //! Any beacon id (0 … 2³²−1) and travel time in (0, 60] s are accepted, as in the log format.
+//! The GPS names are those of the MOOS iGPS instrument (GPS_X/GPS_Y on the local grid and
+//! GPS_LATITUDE/GPS_LONGITUDE); the DVL names those of the MOOS iDVL instrument, whose body frame
+//! (RDI's) has X to starboard and Y forward, its earth frame X east and Y north. A two-variable
+//! row is made when both halves are posted at the same time. Errors name the alog line.
 //!
 //! The filter starts at the first time with both NAV_X and NAV_Y; NAV_SPEED and NAV_HEADING
 //! posted at that same time give its speed and heading (and are not also measurements). Later
 //! NAV_X/NAV_Y are the vehicle's own solution and are not used.
 
 use anyhow::{anyhow, bail, Context, Result};
+use coopnav_core::{LatLon, LocalFrame};
 use coopnav_moos::{Alog, AlogEntry};
+use coopnav_nav::auv::VelocityFrame;
 use coopnav_nav::fieldlog::{BeaconId, LogRow, Observation, MAX_TRAVEL_TIME_S};
 use serde::{Deserialize, Serialize};
 
@@ -38,6 +48,14 @@ pub struct AlogMapping {
     pub yaw_rate: String,
     pub gps_x: String,
     pub gps_y: String,
+    pub gps_lat: String,
+    pub gps_lon: String,
+    pub dvl_body_forward: String,
+    pub dvl_body_starboard: String,
+    pub dvl_earth_east: String,
+    pub dvl_earth_north: String,
+    pub truth_x: String,
+    pub truth_y: String,
     pub range: String,
     pub beacon_fix: String,
     pub buoy_fix: String,
@@ -56,6 +74,14 @@ impl Default for AlogMapping {
             yaw_rate: s("NAV_YAW_RATE"),
             gps_x: s("GPS_X"),
             gps_y: s("GPS_Y"),
+            gps_lat: s("GPS_LATITUDE"),
+            gps_lon: s("GPS_LONGITUDE"),
+            dvl_body_forward: s("DVL_BODY_VEL_Y"),
+            dvl_body_starboard: s("DVL_BODY_VEL_X"),
+            dvl_earth_east: s("DVL_EARTH_VEL_X"),
+            dvl_earth_north: s("DVL_EARTH_VEL_Y"),
+            truth_x: s("TRUTH_X"),
+            truth_y: s("TRUTH_Y"),
             range: s("OWTT_RANGE"),
             beacon_fix: s("BEACON_FIX"),
             buoy_fix: s("BUOY_FIX"),
@@ -80,10 +106,10 @@ fn field(e: &AlogEntry, key: &str) -> Result<f64> {
 }
 
 fn at(e: &AlogEntry) -> String {
-    format!("alog entry {} at t = {} s", e.variable, e.time)
+    format!("alog line {}: {} at t = {} s", e.line, e.variable, e.time)
 }
 
-/// An `(east, north)` pair posted as two variables at the same time, latest of each kept.
+/// A row posted as two variables at the same time (a position or a velocity), latest of each kept.
 #[derive(Default)]
 struct Pair {
     x: Option<(f64, f64)>,
@@ -104,14 +130,58 @@ impl Pair {
     }
 }
 
+/// The rows made of two variables.
+#[derive(Clone, Copy)]
+enum Paired {
+    Gps,
+    GpsLatLon,
+    DvlBody,
+    DvlEarth,
+    Truth,
+}
+
+impl Paired {
+    const ALL: [Paired; 5] = [Paired::Gps, Paired::GpsLatLon, Paired::DvlBody, Paired::DvlEarth, Paired::Truth];
+
+    /// Its (first, second) variable names.
+    fn variables(self, map: &AlogMapping) -> (&str, &str) {
+        match self {
+            Paired::Gps => (&map.gps_x, &map.gps_y),
+            Paired::GpsLatLon => (&map.gps_lat, &map.gps_lon),
+            Paired::DvlBody => (&map.dvl_body_forward, &map.dvl_body_starboard),
+            Paired::DvlEarth => (&map.dvl_earth_east, &map.dvl_earth_north),
+            Paired::Truth => (&map.truth_x, &map.truth_y),
+        }
+    }
+
+    /// The row of both values; `e` is the entry that completed the pair (for errors).
+    fn observation(self, (a, b): (f64, f64), frame: Option<&LocalFrame>, e: &AlogEntry) -> Result<Observation> {
+        Ok(match self {
+            Paired::Gps => Observation::Gps { e: a, n: b },
+            Paired::GpsLatLon => {
+                let Some(frame) = frame else {
+                    bail!("{}: a latitude/longitude GPS fix needs `origin = {{ lat_deg = ..., lon_deg = ... }}` in the post-processing config", at(e));
+                };
+                let ll = LatLon::new(a, b).with_context(|| at(e))?;
+                let (e, n) = frame.to_plane(ll);
+                Observation::Gps { e, n }
+            }
+            Paired::DvlBody => Observation::Velocity { frame: VelocityFrame::Body, v: [a, b] },
+            Paired::DvlEarth => Observation::Velocity { frame: VelocityFrame::Earth, v: [a, b] },
+            Paired::Truth => Observation::Truth { e: a, n: b },
+        })
+    }
+}
+
 /// A numeric `key=value` field that may be absent.
 fn optional_field(e: &AlogEntry, key: &str) -> Result<Option<f64>> {
     e.field(key).map(|_| field(e, key)).transpose()
 }
 
 /// The post-processing log rows of an alog, in its order.
-/// BUOY_FIX is beacon 13 at `buoy_depth` (the post-processing config's).
-pub fn rows(alog: &Alog, map: &AlogMapping, buoy_depth: f64) -> Result<Vec<LogRow>> {
+/// BUOY_FIX is beacon 13 at `buoy_depth` (the post-processing config's); `frame` (the config's
+/// origin) places latitude/longitude GPS fixes.
+pub fn rows(alog: &Alog, map: &AlogMapping, buoy_depth: f64, frame: Option<&LocalFrame>) -> Result<Vec<LogRow>> {
     let Some(t0) = first_pair_time(alog, &map.nav_x, &map.nav_y) else {
         bail!("the alog has no time at which both {} and {} are posted (the filter's start)", map.nav_x, map.nav_y);
     };
@@ -126,10 +196,16 @@ pub fn rows(alog: &Alog, map: &AlogMapping, buoy_depth: f64) -> Result<Vec<LogRo
         compass_deg: value_at_start(&map.heading)?,
     };
     let mut out = vec![LogRow { t: t0, obs: init, sigma: None }];
-    let mut gps = Pair::default();
+    let mut pairs: [Pair; 5] = Default::default();
     for e in &alog.entries {
         let v = e.variable.as_str();
         if e.time == t0 && [&map.nav_x, &map.nav_y, &map.speed, &map.heading].iter().any(|m| *m == v) {
+            continue;
+        }
+        if let Some((i, first)) = paired(map, v) {
+            if let Some(values) = pairs[i].post(first, e.time, number(e)?) {
+                out.push(LogRow { t: e.time, obs: Paired::ALL[i].observation(values, frame, e)?, sigma: None });
+            }
             continue;
         }
         let (obs, sigma) = match v {
@@ -137,10 +213,6 @@ pub fn rows(alog: &Alog, map: &AlogMapping, buoy_depth: f64) -> Result<Vec<LogRo
             _ if v == map.heading => (Observation::Heading { compass_deg: number(e)? }, None),
             _ if v == map.depth => (Observation::Depth(number(e)?), None),
             _ if v == map.yaw_rate => (Observation::YawRate { compass_deg_s: number(e)? }, None),
-            _ if v == map.gps_x || v == map.gps_y => match gps.post(v == map.gps_x, e.time, number(e)?) {
-                Some((x, y)) => (Observation::Truth { e: x, n: y }, None),
-                None => continue,
-            },
             _ if v == map.range => {
                 let travel_time = field(e, "travel_time")?;
                 if !(travel_time > 0.0 && travel_time <= MAX_TRAVEL_TIME_S) {
@@ -173,6 +245,14 @@ pub fn rows(alog: &Alog, map: &AlogMapping, buoy_depth: f64) -> Result<Vec<LogRo
     Ok(out)
 }
 
+/// Which pair `variable` is half of (its index in [`Paired::ALL`]) and whether the first half.
+fn paired(map: &AlogMapping, variable: &str) -> Option<(usize, bool)> {
+    Paired::ALL.iter().enumerate().find_map(|(i, p)| {
+        let (a, b) = p.variables(map);
+        (variable == a || variable == b).then_some((i, variable == a))
+    })
+}
+
 fn beacon(e: &AlogEntry) -> Result<BeaconId> {
     let id = field(e, "id")?;
     (id.fract() == 0.0 && (0.0..=f64::from(BeaconId::MAX)).contains(&id))
@@ -193,4 +273,75 @@ pub fn mapping(path: Option<&std::path::Path>) -> Result<AlogMapping> {
     let Some(p) = path else { return Ok(AlogMapping::default()) };
     let text = std::fs::read_to_string(p).with_context(|| format!("reading {}", p.display()))?;
     toml::from_str(&text).with_context(|| format!("in {}", p.display()))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use coopnav_nav::fieldlog::read_field_log;
+    use coopnav_nav::post::PostConfig;
+
+    fn frame() -> LocalFrame {
+        let cfg = PostConfig::from_toml("origin = { lat_deg = 47.97, lon_deg = -116.5 }\n").unwrap();
+        cfg.frame().unwrap()
+    }
+
+    fn alog_rows(text: &str, frame: Option<&LocalFrame>) -> Result<Vec<LogRow>> {
+        let alog = coopnav_moos::read_alog(text.as_bytes())?;
+        rows(&alog, &AlogMapping::default(), 1.5, frame)
+    }
+
+    const START: &str = "%% LOGSTART 1750000000\n0.000 NAV_X pNav 10\n0.000 NAV_Y pNav -5\n0.000 NAV_SPEED pNav 1.5\n0.000 NAV_HEADING pNav 90\n";
+
+    /// GPS on the grid and in latitude/longitude, DVL in both frames and truth, under the default
+    /// names, give the rows of the same mission written as a version-2 log.
+    #[test]
+    fn gps_and_dvl_variables_give_the_rows_of_the_v2_log() {
+        let alog = format!(
+            "{START}\
+             0.500 DVL_BODY_VEL_X iDVL 0.05\n0.500 DVL_BODY_VEL_Y iDVL 1.48\n\
+             1.000 DVL_EARTH_VEL_X iDVL 1.47\n1.000 DVL_EARTH_VEL_Y iDVL -0.12\n\
+             2.000 GPS_X iGPS 12.5\n2.000 GPS_Y iGPS -4.25\n\
+             3.000 GPS_LATITUDE iGPS 47.9701\n3.000 GPS_LONGITUDE iGPS -116.4999\n\
+             4.000 TRUTH_X topside 13\n4.000 TRUTH_Y topside -4\n\
+             5.000 GPS_X iGPS 99\n5.500 GPS_Y iGPS 98\n"
+        );
+        let v2 = "# coopnav-log 2 time=relative\nt,kind,src,v1,v2,v3,v4,sigma\n\
+                  0,init,,10,-5,1.5,90,\n\
+                  0.5,dvl_body,,1.48,0.05,,,\n\
+                  1,dvl_earth,,1.47,-0.12,,,\n\
+                  2,gps,,12.5,-4.25,,,\n\
+                  3,gps_ll,,47.9701,-116.4999,,,\n\
+                  4,truth,,13,-4,,,\n";
+        let f = frame();
+        let expected = read_field_log(v2.as_bytes(), Some(&f)).unwrap().rows;
+        // GPS_X and GPS_Y posted at different times (5 s, 5.5 s) make no fix.
+        assert_eq!(alog_rows(&alog, Some(&f)).unwrap(), expected);
+        assert!(
+            matches!(expected[1].obs, Observation::Velocity { frame: VelocityFrame::Body, v } if v == [1.48, 0.05])
+        );
+    }
+
+    #[test]
+    fn malformed_gps_and_dvl_values_name_their_line() {
+        let f = frame();
+        for (bad, said) in [
+            ("1.000 GPS_X iGPS abc\n", "alog line 6: GPS_X at t = 1 s: value \"abc\" is not a finite number"),
+            ("1.000 DVL_BODY_VEL_X iDVL nan\n", "alog line 6: DVL_BODY_VEL_X"),
+            ("1.000 DVL_EARTH_VEL_Y iDVL inf\n", "alog line 6: DVL_EARTH_VEL_Y"),
+            ("1.000 GPS_LATITUDE iGPS 95\n1.000 GPS_LONGITUDE iGPS 3\n", "alog line 7: GPS_LONGITUDE"),
+            ("1.000 TRUTH_Y topside north\n", "alog line 6: TRUTH_Y"),
+        ] {
+            let e = format!("{:#}", alog_rows(&format!("{START}{bad}"), Some(&f)).unwrap_err());
+            assert!(e.contains(said), "{bad:?}: {e}");
+        }
+        let e = format!(
+            "{:#}",
+            alog_rows(&format!("{START}1.000 GPS_LATITUDE iGPS 95\n1 GPS_LONGITUDE a 3\n"), Some(&f)).unwrap_err()
+        );
+        assert!(e.contains("latitude 95"), "{e}");
+        let latlon = format!("{START}2.000 GPS_LATITUDE iGPS 47.9\n2.000 GPS_LONGITUDE iGPS -116.5\n");
+        let e = format!("{:#}", alog_rows(&latlon, None).unwrap_err());
+        assert!(e.contains("alog line 7") && e.contains("origin = {"), "{e}");
+    }
 }

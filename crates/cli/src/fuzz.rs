@@ -164,7 +164,7 @@ fn alog_parse(b: &[u8]) -> bool {
     coopnav_moos::alog::read_alog(b).is_ok()
 }
 fn alog_import_parse(b: &[u8]) -> bool {
-    coopnav_moos::alog::read_alog(b).is_ok_and(|log| alog_import::rows(&log, &Default::default(), 1.5).is_ok())
+    coopnav_moos::alog::read_alog(b).is_ok_and(|log| alog_import::rows(&log, &Default::default(), 1.5, None).is_ok())
 }
 
 fn node_report_seed() -> Vec<u8> {

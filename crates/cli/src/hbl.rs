@@ -4,8 +4,8 @@ use crate::alog_import;
 use crate::input;
 use anyhow::{Context, Result};
 use coopnav_core::limits;
-use coopnav_nav::fieldlog::{FieldLog, TimeBase};
-use coopnav_nav::post::{self, PostConfig};
+use coopnav_nav::fieldlog::{BeaconId, FieldLog, TimeBase};
+use coopnav_nav::post::{self, PostConfig, PostSample, RangeResidual};
 use coopnav_nav::post_tune::{self, Scored, TuneOptions, TuneReport};
 use coopnav_sim::hbl::grid::{self, GridSpec};
 use coopnav_sim::hbl::tune::{tune, Coefficient, Objective, TuneSpec};
@@ -16,6 +16,7 @@ use coopnav_sim::work;
 /// x_rel bin of the Monte Carlo error profile (m).
 const PROFILE_BIN_M: f64 = 5.0;
 use indicatif::{ProgressBar, ProgressStyle};
+use serde::Serialize;
 use serde_json::json;
 use std::path::{Path, PathBuf};
 
@@ -94,6 +95,10 @@ pub enum Command {
         /// With --tune: Nelder–Mead iterations at most.
         #[arg(long, default_value_t = 80)]
         tune_iters: u64,
+        /// With --tune: the search averages the dead-reckoning rows over blocks of this many
+        /// seconds and predicts in steps of that length (0: full rate); before/after are full rate.
+        #[arg(long, default_value_t = TuneOptions::default().dead_reckoning_block_s)]
+        tune_block_s: f64,
     },
 }
 
@@ -165,8 +170,13 @@ pub fn run_command(cmd: Command) -> Result<()> {
             tune,
             hold_out_every,
             tune_iters,
+            tune_block_s,
         } => {
-            let tune = tune.then_some(TuneOptions { hold_out_every, max_iters: tune_iters });
+            let tune = tune.then_some(TuneOptions {
+                hold_out_every,
+                max_iters: tune_iters,
+                dead_reckoning_block_s: tune_block_s,
+            });
             postprocess(&log, alog_map.as_deref(), config.as_deref(), &out, force, strict, allow_large, tune)
         }
         Command::Example { kind } => example(kind),
@@ -378,7 +388,7 @@ fn postprocess(
     limits::check([work::postprocess_log(&log.display().to_string(), log_bytes)], allow_large)?;
     let field_log = if log.extension().is_some_and(|e| e == "alog") {
         let alog = coopnav_moos::read_alog_file(log)?;
-        let rows = alog_import::rows(&alog, &alog_import::mapping(alog_map)?, cfg.buoy_depth)
+        let rows = alog_import::rows(&alog, &alog_import::mapping(alog_map)?, cfg.buoy_depth, cfg.frame().as_ref())
             .with_context(|| format!("in {}", log.display()))?;
         FieldLog { time: TimeBase::Relative, rows }
     } else {
@@ -414,49 +424,22 @@ fn postprocess(
     };
     // Output times are seconds since the log's origin; a Unix log's origin is recorded here.
     manifest(&dir, "hbl postprocess", 0, json!({ "log": log, "config": cfg, "time_origin_unix": time_origin_unix }))?;
-    let mut csv = String::from(
-        "t,filt_e,filt_n,filt_sd_e,filt_sd_n,smooth_e,smooth_n,smooth_sd_e,smooth_sd_n,true_e,true_n,\
-         smooth_heading_bias_deg,smooth_current_e,smooth_current_n\n",
-    );
-    for s in &result.samples {
-        let o = |v: Option<f64>| v.map_or(String::new(), |x| x.to_string());
-        let (truth, current) = (s.truth, s.smoothed_current);
-        csv.push_str(&format!(
-            "{},{},{},{},{},{},{},{},{},{},{},{},{},{}\n",
-            s.t,
-            s.filtered[0],
-            s.filtered[1],
-            s.filtered_sd[0],
-            s.filtered_sd[1],
-            s.smoothed[0],
-            s.smoothed[1],
-            s.smoothed_sd[0],
-            s.smoothed_sd[1],
-            o(truth.map(|p| p[0])),
-            o(truth.map(|p| p[1])),
-            s.smoothed_heading_bias.to_degrees(),
-            o(current.map(|c| c[0])),
-            o(current.map(|c| c[1])),
-        ));
-    }
-    dir.write_bytes("estimates.csv", csv)?;
-    let mut res = String::from("t,beacon,applied,innovation_m,innovation_sd_m,smoothed_residual_m,nis\n");
-    for r in &result.residuals {
-        res.push_str(&format!(
-            "{},{},{},{},{},{},{}\n",
-            r.t, r.beacon, r.applied, r.innovation, r.innovation_sd, r.smoothed, r.nis
-        ));
-    }
-    dir.write_bytes("residuals.csv", res)?;
+    // Streamed row by row: a day's log has about a million steps (150 MB of CSV).
+    dir.write_csv("estimates.csv", result.samples.iter().map(EstimateRow::of))?;
+    dir.write_csv("residuals.csv", result.residuals.iter().map(ResidualRow::of))?;
     if let Some(frame) = cfg.frame() {
-        let mut ll = String::from("t,smooth_lat_deg,smooth_lon_deg\n");
-        for s in &result.samples {
-            let p = frame
-                .from_plane(s.smoothed[0], s.smoothed[1])
-                .with_context(|| format!("smoothed position at t = {} s has no latitude/longitude", s.t))?;
-            ll.push_str(&format!("{},{},{}\n", s.t, p.lat_deg(), p.lon_deg()));
+        let mut unplaceable = None;
+        let rows = result.samples.iter().map_while(|s| match frame.from_plane(s.smoothed[0], s.smoothed[1]) {
+            Ok(p) => Some(LatLonRow { t: s.t, smooth_lat_deg: p.lat_deg(), smooth_lon_deg: p.lon_deg() }),
+            Err(e) => {
+                unplaceable = Some((s.t, e));
+                None
+            }
+        });
+        dir.write_csv("smoothed_ll.csv", rows)?;
+        if let Some((t, e)) = unplaceable {
+            return Err(e).with_context(|| format!("smoothed position at t = {t} s has no latitude/longitude"));
         }
-        dir.write_bytes("smoothed_ll.csv", ll)?;
     }
     dir.write_json("summary.json", &result.summary)?;
     if let Some(report) = &tuned {
@@ -467,6 +450,81 @@ fn postprocess(
     let out = dir.finish()?;
     println!("{}\nwrote {}", serde_json::to_string_pretty(&result.summary)?, out.display());
     Ok(())
+}
+
+/// One line of `estimates.csv`: filtered and smoothed position with their SDs, the truth where
+/// logged, the smoothed compass bias and current.
+#[derive(Serialize)]
+struct EstimateRow {
+    t: f64,
+    filt_e: f64,
+    filt_n: f64,
+    filt_sd_e: f64,
+    filt_sd_n: f64,
+    smooth_e: f64,
+    smooth_n: f64,
+    smooth_sd_e: f64,
+    smooth_sd_n: f64,
+    true_e: Option<f64>,
+    true_n: Option<f64>,
+    smooth_heading_bias_deg: f64,
+    smooth_current_e: Option<f64>,
+    smooth_current_n: Option<f64>,
+}
+
+impl EstimateRow {
+    fn of(s: &PostSample) -> Self {
+        EstimateRow {
+            t: s.t,
+            filt_e: s.filtered[0],
+            filt_n: s.filtered[1],
+            filt_sd_e: s.filtered_sd[0],
+            filt_sd_n: s.filtered_sd[1],
+            smooth_e: s.smoothed[0],
+            smooth_n: s.smoothed[1],
+            smooth_sd_e: s.smoothed_sd[0],
+            smooth_sd_n: s.smoothed_sd[1],
+            true_e: s.truth.map(|p| p[0]),
+            true_n: s.truth.map(|p| p[1]),
+            smooth_heading_bias_deg: s.smoothed_heading_bias.to_degrees(),
+            smooth_current_e: s.smoothed_current.map(|c| c[0]),
+            smooth_current_n: s.smoothed_current.map(|c| c[1]),
+        }
+    }
+}
+
+/// One line of `residuals.csv`.
+#[derive(Serialize)]
+struct ResidualRow {
+    t: f64,
+    beacon: BeaconId,
+    applied: bool,
+    innovation_m: f64,
+    innovation_sd_m: f64,
+    smoothed_residual_m: f64,
+    nis: f64,
+}
+
+impl ResidualRow {
+    fn of(r: &RangeResidual) -> Self {
+        ResidualRow {
+            t: r.t,
+            beacon: r.beacon,
+            applied: r.applied,
+            innovation_m: r.innovation,
+            innovation_sd_m: r.innovation_sd,
+            smoothed_residual_m: r.smoothed,
+            nis: r.nis,
+        }
+    }
+}
+
+/// One line of `smoothed_ll.csv`.
+#[derive(Serialize)]
+struct LatLonRow {
+    t: f64,
+    smooth_lat_deg: f64,
+    smooth_lon_deg: f64,
 }
 
 /// The tuning's before/after table: values, likelihood, in-sample and held-out residual RMS.

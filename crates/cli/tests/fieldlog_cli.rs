@@ -31,7 +31,7 @@ fn write_alog(path: &Path, rows: &[LogRow]) {
             Observation::Speed(s) => vec![("NAV_SPEED", s.to_string())],
             Observation::Heading { compass_deg } => vec![("NAV_HEADING", compass_deg.to_string())],
             Observation::YawRate { compass_deg_s } => vec![("NAV_YAW_RATE", compass_deg_s.to_string())],
-            Observation::Truth { e, n } => vec![("GPS_X", e.to_string()), ("GPS_Y", n.to_string())],
+            Observation::Truth { e, n } => vec![("TRUTH_X", e.to_string()), ("TRUTH_Y", n.to_string())],
             Observation::Range { beacon, travel_time } => {
                 vec![("OWTT_RANGE", format!("id={beacon},travel_time={travel_time}"))]
             }

@@ -100,8 +100,8 @@ fn as_alog(csv: &str) -> String {
             "buoy_fix" => post("BUOY_FIX", format!("x={},y={}", f[3], f[4])),
             "ship_fix" => post("SHIP_FIX", format!("x={},y={},heading={}", f[3], f[4], f[5])),
             "truth" => {
-                post("GPS_X", f[3].into());
-                post("GPS_Y", f[4].into());
+                post("TRUTH_X", f[3].into());
+                post("TRUTH_Y", f[4].into());
             }
             other => panic!("kind {other}"),
         }

@@ -61,6 +61,8 @@ pub struct AlogEntry {
     pub variable: String,
     pub source: String,
     pub value: String,
+    /// The entry's line in the file (1-based), for errors about its value.
+    pub line: usize,
 }
 
 impl AlogEntry {
@@ -150,7 +152,8 @@ fn parse_entry(line: &str, number: usize) -> Result<AlogEntry, AlogError> {
         Ok(t) if t.is_finite() => t,
         _ => return Err(malformed("TIME is not a finite number")),
     };
-    Ok(AlogEntry { time, variable: variable.to_string(), source: source.to_string(), value: rest.trim().to_string() })
+    let (variable, source, value) = (variable.to_string(), source.to_string(), rest.trim().to_string());
+    Ok(AlogEntry { time, variable, source, value, line: number })
 }
 
 /// The first whitespace-delimited column of `text` and what follows it.

@@ -580,7 +580,7 @@ mod tests {
             EstimatorSpec { bias_per_km_m: f64::NAN, ..EstimatorSpec::default() },
         ] {
             let e = bad.validate("planner.cost.").unwrap_err().to_string();
-            assert!(e.contains("planner.cost.") && e.contains(">= 0"), "{e}");
+            assert!(e.contains("planner.cost.") && e.contains("allowed a finite number >= 0"), "{e}");
         }
     }
 

@@ -174,14 +174,16 @@ pub fn postprocess_log(path: &str, bytes: u64) -> Estimate {
 pub fn postprocess(rows: &[LogRow], cfg: &PostConfig) -> Vec<Estimate> {
     let mut times: Vec<f64> = rows.iter().map(|r| r.t).collect();
     times.sort_by(f64::total_cmp);
+    // As the filter runs: rows at one time share a step, and a gap within 1 ns of a whole number
+    // of steps takes that many (10 Hz times such as 0.3 − 0.2 are not exact multiples of 0.1 s).
     let predictions: f64 = times
         .windows(2)
         .map(|w| match w[1] - w[0] {
             gap if gap > cfg.max_gap_s => 1.0,
-            gap => (gap / cfg.auv.step_s).ceil(),
+            gap => ((gap - 1e-9) / cfg.auv.step_s).ceil().max(0.0),
         })
         .sum();
-    let steps = predictions + times.len() as f64;
+    let steps = predictions + 1.0;
     let per_step = match cfg.model {
         AuvModel::Thesis => CompactHistory::<5>::STEP_BYTES,
         AuvModel::Current(_) => CompactHistory::<7>::STEP_BYTES,
@@ -214,6 +216,16 @@ mod tests {
         // 1000 s apart (over max_gap_s): one step per silence, as the filter runs it.
         assert!(check(postprocess(&rows(1000.0), &cfg), false).is_ok());
         assert!(check([postprocess_log("log.csv", 10_000_000)], false).is_ok());
+        // The step estimate is the filter's own count on a 10 Hz log with two rows per time.
+        let init = Observation::Init { e: 0.0, n: 0.0, speed: 1.0, compass_deg: 0.0 };
+        let mut ten_hz = vec![LogRow { t: 0.0, obs: init, sigma: None }];
+        for i in 1..=2000 {
+            let t = i as f64 * 0.1;
+            ten_hz.push(LogRow { t, obs: Observation::Speed(1.0), sigma: None });
+            ten_hz.push(LogRow { t, obs: Observation::Heading { compass_deg: 0.0 }, sigma: None });
+        }
+        let steps = coopnav_nav::post::postprocess_rows(&ten_hz, &cfg).unwrap().samples.len();
+        assert_eq!((steps, postprocess(&ten_hz, &cfg)[0].value), (2001, 2001.0));
         let e = check([postprocess_log("log.csv", 1_000_000_000)], false).unwrap_err().to_string();
         assert!(e.contains("the size of log.csv"), "{e}");
     }

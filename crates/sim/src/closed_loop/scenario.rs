@@ -504,6 +504,12 @@ impl Scenario {
         if let Some(k) = pl.estimator_bias_per_km {
             p.non_negative("planner.estimator_bias_per_km", k);
         }
+        if let Some(l) = pl.estimator_look_ahead {
+            if (PlannerConfig { look_ahead: l, ..self.planner_config() }).validate().is_err() {
+                let allowed = "<= 63 and (heading_options * pitch_options)^(L + 1) <= 1e12";
+                p.push("planner.estimator_look_ahead", l.to_string(), allowed);
+            }
+        }
         if pl.start_after_reports == 0 {
             p.push("planner.start_after_reports", "0", ">= 1");
         }
@@ -693,6 +699,26 @@ mod tests {
     }
 
     /// Eight AUVs with τ = 30 s leave 3.3 s per slot, less than rate 0's 3.9 s of air time; τ = 44 s fits.
+    #[test]
+    fn the_estimator_planners_own_settings_are_checked() {
+        let text = EXAMPLE.replace(
+            "[planner]\n",
+            "[planner]\nestimator_penalty_case = \"99\"\nestimator_look_ahead = 70\nestimator_terminal_levels = -1.0\n\
+             estimator_bias_per_km = -2.0\n",
+        );
+        let e = err(&text);
+        for field in ["penalty_case", "look_ahead", "terminal_levels", "bias_per_km"] {
+            assert!(e.contains(&format!("planner.estimator_{field}")), "{field}: {e}");
+        }
+        let ok =
+            EXAMPLE.replace("[planner]\n", "[planner]\nestimator_penalty_case = \"3\"\nestimator_look_ahead = 3\n");
+        let sc = Scenario::parse(&ok, Path::new("s.toml")).unwrap();
+        assert_eq!(
+            (sc.planner.estimator_penalty_case.as_deref(), sc.planner.estimator_look_ahead),
+            (Some("3"), Some(3))
+        );
+    }
+
     #[test]
     fn a_schedule_that_cannot_fit_is_refused() {
         let e = err(&EXAMPLE.replace("n_auvs = 3", "n_auvs = 8"));

@@ -367,6 +367,12 @@ mod tests {
             let dr = by_name(format!("current N={n}: planner-estimator beats none"));
             assert!(dr.passed, "{}", dr.detail);
         }
+        // With current at N = 3 the planner must beat every baseline, Hudson's planner included:
+        // before the range-bias model and the cost-to-go it lost to zigzag, centroid and trail.
+        for name in policies().iter().skip(1) {
+            let c = by_name(format!("current N=3: planner-estimator beats {name}"));
+            assert!(c.passed, "{name}: {}", c.detail);
+        }
         // One check per baseline and cell, plus health per cell.
         assert_eq!(r.checks.len(), 3 * policies().len());
         assert!(r.table.contains("greedy-fisher") && r.table.contains("open-loop"));
