@@ -504,10 +504,11 @@ impl Scenario {
         if let Some(k) = pl.estimator_bias_per_km {
             p.non_negative("planner.estimator_bias_per_km", k);
         }
-        if let Some(l) = pl.estimator_look_ahead {
-            if (PlannerConfig { look_ahead: l, ..self.planner_config() }).validate().is_err() {
-                let allowed = "<= 63 and (heading_options * pitch_options)^(L + 1) <= 1e12";
-                p.push("planner.estimator_look_ahead", l.to_string(), allowed);
+        if let Some(look_ahead) = pl.estimator_look_ahead {
+            // The planner's own look-ahead check; its other fields are reported once, below.
+            if let Err(PlanError::Invalid(found)) = (PlannerConfig { look_ahead, ..self.planner_config() }).validate() {
+                let own = found.0.into_iter().filter(|bad| bad.field == "look_ahead");
+                own.for_each(|bad| p.push("planner.estimator_look_ahead", bad.value, bad.allowed));
             }
         }
         if pl.start_after_reports == 0 {
@@ -712,6 +713,11 @@ mod tests {
         }
         let ok =
             EXAMPLE.replace("[planner]\n", "[planner]\nestimator_penalty_case = \"3\"\nestimator_look_ahead = 3\n");
+        let other_field_bad = err(&ok.replace("heading_options = 5", "heading_options = 1"));
+        assert!(
+            other_field_bad.contains("planner.heading_options") && !other_field_bad.contains("estimator_look_ahead"),
+            "a valid estimator look-ahead is blamed for another field: {other_field_bad}"
+        );
         let sc = Scenario::parse(&ok, Path::new("s.toml")).unwrap();
         assert_eq!(
             (sc.planner.estimator_penalty_case.as_deref(), sc.planner.estimator_look_ahead),
