@@ -2,7 +2,9 @@
 // the rule is written once): sets cfg `bellhop_installed` when it is found as `Bellhop::locate`
 // looks for it: `$COOPNAV_BELLHOP`, else tools/bellhop/bellhop.exe at the repository root.
 
-/// Emits the cfg (and what to watch) for the crate at `manifest_dir`, two levels below the root.
+/// Emits the cfg (and what to watch) for the crate at `manifest_dir`, two levels below the root
+/// (`CARGO_MANIFEST_DIR` read when the script runs: one compiled build script serves every checkout
+/// sharing a target directory).
 fn detect_bellhop(manifest_dir: &str) {
     use std::path::Path;
     println!("cargo::rustc-check-cfg=cfg(bellhop_installed)");

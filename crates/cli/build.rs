@@ -26,7 +26,10 @@ struct Optional {
 }
 
 fn main() {
-    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+    // Read when the script runs, not baked in when it is compiled: one compiled build script serves
+    // every checkout that shares a target directory, and must probe the checkout being built.
+    let manifest_dir = std::env::var("CARGO_MANIFEST_DIR").expect("cargo sets CARGO_MANIFEST_DIR for build scripts");
+    let root = Path::new(&manifest_dir).join("../..");
     let optionals = [
         Optional {
             cfg: "chromium_installed",

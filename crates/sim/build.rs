@@ -6,5 +6,5 @@ include!("../acomms/bellhop_cfg.rs");
 fn main() {
     println!("cargo:rerun-if-changed=build.rs");
     println!("cargo:rerun-if-changed=../acomms/bellhop_cfg.rs");
-    detect_bellhop(env!("CARGO_MANIFEST_DIR"));
+    detect_bellhop(&std::env::var("CARGO_MANIFEST_DIR").expect("cargo sets CARGO_MANIFEST_DIR for build scripts"));
 }
