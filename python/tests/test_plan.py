@@ -100,7 +100,7 @@ def test_bad_planner_input_raises_value_error_naming_the_field():
         planner.decide(t, pose, errors[:3], forecast)
     cfg = planner.config
     cfg["limits"] = {"min": 500.0, "max": 100.0}
-    with pytest.raises(ValueError, match="invalid planner setting limits"):
+    with pytest.raises(ValueError, match="invalid planner settings: field limits = min 500, max 100"):
         coopnav.Planner(cfg)
     with pytest.raises(ValueError, match="needs a \"simulate\" scenario"):
         coopnav.simulate(coopnav.Scenario.example("plan"))
