@@ -28,6 +28,14 @@ pub(crate) trait CostModel: Sync {
         0.0
     }
 
+    /// AUV `k`'s term on the last level, with the cost-to-go: `term` and `state` are what
+    /// `update` returned for the ping from `cna` to the AUV at `auv`. Must be ≥ (1 + H)·term
+    /// (H = `terminal_levels`), what the bounds assume of it (up to their 1e-9 margin).
+    #[inline(always)]
+    fn leaf_term(&self, _k: usize, _state: &Self::State, _cna: [f64; 3], _auv: [f64; 3], term: f64) -> f64 {
+        term * (1.0 + self.terminal_levels())
+    }
+
     /// Joins one AUV's term into a level's raw cost (sum, or max for worst-AUV).
     fn combine(&self, acc: f64, term: f64) -> f64;
 

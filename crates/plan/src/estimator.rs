@@ -36,6 +36,23 @@
 //!    bounds (a fixed factor ≥ 1 commutes with sum and max); the bias term of step 4 is ≥ 0 and
 //!    only increases every term, so the covariance bounds below stay valid lower bounds for M;
 //!    they add it at the shortest range the CNA can be at (`EkfCost::term_bound`).
+//! 7. Reach-time cost-to-go (`reach_success` p_u; issue 10's unwon N = 5 cell): step 6 holds the
+//!    leaf's term for H levels, which is right for an AUV the CNA can ping from the leaf and wrong
+//!    for one beyond the link's reach: its pings are lost (p_s ≈ 0) and its filter's covariance
+//!    grows by qτ per axis and level until the CNA gets close enough. The useful range r_u is the
+//!    shortest range at which the planner's link model p_s falls below p_u ([`useful_range`]).
+//!    From the leaf pose at slant range d from the AUV's leaf position, at its speed s (s·τ per
+//!    level), the CNA needs m = max(0, d − r_u)/(s·τ) levels to be within r_u (the AUV's own motion
+//!    is left out: it may open or close the distance). Level i = 1..H beyond the horizon has then
+//!    grown by qτ·min(i, m) per axis over the held leaf covariance; taking i as continuous, the
+//!    mean over the H levels is ḡ = (qτ/H)·∫₀ᴴ min(x, m) dx = qτ·(m − m²/(2H)) for m ≤ H and
+//!    qτ·H/2 beyond ([`EkfCost::reach_growth`]). The H levels then count H·term(M + ḡ·I) instead
+//!    of H·term(M): exact for the trace sum, the mean growth for the other aggregates. Each AUV is
+//!    taken alone (the CNA cannot reach every far AUV at once, so this under-states their growth);
+//!    it pulls the CNA towards the AUVs that lose most: fast-growing ones, far beyond r_u. The
+//!    term grows with ḡ (trace, √trace and ln(1 + det) all grow with M in the semi-definite
+//!    order), so the leaf term stays ≥ (1 + H)·term(M) and step 6's bounds stay valid; the bound
+//!    adds ḡ at the shortest leaf range the CNA can reach (ḡ grows with d). p_u = 0 is none.
 //!
 //! Lower bound for branch-and-bound (the levels below a node; derivation in [`EkfCost::bound_rest`]):
 //! by operator convexity of the inverse, E ⪰ (P̃⁻¹ + p_s·hhᵀ/R)⁻¹ ⪰ (P̃⁻¹ + hhᵀ/R_min)⁻¹, so the
@@ -117,6 +134,11 @@ pub struct EstimatorSpec {
     /// H of step 6: levels of cost-to-go counted beyond the horizon at each leaf (≥ 0; 0 = none).
     #[serde(default)]
     pub terminal_levels: f64,
+    /// p_u of step 7: the success probability a ping needs to be useful; the reach cost-to-go
+    /// counts each AUV's growth until the CNA is within the range where p_s ≥ p_u (in [0, 1];
+    /// 0 = none; it acts only with H > 0).
+    #[serde(default)]
+    pub reach_success: f64,
 }
 
 impl CheckFields for EstimatorSpec {
@@ -125,6 +147,7 @@ impl CheckFields for EstimatorSpec {
         p.non_negative(&format!("{prefix}range_noise.per_km_m"), self.range_noise.per_km_m);
         p.non_negative(&format!("{prefix}bias_per_km_m"), self.bias_per_km_m);
         p.non_negative(&format!("{prefix}terminal_levels"), self.terminal_levels);
+        p.probability(&format!("{prefix}reach_success"), self.reach_success);
     }
 }
 
@@ -207,6 +230,20 @@ impl LinkTable {
         let f = x - i as f64;
         self.p[i] + (self.p[i + 1] - self.p[i]) * f
     }
+
+    /// r_u of step 7: the shortest range at which the interpolated success falls below `p_u`, m
+    /// (infinite when it never does, so p_u = 0 makes every AUV reachable at once).
+    pub fn useful_range(&self, p_u: f64) -> f64 {
+        let Some(i) = self.p.iter().position(|&p| p < p_u) else {
+            return f64::INFINITY;
+        };
+        if i == 0 {
+            return 0.0;
+        }
+        // Linear between the last sample at or above p_u and the first below it.
+        let (hi, lo) = (self.p[i - 1], self.p[i]);
+        (i as f64 - 1.0 + (hi - p_u) / (hi - lo)) * Self::STEP_M
+    }
 }
 
 /// Steps 1–3 of the module's derivation: the expected covariance [P_ee, P_en, P_nn] after τ of
@@ -250,14 +287,44 @@ pub(crate) struct EkfCost {
     /// q_k·τ per AUV, m².
     pub q_tau: Vec<f64>,
     pub link: LinkTable,
+    /// Step 7: the useful range r_u (m) and the CNA's step s·τ (m per level).
+    pub reach: Reach,
+}
+
+/// What step 7 needs of the CNA and its link.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Reach {
+    pub useful_range_m: f64,
+    pub step_m: f64,
 }
 
 impl EkfCost {
-    pub fn new(spec: EstimatorSpec, estimates: &[AuvEstimate], tau: f64, link: LinkTable) -> Result<Self, PlanError> {
+    /// The model for AUVs `estimates`, levels of `tau` seconds, a CNA moving `speed` m/s.
+    pub fn new(
+        spec: EstimatorSpec,
+        estimates: &[AuvEstimate],
+        tau: f64,
+        speed: f64,
+        link: LinkTable,
+    ) -> Result<Self, PlanError> {
         for (k, e) in estimates.iter().enumerate() {
             e.validate(k)?;
         }
-        Ok(EkfCost { spec, q_tau: estimates.iter().map(|e| e.process_noise * tau).collect(), link })
+        let reach = Reach { useful_range_m: link.useful_range(spec.reach_success), step_m: speed * tau };
+        Ok(EkfCost { spec, q_tau: estimates.iter().map(|e| e.process_noise * tau).collect(), link, reach })
+    }
+
+    /// ḡ of step 7 for AUV `k` at slant range `range_m` from the leaf pose: the mean growth per
+    /// axis over the H levels beyond the horizon before the CNA is within the useful range, m².
+    #[inline(always)]
+    fn reach_growth(&self, k: usize, range_m: f64) -> f64 {
+        let h = self.spec.terminal_levels;
+        let beyond = range_m - self.reach.useful_range_m;
+        if !(beyond > 0.0 && h > 0.0) {
+            return 0.0;
+        }
+        let m = (beyond / self.reach.step_m).min(h);
+        self.q_tau[k] * (m - m * m / (2.0 * h))
     }
 
     /// β(r)² of step 4 for a ping from `cna` to the AUV at `auv`, m².
@@ -275,8 +342,9 @@ impl EkfCost {
     }
 
     /// A lower bound on a level's term from lower bounds on tr E and det E and the half bias
-    /// variance h = β²/2 at the shortest possible range: M = E + h·I has tr M = tr E + 2h and
-    /// det M = det E + h·tr E + h², both increasing in tr E and det E.
+    /// variance h = β²/2 at the shortest possible range (plus step 7's growth ḡ at the leaf):
+    /// M = E + h·I has tr M = tr E + 2h and det M = det E + h·tr E + h², both increasing in tr E
+    /// and det E. With exact tr E and det E it is the term itself.
     #[inline(always)]
     fn term_bound(&self, trace: f64, det: f64, half_bias2: f64) -> f64 {
         let h = half_bias2;
@@ -313,6 +381,22 @@ impl CostModel for EkfCost {
         self.spec.terminal_levels
     }
 
+    /// Steps 6 and 7: the leaf's term plus H levels at M + ḡ·I (ḡ = 0: (1 + H)·term exactly).
+    #[inline(always)]
+    fn leaf_term(&self, k: usize, state: &[f64; 3], cna: [f64; 3], auv: [f64; 3], term: f64) -> f64 {
+        let h = self.spec.terminal_levels;
+        let d = [auv[0] - cna[0], auv[1] - cna[1], auv[2] - cna[2]];
+        let range2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
+        let growth = self.reach_growth(k, range2.sqrt());
+        if growth <= 0.0 {
+            return term * (1.0 + h);
+        }
+        let [a, b, c] = *state;
+        let half_bias2 = 0.5 * self.bias_variance_at(range2);
+        let (ma, mc) = (a + half_bias2, c + half_bias2);
+        term + h * self.term_bound(ma + mc, ma * mc - b * b, growth)
+    }
+
     #[inline(always)]
     fn combine(&self, acc: f64, term: f64) -> f64 {
         match self.spec.aggregate {
@@ -329,7 +413,9 @@ impl CostModel for EkfCost {
     /// - [`EigenFloor`]: whatever the ping directions.
     ///
     /// R ≥ R(max(0, |a − c| − spread)) at each level (R grows with range), p_s ≤ 1 and |h| ≤ 1;
-    /// the bias term of step 4 at that shortest range is added to both (`term_bound`).
+    /// the bias term of step 4 at that shortest range is added to both (`term_bound`), and at
+    /// the leaf (the last slot of `out`) step 7's growth ḡ at that range, scaled by 1/(1 + H)
+    /// because the tree weights the leaf's bound by 1 + H (`Tree::rest_bound`).
     fn bound_rest(
         &self,
         k: usize,
@@ -348,7 +434,8 @@ impl CostModel for EkfCost {
         let mut eigen = EigenFloor::of(state);
         // The horizontal line of sight is at least `before` long before each level's move.
         let mut before = horizontal;
-        for (slot, b) in out.iter_mut().zip(below) {
+        let leaf = out.len().saturating_sub(1);
+        for (j, (slot, b)) in out.iter_mut().zip(below).enumerate() {
             let turn_max = if before > b.turn { (b.turn / before) * (b.turn / before) } else { 1.0 };
             let los = [b.auv[0] - cna[0], b.auv[1] - cna[1], b.auv[2] - cna[2]];
             let nearest = (norm(los) - b.spread).max(0.0);
@@ -357,7 +444,14 @@ impl CostModel for EkfCost {
             before = (los[0] * los[0] + los[1] * los[1]).sqrt() - b.spread;
             let (trace, det) = turn.step(q, turn_max, r_min);
             let (eigen_trace, eigen_det) = eigen.step(q, r_min);
-            let term = self.term_bound(trace, det, half_bias2).max(self.term_bound(eigen_trace, eigen_det, half_bias2));
+            let level_bound = |h: f64| self.term_bound(trace, det, h).max(self.term_bound(eigen_trace, eigen_det, h));
+            let mut term = level_bound(half_bias2);
+            let growth = if j == leaf { self.reach_growth(k, nearest) } else { 0.0 };
+            if growth > 0.0 {
+                // Step 7 at the leaf: (term + H·term(+ḡ))/(1 + H), the tree weighting the leaf by 1 + H.
+                let h = self.spec.terminal_levels;
+                term = (term + h * level_bound(half_bias2 + growth)) / (1.0 + h);
+            }
             *slot = self.combine(*slot, term);
         }
     }
@@ -502,13 +596,16 @@ mod tests {
     use super::*;
     use proptest::prelude::*;
 
+    /// No reach cost-to-go: every AUV is within reach.
+    const NO_REACH: Reach = Reach { useful_range_m: f64::INFINITY, step_m: 1.0 };
+
     fn biased(aggregate: Aggregate, q_tau: Vec<f64>, bias_per_km_m: f64) -> EkfCost {
         let spec = EstimatorSpec { aggregate, bias_per_km_m, ..EstimatorSpec::default() };
-        EkfCost { spec, q_tau, link: LinkTable::perfect() }
+        EkfCost { spec, q_tau, link: LinkTable::perfect(), reach: NO_REACH }
     }
 
     fn model(aggregate: Aggregate, q_tau: Vec<f64>, link: LinkTable) -> EkfCost {
-        EkfCost { spec: EstimatorSpec { aggregate, ..EstimatorSpec::default() }, q_tau, link }
+        EkfCost { spec: EstimatorSpec { aggregate, ..EstimatorSpec::default() }, q_tau, link, reach: NO_REACH }
     }
 
     #[test]
@@ -572,7 +669,7 @@ mod tests {
     #[test]
     fn the_terminal_cost_is_h_levels_and_settings_are_checked() {
         let spec = EstimatorSpec { terminal_levels: 3.0, ..EstimatorSpec::default() };
-        let m = EkfCost { spec, q_tau: vec![0.0], link: LinkTable::perfect() };
+        let m = EkfCost { spec, q_tau: vec![0.0], link: LinkTable::perfect(), reach: NO_REACH };
         assert_eq!(m.terminal_levels(), 3.0);
         assert_eq!(model(Aggregate::TraceSum, vec![0.0], LinkTable::perfect()).terminal_levels(), 0.0);
         for bad in [
@@ -582,6 +679,49 @@ mod tests {
             let e = bad.validate("planner.cost.").unwrap_err().to_string();
             assert!(e.contains("planner.cost.") && e.contains("allowed a finite number >= 0"), "{e}");
         }
+    }
+
+    #[test]
+    fn far_auvs_grow_until_the_cna_can_reach_them() {
+        // qτ = 2 m², H = 4, s·τ = 60 m, r_u = 500 m. At 620 m: m = 2 levels, ḡ = 2·(2 − 4/8) = 3 m²;
+        // at 1400 m: m ≥ H, ḡ = qτ·H/2 = 4 m²; within r_u nothing. Trace sum: term + H·(tr M + 2ḡ).
+        let spec = EstimatorSpec { terminal_levels: 4.0, ..EstimatorSpec::default() };
+        let m = EkfCost {
+            spec,
+            q_tau: vec![2.0],
+            link: LinkTable::perfect(),
+            reach: Reach { useful_range_m: 500.0, step_m: 60.0 },
+        };
+        let start = [4.0, 1.0, 2.0];
+        for (east, growth) in [(400.0, 0.0), (620.0, 3.0), (1400.0, 4.0)] {
+            let auv = [east, 0.0, 0.0];
+            let (p, term) = m.update(0, &start, [0.0; 3], auv);
+            let want = term + 4.0 * (p[0] + p[2] + 2.0 * growth);
+            let got = m.leaf_term(0, &p, [0.0; 3], auv, term);
+            assert!((got - want).abs() < 1e-9 * want, "{east} m: {got} vs {want}");
+        }
+        // Off (p_u = 0 or H = 0): (1 + H)·term exactly.
+        let off = EkfCost { spec, q_tau: vec![2.0], link: LinkTable::perfect(), reach: NO_REACH };
+        let (p, term) = off.update(0, &start, [0.0; 3], [1400.0, 0.0, 0.0]);
+        assert_eq!(off.leaf_term(0, &p, [0.0; 3], [1400.0, 0.0, 0.0], term), 5.0 * term);
+    }
+
+    #[test]
+    fn the_useful_range_is_where_the_link_falls_below_the_threshold() {
+        struct Linear;
+        impl LinkModel for Linear {
+            fn success(&self, r: f64) -> f64 {
+                (1.0 - r / 4000.0).max(0.0)
+            }
+        }
+        let t = LinkTable::sample(&Linear).unwrap();
+        assert!((t.useful_range(0.75) - 1000.0).abs() < 1e-9);
+        assert!((t.useful_range(0.5) - 2000.0).abs() < 1e-9);
+        assert_eq!(t.useful_range(0.0), f64::INFINITY);
+        assert_eq!(LinkTable::perfect().useful_range(1.0), f64::INFINITY);
+        let spec = EstimatorSpec { reach_success: 1.5, ..EstimatorSpec::default() };
+        let e = spec.validate("planner.cost.").unwrap_err().to_string();
+        assert!(e.contains("planner.cost.reach_success"), "{e}");
     }
 
     #[test]
@@ -602,6 +742,7 @@ mod tests {
             EstimatorSpec::default(),
             &[AuvEstimate { cov: [1.0, 2.0, 1.0], process_noise: 0.1 }],
             10.0,
+            2.0,
             LinkTable::perfect(),
         )
         .err()
@@ -640,12 +781,17 @@ mod tests {
         #[test]
         fn the_bound_below_a_node_is_never_above_a_real_path(
             ve in 0.01f64..50.0, vn in 0.01f64..50.0, rho in -0.99f64..0.99, q in 0.0f64..3.0,
-            agg in 0usize..4, bias in prop_oneof![Just(0.0), 0.0f64..10.0], auv0 in (-800.0f64..800.0, -800.0f64..800.0, 0.0f64..150.0),
+            agg in 0usize..4, bias in prop_oneof![Just(0.0), 0.0f64..10.0],
+            reach in prop_oneof![Just(None), (0.0f64..8.0, 0.0f64..900.0).prop_map(Some)], auv0 in (-800.0f64..800.0, -800.0f64..800.0, 0.0f64..150.0),
             vel in (-3.0f64..3.0, -3.0f64..3.0), step in 1.0f64..60.0,
             moves in prop::collection::vec((-3.2f64..3.2, 0.0f64..1.0, -1.0f64..1.0), 1..8), circle in any::<bool>(),
         ) {
             let aggregate = [Aggregate::TraceSum, Aggregate::WorstAuv, Aggregate::LogDet, Aggregate::SigmaSum][agg];
-            let m = biased(aggregate, vec![q], bias);
+            let mut m = biased(aggregate, vec![q], bias);
+            if let Some((h, useful_range_m)) = reach {
+                m.spec.terminal_levels = h;
+                m.reach = Reach { useful_range_m, step_m: step };
+            }
             let p0 = [ve, rho * (ve * vn).sqrt(), vn];
             let mut cna = [0.0, 0.0, 20.0];
             let mut auv = [auv0.0, auv0.1, auv0.2];
@@ -667,6 +813,10 @@ mod tests {
                 let (next, term) = m.update(0, &p, cna, auv);
                 p = next;
                 actual.push(term);
+            }
+            // The leaf's bound slot stands for its term with the cost-to-go over 1 + H (step 7).
+            if let Some(last) = actual.last_mut() {
+                *last = m.leaf_term(0, &p, cna, auv, *last) / (1.0 + m.spec.terminal_levels);
             }
             m.bound_rest(0, &p0, node_cna, node_auv, below.into_iter(), &mut bound);
             for (j, (b, a)) in bound.iter().zip(&actual).enumerate() {

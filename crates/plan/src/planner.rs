@@ -355,7 +355,7 @@ impl LookAheadPlanner {
 
     fn estimator_tree(&self, spec: EstimatorSpec, input: &PlanInput, depth: usize) -> Result<Tree<EkfCost>, PlanError> {
         let g = self.geometry(input, depth)?;
-        let model = EkfCost::new(spec, input.estimates, self.cfg.motion.tau, self.link.clone())?;
+        let model = EkfCost::new(spec, input.estimates, self.cfg.motion.tau, self.cfg.motion.speed, self.link.clone())?;
         let root = input.estimates.iter().map(|e| e.cov).collect();
         Ok(self.tree(g, model, root))
     }

@@ -74,7 +74,7 @@ prop_compose! {
                   slant in any::<bool>(), tangential in any::<bool>(),
                   covs in prop::collection::vec((0.1f64..30.0, 0.1f64..30.0, -0.95f64..0.95, 0.0f64..0.2), 5),
                   estimator in any::<bool>(), aggregate in 0usize..4, sigma_m in 0.05f64..3.0, per_km_m in 0.0f64..5.0,
-                  bias_per_km_m in prop_oneof![Just(0.0), 0.0f64..10.0], terminal_levels in prop_oneof![Just(0.0), 0.0f64..8.0],
+                  bias_per_km_m in prop_oneof![Just(0.0), 0.0f64..10.0], terminal_levels in prop_oneof![Just(0.0), 0.0f64..8.0], reach_success in prop_oneof![Just(0.0), 0.0f64..1.0],
                   link_mid in 300.0f64..3000.0) -> Instance {
         let cna = if auv_cna { CnaKind::auv(b) } else { CnaKind::Asc {} };
         let m = a * if auv_cna { b } else { 1 };
@@ -94,7 +94,7 @@ prop_compose! {
         if estimator {
             let aggregate = [Aggregate::TraceSum, Aggregate::WorstAuv, Aggregate::LogDet, Aggregate::SigmaSum][aggregate];
             let range_noise = RangeNoise { sigma_m, per_km_m };
-            cfg.cost = CostSpec::Estimator(EstimatorSpec { aggregate, range_noise, bias_per_km_m, terminal_levels });
+            cfg.cost = CostSpec::Estimator(EstimatorSpec { aggregate, range_noise, bias_per_km_m, terminal_levels, reach_success });
         }
         Instance { cfg, cna: CnaPose { pos: Vec3::new(0.0, 0.0, z), heading: Heading::from_radians(heading), pitch: 0.0 }, starts, vels, eps, estimates, link_mid }
     }

@@ -193,7 +193,7 @@ impl<M: CostModel> Tree<M> {
             dmin2 = dmin2.min(d2);
             dmax2 = dmax2.max(d2);
             let (state, term) = self.model.update(k, &parent.state[k], pose.p, a);
-            let term = if leaf { term * self.leaf_weight() } else { term };
+            let term = if leaf { self.model.leaf_term(k, &state, pose.p, a, term) } else { term };
             out[k] = state;
             raw = self.model.combine(raw, term);
             if cut.cuts(raw) {

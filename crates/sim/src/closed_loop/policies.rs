@@ -133,6 +133,7 @@ fn build(name: &str, sc: &Scenario, planned: Option<&TimedWaypoints>) -> Result<
                     aggregate: p.estimator_aggregate,
                     bias_per_km_m: p.estimator_bias_per_km.unwrap_or(noise.per_km_m),
                     terminal_levels: p.estimator_terminal_levels,
+                    reach_success: p.estimator_reach_success,
                 });
                 if let Some(case) = p.estimator_penalty_case.as_deref().and_then(PenaltyCase::from_id) {
                     cfg.penalties = case.penalties();

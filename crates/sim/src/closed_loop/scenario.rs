@@ -281,6 +281,11 @@ pub struct Planner {
     /// Levels of cost-to-go `planner-estimator` counts at each leaf (estimator step 6; 0 = none).
     #[serde(default)]
     pub estimator_terminal_levels: f64,
+    /// Success probability that makes a ping useful for `planner-estimator`'s reach cost-to-go
+    /// (coopnav_plan estimator step 7: each AUV's growth until the CNA is within the range where
+    /// the link's success reaches it; 0 = none).
+    #[serde(default)]
+    pub estimator_reach_success: f64,
     /// Table 5.2 penalty case of `planner-estimator` (default: `penalty_case`). Its cost already
     /// prices what Hudson's distance limits stand for (a far ping is lost and noisy, one from
     /// overhead teaches nothing horizontally), so case "2" (no penalties) is an option.
@@ -501,6 +506,7 @@ impl Scenario {
         p.positive("planner.sigma0", pl.sigma0);
         p.non_negative("planner.eps0", pl.eps0);
         p.non_negative("planner.estimator_terminal_levels", pl.estimator_terminal_levels);
+        p.probability("planner.estimator_reach_success", pl.estimator_reach_success);
         if let Some(k) = pl.estimator_bias_per_km {
             p.non_negative("planner.estimator_bias_per_km", k);
         }
@@ -705,10 +711,10 @@ mod tests {
         let text = EXAMPLE.replace(
             "[planner]\n",
             "[planner]\nestimator_penalty_case = \"99\"\nestimator_look_ahead = 70\nestimator_terminal_levels = -1.0\n\
-             estimator_bias_per_km = -2.0\n",
+             estimator_bias_per_km = -2.0\nestimator_reach_success = 1.5\n",
         );
         let e = err(&text);
-        for field in ["penalty_case", "look_ahead", "terminal_levels", "bias_per_km"] {
+        for field in ["penalty_case", "look_ahead", "terminal_levels", "bias_per_km", "reach_success"] {
             assert!(e.contains(&format!("planner.estimator_{field}")), "{field}: {e}");
         }
         let ok =
