@@ -1,7 +1,8 @@
 //! The full `closed-loop-vs-baselines` evaluation with a chosen number of runs per cell, writing
 //! the table and the plot of the paired differences:
-//! `cargo run --release -p coopnav-sim --example closed_loop_eval -- RUNS SEED OUT_DIR [SCENARIO]`
-//! (SCENARIO: `current` or `sloping-auv-cna`, one of them only; default both).
+//! `cargo run --release -p coopnav-sim --example closed_loop_eval -- RUNS SEED OUT_DIR [SCENARIO [N,N,...]]`
+//! (SCENARIO: `current` or `sloping-auv-cna`, one of them only, or `all`; default both; N: only
+//! these fleet sizes, default all).
 
 use coopnav_sim::experiments::closed_loop::{difference_svg, evaluate, setup, Cell};
 use coopnav_sim::experiments::{ReproOptions, Size};
@@ -9,16 +10,24 @@ use std::time::Instant;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args: Vec<String> = std::env::args().skip(1).collect();
-    let (runs, seed, out, only) = match args.as_slice() {
-        [runs, seed, out] => (runs, seed, out, None),
-        [runs, seed, out, only] => (runs, seed, out, Some(only.as_str())),
-        _ => return Err("usage: closed_loop_eval RUNS SEED OUT_DIR [SCENARIO]".into()),
+    let (runs, seed, out, only, sizes) = match args.as_slice() {
+        [runs, seed, out] => (runs, seed, out, "all", None),
+        [runs, seed, out, only] => (runs, seed, out, only.as_str(), None),
+        [runs, seed, out, only, sizes] => (runs, seed, out, only.as_str(), Some(sizes)),
+        _ => return Err("usage: closed_loop_eval RUNS SEED OUT_DIR [SCENARIO [N,N,...]]".into()),
     };
     let (runs, seed): (usize, u64) = (runs.parse()?, seed.parse()?);
+    let sizes: Option<Vec<usize>> =
+        sizes.map(|s| s.split(',').map(str::parse).collect::<Result<_, _>>()).transpose()?;
     let (mut settings, _, duration) = setup(&ReproOptions { size: Size::Full, seed })?;
-    settings.retain(|s| only.is_none_or(|name| s.name == name));
+    settings.retain(|s| only == "all" || s.name == only);
     if settings.is_empty() {
-        return Err(format!("no scenario {only:?} (allowed: current, sloping-auv-cna)").into());
+        return Err(format!("no scenario {only} (allowed: current, sloping-auv-cna, all)").into());
+    }
+    if let Some(sizes) = &sizes {
+        for s in settings.iter_mut() {
+            s.n.retain(|n| sizes.contains(n));
+        }
     }
     let start = Instant::now();
     let report = evaluate(&settings, runs, duration, seed, &|_| {})?;

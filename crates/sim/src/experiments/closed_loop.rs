@@ -7,8 +7,8 @@
 //! entirely below zero; every other cell is printed with its measured cause.
 //!
 //! Seeds: the planner's settings chosen by experiment (the aggregate `sigma_sum`, the range bias,
-//! the cost-to-go, the level-0 penalty above 5 AUVs, L with the AUV CNA) were picked on base
-//! seed [`TUNING_SEED`] (runs `run_seed(1000, 0..6)`); the evaluation uses the base seed
+//! the cost-to-go, the level-0 penalty and the reach cost-to-go from 5 AUVs on, L with the AUV
+//! CNA) were picked on base seed [`TUNING_SEED`] (runs `run_seed(1000, 0..R)`, R = 6 to 40); the evaluation uses the base seed
 //! of `--seed` (default 1, runs `run_seed(1, 0..runs)`) and refuses the tuning seed. The
 //! baselines run exactly as configured elsewhere (nothing is tuned for or against them).
 
@@ -68,13 +68,27 @@ pub struct Setting {
 pub const BIAS_PER_KM: f64 = 6.0;
 pub const TERMINAL_LEVELS: f64 = 10.0;
 
-/// Above this many AUVs `planner-estimator` runs without the level-0 distance penalty (Table 5.2
-/// case 3, look-ahead doubling only). With 8 AUVs spread over 4.8 km every option breaks the
-/// 1 km limit, and the penalty, C·(1 + v) with v in metres, then decides alone (the CNA
-/// minimises its largest distance, the same path as Hudson's planner); chosen on the tuning
-/// seed: N = 8 with current 20.1 m with the penalty, 14.3 m without; N = 5 8.6 m with it,
-/// 10.7 m without.
-pub const PRIMARY_PENALTY_MAX_AUVS: usize = 5;
+/// From this many AUVs on (a fleet spread wider than the link's plateau), `planner-estimator`
+/// runs without the level-0 distance penalty (Table 5.2 case 3, look-ahead doubling only) and
+/// with the reach-time cost-to-go ([`REACH_SUCCESS`], [`SPREAD_TERMINAL_LEVELS`]) in its place.
+/// With 5 or 8 AUVs spread over 3–4.8 km every option breaks the 1 km limit for some AUV, and
+/// the penalty, C·(1 + v) with v in metres, then decides alone (the CNA minimises its largest
+/// distance, Hudson's planner's path). Chosen on the tuning seed, default mission with current:
+/// N = 8 20.1 m with the penalty, 14.3 m without (6 runs); N = 5 (40 runs) 8.2 m with the penalty
+/// and H = 10 (20 runs), 9.9 m with neither penalty nor reach term (H = 20), 7.4 m with the reach
+/// term instead of the penalty (open-loop 7.6 m, Hudson's planner 7.9 m); N = 8 (16 runs) 14.4 m
+/// without, 14.3 m with the reach term.
+pub const SPREAD_FLEET_MIN_AUVS: usize = 5;
+
+/// p_u of the reach-time cost-to-go (coopnav_plan estimator step 7) for spread fleets: just below
+/// the 0.8 plateau of the rate-0 success curve, so the useful range r_u ≈ 0.93 km is where pings
+/// start being lost. 0.5 and 0.6 (r_u ≈ 2–2.5 km, farther than most AUVs ever are) changed
+/// nothing on the tuning seed; 0.79 did.
+pub const REACH_SUCCESS: f64 = 0.79;
+
+/// H for spread fleets: the reach term's growth saturates at qτ·H/2, and with H = 10 it was too
+/// weak to replace the penalty (N = 5, tuning seed, case 3: 9.7 m with H = 10, 7.3 m with 20).
+pub const SPREAD_TERMINAL_LEVELS: f64 = 20.0;
 
 impl Setting {
     /// The mission for `n` AUVs, with the evaluation's planner settings and seed.
@@ -87,8 +101,10 @@ impl Setting {
         sc.planner.estimator_aggregate = Aggregate::SigmaSum;
         sc.planner.estimator_bias_per_km = Some(BIAS_PER_KM);
         sc.planner.estimator_terminal_levels = TERMINAL_LEVELS;
-        if n > PRIMARY_PENALTY_MAX_AUVS {
+        if n >= SPREAD_FLEET_MIN_AUVS {
             sc.planner.estimator_penalty_case = Some(PenaltyCase::C3.id().to_string());
+            sc.planner.estimator_reach_success = REACH_SUCCESS;
+            sc.planner.estimator_terminal_levels = SPREAD_TERMINAL_LEVELS;
         }
         // Hudson's schedule needs a slot of air time + travel + guard (4.67 s at rate 0) per
         // vehicle: 30 s holds up to 5 AUVs, 8 AUVs need 9 slots, 44 s (below 45 s, where the 4°/s
@@ -171,8 +187,9 @@ pub fn evaluate(
     let mut table = format!(
         "True mean navigation error of the survey AUVs (m), {runs} runs per policy and cell, base seed {seed} \
          (settings chosen on base seed {TUNING_SEED}); planners A=5, L=5; planner-estimator: L=5 (ASC) or 3 \
-         (AUV CNA), aggregate sigma_sum, range bias {BIAS_PER_KM} m/km, {TERMINAL_LEVELS} levels of cost-to-go, no level-0 \
-         distance penalty above {PRIMARY_PENALTY_MAX_AUVS} AUVs.\n\
+         (AUV CNA), aggregate sigma_sum, range bias {BIAS_PER_KM} m/km, {TERMINAL_LEVELS} levels of cost-to-go; from \
+         {SPREAD_FLEET_MIN_AUVS} AUVs on no level-0 distance penalty, the reach cost-to-go (p_u {REACH_SUCCESS}) and \
+         {SPREAD_TERMINAL_LEVELS} levels.\n\
          Every difference is planner-estimator minus the baseline, paired by run; a cell is won when its 95 % CI \
          lies below zero.\n\n"
     );
