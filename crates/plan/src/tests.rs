@@ -321,3 +321,32 @@ fn a_bad_tie_tolerance_is_named() {
     let e = LookAheadPlanner::new(cfg).unwrap_err().to_string();
     assert!(e.contains("search.tie_tolerance") && e.contains("<= 1e-3"), "{e}");
 }
+
+/// Flies 15 decisions of the estimator-aware planner without penalties (case 2), H = 20: one AUV
+/// 200 m west of the CNA's start, one 1,000 m east beyond the link's half-success range (800 m),
+/// both holding station; the filters' covariances are held at their reports. Returns the CNA's
+/// final distance to the far AUV.
+fn distance_to_far_auv(reach_success: f64) -> f64 {
+    let mut cfg = asc(5, 3, PenaltyCase::C2);
+    let spec = EstimatorSpec { terminal_levels: 20.0, reach_success, ..EstimatorSpec::default() };
+    cfg.cost = CostSpec::Estimator(spec);
+    let mut p = LookAheadPlanner::with_link(cfg, &FallingLink(800.0)).unwrap();
+    let auvs = [Vec3::new(-200.0, 0.0, 50.0), Vec3::new(1000.0, 0.0, 50.0)];
+    let f = FnForecast { n: 2, f: move |k: usize, _: f64| Some(auvs[k]) };
+    let estimates = [AuvEstimate { cov: [20.0, 0.0, 20.0], process_noise: 0.2 }; 2];
+    let mut cna = CnaPose { pos: Vec3::zeros(), heading: Heading::from_radians(0.0), pitch: 0.0 };
+    for s in 0..15 {
+        let input = PlanInput { t: s as f64 * cfg.motion.tau, cna, errors: &[], estimates: &estimates, forecast: &f };
+        cna = p.decide(&input).unwrap().next;
+    }
+    (auvs[1] - cna.pos).norm()
+}
+
+#[test]
+fn the_reach_cost_to_go_pulls_the_cna_towards_an_auv_beyond_the_link() {
+    // Without it the far AUV's term is the same wherever the CNA ends its horizon (its pings are
+    // lost either way), so nothing draws the CNA over; with it every step east shortens the wait.
+    let (without, with) = (distance_to_far_auv(0.0), distance_to_far_auv(0.5));
+    assert!(with < without - 100.0, "with the reach term {with:.0} m from the far AUV, without {without:.0} m");
+    assert!(with < 900.0, "with the reach term the CNA ends {with:.0} m from the far AUV");
+}
