@@ -596,6 +596,15 @@ mod tests {
     use super::*;
     use proptest::prelude::*;
 
+    /// A link whose success falls linearly from 1 at 0 m to 0 at `.0` m.
+    struct Linear(f64);
+
+    impl LinkModel for Linear {
+        fn success(&self, r: f64) -> f64 {
+            (1.0 - r / self.0).max(0.0)
+        }
+    }
+
     /// No reach cost-to-go: every AUV is within reach.
     const NO_REACH: Reach = Reach { useful_range_m: f64::INFINITY, step_m: 1.0 };
 
@@ -708,13 +717,7 @@ mod tests {
 
     #[test]
     fn the_useful_range_is_where_the_link_falls_below_the_threshold() {
-        struct Linear;
-        impl LinkModel for Linear {
-            fn success(&self, r: f64) -> f64 {
-                (1.0 - r / 4000.0).max(0.0)
-            }
-        }
-        let t = LinkTable::sample(&Linear).unwrap();
+        let t = LinkTable::sample(&Linear(4000.0)).unwrap();
         assert!((t.useful_range(0.75) - 1000.0).abs() < 1e-9);
         assert!((t.useful_range(0.5) - 2000.0).abs() < 1e-9);
         assert_eq!(t.useful_range(0.0), f64::INFINITY);
@@ -753,13 +756,7 @@ mod tests {
 
     #[test]
     fn the_link_table_interpolates_and_holds_its_last_value() {
-        struct Linear;
-        impl LinkModel for Linear {
-            fn success(&self, r: f64) -> f64 {
-                (1.0 - r / 40_000.0).max(0.0)
-            }
-        }
-        let t = LinkTable::sample(&Linear).unwrap();
+        let t = LinkTable::sample(&Linear(40_000.0)).unwrap();
         assert!((t.success(1234.5) - (1.0 - 1234.5 / 40_000.0)).abs() < 1e-12);
         assert_eq!(t.success(1e9), 0.5);
         struct Broken;
