@@ -29,11 +29,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             s.n.retain(|n| sizes.contains(n));
         }
     }
+    // Before the runs, so a bad OUT_DIR fails at once rather than after them.
+    std::fs::create_dir_all(out).map_err(|e| format!("output directory {out}: {e}"))?;
     let start = Instant::now();
     let report = evaluate(&settings, runs, duration, seed, &|_| {})?;
     let wall = start.elapsed().as_secs_f64();
     let cells: Vec<Cell> = serde_json::from_value(report.data["cells"].clone())?;
-    std::fs::create_dir_all(out)?;
     let checks: Vec<String> = report.checks.iter().map(|c| c.line()).collect();
     let text = format!("{}\n{}\nwall time {wall:.1} s\n", report.table, checks.join("\n"));
     std::fs::write(format!("{out}/table.txt"), &text)?;
