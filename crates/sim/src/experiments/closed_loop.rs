@@ -399,6 +399,18 @@ mod tests {
     }
 
     #[test]
+    fn spread_fleets_trade_the_level_0_penalty_for_the_reach_cost_to_go() {
+        let (settings, _, _) = setup(&ReproOptions { size: Size::Full, seed: 1 }).unwrap();
+        for setting in &settings {
+            let (small, spread) = (setting.scenario(3, 1, None).planner, setting.scenario(5, 1, None).planner);
+            assert_eq!((small.estimator_penalty_case, small.estimator_reach_success), (None, 0.0));
+            assert_eq!(small.estimator_terminal_levels, TERMINAL_LEVELS);
+            assert_eq!(spread.estimator_penalty_case.as_deref(), Some(PenaltyCase::C3.id()));
+            assert_eq!((spread.estimator_reach_success, spread.estimator_terminal_levels), (0.79, 20.0));
+        }
+    }
+
+    #[test]
     fn the_tuning_seed_is_refused() {
         let e = closed_loop_vs_baselines(&ReproOptions { size: Size::Reduced, seed: TUNING_SEED }).unwrap_err();
         assert!(e.to_string().contains("--seed"), "{e}");
