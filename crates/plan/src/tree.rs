@@ -3,8 +3,9 @@
 //! so the brute-force reference and the production search evaluate every path bit-identically.
 //!
 //! Path costs are summed from the root down, ((c₀ + c₁) + c₂) + …, in both searches. On the last
-//! level each AUV's term counts 1 + H times, H the model's cost-to-go in levels
-//! (`CostModel::terminal_levels`), in both searches and in the bounds.
+//! level each AUV's term is the model's `CostModel::leaf_term` (at least 1 + H times the term, H
+//! the model's cost-to-go in levels, `CostModel::terminal_levels`), in both searches; the bounds
+//! count the last level 1 + H times.
 
 use crate::cost_model::{norm, Below, CostModel};
 use crate::motion::{FastOption, FastPose, MotionConfig};
