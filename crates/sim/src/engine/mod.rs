@@ -11,6 +11,7 @@
 
 pub mod health;
 mod inflight;
+mod mini;
 pub mod observe;
 mod phases;
 mod vehicles;
@@ -27,13 +28,14 @@ use coopnav_core::{Bathymetry, SeedStream, Vec3};
 use coopnav_plan::predict::UnderwayPredictor;
 use coopnav_plan::AuvForecast;
 use inflight::InFlight;
+use mini::SurfaceFilters;
 pub use observe::{CommsEvent, Decision, Observer, Trace, TraceRow};
 use phases::Payload;
 use rand_chacha::ChaCha8Rng;
 use serde::Serialize;
 use std::sync::Arc;
 use std::time::Instant;
-use vehicles::{stream, Buoy, Craft, SurveyAuv};
+use vehicles::{stream, Buoy, Craft, Ship, SurveyAuv};
 
 /// Links forced to lose every packet (failure studies and tests).
 #[derive(Debug, Clone, Default)]
@@ -145,6 +147,9 @@ struct Engine<'a> {
     auvs: Vec<SurveyAuv>,
     cna: Cna,
     buoys: Vec<Buoy>,
+    ships: Vec<Ship>,
+    /// Per survey AUV, its filters of the ships and buoys it hears mini-packets from.
+    surface: Vec<SurfaceFilters>,
     air: InFlight<Payload>,
     /// The scenario's transmission-loss model, built once for the run.
     tl: Arc<dyn TransmissionLoss>,
@@ -208,6 +213,8 @@ impl<'a> Engine<'a> {
             auvs,
             cna,
             buoys: (0..sc.buoys.len()).map(|i| Buoy::new(sc, i, &streams)).collect(),
+            ships: (0..sc.ships.len()).map(|i| Ship::new(sc, i, &streams)).collect(),
+            surface: (0..n).map(|_| SurfaceFilters::new(sc)).collect(),
             air: InFlight::new(sc.channel.collisions.capture_margin_db),
             tl: sc.comms.tl.provider(sc).unwrap_or_else(|e| {
                 // Validation builds the provider first, so this is a scenario built in code.
