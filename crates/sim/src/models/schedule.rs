@@ -399,7 +399,7 @@ mod tests {
         assert!(slots.iter().all(|s| s.length_s == 2.0));
         // MSBL: the buoy's slots are silent; HBL One: the port modem only.
         let msbl = Schedule::GillCycle { cycle: GillCycle::Msbl, configuration: Configuration::Msbl }.slots(20.0, 1, 0);
-        assert_eq!(msbl.len(), 6);
+        assert_eq!(msbl.len(), 5);
         assert!(msbl.iter().all(|s| matches!(s.owner, Owner::Ship(0, _))));
         let one = Schedule::GillCycle { cycle: GillCycle::HblLong, configuration: Configuration::HblOne };
         assert!(one.slots(20.0, 1, 1).iter().all(|s| s.owner != Owner::Ship(0, Starboard)));
