@@ -348,6 +348,10 @@ impl Engine<'_> {
 
     /// Once a second: true error, the filter's σ and NEES, distances, and the observer.
     pub(super) fn observe(&mut self, t: f64, obs: &mut dyn Observer) {
+        if !self.ships.is_empty() {
+            let ships: Vec<Vec3> = self.ships.iter().map(|s| s.pos).collect();
+            obs.on_ships(t, &ships);
+        }
         let limits = self.sc.planner.limits;
         let cna = self.cna.craft.pos;
         let mut rows = Vec::with_capacity(self.auvs.len());
