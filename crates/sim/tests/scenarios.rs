@@ -1,7 +1,8 @@
 //! Every file of the scenario library (`scenarios/*.toml` at the repository root) loads,
 //! validates and runs, reduced to a short mission with a shallow planner.
 
-use coopnav_sim::closed_loop::{run, run_traced, Faults, PolicySpec, Scenario};
+use coopnav_sim::closed_loop::{run, Faults, PolicySpec, Scenario};
+use coopnav_sim::hbl::zone::{zone_monte_carlo, ZoneSpec};
 use coopnav_sim::models::schedule::Owner;
 use std::path::{Path, PathBuf};
 
@@ -80,22 +81,15 @@ fn the_embedded_default_mission_is_the_library_file() {
     assert_eq!(std::fs::read_to_string(file).unwrap(), coopnav_sim::closed_loop::EXAMPLE);
 }
 
-/// Mean true error of the single AUV of Gill's Table 5 file `name` over `runs` seeds while it is
-/// in Gill's measurement zone: x_rel from −30 to 75 m, at the nominal closing speed of 2.15 m/s
-/// from −200 m, is t in [79, 128] s (the engine's trace has no ship position; the ship's start
-/// scatter moves the window by about 2 s).
-fn gill_zone_error(name: &str, runs: u64) -> f64 {
+/// Mean zone error (Gill's metric, x_rel from −30 to 75 m behind the ship) of the single AUV of
+/// Gill's Table 5 file `name` over `runs` seeds on the engine; every run healthy and through the zone.
+fn gill_zone_error(name: &str, runs: usize) -> f64 {
     let file = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenarios").join(name);
     let sc = Scenario::load(&file).unwrap_or_else(|e| panic!("{e}"));
-    let mut errors = Vec::new();
-    for seed in 1..=runs {
-        let mut policy = PolicySpec::new("none", &sc).unwrap().build(&sc).unwrap();
-        let r = run_traced(&sc, &mut policy, seed, &Faults::default());
-        assert!(r.fleet.healthy && r.auvs[0].ranges_applied > 0, "{name} seed {seed}");
-        let trace = r.trace.unwrap();
-        errors.extend(trace.rows.iter().filter(|row| (79.0..=128.0).contains(&row.t)).map(|row| row.error));
-    }
-    errors.iter().sum::<f64>() / errors.len() as f64
+    let (zones, healthy) = zone_monte_carlo(&sc, ZoneSpec::table5(), runs, sc.seed).unwrap();
+    assert!(healthy, "{name}");
+    assert!(zones.iter().all(|z| z.zone_samples > 40), "{name}: every run crosses the ship: {zones:?}");
+    zones.iter().filter_map(|z| z.zone_error).sum::<f64>() / zones.len() as f64
 }
 
 /// Gill's Table 5 on the engine: ship and buoy mini-packets in 2 s slots, the AUV's ship and buoy
@@ -108,5 +102,6 @@ fn gills_table5_files_run_on_the_engine_and_the_hybrid_baseline_beats_msbl() {
     let hbl_two = gill_zone_error("gill-table5-hbl-two.toml", 40);
     eprintln!("zone error over 40 seeds: MSBL {msbl:.3} m, HBL One {hbl_one:.3} m, HBL Two {hbl_two:.3} m");
     assert!(hbl_two < msbl && hbl_one < msbl, "MSBL {msbl}, HBL One {hbl_one}, HBL Two {hbl_two}");
-    assert!(hbl_two < 3.0 && msbl < 6.0, "MSBL {msbl}, HBL One {hbl_one}, HBL Two {hbl_two}");
+    // The thesis's HBL band (1–1.7 m) widened as the reduced reproduction widens it.
+    assert!((0.7..2.0).contains(&hbl_two) && (0.7..2.0).contains(&hbl_one), "HBL One {hbl_one}, HBL Two {hbl_two}");
 }

@@ -6,8 +6,9 @@
 //!
 //! Today it runs the closed-loop scenario: survey AUVs on lawnmowers with OWTT EKFs, one CNA
 //! (ASC or AUV) steered by a [`crate::policy::CnaPolicy`], transponder buoys (moored or
-//! drifting) whose position broadcasts the AUVs range to as well, the comms schedule of the
-//! scenario.
+//! drifting) whose position broadcasts the AUVs range to as well, ships on a fixed track, the
+//! comms schedule of the scenario. Ships and buoys may send 13-bit mini-packets (Gill's cycles):
+//! each survey AUV filters their states from the components and ranges to them ([`mini`]).
 
 pub mod health;
 mod inflight;
