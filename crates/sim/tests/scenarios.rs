@@ -105,3 +105,24 @@ fn gills_table5_files_run_on_the_engine_and_the_hybrid_baseline_beats_msbl() {
     // The thesis's HBL band (1–1.7 m) widened as the reduced reproduction widens it.
     assert!((0.7..2.0).contains(&hbl_two) && (0.7..2.0).contains(&hbl_one), "HBL One {hbl_one}, HBL Two {hbl_two}");
 }
+
+/// A Gill file whose cycle cannot run is refused before anything runs, every problem named: the
+/// cycle's period against `comms.tau`, HBL without a buoy, a ship slot without its component.
+#[test]
+fn a_gill_file_that_cannot_run_is_refused_naming_every_field() {
+    let file = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenarios/gill-table5-hbl-one.toml");
+    let text = std::fs::read_to_string(&file).unwrap();
+    let start = text.find("[[buoys]]").unwrap();
+    let end = text.find("[comms]").unwrap();
+    let broken = format!("{}{}", &text[..start], &text[end..]).replace("tau = 20.0", "tau = 16.0");
+    let e = Scenario::parse(&broken, Path::new("broken.toml")).unwrap_err().to_string();
+    for field in ["comms.tau = 16", "comms.schedule.configuration = HBL One"] {
+        assert!(e.contains(field) && e.contains("broken.toml"), "{field} missing from: {e}");
+    }
+    let tdma = text.replace(
+        "schedule = { kind = \"gill_cycle\", cycle = \"hbl_long\", configuration = \"hbl_one\" }",
+        "schedule = { kind = \"tdma\", slots = [{ who = \"ship0.port\", start_s = 0.0, length_s = 0.8 }] }",
+    );
+    let e = Scenario::parse(&tdma, Path::new("tdma.toml")).unwrap_err().to_string();
+    assert!(e.contains("comms.schedule.slots[0].message") && e.contains("comms.schedule.slot 0 (ship0.port"), "{e}");
+}

@@ -146,13 +146,20 @@ impl Schedule {
     /// Every problem, as (field under `prefix`, value, allowed).
     pub fn problems(&self, prefix: &str, fit: &Fit) -> Vec<(String, String, String)> {
         let mut out = Vec::new();
-        if let Schedule::GillCycle { cycle, .. } = self {
+        if let Schedule::GillCycle { cycle, configuration } = self {
             let period = cycle.cycle().period();
             if (period - fit.tau).abs() > 1e-9 {
                 out.push(("comms.tau".into(), fit.tau.to_string(), format!("{period} s, the period of Gill's cycle")));
             }
             if fit.n_ships == 0 {
                 out.push((format!("{prefix}kind"), "gill_cycle".into(), "a scenario with a [[ships]] entry".into()));
+            }
+            if configuration.has_buoy() && fit.n_buoys == 0 {
+                out.push((
+                    format!("{prefix}configuration"),
+                    configuration.label().into(),
+                    "msbl, or a scenario with a [[buoys]] entry (HBL ranges to buoy0)".into(),
+                ));
             }
         }
         if let Schedule::Tdma { slots } = self {
@@ -436,6 +443,9 @@ mod tests {
         let p = gill.problems("s.", &fit);
         assert_eq!((p.len(), p[0].0.as_str(), p[0].2.as_str()), (1, "comms.tau", "16 s, the period of Gill's cycle"));
         assert!(gill.problems("s.", &Fit { tau: 16.0, ..fit }).is_empty());
+        let p = gill.problems("s.", &Fit { tau: 16.0, n_buoys: 0, n_ships: 0, ..fit });
+        let fields: Vec<&str> = p.iter().map(|p| p.0.as_str()).collect();
+        assert_eq!(fields, ["s.kind", "s.configuration"], "{p:?}");
     }
 
     #[test]
