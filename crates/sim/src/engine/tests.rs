@@ -205,3 +205,30 @@ fn mini_packets_from_a_ship_and_a_buoy_sent_together_collide_at_the_auv() {
     let a = &apart.auvs[0];
     assert!(a.downlink.received > 0 && a.buoy_link.received > 0 && a.ranges_applied > 0, "{a:?}");
 }
+
+/// The ships' true positions the engine reports each second.
+#[derive(Default)]
+struct ShipTrack(Vec<(f64, Vec3)>);
+
+impl Observer for ShipTrack {
+    fn on_ships(&mut self, t: f64, ships: &[Vec3]) {
+        self.0.push((t, ships[0]));
+    }
+}
+
+/// Gill's ship starts scattered about its nominal start (4 m, 0.1 rad) and its pilot brings it
+/// onto its westward track, at its speed.
+#[test]
+fn a_ship_on_a_fixed_track_converges_onto_it_and_keeps_its_speed() {
+    let sc = ship_and_buoy_minis(2.0);
+    for seed in 1..=5 {
+        let mut track = ShipTrack::default();
+        let mut policy = PolicySpec::new("none", &sc).unwrap().build(&sc).unwrap();
+        run(&sc, &mut policy, seed, &Faults::default(), &mut track);
+        let (t0, start) = track.0[0];
+        let (t1, end) = *track.0.last().unwrap();
+        assert!(start.y.abs() < 20.0 && end.y.abs() < 0.5, "seed {seed}: y {} -> {}", start.y, end.y);
+        let speed = (start.x - end.x) / (t1 - t0);
+        assert!((speed - 1.3).abs() < 0.2, "seed {seed}: {speed} m/s west");
+    }
+}
