@@ -1,12 +1,23 @@
-//! AUV EKF cost per step: predict + speed + compass updates, and a range update.
+//! AUV EKF cost per step: predict + speed + compass updates (5 states, and 7 with the current),
+//! and a range update.
 
 use coopnav_core::Vec3;
-use coopnav_nav::{AuvEkf, AuvParams, RangeMeasurement};
+use coopnav_nav::{AuvEkf, AuvParams, CurrentParams, RangeMeasurement};
 use criterion::{black_box, criterion_group, criterion_main, Criterion};
 
 fn bench(c: &mut Criterion) {
     c.bench_function("auv_ekf_step_predict_speed_heading", |b| {
         let mut f = AuvEkf::new(0.0, 0.0, 0.0, 0.85, 0.0, AuvParams::default());
+        let mut t = 0.0;
+        b.iter(|| {
+            t += 0.1;
+            f.predict_to(t, black_box(0.001));
+            f.update_speed(black_box(0.85));
+            f.update_heading(black_box(0.0))
+        })
+    });
+    c.bench_function("auv_ekf_current_step_predict_speed_heading", |b| {
+        let mut f = AuvEkf::with_current(0.0, 0.0, 0.0, 0.85, 0.0, AuvParams::default(), CurrentParams::default());
         let mut t = 0.0;
         b.iter(|| {
             t += 0.1;

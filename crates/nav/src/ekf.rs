@@ -174,17 +174,16 @@ impl<const N: usize> Ekf<N> {
     /// `h` the Jacobian row, `r` the measurement variance. The Joseph form of [`Self::update`]
     /// with the gain a rank-one correction: (I − k h) P (I − k h)ᵀ + r k kᵀ is computed as
     /// B = P − k (P hᵀ)ᵀ, then B − (B hᵀ) kᵀ + r k kᵀ, O(N²) instead of dense N×N products
-    /// (equal up to rounding).
+    /// (equal up to rounding). Products with h visit only its non-zero entries (a speed row has
+    /// one, a compass row two; a zero term adds nothing to a sum), and the rank-one corrections
+    /// run down the columns of the column-major storage: this runs twice per AUV per filter step.
     pub fn update_scalar(&mut self, innovation: f64, h: SMatrix<f64, 1, N>, r: f64, gate: &Gate) -> UpdateOutcome {
         if !(innovation.is_finite() && all_finite(h.as_slice()) && r.is_finite()) {
             return UpdateOutcome::Unusable;
         }
-        // Written as loops over the fixed size: this runs twice per AUV per filter step.
-        let mut pht = [0.0; N];
-        for (i, v) in pht.iter_mut().enumerate() {
-            *v = (0..N).map(|j| self.p[(i, j)] * h[j]).sum();
-        }
-        let s = (0..N).map(|j| h[j] * pht[j]).sum::<f64>() + r;
+        let seen = NonZero::of(&h);
+        let pht = seen.times(&self.p.data.0, &h);
+        let s = seen.columns().iter().map(|&j| h[j] * pht[j]).sum::<f64>() + r;
         if !(s > 0.0 && s.is_finite()) {
             return UpdateOutcome::Unusable;
         }
@@ -195,22 +194,25 @@ impl<const N: usize> Ekf<N> {
             return UpdateOutcome::Gated { nis };
         }
         let k = pht.map(|v| v / s);
-        // B = P − k (P hᵀ)ᵀ, then P⁺ = B − (B hᵀ) kᵀ + r k kᵀ.
-        let mut p_new = self.p;
-        for i in 0..N {
-            for j in 0..N {
-                p_new[(i, j)] -= k[i] * pht[j];
+        // B = P − k (P hᵀ)ᵀ, then P⁺ = B − (B hᵀ) kᵀ + r k kᵀ = B + c kᵀ with c = r k − B hᵀ;
+        // `columns[j][i]` is entry (i, j).
+        let mut columns = self.p.data.0;
+        for (column, &pj) in columns.iter_mut().zip(&pht) {
+            for (v, &ki) in column.iter_mut().zip(&k) {
+                *v -= ki * pj;
             }
         }
-        let mut bht = [0.0; N];
-        for (i, v) in bht.iter_mut().enumerate() {
-            *v = (0..N).map(|j| p_new[(i, j)] * h[j]).sum();
+        let bht = seen.times(&columns, &h);
+        let mut c = [0.0; N];
+        for (i, v) in c.iter_mut().enumerate() {
+            *v = r * k[i] - bht[i];
         }
-        for i in 0..N {
-            for j in 0..N {
-                p_new[(i, j)] += (r * k[i] - bht[i]) * k[j];
+        for (column, &kj) in columns.iter_mut().zip(&k) {
+            for (v, &ci) in column.iter_mut().zip(&c) {
+                *v += ci * kj;
             }
         }
+        let mut p_new = SMatrix::<f64, N, N>::from_data(nalgebra::ArrayStorage(columns));
         symmetrise_in_place(&mut p_new);
         let x_new = self.x + SVector::<f64, N>::from(k) * innovation;
         self.commit(x_new, p_new).map_or(UpdateOutcome::Unusable, |()| UpdateOutcome::Applied { nis })
@@ -295,6 +297,36 @@ pub fn wrap_angle(a: f64) -> f64 {
     }
 }
 
+/// The columns where a measurement row h is non-zero, in increasing order.
+struct NonZero<const N: usize> {
+    columns: [usize; N],
+    len: usize,
+}
+
+impl<const N: usize> NonZero<N> {
+    fn of(h: &SMatrix<f64, 1, N>) -> Self {
+        let mut nz = NonZero { columns: [0; N], len: 0 };
+        for j in (0..N).filter(|&j| h[j] != 0.0) {
+            nz.columns[nz.len] = j;
+            nz.len += 1;
+        }
+        nz
+    }
+
+    fn columns(&self) -> &[usize] {
+        &self.columns[..self.len]
+    }
+
+    /// M hᵀ for M given by its columns, summed over h's non-zero entries in column order.
+    fn times(&self, m: &[[f64; N]; N], h: &SMatrix<f64, 1, N>) -> [f64; N] {
+        let mut out = [0.0; N];
+        for (i, v) in out.iter_mut().enumerate() {
+            *v = self.columns().iter().map(|&j| m[j][i] * h[j]).sum();
+        }
+        out
+    }
+}
+
 /// [`symmetrise`] in place, mirroring the averaged upper triangle.
 fn symmetrise_in_place<const N: usize>(m: &mut SMatrix<f64, N, N>) {
     for i in 0..N {
@@ -316,8 +348,10 @@ pub fn is_positive_definite<const N: usize>(m: &SMatrix<f64, N, N>) -> bool {
     all_finite(m.as_slice()) && m.cholesky().is_some()
 }
 
+/// Every value finite; without an early exit, so the check vectorises (it runs on every step).
+#[inline]
 fn all_finite(v: &[f64]) -> bool {
-    v.iter().all(|x| x.is_finite())
+    v.iter().fold(true, |ok, x| ok & x.is_finite())
 }
 
 /// P ← F P Fᵀ + diag(q) for F = I + G, G given by its non-zero entries (row, column, value),
