@@ -18,7 +18,7 @@ pub mod mission;
 pub mod rng;
 pub mod validation;
 
-pub use angle::{wrap_pi, CompassDeg, Degrees, Heading, Radians};
+pub use angle::{rem_euclid, wrap_pi, CompassDeg, Degrees, Heading, Radians};
 pub use bathymetry::{Bathymetry, BathymetryError, Shelf};
 pub use geodesy::{Ecef, Enu, GeodesyError, Geodetic, LatLon, LatLonStorage, LocalFrame};
 pub use geometry::Vec3;
