@@ -182,7 +182,9 @@ impl<const N: usize> Ekf<N> {
             return UpdateOutcome::Unusable;
         }
         let seen = NonZero::of(&h);
-        let pht = seen.times(&self.p.data.0, &h);
+        // `p[j][i]` is entry (i, j) of the column-major storage.
+        let p = &self.p.data.0;
+        let pht = seen.times(|i, j| p[j][i], &h);
         let s = seen.columns().iter().map(|&j| h[j] * pht[j]).sum::<f64>() + r;
         if !(s > 0.0 && s.is_finite()) {
             return UpdateOutcome::Unusable;
@@ -194,22 +196,19 @@ impl<const N: usize> Ekf<N> {
             return UpdateOutcome::Gated { nis };
         }
         let k = pht.map(|v| v / s);
-        // B = P − k (P hᵀ)ᵀ, then P⁺ = B − (B hᵀ) kᵀ + r k kᵀ = B + c kᵀ with c = r k − B hᵀ;
-        // `columns[j][i]` is entry (i, j).
-        let mut columns = self.p.data.0;
-        for (column, &pj) in columns.iter_mut().zip(&pht) {
-            for (v, &ki) in column.iter_mut().zip(&k) {
-                *v -= ki * pj;
-            }
-        }
-        let bht = seen.times(&columns, &h);
+        // B = P − k (P hᵀ)ᵀ, then P⁺ = B − (B hᵀ) kᵀ + r k kᵀ = B + c kᵀ with c = r k − B hᵀ.
+        // B hᵀ needs only h's columns of B, so P⁺ is written in one pass, every entry rounded
+        // as in the two-pass form: (p − kᵢ (P hᵀ)ⱼ) + cᵢ kⱼ.
+        let b = |i: usize, j: usize| p[j][i] - k[i] * pht[j];
+        let bht = seen.times(b, &h);
         let mut c = [0.0; N];
         for (i, v) in c.iter_mut().enumerate() {
             *v = r * k[i] - bht[i];
         }
-        for (column, &kj) in columns.iter_mut().zip(&k) {
-            for (v, &ci) in column.iter_mut().zip(&c) {
-                *v += ci * kj;
+        let mut columns = *p;
+        for (column, (&pj, &kj)) in columns.iter_mut().zip(pht.iter().zip(&k)) {
+            for (v, (&ki, &ci)) in column.iter_mut().zip(k.iter().zip(&c)) {
+                *v = (*v - ki * pj) + ci * kj;
             }
         }
         let mut p_new = SMatrix::<f64, N, N>::from_data(nalgebra::ArrayStorage(columns));
@@ -317,11 +316,12 @@ impl<const N: usize> NonZero<N> {
         &self.columns[..self.len]
     }
 
-    /// M hᵀ for M given by its columns, summed over h's non-zero entries in column order.
-    fn times(&self, m: &[[f64; N]; N], h: &SMatrix<f64, 1, N>) -> [f64; N] {
+    /// M hᵀ for M given entry by entry (`m(i, j)`), summed over h's non-zero entries in column
+    /// order.
+    fn times(&self, m: impl Fn(usize, usize) -> f64, h: &SMatrix<f64, 1, N>) -> [f64; N] {
         let mut out = [0.0; N];
         for (i, v) in out.iter_mut().enumerate() {
-            *v = self.columns().iter().map(|&j| m[j][i] * h[j]).sum();
+            *v = self.columns().iter().map(|&j| m(i, j) * h[j]).sum();
         }
         out
     }
