@@ -198,21 +198,25 @@ impl<const N: usize> Ekf<N> {
         let k = pht.map(|v| v / s);
         // B = P − k (P hᵀ)ᵀ, then P⁺ = B − (B hᵀ) kᵀ + r k kᵀ = B + c kᵀ with c = r k − B hᵀ.
         // B hᵀ needs only h's columns of B, so P⁺ is written in one pass, every entry rounded
-        // as in the two-pass form: (p − kᵢ (P hᵀ)ⱼ) + cᵢ kⱼ.
+        // as in the two-pass form, (p − kᵢ (P hᵀ)ⱼ) + cᵢ kⱼ, and each off-diagonal pair averaged
+        // as [`symmetrise`] averages it.
         let b = |i: usize, j: usize| p[j][i] - k[i] * pht[j];
         let bht = seen.times(b, &h);
         let mut c = [0.0; N];
         for (i, v) in c.iter_mut().enumerate() {
             *v = r * k[i] - bht[i];
         }
-        let mut columns = *p;
-        for (column, (&pj, &kj)) in columns.iter_mut().zip(pht.iter().zip(&k)) {
-            for (v, (&ki, &ci)) in column.iter_mut().zip(k.iter().zip(&c)) {
-                *v = (*v - ki * pj) + ci * kj;
+        let entry = |i: usize, j: usize| b(i, j) + c[i] * k[j];
+        let mut columns = [[0.0; N]; N];
+        for j in 0..N {
+            columns[j][j] = entry(j, j);
+            for i in 0..j {
+                let v = 0.5 * (entry(i, j) + entry(j, i));
+                columns[j][i] = v;
+                columns[i][j] = v;
             }
         }
-        let mut p_new = SMatrix::<f64, N, N>::from_data(nalgebra::ArrayStorage(columns));
-        symmetrise_in_place(&mut p_new);
+        let p_new = SMatrix::<f64, N, N>::from_data(nalgebra::ArrayStorage(columns));
         let x_new = self.x + SVector::<f64, N>::from(k) * innovation;
         self.commit(x_new, p_new).map_or(UpdateOutcome::Unusable, |()| UpdateOutcome::Applied { nis })
     }
