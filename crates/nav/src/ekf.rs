@@ -333,11 +333,13 @@ impl<const N: usize> NonZero<N> {
 
 /// [`symmetrise`] in place, mirroring the averaged upper triangle.
 fn symmetrise_in_place<const N: usize>(m: &mut SMatrix<f64, N, N>) {
-    for i in 0..N {
-        for j in i + 1..N {
-            let v = 0.5 * (m[(i, j)] + m[(j, i)]);
-            m[(i, j)] = v;
-            m[(j, i)] = v;
+    // `columns[j][i]` is entry (i, j).
+    let columns = &mut m.data.0;
+    for j in 1..N {
+        for i in 0..j {
+            let v = 0.5 * (columns[j][i] + columns[i][j]);
+            columns[j][i] = v;
+            columns[i][j] = v;
         }
     }
 }
@@ -365,17 +367,19 @@ pub fn propagate_covariance<const N: usize>(
     g: &[(usize, usize, f64)],
     q_diag: &SVector<f64, N>,
 ) {
-    // A = F P = P + G P (rows of G read the old P), then P⁻ = A Fᵀ = A + A Gᵀ (columns).
-    let old = *p;
+    // A = F P = P + G P (rows of G read the old P), then P⁻ = A Fᵀ = A + A Gᵀ (columns);
+    // `columns[c][r]` is entry (r, c).
+    let old = p.data.0;
+    let columns = &mut p.data.0;
     for &(i, j, v) in g {
-        for c in 0..N {
-            p[(i, c)] += v * old[(j, c)];
+        for (column, old_column) in columns.iter_mut().zip(&old) {
+            column[i] += v * old_column[j];
         }
     }
-    let a = *p;
+    let a = *columns;
     for &(i, j, v) in g {
-        for r in 0..N {
-            p[(r, i)] += v * a[(r, j)];
+        for (x, &a_rj) in columns[i].iter_mut().zip(&a[j]) {
+            *x += v * a_rj;
         }
     }
     for i in 0..N {
