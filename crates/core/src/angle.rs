@@ -7,11 +7,30 @@ use std::f64::consts::{PI, TAU};
 
 /// Wraps an angle in radians to (-π, π].
 pub fn wrap_pi(a: f64) -> f64 {
-    let w = a.rem_euclid(TAU);
+    let w = rem_euclid(a, TAU);
     if w > PI {
         w - TAU
     } else {
         w
+    }
+}
+
+/// `a.rem_euclid(m)` for m > 0, bit for bit, without the remainder routine (a software loop,
+/// and angles are wrapped several times per vehicle and step) when |a| < 2m: below m the
+/// remainder is `a` itself, below 2m it is a ∓ m, exact by Sterbenz's lemma and carrying the
+/// sign of `a` as the remainder does (−m gives −0).
+pub fn rem_euclid(a: f64, m: f64) -> f64 {
+    let r = if a.abs() < m {
+        a
+    } else if a.abs() < 2.0 * m {
+        (a - m.copysign(a)).copysign(a)
+    } else {
+        a % m
+    };
+    if r < 0.0 {
+        r + m
+    } else {
+        r
     }
 }
 
@@ -72,7 +91,7 @@ pub struct CompassDeg(pub f64);
 
 impl From<Heading> for CompassDeg {
     fn from(h: Heading) -> Self {
-        CompassDeg((90.0 - h.0.to_degrees()).rem_euclid(360.0))
+        CompassDeg(rem_euclid(90.0 - h.0.to_degrees(), 360.0))
     }
 }
 
@@ -86,6 +105,34 @@ impl From<CompassDeg> for Heading {
 mod tests {
     use super::*;
     use proptest::prelude::*;
+
+    /// The fast path agrees bit for bit with `f64::rem_euclid` (signed zeros included) on the
+    /// boundaries of its branches, on special values and on random angles of every size.
+    #[test]
+    fn rem_euclid_equals_the_standard_remainder_bit_for_bit() {
+        let same = |a: f64, m: f64| {
+            let (fast, std) = (rem_euclid(a, m), a.rem_euclid(m));
+            assert!(fast.to_bits() == std.to_bits() || (fast.is_nan() && std.is_nan()), "{a} mod {m}: {fast} vs {std}");
+        };
+        let special = [0.0, -0.0, f64::NAN, f64::INFINITY, f64::NEG_INFINITY, f64::MIN_POSITIVE, 1e-300, 1e300];
+        for m in [TAU, 360.0, 3600.0, 0.1] {
+            for base in [m, 2.0 * m, 3.0 * m, 0.5 * m] {
+                for v in [base, base.next_up(), base.next_down()] {
+                    same(v, m);
+                    same(-v, m);
+                }
+            }
+            special.iter().for_each(|&a| same(a, m));
+        }
+        let mut state = 0x9e37_79b9_7f4a_7c15_u64;
+        for _ in 0..200_000 {
+            state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            let unit = (state >> 11) as f64 / (1u64 << 53) as f64;
+            let scale = [1.0, 10.0, 1e3, 1e6][(state & 3) as usize];
+            same((unit - 0.5) * 4.0 * TAU * scale, TAU);
+            same((unit - 0.5) * 1440.0 * scale, 360.0);
+        }
+    }
 
     #[test]
     fn compass_cardinal_points() {

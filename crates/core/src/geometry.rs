@@ -8,7 +8,40 @@ pub fn horizontal_distance(a: &Vec3, b: &Vec3) -> f64 {
     (a.x - b.x).hypot(a.y - b.y)
 }
 
+/// `dx.hypot(dy)`, or None when one component alone is farther than `bound` (the hypotenuse
+/// then is too: it is at least the larger component, which the rounded hypot keeps). Vehicles
+/// ask "within this distance?" every step and are mostly far, so most asks skip the hypot.
+pub fn hypot_within(dx: f64, dy: f64, bound: f64) -> Option<f64> {
+    (dx.abs() <= bound && dy.abs() <= bound).then(|| dx.hypot(dy))
+}
+
 /// Bearing (math convention, radians) of `to` as seen from `from`, in the horizontal plane.
 pub fn horizontal_bearing(from: &Vec3, to: &Vec3) -> f64 {
     (to.y - from.y).atan2(to.x - from.x)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::hypot_within;
+
+    /// Whatever the bound, "within" answers as the hypot itself would, with `<` and with `<=`,
+    /// including components exactly at the bound and hypotenuses a rounding away from it.
+    #[test]
+    fn hypot_within_answers_as_the_hypot_does() {
+        let mut state = 0x2545_f491_4f6c_dd1d_u64;
+        let mut next = || {
+            state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            (state >> 11) as f64 / (1u64 << 53) as f64
+        };
+        for bound in [0.15_f64, 1.0, 5.0, 1e-3] {
+            let edge = [(bound, 0.0), (0.0, -bound), (bound.next_up(), 0.0), (0.6 * bound, 0.8 * bound)];
+            let random: Vec<(f64, f64)> =
+                (0..100_000).map(|_| ((next() - 0.5) * 3.0 * bound, (next() - 0.5) * 3.0 * bound)).collect();
+            for (dx, dy) in edge.into_iter().chain(random) {
+                let d = dx.hypot(dy);
+                assert_eq!(hypot_within(dx, dy, bound).is_some_and(|h| h < bound), d < bound, "{dx}, {dy}");
+                assert_eq!(hypot_within(dx, dy, bound).is_some_and(|h| h <= bound), d <= bound, "{dx}, {dy}");
+            }
+        }
+    }
 }

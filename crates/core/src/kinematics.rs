@@ -8,7 +8,7 @@
 //! "shadow simulation") and by the simulators, so it knows nothing about modems.
 
 use crate::bathymetry::Bathymetry;
-use crate::{wrap_pi, Heading, Vec3};
+use crate::{hypot_within, wrap_pi, Heading, Vec3};
 use serde::{Deserialize, Serialize};
 
 /// Depth reference of a waypoint.
@@ -234,7 +234,8 @@ impl Iver2 {
         s.lin_accel = lin_accel;
         s.t += dt;
 
-        if (wp.x - s.pos.x).hypot(wp.y - s.pos.y) < p.waypoint_tolerance {
+        let tolerance = p.waypoint_tolerance;
+        if hypot_within(wp.x - s.pos.x, wp.y - s.pos.y, tolerance).is_some_and(|d| d < tolerance) {
             self.next += 1;
         }
     }

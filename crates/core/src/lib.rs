@@ -18,10 +18,10 @@ pub mod mission;
 pub mod rng;
 pub mod validation;
 
-pub use angle::{wrap_pi, CompassDeg, Degrees, Heading, Radians};
+pub use angle::{rem_euclid, wrap_pi, CompassDeg, Degrees, Heading, Radians};
 pub use bathymetry::{Bathymetry, BathymetryError, Shelf};
 pub use geodesy::{Ecef, Enu, GeodesyError, Geodetic, LatLon, LatLonStorage, LocalFrame};
-pub use geometry::Vec3;
+pub use geometry::{hypot_within, Vec3};
 pub use kinematics::{DepthTarget, Iver2, Iver2Params, Iver2State, Waypoint};
 pub use mission::{DepthProfile, Lawnmower, Track, TrackError, TrackSample};
 pub use rng::{run_seed, SeedStream};

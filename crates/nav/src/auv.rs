@@ -128,7 +128,12 @@ impl CheckFields for AuvParams {
 /// plus the drift of the current states when there are 7: the mean map the EKF linearises and the
 /// unscented smoother pushes sigma points through.
 pub fn transition<const M: usize>(x: &SVector<f64, M>, h: f64, turn: f64) -> SVector<f64, M> {
-    let (sin, cos) = x[PSI].sin_cos();
+    transition_at(x, h, turn, x[PSI].sin_cos())
+}
+
+/// [`transition`] with (sin ψ, cos ψ) of `x` already computed (the filter's step shares them
+/// with its Jacobian).
+fn transition_at<const M: usize>(x: &SVector<f64, M>, h: f64, turn: f64, (sin, cos): (f64, f64)) -> SVector<f64, M> {
     let mut next = *x;
     next[E] += h * x[S] * cos;
     next[N] += h * x[S] * sin;
@@ -143,16 +148,20 @@ pub fn transition<const M: usize>(x: &SVector<f64, M>, h: f64, turn: f64) -> SVe
 /// ∂transition/∂x at `x` (digest §3.2, F^A).
 pub fn transition_jacobian<const M: usize>(x: &SVector<f64, M>, h: f64) -> SMatrix<f64, M, M> {
     let mut f = SMatrix::<f64, M, M>::identity();
-    for (i, j, v) in transition_jacobian_entries(x, h) {
+    for (i, j, v) in transition_jacobian_entries(x, h, x[PSI].sin_cos()) {
         f[(i, j)] += v;
     }
     f
 }
 
 /// The non-identity entries (row, column, value) of [`transition_jacobian`]: four, six with the
-/// current states (zero-valued when `M` = 5, so the array has one length).
-fn transition_jacobian_entries<const M: usize>(x: &SVector<f64, M>, h: f64) -> [(usize, usize, f64); 6] {
-    let (sin, cos) = x[PSI].sin_cos();
+/// current states (zero-valued when `M` = 5, so the array has one length); (sin ψ, cos ψ) of `x`
+/// given.
+fn transition_jacobian_entries<const M: usize>(
+    x: &SVector<f64, M>,
+    h: f64,
+    (sin, cos): (f64, f64),
+) -> [(usize, usize, f64); 6] {
     let drift = if M > CURRENT_N { h } else { 0.0 };
     let (ce, cn) = if M > CURRENT_N { (CURRENT_E, CURRENT_N) } else { (E, N) };
     [
@@ -246,9 +255,10 @@ impl<const M: usize> AuvEkf<M> {
             return false;
         }
         let x = *self.ekf.x();
-        let x_new = transition(&x, h, h * yaw_rate);
+        let sin_cos = x[PSI].sin_cos();
+        let x_new = transition_at(&x, h, h * yaw_rate, sin_cos);
         let q = self.step_q(h);
-        self.ekf.predict_sparse(t, x_new, &transition_jacobian_entries(&x, h), &q)
+        self.ekf.predict_sparse(t, x_new, &transition_jacobian_entries(&x, h, sin_cos), &q)
     }
 
     /// The prediction from `x` over `h` seconds at heading rate `yaw_rate`: the propagated mean,
@@ -269,7 +279,7 @@ impl<const M: usize> AuvEkf<M> {
     /// recomputes each prior bit for bit.
     pub fn prior_covariance(&self, x: &SVector<f64, M>, p: &SMatrix<f64, M, M>, h: f64) -> SMatrix<f64, M, M> {
         let mut p = *p;
-        propagate_covariance(&mut p, &transition_jacobian_entries(x, h), &self.step_q(h));
+        propagate_covariance(&mut p, &transition_jacobian_entries(x, h, x[PSI].sin_cos()), &self.step_q(h));
         p
     }
 

@@ -174,17 +174,18 @@ impl<const N: usize> Ekf<N> {
     /// `h` the Jacobian row, `r` the measurement variance. The Joseph form of [`Self::update`]
     /// with the gain a rank-one correction: (I − k h) P (I − k h)ᵀ + r k kᵀ is computed as
     /// B = P − k (P hᵀ)ᵀ, then B − (B hᵀ) kᵀ + r k kᵀ, O(N²) instead of dense N×N products
-    /// (equal up to rounding).
+    /// (equal up to rounding). Products with h visit only its non-zero entries (a speed row has
+    /// one, a compass row two; a zero term adds nothing to a sum), and the rank-one corrections
+    /// run down the columns of the column-major storage: this runs twice per AUV per filter step.
     pub fn update_scalar(&mut self, innovation: f64, h: SMatrix<f64, 1, N>, r: f64, gate: &Gate) -> UpdateOutcome {
         if !(innovation.is_finite() && all_finite(h.as_slice()) && r.is_finite()) {
             return UpdateOutcome::Unusable;
         }
-        // Written as loops over the fixed size: this runs twice per AUV per filter step.
-        let mut pht = [0.0; N];
-        for (i, v) in pht.iter_mut().enumerate() {
-            *v = (0..N).map(|j| self.p[(i, j)] * h[j]).sum();
-        }
-        let s = (0..N).map(|j| h[j] * pht[j]).sum::<f64>() + r;
+        let seen = NonZero::of(&h);
+        // `p[j][i]` is entry (i, j) of the column-major storage.
+        let p = &self.p.data.0;
+        let pht = seen.times(|i, j| p[j][i], &h);
+        let s = seen.columns().iter().map(|&j| h[j] * pht[j]).sum::<f64>() + r;
         if !(s > 0.0 && s.is_finite()) {
             return UpdateOutcome::Unusable;
         }
@@ -195,23 +196,27 @@ impl<const N: usize> Ekf<N> {
             return UpdateOutcome::Gated { nis };
         }
         let k = pht.map(|v| v / s);
-        // B = P − k (P hᵀ)ᵀ, then P⁺ = B − (B hᵀ) kᵀ + r k kᵀ.
-        let mut p_new = self.p;
-        for i in 0..N {
-            for j in 0..N {
-                p_new[(i, j)] -= k[i] * pht[j];
+        // B = P − k (P hᵀ)ᵀ, then P⁺ = B − (B hᵀ) kᵀ + r k kᵀ = B + c kᵀ with c = r k − B hᵀ.
+        // B hᵀ needs only h's columns of B, so P⁺ is written in one pass, every entry rounded
+        // as in the two-pass form, (p − kᵢ (P hᵀ)ⱼ) + cᵢ kⱼ, and each off-diagonal pair averaged
+        // as [`symmetrise`] averages it.
+        let b = |i: usize, j: usize| p[j][i] - k[i] * pht[j];
+        let bht = seen.times(b, &h);
+        let mut c = [0.0; N];
+        for (i, v) in c.iter_mut().enumerate() {
+            *v = r * k[i] - bht[i];
+        }
+        let entry = |i: usize, j: usize| b(i, j) + c[i] * k[j];
+        let mut columns = [[0.0; N]; N];
+        for j in 0..N {
+            columns[j][j] = entry(j, j);
+            for i in 0..j {
+                let v = 0.5 * (entry(i, j) + entry(j, i));
+                columns[j][i] = v;
+                columns[i][j] = v;
             }
         }
-        let mut bht = [0.0; N];
-        for (i, v) in bht.iter_mut().enumerate() {
-            *v = (0..N).map(|j| p_new[(i, j)] * h[j]).sum();
-        }
-        for i in 0..N {
-            for j in 0..N {
-                p_new[(i, j)] += (r * k[i] - bht[i]) * k[j];
-            }
-        }
-        symmetrise_in_place(&mut p_new);
+        let p_new = SMatrix::<f64, N, N>::from_data(nalgebra::ArrayStorage(columns));
         let x_new = self.x + SVector::<f64, N>::from(k) * innovation;
         self.commit(x_new, p_new).map_or(UpdateOutcome::Unusable, |()| UpdateOutcome::Applied { nis })
     }
@@ -295,13 +300,46 @@ pub fn wrap_angle(a: f64) -> f64 {
     }
 }
 
+/// The columns where a measurement row h is non-zero, in increasing order.
+struct NonZero<const N: usize> {
+    columns: [usize; N],
+    len: usize,
+}
+
+impl<const N: usize> NonZero<N> {
+    fn of(h: &SMatrix<f64, 1, N>) -> Self {
+        let mut nz = NonZero { columns: [0; N], len: 0 };
+        for j in (0..N).filter(|&j| h[j] != 0.0) {
+            nz.columns[nz.len] = j;
+            nz.len += 1;
+        }
+        nz
+    }
+
+    fn columns(&self) -> &[usize] {
+        &self.columns[..self.len]
+    }
+
+    /// M hᵀ for M given entry by entry (`m(i, j)`), summed over h's non-zero entries in column
+    /// order.
+    fn times(&self, m: impl Fn(usize, usize) -> f64, h: &SMatrix<f64, 1, N>) -> [f64; N] {
+        let mut out = [0.0; N];
+        for (i, v) in out.iter_mut().enumerate() {
+            *v = self.columns().iter().map(|&j| m(i, j) * h[j]).sum();
+        }
+        out
+    }
+}
+
 /// [`symmetrise`] in place, mirroring the averaged upper triangle.
 fn symmetrise_in_place<const N: usize>(m: &mut SMatrix<f64, N, N>) {
-    for i in 0..N {
-        for j in i + 1..N {
-            let v = 0.5 * (m[(i, j)] + m[(j, i)]);
-            m[(i, j)] = v;
-            m[(j, i)] = v;
+    // `columns[j][i]` is entry (i, j).
+    let columns = &mut m.data.0;
+    for j in 1..N {
+        for i in 0..j {
+            let v = 0.5 * (columns[j][i] + columns[i][j]);
+            columns[j][i] = v;
+            columns[i][j] = v;
         }
     }
 }
@@ -316,8 +354,10 @@ pub fn is_positive_definite<const N: usize>(m: &SMatrix<f64, N, N>) -> bool {
     all_finite(m.as_slice()) && m.cholesky().is_some()
 }
 
+/// Every value finite; without an early exit, so the check vectorises (it runs on every step).
+#[inline]
 fn all_finite(v: &[f64]) -> bool {
-    v.iter().all(|x| x.is_finite())
+    v.iter().fold(true, |ok, x| ok & x.is_finite())
 }
 
 /// P ← F P Fᵀ + diag(q) for F = I + G, G given by its non-zero entries (row, column, value),
@@ -327,17 +367,19 @@ pub fn propagate_covariance<const N: usize>(
     g: &[(usize, usize, f64)],
     q_diag: &SVector<f64, N>,
 ) {
-    // A = F P = P + G P (rows of G read the old P), then P⁻ = A Fᵀ = A + A Gᵀ (columns).
-    let old = *p;
+    // A = F P = P + G P (rows of G read the old P), then P⁻ = A Fᵀ = A + A Gᵀ (columns);
+    // `columns[c][r]` is entry (r, c).
+    let old = p.data.0;
+    let columns = &mut p.data.0;
     for &(i, j, v) in g {
-        for c in 0..N {
-            p[(i, c)] += v * old[(j, c)];
+        for (column, old_column) in columns.iter_mut().zip(&old) {
+            column[i] += v * old_column[j];
         }
     }
-    let a = *p;
+    let a = *columns;
     for &(i, j, v) in g {
-        for r in 0..N {
-            p[(r, i)] += v * a[(r, j)];
+        for (x, &a_rj) in columns[i].iter_mut().zip(&a[j]) {
+            *x += v * a_rj;
         }
     }
     for i in 0..N {

@@ -7,7 +7,7 @@
 
 use anyhow::{Context, Result};
 use coopnav_nav::{AuvModel, CurrentParams};
-use coopnav_sim::closed_loop::{self, Faults, PolicySpec, Scenario};
+use coopnav_sim::closed_loop::{self, Faults, PhaseClock, PolicySpec, Scenario};
 use coopnav_sim::models::tl::{GridModel, TlModel};
 use serde_json::json;
 use std::path::Path;
@@ -68,12 +68,13 @@ pub fn run(args: Args) -> Result<()> {
     let mut last = None;
     for _ in 0..args.reps.max(1) {
         let mut policy = spec.build(&sc)?;
-        let r = closed_loop::run(&sc, &mut policy, sc.seed, &Faults::default(), &mut ());
-        timings.push(r.timing);
+        let mut clock = PhaseClock::start();
+        let r = closed_loop::run(&sc, &mut policy, sc.seed, &Faults::default(), &mut clock);
+        timings.push((r.wall_s, clock.timing));
         last = Some(r);
     }
-    timings.sort_by(|a, b| a.total_s.total_cmp(&b.total_s));
-    let t = timings[timings.len() / 2];
+    timings.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let (wall_s, t) = timings[timings.len() / 2];
     let r = last.expect("at least one repetition");
     let out = json!({
         "target": "closed-loop",
@@ -89,11 +90,12 @@ pub fn run(args: Args) -> Result<()> {
         "tl_prepare_s (grid computed or read from disk, untimed below)": prepare_s,
         "parallel_planner": args.parallel,
         "reps": timings.len(),
-        "wall_s": t.total_s,
-        "real_time_factor": sc.duration_s / t.total_s,
+        "wall_s": wall_s,
+        "real_time_factor": sc.duration_s / wall_s,
         "target_wall_s": TARGET_S,
-        "meets_target": t.total_s <= TARGET_S,
+        "meets_target": wall_s <= TARGET_S,
         "breakdown_s": {
+            "setup (vehicles, schedule, transmission-loss provider)": t.setup_s,
             "decide (CNA policy, planner)": t.decide_s,
             "advance (truth kinematics)": t.advance_s,
             "transmit (slots, channel draws, travel times)": t.transmit_s,

@@ -5,7 +5,7 @@
 
 use super::policies::{PolicyError, PolicySpec};
 use super::scenario::Scenario;
-use crate::engine::{run, Faults, Observer, RunResult, Timing};
+use crate::engine::{run, Faults, Observer, RunResult};
 use crate::hbl::mc::{t_975, Stats};
 use coopnav_core::run_seed;
 use rayon::prelude::*;
@@ -67,8 +67,6 @@ pub struct Comparison {
     pub seed: u64,
     pub policies: Vec<PolicySummary>,
     pub paired: Vec<Paired>,
-    #[serde(skip)]
-    pub timing: Timing,
 }
 
 /// Runs every policy `runs` times and pairs the first policy (the reference) with each other
@@ -112,10 +110,6 @@ pub fn monte_carlo_until(
             Ok(r)
         })
         .collect::<Result<Vec<RunResult>, PolicyError>>()?;
-    let mut timing = Timing::default();
-    for r in &results {
-        timing.add(&r.timing);
-    }
     let summaries: Vec<PolicySummary> =
         results.chunks(runs.max(1)).zip(&specs).map(|(rs, s)| summarise(&s.name, rs)).collect();
     let paired = match summaries.split_first() {
@@ -129,7 +123,7 @@ pub fn monte_carlo_until(
             .collect(),
         None => Vec::new(),
     };
-    Ok(Comparison { n_auvs: sc.fleet.n_auvs, runs, seed: sc.seed, policies: summaries, paired, timing })
+    Ok(Comparison { n_auvs: sc.fleet.n_auvs, runs, seed: sc.seed, policies: summaries, paired })
 }
 
 fn summarise(name: &str, rs: &[RunResult]) -> PolicySummary {

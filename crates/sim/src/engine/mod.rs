@@ -30,7 +30,7 @@ use coopnav_plan::predict::UnderwayPredictor;
 use coopnav_plan::AuvForecast;
 use inflight::InFlight;
 use mini::SurfaceFilters;
-pub use observe::{CommsEvent, Decision, Observer, Trace, TraceRow};
+pub use observe::{CommsEvent, Decision, Observer, Phase, PhaseClock, Timing, Trace, TraceRow};
 use phases::Payload;
 use rand_chacha::ChaCha8Rng;
 use serde::Serialize;
@@ -46,36 +46,6 @@ pub struct Faults {
     pub silent_from_s: f64,
 }
 
-/// Wall-clock time per phase (not part of the deterministic results).
-#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]
-pub struct Timing {
-    /// CNA decisions, including the planner.
-    pub decide_s: f64,
-    /// Truth kinematics of every vehicle.
-    pub advance_s: f64,
-    /// Slots due: encoding, channel draws, travel times.
-    pub transmit_s: f64,
-    /// Packets' fates and the range updates they carry.
-    pub deliver_s: f64,
-    /// Filter predictions and sensor updates.
-    pub sense_s: f64,
-    /// Metrics and the observer.
-    pub observe_s: f64,
-    pub total_s: f64,
-}
-
-impl Timing {
-    pub fn add(&mut self, o: &Timing) {
-        self.decide_s += o.decide_s;
-        self.advance_s += o.advance_s;
-        self.transmit_s += o.transmit_s;
-        self.deliver_s += o.deliver_s;
-        self.sense_s += o.sense_s;
-        self.observe_s += o.observe_s;
-        self.total_s += o.total_s;
-    }
-}
-
 /// Everything one run produced.
 #[derive(Debug, Clone, Serialize)]
 pub struct RunResult {
@@ -87,8 +57,10 @@ pub struct RunResult {
     /// The recorded time series ([`run_traced`] only).
     #[serde(skip)]
     pub trace: Option<Trace>,
+    /// Wall time of the whole run, s (not part of the deterministic results; a [`PhaseClock`]
+    /// observer splits it by phase).
     #[serde(skip)]
-    pub timing: Timing,
+    pub wall_s: f64,
 }
 
 /// The CNA predictors as a forecast, hiding AUVs with fewer than the required reports (A14).
@@ -166,16 +138,15 @@ struct Engine<'a> {
 pub fn run(sc: &Scenario, policy: &mut Policy, seed: u64, faults: &Faults, obs: &mut dyn Observer) -> RunResult {
     let t_start = Instant::now();
     let mut engine = Engine::new(sc, policy, seed, faults);
-    let mut timing = Timing::default();
+    obs.on_phase_end(Phase::Setup);
     let steps = (sc.duration_s / sc.dt).round() as u64;
     for step in 0..steps {
         if obs.stop() {
             break;
         }
-        engine.step(step, &mut timing, obs);
+        engine.step(step, obs);
     }
-    timing.total_s = t_start.elapsed().as_secs_f64();
-    engine.finish(seed, timing)
+    engine.finish(seed, t_start.elapsed().as_secs_f64())
 }
 
 /// [`run`] keeping the whole time series in the result.
@@ -230,31 +201,25 @@ impl<'a> Engine<'a> {
         }
     }
 
-    /// One truth step from `step · dt`, phase by phase, each timed.
-    fn step(&mut self, step: u64, timing: &mut Timing, obs: &mut dyn Observer) {
+    /// One truth step from `step · dt`, phase by phase, each end reported.
+    fn step(&mut self, step: u64, obs: &mut dyn Observer) {
         let t = step as f64 * self.sc.dt;
         let t_next = t + self.sc.dt;
-        let mut clock = Instant::now();
-        let mut lap = |slot: &mut f64| {
-            let now = Instant::now();
-            *slot += (now - clock).as_secs_f64();
-            clock = now;
-        };
         self.decide(t_next, obs);
-        lap(&mut timing.decide_s);
+        obs.on_phase_end(Phase::Decide);
         self.advance();
-        lap(&mut timing.advance_s);
+        obs.on_phase_end(Phase::Advance);
         self.transmit(t, t_next);
-        lap(&mut timing.transmit_s);
+        obs.on_phase_end(Phase::Transmit);
         self.deliver(t_next, obs);
-        lap(&mut timing.deliver_s);
+        obs.on_phase_end(Phase::Deliver);
         self.sense(t_next);
-        lap(&mut timing.sense_s);
+        obs.on_phase_end(Phase::Sense);
         let per_second = ((1.0 / self.sc.dt).round() as u64).max(1);
         if (step + 1) % per_second == 0 {
             self.observe(t_next, obs);
         }
-        lap(&mut timing.observe_s);
+        obs.on_phase_end(Phase::Observe);
     }
 
     /// Transmission loss from `a` to `b`, dB; the ceiling (a lost packet) when the model fails.
@@ -266,7 +231,7 @@ impl<'a> Engine<'a> {
         t >= self.faults.silent_from_s && self.faults.silent_auvs.contains(&k)
     }
 
-    fn finish(self, seed: u64, timing: Timing) -> RunResult {
+    fn finish(self, seed: u64, wall_s: f64) -> RunResult {
         let auvs: Vec<AuvMetrics> = self.tallies.iter().enumerate().map(|(k, a)| metrics(k, a)).collect();
         let pooled: Vec<f64> = self.tallies.iter().flat_map(|a| a.errors.iter().copied()).collect();
         let modelled: Vec<f64> = self.tallies.iter().flat_map(|a| a.modelled.iter().copied()).collect();
@@ -283,7 +248,7 @@ impl<'a> Engine<'a> {
             },
             planner: self.policy.planner_stats(),
             trace: None,
-            timing,
+            wall_s,
         }
     }
 }

@@ -1,9 +1,11 @@
 //! What the engine reports as it runs, and the one recorded time series. The engine calls an
-//! [`Observer`] once per second of mission time and once per packet whose fate is known; the
-//! caller keeps what it wants (`()` keeps nothing, [`Trace`] keeps everything).
+//! [`Observer`] once per second of mission time, once per packet whose fate is known and at the
+//! end of every phase of a step; the caller keeps what it wants (`()` keeps nothing, [`Trace`]
+//! keeps the time series, [`PhaseClock`] the wall time of each phase).
 
 use coopnav_core::Vec3;
 use serde::Serialize;
+use std::time::Instant;
 
 /// One row of the time series (every second, per AUV).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
@@ -64,6 +66,8 @@ pub trait Observer {
     fn on_ships(&mut self, _t: f64, _ships: &[Vec3]) {}
     /// A packet whose fate is known (at the end of its arrival).
     fn on_packet(&mut self, _event: &CommsEvent) {}
+    /// A phase of the run ended: the set-up once, then each phase of every step, in order.
+    fn on_phase_end(&mut self, _phase: Phase) {}
     /// Asked before every truth step: true ends the run there (a caller's cancellation, e.g.
     /// Ctrl-C in the Python bindings); the result then covers only the steps run.
     fn stop(&self) -> bool {
@@ -93,5 +97,72 @@ impl Observer for Trace {
     }
     fn on_packet(&mut self, event: &CommsEvent) {
         self.comms.push(*event);
+    }
+}
+
+/// The parts of a run, in the order the engine ends them (the phases of a step: see
+/// `engine::phases`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Phase {
+    /// Building the run: vehicles, schedule, the transmission-loss provider.
+    Setup,
+    Decide,
+    Advance,
+    Transmit,
+    Deliver,
+    Sense,
+    Observe,
+}
+
+/// Wall-clock time per part of a run (not part of the deterministic results).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]
+pub struct Timing {
+    /// Building the run (vehicles, schedule, transmission-loss provider).
+    pub setup_s: f64,
+    /// CNA decisions, including the planner.
+    pub decide_s: f64,
+    /// Truth kinematics of every vehicle.
+    pub advance_s: f64,
+    /// Slots due: encoding, channel draws, travel times.
+    pub transmit_s: f64,
+    /// Packets' fates and the range updates they carry.
+    pub deliver_s: f64,
+    /// Filter predictions and sensor updates.
+    pub sense_s: f64,
+    /// Metrics and the observer.
+    pub observe_s: f64,
+}
+
+/// Times every part of a run (the benchmark's observer). Reading the clock at each of a step's
+/// six phase ends costs about as much as a phase, so only a run that asks for it pays it.
+#[derive(Debug, Clone)]
+pub struct PhaseClock {
+    last: Instant,
+    pub timing: Timing,
+}
+
+impl PhaseClock {
+    /// A clock started now: start it just before the run.
+    pub fn start() -> Self {
+        PhaseClock { last: Instant::now(), timing: Timing::default() }
+    }
+}
+
+impl Observer for PhaseClock {
+    fn on_phase_end(&mut self, phase: Phase) {
+        let now = Instant::now();
+        let elapsed = (now - self.last).as_secs_f64();
+        self.last = now;
+        let t = &mut self.timing;
+        let slot = match phase {
+            Phase::Setup => &mut t.setup_s,
+            Phase::Decide => &mut t.decide_s,
+            Phase::Advance => &mut t.advance_s,
+            Phase::Transmit => &mut t.transmit_s,
+            Phase::Deliver => &mut t.deliver_s,
+            Phase::Sense => &mut t.sense_s,
+            Phase::Observe => &mut t.observe_s,
+        };
+        *slot += elapsed;
     }
 }

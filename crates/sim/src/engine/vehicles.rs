@@ -14,7 +14,7 @@ use coopnav_acomms::node_report::{NodeReport, VehicleType};
 use coopnav_acomms::selector::{AdaptiveBins, FixedRate, RatePolicy};
 use coopnav_acomms::Rate;
 use coopnav_core::{
-    wrap_pi, Bathymetry, DepthTarget, Heading, Iver2, Iver2Params, Iver2State, SeedStream, Vec3, Waypoint,
+    hypot_within, wrap_pi, Bathymetry, DepthTarget, Heading, Iver2, Iver2Params, Iver2State, SeedStream, Vec3, Waypoint,
 };
 use coopnav_nav::{AuvFilter, Side, StateKind};
 use rand_chacha::ChaCha8Rng;
@@ -238,8 +238,7 @@ impl Craft {
         let dz_max = speed * dt * 0.5;
         self.pos.z += (goal.z - self.pos.z).clamp(-dz_max, dz_max);
         let (dx, dy) = (goal.x - self.pos.x, goal.y - self.pos.y);
-        let dist = dx.hypot(dy);
-        if dist <= speed * dt {
+        if hypot_within(dx, dy, speed * dt).is_some_and(|dist| dist <= speed * dt) {
             self.pos.x = goal.x;
             self.pos.y = goal.y;
             return;

@@ -4,6 +4,7 @@
 //! seed see the same noise (common random numbers).
 
 use super::config::{Acoustic, Buoy, Drift};
+use coopnav_core::rem_euclid;
 use rand::Rng;
 use rand_chacha::ChaCha8Rng;
 use rand_distr::StandardNormal;
@@ -54,7 +55,7 @@ impl CompassBias {
     }
     /// Bias at a math-convention heading (rad), looked up at the rounded compass degree.
     pub fn at(&self, psi: f64) -> f64 {
-        let compass = (90.0 - psi.to_degrees()).rem_euclid(360.0);
+        let compass = rem_euclid(90.0 - psi.to_degrees(), 360.0);
         self.table[(compass.round() as usize) % 360]
     }
 }
