@@ -7,7 +7,9 @@ use crate::models::buoy::{BuoySpec, MAX_BUOYS};
 use crate::models::channel::Channel;
 use crate::models::filter::FilterSpec;
 use crate::models::finish::Finish;
+use crate::models::minipacket;
 use crate::models::schedule::{longest_air, payload_problem, Fit, Schedule};
+use crate::models::ship::{ShipSpec, MAX_SHIPS};
 use crate::models::tl::TlModel;
 pub use crate::scenario_file::ScenarioError;
 use crate::scenario_file::{self, overlay, Problems};
@@ -45,6 +47,9 @@ pub struct Scenario {
     /// Transponder buoys (`[[buoys]]`): each broadcasts its position in its own slot.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub buoys: Vec<BuoySpec>,
+    /// Ships on a fixed track (`[[ships]]`): each broadcasts its state as mini-packets.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub ships: Vec<ShipSpec>,
     #[serde(default)]
     pub comms: Comms,
     /// The acoustic channel as the sea plays it (truth), apart from what `[filter]` assumes.
@@ -217,6 +222,8 @@ pub struct Comms {
     pub slot_guard_s: f64,
     /// Longest range a slot must allow the packet to travel, m.
     pub max_range_m: f64,
+    /// Air time of a 13-bit mini-packet, s (see [`minipacket::DEFAULT_AIR_S`]).
+    pub mini_packet_air_s: f64,
 }
 
 impl Default for Comms {
@@ -231,6 +238,7 @@ impl Default for Comms {
             schedule: Schedule::default(),
             slot_guard_s: 0.1,
             max_range_m: 1000.0,
+            mini_packet_air_s: minipacket::DEFAULT_AIR_S,
         }
     }
 }
@@ -320,6 +328,7 @@ impl Scenario {
         self.validate_fleet(&mut p);
         self.validate_cna(&mut p);
         self.validate_buoys(&mut p);
+        self.validate_ships(&mut p);
         self.validate_comms(&mut p);
         self.validate_sensors(&mut p);
         self.filter.check_fields("filter.", &mut p);
@@ -434,6 +443,17 @@ impl Scenario {
         for (i, b) in self.buoys.iter().enumerate() {
             p.extend(b.problems(&format!("buoys[{i}].")));
             p.extend(payload_problem(&format!("buoys[{i}].rate"), b.rate, report_bytes));
+            b.filter.check_fields(&format!("buoys[{i}].filter."), p);
+        }
+    }
+
+    fn validate_ships(&self, p: &mut Problems) {
+        if self.ships.len() > MAX_SHIPS {
+            p.push("ships", format!("{} ships", self.ships.len()), format!("at most {MAX_SHIPS}"));
+        }
+        for (i, ship) in self.ships.iter().enumerate() {
+            p.extend(ship.problems(&format!("ships[{i}].")));
+            ship.filter.check_fields(&format!("ships[{i}].filter."), p);
         }
     }
 
@@ -469,6 +489,7 @@ impl Scenario {
         p.extend(c.tl.problems("comms.tl."));
         p.non_negative("comms.slot_guard_s", c.slot_guard_s);
         p.positive("comms.max_range_m", c.max_range_m);
+        p.check("comms.mini_packet_air_s", c.mini_packet_air_s, |v| v > 0.0 && v <= 10.0, "0 < air time <= 10 s");
         p.extend(self.channel.range_error.problems("channel.range_error."));
         p.extend(self.channel.sound_speed.problems("channel.sound_speed."));
         p.extend(self.channel.clocks.problems("channel.clocks."));
@@ -478,9 +499,11 @@ impl Scenario {
                 tau: c.tau,
                 n_auvs: self.fleet.n_auvs,
                 n_buoys: self.buoys.len(),
+                n_ships: self.ships.len(),
                 cna_air_s: longest_air([c.cna_rate]),
                 buoy_air_s: longest_air(self.buoys.iter().map(|b| b.rate)),
                 status_air_s: longest_air(status_rates),
+                mini_air_s: c.mini_packet_air_s,
                 travel_s: c.max_range_m / self.channel.sound_speed.slowest(),
                 guard_s: c.slot_guard_s,
             };

@@ -6,11 +6,13 @@
 //!
 //! Today it runs the closed-loop scenario: survey AUVs on lawnmowers with OWTT EKFs, one CNA
 //! (ASC or AUV) steered by a [`crate::policy::CnaPolicy`], transponder buoys (moored or
-//! drifting) whose position broadcasts the AUVs range to as well, the comms schedule of the
-//! scenario.
+//! drifting) whose position broadcasts the AUVs range to as well, ships on a fixed track, the
+//! comms schedule of the scenario. Ships and buoys may send 13-bit mini-packets (Gill's cycles):
+//! each survey AUV filters their states from the components and ranges to them ([`mini`]).
 
 pub mod health;
 mod inflight;
+mod mini;
 pub mod observe;
 mod phases;
 mod vehicles;
@@ -27,13 +29,14 @@ use coopnav_core::{Bathymetry, SeedStream, Vec3};
 use coopnav_plan::predict::UnderwayPredictor;
 use coopnav_plan::AuvForecast;
 use inflight::InFlight;
+use mini::SurfaceFilters;
 pub use observe::{CommsEvent, Decision, Observer, Trace, TraceRow};
 use phases::Payload;
 use rand_chacha::ChaCha8Rng;
 use serde::Serialize;
 use std::sync::Arc;
 use std::time::Instant;
-use vehicles::{stream, Buoy, Craft, SurveyAuv};
+use vehicles::{stream, Buoy, Craft, Ship, SurveyAuv};
 
 /// Links forced to lose every packet (failure studies and tests).
 #[derive(Debug, Clone, Default)]
@@ -145,6 +148,9 @@ struct Engine<'a> {
     auvs: Vec<SurveyAuv>,
     cna: Cna,
     buoys: Vec<Buoy>,
+    ships: Vec<Ship>,
+    /// Per survey AUV, its filters of the ships and buoys it hears mini-packets from.
+    surface: Vec<SurfaceFilters>,
     air: InFlight<Payload>,
     /// The scenario's transmission-loss model, built once for the run.
     tl: Arc<dyn TransmissionLoss>,
@@ -208,6 +214,8 @@ impl<'a> Engine<'a> {
             auvs,
             cna,
             buoys: (0..sc.buoys.len()).map(|i| Buoy::new(sc, i, &streams)).collect(),
+            ships: (0..sc.ships.len()).map(|i| Ship::new(sc, i, &streams)).collect(),
+            surface: (0..n).map(|_| SurfaceFilters::new(sc)).collect(),
             air: InFlight::new(sc.channel.collisions.capture_margin_db),
             tl: sc.comms.tl.provider(sc).unwrap_or_else(|e| {
                 // Validation builds the provider first, so this is a scenario built in code.

@@ -60,6 +60,8 @@ pub trait Observer {
     fn on_decision(&mut self, _decision: &Decision) {}
     /// After the step ending at `t`, once per second: the CNA's true position and one row per AUV.
     fn on_sample(&mut self, _t: f64, _cna: Vec3, _rows: &[TraceRow]) {}
+    /// Just before each `on_sample`, in a scenario with ships: ship i's true position at index i.
+    fn on_ships(&mut self, _t: f64, _ships: &[Vec3]) {}
     /// A packet whose fate is known (at the end of its arrival).
     fn on_packet(&mut self, _event: &CommsEvent) {}
     /// Asked before every truth step: true ends the run there (a caller's cancellation, e.g.

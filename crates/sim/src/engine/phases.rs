@@ -16,7 +16,8 @@ use crate::closed_loop::scenario::Scenario;
 use crate::hbl::noise::normal;
 use crate::models::channel::{air_time, Clock};
 use crate::models::finish::Finish;
-use crate::models::schedule::Owner;
+use crate::models::minipacket::SUCCESS_RATE;
+use crate::models::schedule::{Message, Owner};
 use crate::policy::ReportedCov;
 use crate::policy::{CnaCommand, PolicyContext};
 use coopnav_acomms::codec::{DecodeError, EncodeError};
@@ -25,7 +26,7 @@ use coopnav_acomms::selector::{Choice, Outcome};
 use coopnav_acomms::status::{CovTrailer, CovarianceReport};
 use coopnav_acomms::Rate;
 use coopnav_core::{Heading, Vec3};
-use coopnav_nav::{RangeMeasurement, UpdateOutcome};
+use coopnav_nav::{RangeMeasurement, StateKind, UpdateOutcome};
 use coopnav_plan::predict::StatusReport;
 use coopnav_plan::CnaPose;
 use rand_chacha::ChaCha8Rng;
@@ -39,6 +40,9 @@ pub enum Payload {
     Position { rate: Rate, fix: Vec3, travel_time: Option<f64>, decoded: bool },
     /// A survey AUV's status message through the wire format.
     Status { rate: Rate, slot_id: u64, bytes: Vec<u8>, decoded: bool },
+    /// A ship's or buoy's 13-bit mini-packet: one decoded state component and the travel time
+    /// the receiver measured (see [`super::mini`]).
+    Mini { kind: StateKind, value: f64, travel_time: Option<f64>, decoded: bool },
 }
 
 impl Engine<'_> {
@@ -110,6 +114,9 @@ impl Engine<'_> {
     pub(super) fn advance(&mut self) {
         let sc = self.sc;
         self.cna.craft.step(sc.cna.speed, sc.cna.max_turn_rate_deg_s.to_radians(), sc.dt);
+        for (ship, spec) in self.ships.iter_mut().zip(&sc.ships) {
+            ship.step(spec, sc.dt);
+        }
         for a in self.auvs.iter_mut() {
             let action = sc.fleet.finish.act(a.ctrl.is_complete(), a.ekf.position(), a.station);
             a.step_truth(sc, &self.bathy, action);
@@ -130,10 +137,13 @@ impl Engine<'_> {
             }
             self.next_slot += 1;
             let frac = ((t_tx - t) / self.sc.dt).clamp(0.0, 1.0);
-            match slot.owner {
-                Owner::Cna => self.broadcast(t_tx, frac),
-                Owner::Buoy(b) => self.buoy_broadcast(b, t_tx, frac),
-                Owner::Auv(j) => self.send_status(j, t_tx, frac),
+            match (slot.message, slot.owner) {
+                (Message::Mini(kind), owner) => self.mini_broadcast(owner, kind, t_tx, frac),
+                (Message::Packet, Owner::Cna) => self.broadcast(t_tx, frac),
+                (Message::Packet, Owner::Buoy(b)) => self.buoy_broadcast(b, t_tx, frac),
+                (Message::Packet, Owner::Auv(j)) => self.send_status(j, t_tx, frac),
+                // Validation refuses a ship slot without a component.
+                (Message::Packet, Owner::Ship(..)) => {}
             }
         }
     }
@@ -266,8 +276,20 @@ impl Engine<'_> {
                         self.apply_range(k, &meta, fix, travel_time);
                     }
                 }
-                (Payload::Broadcast { .. } | Payload::Position { .. }, Owner::Cna | Owner::Buoy(_))
-                | (Payload::Status { .. }, Owner::Buoy(_)) => {}
+                (Payload::Mini { kind, value, travel_time, decoded }, Owner::Auv(k)) => {
+                    let received = decoded && survived;
+                    let (stats, direction) = match meta.from {
+                        Owner::Ship(..) => (&mut self.tallies[k].down, "ship"),
+                        _ => (&mut self.tallies[k].buoys, "buoy"),
+                    };
+                    stats.record(SUCCESS_RATE.index(), received);
+                    obs.on_packet(&event(&meta, direction, k, decoded, survived));
+                    if received {
+                        self.hear_mini(k, &meta, kind, value, travel_time);
+                    }
+                }
+                (Payload::Broadcast { .. } | Payload::Position { .. } | Payload::Mini { .. }, _)
+                | (Payload::Status { .. }, Owner::Buoy(_) | Owner::Ship(..)) => {}
             }
         }
     }
@@ -286,7 +308,7 @@ impl Engine<'_> {
     /// AUV `k`'s filter applies the range of a decoded broadcast from a transponder at `fix`. The
     /// range was measured at the start of the arrival; the modem driver moves the transponder by
     /// the AUV's own dead-reckoned motion over the decode delay, so the filter can apply it now.
-    fn apply_range(&mut self, k: usize, meta: &Arrival<()>, fix: Vec3, travel_time: Option<f64>) {
+    pub(super) fn apply_range(&mut self, k: usize, meta: &Arrival<()>, fix: Vec3, travel_time: Option<f64>) {
         let sc = self.sc;
         let a = &mut self.auvs[k];
         let Some(travel_time) = travel_time else { return };
@@ -326,6 +348,10 @@ impl Engine<'_> {
 
     /// Once a second: true error, the filter's σ and NEES, distances, and the observer.
     pub(super) fn observe(&mut self, t: f64, obs: &mut dyn Observer) {
+        if !self.ships.is_empty() {
+            let ships: Vec<Vec3> = self.ships.iter().map(|s| s.pos).collect();
+            obs.on_ships(t, &ships);
+        }
         let limits = self.sc.planner.limits;
         let cna = self.cna.craft.pos;
         let mut rows = Vec::with_capacity(self.auvs.len());
@@ -370,7 +396,7 @@ impl Engine<'_> {
 /// `p0` moving at `v` with its own clock: the true travel time, and the one the receiver measures
 /// (None: no usable range). The range error is drawn whatever the packet's fate, so losses do
 /// not shift the stream.
-fn measured_travel(
+pub(super) fn measured_travel(
     sc: &Scenario,
     from: Vec3,
     t_tx: f64,
@@ -384,7 +410,7 @@ fn measured_travel(
     (tt, error.map(|e| tt + e + clocks))
 }
 
-fn arrival(
+pub(super) fn arrival(
     from: Owner,
     to: Owner,
     t_tx: f64,

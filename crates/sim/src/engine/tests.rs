@@ -5,6 +5,7 @@ use super::*;
 use crate::closed_loop::PolicySpec;
 use crate::models::finish::Finish;
 use crate::models::schedule::{Schedule, SlotSpec};
+use coopnav_nav::StateKind;
 
 /// One AUV on a short lawnmower (two 300 m lanes, done after about 480 s), then `duration` s.
 fn short_survey(finish: Finish, duration: f64) -> Scenario {
@@ -69,7 +70,7 @@ fn two_statuses_in_one_slot_collide_at_the_cna() {
     let mut sc = Scenario::example().with_auvs(2);
     sc.duration_s = 600.0;
     sc.channel.collisions.capture_margin_db = None;
-    let slot = |who: &str, start_s| SlotSpec { who: who.into(), start_s, length_s: 10.0 };
+    let slot = |who: &str, start_s| SlotSpec { who: who.into(), start_s, length_s: 10.0, message: None };
     sc.comms.schedule = Schedule::Tdma { slots: vec![slot("cna", 0.0), slot("auv0", 10.0), slot("auv1", 10.0)] };
     let (r, trace) = traced(&sc, "centroid", 2);
     for a in &r.auvs {
@@ -85,7 +86,7 @@ fn two_statuses_in_one_slot_collide_at_the_cna() {
 fn a_modem_transmitting_hears_no_broadcast() {
     let mut sc = Scenario::example().with_auvs(2);
     sc.duration_s = 600.0;
-    let slot = |who: &str, start_s| SlotSpec { who: who.into(), start_s, length_s: 10.0 };
+    let slot = |who: &str, start_s| SlotSpec { who: who.into(), start_s, length_s: 10.0, message: None };
     sc.comms.schedule = Schedule::Tdma { slots: vec![slot("cna", 0.0), slot("auv0", 0.0), slot("auv1", 10.0)] };
     let (r, _) = traced(&sc, "centroid", 2);
     assert!(r.auvs[0].downlink.sent >= 19 && r.auvs[0].downlink.received == 0, "{:?}", r.auvs[0].downlink);
@@ -145,7 +146,7 @@ fn a_buoy_sharing_the_cnas_slot_collides_with_it() {
     let mut sc = with_buoy(Scenario::example().with_auvs(1), 900.0, 300.0);
     sc.duration_s = 600.0;
     sc.channel.collisions.capture_margin_db = None;
-    let slot = |who: &str, start_s| SlotSpec { who: who.into(), start_s, length_s: 10.0 };
+    let slot = |who: &str, start_s| SlotSpec { who: who.into(), start_s, length_s: 10.0, message: None };
     sc.comms.schedule = Schedule::Tdma { slots: vec![slot("cna", 0.0), slot("buoy0", 0.0), slot("auv0", 10.0)] };
     let (r, trace) = traced(&sc, "centroid", 2);
     let a = &r.auvs[0];
@@ -177,4 +178,57 @@ fn a_drifting_buoys_batch_is_identical_on_one_and_two_threads() {
     let (a, b) = (go(&sc, 1), go(&sc, 2));
     assert_eq!(a, b);
     assert_ne!(a, go(&alone, 2));
+}
+
+/// Gill's HBL Two file with its cycle replaced by two mini-packet slots, ship then buoy,
+/// `gap_s` apart.
+fn ship_and_buoy_minis(gap_s: f64) -> Scenario {
+    let text = include_str!("../../../../scenarios/gill-table5-hbl-two.toml");
+    let mut sc = Scenario::parse(text, std::path::Path::new("gill-table5-hbl-two.toml")).unwrap();
+    let slot = |who: &str, start_s, kind| SlotSpec { who: who.into(), start_s, length_s: 2.0, message: Some(kind) };
+    sc.comms.schedule = Schedule::Tdma {
+        slots: vec![slot("ship0.port", 0.0, StateKind::East), slot("buoy0", gap_s, StateKind::North)],
+    };
+    sc
+}
+
+/// Mini-packets occupy the water for their air time like every packet: the ship's and the
+/// buoy's sent together overlap at the AUV and both are lost; 2 s apart, both are heard and
+/// their ranges applied.
+#[test]
+fn mini_packets_from_a_ship_and_a_buoy_sent_together_collide_at_the_auv() {
+    let (together, _) = traced(&ship_and_buoy_minis(0.0), "none", 2);
+    let a = &together.auvs[0];
+    assert!(a.downlink.sent > 0 && a.buoy_link.sent > 0, "{a:?}");
+    assert_eq!((a.downlink.received, a.buoy_link.received, a.ranges_applied), (0, 0, 0), "{a:?}");
+    let (apart, _) = traced(&ship_and_buoy_minis(2.0), "none", 2);
+    let a = &apart.auvs[0];
+    assert!(a.downlink.received > 0 && a.buoy_link.received > 0 && a.ranges_applied > 0, "{a:?}");
+}
+
+/// The ships' true positions the engine reports each second.
+#[derive(Default)]
+struct ShipTrack(Vec<(f64, Vec3)>);
+
+impl Observer for ShipTrack {
+    fn on_ships(&mut self, t: f64, ships: &[Vec3]) {
+        self.0.push((t, ships[0]));
+    }
+}
+
+/// Gill's ship starts scattered about its nominal start (4 m, 0.1 rad) and its pilot brings it
+/// onto its westward track, at its speed.
+#[test]
+fn a_ship_on_a_fixed_track_converges_onto_it_and_keeps_its_speed() {
+    let sc = ship_and_buoy_minis(2.0);
+    for seed in 1..=5 {
+        let mut track = ShipTrack::default();
+        let mut policy = PolicySpec::new("none", &sc).unwrap().build(&sc).unwrap();
+        run(&sc, &mut policy, seed, &Faults::default(), &mut track);
+        let (t0, start) = track.0[0];
+        let (t1, end) = *track.0.last().unwrap();
+        assert!(start.y.abs() < 20.0 && end.y.abs() < 0.5, "seed {seed}: y {} -> {}", start.y, end.y);
+        let speed = (start.x - end.x) / (t1 - t0);
+        assert!((speed - 1.3).abs() < 0.2, "seed {seed}: {speed} m/s west");
+    }
 }

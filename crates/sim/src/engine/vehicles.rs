@@ -1,19 +1,22 @@
 //! The engine's vehicles: a survey AUV (its controller steering on its own estimate, its truth,
-//! its filter, its sensors' noise streams and its modem's state), the CNA craft, and the
-//! transponder buoys (their drift, GPS and clock).
+//! its filter, its sensors' noise streams and its modem's state), the CNA craft, the
+//! transponder buoys (their drift, GPS and clock) and the ships on a fixed track (their pilot,
+//! broadcast sensors and clock).
 
 use crate::closed_loop::scenario::Scenario;
 use crate::hbl::noise::{normal, BuoyMotion, CompassBias};
 use crate::models::buoy::BuoySpec;
 use crate::models::channel::Clock;
 use crate::models::finish::Action;
+use crate::models::minipacket;
+use crate::models::ship::ShipSpec;
 use coopnav_acomms::node_report::{NodeReport, VehicleType};
 use coopnav_acomms::selector::{AdaptiveBins, FixedRate, RatePolicy};
 use coopnav_acomms::Rate;
 use coopnav_core::{
     wrap_pi, Bathymetry, DepthTarget, Heading, Iver2, Iver2Params, Iver2State, SeedStream, Vec3, Waypoint,
 };
-use coopnav_nav::AuvFilter;
+use coopnav_nav::{AuvFilter, Side, StateKind};
 use rand_chacha::ChaCha8Rng;
 
 /// Stream ids of one run: the CNA's, a block of ten per survey AUV and one per buoy.
@@ -38,6 +41,11 @@ pub mod stream {
     pub const BUOY_CLOCK: u64 = 2;
     /// The channel draws (fate and range error) of its broadcasts, at every AUV in turn.
     pub const BUOY_LINK: u64 = 3;
+    pub const SHIP_BASE: u64 = 20_000;
+    pub const SHIP_INIT: u64 = 0;
+    pub const SHIP_SENSORS: u64 = 1;
+    pub const SHIP_CLOCK: u64 = 2;
+    pub const SHIP_LINK: u64 = 3;
 }
 
 /// A survey AUV.
@@ -280,5 +288,76 @@ impl Buoy {
         let p = self.position(t);
         let (ex, ey) = (self.gps_sd * normal(&mut self.rng_gps), self.gps_sd * normal(&mut self.rng_gps));
         Vec3::new(p.x + ex, p.y + ey, p.z)
+    }
+}
+
+/// A ship on its fixed track: its truth (a unicycle its pilot steers back onto the track), what
+/// its broadcasts measure, and its modems' clock.
+pub struct Ship {
+    /// True position of its reference point at the end of the last step, and at its start.
+    pub pos: Vec3,
+    pub prev: Vec3,
+    /// True math heading and speed over ground.
+    pub psi: f64,
+    pub speed: f64,
+    pub clock: Clock,
+    rng_sensors: ChaCha8Rng,
+    pub rng_link: ChaCha8Rng,
+}
+
+impl Ship {
+    /// Ship `i` at its nominal start, scattered as its spec says (its own stream).
+    pub fn new(sc: &Scenario, i: usize, streams: &SeedStream) -> Self {
+        let spec = &sc.ships[i];
+        let rng = |id: u64| streams.rng(stream::SHIP_BASE + 10 * i as u64 + id);
+        let mut r_init = rng(stream::SHIP_INIT);
+        let sd = spec.start_scatter;
+        let pos = Vec3::new(
+            spec.x + sd.position_sd_m * normal(&mut r_init),
+            spec.y + sd.position_sd_m * normal(&mut r_init),
+            0.0,
+        );
+        let speed = spec.speed + sd.speed_sd * normal(&mut r_init);
+        let psi = wrap_pi(spec.track() + sd.heading_sd_deg.to_radians() * normal(&mut r_init));
+        Ship {
+            pos,
+            prev: pos,
+            psi,
+            speed,
+            clock: sc.channel.clocks.draw(&mut rng(stream::SHIP_CLOCK)),
+            rng_sensors: rng(stream::SHIP_SENSORS),
+            rng_link: rng(stream::SHIP_LINK),
+        }
+    }
+
+    /// One truth step: the pilot's heading-rate command from the true offset off the track.
+    pub fn step(&mut self, spec: &ShipSpec, dt: f64) {
+        let track = spec.track();
+        let (dx, dy) = (self.pos.x - spec.x, self.pos.y - spec.y);
+        let left_of_track = -dx * track.sin() + dy * track.cos();
+        let rate = spec.pilot.rate(left_of_track, track, self.psi);
+        self.prev = self.pos;
+        self.psi = wrap_pi(self.psi + rate * dt);
+        self.pos.x += dt * self.speed * self.psi.cos();
+        self.pos.y += dt * self.speed * self.psi.sin();
+    }
+
+    /// The transducer of its `side` modem at fraction `frac` of the last step.
+    pub fn modem(&self, spec: &ShipSpec, side: Side, frac: f64) -> Vec3 {
+        let p = lerp(self.prev, self.pos, frac);
+        spec.outriggers.position(side, p.x, p.y, self.psi)
+    }
+
+    /// The value its mini-packet carrying `kind` decodes to: its DGPS position at fraction `frac`
+    /// of the last step, its measured speed and heading, quantised (four draws, whatever the kind:
+    /// the stream does not depend on the cycle).
+    pub fn mini_value(&mut self, spec: &ShipSpec, kind: StateKind, frac: f64) -> f64 {
+        let s = &spec.sensors;
+        let noise: [f64; 4] = std::array::from_fn(|_| normal(&mut self.rng_sensors));
+        let p = lerp(self.prev, self.pos, frac);
+        let measured = [p.x + s.gps_sd_m * noise[0], p.y + s.gps_sd_m * noise[1]];
+        let speed = self.speed + s.speed_sd * noise[2];
+        let psi = self.psi + s.heading_sd_deg.to_radians() * noise[3];
+        minipacket::quantised(kind, measured, speed, psi, &spec.zone)
     }
 }

@@ -8,6 +8,7 @@ use crate::hbl::config::Scenario;
 use crate::hbl::grid::{buoy_grid, optimal_region, GridSpec};
 use crate::hbl::mc::{monte_carlo, monte_carlo_profiled, welch_95, McError, McSummary, Stats};
 use crate::hbl::profile::ProfileBin;
+use crate::hbl::zone::{zone_monte_carlo, ZoneMetrics, ZoneSpec};
 use coopnav_nav::cycle::Configuration;
 use serde_json::json;
 use std::fmt::Write;
@@ -110,6 +111,48 @@ fn across_path_profile(table: &mut String, configs: &[Configuration], profiles: 
     table.push('\n');
 }
 
+/// The Table 5 set-up as scenario files of the one engine (ship, buoy and AUV vehicles, Gill's
+/// cycles as `gill_cycle` schedules, mini-packets through the engine's channel).
+const ENGINE_FILES: [(&str, &str); 3] = [
+    ("gill-table5-msbl.toml", include_str!("../../../../scenarios/gill-table5-msbl.toml")),
+    ("gill-table5-hbl-one.toml", include_str!("../../../../scenarios/gill-table5-hbl-one.toml")),
+    ("gill-table5-hbl-two.toml", include_str!("../../../../scenarios/gill-table5-hbl-two.toml")),
+];
+
+/// One configuration's zone figures on the engine.
+#[derive(serde::Serialize)]
+struct EngineZone {
+    file: &'static str,
+    zone_error: Stats,
+    zone_parallel: Stats,
+    zone_perpendicular: Stats,
+    approach_perpendicular: Stats,
+    healthy: bool,
+}
+
+/// Runs the three Table 5 scenario files on the engine, `n` runs each with the old loop's seeds.
+fn engine_table_5(n: usize, seed: u64) -> Result<Vec<EngineZone>, ExperimentError> {
+    let engine_failed = |e: String| ExperimentError::Failed { id: ID5.into(), message: e };
+    ENGINE_FILES
+        .iter()
+        .map(|(file, text)| {
+            let sc = crate::closed_loop::Scenario::parse(text, std::path::Path::new(file))
+                .map_err(|e| engine_failed(e.to_string()))?;
+            let (runs, healthy) =
+                zone_monte_carlo(&sc, ZoneSpec::table5(), n, seed).map_err(|e| engine_failed(e.to_string()))?;
+            let of = |f: fn(&ZoneMetrics) -> Option<f64>| Stats::of(&runs.iter().filter_map(f).collect::<Vec<_>>());
+            Ok(EngineZone {
+                file,
+                zone_error: of(|m| m.zone_error),
+                zone_parallel: of(|m| m.zone_parallel),
+                zone_perpendicular: of(|m| m.zone_perpendicular),
+                approach_perpendicular: of(|m| m.approach_perpendicular),
+                healthy,
+            })
+        })
+        .collect()
+}
+
 /// The approach-window statistics; every Table 5 run reaches the zone, so they exist.
 fn approach(s: &McSummary) -> Stats {
     s.approach_perpendicular.unwrap_or(Stats { n: 0, mean: f64::NAN, sd: f64::NAN, se: f64::NAN })
@@ -162,6 +205,29 @@ fn table_5(o: &ReproOptions) -> Result<ReproReport, ExperimentError> {
     )
     .ok();
     across_path_profile(&mut table, &configs.map(|c| c.0), &profiles);
+    let engine = engine_table_5(n, o.seed)?;
+    writeln!(table, "\nthe same set-up on the one engine (scenarios/gill-table5-*.toml, zone sampled once a second):")
+        .ok();
+    writeln!(
+        table,
+        "{:<9} {:>16} {:>7} {:>7} {:>7} {:>9}",
+        "config", "engine mean±SD", "SE", "par", "perp", "approach"
+    )
+    .ok();
+    for ((c, ..), e) in configs.iter().zip(&engine) {
+        writeln!(
+            table,
+            "{:<9} {:>8.3} ± {:<5.3} {:>7.3} {:>7.3} {:>7.3} {:>9.3}",
+            c.label(),
+            e.zone_error.mean,
+            e.zone_error.sd,
+            e.zone_error.se,
+            e.zone_parallel.mean,
+            e.zone_perpendicular.mean,
+            e.approach_perpendicular.mean
+        )
+        .ok();
+    }
     let (msbl, one, two) = (&rows[0].3, &rows[1].3, &rows[2].3);
     let d = welch_95(&two.zone_error, &one.zone_error);
     let mut checks = vec![
@@ -203,8 +269,20 @@ fn table_5(o: &ReproOptions) -> Result<ReproReport, ExperimentError> {
         rows.iter().all(|r| r.3.all_healthy && r.4.all_healthy),
         "every run of every configuration",
     ));
+    let (e_msbl, e_two) = (&engine[0], &engine[2]);
+    let e_gap = welch_95(&e_msbl.approach_perpendicular, &e_two.approach_perpendicular);
+    checks.push(Check::new(
+        "on the engine too, HBL Two corrects the across-path error before the zone and MSBL does not",
+        e_gap.low > 0.0 && engine.iter().all(|e| e.healthy),
+        format!(
+            "engine across-path error before the zone: HBL Two {:.3} m vs MSBL {:.3} m (difference CI {:.3}..{:.3}); \
+             every engine run finite",
+            e_two.approach_perpendicular.mean, e_msbl.approach_perpendicular.mean, e_gap.low, e_gap.high
+        ),
+    ));
     let data = json!({ "runs": n, "seed": o.seed, "results": rows.iter().map(|(c, sim, field, p, g)| json!({
-        "configuration": c.label(), "thesis_simulation": sim, "thesis_field": field, "ours": p, "ours_gated": g })).collect::<Vec<_>>() });
+        "configuration": c.label(), "thesis_simulation": sim, "thesis_field": field, "ours": p, "ours_gated": g })).collect::<Vec<_>>(),
+        "engine": engine });
     Ok(ReproReport { id: ID5.into(), table, checks, data })
 }
 

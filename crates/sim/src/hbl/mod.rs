@@ -1,7 +1,7 @@
 //! The Gill (2013) hybrid-baseline world: truth simulation of an AUV passing counter-course
 //! under a ship with an off-path buoy, the sensor and acoustic noise, Monte Carlo with common
 //! random numbers, the buoy-location grid, coefficient tuning and the log writer for the
-//! post-processing pipeline. The filters themselves live in `coopnav_nav`.
+//! post-processing pipeline; and Gill's zone metric as an engine observer ([`zone`]). The filters themselves live in `coopnav_nav`.
 
 pub mod config;
 pub mod grid;
@@ -12,6 +12,7 @@ pub mod plot;
 pub mod profile;
 pub mod tune;
 pub mod world;
+pub mod zone;
 
 pub use config::{ConfigError, Scenario};
 pub use mc::{monte_carlo, monte_carlo_profiled, welch_95, McError, McResult, McSummary, Stats, WelchCi};

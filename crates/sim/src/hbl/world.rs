@@ -5,8 +5,9 @@
 
 use super::config::{Scenario, TransponderTime};
 use super::noise::{draw_reception, normal, stream, BuoyMotion, CompassBias, Reception};
+use crate::models::minipacket::quantised;
 use coopnav_core::{wrap_pi, CompassDeg, Heading, SeedStream, Vec3};
-use coopnav_nav::codec::{decode_heading_deg, encode_heading_deg, Zone, SPEED_AXIS};
+use coopnav_nav::codec::Zone;
 use coopnav_nav::cycle::{Cycle, Transmitter, Vehicle};
 use coopnav_nav::ekf::is_positive_definite;
 use coopnav_nav::post::{Entry, Record};
@@ -123,19 +124,6 @@ impl Filters {
             c.push(b.ekf().counts());
         }
         c.iter().fold((0, 0), |a, b| (a.0 + b.0, a.1 + b.1))
-    }
-}
-
-/// Broadcast of `kind` by a vehicle: quantised, then decoded to the box centre as the AUV sees it.
-fn broadcast(kind: StateKind, pos: [f64; 2], speed: f64, psi: f64, zone: &Zone) -> f64 {
-    match kind {
-        StateKind::East => zone.east.decode(zone.east.encode(pos[0]).index),
-        StateKind::North => zone.north.decode(zone.north.encode(pos[1]).index),
-        StateKind::Speed => SPEED_AXIS.decode(SPEED_AXIS.encode(speed).index),
-        StateKind::Heading => {
-            let compass = CompassDeg::from(Heading::from_radians(psi)).0;
-            Heading::from(CompassDeg(decode_heading_deg(encode_heading_deg(compass)))).radians()
-        }
     }
 }
 
@@ -327,7 +315,7 @@ impl<'a> World<'a> {
         }
         let dgps = sc.sensors.dgps_sd;
         let measured = [pos[0] + dgps * noise[0] + bias[0], pos[1] + dgps * noise[1] + bias[1]];
-        let value = broadcast(
+        let value = quantised(
             kind,
             measured,
             speed + sc.sensors.ship_speed_sd * noise[2],

@@ -4,8 +4,11 @@
 //! range, beside the CNA's. The spec (`[[buoys]]`) and its validation live here; the engine's
 //! buoy vehicle is in `engine/vehicles.rs`.
 
+use super::minipacket::zone_problems;
 use crate::hbl::noise::{BuoyMotion, LakeDrift};
 use coopnav_acomms::Rate;
+use coopnav_nav::codec::Zone;
+use coopnav_nav::SurfaceParams;
 use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
 
@@ -27,6 +30,13 @@ pub struct BuoySpec {
     /// WHOI rate of its position broadcast (default 0, the most robust).
     #[serde(default = "default_rate")]
     pub rate: Rate,
+    /// Quantisation zone of its East/North mini-packets (a `gill_cycle` or a `tdma` slot with a
+    /// `message`); default: Gill's 1.6 m × 0.6 m boxes centred on its deployment position.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub zone: Option<Zone>,
+    /// The buoy filter every survey AUV runs from its mini-packets (gill digest §3.3, Table 3).
+    #[serde(default = "SurfaceParams::buoy")]
+    pub filter: SurfaceParams,
 }
 
 /// How a buoy moves: moored, a constant drift, or Gill's lake statistics drawn per run.
@@ -59,6 +69,11 @@ fn default_rate() -> Rate {
 pub const MAX_BUOYS: usize = 8;
 
 impl BuoySpec {
+    /// The zone its mini-packets are quantised in.
+    pub fn zone(&self) -> Zone {
+        self.zone.unwrap_or_else(|| Zone::centred(self.x, self.y, 1.6, 0.6))
+    }
+
     /// Its true trajectory for one run (a lake drift draws from `rng`, its own stream).
     pub fn motion(&self, rng: &mut ChaCha8Rng) -> BuoyMotion {
         let p0 = [self.x, self.y];
@@ -94,6 +109,9 @@ impl BuoySpec {
                 need("drift.circular_fraction", f, (0.0..=1.0).contains(&f), "a probability in [0, 1]");
                 need("drift.circular_radius_m", s.circular_radius_m, s.circular_radius_m > 0.0, "a number > 0 m");
             }
+        }
+        if let Some(zone) = &self.zone {
+            out.extend(zone_problems(&format!("{prefix}zone."), zone));
         }
         if self.rate.spec().deprecated {
             out.push((

@@ -1,11 +1,14 @@
 //! Named, configurable models the engine plugs in, each a `#[serde(tag = "kind")]` spec with its
-//! parameters and its own validation: transponder buoys ([`buoy`]), the acoustic channel's truth side ([`channel`]), the comms
-//! schedule ([`schedule`]), what a vehicle does after its mission ([`finish`]) and what the
+//! parameters and its own validation: transponder buoys ([`buoy`]), ships on a fixed track
+//! ([`ship`]), the acoustic channel's truth side ([`channel`]), the 13-bit mini-packet
+//! ([`minipacket`]), the comms schedule ([`schedule`]), what a vehicle does after its mission ([`finish`]) and what the
 //! survey AUVs' filters assume ([`filter`]), and the transmission loss ([`tl`]).
 
 pub mod buoy;
 pub mod channel;
 pub mod filter;
 pub mod finish;
+pub mod minipacket;
 pub mod schedule;
+pub mod ship;
 pub mod tl;

@@ -1,12 +1,16 @@
 //! The comms schedule as data: one TDMA cycle of period τ, a list of slots each owned by the CNA
-//! (its broadcast), a buoy (its position broadcast) or one survey AUV (its status message).
+//! (its broadcast), a buoy (its position broadcast, or one state component as a mini-packet), a
+//! ship's port or starboard modem (a mini-packet) or one survey AUV (its status message).
 //! `broadcast_then_status` is Hudson's preset (the CNA at m·τ, then AUV j at m·τ + (j + 1)·τ/(N + 1));
-//! with B buoys their slots follow the CNA's, every slot τ/(1 + B + N); `tdma` lists the slots.
-//! Validation refuses a slot shorter than its packet's air time plus the longest expected travel
-//! time plus a guard, naming the slot, and a message too long for its rate.
+//! with B buoys their slots follow the CNA's, every slot τ/(1 + B + N); `gill_cycle` is Gill's MSBL /
+//! HBL Short / HBL Long cycle (gill digest §4, Table 1) of 2 s mini-packet slots from ship0 and
+//! buoy0; `tdma` lists the slots. Validation refuses a slot shorter than its packet's air time plus
+//! the longest expected travel time plus a guard, naming the slot, and a message too long for its rate.
 
 use super::channel::{air_time, capacity};
 use coopnav_acomms::Rate;
+use coopnav_nav::cycle::{Configuration, Cycle, Transmitter};
+use coopnav_nav::{Side, StateKind};
 use serde::{Deserialize, Serialize};
 
 /// Who transmits in a slot.
@@ -15,6 +19,18 @@ pub enum Owner {
     Cna,
     Buoy(usize),
     Auv(usize),
+    /// One of ship i's two outrigger modems.
+    Ship(usize, Side),
+}
+
+/// What a slot's owner sends.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Message {
+    /// The owner's own packet at its WHOI rate (the CNA's broadcast, a buoy's position report,
+    /// an AUV's status).
+    Packet,
+    /// A 13-bit mini-packet: a ranging ping carrying one quantised state component.
+    Mini(StateKind),
 }
 
 /// One slot of the cycle, seconds after the cycle start.
@@ -23,22 +39,56 @@ pub struct Slot {
     pub owner: Owner,
     pub start_s: f64,
     pub length_s: f64,
+    pub message: Message,
 }
 
-/// A slot as written in the file: `who = "cna"`, `"buoy0"`, … or `"auv0"`, `"auv1"`, …
+/// A slot as written in the file: `who = "cna"`, `"buoy0"`, …, `"ship0.port"`, `"ship0.starboard"`,
+/// … or `"auv0"`, `"auv1"`, …; `message` (`east`, `north`, `speed` or `heading`) makes it a
+/// mini-packet carrying that state component (a ship's slot must name one).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct SlotSpec {
     pub who: String,
     pub start_s: f64,
     pub length_s: f64,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub message: Option<StateKind>,
+}
+
+/// Gill's cycle presets (Table 1).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum GillCycle {
+    Msbl,
+    HblShort,
+    HblLong,
+}
+
+impl GillCycle {
+    pub fn cycle(self) -> Cycle {
+        match self {
+            GillCycle::Msbl => Cycle::msbl(),
+            GillCycle::HblShort => Cycle::hbl_short(),
+            GillCycle::HblLong => Cycle::hbl_long(),
+        }
+    }
 }
 
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
 pub enum Schedule {
     BroadcastThenStatus {},
-    Tdma { slots: Vec<SlotSpec> },
+    Tdma {
+        slots: Vec<SlotSpec>,
+    },
+    /// Gill's cycle: every slot a mini-packet from ship0's port or starboard modem or from buoy0,
+    /// the ship's slots assigned to its modems by the navigation `configuration` (MSBL and HBL
+    /// Two alternate port and starboard, HBL One uses port only; gill digest §10 A7–A8). The
+    /// cycle's period must be `comms.tau`.
+    GillCycle {
+        cycle: GillCycle,
+        configuration: Configuration,
+    },
 }
 
 impl Default for Schedule {
@@ -52,10 +102,12 @@ pub struct Fit {
     pub tau: f64,
     pub n_auvs: usize,
     pub n_buoys: usize,
-    /// Longest air time any rate the CNA / a buoy / an AUV may use takes.
+    pub n_ships: usize,
+    /// Longest air time any rate the CNA / a buoy / an AUV may use takes, and a mini-packet's.
     pub cna_air_s: f64,
     pub buoy_air_s: f64,
     pub status_air_s: f64,
+    pub mini_air_s: f64,
     /// Longest expected travel time, s.
     pub travel_s: f64,
     pub guard_s: f64,
@@ -71,13 +123,21 @@ impl Schedule {
                     .chain((0..n_buoys).map(Owner::Buoy))
                     .chain((0..n_auvs).map(Owner::Auv))
                     .enumerate()
-                    .map(|(i, owner)| Slot { owner, start_s: i as f64 * length_s, length_s })
+                    .map(|(i, owner)| Slot { owner, start_s: i as f64 * length_s, length_s, message: Message::Packet })
                     .collect::<Vec<_>>()
             }
             Schedule::Tdma { slots } => slots
                 .iter()
-                .filter_map(|s| Some(Slot { owner: parse_owner(&s.who)?, start_s: s.start_s, length_s: s.length_s }))
+                .filter_map(|s| {
+                    Some(Slot {
+                        owner: parse_owner(&s.who)?,
+                        start_s: s.start_s,
+                        length_s: s.length_s,
+                        message: s.message.map_or(Message::Packet, Message::Mini),
+                    })
+                })
                 .collect(),
+            Schedule::GillCycle { cycle, configuration } => gill_slots(&cycle.cycle(), *configuration),
         };
         slots.sort_by(|a, b| a.start_s.total_cmp(&b.start_s));
         slots
@@ -86,20 +146,49 @@ impl Schedule {
     /// Every problem, as (field under `prefix`, value, allowed).
     pub fn problems(&self, prefix: &str, fit: &Fit) -> Vec<(String, String, String)> {
         let mut out = Vec::new();
+        if let Schedule::GillCycle { cycle, configuration } = self {
+            let period = cycle.cycle().period();
+            if (period - fit.tau).abs() > 1e-9 {
+                out.push(("comms.tau".into(), fit.tau.to_string(), format!("{period} s, the period of Gill's cycle")));
+            }
+            if fit.n_ships == 0 {
+                out.push((format!("{prefix}kind"), "gill_cycle".into(), "a scenario with a [[ships]] entry".into()));
+            }
+            if configuration.has_buoy() && fit.n_buoys == 0 {
+                out.push((
+                    format!("{prefix}configuration"),
+                    configuration.label().into(),
+                    "msbl, or a scenario with a [[buoys]] entry (HBL ranges to buoy0)".into(),
+                ));
+            }
+        }
         if let Schedule::Tdma { slots } = self {
             if slots.is_empty() {
                 out.push((format!("{prefix}slots"), "[]".into(), "at least one slot".into()));
             }
             for (i, s) in slots.iter().enumerate() {
                 let field = |f: &str| format!("{prefix}slots[{i}].{f}");
-                let known = match parse_owner(&s.who) {
+                let owner = parse_owner(&s.who);
+                let known = match owner {
                     Some(Owner::Cna) => true,
                     Some(Owner::Auv(k)) => k < fit.n_auvs,
                     Some(Owner::Buoy(b)) => b < fit.n_buoys,
+                    Some(Owner::Ship(i, _)) => i < fit.n_ships,
                     None => false,
                 };
                 if !known {
                     out.push((field("who"), s.who.clone(), owners_allowed(fit)));
+                }
+                match (owner, s.message) {
+                    (Some(Owner::Ship(..)), None) => {
+                        out.push((field("message"), "none".into(), "east, north, speed or heading".into()))
+                    }
+                    (Some(Owner::Cna | Owner::Auv(_)), Some(kind)) => out.push((
+                        field("message"),
+                        format!("{kind:?}").to_lowercase(),
+                        "no message: mini-packets come from ships and buoys".into(),
+                    )),
+                    _ => {}
                 }
                 if !(s.start_s.is_finite() && s.start_s >= 0.0 && s.length_s.is_finite() && s.length_s > 0.0) {
                     out.push((
@@ -127,10 +216,12 @@ impl Schedule {
             }
         }
         for (i, s) in slots.iter().enumerate() {
-            let (who, air) = match s.owner {
-                Owner::Cna => ("cna".to_string(), fit.cna_air_s),
-                Owner::Buoy(b) => (format!("buoy{b}"), fit.buoy_air_s),
-                Owner::Auv(k) => (format!("auv{k}"), fit.status_air_s),
+            let who = owner_name(s.owner);
+            let air = match (s.message, s.owner) {
+                (Message::Mini(_), _) | (Message::Packet, Owner::Ship(..)) => fit.mini_air_s,
+                (Message::Packet, Owner::Cna) => fit.cna_air_s,
+                (Message::Packet, Owner::Buoy(_)) => fit.buoy_air_s,
+                (Message::Packet, Owner::Auv(_)) => fit.status_air_s,
             };
             let need = air + fit.travel_s + fit.guard_s;
             if s.length_s + 1e-9 < need {
@@ -149,21 +240,66 @@ impl Schedule {
     }
 }
 
+/// Gill's cycle as slots: each slot carrying a ship or buoy state becomes a mini-packet from the
+/// modem the configuration assigns it (silent and fleet-leader slots, and buoy slots without a
+/// buoy, send nothing).
+fn gill_slots(cycle: &Cycle, configuration: Configuration) -> Vec<Slot> {
+    let length_s = cycle.slot_seconds;
+    configuration
+        .assign(cycle)
+        .into_iter()
+        .zip(&cycle.slots)
+        .enumerate()
+        .filter_map(|(i, (from, content))| {
+            let owner = match from? {
+                Transmitter::Ship(side) => Owner::Ship(0, side),
+                Transmitter::Buoy => Owner::Buoy(0),
+            };
+            let (_, kind) = content.state()?;
+            Some(Slot { owner, start_s: i as f64 * length_s, length_s, message: Message::Mini(kind) })
+        })
+        .collect()
+}
+
 fn parse_owner(who: &str) -> Option<Owner> {
     let numbered = |prefix: &str| who.strip_prefix(prefix)?.parse().ok();
+    let ship = || {
+        let (ship, side) = who.strip_prefix("ship")?.split_once('.')?;
+        let side = match side {
+            "port" => Side::Port,
+            "starboard" => Side::Starboard,
+            _ => return None,
+        };
+        Some(Owner::Ship(ship.parse().ok()?, side))
+    };
     match who {
         "cna" => Some(Owner::Cna),
-        _ => numbered("auv").map(Owner::Auv).or_else(|| numbered("buoy").map(Owner::Buoy)),
+        _ => numbered("auv").map(Owner::Auv).or_else(|| numbered("buoy").map(Owner::Buoy)).or_else(ship),
+    }
+}
+
+/// A slot owner as a file names it.
+pub fn owner_name(owner: Owner) -> String {
+    match owner {
+        Owner::Cna => "cna".into(),
+        Owner::Buoy(b) => format!("buoy{b}"),
+        Owner::Auv(k) => format!("auv{k}"),
+        Owner::Ship(i, Side::Port) => format!("ship{i}.port"),
+        Owner::Ship(i, Side::Starboard) => format!("ship{i}.starboard"),
     }
 }
 
 /// The owners a slot may name, for an error message.
 fn owners_allowed(fit: &Fit) -> String {
-    let auvs = format!("auv0..auv{}", fit.n_auvs.saturating_sub(1));
-    match fit.n_buoys {
-        0 => format!("cna or {auvs}"),
-        b => format!("cna, buoy0..buoy{} or {auvs}", b - 1),
+    let mut named = vec!["cna".to_string()];
+    if fit.n_buoys > 0 {
+        named.push(format!("buoy0..buoy{}", fit.n_buoys - 1));
     }
+    if fit.n_ships > 0 {
+        named.push(format!("ship0..ship{}.port or .starboard", fit.n_ships - 1));
+    }
+    let auvs = format!("auv0..auv{}", fit.n_auvs.saturating_sub(1));
+    format!("{} or {auvs}", named.join(", "))
 }
 
 /// The message at `rate` carrying `bytes`: a problem unless the rate's frames hold it.
@@ -187,9 +323,11 @@ mod tests {
             tau,
             n_auvs: n,
             n_buoys: 0,
+            n_ships: 0,
             cna_air_s: 3.9,
             buoy_air_s: 3.9,
             status_air_s: 3.9,
+            mini_air_s: 0.5,
             travel_s: 0.7,
             guard_s: 0.2,
         }
@@ -218,7 +356,7 @@ mod tests {
                 (Owner::Auv(1), 32.0)
             ]
         );
-        let slot = |who: &str, start_s| SlotSpec { who: who.into(), start_s, length_s: 10.0 };
+        let slot = |who: &str, start_s| SlotSpec { who: who.into(), start_s, length_s: 10.0, message: None };
         let tdma = Schedule::Tdma { slots: vec![slot("cna", 0.0), slot("buoy0", 10.0), slot("buoy2", 20.0)] };
         let p = tdma.problems("s.", &Fit { n_buoys: 2, ..fit(30.0, 1) });
         assert_eq!(p.len(), 1, "{p:?}");
@@ -234,15 +372,80 @@ mod tests {
         assert!(p[3].2.contains("air time 3.90 s") && p[3].2.contains("travel 0.70 s"), "{p:?}");
         let tdma = Schedule::Tdma {
             slots: vec![
-                SlotSpec { who: "cna".into(), start_s: 0.0, length_s: 6.0 },
-                SlotSpec { who: "auv0".into(), start_s: 6.0, length_s: 4.0 },
-                SlotSpec { who: "auv7".into(), start_s: 10.0, length_s: 25.0 },
+                SlotSpec { who: "cna".into(), start_s: 0.0, length_s: 6.0, message: None },
+                SlotSpec { who: "auv0".into(), start_s: 6.0, length_s: 4.0, message: None },
+                SlotSpec { who: "auv7".into(), start_s: 10.0, length_s: 25.0, message: None },
             ],
         };
         let p = tdma.problems("s.", &fit(30.0, 1));
         let fields: Vec<&str> = p.iter().map(|x| x.0.as_str()).collect();
         assert!(fields.contains(&"s.slots[2].who") && fields.contains(&"s.slots[2].length_s"), "{p:?}");
         assert!(fields.iter().any(|f| f.starts_with("s.slot 1 (auv0")), "{p:?}");
+    }
+
+    #[test]
+    fn gills_cycles_are_mini_packet_slots_from_the_assigned_modems() {
+        use Side::{Port, Starboard};
+        let hbl_two = Schedule::GillCycle { cycle: GillCycle::HblLong, configuration: Configuration::HblTwo };
+        let slots = hbl_two.slots(20.0, 1, 1);
+        let seen: Vec<(Owner, f64, Message)> = slots.iter().map(|s| (s.owner, s.start_s, s.message)).collect();
+        use StateKind::{East, Heading, North, Speed};
+        assert_eq!(
+            seen,
+            [
+                (Owner::Ship(0, Port), 0.0, Message::Mini(East)),
+                (Owner::Ship(0, Starboard), 2.0, Message::Mini(North)),
+                (Owner::Buoy(0), 4.0, Message::Mini(North)),
+                (Owner::Ship(0, Port), 6.0, Message::Mini(Speed)),
+                (Owner::Ship(0, Starboard), 8.0, Message::Mini(Heading)),
+                (Owner::Buoy(0), 10.0, Message::Mini(East)),
+                (Owner::Ship(0, Port), 14.0, Message::Mini(East)),
+                (Owner::Buoy(0), 16.0, Message::Mini(North)),
+            ]
+        );
+        assert!(slots.iter().all(|s| s.length_s == 2.0));
+        // MSBL: the buoy's slots are silent; HBL One: the port modem only.
+        let msbl = Schedule::GillCycle { cycle: GillCycle::Msbl, configuration: Configuration::Msbl }.slots(20.0, 1, 0);
+        assert_eq!(msbl.len(), 5);
+        assert!(msbl.iter().all(|s| matches!(s.owner, Owner::Ship(0, _))));
+        let one = Schedule::GillCycle { cycle: GillCycle::HblLong, configuration: Configuration::HblOne };
+        assert!(one.slots(20.0, 1, 1).iter().all(|s| s.owner != Owner::Ship(0, Starboard)));
+        let with_ship = Fit { n_ships: 1, n_buoys: 1, travel_s: 0.67, guard_s: 0.1, ..fit(20.0, 1) };
+        assert!(hbl_two.problems("comms.schedule.", &with_ship).is_empty());
+    }
+
+    #[test]
+    fn a_mini_packet_fits_a_two_second_slot_and_a_rate_0_packet_does_not() {
+        let fit = Fit { n_ships: 1, n_buoys: 1, travel_s: 0.67, guard_s: 0.1, ..fit(20.0, 1) };
+        let slot = |who: &str, start_s, message| SlotSpec { who: who.into(), start_s, length_s: 2.0, message };
+        let tdma = Schedule::Tdma {
+            slots: vec![
+                slot("ship0.port", 0.0, Some(StateKind::East)),
+                slot("buoy0", 2.0, Some(StateKind::North)),
+                // The buoy's full position report at rate 0: 3.9 s of air time in a 2 s slot.
+                slot("buoy0", 4.0, None),
+            ],
+        };
+        let p = tdma.problems("s.", &fit);
+        assert_eq!(p.len(), 1, "{p:?}");
+        assert!(p[0].0.starts_with("s.slot 2 (buoy0, at 4.00 s)") && p[0].2.contains("air time 3.90 s"), "{p:?}");
+        // A ship slot must name its component, a CNA slot may not; a Gill cycle needs its period.
+        let bad = Schedule::Tdma {
+            slots: vec![
+                slot("ship0.port", 0.0, None),
+                slot("cna", 2.0, Some(StateKind::East)),
+                slot("ship1.port", 4.0, None),
+            ],
+        };
+        let fields: Vec<String> = bad.problems("s.", &fit).into_iter().map(|p| p.0).collect();
+        assert_eq!(fields, ["s.slots[0].message", "s.slots[1].message", "s.slots[2].who", "s.slots[2].message"]);
+        let gill = Schedule::GillCycle { cycle: GillCycle::HblShort, configuration: Configuration::HblTwo };
+        let p = gill.problems("s.", &fit);
+        assert_eq!((p.len(), p[0].0.as_str(), p[0].2.as_str()), (1, "comms.tau", "16 s, the period of Gill's cycle"));
+        assert!(gill.problems("s.", &Fit { tau: 16.0, ..fit }).is_empty());
+        let p = gill.problems("s.", &Fit { tau: 16.0, n_buoys: 0, n_ships: 0, ..fit });
+        let fields: Vec<&str> = p.iter().map(|p| p.0.as_str()).collect();
+        assert_eq!(fields, ["s.kind", "s.configuration"], "{p:?}");
     }
 
     #[test]
