@@ -247,11 +247,15 @@ fn layout(g: &GridModel, sc: &Scenario) -> (LatticeSpec, GridSpec) {
 /// tests): a buoy's 1 m transducer read from the ASC's 0 m layer is within 0.81 dB of a direct run.
 const SOURCE_DEPTH_TOLERANCE_M: f64 = 1.0;
 
-/// Every depth a packet leaves from: the CNA's, each buoy's modem, and the survey AUVs' (their
-/// status messages): their depth, or, keeping altitude, the span the terrain under the lattice
-/// gives them, one layer every `source_depth_step_m`. Sorted, without near-duplicates.
+/// Every depth a packet leaves from: the CNA's, each buoy's modem, each ship's outriggers, and the
+/// survey AUVs' (their status messages): their depth, or, keeping altitude, the span the terrain
+/// under the lattice gives them, one layer every `source_depth_step_m`. Sorted, without
+/// near-duplicates.
 fn source_layers(g: &GridModel, sc: &Scenario, cna_depth: f64, (lo, hi): ((f64, f64), (f64, f64))) -> Vec<f64> {
-    let mut depths: Vec<f64> = std::iter::once(cna_depth).chain(sc.buoys.iter().map(|b| b.modem_depth_m)).collect();
+    let mut depths: Vec<f64> = std::iter::once(cna_depth)
+        .chain(sc.buoys.iter().map(|b| b.modem_depth_m))
+        .chain(sc.ships.iter().map(|s| s.outriggers.depth))
+        .collect();
     match sc.fleet.depth {
         DepthTarget::Depth { depth } => depths.push(depth),
         DepthTarget::Altitude { altitude } => {
