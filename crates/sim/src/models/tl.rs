@@ -165,12 +165,13 @@ struct GridInputs<'a> {
 fn grid(g: &GridModel, sc: &Scenario) -> Result<Arc<AnchorLattice>, TlError> {
     let env = environment(sc);
     let (lattice, spec) = layout(g, sc);
-    let fields = lattice.nx * lattice.ny * spec.bearings;
+    let layers = lattice.source_depths.len();
+    let fields = lattice.nx * lattice.ny * layers * spec.bearings;
     if fields > MAX_GRID_FIELDS {
         return Err(TlError::Invalid(format!(
-            "the grid needs {fields} BELLHOP runs ({} × {} anchors × {} bearings), more than {MAX_GRID_FIELDS}: \
-             widen anchor_spacing_m or lower bearings",
-            lattice.nx, lattice.ny, spec.bearings
+            "the grid needs {fields} BELLHOP runs ({} × {} anchors × {layers} source depths {:?} m × {} bearings), \
+             more than {MAX_GRID_FIELDS}: widen anchor_spacing_m or source_depth_step_m, or lower bearings",
+            lattice.nx, lattice.ny, lattice.source_depths, spec.bearings
         )));
     }
     let exe = Bellhop::locate()?;
