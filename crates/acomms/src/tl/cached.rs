@@ -42,9 +42,17 @@ impl GridSpec {
             )))
         }
     }
-    fn axis(step: f64, max: f64) -> Vec<f64> {
-        let n = (max / step).round() as usize;
-        (1..=n).map(|i| i as f64 * step).collect()
+    /// Ranges from one step out (range 0 has no field).
+    fn ranges(&self) -> Vec<f64> {
+        let n = (self.max_range / self.range_step).round() as usize;
+        (1..=n).map(|i| i as f64 * self.range_step).collect()
+    }
+    /// Depths from the surface: a receiver at an ASC's or a buoy's shallow transducer reads its
+    /// own row, not the first row one step down (that read an uplink to the surface 1.1–1.8 dB
+    /// off a direct run, measured; BELLHOP places a receiver above 0.5 m at 0.5 m).
+    fn depths(&self) -> Vec<f64> {
+        let n = (self.max_depth / self.depth_step).round() as usize;
+        (0..=n).map(|i| i as f64 * self.depth_step).collect()
     }
 }
 
@@ -68,8 +76,7 @@ impl CachedGrid {
         progress: &(dyn Fn(u64) + Sync),
     ) -> Result<Self, TlError> {
         spec.validate()?;
-        let ranges = GridSpec::axis(spec.range_step, spec.max_range);
-        let depths = GridSpec::axis(spec.depth_step, spec.max_depth);
+        let (ranges, depths) = (spec.ranges(), spec.depths());
         let fields = (0..spec.bearings)
             .into_par_iter()
             .map(|b| {
@@ -83,7 +90,7 @@ impl CachedGrid {
 
     fn bilinear(&self, field: &[f32], r: f64, z: f64) -> f64 {
         let pos = |axis: &[f64], step: f64, v: f64| {
-            let f = (v / step - 1.0).clamp(0.0, (axis.len() - 1) as f64);
+            let f = ((v - axis[0]) / step).clamp(0.0, (axis.len() - 1) as f64);
             let i = (f as usize).min(axis.len().saturating_sub(2));
             (i, (f - i as f64).min(1.0))
         };
@@ -118,8 +125,7 @@ impl CachedGrid {
     /// A grid from stored values; refuses fields that do not match the spec's axes.
     pub fn from_fields(anchor: Vec3, spec: GridSpec, fields: Vec<Vec<f32>>) -> Result<Self, TlError> {
         spec.validate()?;
-        let ranges = GridSpec::axis(spec.range_step, spec.max_range);
-        let depths = GridSpec::axis(spec.depth_step, spec.max_depth);
+        let (ranges, depths) = (spec.ranges(), spec.depths());
         let cells = ranges.len() * depths.len();
         if fields.len() != spec.bearings || fields.iter().any(|f| f.len() != cells) {
             return Err(TlError::Invalid(format!(
@@ -132,7 +138,7 @@ impl CachedGrid {
 }
 
 /// Where the sources of an [`AnchorLattice`] sit: `nx × ny` anchors at `origin + (i, j)·spacing`,
-/// all at `source_depth`.
+/// repeated at every depth of `source_depths` (one layer per depth).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct LatticeSpec {
@@ -140,21 +146,62 @@ pub struct LatticeSpec {
     pub spacing: f64,
     pub nx: usize,
     pub ny: usize,
-    pub source_depth: f64,
+    /// Source depths of the layers, m, strictly increasing.
+    pub source_depths: Vec<f64>,
+    /// How far (m) a source may sit above the first layer or below the last and still read it.
+    pub depth_tolerance: f64,
 }
 
 impl LatticeSpec {
-    fn anchor(&self, i: usize, j: usize) -> Vec3 {
-        Vec3::new(self.origin.0 + i as f64 * self.spacing, self.origin.1 + j as f64 * self.spacing, self.source_depth)
+    fn anchor(&self, i: usize, j: usize, depth: f64) -> Vec3 {
+        Vec3::new(self.origin.0 + i as f64 * self.spacing, self.origin.1 + j as f64 * self.spacing, depth)
     }
     /// The corner opposite the origin.
     pub fn anchor_extent(&self) -> (f64, f64) {
-        let a = self.anchor(self.nx - 1, self.ny - 1);
+        let a = self.anchor(self.nx - 1, self.ny - 1, 0.0);
         (a.x, a.y)
     }
-    /// Anchors row by row (j outer).
+    /// Anchors layer by layer (shallowest first), each layer row by row (j outer).
     pub fn anchors(&self) -> Vec<Vec3> {
-        (0..self.ny).flat_map(|j| (0..self.nx).map(move |i| self.anchor(i, j))).collect()
+        let per_layer = |&d: &f64| (0..self.ny).flat_map(move |j| (0..self.nx).map(move |i| self.anchor(i, j, d)));
+        self.source_depths.iter().flat_map(per_layer).collect()
+    }
+
+    fn problem(&self, grids: usize) -> Option<String> {
+        let layers = &self.source_depths;
+        let depths_ok =
+            !layers.is_empty() && layers.iter().all(|d| d.is_finite()) && layers.windows(2).all(|w| w[1] > w[0]);
+        let ok = self.nx >= 1
+            && self.ny >= 1
+            && self.spacing > 0.0
+            && self.spacing.is_finite()
+            && depths_ok
+            && self.depth_tolerance >= 0.0
+            && self.depth_tolerance.is_finite()
+            && grids == self.nx * self.ny * layers.len();
+        (!ok).then(|| {
+            format!(
+                "lattice {self:?} with {grids} grids: need nx, ny ≥ 1, spacing > 0, source depths finite and \
+                 strictly increasing, depth_tolerance ≥ 0 and one grid per anchor and layer"
+            )
+        })
+    }
+
+    /// The layer at or above `z` and the weight of the one below it; a depth beyond the layers
+    /// by more than the tolerance is refused, naming it.
+    fn layer(&self, z: f64) -> Result<(usize, f64), TlError> {
+        let d = &self.source_depths;
+        let (first, last) = (d[0], d[d.len() - 1]);
+        if !(z >= first - self.depth_tolerance && z <= last + self.depth_tolerance) {
+            return Err(TlError::Invalid(format!(
+                "a source at {z} m depth: the grid was built for sources at {d:?} m (± {} m); \
+                 build it with a layer at that depth",
+                self.depth_tolerance
+            )));
+        }
+        let k = d.partition_point(|&l| l <= z).saturating_sub(1).min(d.len().saturating_sub(2));
+        let t = if d.len() > 1 { ((z - d[k]) / (d[k + 1] - d[k])).clamp(0.0, 1.0) } else { 0.0 };
+        Ok((k, t))
     }
 }
 
@@ -163,9 +210,10 @@ impl LatticeSpec {
 /// anchors around the source bilinearly, each read at the receiver's geometry relative to the
 /// source (range, bearing, depth), so a source on an anchor reads that anchor's own field.
 ///
-/// Approximation (invented, nams digest §4.6 computes every link directly): all anchors sit at one
-/// source depth. Incoherent TL is reciprocal apart from the source beam pattern, so when the
-/// receiver is nearer that depth than the source, the two ends are swapped.
+/// The transmitter is always the source: BELLHOP applies the beam pattern at the source only, so
+/// swapping the ends (reciprocity) read an uplink 0.8–1.9 dB off a direct run (measured, test
+/// below). Sources between two layers blend them linearly in depth (invented, nams digest §4.6
+/// computes every link directly); a source outside the layers is refused.
 #[derive(Debug, Clone)]
 pub struct AnchorLattice {
     pub lattice: LatticeSpec,
@@ -180,6 +228,9 @@ impl AnchorLattice {
         spec: GridSpec,
         progress: &(dyn Fn(u64) + Sync),
     ) -> Result<Self, TlError> {
+        if let Some(problem) = lattice.problem(lattice.nx * lattice.ny * lattice.source_depths.len()) {
+            return Err(TlError::Invalid(problem));
+        }
         let grids = lattice
             .anchors()
             .into_par_iter()
@@ -190,18 +241,10 @@ impl AnchorLattice {
 
     /// A lattice from stored grids, one per anchor in [`LatticeSpec::anchors`] order.
     pub fn from_grids(lattice: LatticeSpec, grids: Vec<CachedGrid>) -> Result<Self, TlError> {
-        let ok = lattice.nx >= 1
-            && lattice.ny >= 1
-            && lattice.spacing > 0.0
-            && lattice.spacing.is_finite()
-            && grids.len() == lattice.nx * lattice.ny;
-        if !ok {
-            return Err(TlError::Invalid(format!(
-                "lattice {lattice:?} with {} grids: need nx, ny ≥ 1, spacing > 0 and one grid per anchor",
-                grids.len()
-            )));
+        match lattice.problem(grids.len()) {
+            Some(problem) => Err(TlError::Invalid(problem)),
+            None => Ok(AnchorLattice { lattice, grids }),
         }
-        Ok(AnchorLattice { lattice, grids })
     }
 
     pub fn grids(&self) -> &[CachedGrid] {
@@ -214,19 +257,27 @@ impl AnchorLattice {
         let i = (f as usize).min(n.saturating_sub(2));
         (i, if n > 1 { f - i as f64 } else { 0.0 })
     }
+
+    /// The four anchors around `src` in layer `k`, blended bilinearly.
+    fn in_layer(&self, k: usize, src: &Vec3, rx: &Vec3) -> Result<f64, TlError> {
+        let l = &self.lattice;
+        let (i, ti) = Self::axis(l.nx, (src.x - l.origin.0) / l.spacing);
+        let (j, tj) = Self::axis(l.ny, (src.y - l.origin.1) / l.spacing);
+        let at = |i: usize, j: usize| self.grids[(k * l.ny + j.min(l.ny - 1)) * l.nx + i.min(l.nx - 1)].tl(src, rx);
+        let lo = at(i, j)? * (1.0 - ti) + at(i + 1, j)? * ti;
+        let hi = at(i, j + 1)? * (1.0 - ti) + at(i + 1, j + 1)? * ti;
+        Ok(lo * (1.0 - tj) + hi * tj)
+    }
 }
 
 impl TransmissionLoss for AnchorLattice {
     fn tl(&self, src: &Vec3, rx: &Vec3) -> Result<f64, TlError> {
-        let depth = self.lattice.source_depth;
-        let (src, rx) = if (rx.z - depth).abs() < (src.z - depth).abs() { (rx, src) } else { (src, rx) };
-        let l = &self.lattice;
-        let (i, ti) = Self::axis(l.nx, (src.x - l.origin.0) / l.spacing);
-        let (j, tj) = Self::axis(l.ny, (src.y - l.origin.1) / l.spacing);
-        let at = |i: usize, j: usize| self.grids[j.min(l.ny - 1) * l.nx + i.min(l.nx - 1)].tl(src, rx);
-        let lo = at(i, j)? * (1.0 - ti) + at(i + 1, j)? * ti;
-        let hi = at(i, j + 1)? * (1.0 - ti) + at(i + 1, j + 1)? * ti;
-        Ok(lo * (1.0 - tj) + hi * tj)
+        let (k, t) = self.lattice.layer(src.z)?;
+        let upper = self.in_layer(k, src, rx)?;
+        if t == 0.0 {
+            return Ok(upper);
+        }
+        Ok(upper * (1.0 - t) + self.in_layer(k + 1, src, rx)? * t)
     }
 }
 
@@ -268,7 +319,7 @@ mod tests {
         }
         // Held beyond the grid.
         assert!((g.lookup(5000.0, 0.0, 60.0) - g.lookup(3000.0, 0.0, 60.0)).abs() < 1e-9);
-        assert_eq!(g.bytes(), 4 * 60 * 12 * 4);
+        assert_eq!(g.bytes(), 4 * 60 * 13 * 4, "60 ranges × 13 depths (0 to 60 m) × 4 bearings");
     }
 
     #[test]
@@ -290,27 +341,74 @@ mod tests {
         // Thorp depends on the geometry only, so every anchor holds the same field and a source
         // anywhere (between anchors, or off the lattice) reads the analytic value.
         let t = Thorp::default();
-        let lattice = LatticeSpec { origin: (0.0, 0.0), spacing: 500.0, nx: 3, ny: 2, source_depth: 1.0 };
+        let lattice = LatticeSpec {
+            origin: (0.0, 0.0),
+            spacing: 500.0,
+            nx: 3,
+            ny: 2,
+            source_depths: vec![1.0],
+            depth_tolerance: 0.5,
+        };
         let l = AnchorLattice::build(&t, lattice.clone(), spec(), &|_| {}).unwrap();
         assert_eq!(l.grids().len(), 6);
         assert_eq!(lattice.anchor_extent(), (1000.0, 500.0));
-        for src in [Vec3::new(130.0, 420.0, 1.0), Vec3::new(-300.0, 900.0, 1.0)] {
+        for src in [Vec3::new(130.0, 420.0, 1.0), Vec3::new(-300.0, 900.0, 1.4)] {
             let rx = Vec3::new(src.x + 400.0, src.y - 300.0, 1.0);
             let (exact, cached) = (t.tl(&src, &rx).unwrap(), l.tl(&src, &rx).unwrap());
             assert!((exact - cached).abs() < 0.2, "{src:?}: {exact} vs {cached}");
         }
-        // The end nearer the anchors' depth is taken as the source (reciprocity).
-        let (deep, shallow) = (Vec3::new(200.0, 100.0, 40.0), Vec3::new(600.0, 400.0, 1.0));
-        assert_eq!(l.tl(&deep, &shallow).unwrap(), l.tl(&shallow, &deep).unwrap());
         assert!(AnchorLattice::from_grids(lattice, Vec::new()).is_err());
     }
 
-    /// Issue 9: the cached grid must read within 1 dB of a direct BELLHOP run at the same point.
-    /// Measured (16 bearings, 10 m × 2 m cells, anchors 500 m apart, sources between anchors):
-    /// at most 0.14 dB. The 4.7 dB of `coopnav bench acomms` is a single-anchor grid read for a
-    /// source 1 km from its anchor: 2.9 dB from the source's other depth (25 m vs 30 m) and water
-    /// column, 1.9 dB from interpolating across its 45° bearings; range/depth interpolation and
-    /// one-receiver vs full-field runs differ by ≤ 0.13 dB.
+    /// A provider whose TL grows with the source's depth, to tell the layers apart.
+    struct DepthPlane;
+    impl TransmissionLoss for DepthPlane {
+        fn tl(&self, src: &Vec3, rx: &Vec3) -> Result<f64, TlError> {
+            Ok(40.0 + 0.01 * (rx.x - src.x).hypot(rx.y - src.y) + 0.3 * src.z + 0.5 * rx.z)
+        }
+    }
+
+    #[test]
+    fn the_transmitter_is_the_source_layers_blend_in_depth_and_a_depth_not_built_is_refused() {
+        let lattice = LatticeSpec {
+            origin: (0.0, 0.0),
+            spacing: 500.0,
+            nx: 2,
+            ny: 2,
+            source_depths: vec![0.0, 20.0, 30.0],
+            depth_tolerance: 1.0,
+        };
+        let l = AnchorLattice::build(&DepthPlane, lattice.clone(), spec(), &|_| {}).unwrap();
+        assert_eq!(l.grids().len(), 12);
+        let (ship, auv) = (Vec3::new(200.0, 100.0, 0.0), Vec3::new(600.0, 400.0, 20.0));
+        for (src, rx) in
+            [(ship, auv), (auv, ship), (Vec3::new(100.0, 300.0, 25.0), ship), (auv, Vec3::new(100.0, 100.0, 30.0))]
+        {
+            let rx = Vec3::new(rx.x + 10.0, rx.y, rx.z);
+            let (exact, cached) = (DepthPlane.tl(&src, &rx).unwrap(), l.tl(&src, &rx).unwrap());
+            assert!((exact - cached).abs() < 1e-3, "{src:?} → {rx:?}: {exact} vs {cached}");
+        }
+        // Uplink and downlink differ (10 dB vs 6 dB of depth terms): no reciprocity swap.
+        assert!((l.tl(&ship, &auv).unwrap() - l.tl(&auv, &ship).unwrap() - 4.0).abs() < 1e-3);
+        for z in [-1.5, 31.5, f64::NAN] {
+            let err = l.tl(&Vec3::new(0.0, 0.0, z), &auv).unwrap_err().to_string();
+            assert!(err.contains(&format!("{z} m depth")) && err.contains("[0.0, 20.0, 30.0]"), "{err}");
+        }
+        let unordered = LatticeSpec { source_depths: vec![20.0, 0.0], ..lattice.clone() };
+        assert!(AnchorLattice::build(&DepthPlane, unordered, spec(), &|_| {}).is_err());
+        let none = LatticeSpec { source_depths: Vec::new(), ..lattice };
+        assert!(AnchorLattice::build(&DepthPlane, none, spec(), &|_| {}).is_err());
+    }
+
+    /// Issue 9: the cached grid must read within 1 dB of a direct BELLHOP run at the same point,
+    /// for the CNA's downlink, the AUVs' uplink, and a buoy's 1 m transducer on a grid built at
+    /// the ASC's 0 m. Grid: 16 bearings, 10 m × 2 m cells, anchors 500 m apart, layers at the ASC's
+    /// 0 m and the AUVs' 20 m and 28 m; sources off the anchors, nodes and bearings (one AUV 390 m
+    /// beyond the lattice). Measured worst |grid − direct|: downlink 0.26 dB, uplink 0.91 dB,
+    /// buoy 0.81 dB (both worst at the AUV beyond the lattice). Before: the uplink read the
+    /// downlink's field (reciprocity swap) and the surface receiver the 2 m row, up to 1.9 dB off.
+    /// A source at 24 m, blended from the 20 m and 28 m layers, read 0.6–2.0 dB off: layers must
+    /// sit at the transmitters' depths.
     #[test]
     #[cfg_attr(not(bellhop_installed), ignore = "BELLHOP is not installed: run scripts/install-bellhop.sh")]
     fn a_lattice_grid_agrees_with_direct_bellhop_runs_within_1_db() {
@@ -318,22 +416,35 @@ mod tests {
         use coopnav_core::{Bathymetry, Shelf};
         let bathy = std::sync::Arc::new(Bathymetry::shelf(&Shelf::default()).unwrap());
         let bh = Bellhop::new(AcousticEnv::nams(bathy)).expect("build.rs found BELLHOP installed");
-        let lattice = LatticeSpec { origin: (500.0, 500.0), spacing: 500.0, nx: 2, ny: 2, source_depth: 0.5 };
+        let lattice = LatticeSpec {
+            origin: (500.0, 500.0),
+            spacing: 500.0,
+            nx: 2,
+            ny: 2,
+            source_depths: vec![0.0, 20.0, 28.0],
+            depth_tolerance: 1.0,
+        };
         let spec = GridSpec { bearings: 16, range_step: 10.0, max_range: 1200.0, depth_step: 2.0, max_depth: 60.0 };
         let l = AnchorLattice::build(&bh, lattice, spec, &|_| {}).unwrap();
-        // (source, range m, bearing deg, receiver depth m): off the anchors, the nodes and the bearings.
+        // (ASC position, range m, bearing deg, AUV depth m).
         let cases = [
-            (Vec3::new(730.0, 860.0, 0.5), 333.0, 17.0, 20.0),
-            (Vec3::new(980.0, 520.0, 0.5), 150.0, 100.0, 10.0),
-            (Vec3::new(600.0, 990.0, 0.5), 512.0, 300.0, 25.0),
-            (Vec3::new(750.0, 750.0, 0.5), 905.0, 45.0, 28.0),
-            (Vec3::new(500.0, 500.0, 0.5), 381.0, 23.2, 28.0),
+            (Vec3::new(730.0, 860.0, 0.0), 333.0, 17.0, 20.0),
+            (Vec3::new(980.0, 520.0, 0.0), 150.0, 100.0, 28.0),
+            (Vec3::new(600.0, 990.0, 0.0), 512.0, 300.0, 20.0),
+            (Vec3::new(750.0, 750.0, 0.0), 905.0, 45.0, 28.0),
+            (Vec3::new(500.0, 500.0, 0.0), 381.0, 23.2, 28.0),
         ];
-        for (src, r, deg, z) in cases {
+        for (asc, r, deg, z) in cases {
             let b = f64::to_radians(deg);
-            let rx = Vec3::new(src.x + r * b.cos(), src.y + r * b.sin(), z);
-            let (direct, cached) = (bh.tl(&src, &rx).unwrap(), l.tl(&src, &rx).unwrap());
-            assert!((direct - cached).abs() <= 1.0, "{src:?} → {rx:?}: direct {direct:.2} dB, grid {cached:.2} dB");
+            let auv = Vec3::new(asc.x + r * b.cos(), asc.y + r * b.sin(), z);
+            let buoy = Vec3::new(asc.x, asc.y, 1.0);
+            for (link, src, rx) in [("downlink", asc, auv), ("uplink", auv, asc), ("buoy", buoy, auv)] {
+                let (direct, cached) = (bh.tl(&src, &rx).unwrap(), l.tl(&src, &rx).unwrap());
+                assert!(
+                    (direct - cached).abs() <= 1.0,
+                    "{link} {src:?} → {rx:?}: direct {direct:.2} dB, grid {cached:.2} dB"
+                );
+            }
         }
     }
 

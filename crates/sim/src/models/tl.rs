@@ -15,6 +15,7 @@ use coopnav_acomms::tl::analytic::Thorp;
 use coopnav_acomms::tl::bellhop::{AcousticEnv, Bellhop};
 use coopnav_acomms::tl::cached::{AnchorLattice, CachedGrid, GridSpec, LatticeSpec};
 use coopnav_acomms::tl::{TlError, TransmissionLoss};
+use coopnav_core::DepthTarget;
 use serde::{Deserialize, Serialize};
 use std::collections::HashMap;
 use std::hash::{Hash, Hasher};
@@ -51,6 +52,10 @@ pub struct GridModel {
     pub anchor_spacing_m: f64,
     /// The lattice covers the survey blocks and the CNA's start, widened by this much.
     pub margin_m: f64,
+    /// Spacing of the source layers over the depths an altitude-keeping survey AUV transmits
+    /// from. Invented; measured (acomms `tl::cached` tests): a source 4 m from the layers either
+    /// side of it, 8 m apart, read 0.6–2.0 dB off a direct run.
+    pub source_depth_step_m: f64,
     /// Directory of the disk cache (default: `coopnav-tl` in the system temporary directory).
     pub cache_dir: Option<PathBuf>,
 }
@@ -63,6 +68,7 @@ impl Default for GridModel {
             depth_step_m: 2.0,
             anchor_spacing_m: 500.0,
             margin_m: 500.0,
+            source_depth_step_m: 10.0,
             cache_dir: None,
         }
     }
@@ -102,6 +108,7 @@ impl TlModel {
                 need("depth_step_m", g.depth_step_m, g.depth_step_m >= 0.5, ">= 0.5 m");
                 need("anchor_spacing_m", g.anchor_spacing_m, g.anchor_spacing_m >= 50.0, ">= 50 m");
                 need("margin_m", g.margin_m, g.margin_m >= 0.0, ">= 0 m");
+                need("source_depth_step_m", g.source_depth_step_m, g.source_depth_step_m >= 0.5, ">= 0.5 m");
             }
         }
         out
@@ -158,17 +165,18 @@ struct GridInputs<'a> {
 fn grid(g: &GridModel, sc: &Scenario) -> Result<Arc<AnchorLattice>, TlError> {
     let env = environment(sc);
     let (lattice, spec) = layout(g, sc);
-    let fields = lattice.nx * lattice.ny * spec.bearings;
+    let layers = lattice.source_depths.len();
+    let fields = lattice.nx * lattice.ny * layers * spec.bearings;
     if fields > MAX_GRID_FIELDS {
         return Err(TlError::Invalid(format!(
-            "the grid needs {fields} BELLHOP runs ({} × {} anchors × {} bearings), more than {MAX_GRID_FIELDS}: \
-             widen anchor_spacing_m or lower bearings",
-            lattice.nx, lattice.ny, spec.bearings
+            "the grid needs {fields} BELLHOP runs ({} × {} anchors × {layers} source depths {:?} m × {} bearings), \
+             more than {MAX_GRID_FIELDS}: widen anchor_spacing_m or source_depth_step_m, or lower bearings",
+            lattice.nx, lattice.ny, lattice.source_depths, spec.bearings
         )));
     }
     let exe = Bellhop::locate()?;
     let inputs = GridInputs {
-        format: 1,
+        format: 2,
         bathymetry: &env.bathymetry,
         ssp: &env.ssp,
         freq_hz: env.freq_hz,
@@ -207,8 +215,8 @@ fn grid(g: &GridModel, sc: &Scenario) -> Result<Arc<AnchorLattice>, TlError> {
 }
 
 /// The anchors over the survey blocks, the CNA start and the buoys' deployments (widened by the
-/// margin), and the field each one holds: to 1.2 × the schedule's longest range, over the
-/// deepest water there.
+/// margin), one layer per depth a transmitter sends from, and the field each one holds: to 1.2 ×
+/// the schedule's longest range, over the deepest water there.
 fn layout(g: &GridModel, sc: &Scenario) -> (LatticeSpec, GridSpec) {
     let start = cna_start(sc).pos;
     let points = (0..sc.fleet.n_auvs)
@@ -226,7 +234,8 @@ fn layout(g: &GridModel, sc: &Scenario) -> (LatticeSpec, GridSpec) {
         spacing: g.anchor_spacing_m,
         nx: count(hi.0 - lo.0),
         ny: count(hi.1 - lo.1),
-        source_depth: start.z,
+        source_depths: source_layers(g, sc, start.z, (lo, hi)),
+        depth_tolerance: SOURCE_DEPTH_TOLERANCE_M,
     };
     let max_range = (1.2 * sc.comms.max_range_m / g.range_step_m).ceil() * g.range_step_m;
     let max_depth = (sc.bathymetry().max_depth() / g.depth_step_m).ceil() * g.depth_step_m;
@@ -234,6 +243,46 @@ fn layout(g: &GridModel, sc: &Scenario) -> (LatticeSpec, GridSpec) {
         GridSpec { bearings: g.bearings, range_step: g.range_step_m, max_range, depth_step: g.depth_step_m, max_depth };
     (lattice, spec)
 }
+
+/// How far a source may sit from the layers' span, m. Invented; measured (acomms `tl::cached`
+/// tests): a buoy's 1 m transducer read from the ASC's 0 m layer is within 0.81 dB of a direct run.
+const SOURCE_DEPTH_TOLERANCE_M: f64 = 1.0;
+
+/// Every depth a packet leaves from: the CNA's, each buoy's modem, each ship's outriggers, and the
+/// survey AUVs' (their status messages): their depth, or, keeping altitude, the span the terrain
+/// under the lattice gives them, one layer every `source_depth_step_m`. Sorted, without
+/// near-duplicates.
+fn source_layers(g: &GridModel, sc: &Scenario, cna_depth: f64, (lo, hi): ((f64, f64), (f64, f64))) -> Vec<f64> {
+    let mut depths: Vec<f64> = std::iter::once(cna_depth)
+        .chain(sc.buoys.iter().map(|b| b.modem_depth_m))
+        .chain(sc.ships.iter().map(|s| s.outriggers.depth))
+        .collect();
+    match sc.fleet.depth {
+        DepthTarget::Depth { depth } => depths.push(depth),
+        DepthTarget::Altitude { altitude } => {
+            let bathymetry = sc.bathymetry();
+            let (nx, ny) = (
+                ((hi.0 - lo.0) / TERRAIN_SAMPLE_M).ceil() as usize,
+                ((hi.1 - lo.1) / TERRAIN_SAMPLE_M).ceil() as usize,
+            );
+            let water = (0..=nx)
+                .flat_map(|i| {
+                    (0..=ny).map(move |j| (lo.0 + i as f64 * TERRAIN_SAMPLE_M, lo.1 + j as f64 * TERRAIN_SAMPLE_M))
+                })
+                .map(|(x, y)| bathymetry.depth_at(x, y));
+            let (shallow, deep) = water.fold((f64::INFINITY, 0.0f64), |(a, b), d| (a.min(d), b.max(d)));
+            let (top, bottom) = ((shallow - altitude).max(0.0), (deep - altitude).max(0.0));
+            let layers = ((bottom - top) / g.source_depth_step_m).ceil() as usize;
+            depths.extend((0..=layers).map(|i| (top + i as f64 * g.source_depth_step_m).min(bottom)));
+        }
+    }
+    depths.sort_by(f64::total_cmp);
+    depths.dedup_by(|b, a| *b - *a < 0.5 * SOURCE_DEPTH_TOLERANCE_M);
+    depths
+}
+
+/// Terrain sampling for the altitude-keeping AUVs' depth span, m.
+const TERRAIN_SAMPLE_M: f64 = 50.0;
 
 /// The disk cache: one file per grid, its key text on the first line (checked on reading, so a
 /// hash collision or a changed format recomputes), then every field's f32 values, little-endian.
@@ -331,7 +380,26 @@ mod tests {
             }
         }
         assert!(spec.max_range >= sc.comms.max_range_m && spec.max_depth >= sc.bathymetry().max_depth());
-        assert_eq!(lattice.source_depth, 0.0, "the ASC's depth");
+        assert_eq!(lattice.source_depths, [0.0, 20.0], "the ASC's depth and the AUVs'");
+    }
+
+    #[test]
+    fn every_transmitter_depth_has_a_layer() {
+        let file = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenarios/full-stack.toml");
+        // Parsed without validation: validating builds the grid.
+        let sc: Scenario = toml::from_str(&std::fs::read_to_string(file).unwrap()).unwrap();
+        let g = GridModel { source_depth_step_m: 10.0, ..GridModel::default() };
+        let (lattice, _) = layout(&g, &sc);
+        let layers = &lattice.source_depths;
+        // The ASC at 0 m, the buoys' 1 m modems, the AUVs at 15 m over 30–90 m of shelf.
+        assert_eq!(&layers[..2], [0.0, 1.0]);
+        assert_eq!(layers[2], 15.0, "over the shallowest 30 m");
+        assert!(layers[2..].windows(2).all(|w| w[1] - w[0] <= 10.0 + 1e-9), "{layers:?}");
+        let bathymetry = sc.bathymetry();
+        for (x, y) in (0..sc.fleet.n_auvs).flat_map(|k| sc.lawnmower(k).waypoints()) {
+            let z = bathymetry.depth_at(x, y) - 15.0;
+            assert!(z >= layers[2] && z <= *layers.last().unwrap(), "an AUV at {z} m, layers {layers:?}");
+        }
     }
 
     #[test]
