@@ -34,6 +34,7 @@ pub use observe::{CommsEvent, Decision, Observer, Phase, PhaseClock, Timing, Tra
 use phases::Payload;
 use rand_chacha::ChaCha8Rng;
 use serde::Serialize;
+use std::cell::Cell;
 use std::sync::Arc;
 use std::time::Instant;
 use vehicles::{stream, Buoy, Craft, Ship, SurveyAuv};
@@ -126,6 +127,8 @@ struct Engine<'a> {
     air: InFlight<Payload>,
     /// The scenario's transmission-loss model, built once for the run.
     tl: Arc<dyn TransmissionLoss>,
+    /// Whether a failed transmission-loss lookup was reported (once per run: it repeats per packet).
+    tl_failure_reported: Cell<bool>,
     next_decision: u64,
     /// Index of the next slot over the whole run (cycle = index / slots per cycle).
     next_slot: u64,
@@ -193,6 +196,7 @@ impl<'a> Engine<'a> {
                 tracing::error!(error = %e, "transmission loss unavailable: every packet is lost");
                 Arc::new(Unavailable)
             }),
+            tl_failure_reported: Cell::new(false),
             next_decision: 0,
             next_slot: 0,
             status_sent: vec![0; n],
@@ -222,9 +226,20 @@ impl<'a> Engine<'a> {
         obs.on_phase_end(Phase::Observe);
     }
 
-    /// Transmission loss from `a` to `b`, dB; the ceiling (a lost packet) when the model fails.
+    /// Transmission loss from `a` to `b`, dB; the ceiling (a lost packet) when the model fails,
+    /// said once per run so the loss is never silent.
     fn tl_db(&self, a: &Vec3, b: &Vec3) -> f64 {
-        self.tl.tl(a, b).unwrap_or(TL_CEILING)
+        self.tl.tl(a, b).unwrap_or_else(|e| {
+            if !self.tl_failure_reported.replace(true) {
+                tracing::error!(
+                    error = %e,
+                    from = ?[a.x, a.y, a.z],
+                    to = ?[b.x, b.y, b.z],
+                    "no transmission loss for a link: its packet is lost (further failures in this run are not reported)"
+                );
+            }
+            TL_CEILING
+        })
     }
 
     fn silent(&self, k: usize, t: f64) -> bool {

@@ -16,6 +16,7 @@ use coopnav_acomms::tl::bellhop::{AcousticEnv, Bellhop};
 use coopnav_acomms::tl::cached::{AnchorLattice, CachedGrid, GridSpec, LatticeSpec};
 use coopnav_acomms::tl::{TlError, TransmissionLoss};
 use coopnav_core::DepthTarget;
+use coopnav_plan::CnaKind;
 use serde::{Deserialize, Serialize};
 use std::collections::HashMap;
 use std::hash::{Hash, Hasher};
@@ -248,37 +249,48 @@ fn layout(g: &GridModel, sc: &Scenario) -> (LatticeSpec, GridSpec) {
 /// tests): a buoy's 1 m transducer read from the ASC's 0 m layer is within 0.81 dB of a direct run.
 const SOURCE_DEPTH_TOLERANCE_M: f64 = 1.0;
 
-/// Every depth a packet leaves from: the CNA's, each buoy's modem, each ship's outriggers, and the
-/// survey AUVs' (their status messages): their depth, or, keeping altitude, the span the terrain
-/// under the lattice gives them, one layer every `source_depth_step_m`. Sorted, without
-/// near-duplicates.
+/// Every depth a packet leaves from: the CNA's (an AUV CNA's whole reachable span: the planner's
+/// depth limits down to the deepest water under the lattice), each buoy's modem, each ship's
+/// outriggers, and the survey AUVs' (their status messages): their depth, or, keeping altitude,
+/// the span the terrain under the lattice gives them. A span gets one layer every
+/// `source_depth_step_m`. Sorted, without near-duplicates.
 fn source_layers(g: &GridModel, sc: &Scenario, cna_depth: f64, (lo, hi): ((f64, f64), (f64, f64))) -> Vec<f64> {
     let mut depths: Vec<f64> = std::iter::once(cna_depth)
         .chain(sc.buoys.iter().map(|b| b.modem_depth_m))
         .chain(sc.ships.iter().map(|s| s.outriggers.depth))
         .collect();
+    let water = || water_span(sc, (lo, hi));
+    let span = |top: f64, bottom: f64| {
+        let layers = ((bottom - top) / g.source_depth_step_m).ceil().max(0.0) as usize;
+        (0..=layers).map(move |i| (top + i as f64 * g.source_depth_step_m).min(bottom))
+    };
+    if let CnaKind::Auv { min_depth, max_depth, .. } = sc.planner_config().motion.cna {
+        // Without these layers a depth change of more than the tolerance would leave every
+        // later CNA packet without a transmission loss, i.e. lost.
+        depths.extend(span(min_depth.max(0.0), max_depth.min(water().1)));
+    }
     match sc.fleet.depth {
         DepthTarget::Depth { depth } => depths.push(depth),
         DepthTarget::Altitude { altitude } => {
-            let bathymetry = sc.bathymetry();
-            let (nx, ny) = (
-                ((hi.0 - lo.0) / TERRAIN_SAMPLE_M).ceil() as usize,
-                ((hi.1 - lo.1) / TERRAIN_SAMPLE_M).ceil() as usize,
-            );
-            let water = (0..=nx)
-                .flat_map(|i| {
-                    (0..=ny).map(move |j| (lo.0 + i as f64 * TERRAIN_SAMPLE_M, lo.1 + j as f64 * TERRAIN_SAMPLE_M))
-                })
-                .map(|(x, y)| bathymetry.depth_at(x, y));
-            let (shallow, deep) = water.fold((f64::INFINITY, 0.0f64), |(a, b), d| (a.min(d), b.max(d)));
-            let (top, bottom) = ((shallow - altitude).max(0.0), (deep - altitude).max(0.0));
-            let layers = ((bottom - top) / g.source_depth_step_m).ceil() as usize;
-            depths.extend((0..=layers).map(|i| (top + i as f64 * g.source_depth_step_m).min(bottom)));
+            let (shallow, deep) = water();
+            depths.extend(span((shallow - altitude).max(0.0), (deep - altitude).max(0.0)));
         }
     }
     depths.sort_by(f64::total_cmp);
     depths.dedup_by(|b, a| *b - *a < 0.5 * SOURCE_DEPTH_TOLERANCE_M);
     depths
+}
+
+/// The shallowest and deepest water under the lattice's box, m, sampled every
+/// [`TERRAIN_SAMPLE_M`].
+fn water_span(sc: &Scenario, (lo, hi): ((f64, f64), (f64, f64))) -> (f64, f64) {
+    let bathymetry = sc.bathymetry();
+    let (nx, ny) =
+        (((hi.0 - lo.0) / TERRAIN_SAMPLE_M).ceil() as usize, ((hi.1 - lo.1) / TERRAIN_SAMPLE_M).ceil() as usize);
+    (0..=nx)
+        .flat_map(|i| (0..=ny).map(move |j| (lo.0 + i as f64 * TERRAIN_SAMPLE_M, lo.1 + j as f64 * TERRAIN_SAMPLE_M)))
+        .map(|(x, y)| bathymetry.depth_at(x, y))
+        .fold((f64::INFINITY, 0.0f64), |(a, b), d| (a.min(d), b.max(d)))
 }
 
 /// Terrain sampling for the altitude-keeping AUVs' depth span, m.
@@ -400,6 +412,23 @@ mod tests {
             let z = bathymetry.depth_at(x, y) - 15.0;
             assert!(z >= layers[2] && z <= *layers.last().unwrap(), "an AUV at {z} m, layers {layers:?}");
         }
+    }
+
+    #[test]
+    fn an_auv_cna_has_layers_over_every_depth_it_can_reach() {
+        let file = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenarios/sloping-auv-cna.toml");
+        let sc: Scenario = toml::from_str(&std::fs::read_to_string(file).unwrap()).unwrap();
+        let g = GridModel { source_depth_step_m: 10.0, ..GridModel::default() };
+        let (lattice, _) = layout(&g, &sc);
+        let layers = &lattice.source_depths;
+        // From the surface (the planner's minimum depth) down to the shelf's deepest water, 90 m
+        // (the lattice reaches past x = 1700 m), never more than a step apart: a lookup anywhere
+        // in between is blended, never refused.
+        assert_eq!((layers[0], *layers.last().unwrap()), (0.0, 90.0), "{layers:?}");
+        assert!(layers.windows(2).all(|w| w[1] - w[0] <= 10.0 + 1e-9), "{layers:?}");
+        // The ASC of the default mission still gets only its own depth.
+        let (asc, _) = layout(&g, &Scenario::example());
+        assert_eq!(asc.source_depths, [0.0, 20.0]);
     }
 
     #[test]
