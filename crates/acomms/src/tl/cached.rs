@@ -368,16 +368,21 @@ mod tests {
         }
     }
 
-    #[test]
-    fn the_transmitter_is_the_source_layers_blend_in_depth_and_a_depth_not_built_is_refused() {
-        let lattice = LatticeSpec {
-            origin: (0.0, 0.0),
+    /// 2 × 2 anchors 500 m apart from `origin`, one layer per source depth, 1 m tolerance.
+    fn square_lattice(origin: (f64, f64), source_depths: &[f64]) -> LatticeSpec {
+        LatticeSpec {
+            origin,
             spacing: 500.0,
             nx: 2,
             ny: 2,
-            source_depths: vec![0.0, 20.0, 30.0],
+            source_depths: source_depths.to_vec(),
             depth_tolerance: 1.0,
-        };
+        }
+    }
+
+    #[test]
+    fn the_transmitter_is_the_source_layers_blend_in_depth_and_a_depth_not_built_is_refused() {
+        let lattice = square_lattice((0.0, 0.0), &[0.0, 20.0, 30.0]);
         let l = AnchorLattice::build(&DepthPlane, lattice.clone(), spec(), &|_| {}).unwrap();
         assert_eq!(l.grids().len(), 12);
         let (ship, auv) = (Vec3::new(200.0, 100.0, 0.0), Vec3::new(600.0, 400.0, 20.0));
@@ -416,14 +421,7 @@ mod tests {
         use coopnav_core::{Bathymetry, Shelf};
         let bathy = std::sync::Arc::new(Bathymetry::shelf(&Shelf::default()).unwrap());
         let bh = Bellhop::new(AcousticEnv::nams(bathy)).expect("build.rs found BELLHOP installed");
-        let lattice = LatticeSpec {
-            origin: (500.0, 500.0),
-            spacing: 500.0,
-            nx: 2,
-            ny: 2,
-            source_depths: vec![0.0, 20.0, 28.0],
-            depth_tolerance: 1.0,
-        };
+        let lattice = square_lattice((500.0, 500.0), &[0.0, 20.0, 28.0]);
         let spec = GridSpec { bearings: 16, range_step: 10.0, max_range: 1200.0, depth_step: 2.0, max_depth: 60.0 };
         let l = AnchorLattice::build(&bh, lattice, spec, &|_| {}).unwrap();
         // (ASC position, range m, bearing deg, AUV depth m).

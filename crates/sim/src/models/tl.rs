@@ -395,14 +395,18 @@ mod tests {
         assert_eq!(lattice.source_depths, [0.0, 20.0], "the ASC's depth and the AUVs'");
     }
 
+    /// A library scenario, parsed without validation (validating builds the grid), and the source
+    /// layers its grid gets at 10 m steps.
+    fn library_layers(file: &str) -> (Scenario, Vec<f64>) {
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenarios").join(file);
+        let sc: Scenario = toml::from_str(&std::fs::read_to_string(path).unwrap()).unwrap();
+        let (lattice, _) = layout(&GridModel { source_depth_step_m: 10.0, ..GridModel::default() }, &sc);
+        (sc, lattice.source_depths)
+    }
+
     #[test]
     fn every_transmitter_depth_has_a_layer() {
-        let file = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenarios/full-stack.toml");
-        // Parsed without validation: validating builds the grid.
-        let sc: Scenario = toml::from_str(&std::fs::read_to_string(file).unwrap()).unwrap();
-        let g = GridModel { source_depth_step_m: 10.0, ..GridModel::default() };
-        let (lattice, _) = layout(&g, &sc);
-        let layers = &lattice.source_depths;
+        let (sc, layers) = library_layers("full-stack.toml");
         // The ASC at 0 m, the buoys' 1 m modems, the AUVs at 15 m over 30–90 m of shelf.
         assert_eq!(&layers[..2], [0.0, 1.0]);
         assert_eq!(layers[2], 15.0, "over the shallowest 30 m");
@@ -416,17 +420,14 @@ mod tests {
 
     #[test]
     fn an_auv_cna_has_layers_over_every_depth_it_can_reach() {
-        let file = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenarios/sloping-auv-cna.toml");
-        let sc: Scenario = toml::from_str(&std::fs::read_to_string(file).unwrap()).unwrap();
-        let g = GridModel { source_depth_step_m: 10.0, ..GridModel::default() };
-        let (lattice, _) = layout(&g, &sc);
-        let layers = &lattice.source_depths;
+        let (_, layers) = library_layers("sloping-auv-cna.toml");
         // From the surface (the planner's minimum depth) down to the shelf's deepest water, 90 m
         // (the lattice reaches past x = 1700 m), never more than a step apart: a lookup anywhere
         // in between is blended, never refused.
         assert_eq!((layers[0], *layers.last().unwrap()), (0.0, 90.0), "{layers:?}");
         assert!(layers.windows(2).all(|w| w[1] - w[0] <= 10.0 + 1e-9), "{layers:?}");
         // The ASC of the default mission still gets only its own depth.
+        let g = GridModel { source_depth_step_m: 10.0, ..GridModel::default() };
         let (asc, _) = layout(&g, &Scenario::example());
         assert_eq!(asc.source_depths, [0.0, 20.0]);
     }
