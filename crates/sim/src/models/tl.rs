@@ -378,6 +378,8 @@ mod tests {
         let bad = TlModel::BellhopGrid(GridModel { bearings: 0, anchor_spacing_m: 10.0, ..GridModel::default() });
         let fields: Vec<String> = bad.problems("comms.tl.").into_iter().map(|p| p.0).collect();
         assert_eq!(fields, ["comms.tl.bearings", "comms.tl.anchor_spacing_m"]);
+        let flat = TlModel::BellhopGrid(GridModel { source_depth_step_m: 0.1, ..GridModel::default() });
+        assert_eq!(flat.problems("comms.tl.")[0].0, "comms.tl.source_depth_step_m");
         assert!(TlModel::Analytic(Thorp { k: -1.0, freq_hz: 25_000.0 }).problems("t.")[0].0 == "t.k");
     }
 
