@@ -508,6 +508,10 @@ mod tests {
         assert!(matches!(e, BellhopError::NotFound { .. }) && e.to_string().contains("install-bellhop.sh"));
         let bad = AcousticEnv { ssp: vec![(5.0, 1500.0)], ..env() };
         assert!(matches!(Bellhop::with_exe(PathBuf::from("/bin/false"), bad), Err(BellhopError::BadEnvironment(_))));
+        for beams in [0, 99, 100_001] {
+            let e = Bellhop::with_exe(PathBuf::from("/bin/false"), AcousticEnv { beams, ..env() }).unwrap_err();
+            assert!(e.to_string().contains(&format!("beams {beams} must be within 100..=100000")), "{e}");
+        }
         // A program that exits non-zero without output.
         let b = Bellhop::with_exe(PathBuf::from("/bin/false"), env()).unwrap();
         let e = b.tl(&Vec3::new(0.0, 0.0, 10.0), &Vec3::new(100.0, 0.0, 10.0)).unwrap_err();
