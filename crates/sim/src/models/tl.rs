@@ -53,8 +53,8 @@ pub struct GridModel {
     pub anchor_spacing_m: f64,
     /// The lattice covers the survey blocks and the CNA's start, widened by this much.
     pub margin_m: f64,
-    /// Spacing of the source layers over the depths an altitude-keeping survey AUV transmits
-    /// from. Invented; measured (acomms `tl::cached` tests): a source 4 m from the layers either
+    /// Spacing of the source layers over a depth span a transmitter moves through (an
+    /// altitude-keeping survey AUV, an AUV CNA). Invented; measured (acomms `tl::cached` tests): a source 4 m from the layers either
     /// side of it, 8 m apart, read 0.6–2.0 dB off a direct run.
     pub source_depth_step_m: f64,
     /// Directory of the disk cache (default: `coopnav-tl` in the system temporary directory).
