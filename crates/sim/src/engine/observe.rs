@@ -48,6 +48,14 @@ pub struct CommsEvent {
     pub lost_to: &'static str,
 }
 
+/// One buoy at a sample: its transducer's true position and, per survey AUV (by index), where
+/// that AUV's filter of the buoy (fed by its mini-packets) puts it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct BuoySample {
+    pub truth: Vec3,
+    pub estimates: Vec<[f64; 2]>,
+}
+
 /// A CNA decision: where it was (true position) and the point it now steers for (none: hold).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Decision {
@@ -64,6 +72,9 @@ pub trait Observer {
     fn on_sample(&mut self, _t: f64, _cna: Vec3, _rows: &[TraceRow]) {}
     /// Just before each `on_sample`, in a scenario with ships: ship i's true position at index i.
     fn on_ships(&mut self, _t: f64, _ships: &[Vec3]) {}
+    /// Just before each `on_sample`, in a scenario with buoys: buoy i's truth and what every
+    /// survey AUV's filter of it holds, at index i.
+    fn on_buoys(&mut self, _t: f64, _buoys: &[BuoySample]) {}
     /// A packet whose fate is known (at the end of its arrival).
     fn on_packet(&mut self, _event: &CommsEvent) {}
     /// A phase of the run ended: the set-up once, then each phase of every step, in order.
