@@ -363,4 +363,20 @@ mod tests {
         let ok = ZoneRuns { runs: vec![reached, reached], ..runs };
         assert_eq!(ok.summary(7).unwrap().zone_error.mean, 1.0);
     }
+
+    #[test]
+    fn a_zone_monte_carlo_is_identical_on_one_and_two_threads_and_scores_the_heard_buoy() {
+        let sc = table5_scenario(Configuration::HblTwo).unwrap();
+        let on = |threads| {
+            let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+            pool.install(|| zone_monte_carlo(&sc, ZoneSpec::table5(), 4, 3).unwrap())
+        };
+        let (one, two) = (on(1), on(2));
+        assert_eq!((&one.runs, one.healthy, &one.profile), (&two.runs, two.healthy, &two.profile));
+        assert!(one.runs.iter().all(|m| m.zone_samples > 40 && m.buoy_error.is_some()), "{:?}", one.runs);
+        // MSBL's cycle never has the buoy transmit: its filter and saturation are not scored.
+        let msbl = table5_scenario(Configuration::Msbl).unwrap();
+        let runs = zone_monte_carlo(&msbl, ZoneSpec::table5(), 2, 3).unwrap().runs;
+        assert!(runs.iter().all(|m| m.buoy_error.is_none() && m.saturation_error.is_none()), "{runs:?}");
+    }
 }
