@@ -49,7 +49,9 @@ const ID5: &str = "gill-table-5";
 const MSBL_DEVIATION: &str = "our MSBL keeps the thesis's shape (perpendicular error ≈ 3 m until ~30 m before the \
 crossing, then corrected) but corrects earlier and deeper near the ship, so the zone mean is ≈ 2 m. The MSBL-era AUV \
 and ship coefficients that set this are unpublished (digest §10 A2); raising our MSBL error would mean degrading \
-its filter by hand, which we do not do. A smaller Q^A or a longer Δt only lowers it further (1.66–1.75 m for Q^A/100, Δt = 1 s, Q per 2 s).";
+its filter by hand, which we do not do. A smaller Q^A or a longer Δt only lowers it further (1.66–1.75 m for Q^A/100, Δt = 1 s, Q per 2 s, \
+measured on the old HBL loop). The engine's SD (3.2 m at 250 runs) comes from a few runs that start with the across-path \
+estimate far off and diverge at the crossing (run 0: 44.7 m); they also widen the reduced form's band.";
 
 /// Why our Short vs Long difference is smaller than the thesis's (measured; see the issue-3 and
 /// issue-9 notes).
