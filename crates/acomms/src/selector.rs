@@ -67,6 +67,27 @@ impl RatePolicySpec {
     pub fn rates(&self) -> Result<Vec<Rate>, String> {
         Ok(self.build()?.rates())
     }
+
+    /// The policy's name in tables ("fixed rate 1", "alternating 0/5", "adaptive"), or "invalid".
+    pub fn label(&self) -> String {
+        self.build().map_or_else(|_| "invalid".into(), |p| p.name())
+    }
+
+    /// The thesis's four (§5.4): controls 1–3 (fixed rate 0, fixed rate 1, rates 0 and 5 in turn)
+    /// and the adaptive selector without rate 5 (Table 8 values).
+    pub fn thesis() -> Vec<RatePolicySpec> {
+        vec![
+            RatePolicySpec::Fixed { rate: Rate::R0 },
+            RatePolicySpec::Fixed { rate: Rate::R1 },
+            RatePolicySpec::Alternating { rates: vec![Rate::R0, Rate::R5] },
+            RatePolicySpec::Adaptive(AdaptiveConfig::default()),
+        ]
+    }
+
+    /// A control: a policy that does not learn from the channel.
+    pub fn is_control(&self) -> bool {
+        !matches!(self, RatePolicySpec::Adaptive(_))
+    }
 }
 
 /// Always transmit at one rate.
@@ -473,10 +494,15 @@ mod tests {
         assert!(parse("kind = \"adaptive\"\nmemroy = 4").is_err(), "unknown fields are refused");
         assert!(parse("kind = \"greedy\"").is_err());
         let deprecated = RatePolicySpec::Fixed { rate: Rate::new(2).unwrap() };
-        assert!(deprecated.build().unwrap_err().contains("allowed 0, 1, 4 or 5"));
-        assert!(RatePolicySpec::Alternating { rates: vec![] }.build().unwrap_err().contains("non-empty"));
+        assert!(deprecated.rates().unwrap_err().contains("allowed 0, 1, 4 or 5"));
+        assert!(RatePolicySpec::Alternating { rates: vec![] }.rates().unwrap_err().contains("non-empty"));
         let bad = RatePolicySpec::Adaptive(AdaptiveConfig { memory: 0, ..AdaptiveConfig::default() });
-        assert!(bad.build().unwrap_err().contains("adaptive.memory"));
+        assert!(bad.rates().unwrap_err().contains("adaptive.memory"));
+        assert_eq!(bad.label(), "invalid");
+        let thesis = RatePolicySpec::thesis();
+        let labels: Vec<String> = thesis.iter().map(RatePolicySpec::label).collect();
+        assert_eq!(labels, ["fixed rate 0", "fixed rate 1", "alternating 0/5", "adaptive"]);
+        assert_eq!(thesis.iter().map(RatePolicySpec::is_control).collect::<Vec<_>>(), [true, true, true, false]);
     }
 
     #[test]
