@@ -57,7 +57,7 @@ impl Engine<'_> {
         self.next_decision += 1;
         let surfacing = self.sc.cna.auv.as_ref().and_then(|a| a.surfacing.as_ref());
         let step = self.cna.own.step(surfacing, t_dec, self.cna.craft.pos.z);
-        let fix = self.cna_fix(t_dec, step == Step::Fix);
+        let fix = self.cna_fix(t_dec, matches!(step, Step::Fix { .. }));
         let transmits = self.policy.as_policy().transmits();
         let cna = &mut self.cna;
         for k in 0..self.auvs.len() {
@@ -94,11 +94,14 @@ impl Engine<'_> {
         let here = cna.craft.pos;
         // The policy decides even while the CNA surfaces, so its own models keep stepping.
         let command = self.policy.as_policy().decide(&ctx);
-        cna.craft.target = match command {
-            _ if step == Step::Climb => Some(Vec3::new(here.x, here.y, 0.0)),
-            // The command is relative to the fix the policy saw.
-            CnaCommand::GoTo(p) => Some(Vec3::new(here.x + p.x - fix.x, here.y + p.y - fix.y, p.z)),
-            CnaCommand::Hold => None,
+        // The command is relative to the fix the policy saw.
+        let steer = |p: Vec3, z: f64| Some(Vec3::new(here.x + p.x - fix.x, here.y + p.y - fix.y, z));
+        cna.craft.target = match (step, command) {
+            (Step::Climb, _) => Some(Vec3::new(here.x, here.y, 0.0)),
+            (Step::Fix { to }, CnaCommand::GoTo(p)) => steer(p, to),
+            (Step::Fix { to }, CnaCommand::Hold) => Some(Vec3::new(here.x, here.y, to)),
+            (Step::Work, CnaCommand::GoTo(p)) => steer(p, p.z),
+            (Step::Work, CnaCommand::Hold) => None,
         };
         obs.on_decision(&Decision { t: t_dec, from: here, to: cna.craft.target });
     }

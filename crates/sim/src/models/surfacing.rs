@@ -1,8 +1,8 @@
 //! When an AUV CNA leaves its work to climb for a GPS fix, as a field team runs one whose own
 //! dead reckoning drifts: on a fixed period, or when its own horizontal σ (which it knows from its
 //! navigation filter) reaches a threshold. It climbs straight up at its pitch-limited rate,
-//! stays at the surface for the fix time, takes a fix of the configured σ and goes back to work
-//! (diving to whatever depth its policy commands next). The climb and the wait are what it costs:
+//! stays at the surface for the fix time, takes a fix of the configured σ and goes back to work,
+//! diving to the depth it left (policies that keep the current depth would otherwise stay up). The climb and the wait are what it costs:
 //! meanwhile the CNA follows no policy, whichever it is. Checked at each decision (every τ).
 //! Invented parameters (no thesis value): the period, threshold, fix time and fix σ.
 
@@ -46,10 +46,10 @@ impl Surfacing {
 pub enum Phase {
     /// Following its policy.
     Working,
-    /// Climbing to the surface.
-    Climbing,
+    /// Climbing to the surface from its working depth, m.
+    Climbing { from: f64 },
     /// At the surface since this time, waiting for the fix.
-    Surfaced { since: f64 },
+    Surfaced { since: f64, from: f64 },
 }
 
 /// What the CNA does at this decision.
@@ -59,8 +59,8 @@ pub enum Step {
     Work,
     /// Go (or stay) straight up at its current horizontal position.
     Climb,
-    /// Take the GPS fix now (then follow the policy).
-    Fix,
+    /// Take the GPS fix now and dive back to the working depth `to` (m), on the policy's course.
+    Fix { to: f64 },
 }
 
 /// The CNA's own navigation uncertainty and surfacing cycle.
@@ -97,20 +97,20 @@ impl OwnNav {
         let Some(rule) = rule else { return Step::Work };
         match self.phase {
             Phase::Working if self.due(&rule.when, t) => {
-                self.phase = Phase::Climbing;
+                self.phase = Phase::Climbing { from: depth };
                 self.step(Some(rule), t, depth)
             }
             Phase::Working => Step::Work,
-            Phase::Climbing if depth <= SURFACE_DEPTH_M => {
-                self.phase = Phase::Surfaced { since: t };
+            Phase::Climbing { from } if depth <= SURFACE_DEPTH_M => {
+                self.phase = Phase::Surfaced { since: t, from };
                 self.step(Some(rule), t, depth)
             }
-            Phase::Climbing => Step::Climb,
-            Phase::Surfaced { since } if t - since >= rule.fix_time_s => {
+            Phase::Climbing { .. } => Step::Climb,
+            Phase::Surfaced { since, from } if t - since >= rule.fix_time_s => {
                 self.phase = Phase::Working;
                 self.fix_variance = rule.gps_sd_m * rule.gps_sd_m;
                 self.fix_t = t;
-                Step::Fix
+                Step::Fix { to: from }
             }
             Phase::Surfaced { .. } => Step::Climb,
         }
@@ -140,8 +140,8 @@ mod tests {
         assert_eq!(nav.step(Some(&r), 3570.0, 10.0), Step::Work);
         assert_eq!(nav.step(Some(&r), 3600.0, 10.0), Step::Climb);
         assert_eq!(nav.step(Some(&r), 3630.0, 0.0), Step::Climb);
-        assert_eq!(nav.phase(), Phase::Surfaced { since: 3630.0 });
-        assert_eq!(nav.step(Some(&r), 3660.0, 0.0), Step::Fix);
+        assert_eq!(nav.phase(), Phase::Surfaced { since: 3630.0, from: 10.0 });
+        assert_eq!(nav.step(Some(&r), 3660.0, 0.0), Step::Fix { to: 10.0 });
         assert_eq!(nav.variance(3660.0), 4.0);
         assert!((nav.variance(3760.0) - 5.0).abs() < 1e-12);
         assert_eq!(nav.step(Some(&r), 3690.0, 0.0), Step::Work);
@@ -153,7 +153,7 @@ mod tests {
         let mut nav = OwnNav::new(0.01);
         assert_eq!(nav.step(Some(&r), 870.0, 10.0), Step::Work);
         // Already at the surface and no wait: the fix comes at once.
-        assert_eq!(nav.step(Some(&r), 900.0, 0.2), Step::Fix);
+        assert_eq!(nav.step(Some(&r), 900.0, 0.2), Step::Fix { to: 0.2 });
         assert_eq!(nav.step(Some(&r), 1770.0, 10.0), Step::Work);
         assert_eq!(nav.step(Some(&r), 1800.0, 10.0), Step::Climb);
         let mut never = OwnNav::new(0.01);
