@@ -69,9 +69,9 @@ pub const BIAS_PER_KM: f64 = 6.0;
 
 /// Whether `planner-estimator` adds the CNA's own variance to each ping's range variance
 /// (coopnav_plan estimator step 2). Off: on the tuning seed (20 runs, N = 3) it changed nothing
-/// with the ASC (5.91 m on, 5.90 m off) and cost with the surfacing AUV CNA (4.23 m on, 4.11 m
-/// off; centroid-standoff 4.07 m). A common CNA offset moves every AUV's estimate alike, which
-/// the per-ping noise model cannot express (see the issue 10 README).
+/// measurable: with the ASC 5.91 m on, 5.90 m off; with the surfacing AUV CNA 4.40 m on, 4.37 m
+/// off. A common CNA offset moves every AUV's estimate alike, which a per-ping noise term cannot
+/// express (see the issue 10 README).
 pub const CNA_VARIANCE: bool = false;
 pub const TERMINAL_LEVELS: f64 = 10.0;
 
