@@ -100,6 +100,12 @@ impl CnaPolicy for FixedPattern {
     }
 }
 
+/// The centroid of the AUVs' predicted positions half a period ahead (None: none known).
+fn predicted_centroid(ctx: &PolicyContext) -> Option<Vec3> {
+    let ahead = ctx.predicted_all(ctx.t + ctx.tau / 2.0);
+    (!ahead.is_empty()).then(|| ahead.iter().sum::<Vec3>() / ahead.len() as f64)
+}
+
 /// Loiter at the centroid of the AUVs' predicted positions half a period ahead.
 #[derive(Debug, Clone, Copy, Default)]
 pub struct Centroid;
@@ -109,12 +115,10 @@ impl CnaPolicy for Centroid {
         "centroid"
     }
     fn decide(&mut self, ctx: &PolicyContext) -> CnaCommand {
-        let ahead = ctx.predicted_all(ctx.t + ctx.tau / 2.0);
-        if ahead.is_empty() {
-            return CnaCommand::Hold;
+        match predicted_centroid(ctx) {
+            Some(c) => CnaCommand::GoTo(Vec3::new(c.x, c.y, ctx.cna.pos.z)),
+            None => CnaCommand::Hold,
         }
-        let c = ahead.iter().sum::<Vec3>() / ahead.len() as f64;
-        CnaCommand::GoTo(Vec3::new(c.x, c.y, ctx.cna.pos.z))
     }
 }
 
@@ -131,11 +135,7 @@ impl CnaPolicy for CentroidStandoff {
         "centroid-standoff"
     }
     fn decide(&mut self, ctx: &PolicyContext) -> CnaCommand {
-        let ahead = ctx.predicted_all(ctx.t + ctx.tau / 2.0);
-        if ahead.is_empty() {
-            return CnaCommand::Hold;
-        }
-        let c = ahead.iter().sum::<Vec3>() / ahead.len() as f64;
+        let Some(c) = predicted_centroid(ctx) else { return CnaCommand::Hold };
         let (dx, dy) = (ctx.cna.pos.x - c.x, ctx.cna.pos.y - c.y);
         // From the CNA's bearing about the centroid (its heading's side when it sits on it), one
         // period's travel further along the circle; from off the circle, the bearing's point on it.
