@@ -158,7 +158,15 @@ impl Planner {
         let inner = &mut self.inner;
         let d = py
             .detach(|| {
-                let input = PlanInput { t, cna, errors: &errors, estimates: &estimates, forecast: &forecast };
+                // The Python API takes no CNA variance: 0 is the cost as before it existed.
+                let input = PlanInput {
+                    t,
+                    cna,
+                    errors: &errors,
+                    estimates: &estimates,
+                    cna_variance: 0.0,
+                    forecast: &forecast,
+                };
                 inner.decide(&input)
             })
             .map_err(value_error)?;

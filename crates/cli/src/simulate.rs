@@ -16,7 +16,7 @@ use std::path::PathBuf;
 #[derive(clap::Args)]
 pub struct Args {
     /// CNA policies, comma-separated: planner, planner-estimator, none, racetrack, zigzag,
-    /// centroid, trail, relay, open-loop, greedy-fisher. One run writes a run directory for the
+    /// centroid, centroid-standoff, trail, relay, open-loop, greedy-fisher. One run writes a run directory for the
     /// first; --runs compares them all, each paired with the first.
     #[arg(long, value_delimiter = ',', default_value = "planner")]
     policy: Vec<String>,

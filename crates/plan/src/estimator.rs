@@ -9,6 +9,13 @@
 //!    the AUV tells it nothing horizontally, which is the 3-D geometry). Range noise variance
 //!    R(r) = σ₀² + (k·r/1000)² ([`RangeNoise`]). The EKF update is
 //!    P⁺ = P̃ − P̃hhᵀP̃ / (hᵀP̃h + R).
+//!    The CNA's own horizontal position error (issue 10, AUV CNA): the AUV's filter takes the
+//!    CNA's broadcast position as exact, but it is off by e ~ N(0, σ_c²·I₂) per axis (its GPS σ,
+//!    or an AUV CNA's dead-reckoning σ grown since its last fix: `PlanInput::cna_variance`). The
+//!    range is measured from the true CNA and predicted from the broadcast one, so the innovation
+//!    carries −h_xyᵀe more: the effective range variance is R(r) + σ_c²·|h_xy|². (Taken as fresh
+//!    per ping; the CNA's error is a random walk, so this under-states its correlation.) It is
+//!    ≥ R(r), so the bounds below, which use R(r_min) alone, stay valid.
 //! 3. The packet arrives with probability p_s(r) (the acoustic link's model, passed in as a
 //!    [`LinkModel`]); the expected posterior is E = (1 − p_s)·P̃ + p_s·P⁺
 //!    = P̃ − p_s·P̃hhᵀP̃ / (hᵀP̃h + R).
@@ -247,8 +254,8 @@ impl LinkTable {
 }
 
 /// Steps 1–3 of the module's derivation: the expected covariance [P_ee, P_en, P_nn] after τ of
-/// growth (`q_tau` per axis) and a ping from `cna` to the AUV at `auv` that arrives with
-/// probability `success(slant range)`. Shared by the planner's cost and the closed loop's model
+/// growth (`q_tau` per axis) and a ping from `cna` (its own horizontal variance `cna_variance`
+/// per axis, m²) to the AUV at `auv` that arrives with probability `success(slant range)`. Shared by the planner's cost and the closed loop's model
 /// of the AUVs' filters, so both use one formula.
 #[inline(always)]
 pub fn expected_posterior(
@@ -257,6 +264,7 @@ pub fn expected_posterior(
     cna: [f64; 3],
     auv: [f64; 3],
     noise: &RangeNoise,
+    cna_variance: f64,
     success: impl Fn(f64) -> f64,
 ) -> [f64; 3] {
     let (mut a, mut b, mut c) = (cov[0] + q_tau, cov[1], cov[2] + q_tau);
@@ -266,7 +274,7 @@ pub fn expected_posterior(
         let r = r2.sqrt();
         let (h0, h1) = (d[0] / r, d[1] / r);
         let (ph0, ph1) = (a * h0 + b * h1, b * h0 + c * h1);
-        let innovation = h0 * ph0 + h1 * ph1 + noise.variance(r);
+        let innovation = h0 * ph0 + h1 * ph1 + noise.variance(r) + cna_variance * (h0 * h0 + h1 * h1);
         let gain = success(r) / innovation;
         a -= gain * ph0 * ph0;
         b -= gain * ph0 * ph1;
@@ -287,6 +295,8 @@ pub(crate) struct EkfCost {
     /// q_k·τ per AUV, m².
     pub q_tau: Vec<f64>,
     pub link: LinkTable,
+    /// σ_c² of step 2: the CNA's own horizontal variance per axis, m².
+    pub cna_variance: f64,
     /// Step 7: the useful range r_u (m) and the CNA's step s·τ (m per level).
     pub reach: Reach,
 }
@@ -299,19 +309,25 @@ pub(crate) struct Reach {
 }
 
 impl EkfCost {
-    /// The model for AUVs `estimates`, levels of `tau` seconds, a CNA moving `speed` m/s.
+    /// The model for AUVs `estimates`, levels of `tau` seconds, a CNA moving `speed` m/s whose own
+    /// horizontal variance per axis is `cna_variance` m².
     pub fn new(
         spec: EstimatorSpec,
         estimates: &[AuvEstimate],
-        tau: f64,
-        speed: f64,
+        (tau, speed, cna_variance): (f64, f64, f64),
         link: LinkTable,
     ) -> Result<Self, PlanError> {
         for (k, e) in estimates.iter().enumerate() {
             e.validate(k)?;
         }
+        if !(cna_variance.is_finite() && cna_variance >= 0.0) {
+            return Err(PlanError::Input(format!(
+                "the CNA's own horizontal variance {cna_variance} m² is not a finite number >= 0"
+            )));
+        }
         let reach = Reach { useful_range_m: link.useful_range(spec.reach_success), step_m: speed * tau };
-        Ok(EkfCost { spec, q_tau: estimates.iter().map(|e| e.process_noise * tau).collect(), link, reach })
+        let q_tau = estimates.iter().map(|e| e.process_noise * tau).collect();
+        Ok(EkfCost { spec, q_tau, link, cna_variance, reach })
     }
 
     /// ḡ of step 7 for AUV `k` at slant range `range_m` from the leaf pose: the mean growth per
@@ -370,7 +386,9 @@ impl CostModel for EkfCost {
     fn update(&self, k: usize, parent: &[f64; 3], cna: [f64; 3], auv: [f64; 3]) -> ([f64; 3], f64) {
         let link = &self.link;
         let [a, b, c] =
-            expected_posterior(parent, self.q_tau[k], cna, auv, &self.spec.range_noise, |r| link.success(r));
+            expected_posterior(parent, self.q_tau[k], cna, auv, &self.spec.range_noise, self.cna_variance, |r| {
+                link.success(r)
+            });
         let half_bias2 = 0.5 * self.bias_variance(cna, auv);
         let (ma, mc) = (a + half_bias2, c + half_bias2);
         ([a, b, c], self.term(ma + mc, ma * mc - b * b))
@@ -610,11 +628,12 @@ mod tests {
 
     fn biased(aggregate: Aggregate, q_tau: Vec<f64>, bias_per_km_m: f64) -> EkfCost {
         let spec = EstimatorSpec { aggregate, bias_per_km_m, ..EstimatorSpec::default() };
-        EkfCost { spec, q_tau, link: LinkTable::perfect(), reach: NO_REACH }
+        EkfCost { spec, q_tau, link: LinkTable::perfect(), cna_variance: 0.0, reach: NO_REACH }
     }
 
     fn model(aggregate: Aggregate, q_tau: Vec<f64>, link: LinkTable) -> EkfCost {
-        EkfCost { spec: EstimatorSpec { aggregate, ..EstimatorSpec::default() }, q_tau, link, reach: NO_REACH }
+        let spec = EstimatorSpec { aggregate, ..EstimatorSpec::default() };
+        EkfCost { spec, q_tau, link, cna_variance: 0.0, reach: NO_REACH }
     }
 
     #[test]
@@ -628,6 +647,25 @@ mod tests {
             assert!((p[i] - want[i]).abs() < 1e-12, "{p:?} vs {want:?}");
         }
         assert!((cost - (want[0] + want[2])).abs() < 1e-12);
+    }
+
+    #[test]
+    fn the_cnas_own_variance_adds_to_the_range_variance_by_the_horizontal_share() {
+        // As above with σ_c² = 4 m²: level geometry, |h_xy|² = 1, innovation 3.9525 + 4.
+        let mut m = model(Aggregate::TraceSum, vec![0.0], LinkTable::perfect());
+        m.cna_variance = 4.0;
+        let (p, _) = m.update(0, &[4.0, 1.0, 2.0], [0.0; 3], [300.0, 400.0, 0.0]);
+        let want = [4.0 - 10.24 / 7.9525, 1.0 - 7.04 / 7.9525, 2.0 - 4.84 / 7.9525];
+        for i in 0..3 {
+            assert!((p[i] - want[i]).abs() < 1e-12, "{p:?} vs {want:?}");
+        }
+        // Slant: AUV 300 m east and 400 m below, r = 500 m, h_xy = (0.6, 0), |h_xy|² = 0.36.
+        // P̃h = (2.4, 0.6), hᵀP̃h = 1.44, R = 0.15² + 0.5² = 0.2725, plus 0.36·4 = 1.44: 3.1525.
+        let (p, _) = m.update(0, &[4.0, 1.0, 2.0], [0.0; 3], [300.0, 0.0, 400.0]);
+        let want = [4.0 - 5.76 / 3.1525, 1.0 - 1.44 / 3.1525, 2.0 - 0.36 / 3.1525];
+        for i in 0..3 {
+            assert!((p[i] - want[i]).abs() < 1e-12, "{p:?} vs {want:?}");
+        }
     }
 
     #[test]
@@ -678,7 +716,7 @@ mod tests {
     #[test]
     fn the_terminal_cost_is_h_levels_and_settings_are_checked() {
         let spec = EstimatorSpec { terminal_levels: 3.0, ..EstimatorSpec::default() };
-        let m = EkfCost { spec, q_tau: vec![0.0], link: LinkTable::perfect(), reach: NO_REACH };
+        let m = EkfCost { spec, q_tau: vec![0.0], link: LinkTable::perfect(), cna_variance: 0.0, reach: NO_REACH };
         assert_eq!(m.terminal_levels(), 3.0);
         assert_eq!(model(Aggregate::TraceSum, vec![0.0], LinkTable::perfect()).terminal_levels(), 0.0);
         for bad in [
@@ -699,6 +737,7 @@ mod tests {
             spec,
             q_tau: vec![2.0],
             link: LinkTable::perfect(),
+            cna_variance: 0.0,
             reach: Reach { useful_range_m: 500.0, step_m: 60.0 },
         };
         let start = [4.0, 1.0, 2.0];
@@ -710,7 +749,7 @@ mod tests {
             assert!((got - want).abs() < 1e-9 * want, "{east} m: {got} vs {want}");
         }
         // Off (p_u = 0 or H = 0): (1 + H)·term exactly.
-        let off = EkfCost { spec, q_tau: vec![2.0], link: LinkTable::perfect(), reach: NO_REACH };
+        let off = EkfCost { spec, q_tau: vec![2.0], link: LinkTable::perfect(), cna_variance: 0.0, reach: NO_REACH };
         let (p, term) = off.update(0, &start, [0.0; 3], [1400.0, 0.0, 0.0]);
         assert_eq!(off.leaf_term(0, &p, [0.0; 3], [1400.0, 0.0, 0.0], term), 5.0 * term);
     }
@@ -744,14 +783,16 @@ mod tests {
         let e = EkfCost::new(
             EstimatorSpec::default(),
             &[AuvEstimate { cov: [1.0, 2.0, 1.0], process_noise: 0.1 }],
-            10.0,
-            2.0,
+            (10.0, 2.0, 0.0),
             LinkTable::perfect(),
         )
         .err()
         .unwrap()
         .to_string();
         assert!(e.contains("AUV 0") && e.contains("positive semi-definite"), "{e}");
+        let ok = [AuvEstimate { cov: [1.0, 0.0, 1.0], process_noise: 0.1 }];
+        let e = EkfCost::new(EstimatorSpec::default(), &ok, (10.0, 2.0, -1.0), LinkTable::perfect()).err().unwrap();
+        assert!(e.to_string().contains("the CNA's own horizontal variance -1"), "{e}");
     }
 
     #[test]
@@ -778,13 +819,14 @@ mod tests {
         #[test]
         fn the_bound_below_a_node_is_never_above_a_real_path(
             ve in 0.01f64..50.0, vn in 0.01f64..50.0, rho in -0.99f64..0.99, q in 0.0f64..3.0,
-            agg in 0usize..4, bias in prop_oneof![Just(0.0), 0.0f64..10.0],
+            agg in 0usize..4, bias in prop_oneof![Just(0.0), 0.0f64..10.0], cna_variance in prop_oneof![Just(0.0), 0.0f64..60.0],
             reach in prop_oneof![Just(None), (0.0f64..8.0, 0.0f64..900.0).prop_map(Some)], auv0 in (-800.0f64..800.0, -800.0f64..800.0, 0.0f64..150.0),
             vel in (-3.0f64..3.0, -3.0f64..3.0), step in 1.0f64..60.0,
             moves in prop::collection::vec((-3.2f64..3.2, 0.0f64..1.0, -1.0f64..1.0), 1..8), circle in any::<bool>(),
         ) {
             let aggregate = [Aggregate::TraceSum, Aggregate::WorstAuv, Aggregate::LogDet, Aggregate::SigmaSum][agg];
             let mut m = biased(aggregate, vec![q], bias);
+            m.cna_variance = cna_variance;
             if let Some((h, useful_range_m)) = reach {
                 m.spec.terminal_levels = h;
                 m.reach = Reach { useful_range_m, step_m: step };

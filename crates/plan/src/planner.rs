@@ -219,6 +219,9 @@ pub struct PlanInput<'a> {
     /// Each AUV's filter covariance (same order), for the estimator-aware cost; may be empty
     /// under Hudson's.
     pub estimates: &'a [AuvEstimate],
+    /// The CNA's own horizontal position variance per axis, m² (its GPS σ², or an AUV CNA's
+    /// navigation variance); the estimator-aware cost adds it to each ping's range variance.
+    pub cna_variance: f64,
     pub forecast: &'a dyn AuvForecast,
 }
 
@@ -355,7 +358,8 @@ impl LookAheadPlanner {
 
     fn estimator_tree(&self, spec: EstimatorSpec, input: &PlanInput, depth: usize) -> Result<Tree<EkfCost>, PlanError> {
         let g = self.geometry(input, depth)?;
-        let model = EkfCost::new(spec, input.estimates, self.cfg.motion.tau, self.cfg.motion.speed, self.link.clone())?;
+        let motion = (self.cfg.motion.tau, self.cfg.motion.speed, input.cna_variance);
+        let model = EkfCost::new(spec, input.estimates, motion, self.link.clone())?;
         let root = input.estimates.iter().map(|e| e.cov).collect();
         Ok(self.tree(g, model, root))
     }

@@ -19,6 +19,8 @@ struct Instance {
     estimates: Vec<AuvEstimate>,
     /// Range (m) where the test link's success probability falls to one half.
     link_mid: f64,
+    /// The CNA's own horizontal variance per axis, m².
+    cna_variance: f64,
 }
 
 /// A link whose success falls smoothly with range: 1 / (1 + (r / mid)^4).
@@ -41,7 +43,15 @@ impl Instance {
         let mut p =
             LookAheadPlanner::with_link(PlannerConfig { search, ..self.cfg }, &FallingLink(self.link_mid)).unwrap();
         let (e, f) = (self.errors(), self.forecast());
-        p.decide(&PlanInput { t: 0.0, cna: self.cna, errors: &e, estimates: &self.estimates, forecast: &f }).unwrap()
+        p.decide(&PlanInput {
+            t: 0.0,
+            cna: self.cna,
+            errors: &e,
+            estimates: &self.estimates,
+            cna_variance: self.cna_variance,
+            forecast: &f,
+        })
+        .unwrap()
     }
 }
 
@@ -75,7 +85,7 @@ prop_compose! {
                   covs in prop::collection::vec((0.1f64..30.0, 0.1f64..30.0, -0.95f64..0.95, 0.0f64..0.2), 5),
                   estimator in any::<bool>(), aggregate in 0usize..4, sigma_m in 0.05f64..3.0, per_km_m in 0.0f64..5.0,
                   bias_per_km_m in prop_oneof![Just(0.0), 0.0f64..10.0], terminal_levels in prop_oneof![Just(0.0), 0.0f64..8.0], reach_success in prop_oneof![Just(0.0), 0.0f64..1.0],
-                  link_mid in 300.0f64..3000.0) -> Instance {
+                  link_mid in 300.0f64..3000.0, cna_variance in prop_oneof![Just(0.0), 0.0f64..60.0]) -> Instance {
         let cna = if auv_cna { CnaKind::auv(b) } else { CnaKind::Asc {} };
         let m = a * if auv_cna { b } else { 1 };
         // Keep the brute force affordable: at most ~20k leaves.
@@ -96,7 +106,7 @@ prop_compose! {
             let range_noise = RangeNoise { sigma_m, per_km_m };
             cfg.cost = CostSpec::Estimator(EstimatorSpec { aggregate, range_noise, bias_per_km_m, terminal_levels, reach_success });
         }
-        Instance { cfg, cna: CnaPose { pos: Vec3::new(0.0, 0.0, z), heading: Heading::from_radians(heading), pitch: 0.0 }, starts, vels, eps, estimates, link_mid }
+        Instance { cfg, cna: CnaPose { pos: Vec3::new(0.0, 0.0, z), heading: Heading::from_radians(heading), pitch: 0.0 }, starts, vels, eps, estimates, link_mid, cna_variance }
     }
 }
 
@@ -136,6 +146,7 @@ fn instance_fixed(cfg: PlannerConfig) -> Instance {
         eps: vec![1.0, 1.0],
         estimates: vec![AuvEstimate { cov: [4.0, 1.0, 2.0], process_noise: 0.05 }; 2],
         link_mid: 1200.0,
+        cna_variance: 1.0,
     }
 }
 
@@ -201,7 +212,14 @@ fn deadline_returns_the_deepest_completed_level() {
         };
         let mut p = LookAheadPlanner::new(PlannerConfig { search, ..inst.cfg }).unwrap();
         let (e, f) = (inst.errors(), inst.forecast());
-        match p.decide(&PlanInput { t: 0.0, cna: inst.cna, errors: &e, estimates: &[], forecast: &f }) {
+        match p.decide(&PlanInput {
+            t: 0.0,
+            cna: inst.cna,
+            errors: &e,
+            estimates: &[],
+            cna_variance: 1.0,
+            forecast: &f,
+        }) {
             Ok(d) => assert!(d.levels_searched >= 1 && d.levels_searched < 13, "A={a}: {}", d.levels_searched),
             Err(e) => assert_eq!(e, PlanError::Deadline),
         }
@@ -214,9 +232,13 @@ fn horizon_is_truncated_at_the_end_of_data() {
     let f = FnForecast { n: 2, f: |k: usize, t: f64| (t <= 20.0).then(|| inst.starts[k] + inst.vels[k] * t) };
     let mut p = LookAheadPlanner::new(inst.cfg).unwrap();
     let e = inst.errors();
-    let d = p.decide(&PlanInput { t: 0.0, cna: inst.cna, errors: &e, estimates: &[], forecast: &f }).unwrap();
+    let d = p
+        .decide(&PlanInput { t: 0.0, cna: inst.cna, errors: &e, estimates: &[], cna_variance: 1.0, forecast: &f })
+        .unwrap();
     assert_eq!((d.levels_requested, d.levels_searched), (6, 2));
-    let err = p.decide(&PlanInput { t: 20.0, cna: inst.cna, errors: &e, estimates: &[], forecast: &f }).unwrap_err();
+    let err = p
+        .decide(&PlanInput { t: 20.0, cna: inst.cna, errors: &e, estimates: &[], cna_variance: 1.0, forecast: &f })
+        .unwrap_err();
     assert!(matches!(err, PlanError::NoForecast { .. }));
 }
 
@@ -236,7 +258,8 @@ fn fly(case: PenaltyCase, gap: f64, steps: usize) -> Vec<f64> {
     let mut dist = Vec::new();
     for s in 0..steps {
         let t = s as f64 * cfg.motion.tau;
-        let d = p.decide(&PlanInput { t, cna, errors: &errs, estimates: &[], forecast: &f }).unwrap();
+        let d =
+            p.decide(&PlanInput { t, cna, errors: &errs, estimates: &[], cna_variance: 1.0, forecast: &f }).unwrap();
         cna = d.next;
         let a = auv(t + cfg.motion.tau);
         errs[0] =
@@ -306,7 +329,7 @@ fn a_deadline_stops_the_brute_force_too() {
     let mut p = LookAheadPlanner::new(PlannerConfig { search, ..inst.cfg }).unwrap();
     let (e, f) = (inst.errors(), inst.forecast());
     let t0 = std::time::Instant::now();
-    match p.decide(&PlanInput { t: 0.0, cna: inst.cna, errors: &e, estimates: &[], forecast: &f }) {
+    match p.decide(&PlanInput { t: 0.0, cna: inst.cna, errors: &e, estimates: &[], cna_variance: 1.0, forecast: &f }) {
         Ok(d) => assert!(d.levels_searched >= 1 && d.levels_searched < 13, "{}", d.levels_searched),
         Err(e) => assert_eq!(e, PlanError::Deadline),
     }
@@ -336,7 +359,14 @@ fn distance_to_far_auv(reach_success: f64) -> f64 {
     let estimates = [AuvEstimate { cov: [20.0, 0.0, 20.0], process_noise: 0.2 }; 2];
     let mut cna = CnaPose { pos: Vec3::zeros(), heading: Heading::from_radians(0.0), pitch: 0.0 };
     for s in 0..15 {
-        let input = PlanInput { t: s as f64 * cfg.motion.tau, cna, errors: &[], estimates: &estimates, forecast: &f };
+        let input = PlanInput {
+            t: s as f64 * cfg.motion.tau,
+            cna,
+            errors: &[],
+            estimates: &estimates,
+            cna_variance: 0.0,
+            forecast: &f,
+        };
         cna = p.decide(&input).unwrap().next;
     }
     (auvs[1] - cna.pos).norm()

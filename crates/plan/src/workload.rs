@@ -100,7 +100,8 @@ impl Workload {
         let estimate = AuvEstimate { cov: [1.0, 0.0, 1.0], process_noise: 0.5 * cfg.error.alpha };
         let estimates = vec![estimate; self.n];
         let forecast = FnForecast { n: self.n, f: move |k: usize, t: f64| Some(auv(k, t)) };
-        let input = PlanInput { t: 0.0, cna, errors: &errors, estimates: &estimates, forecast: &forecast };
+        let input =
+            PlanInput { t: 0.0, cna, errors: &errors, estimates: &estimates, cna_variance: 1.0, forecast: &forecast };
         LookAheadPlanner::new(cfg)?.decide(&input)
     }
 }

@@ -104,7 +104,7 @@ impl CovarianceTracker {
         self.covs[k] = Some(match self.prior(k, t, reported) {
             None => self.start.cov,
             Some((prior, grow)) => {
-                expected_posterior(&prior, grow, [cna.x, cna.y, cna.z], [auv.x, auv.y, auv.z], &self.noise, |_| p)
+                expected_posterior(&prior, grow, [cna.x, cna.y, cna.z], [auv.x, auv.y, auv.z], &self.noise, 0.0, |_| p)
             }
         });
     }
@@ -156,6 +156,8 @@ pub struct PlannerPolicy {
     /// The filters' covariances, under the estimator-aware cost only.
     covariances: Option<CovarianceTracker>,
     lost_pings: Option<PingLikelihood>,
+    /// Whether the planner is given the CNA's own variance (else 0: broadcasts taken as exact).
+    cna_variance: bool,
     stats: PlannerStats,
     levels_total: u64,
 }
@@ -207,7 +209,13 @@ impl PlannerPolicy {
             (Some(f), CostSpec::Estimator(_)) => LookAheadPlanner::with_link(cfg, &LikelihoodLink(f))?,
             _ => LookAheadPlanner::new(cfg)?,
         };
-        Ok(PlannerPolicy { planner, tracker, covariances, lost_pings, stats, levels_total: 0 })
+        Ok(PlannerPolicy { planner, tracker, covariances, lost_pings, cna_variance: true, stats, levels_total: 0 })
+    }
+
+    /// The planner scores every broadcast position as exact (the CNA's own variance left out).
+    pub fn without_cna_variance(mut self) -> Self {
+        self.cna_variance = false;
+        self
     }
 
     pub fn stats(&self) -> PlannerStats {
@@ -271,6 +279,7 @@ impl CnaPolicy for PlannerPolicy {
             cna: ctx.cna,
             errors: &errors,
             estimates: &estimates,
+            cna_variance: if self.cna_variance { ctx.cna_variance } else { 0.0 },
             forecast: &forecast,
         }) {
             Ok(d) => {
@@ -316,6 +325,12 @@ mod tests {
         }
     }
 
+    /// The context of decision `step` (τ = 30 s) from `cna`.
+    fn at_step<'a>(step: u32, cna: CnaPose, fleet: &'a dyn AuvForecast) -> PolicyContext<'a> {
+        let t = 30.0 * f64::from(step);
+        PolicyContext { t, tau: 30.0, cna, speed: 2.0, fleet, reported: &[], cna_variance: 1.0 }
+    }
+
     #[test]
     fn plans_over_known_auvs_and_tracks_their_errors() {
         let mut p = PlannerPolicy::new(cfg(), 2, 1.0, 1.0, None, None).unwrap();
@@ -323,8 +338,7 @@ mod tests {
         let fleet = FnForecast { n: 2, f: |k: usize, t: f64| (k == 0).then(|| Vec3::new(300.0, 1.5 * t, 20.0)) };
         let cna = CnaPose { pos: Vec3::new(0.0, 0.0, 0.0), heading: Heading::from_radians(0.0), pitch: 0.0 };
         for step in 0..4 {
-            let ctx = PolicyContext { t: 30.0 * step as f64, tau: 30.0, cna, speed: 2.0, fleet: &fleet, reported: &[] };
-            assert!(matches!(p.decide(&ctx), CnaCommand::GoTo(_)));
+            assert!(matches!(p.decide(&at_step(step, cna, &fleet)), CnaCommand::GoTo(_)));
         }
         assert!(p.tracker().total(0).unwrap() > 1.0);
         assert!(p.tracker().total(1).is_none());
@@ -359,8 +373,7 @@ mod tests {
         let fleet = FnForecast { n: 2, f: |k: usize, t: f64| Some(Vec3::new(300.0 + 200.0 * k as f64, 1.5 * t, 20.0)) };
         let cna = CnaPose { pos: Vec3::new(0.0, 0.0, 0.0), heading: Heading::from_radians(0.0), pitch: 0.0 };
         for step in 0..4 {
-            let ctx = PolicyContext { t: 30.0 * step as f64, tau: 30.0, cna, speed: 2.0, fleet: &fleet, reported: &[] };
-            assert!(matches!(p.decide(&ctx), CnaCommand::GoTo(_)));
+            assert!(matches!(p.decide(&at_step(step, cna, &fleet)), CnaCommand::GoTo(_)));
         }
         // Three pings after the start: the radial variance collapses, the trace falls below 2·16.
         let c = p.covariances.as_ref().unwrap().estimate(0).unwrap().cov;

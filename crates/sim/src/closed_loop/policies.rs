@@ -4,7 +4,8 @@
 use super::planner_policy::{LikelihoodLink, PingLikelihood, PlannerPolicy, PlannerStats};
 use super::scenario::Scenario;
 use crate::policy::{
-    Centroid, CnaPolicy, FixedPattern, GreedyFisher, MidpointRelay, NoCna, Rect, TimedWaypoints, Trail,
+    Centroid, CentroidStandoff, CnaPolicy, FixedPattern, GreedyFisher, MidpointRelay, NoCna, Rect, TimedWaypoints,
+    Trail,
 };
 use crate::predeploy::runner;
 use crate::predeploy::scenario::Mission;
@@ -19,13 +20,14 @@ use thiserror::Error;
 /// Every policy name, the planners first: `planner` scores with Hudson's model, `planner-estimator`
 /// with the survey AUVs' filter covariances (issue 10); `greedy-fisher` is the one-step
 /// Fisher-information baseline.
-pub const POLICY_NAMES: [&str; 10] = [
+pub const POLICY_NAMES: [&str; 11] = [
     "planner",
     "planner-estimator",
     "none",
     "racetrack",
     "zigzag",
     "centroid",
+    "centroid-standoff",
     "trail",
     "relay",
     "open-loop",
@@ -140,14 +142,18 @@ fn build(name: &str, sc: &Scenario, planned: Option<&TimedWaypoints>) -> Result<
                 }
                 cfg.look_ahead = p.estimator_look_ahead.unwrap_or(cfg.look_ahead);
             }
-            let policy =
+            let mut policy =
                 PlannerPolicy::new(cfg, n, p.sigma0, p.eps0, likelihood, Some((start, noise))).map_err(plan_err)?;
+            if !p.estimator_cna_variance {
+                policy = policy.without_cna_variance();
+            }
             return Ok(Policy::Planner(Box::new(policy)));
         }
         "none" => Box::new(NoCna),
         "racetrack" => Box::new(FixedPattern::racetrack(survey_area(sc), RACETRACK_INSET, CAPTURE_RADIUS)),
         "zigzag" => Box::new(FixedPattern::zigzag(survey_area(sc), ZIGZAG_LEGS, CAPTURE_RADIUS)),
         "centroid" => Box::new(Centroid),
+        "centroid-standoff" => Box::new(CentroidStandoff { radius: sc.cna.standoff_radius_m }),
         "trail" => Box::new(Trail { auv: n / 2, range: TRAIL_RANGE, angle: std::f64::consts::PI }),
         "relay" => Box::new(MidpointRelay { base: (sc.cna.x, sc.cna.y), auv: n / 2 }),
         "greedy-fisher" => {

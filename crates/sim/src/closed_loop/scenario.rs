@@ -10,6 +10,7 @@ use crate::models::finish::Finish;
 use crate::models::minipacket;
 use crate::models::schedule::{longest_air, payload_problem, Fit, Schedule};
 use crate::models::ship::{ShipSpec, MAX_SHIPS};
+use crate::models::surfacing::Surfacing;
 use crate::models::tl::TlModel;
 pub use crate::scenario_file::ScenarioError;
 use crate::scenario_file::{self, overlay, Problems};
@@ -179,6 +180,14 @@ pub struct Cna {
     /// An AUV CNA instead of an ASC.
     #[serde(default)]
     pub auv: Option<AuvCna>,
+    /// Radius of the `centroid-standoff` baseline's loiter circle around the fleet's centroid, m.
+    /// Invented: 150 m, the trail baseline's stand-off.
+    #[serde(default = "default_standoff")]
+    pub standoff_radius_m: f64,
+}
+
+fn default_standoff() -> f64 {
+    150.0
 }
 
 /// An AUV as the CNA (Hudson's AUV-CNA case: heading and pitch options).
@@ -192,6 +201,9 @@ pub struct AuvCna {
     /// Growth of the CNA's own horizontal position-error variance, m²/s per axis (a random walk:
     /// what it broadcasts is its truth plus this error). Invented: no thesis value.
     pub nav_diffusion: f64,
+    /// When it climbs for a GPS fix (None: never; [`Surfacing`]).
+    #[serde(default)]
+    pub surfacing: Option<Surfacing>,
 }
 
 fn default_turn_rate() -> f64 {
@@ -302,6 +314,15 @@ pub struct Planner {
     /// L of `planner-estimator` (default: `look_ahead`).
     #[serde(default)]
     pub estimator_look_ahead: Option<usize>,
+    /// Whether `planner-estimator` adds the CNA's own horizontal variance (GPS σ², or an AUV
+    /// CNA's navigation variance since its last fix) to each ping's range variance (coopnav_plan
+    /// estimator step 2); false scores every broadcast position as exact.
+    #[serde(default = "yes")]
+    pub estimator_cna_variance: bool,
+}
+
+fn yes() -> bool {
+    true
 }
 
 fn default_case() -> String {
@@ -425,6 +446,7 @@ impl Scenario {
         p.positive("cna.speed", c.speed);
         p.positive("cna.max_turn_rate_deg_s", c.max_turn_rate_deg_s);
         p.non_negative("cna.gps_sd", c.gps_sd);
+        p.non_negative("cna.standoff_radius_m", c.standoff_radius_m);
         if let Some(a) = &c.auv {
             if a.pitch_options == 0 {
                 p.push("cna.auv.pitch_options", "0", ">= 1");
@@ -436,6 +458,9 @@ impl Scenario {
                 "0 <= depth < 100 m (the planner's AUV-CNA depth limits)",
             );
             p.non_negative("cna.auv.nav_diffusion", a.nav_diffusion);
+            if let Some(s) = &a.surfacing {
+                s.validate("cna.auv.surfacing.", p);
+            }
         }
     }
 

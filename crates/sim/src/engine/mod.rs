@@ -23,6 +23,7 @@ use crate::closed_loop::policies::{cna_start, Policy};
 use crate::closed_loop::scenario::Scenario;
 use crate::models::channel::Clock;
 use crate::models::schedule::Slot;
+use crate::models::surfacing::OwnNav;
 use crate::policy::ReportedCov;
 use coopnav_acomms::tl::{TlError, TransmissionLoss, TL_CEILING};
 use coopnav_core::{Bathymetry, SeedStream, Vec3};
@@ -88,6 +89,8 @@ struct Cna {
     /// Its broadcast position minus its truth (GPS error for an ASC, a random walk for an AUV),
     /// drawn at each decision and held over the cycle.
     nav_error: (f64, f64),
+    /// What it knows of its own navigation error, and its surfacing cycle (an AUV CNA).
+    own: OwnNav,
     rng_gps: ChaCha8Rng,
     rng_nav: ChaCha8Rng,
     clock: Clock,
@@ -173,6 +176,7 @@ impl<'a> Engine<'a> {
         let cna = Cna {
             craft: Craft { pos: start.pos, prev: start.pos, heading: start.heading.radians(), target: None },
             nav_error: (0.0, 0.0),
+            own: OwnNav::new(sc.cna.auv.as_ref().map_or(0.0, |a| a.nav_diffusion)),
             rng_gps: streams.rng(stream::CNA_GPS),
             rng_nav: streams.rng(stream::CNA_NAV),
             clock: sc.channel.clocks.draw(&mut streams.rng(stream::CNA_CLOCK)),

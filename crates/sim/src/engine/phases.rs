@@ -18,6 +18,7 @@ use crate::models::channel::{air_time, Clock};
 use crate::models::finish::Finish;
 use crate::models::minipacket::SUCCESS_RATE;
 use crate::models::schedule::{Message, Owner};
+use crate::models::surfacing::Step;
 use crate::policy::ReportedCov;
 use crate::policy::{CnaCommand, PolicyContext};
 use coopnav_acomms::codec::{DecodeError, EncodeError};
@@ -54,7 +55,9 @@ impl Engine<'_> {
         }
         let t_dec = self.next_decision as f64 * tau;
         self.next_decision += 1;
-        let fix = self.cna_fix(t_dec);
+        let surfacing = self.sc.cna.auv.as_ref().and_then(|a| a.surfacing.as_ref());
+        let step = self.cna.own.step(surfacing, t_dec, self.cna.craft.pos.z);
+        let fix = self.cna_fix(t_dec, matches!(step, Step::Fix { .. }));
         let transmits = self.policy.as_policy().transmits();
         let cna = &mut self.cna;
         for k in 0..self.auvs.len() {
@@ -83,24 +86,34 @@ impl Engine<'_> {
             speed: self.sc.cna.speed,
             fleet: &fleet,
             reported: &cna.reported,
+            cna_variance: match &self.sc.cna.auv {
+                None => self.sc.cna.gps_sd * self.sc.cna.gps_sd,
+                Some(_) => cna.own.variance(t_dec),
+            },
         };
         let here = cna.craft.pos;
-        cna.craft.target = match self.policy.as_policy().decide(&ctx) {
-            // The command is relative to the fix the policy saw.
-            CnaCommand::GoTo(p) => Some(Vec3::new(here.x + p.x - fix.x, here.y + p.y - fix.y, p.z)),
-            CnaCommand::Hold => None,
+        // The policy decides even while the CNA surfaces, so its own models keep stepping.
+        let command = self.policy.as_policy().decide(&ctx);
+        // The command is relative to the fix the policy saw.
+        let steer = |p: Vec3, z: f64| Some(Vec3::new(here.x + p.x - fix.x, here.y + p.y - fix.y, z));
+        cna.craft.target = match (step, command) {
+            (Step::Climb, _) => Some(Vec3::new(here.x, here.y, 0.0)),
+            (Step::Fix { to }, CnaCommand::GoTo(p)) => steer(p, to),
+            (Step::Fix { to }, CnaCommand::Hold) => Some(Vec3::new(here.x, here.y, to)),
+            (Step::Work, CnaCommand::GoTo(p)) => steer(p, p.z),
+            (Step::Work, CnaCommand::Hold) => None,
         };
         obs.on_decision(&Decision { t: t_dec, from: here, to: cna.craft.target });
     }
 
-    /// Draws the CNA's navigation error for this cycle and returns its position fix.
-    fn cna_fix(&mut self, t_dec: f64) -> Vec3 {
+    /// Draws the CNA's navigation error for this cycle and returns its position fix (`surfaced`:
+    /// an AUV CNA takes its GPS fix at the surface now).
+    fn cna_fix(&mut self, t_dec: f64, surfaced: bool) -> Vec3 {
         let cna = &mut self.cna;
+        let gps = |sd: f64, rng: &mut ChaCha8Rng| (sd * normal(rng), sd * normal(rng));
         cna.nav_error = match &self.sc.cna.auv {
-            None => {
-                let sd = self.sc.cna.gps_sd;
-                (sd * normal(&mut cna.rng_gps), sd * normal(&mut cna.rng_gps))
-            }
+            None => gps(self.sc.cna.gps_sd, &mut cna.rng_gps),
+            Some(a) if surfaced => gps(a.surfacing.map_or(0.0, |s| s.gps_sd_m), &mut cna.rng_gps),
             Some(a) => {
                 let sd = (a.nav_diffusion * if t_dec > 0.0 { self.sc.comms.tau } else { 0.0 }).sqrt();
                 (cna.nav_error.0 + sd * normal(&mut cna.rng_nav), cna.nav_error.1 + sd * normal(&mut cna.rng_nav))

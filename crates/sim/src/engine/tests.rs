@@ -308,3 +308,30 @@ fn a_ship_on_a_fixed_track_converges_onto_it_and_keeps_its_speed() {
         assert!((speed - 1.3).abs() < 0.2, "seed {seed}: {speed} m/s west");
     }
 }
+
+/// An AUV CNA whose σ reaches the threshold climbs straight up, waits at the surface for its fix,
+/// dives back to its working depth, and does it again as its σ regrows; every policy alike.
+#[test]
+fn an_auv_cna_surfaces_for_a_fix_and_dives_back() {
+    use crate::closed_loop::scenario::AuvCna;
+    use crate::models::surfacing::{SurfaceWhen, Surfacing};
+    let mut sc = short_survey(Finish::Loiter { radius_m: 50.0 }, 900.0);
+    // σ² grows 0.05 m²/s: σ = 2 m after 80 s, then 1 + 0.05·t reaches 4 m² 60 s after each fix.
+    let surfacing = Surfacing { when: SurfaceWhen::Sigma { sigma_m: 2.0 }, fix_time_s: 30.0, gps_sd_m: 1.0 };
+    sc.cna.auv = Some(AuvCna { pitch_options: 1, depth: 10.0, nav_diffusion: 0.05, surfacing: Some(surfacing) });
+    for policy in ["centroid", "planner"] {
+        let (r, trace) = traced(&sc, policy, 4);
+        assert!(r.fleet.healthy, "{policy}");
+        let climbs: Vec<f64> = trace
+            .decisions
+            .iter()
+            .filter(|d| d.from.z > 5.0 && d.to.is_some_and(|to| to.z == 0.0 && to.x == d.from.x && to.y == d.from.y))
+            .map(|d| d.t)
+            .collect();
+        assert!(climbs.len() >= 3, "{policy}: climbs at {climbs:?}");
+        assert_eq!(climbs[0], 90.0, "{policy}: σ reaches 2 m at 80 s, the next decision is at 90 s");
+        // Back at the working depth by the decision after each fix.
+        let deep_again = trace.decisions.iter().filter(|d| d.t > climbs[0] && d.from.z > 9.0).map(|d| d.t).next();
+        assert!(deep_again.is_some_and(|t| t < climbs[1]), "{policy}: {deep_again:?} before {}", climbs[1]);
+    }
+}

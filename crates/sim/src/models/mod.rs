@@ -2,7 +2,8 @@
 //! parameters and its own validation: transponder buoys ([`buoy`]), ships on a fixed track
 //! ([`ship`]), the acoustic channel's truth side ([`channel`]), the 13-bit mini-packet
 //! ([`minipacket`]), the comms schedule ([`schedule`]), what a vehicle does after its mission ([`finish`]) and what the
-//! survey AUVs' filters assume ([`filter`]), and the transmission loss ([`tl`]).
+//! survey AUVs' filters assume ([`filter`]), the transmission loss ([`tl`]) and when an AUV CNA
+//! surfaces for a GPS fix ([`surfacing`]).
 
 pub mod buoy;
 pub mod channel;
@@ -11,4 +12,5 @@ pub mod finish;
 pub mod minipacket;
 pub mod schedule;
 pub mod ship;
+pub mod surfacing;
 pub mod tl;

@@ -1,5 +1,5 @@
 //! The baselines the planner is judged against: no CNA at all, fixed patterns over the survey
-//! area, loitering at the fleet's centroid, trailing one AUV, relaying between a base and an AUV,
+//! area, loitering at the fleet's centroid (on top of it, or on a stand-off circle around it), trailing one AUV, relaying between a base and an AUV,
 //! and a pre-deployment plan flown open-loop. Each is deliberately simple and stateless except
 //! for where it is along its own pattern.
 
@@ -100,6 +100,12 @@ impl CnaPolicy for FixedPattern {
     }
 }
 
+/// The centroid of the AUVs' predicted positions half a period ahead (None: none known).
+fn predicted_centroid(ctx: &PolicyContext) -> Option<Vec3> {
+    let ahead = ctx.predicted_all(ctx.t + ctx.tau / 2.0);
+    (!ahead.is_empty()).then(|| ahead.iter().sum::<Vec3>() / ahead.len() as f64)
+}
+
 /// Loiter at the centroid of the AUVs' predicted positions half a period ahead.
 #[derive(Debug, Clone, Copy, Default)]
 pub struct Centroid;
@@ -109,12 +115,36 @@ impl CnaPolicy for Centroid {
         "centroid"
     }
     fn decide(&mut self, ctx: &PolicyContext) -> CnaCommand {
-        let ahead = ctx.predicted_all(ctx.t + ctx.tau / 2.0);
-        if ahead.is_empty() {
-            return CnaCommand::Hold;
+        match predicted_centroid(ctx) {
+            Some(c) => CnaCommand::GoTo(Vec3::new(c.x, c.y, ctx.cna.pos.z)),
+            None => CnaCommand::Hold,
         }
-        let c = ahead.iter().sum::<Vec3>() / ahead.len() as f64;
-        CnaCommand::GoTo(Vec3::new(c.x, c.y, ctx.cna.pos.z))
+    }
+}
+
+/// Loiter on a circle of radius `radius` around the centroid of the AUVs' predicted positions
+/// half a period ahead, counter-clockwise: what a field team does with a CNA it does not plan for
+/// (a range from right above an AUV tells it nothing horizontally, so the circle keeps a stand-off).
+#[derive(Debug, Clone, Copy)]
+pub struct CentroidStandoff {
+    pub radius: f64,
+}
+
+impl CnaPolicy for CentroidStandoff {
+    fn name(&self) -> &'static str {
+        "centroid-standoff"
+    }
+    fn decide(&mut self, ctx: &PolicyContext) -> CnaCommand {
+        let Some(c) = predicted_centroid(ctx) else { return CnaCommand::Hold };
+        let (dx, dy) = (ctx.cna.pos.x - c.x, ctx.cna.pos.y - c.y);
+        // From the CNA's bearing about the centroid (its heading's side when it sits on it), one
+        // period's travel further along the circle; from off the circle, the bearing's point on it.
+        let bearing = if dx.hypot(dy) > 1e-9 { dy.atan2(dx) } else { ctx.cna.heading.radians() };
+        let on_circle = (dx.hypot(dy) - self.radius).abs() <= ctx.speed * ctx.tau;
+        let advance = if on_circle && self.radius > 0.0 { ctx.speed * ctx.tau / self.radius } else { 0.0 };
+        let angle = bearing + advance;
+        let target = (c.x + self.radius * angle.cos(), c.y + self.radius * angle.sin());
+        CnaCommand::GoTo(Vec3::new(target.0, target.1, ctx.cna.pos.z))
     }
 }
 
@@ -211,6 +241,7 @@ mod tests {
             speed: 2.0,
             fleet,
             reported: &[],
+            cna_variance: 1.0,
         }
     }
 
@@ -251,10 +282,27 @@ mod tests {
     }
 
     #[test]
+    fn centroid_standoff_circles_the_predicted_centroid_at_its_radius() {
+        let fleet = Eastbound(vec![(0.0, 0.0), (0.0, 100.0)]);
+        // The centroid half a period ahead is (15, 50); the CNA sits 100 m east of it, on the circle.
+        let mut p = CentroidStandoff { radius: 100.0 };
+        let (x, y) = target(p.decide(&ctx(0.0, (115.0, 50.0), &fleet)));
+        assert!(((x - 15.0).hypot(y - 50.0) - 100.0).abs() < 1e-9, "({x}, {y})");
+        // One period at 2 m/s is 60 m of arc: 0.6 rad counter-clockwise.
+        assert!((x - (15.0 + 100.0 * 0.6f64.cos())).abs() < 1e-9 && (y - (50.0 + 100.0 * 0.6f64.sin())).abs() < 1e-9);
+        // Far off the circle (500 m east): it heads for the circle's nearest point first.
+        assert_eq!(target(p.decide(&ctx(0.0, (515.0, 50.0), &fleet))), (115.0, 50.0));
+        // Never onto the centroid itself, unlike `Centroid`.
+        let (x, y) = target(p.decide(&ctx(0.0, (15.0, 50.0), &fleet)));
+        assert!(((x - 15.0).hypot(y - 50.0) - 100.0).abs() < 1e-9);
+    }
+
+    #[test]
     fn policies_hold_when_nothing_is_known() {
         let fleet = Eastbound(vec![]);
         let c = ctx(0.0, (0.0, 0.0), &fleet);
         assert_eq!(Centroid.decide(&c), CnaCommand::Hold);
+        assert_eq!(CentroidStandoff { radius: 100.0 }.decide(&c), CnaCommand::Hold);
         assert_eq!(Trail { auv: 0, range: 10.0, angle: 0.0 }.decide(&c), CnaCommand::Hold);
         assert_eq!(MidpointRelay { base: (0.0, 0.0), auv: 0 }.decide(&c), CnaCommand::Hold);
         assert_eq!(TimedWaypoints { waypoints: vec![] }.decide(&c), CnaCommand::Hold);

@@ -108,6 +108,7 @@ mod tests {
             speed: 2.0,
             fleet,
             reported: &[],
+            cna_variance: 1.0,
         }
     }
 

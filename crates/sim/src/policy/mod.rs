@@ -8,7 +8,7 @@
 mod baselines;
 mod greedy;
 
-pub use baselines::{Centroid, FixedPattern, MidpointRelay, NoCna, Rect, TimedWaypoints, Trail};
+pub use baselines::{Centroid, CentroidStandoff, FixedPattern, MidpointRelay, NoCna, Rect, TimedWaypoints, Trail};
 pub use greedy::GreedyFisher;
 
 use coopnav_core::Vec3;
@@ -29,6 +29,9 @@ pub struct PolicyContext<'a> {
     /// The newest covariance each AUV's filter reported in its status message (indexed like
     /// `fleet`; shorter, or `None`, where none arrived).
     pub reported: &'a [Option<ReportedCov>],
+    /// The CNA's own horizontal position variance per axis as it knows it, m² (GPS σ² for an
+    /// ASC; for an AUV CNA its navigation's, grown since its last fix).
+    pub cna_variance: f64,
 }
 
 /// A survey AUV's horizontal position covariance as its own filter reported it.

@@ -1,0 +1,175 @@
+//! When an AUV CNA leaves its work to climb for a GPS fix, as a field team runs one whose own
+//! dead reckoning drifts: on a fixed period, or when its own horizontal σ (which it knows from its
+//! navigation filter) reaches a threshold. It climbs straight up at its pitch-limited rate,
+//! stays at the surface for the fix time, takes a fix of the configured σ and goes back to work,
+//! diving to the depth it left (policies that keep the current depth would otherwise stay up). The climb and the wait are what it costs:
+//! meanwhile the CNA follows no policy, whichever it is. Checked at each decision (every τ).
+//! Invented parameters (no thesis value): the period, threshold, fix time and fix σ.
+
+use coopnav_core::validation::Problems;
+use serde::{Deserialize, Serialize};
+
+/// Which rule sends the CNA up.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
+pub enum SurfaceWhen {
+    /// Every `period_s` seconds since the last fix (the mission start counts as one).
+    Period { period_s: f64 },
+    /// When the CNA's own horizontal 1-σ per axis, √(σ_fix² + D·(t − t_fix)), reaches `sigma_m`.
+    Sigma { sigma_m: f64 },
+}
+
+/// `[cna.auv.surfacing]`: the rule, and what a fix takes and gives.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Surfacing {
+    pub when: SurfaceWhen,
+    /// Time at the surface before the fix is taken, s.
+    pub fix_time_s: f64,
+    /// σ of the GPS fix per axis, m.
+    pub gps_sd_m: f64,
+}
+
+impl Surfacing {
+    pub fn validate(&self, prefix: &str, p: &mut Problems) {
+        match self.when {
+            SurfaceWhen::Period { period_s } => p.positive(&format!("{prefix}when.period_s"), period_s),
+            SurfaceWhen::Sigma { sigma_m } => p.positive(&format!("{prefix}when.sigma_m"), sigma_m),
+        }
+        p.non_negative(&format!("{prefix}fix_time_s"), self.fix_time_s);
+        p.non_negative(&format!("{prefix}gps_sd_m"), self.gps_sd_m);
+    }
+}
+
+/// Where the CNA is in its surfacing cycle.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Phase {
+    /// Following its policy.
+    Working,
+    /// Climbing to the surface from its working depth, m.
+    Climbing { from: f64 },
+    /// At the surface since this time, waiting for the fix.
+    Surfaced { since: f64, from: f64 },
+}
+
+/// What the CNA does at this decision.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Step {
+    /// Follow the policy.
+    Work,
+    /// Go (or stay) straight up at its current horizontal position.
+    Climb,
+    /// Take the GPS fix now and dive back to the working depth `to` (m), on the policy's course.
+    Fix { to: f64 },
+}
+
+/// The CNA's own navigation uncertainty and surfacing cycle.
+#[derive(Debug, Clone, Copy)]
+pub struct OwnNav {
+    /// Variance per axis at the last fix, m², and its time, s.
+    fix_variance: f64,
+    fix_t: f64,
+    /// Growth of the variance, m²/s per axis (the engine's random walk).
+    diffusion: f64,
+    phase: Phase,
+}
+
+/// Depth at which the CNA counts as surfaced, m.
+const SURFACE_DEPTH_M: f64 = 0.5;
+
+impl OwnNav {
+    /// Starting exactly known at time 0 (the engine's CNA error starts at zero).
+    pub fn new(diffusion: f64) -> Self {
+        OwnNav { fix_variance: 0.0, fix_t: 0.0, diffusion, phase: Phase::Working }
+    }
+
+    /// The CNA's own horizontal variance per axis at time `t`, m².
+    pub fn variance(&self, t: f64) -> f64 {
+        self.fix_variance + self.diffusion * (t - self.fix_t).max(0.0)
+    }
+
+    pub fn phase(&self) -> Phase {
+        self.phase
+    }
+
+    /// The decision at time `t` with the CNA at `depth`, under `rule` (None: never surfaces).
+    pub fn step(&mut self, rule: Option<&Surfacing>, t: f64, depth: f64) -> Step {
+        let Some(rule) = rule else { return Step::Work };
+        match self.phase {
+            Phase::Working if self.due(&rule.when, t) => {
+                self.phase = Phase::Climbing { from: depth };
+                self.step(Some(rule), t, depth)
+            }
+            Phase::Working => Step::Work,
+            Phase::Climbing { from } if depth <= SURFACE_DEPTH_M => {
+                self.phase = Phase::Surfaced { since: t, from };
+                self.step(Some(rule), t, depth)
+            }
+            Phase::Climbing { .. } => Step::Climb,
+            Phase::Surfaced { since, from } if t - since >= rule.fix_time_s => {
+                self.phase = Phase::Working;
+                self.fix_variance = rule.gps_sd_m * rule.gps_sd_m;
+                self.fix_t = t;
+                Step::Fix { to: from }
+            }
+            Phase::Surfaced { .. } => Step::Climb,
+        }
+    }
+
+    fn due(&self, when: &SurfaceWhen, t: f64) -> bool {
+        match *when {
+            SurfaceWhen::Period { period_s } => t - self.fix_t >= period_s,
+            SurfaceWhen::Sigma { sigma_m } => self.variance(t) >= sigma_m * sigma_m,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn rule(when: SurfaceWhen) -> Surfacing {
+        Surfacing { when, fix_time_s: 30.0, gps_sd_m: 2.0 }
+    }
+
+    #[test]
+    fn the_sigma_rule_climbs_waits_the_fix_time_and_resets_the_variance() {
+        let r = rule(SurfaceWhen::Sigma { sigma_m: 6.0 });
+        let mut nav = OwnNav::new(0.01);
+        // σ² reaches 36 m² at 3600 s.
+        assert_eq!(nav.step(Some(&r), 3570.0, 10.0), Step::Work);
+        assert_eq!(nav.step(Some(&r), 3600.0, 10.0), Step::Climb);
+        assert_eq!(nav.step(Some(&r), 3630.0, 0.0), Step::Climb);
+        assert_eq!(nav.phase(), Phase::Surfaced { since: 3630.0, from: 10.0 });
+        assert_eq!(nav.step(Some(&r), 3660.0, 0.0), Step::Fix { to: 10.0 });
+        assert_eq!(nav.variance(3660.0), 4.0);
+        assert!((nav.variance(3760.0) - 5.0).abs() < 1e-12);
+        assert_eq!(nav.step(Some(&r), 3690.0, 0.0), Step::Work);
+    }
+
+    #[test]
+    fn the_period_rule_counts_from_the_last_fix_and_no_rule_never_surfaces() {
+        let r = Surfacing { fix_time_s: 0.0, ..rule(SurfaceWhen::Period { period_s: 900.0 }) };
+        let mut nav = OwnNav::new(0.01);
+        assert_eq!(nav.step(Some(&r), 870.0, 10.0), Step::Work);
+        // Already at the surface and no wait: the fix comes at once.
+        assert_eq!(nav.step(Some(&r), 900.0, 0.2), Step::Fix { to: 0.2 });
+        assert_eq!(nav.step(Some(&r), 1770.0, 10.0), Step::Work);
+        assert_eq!(nav.step(Some(&r), 1800.0, 10.0), Step::Climb);
+        let mut never = OwnNav::new(0.01);
+        assert_eq!(never.step(None, 1e6, 10.0), Step::Work);
+        assert_eq!(never.variance(100.0), 1.0);
+    }
+
+    #[test]
+    fn bad_settings_are_named() {
+        let mut p = Problems::default();
+        Surfacing { fix_time_s: -1.0, ..rule(SurfaceWhen::Sigma { sigma_m: 0.0 }) }
+            .validate("cna.auv.surfacing.", &mut p);
+        let text = format!("{p:?}");
+        assert!(
+            text.contains("cna.auv.surfacing.when.sigma_m") && text.contains("cna.auv.surfacing.fix_time_s"),
+            "{text}"
+        );
+    }
+}
