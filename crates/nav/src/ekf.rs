@@ -200,21 +200,23 @@ impl<const N: usize> Ekf<N> {
         // B hᵀ needs only h's columns of B, so P⁺ is written in one pass, every entry rounded
         // as in the two-pass form, (p − kᵢ (P hᵀ)ⱼ) + cᵢ kⱼ, and each off-diagonal pair averaged
         // as [`symmetrise`] averages it.
-        let bht = seen.times(|i, j| p[j][i] - k[i] * pht[j], &h);
+        let b = |i: usize, j: usize| p[j][i] - k[i] * pht[j];
+        let bht = seen.times(b, &h);
         let mut c = [0.0; N];
         for (i, v) in c.iter_mut().enumerate() {
             *v = r * k[i] - bht[i];
         }
-        // Every entry b(i, j) + cᵢ kⱼ down whole columns (a loop the compiler vectorises), then
-        // the pairs averaged in place: the same roundings as entry by entry.
+        let entry = |i: usize, j: usize| b(i, j) + c[i] * k[j];
         let mut columns = [[0.0; N]; N];
-        for (j, column) in columns.iter_mut().enumerate() {
-            for (i, v) in column.iter_mut().enumerate() {
-                *v = (p[j][i] - k[i] * pht[j]) + c[i] * k[j];
+        for j in 0..N {
+            columns[j][j] = entry(j, j);
+            for i in 0..j {
+                let v = 0.5 * (entry(i, j) + entry(j, i));
+                columns[j][i] = v;
+                columns[i][j] = v;
             }
         }
-        let mut p_new = SMatrix::<f64, N, N>::from_data(nalgebra::ArrayStorage(columns));
-        symmetrise_in_place(&mut p_new);
+        let p_new = SMatrix::<f64, N, N>::from_data(nalgebra::ArrayStorage(columns));
         let x_new = self.x + SVector::<f64, N>::from(k) * innovation;
         self.commit(x_new, p_new).map_or(UpdateOutcome::Unusable, |()| UpdateOutcome::Applied { nis })
     }
