@@ -33,6 +33,63 @@ pub trait RatePolicy: Send {
     fn choose(&mut self, slot: u64, distance: Option<f64>) -> Choice;
 }
 
+/// A rate policy as a file names it (`kind = "fixed" | "alternating" | "adaptive"`): the one
+/// list of policies, each name written once here; [`RatePolicySpec::build`] makes the policy.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
+pub enum RatePolicySpec {
+    /// Every own slot at `rate` (Nams's controls 1 and 2).
+    Fixed { rate: Rate },
+    /// Every own slot, cycling through `rates` (control 3: rates 0 and 5).
+    Alternating { rates: Vec<Rate> },
+    /// The adaptive distance-bin selector (Nams §5.3; its fields are [`AdaptiveConfig`]'s).
+    Adaptive(AdaptiveConfig),
+}
+
+impl RatePolicySpec {
+    /// The policy, or what is wrong with the specification (naming the field and what is allowed).
+    pub fn build(&self) -> Result<Box<dyn RatePolicy>, String> {
+        let usable = |r: &Rate| !r.spec().deprecated;
+        Ok(match self {
+            RatePolicySpec::Fixed { rate } if usable(rate) => Box::new(FixedRate { rate: *rate }),
+            RatePolicySpec::Alternating { rates } if !rates.is_empty() && rates.iter().all(usable) => {
+                Box::new(Alternating::new(rates.clone()))
+            }
+            RatePolicySpec::Fixed { rate } => return Err(format!("rate {rate}: allowed 0, 1, 4 or 5")),
+            RatePolicySpec::Alternating { rates } => {
+                return Err(format!("rates {rates:?}: allowed a non-empty list of 0, 1, 4 or 5"))
+            }
+            RatePolicySpec::Adaptive(cfg) => Box::new(AdaptiveBins::new(cfg.clone())?),
+        })
+    }
+
+    /// Every rate the policy may use, or what is wrong with it.
+    pub fn rates(&self) -> Result<Vec<Rate>, String> {
+        Ok(self.build()?.rates())
+    }
+
+    /// The policy's name in tables ("fixed rate 1", "alternating 0/5", "adaptive"), or "invalid".
+    pub fn label(&self) -> String {
+        self.build().map_or_else(|_| "invalid".into(), |p| p.name())
+    }
+
+    /// The thesis's four (§5.4): controls 1–3 (fixed rate 0, fixed rate 1, rates 0 and 5 in turn)
+    /// and the adaptive selector without rate 5 (Table 8 values).
+    pub fn thesis() -> Vec<RatePolicySpec> {
+        vec![
+            RatePolicySpec::Fixed { rate: Rate::R0 },
+            RatePolicySpec::Fixed { rate: Rate::R1 },
+            RatePolicySpec::Alternating { rates: vec![Rate::R0, Rate::R5] },
+            RatePolicySpec::Adaptive(AdaptiveConfig::default()),
+        ]
+    }
+
+    /// A control: a policy that does not learn from the channel.
+    pub fn is_control(&self) -> bool {
+        !matches!(self, RatePolicySpec::Adaptive(_))
+    }
+}
+
 /// Always transmit at one rate.
 #[derive(Debug, Clone)]
 pub struct FixedRate {
@@ -420,6 +477,32 @@ mod tests {
         assert_eq!(s.choose(6, Some(2000.0)), Choice::Transmit(Rate::R1), "status bins reach further");
         s.feedback(&[Outcome { slot: 6, success: true }], false);
         assert_eq!(s.mode(), Mode::Data);
+    }
+
+    #[test]
+    fn policies_are_named_by_kind_in_a_file_and_bad_ones_are_refused() {
+        let parse = |text: &str| toml::from_str::<RatePolicySpec>(text);
+        let fixed = parse("kind = \"fixed\"\nrate = 1").unwrap();
+        assert_eq!(fixed, RatePolicySpec::Fixed { rate: Rate::R1 });
+        assert_eq!(fixed.build().unwrap().name(), "fixed rate 1");
+        let alternating = parse("kind = \"alternating\"\nrates = [0, 5]").unwrap();
+        assert_eq!(alternating.rates().unwrap(), [Rate::R0, Rate::R5]);
+        let adaptive = parse("kind = \"adaptive\"\nmemory = 4").unwrap();
+        assert_eq!(adaptive, RatePolicySpec::Adaptive(AdaptiveConfig { memory: 4, ..AdaptiveConfig::default() }));
+        assert_eq!(adaptive.rates().unwrap(), [Rate::R1, Rate::R4]);
+        assert!(parse("kind = \"fixed\"\nrate = 1\nspeed = 2").is_err(), "unknown fields are refused");
+        assert!(parse("kind = \"adaptive\"\nmemroy = 4").is_err(), "unknown fields are refused");
+        assert!(parse("kind = \"greedy\"").is_err());
+        let deprecated = RatePolicySpec::Fixed { rate: Rate::new(2).unwrap() };
+        assert!(deprecated.rates().unwrap_err().contains("allowed 0, 1, 4 or 5"));
+        assert!(RatePolicySpec::Alternating { rates: vec![] }.rates().unwrap_err().contains("non-empty"));
+        let bad = RatePolicySpec::Adaptive(AdaptiveConfig { memory: 0, ..AdaptiveConfig::default() });
+        assert!(bad.rates().unwrap_err().contains("adaptive.memory"));
+        assert_eq!(bad.label(), "invalid");
+        let thesis = RatePolicySpec::thesis();
+        let labels: Vec<String> = thesis.iter().map(RatePolicySpec::label).collect();
+        assert_eq!(labels, ["fixed rate 0", "fixed rate 1", "alternating 0/5", "adaptive"]);
+        assert_eq!(thesis.iter().map(RatePolicySpec::is_control).collect::<Vec<_>>(), [true, true, true, false]);
     }
 
     #[test]

@@ -153,3 +153,18 @@ pub fn run(args: Args) -> Result<()> {
     eprintln!("wrote {}", run.finish()?.display());
     Ok(())
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use coopnav_acomms::selector::RatePolicySpec;
+
+    #[test]
+    fn the_example_loads_back_with_the_thesis_behaviours() {
+        let file = parse_file(&example().unwrap(), Path::new("example.toml")).unwrap();
+        assert_eq!(file.experiment.behaviours, RatePolicySpec::thesis());
+        let old = "[experiment]\nbehaviours = [\"fixed_rate1\"]\n";
+        let e = format!("{:#}", parse_file(old, Path::new("old.toml")).err().unwrap());
+        assert!(e.contains("old.toml") && e.contains("behaviours"), "{e}");
+    }
+}

@@ -11,7 +11,7 @@ const SMALL: &str = r#"
 [experiment]
 repetitions = 2
 max_time = 900.0
-behaviours = ["fixed_rate1", { adaptive = { step = 10.0 } }]
+behaviours = [{ kind = "fixed", rate = 1 }, { kind = "adaptive", step = 10.0 }]
 scenarios = [{ name = "tiny", square = 200.0, lane_spacing = 50.0, noise_db = 6.0 }]
 
 [tl]

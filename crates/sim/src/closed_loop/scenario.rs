@@ -510,6 +510,7 @@ impl Scenario {
                 buoy_air_s: longest_air(self.buoys.iter().map(|b| b.rate)),
                 status_air_s: longest_air(status_rates),
                 mini_air_s: c.mini_packet_air_s,
+                status_bytes,
                 travel_s: c.max_range_m / self.channel.sound_speed.slowest(),
                 guard_s: c.slot_guard_s,
             };

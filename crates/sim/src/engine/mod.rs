@@ -30,7 +30,7 @@ use coopnav_plan::predict::UnderwayPredictor;
 use coopnav_plan::AuvForecast;
 use inflight::InFlight;
 use mini::SurfaceFilters;
-pub use observe::{CommsEvent, Decision, Observer, Phase, PhaseClock, Timing, Trace, TraceRow};
+pub use observe::{CommsEvent, Decision, Observer, Phase, PhaseClock, StatusChoice, Timing, Trace, TraceRow};
 use phases::Payload;
 use rand_chacha::ChaCha8Rng;
 use serde::Serialize;
@@ -213,7 +213,7 @@ impl<'a> Engine<'a> {
         obs.on_phase_end(Phase::Decide);
         self.advance();
         obs.on_phase_end(Phase::Advance);
-        self.transmit(t, t_next);
+        self.transmit(t, t_next, obs);
         obs.on_phase_end(Phase::Transmit);
         self.deliver(t_next, obs);
         obs.on_phase_end(Phase::Deliver);

@@ -3,6 +3,7 @@
 //! end of every phase of a step; the caller keeps what it wants (`()` keeps nothing, [`Trace`]
 //! keeps the time series, [`PhaseClock`] the wall time of each phase).
 
+use coopnav_acomms::selector::Choice;
 use coopnav_core::Vec3;
 use serde::Serialize;
 use std::time::Instant;
@@ -48,6 +49,16 @@ pub struct CommsEvent {
     pub lost_to: &'static str,
 }
 
+/// A survey AUV's status slot: what its rate policy chose, from its estimated distance to the
+/// CNA (none before it has heard the CNA).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct StatusChoice {
+    pub t: f64,
+    pub auv: usize,
+    pub distance: Option<f64>,
+    pub choice: Choice,
+}
+
 /// A CNA decision: where it was (true position) and the point it now steers for (none: hold).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Decision {
@@ -64,6 +75,8 @@ pub trait Observer {
     fn on_sample(&mut self, _t: f64, _cna: Vec3, _rows: &[TraceRow]) {}
     /// Just before each `on_sample`, in a scenario with ships: ship i's true position at index i.
     fn on_ships(&mut self, _t: f64, _ships: &[Vec3]) {}
+    /// Every survey AUV's status slot, with its rate policy's choice.
+    fn on_status_choice(&mut self, _choice: &StatusChoice) {}
     /// A packet whose fate is known (at the end of its arrival).
     fn on_packet(&mut self, _event: &CommsEvent) {}
     /// A phase of the run ended: the set-up once, then each phase of every step, in order.

@@ -7,7 +7,7 @@
 
 use super::health::nees_2d;
 use super::inflight::Arrival;
-use super::observe::{CommsEvent, Decision, Observer, TraceRow};
+use super::observe::{CommsEvent, Decision, Observer, StatusChoice, TraceRow};
 use super::vehicles::lerp;
 use super::vehicles::SurveyAuv;
 use super::{Engine, FleetView};
@@ -124,7 +124,7 @@ impl Engine<'_> {
     }
 
     /// Every slot starting in [t, t_next): its owner transmits.
-    pub(super) fn transmit(&mut self, t: f64, t_next: f64) {
+    pub(super) fn transmit(&mut self, t: f64, t_next: f64, obs: &mut dyn Observer) {
         let per_cycle = self.slots.len() as u64;
         if per_cycle == 0 {
             return;
@@ -141,7 +141,7 @@ impl Engine<'_> {
                 (Message::Mini(kind), owner) => self.mini_broadcast(owner, kind, t_tx, frac),
                 (Message::Packet, Owner::Cna) => self.broadcast(t_tx, frac),
                 (Message::Packet, Owner::Buoy(b)) => self.buoy_broadcast(b, t_tx, frac),
-                (Message::Packet, Owner::Auv(j)) => self.send_status(j, t_tx, frac),
+                (Message::Packet, Owner::Auv(j)) => self.send_status(j, t_tx, frac, obs),
                 // Validation refuses a ship slot without a component.
                 (Message::Packet, Owner::Ship(..)) => {}
             }
@@ -202,7 +202,7 @@ impl Engine<'_> {
 
     /// Survey AUV `j`'s status slot: its selector picks the rate (or silence); the message goes
     /// through the wire format to the CNA, and reaches the other AUVs as interference.
-    fn send_status(&mut self, j: usize, t_tx: f64, frac: f64) {
+    fn send_status(&mut self, j: usize, t_tx: f64, frac: f64, obs: &mut dyn Observer) {
         let sc = self.sc;
         let slot_id = self.status_sent[j];
         self.status_sent[j] += 1;
@@ -210,7 +210,9 @@ impl Engine<'_> {
         let a = &mut self.auvs[j];
         let (ex, ey) = a.ekf.position();
         let distance = a.cna_heard.map(|c| (c.x - ex).hypot(c.y - ey));
-        let Choice::Transmit(rate) = a.selector.choose(slot_id, distance) else { return };
+        let choice = a.selector.choose(slot_id, distance);
+        obs.on_status_choice(&StatusChoice { t: t_tx, auv: j, distance, choice });
+        let Choice::Transmit(rate) = choice else { return };
         let bytes = match status_with_covariance(a, j, t_tx) {
             Ok(b) => b,
             Err(e) => {

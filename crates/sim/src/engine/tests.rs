@@ -70,7 +70,8 @@ fn two_statuses_in_one_slot_collide_at_the_cna() {
     let mut sc = Scenario::example().with_auvs(2);
     sc.duration_s = 600.0;
     sc.channel.collisions.capture_margin_db = None;
-    let slot = |who: &str, start_s| SlotSpec { who: who.into(), start_s, length_s: 10.0, message: None };
+    let slot =
+        |who: &str, start_s| SlotSpec { who: who.into(), start_s, length_s: 10.0, message: None, rate_policy: None };
     sc.comms.schedule = Schedule::Tdma { slots: vec![slot("cna", 0.0), slot("auv0", 10.0), slot("auv1", 10.0)] };
     let (r, trace) = traced(&sc, "centroid", 2);
     for a in &r.auvs {
@@ -86,12 +87,80 @@ fn two_statuses_in_one_slot_collide_at_the_cna() {
 fn a_modem_transmitting_hears_no_broadcast() {
     let mut sc = Scenario::example().with_auvs(2);
     sc.duration_s = 600.0;
-    let slot = |who: &str, start_s| SlotSpec { who: who.into(), start_s, length_s: 10.0, message: None };
+    let slot =
+        |who: &str, start_s| SlotSpec { who: who.into(), start_s, length_s: 10.0, message: None, rate_policy: None };
     sc.comms.schedule = Schedule::Tdma { slots: vec![slot("cna", 0.0), slot("auv0", 0.0), slot("auv1", 10.0)] };
     let (r, _) = traced(&sc, "centroid", 2);
     assert!(r.auvs[0].downlink.sent >= 19 && r.auvs[0].downlink.received == 0, "{:?}", r.auvs[0].downlink);
     assert!(r.auvs[1].downlink.received > 0, "{:?}", r.auvs[1].downlink);
     assert_eq!(r.auvs[0].ranges_applied, 0);
+}
+
+/// Keeps every survey AUV's status choice.
+#[derive(Default)]
+struct Choices(Vec<StatusChoice>);
+
+impl Observer for Choices {
+    fn on_status_choice(&mut self, choice: &StatusChoice) {
+        self.0.push(*choice);
+    }
+}
+
+/// A steep rate-4 curve (nothing above 42 dB, about 300 m under the analytic TL) and a robust rate 1;
+/// the CNA (`centroid`) keeps about 300 m from auv1 and 850–1000 m from auv0. With an adaptive
+/// selector whose rate-4 bin starts out to 2 km in auv0's slot, auv0 learns from the CNA's
+/// acknowledgements and falls back to rate 1; the same run with a fixed rate 4 there keeps
+/// losing. auv1's slot names a fixed rate 4 in both runs.
+#[test]
+fn a_slots_adaptive_policy_drops_to_the_robust_rate_where_the_fast_one_fails() {
+    use coopnav_acomms::selector::{AdaptiveConfig, Choice, RatePolicySpec};
+    use coopnav_acomms::success::SuccessCurve;
+    use coopnav_acomms::Rate;
+    let fixed_r4 = RatePolicySpec::Fixed { rate: Rate::R4 };
+    let adaptive = RatePolicySpec::Adaptive(AdaptiveConfig {
+        memory: 5,
+        step: 100.0,
+        data_thresholds: [1500.0, 3000.0, 2000.0, 100.0],
+        ..AdaptiveConfig::default()
+    });
+    let go = |auv0: &RatePolicySpec| {
+        let mut sc = Scenario::example().with_auvs(2);
+        sc.duration_s = 3600.0;
+        let curve = |p_a, tl_ab, tl_bc| SuccessCurve { p_a, tl_ab, tl_bc };
+        (sc.comms.success.curves[1], sc.comms.success.curves[2]) = (curve(0.95, 60.0, 90.0), curve(0.8, 30.0, 42.0));
+        let slot = |who: &str, start_s, rate_policy| SlotSpec {
+            who: who.into(),
+            start_s,
+            length_s: 10.0,
+            message: None,
+            rate_policy,
+        };
+        sc.comms.schedule = Schedule::Tdma {
+            slots: vec![
+                slot("cna", 0.0, None),
+                slot("auv0", 10.0, Some(auv0.clone())),
+                slot("auv1", 20.0, Some(fixed_r4.clone())),
+            ],
+        };
+        sc.validate(std::path::Path::new("t")).unwrap();
+        let mut p = PolicySpec::new("centroid", &sc).unwrap().build(&sc).unwrap();
+        let mut choices = Choices::default();
+        let r = run(&sc, &mut p, 6, &Faults::default(), &mut choices);
+        let of = |auv| choices.0.iter().filter(|c| c.auv == auv).map(|c| c.choice).collect::<Vec<_>>();
+        let success = r.auvs[0].uplink.received as f64 / r.auvs[0].uplink.sent.max(1) as f64;
+        (of(0), of(1), success)
+    };
+    let (fixed0, fixed1, fixed_success) = go(&fixed_r4);
+    let (adaptive0, adaptive1, adaptive_success) = go(&adaptive);
+    for auv1 in [&fixed1, &adaptive1] {
+        assert!(auv1.len() >= 110 && auv1.iter().all(|c| *c == Choice::Transmit(Rate::R4)));
+    }
+    assert!(fixed0.iter().all(|c| *c == Choice::Transmit(Rate::R4)));
+    assert!(adaptive0[..3].iter().all(|c| *c == Choice::Transmit(Rate::R4)), "{adaptive0:?}");
+    let late = &adaptive0[2 * adaptive0.len() / 3..];
+    let late_r1 = late.iter().filter(|c| **c == Choice::Transmit(Rate::R1)).count() as f64 / late.len() as f64;
+    assert!(late_r1 > 0.8, "rate 1 in {late_r1:.2} of the last third: {late:?}");
+    assert!(fixed_success < 0.1 && adaptive_success > 0.5, "fixed {fixed_success:.2}, adaptive {adaptive_success:.2}");
 }
 
 /// A filter told its dead reckoning and ranges are ten times better than they are is finite
@@ -146,7 +215,8 @@ fn a_buoy_sharing_the_cnas_slot_collides_with_it() {
     let mut sc = with_buoy(Scenario::example().with_auvs(1), 900.0, 300.0);
     sc.duration_s = 600.0;
     sc.channel.collisions.capture_margin_db = None;
-    let slot = |who: &str, start_s| SlotSpec { who: who.into(), start_s, length_s: 10.0, message: None };
+    let slot =
+        |who: &str, start_s| SlotSpec { who: who.into(), start_s, length_s: 10.0, message: None, rate_policy: None };
     sc.comms.schedule = Schedule::Tdma { slots: vec![slot("cna", 0.0), slot("buoy0", 0.0), slot("auv0", 10.0)] };
     let (r, trace) = traced(&sc, "centroid", 2);
     let a = &r.auvs[0];
@@ -185,7 +255,13 @@ fn a_drifting_buoys_batch_is_identical_on_one_and_two_threads() {
 fn ship_and_buoy_minis(gap_s: f64) -> Scenario {
     let text = include_str!("../../../../scenarios/gill-table5-hbl-two.toml");
     let mut sc = Scenario::parse(text, std::path::Path::new("gill-table5-hbl-two.toml")).unwrap();
-    let slot = |who: &str, start_s, kind| SlotSpec { who: who.into(), start_s, length_s: 2.0, message: Some(kind) };
+    let slot = |who: &str, start_s, kind| SlotSpec {
+        who: who.into(),
+        start_s,
+        length_s: 2.0,
+        message: Some(kind),
+        rate_policy: None,
+    };
     sc.comms.schedule = Schedule::Tdma {
         slots: vec![slot("ship0.port", 0.0, StateKind::East), slot("buoy0", gap_s, StateKind::North)],
     };

@@ -11,7 +11,7 @@ use crate::models::finish::Action;
 use crate::models::minipacket;
 use crate::models::ship::ShipSpec;
 use coopnav_acomms::node_report::{NodeReport, VehicleType};
-use coopnav_acomms::selector::{AdaptiveBins, FixedRate, RatePolicy};
+use coopnav_acomms::selector::{RatePolicy, RatePolicySpec};
 use coopnav_acomms::Rate;
 use coopnav_core::{
     hypot_within, wrap_pi, Bathymetry, DepthTarget, Heading, Iver2, Iver2Params, Iver2State, SeedStream, Vec3, Waypoint,
@@ -117,10 +117,7 @@ impl SurveyAuv {
             rng_range: rng(stream::RANGE),
             rng_down: rng(stream::DOWNLINK),
             rng_up: rng(stream::UPLINK),
-            selector: match &sc.comms.status_adaptive {
-                Some(cfg) => Box::new(AdaptiveBins::new(cfg.clone()).expect("validated adaptive config")),
-                None => Box::new(FixedRate { rate: sc.comms.status_rate }),
-            },
+            selector: status_policy(sc, k).build().expect("validated rate policy"),
             unacked: Vec::new(),
             cna_heard: None,
             adrift: false,
@@ -218,6 +215,18 @@ impl SurveyAuv {
             altitude: self.ctrl.state.altitude.clamp(-1.0, 203.0),
             battery: 100.0 * (1.0 - t / 86_400.0).clamp(0.0, 1.0),
         }
+    }
+}
+
+/// Survey AUV `k`'s status rate policy: the one its schedule slot names, else the comms default
+/// (the adaptive selector when `comms.status_adaptive` is given, else `comms.status_rate`).
+pub fn status_policy(sc: &Scenario, k: usize) -> RatePolicySpec {
+    if let Some(spec) = sc.comms.schedule.status_policy(k) {
+        return spec.clone();
+    }
+    match &sc.comms.status_adaptive {
+        Some(cfg) => RatePolicySpec::Adaptive(cfg.clone()),
+        None => RatePolicySpec::Fixed { rate: sc.comms.status_rate },
     }
 }
 

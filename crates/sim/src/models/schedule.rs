@@ -4,10 +4,12 @@
 //! `broadcast_then_status` is Hudson's preset (the CNA at m·τ, then AUV j at m·τ + (j + 1)·τ/(N + 1));
 //! with B buoys their slots follow the CNA's, every slot τ/(1 + B + N); `gill_cycle` is Gill's MSBL /
 //! HBL Short / HBL Long cycle (gill digest §4, Table 1) of 2 s mini-packet slots from ship0 and
-//! buoy0; `tdma` lists the slots. Validation refuses a slot shorter than its packet's air time plus
+//! buoy0; `tdma` lists the slots, and a survey AUV's slot may name the rate policy its status
+//! messages use (`rate_policy`, a [`RatePolicySpec`]; otherwise the comms default). Validation refuses a slot shorter than its packet's air time plus
 //! the longest expected travel time plus a guard, naming the slot, and a message too long for its rate.
 
 use super::channel::{air_time, capacity};
+use coopnav_acomms::selector::RatePolicySpec;
 use coopnav_acomms::Rate;
 use coopnav_nav::cycle::{Configuration, Cycle, Transmitter};
 use coopnav_nav::{Side, StateKind};
@@ -44,7 +46,8 @@ pub struct Slot {
 
 /// A slot as written in the file: `who = "cna"`, `"buoy0"`, …, `"ship0.port"`, `"ship0.starboard"`,
 /// … or `"auv0"`, `"auv1"`, …; `message` (`east`, `north`, `speed` or `heading`) makes it a
-/// mini-packet carrying that state component (a ship's slot must name one).
+/// mini-packet carrying that state component (a ship's slot must name one); `rate_policy` on a
+/// survey AUV's slot picks the rate of its status messages (every slot of one AUV names the same).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct SlotSpec {
@@ -53,6 +56,8 @@ pub struct SlotSpec {
     pub length_s: f64,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub message: Option<StateKind>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub rate_policy: Option<RatePolicySpec>,
 }
 
 /// Gill's cycle presets (Table 1).
@@ -103,11 +108,14 @@ pub struct Fit {
     pub n_auvs: usize,
     pub n_buoys: usize,
     pub n_ships: usize,
-    /// Longest air time any rate the CNA / a buoy / an AUV may use takes, and a mini-packet's.
+    /// Longest air time any rate the CNA / a buoy / an AUV may use takes (an AUV whose slot names
+    /// its own rate policy: that policy's rates), and a mini-packet's.
     pub cna_air_s: f64,
     pub buoy_air_s: f64,
     pub status_air_s: f64,
     pub mini_air_s: f64,
+    /// Size of a survey AUV's status message, bytes (every rate of a slot's policy must hold it).
+    pub status_bytes: usize,
     /// Longest expected travel time, s.
     pub travel_s: f64,
     pub guard_s: f64,
@@ -141,6 +149,12 @@ impl Schedule {
         };
         slots.sort_by(|a, b| a.start_s.total_cmp(&b.start_s));
         slots
+    }
+
+    /// The rate policy survey AUV `auv`'s slots name, if any (else the comms default applies).
+    pub fn status_policy(&self, auv: usize) -> Option<&RatePolicySpec> {
+        let Schedule::Tdma { slots } = self else { return None };
+        slots.iter().filter(|s| parse_owner(&s.who) == Some(Owner::Auv(auv))).find_map(|s| s.rate_policy.as_ref())
     }
 
     /// Every problem, as (field under `prefix`, value, allowed).
@@ -190,6 +204,20 @@ impl Schedule {
                     )),
                     _ => {}
                 }
+                if let Some(spec) = &s.rate_policy {
+                    out.extend(rate_policy_problems(&field("rate_policy"), owner, spec, fit.status_bytes));
+                    let first = match owner {
+                        Some(Owner::Auv(k)) => self.status_policy(k),
+                        _ => Some(spec),
+                    };
+                    if first != Some(spec) {
+                        out.push((
+                            field("rate_policy"),
+                            format!("{spec:?}"),
+                            format!("the rate policy of {}'s first slot (one policy per AUV)", s.who),
+                        ));
+                    }
+                }
                 if !(s.start_s.is_finite() && s.start_s >= 0.0 && s.length_s.is_finite() && s.length_s > 0.0) {
                     out.push((
                         field("start_s"),
@@ -221,7 +249,10 @@ impl Schedule {
                 (Message::Mini(_), _) | (Message::Packet, Owner::Ship(..)) => fit.mini_air_s,
                 (Message::Packet, Owner::Cna) => fit.cna_air_s,
                 (Message::Packet, Owner::Buoy(_)) => fit.buoy_air_s,
-                (Message::Packet, Owner::Auv(_)) => fit.status_air_s,
+                (Message::Packet, Owner::Auv(k)) => match self.status_policy(k).map(RatePolicySpec::rates) {
+                    Some(Ok(rates)) => longest_air(rates),
+                    _ => fit.status_air_s,
+                },
             };
             let need = air + fit.travel_s + fit.guard_s;
             if s.length_s + 1e-9 < need {
@@ -237,6 +268,23 @@ impl Schedule {
             }
         }
         out
+    }
+}
+
+/// A slot's `rate_policy` (at `field`): only on a survey AUV's slot, a valid policy, and every rate
+/// holding the status message.
+fn rate_policy_problems(
+    field: &str,
+    owner: Option<Owner>,
+    spec: &RatePolicySpec,
+    status_bytes: usize,
+) -> Vec<(String, String, String)> {
+    if !matches!(owner, Some(Owner::Auv(_))) {
+        return vec![(field.into(), format!("{spec:?}"), "no rate policy: only a survey AUV's slot names one".into())];
+    }
+    match spec.rates() {
+        Ok(rates) => rates.into_iter().filter_map(|r| payload_problem(field, r, status_bytes)).collect(),
+        Err(e) => vec![(field.into(), "rejected".into(), e)],
     }
 }
 
@@ -317,6 +365,7 @@ pub fn longest_air(rates: impl IntoIterator<Item = Rate>) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use coopnav_acomms::selector::AdaptiveConfig;
 
     fn fit(tau: f64, n: usize) -> Fit {
         Fit {
@@ -328,6 +377,7 @@ mod tests {
             buoy_air_s: 3.9,
             status_air_s: 3.9,
             mini_air_s: 0.5,
+            status_bytes: 30,
             travel_s: 0.7,
             guard_s: 0.2,
         }
@@ -356,7 +406,13 @@ mod tests {
                 (Owner::Auv(1), 32.0)
             ]
         );
-        let slot = |who: &str, start_s| SlotSpec { who: who.into(), start_s, length_s: 10.0, message: None };
+        let slot = |who: &str, start_s| SlotSpec {
+            who: who.into(),
+            start_s,
+            length_s: 10.0,
+            message: None,
+            rate_policy: None,
+        };
         let tdma = Schedule::Tdma { slots: vec![slot("cna", 0.0), slot("buoy0", 10.0), slot("buoy2", 20.0)] };
         let p = tdma.problems("s.", &Fit { n_buoys: 2, ..fit(30.0, 1) });
         assert_eq!(p.len(), 1, "{p:?}");
@@ -372,9 +428,9 @@ mod tests {
         assert!(p[3].2.contains("air time 3.90 s") && p[3].2.contains("travel 0.70 s"), "{p:?}");
         let tdma = Schedule::Tdma {
             slots: vec![
-                SlotSpec { who: "cna".into(), start_s: 0.0, length_s: 6.0, message: None },
-                SlotSpec { who: "auv0".into(), start_s: 6.0, length_s: 4.0, message: None },
-                SlotSpec { who: "auv7".into(), start_s: 10.0, length_s: 25.0, message: None },
+                SlotSpec { who: "cna".into(), start_s: 0.0, length_s: 6.0, message: None, rate_policy: None },
+                SlotSpec { who: "auv0".into(), start_s: 6.0, length_s: 4.0, message: None, rate_policy: None },
+                SlotSpec { who: "auv7".into(), start_s: 10.0, length_s: 25.0, message: None, rate_policy: None },
             ],
         };
         let p = tdma.problems("s.", &fit(30.0, 1));
@@ -417,7 +473,13 @@ mod tests {
     #[test]
     fn a_mini_packet_fits_a_two_second_slot_and_a_rate_0_packet_does_not() {
         let fit = Fit { n_ships: 1, n_buoys: 1, travel_s: 0.67, guard_s: 0.1, ..fit(20.0, 1) };
-        let slot = |who: &str, start_s, message| SlotSpec { who: who.into(), start_s, length_s: 2.0, message };
+        let slot = |who: &str, start_s, message| SlotSpec {
+            who: who.into(),
+            start_s,
+            length_s: 2.0,
+            message,
+            rate_policy: None,
+        };
         let tdma = Schedule::Tdma {
             slots: vec![
                 slot("ship0.port", 0.0, Some(StateKind::East)),
@@ -446,6 +508,62 @@ mod tests {
         let p = gill.problems("s.", &Fit { tau: 16.0, n_buoys: 0, n_ships: 0, ..fit });
         let fields: Vec<&str> = p.iter().map(|p| p.0.as_str()).collect();
         assert_eq!(fields, ["s.kind", "s.configuration"], "{p:?}");
+    }
+
+    #[test]
+    fn a_slots_rate_policy_sizes_its_slot_and_is_refused_where_it_does_not_belong() {
+        let r5 = RatePolicySpec::Fixed { rate: Rate::R5 };
+        let slot = |who: &str, start_s, length_s, rate_policy| SlotSpec {
+            who: who.into(),
+            start_s,
+            length_s,
+            message: None,
+            rate_policy,
+        };
+        // 4 s holds rate 5's 3.04 s of air time + 0.9 s, not the comms default's 3.9 s.
+        let short =
+            |policy| Schedule::Tdma { slots: vec![slot("cna", 0.0, 10.0, None), slot("auv0", 10.0, 4.0, policy)] };
+        assert!(short(Some(r5.clone())).problems("s.", &fit(30.0, 1)).is_empty());
+        assert_eq!(short(Some(r5.clone())).status_policy(0), Some(&r5));
+        let p = short(None).problems("s.", &fit(30.0, 1));
+        assert!(p.len() == 1 && p[0].0.starts_with("s.slot 1 (auv0") && p[0].2.contains("air time 3.90 s"), "{p:?}");
+        // A policy on the CNA's slot, two policies for one AUV, a rate too small for the
+        // 40-byte status, and an invalid adaptive configuration are each named.
+        let bad_adaptive = RatePolicySpec::Adaptive(AdaptiveConfig { memory: 0, ..AdaptiveConfig::default() });
+        let bad = Schedule::Tdma {
+            slots: vec![
+                slot("cna", 0.0, 5.0, Some(r5.clone())),
+                slot("auv0", 5.0, 5.0, Some(r5.clone())),
+                slot("auv0", 10.0, 5.0, Some(RatePolicySpec::Fixed { rate: Rate::R0 })),
+                slot("auv1", 15.0, 5.0, Some(bad_adaptive)),
+            ],
+        };
+        let p = bad.problems("s.", &Fit { status_bytes: 40, ..fit(30.0, 2) });
+        let named: Vec<(&str, &str)> = p.iter().map(|p| (p.0.as_str(), p.2.as_str())).collect();
+        assert_eq!(
+            named,
+            [
+                ("s.slots[0].rate_policy", "no rate policy: only a survey AUV's slot names one"),
+                ("s.slots[2].rate_policy", "a rate whose frames hold the 40-byte message"),
+                ("s.slots[2].rate_policy", "the rate policy of auv0's first slot (one policy per AUV)"),
+                ("s.slots[3].rate_policy", "adaptive.memory must be ≥ 1"),
+            ]
+        );
+    }
+
+    #[test]
+    fn a_file_names_a_slots_rate_policy_by_kind() {
+        let text = r#"kind = "tdma"
+slots = [{ who = "cna", start_s = 0.0, length_s = 10.0 },
+         { who = "auv0", start_s = 10.0, length_s = 10.0, rate_policy = { kind = "adaptive", memory = 5 } },
+         { who = "auv1", start_s = 20.0, length_s = 10.0, rate_policy = { kind = "alternating", rates = [0, 5] } }]"#;
+        let s: Schedule = toml::from_str(text).unwrap();
+        let adaptive = RatePolicySpec::Adaptive(AdaptiveConfig { memory: 5, ..AdaptiveConfig::default() });
+        assert_eq!(s.status_policy(0), Some(&adaptive));
+        assert_eq!(s.status_policy(1), Some(&RatePolicySpec::Alternating { rates: vec![Rate::R0, Rate::R5] }));
+        assert_eq!(s.status_policy(2), None);
+        let typo = text.replace("memory", "memroy");
+        assert!(toml::from_str::<Schedule>(&typo).unwrap_err().to_string().contains("memroy"));
     }
 
     #[test]

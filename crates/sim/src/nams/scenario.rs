@@ -1,9 +1,9 @@
-//! Scenarios (thesis Table 6), behaviours (§5.4: three controls and the adaptive selector) and the
-//! experiment configuration, validated before anything runs.
+//! Scenarios (thesis Table 6), behaviours (§5.4: three controls and the adaptive selector, each a
+//! [`RatePolicySpec`]) and the experiment configuration, validated before anything runs.
 
 use crate::scenario_file::{Problems, ScenarioError};
-use coopnav_acomms::selector::{AdaptiveBins, AdaptiveConfig, Alternating, FixedRate, RatePolicy};
-use coopnav_acomms::{Rate, Receiver, SuccessModel, Tdma};
+use coopnav_acomms::selector::RatePolicySpec;
+use coopnav_acomms::{Receiver, SuccessModel, Tdma};
 use coopnav_core::{Iver2Params, Shelf};
 use serde::{Deserialize, Serialize};
 use std::path::Path;
@@ -70,44 +70,9 @@ impl Scenario {
     }
 }
 
-/// A rate-selection behaviour.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case", deny_unknown_fields)]
-pub enum Behaviour {
-    FixedRate0,
-    FixedRate1,
-    Alternating05,
-    Adaptive(AdaptiveConfig),
-}
-
-impl Behaviour {
-    /// The thesis's four: controls 1–3 and the adaptive selector without rate 5 (Table 8 values).
-    pub fn thesis() -> Vec<Behaviour> {
-        vec![
-            Behaviour::FixedRate0,
-            Behaviour::FixedRate1,
-            Behaviour::Alternating05,
-            Behaviour::Adaptive(AdaptiveConfig::default()),
-        ]
-    }
-    pub fn policy(&self) -> Result<Box<dyn RatePolicy>, String> {
-        Ok(match self {
-            Behaviour::FixedRate0 => Box::new(FixedRate { rate: Rate::R0 }),
-            Behaviour::FixedRate1 => Box::new(FixedRate { rate: Rate::R1 }),
-            Behaviour::Alternating05 => Box::new(Alternating::new(vec![Rate::R0, Rate::R5])),
-            Behaviour::Adaptive(c) => Box::new(AdaptiveBins::new(c.clone())?),
-        })
-    }
-    pub fn label(&self) -> String {
-        match self.policy() {
-            Ok(p) => p.name(),
-            Err(_) => "invalid".into(),
-        }
-    }
-    pub fn is_control(&self) -> bool {
-        !matches!(self, Behaviour::Adaptive(_))
-    }
-}
+/// A rate-selection behaviour: the rate policy both vehicles run (`{ kind = "fixed", rate = 1 }`,
+/// `{ kind = "alternating", rates = [0, 5] }`, `{ kind = "adaptive", … }`).
+pub type Behaviour = RatePolicySpec;
 
 /// How the collaborator's position is estimated.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
@@ -124,7 +89,7 @@ pub enum EstimatorMode {
 #[serde(default, deny_unknown_fields)]
 pub struct ExperimentConfig {
     pub scenarios: Vec<Scenario>,
-    pub behaviours: Vec<Behaviour>,
+    pub behaviours: Vec<RatePolicySpec>,
     pub repetitions: usize,
     pub seed: u64,
     pub shelf: Shelf,
@@ -141,7 +106,7 @@ impl Default for ExperimentConfig {
     fn default() -> Self {
         ExperimentConfig {
             scenarios: (1..=4).map(Scenario::thesis).collect(),
-            behaviours: Behaviour::thesis(),
+            behaviours: RatePolicySpec::thesis(),
             repetitions: 40,
             seed: 1,
             shelf: Shelf::default(),
@@ -182,7 +147,7 @@ impl ExperimentConfig {
             s.collect_problems(&format!("{t}.scenarios[{i}]"), problems);
         }
         for (i, b) in self.behaviours.iter().enumerate() {
-            if let Err(e) = b.policy() {
+            if let Err(e) = b.build() {
                 problems.push(format!("{t}.behaviours[{i}]"), "rejected", e);
             }
         }

@@ -58,7 +58,7 @@ fn node(
     seeds: &SeedStream,
     origin: LocalOrigin,
 ) -> Result<Node, WorldError> {
-    let policy = behaviour.policy().map_err(WorldError::Behaviour)?;
+    let policy = behaviour.build().map_err(WorldError::Behaviour)?;
     let rates = policy.rates();
     let width = MaskWidth::for_rates(rates.iter().copied());
     let min_frame = rates.iter().map(|r| r.spec().frame_bytes).min().unwrap_or(32);
@@ -86,7 +86,7 @@ fn node(
 
 /// Slot length the behaviour forces on the network (15 s if it may use rate 5).
 pub fn slot_length(cfg: &ExperimentConfig, behaviour: &Behaviour) -> Result<f64, WorldError> {
-    let rates: Vec<Rate> = behaviour.policy().map_err(WorldError::Behaviour)?.rates();
+    let rates: Vec<Rate> = behaviour.rates().map_err(WorldError::Behaviour)?;
     Ok(cfg.tdma.slot_length(rates, cfg.ack))
 }
 
@@ -195,7 +195,7 @@ mod tests {
     #[test]
     fn fixed_rate_1_on_a_quiet_channel_delivers_the_expected_bytes() {
         // p = 0.9; 8 % of received packets lose 1 or 2 of 3 frames: E[frames] = 0.9·(0.92·3 + 0.08·1.5).
-        let m = mean_bw(Behaviour::FixedRate1, 30.0);
+        let m = mean_bw(Behaviour::Fixed { rate: Rate::R1 }, 30.0);
         let want = 0.9 * (0.92 * 3.0 + 0.08 * 1.5) * 64.0 / 10.0;
         assert!((m.bandwidth - want).abs() < 0.03 * want, "{} vs {want}", m.bandwidth);
         assert_eq!(m.duty_cycle, 1.0);
@@ -218,8 +218,8 @@ mod tests {
             estimator: super::super::scenario::EstimatorMode::Dynamic,
             ..ExperimentConfig::default()
         };
-        let d = mean_with(dynamic, Behaviour::FixedRate1, 60.0);
-        let p = mean_bw(Behaviour::FixedRate1, 60.0);
+        let d = mean_with(dynamic, Behaviour::Fixed { rate: Rate::R1 }, 60.0);
+        let p = mean_bw(Behaviour::Fixed { rate: Rate::R1 }, 60.0);
         println!(
             "estimate error mean/max: pre-planned {:.2}/{:.1} m, dynamic {:.2}/{:.1} m",
             p.estimate_error_mean, p.estimate_error_max, d.estimate_error_mean, d.estimate_error_max
