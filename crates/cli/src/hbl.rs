@@ -326,7 +326,7 @@ fn grid_cmd(c: &Common, grid_path: Option<&Path>) -> Result<()> {
         .with_context(|| grid_path.map_or("the default grid spec".into(), |p| format!("in {}", p.display())))?;
     limits::check(work::hbl_grid(&sc, &spec), c.allow_large)?;
     let pb = bar(spec.cells().len() as u64);
-    let cells = grid::buoy_grid(&sc, &spec, c.seed, &|n| pb.set_position(n))?;
+    let cells = grid::buoy_grid(&spec, &|n| pb.set_position(n), &grid::old_loop_cell(&sc, spec.runs_per_cell, c.seed))?;
     pb.finish_and_clear();
     let dir = RunDir::create(&c.out, c.force)?;
     manifest(&dir, "hbl grid", c.seed, json!({ "scenario": sc, "grid": spec }))?;

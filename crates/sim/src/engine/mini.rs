@@ -6,6 +6,7 @@
 //! half-duplex, collisions and the channel's success draw apply as to every packet.
 
 use super::inflight::Arrival;
+use super::observe::BuoySample;
 use super::phases::{arrival, measured_travel, Payload};
 use super::vehicles::lerp;
 use super::Engine;
@@ -33,6 +34,11 @@ impl SurfaceFilters {
         SurfaceFilters { filters: ships.chain(buoys).collect(), n_ships: sc.ships.len() }
     }
 
+    /// Where this filter of buoy `b` puts it at `t` (extrapolated, the filter untouched).
+    pub fn buoy_at(&self, b: usize, t: f64) -> [f64; 2] {
+        self.filters[self.n_ships + b].position_at(t)
+    }
+
     fn of(&mut self, owner: Owner) -> Option<&mut SurfaceEkf> {
         let i = match owner {
             Owner::Ship(i, _) => i,
@@ -44,6 +50,16 @@ impl SurfaceFilters {
 }
 
 impl Engine<'_> {
+    /// Every buoy's truth at `t` and every survey AUV's estimate of it.
+    pub(super) fn buoy_samples(&self, t: f64) -> Vec<BuoySample> {
+        let estimates = |b| self.surface.iter().map(|s| s.buoy_at(b, t)).collect();
+        self.buoys
+            .iter()
+            .enumerate()
+            .map(|(b, buoy)| BuoySample { truth: buoy.position(t), estimates: estimates(b) })
+            .collect()
+    }
+
     /// `owner`'s mini-packet carrying `kind`, sent at `t_tx` (fraction `frac` of the step): an
     /// arrival with its own range at every survey AUV; it reaches the CNA as interference.
     pub(super) fn mini_broadcast(&mut self, owner: Owner, kind: StateKind, t_tx: f64, frac: f64) {

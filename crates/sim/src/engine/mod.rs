@@ -30,7 +30,9 @@ use coopnav_plan::predict::UnderwayPredictor;
 use coopnav_plan::AuvForecast;
 use inflight::InFlight;
 use mini::SurfaceFilters;
-pub use observe::{CommsEvent, Decision, Observer, Phase, PhaseClock, StatusChoice, Timing, Trace, TraceRow};
+pub use observe::{
+    BuoySample, CommsEvent, Decision, Observer, Phase, PhaseClock, StatusChoice, Timing, Trace, TraceRow,
+};
 use phases::Payload;
 use rand_chacha::ChaCha8Rng;
 use serde::Serialize;

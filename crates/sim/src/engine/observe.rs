@@ -49,6 +49,14 @@ pub struct CommsEvent {
     pub lost_to: &'static str,
 }
 
+/// One buoy at a sample: its transducer's true position and, per survey AUV (by index), where
+/// that AUV's filter of the buoy (fed by its mini-packets) puts it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct BuoySample {
+    pub truth: Vec3,
+    pub estimates: Vec<[f64; 2]>,
+}
+
 /// A survey AUV's status slot: what its rate policy chose, from its estimated distance to the
 /// CNA (none before it has heard the CNA).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
@@ -75,6 +83,9 @@ pub trait Observer {
     fn on_sample(&mut self, _t: f64, _cna: Vec3, _rows: &[TraceRow]) {}
     /// Just before each `on_sample`, in a scenario with ships: ship i's true position at index i.
     fn on_ships(&mut self, _t: f64, _ships: &[Vec3]) {}
+    /// Just before each `on_sample`, in a scenario with buoys: buoy i's truth and what every
+    /// survey AUV's filter of it holds, at index i.
+    fn on_buoys(&mut self, _t: f64, _buoys: &[BuoySample]) {}
     /// Every survey AUV's status slot, with its rate policy's choice.
     fn on_status_choice(&mut self, _choice: &StatusChoice) {}
     /// A packet whose fate is known (at the end of its arrival).

@@ -366,6 +366,9 @@ impl Engine<'_> {
             let ships: Vec<Vec3> = self.ships.iter().map(|s| s.pos).collect();
             obs.on_ships(t, &ships);
         }
+        if !self.buoys.is_empty() {
+            obs.on_buoys(t, &self.buoy_samples(t));
+        }
         let limits = self.sc.planner.limits;
         let cna = self.cna.craft.pos;
         let mut rows = Vec::with_capacity(self.auvs.len());

@@ -1,9 +1,13 @@
 //! The buoy-location grid (digest §5.7 item 1, §10 A14): a zero-drift Monte Carlo per candidate
 //! buoy position north of the path, the region within a tolerance of the best cell, and CSV
-//! output (the SVG heat map is in [`super::plot`]).
+//! output (the SVG heat map is in [`super::plot`]). The caller says how one cell runs: the old
+//! HBL loop ([`old_loop_cell`]) or the engine ([`engine_cell`]).
 
 use super::config::{Drift, Scenario};
 use super::mc::{monte_carlo, McError, Stats};
+use super::zone::{zone_monte_carlo, ZoneError, ZoneSpec};
+use crate::closed_loop::Scenario as EngineScenario;
+use crate::models::buoy::Drift as EngineDrift;
 use coopnav_core::validation::{InvalidFields, Problems};
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
@@ -30,6 +34,12 @@ pub enum GridError {
     Fields(#[from] InvalidFields),
     #[error(transparent)]
     Mc(#[from] McError),
+    #[error(transparent)]
+    Zone(#[from] ZoneError),
+    #[error("grid: the scenario has no buoy to place")]
+    NoBuoy,
+    #[error("grid cell x = {x} m, y = {y} m: {source}")]
+    Cell { x: f64, y: f64, source: Box<GridError> },
     #[error("grid CSV: {0}")]
     Csv(#[from] csv::Error),
 }
@@ -83,25 +93,59 @@ pub struct GridCell {
     pub zone_error: Stats,
 }
 
-/// Runs every cell with the same base seed (common random numbers across cells); `progress`
-/// receives the number of finished cells.
+/// The zone-error statistics of one cell's Monte Carlo, the buoy placed at the cell.
+pub type CellMonteCarlo<'a> = dyn Fn([f64; 2]) -> Result<Stats, GridError> + Sync + 'a;
+
+/// Runs `cell` at every cell of `spec`, in row-major order; `progress` receives the number of
+/// finished cells.
 pub fn buoy_grid(
-    base: &Scenario,
     spec: &GridSpec,
-    seed: u64,
     progress: &(dyn Fn(u64) + Sync),
+    cell: &CellMonteCarlo,
 ) -> Result<Vec<GridCell>, GridError> {
     spec.validate()?;
     let mut out = Vec::new();
     for (i, [x, y]) in spec.cells().into_iter().enumerate() {
-        let mut sc = base.clone();
-        sc.buoy.fixed = Some([x, y]);
-        sc.buoy.drift = Drift::None;
-        let r = monte_carlo(&sc, spec.runs_per_cell, seed, &|_| {})?;
-        out.push(GridCell { x, y, zone_error: r.summary.zone_error });
+        let zone_error = cell([x, y]).map_err(|e| GridError::Cell { x, y, source: Box::new(e) })?;
+        out.push(GridCell { x, y, zone_error });
         progress(i as u64 + 1);
     }
     Ok(out)
+}
+
+/// A cell on the old HBL loop: `base` with the buoy moored at the cell, `runs` runs from `seed`
+/// (the same base seed in every cell: common random numbers across cells).
+pub fn old_loop_cell(
+    base: &Scenario,
+    runs: usize,
+    seed: u64,
+) -> impl Fn([f64; 2]) -> Result<Stats, GridError> + Sync + '_ {
+    move |[x, y]| {
+        let mut sc = base.clone();
+        sc.buoy.fixed = Some([x, y]);
+        sc.buoy.drift = Drift::None;
+        Ok(monte_carlo(&sc, runs, seed, &|_| {})?.summary.zone_error)
+    }
+}
+
+/// A cell on the engine: scenario `base` with its buoy 0 moored at the cell (its zone as the
+/// file gives it), `runs` runs from `seed`, scored in `zone`.
+pub fn engine_cell(
+    base: &EngineScenario,
+    zone: ZoneSpec,
+    runs: usize,
+    seed: u64,
+) -> Result<impl Fn([f64; 2]) -> Result<Stats, GridError> + Sync + '_, GridError> {
+    if base.buoys.is_empty() {
+        return Err(GridError::NoBuoy);
+    }
+    Ok(move |[x, y]: [f64; 2]| {
+        let mut sc = base.clone();
+        sc.buoys[0].x = x;
+        sc.buoys[0].y = y;
+        sc.buoys[0].drift = EngineDrift::Moored;
+        Ok(zone_monte_carlo(&sc, zone, runs, seed).map_err(ZoneError::from)?.summary(seed)?.zone_error)
+    })
 }
 
 /// Cells whose mean error is within `tolerance` (fraction) of the best cell's.
@@ -146,5 +190,20 @@ mod tests {
             GridCell { x: 2.0, y: 0.0, zone_error: s(2.0) },
         ];
         assert_eq!(optimal_region(&cells, 0.1).len(), 2);
+    }
+
+    #[test]
+    fn an_engine_grid_names_the_cell_whose_runs_never_reached_the_zone_and_needs_a_buoy() {
+        let text = include_str!("../../../../scenarios/gill-table5-hbl-two.toml");
+        let mut sc = EngineScenario::parse(text, std::path::Path::new("gill-table5-hbl-two.toml")).unwrap();
+        sc.duration_s = 20.0; // the AUV meets the ship's zone after about 80 s
+        let spec = GridSpec { x: [0.0, 0.0], y: [50.0, 50.0], spacing: 10.0, runs_per_cell: 2 };
+        let err = {
+            let cell = engine_cell(&sc, ZoneSpec::table5(), 2, 1).unwrap();
+            buoy_grid(&spec, &|_| {}, &cell).unwrap_err().to_string()
+        };
+        assert!(err.contains("x = 0 m, y = 50 m") && err.contains("never entered"), "{err}");
+        sc.buoys.clear();
+        assert!(matches!(engine_cell(&sc, ZoneSpec::table5(), 2, 1), Err(GridError::NoBuoy)));
     }
 }

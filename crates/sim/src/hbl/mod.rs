@@ -1,7 +1,9 @@
-//! The Gill (2013) hybrid-baseline world: truth simulation of an AUV passing counter-course
-//! under a ship with an off-path buoy, the sensor and acoustic noise, Monte Carlo with common
-//! random numbers, the buoy-location grid, coefficient tuning and the log writer for the
-//! post-processing pipeline; and Gill's zone metric as an engine observer ([`zone`]). The filters themselves live in `coopnav_nav`.
+//! The Gill (2013) hybrid-baseline tools: Gill's zone metric as an engine observer with its Monte
+//! Carlo ([`zone`], what `coopnav reproduce gill-*` runs), the buoy-location grid over either
+//! world ([`grid`]); and the older HBL world loop ([`world`]: truth simulation of an AUV passing
+//! counter-course under a ship with an off-path buoy, Monte Carlo with common random numbers,
+//! coefficient tuning and the log writer for the post-processing pipeline) that `coopnav hbl …`
+//! and `bench hbl` still run. The filters themselves live in `coopnav_nav`.
 
 pub mod config;
 pub mod grid;

@@ -35,7 +35,7 @@ pub(crate) fn bin_rows(rows: &[TraceRow], bin_m: f64) -> BinSums {
     for r in rows {
         let s = sums.entry((r.x_rel / bin_m).floor() as i64).or_default();
         let (de, dn) = (r.auv_est[0] - r.auv_true[0], r.auv_est[1] - r.auv_true[1]);
-        add(s, [1.0, r.error, de.abs(), dn.abs()]);
+        add_to_bin(s, [1.0, r.error, de.abs(), dn.abs()]);
     }
     sums
 }
@@ -46,7 +46,7 @@ pub(crate) fn merge_bins(per_run: impl Iterator<Item = BinSums>, bin_m: f64) -> 
     let mut total = BinSums::new();
     for sums in per_run {
         for (k, v) in sums {
-            add(total.entry(k).or_default(), v);
+            add_to_bin(total.entry(k).or_default(), v);
         }
     }
     total
@@ -61,7 +61,8 @@ pub(crate) fn merge_bins(per_run: impl Iterator<Item = BinSums>, bin_m: f64) -> 
         .collect()
 }
 
-fn add(acc: &mut [f64; 4], v: [f64; 4]) {
+/// Adds one sample's (or one run's) [count, error, |parallel|, |perpendicular|] to a bin.
+pub(crate) fn add_to_bin(acc: &mut [f64; 4], v: [f64; 4]) {
     for (a, x) in acc.iter_mut().zip(v) {
         *a += x;
     }

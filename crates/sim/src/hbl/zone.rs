@@ -1,31 +1,84 @@
 //! Gill's zone metric (gill digest §5.6, §7.5) as an engine [`Observer`]: the survey AUV's true
 //! error while it is in the measurement zone relative to the ship, x_rel = (AUV − ship) along the
 //! AUV's direction of travel in [zone_min, zone_max], split into along- and across-path parts,
-//! and the across-path error in the approach window just before the zone. The engine samples
-//! once a second; the old HBL loop scored every 0.1 s step.
+//! the across-path error in the approach window just before the zone, the error profile against
+//! x_rel (the thesis's Figs. 16, 19, 21), and, where the schedule has buoy 0 transmit, the AUV's
+//! buoy-filter error and the buoy's saturation error over the whole run (Table 4). The engine
+//! samples once a second; the old HBL loop scored every 0.1 s step and the saturation at the
+//! buoy's slots only.
 
-use crate::closed_loop::{run, Faults, PolicyError, PolicySpec, Scenario};
-use crate::engine::{Observer, TraceRow};
+use super::mc::Stats;
+use super::profile::{add_to_bin, merge_bins, BinSums, ProfileBin};
+use crate::closed_loop::{run, Faults, PolicyError, PolicySpec, Scenario, ScenarioError};
+use crate::engine::{BuoySample, Observer, TraceRow};
+use crate::models::schedule::Owner;
 use coopnav_core::{run_seed, CompassDeg, Heading, Vec3};
+use coopnav_nav::codec::Zone;
+use coopnav_nav::cycle::Configuration;
+use rayon::prelude::*;
 use serde::Serialize;
+use std::path::Path;
+use thiserror::Error;
 
-/// Where the zone is: the AUV's path direction, the x_rel limits and the approach window, m.
+#[derive(Debug, Error)]
+pub enum ZoneError {
+    #[error(transparent)]
+    Policy(#[from] PolicyError),
+    #[error("run {index} (seed {seed}): the AUV never entered the measurement zone within duration_s")]
+    NoZone { index: usize, seed: u64 },
+}
+
+/// Gill's Table 5 set-up as scenario files of the one engine (ship, buoy and AUV vehicles, Gill's
+/// cycles as `gill_cycle` schedules, mini-packets through the engine's channel): configuration
+/// `c`'s file name under `scenarios/` and its text.
+pub fn table5_file(c: Configuration) -> (&'static str, &'static str) {
+    match c {
+        Configuration::Msbl => ("gill-table5-msbl.toml", include_str!("../../../../scenarios/gill-table5-msbl.toml")),
+        Configuration::HblOne => {
+            ("gill-table5-hbl-one.toml", include_str!("../../../../scenarios/gill-table5-hbl-one.toml"))
+        }
+        Configuration::HblTwo => {
+            ("gill-table5-hbl-two.toml", include_str!("../../../../scenarios/gill-table5-hbl-two.toml"))
+        }
+    }
+}
+
+/// Configuration `c`'s Table 5 file, parsed.
+pub fn table5_scenario(c: Configuration) -> Result<Scenario, ScenarioError> {
+    let (file, text) = table5_file(c);
+    Scenario::parse(text, Path::new(file))
+}
+
+/// Where the zone is: the AUV's path direction, the x_rel limits, the approach window and the
+/// profile's bin width, m; and whether the run ends once the AUV is past the zone.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ZoneSpec {
     pub path_compass_deg: f64,
     pub zone_min: f64,
     pub zone_max: f64,
     pub approach_m: f64,
+    pub profile_bin_m: f64,
+    /// End the run at the first sample past zone_max (only the zone is wanted: a grid cell).
+    pub stop_past_zone: bool,
 }
 
 impl ZoneSpec {
-    /// Gill's Table 5 zone (digest §5.1, A16) for an AUV running east: −30…75 m, 50 m approach.
+    /// Gill's Table 5 zone (digest §5.1, A16) for an AUV running east: −30…75 m, 50 m approach,
+    /// the profile in 25 m bins.
     pub fn table5() -> Self {
-        ZoneSpec { path_compass_deg: 90.0, zone_min: -30.0, zone_max: 75.0, approach_m: 50.0 }
+        ZoneSpec {
+            path_compass_deg: 90.0,
+            zone_min: -30.0,
+            zone_max: 75.0,
+            approach_m: 50.0,
+            profile_bin_m: 25.0,
+            stop_past_zone: false,
+        }
     }
 }
 
-/// The zone figures of one run (None where the AUV never was in the window).
+/// The zone figures of one run (None where the AUV never was in the window, or the schedule
+/// never has buoy 0 transmit).
 #[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]
 pub struct ZoneMetrics {
     pub zone_error: Option<f64>,
@@ -33,34 +86,87 @@ pub struct ZoneMetrics {
     pub zone_perpendicular: Option<f64>,
     pub zone_samples: usize,
     pub approach_perpendicular: Option<f64>,
+    /// Mean distance from buoy 0 to where the AUV's filter of it puts it, over the run.
+    pub buoy_error: Option<f64>,
+    /// Mean distance from buoy 0 to its clamp into its broadcast zone, over the run.
+    pub saturation_error: Option<f64>,
 }
 
-/// Scores survey AUV `auv` against ship `ship`.
+/// Running sum and count of one mean.
+#[derive(Debug, Clone, Copy, Default)]
+struct Mean {
+    sum: f64,
+    n: usize,
+}
+
+impl Mean {
+    fn add(&mut self, v: f64) {
+        self.sum += v;
+        self.n += 1;
+    }
+    fn get(&self) -> Option<f64> {
+        (self.n > 0).then(|| self.sum / self.n as f64)
+    }
+}
+
+/// Scores survey AUV `auv` against ship `ship` (and buoy 0, when scored).
 pub struct GillZone {
     spec: ZoneSpec,
     auv: usize,
     ship: usize,
+    /// Buoy 0's broadcast zone, when its filter and saturation are scored.
+    buoy_zone: Option<Zone>,
     /// The ship's true position at the current sample.
     ship_at: Option<Vec3>,
-    zone: [f64; 3],
-    zone_n: usize,
-    approach: f64,
-    approach_n: usize,
+    zone: [Mean; 3],
+    approach: Mean,
+    buoy: Mean,
+    saturation: Mean,
+    bins: BinSums,
+    past_zone: bool,
 }
 
 impl GillZone {
     pub fn new(spec: ZoneSpec, auv: usize, ship: usize) -> Self {
-        GillZone { spec, auv, ship, ship_at: None, zone: [0.0; 3], zone_n: 0, approach: 0.0, approach_n: 0 }
+        GillZone {
+            spec,
+            auv,
+            ship,
+            buoy_zone: None,
+            ship_at: None,
+            zone: [Mean::default(); 3],
+            approach: Mean::default(),
+            buoy: Mean::default(),
+            saturation: Mean::default(),
+            bins: BinSums::new(),
+            past_zone: false,
+        }
+    }
+
+    /// Also scores buoy 0 (its zone `zone`): the AUV's filter of it and its saturation.
+    pub fn with_buoy(self, zone: Zone) -> Self {
+        GillZone { buoy_zone: Some(zone), ..self }
+    }
+
+    /// For engine scenario `sc`: AUV 0 against ship 0, and buoy 0 where the schedule has it transmit.
+    pub fn of_scenario(spec: ZoneSpec, sc: &Scenario) -> Self {
+        let zone = GillZone::new(spec, 0, 0);
+        let slots = sc.comms.schedule.slots(sc.comms.tau, sc.fleet.n_auvs, sc.buoys.len());
+        match sc.buoys.first() {
+            Some(b) if slots.iter().any(|s| s.owner == Owner::Buoy(0)) => zone.with_buoy(b.zone()),
+            _ => zone,
+        }
     }
 
     pub fn metrics(&self) -> ZoneMetrics {
-        let mean = |sum: f64, n: usize| (n > 0).then(|| sum / n as f64);
         ZoneMetrics {
-            zone_error: mean(self.zone[0], self.zone_n),
-            zone_parallel: mean(self.zone[1], self.zone_n),
-            zone_perpendicular: mean(self.zone[2], self.zone_n),
-            zone_samples: self.zone_n,
-            approach_perpendicular: mean(self.approach, self.approach_n),
+            zone_error: self.zone[0].get(),
+            zone_parallel: self.zone[1].get(),
+            zone_perpendicular: self.zone[2].get(),
+            zone_samples: self.zone[0].n,
+            approach_perpendicular: self.approach.get(),
+            buoy_error: self.buoy.get(),
+            saturation_error: self.saturation.get(),
         }
     }
 
@@ -70,15 +176,17 @@ impl GillZone {
         let across = |dx: f64, dy: f64| -dx * uy + dy * ux;
         let x_rel = along(row.true_x - ship.x, row.true_y - ship.y);
         let (dx, dy) = (row.est_x - row.true_x, row.est_y - row.true_y);
+        let (parallel, perpendicular) = (along(dx, dy).abs(), across(dx, dy).abs());
+        let bin = (x_rel / self.spec.profile_bin_m).floor() as i64;
+        add_to_bin(self.bins.entry(bin).or_default(), [1.0, row.error, parallel, perpendicular]);
         let s = &self.spec;
+        self.past_zone |= x_rel > s.zone_max;
         if (s.zone_min..=s.zone_max).contains(&x_rel) {
-            self.zone[0] += row.error;
-            self.zone[1] += along(dx, dy).abs();
-            self.zone[2] += across(dx, dy).abs();
-            self.zone_n += 1;
+            self.zone[0].add(row.error);
+            self.zone[1].add(parallel);
+            self.zone[2].add(perpendicular);
         } else if (s.zone_min - s.approach_m..s.zone_min).contains(&x_rel) {
-            self.approach += across(dx, dy).abs();
-            self.approach_n += 1;
+            self.approach.add(perpendicular);
         }
     }
 }
@@ -87,31 +195,86 @@ impl Observer for GillZone {
     fn on_ships(&mut self, _t: f64, ships: &[Vec3]) {
         self.ship_at = ships.get(self.ship).copied();
     }
+    fn on_buoys(&mut self, _t: f64, buoys: &[BuoySample]) {
+        let (Some(zone), Some(b)) = (self.buoy_zone, buoys.first()) else { return };
+        if let Some(est) = b.estimates.get(self.auv) {
+            self.buoy.add((est[0] - b.truth.x).hypot(est[1] - b.truth.y));
+        }
+        self.saturation.add(zone.saturation_error(b.truth.x, b.truth.y));
+    }
     fn on_sample(&mut self, _t: f64, _cna: Vec3, rows: &[TraceRow]) {
         if let (Some(ship), Some(row)) = (self.ship_at, rows.iter().find(|r| r.auv == self.auv)) {
             self.score(ship, row);
         }
     }
+    fn stop(&self) -> bool {
+        self.spec.stop_past_zone && self.past_zone
+    }
+}
+
+/// A zone Monte Carlo: every run's figures, whether every run was healthy, and the error profile
+/// against x_rel over all runs.
+#[derive(Debug, Clone)]
+pub struct ZoneRuns {
+    pub runs: Vec<ZoneMetrics>,
+    pub healthy: bool,
+    pub profile: Vec<ProfileBin>,
+}
+
+/// A zone Monte Carlo's across-run statistics.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ZoneSummary {
+    pub zone_error: Stats,
+    pub zone_parallel: Stats,
+    pub zone_perpendicular: Stats,
+    pub approach_perpendicular: Option<Stats>,
+    pub buoy_error: Option<Stats>,
+    pub saturation_error: Option<Stats>,
+    /// Every run kept finite states (the engine's health).
+    pub all_healthy: bool,
+}
+
+impl ZoneRuns {
+    /// The statistics over runs seeded `run_seed(base_seed, i)`; an error names the first run
+    /// that never reached the zone.
+    pub fn summary(&self, base_seed: u64) -> Result<ZoneSummary, ZoneError> {
+        if let Some(index) = self.runs.iter().position(|m| m.zone_error.is_none()) {
+            return Err(ZoneError::NoZone { index, seed: run_seed(base_seed, index as u64) });
+        }
+        let of = |f: fn(&ZoneMetrics) -> Option<f64>| {
+            let v: Vec<f64> = self.runs.iter().filter_map(f).collect();
+            (!v.is_empty()).then(|| Stats::of(&v))
+        };
+        let every = |f: fn(&ZoneMetrics) -> Option<f64>| Stats::of(&self.runs.iter().filter_map(f).collect::<Vec<_>>());
+        Ok(ZoneSummary {
+            zone_error: every(|m| m.zone_error),
+            zone_parallel: every(|m| m.zone_parallel),
+            zone_perpendicular: every(|m| m.zone_perpendicular),
+            approach_perpendicular: of(|m| m.approach_perpendicular),
+            buoy_error: of(|m| m.buoy_error),
+            saturation_error: of(|m| m.saturation_error),
+            all_healthy: self.healthy,
+        })
+    }
 }
 
 /// Runs engine scenario `sc` (its CNA silent: policy `none`) with seeds `run_seed(base_seed, i)`
-/// and scores survey AUV 0 against ship 0 in `spec`'s zone. Also whether every run was healthy.
-pub fn zone_monte_carlo(
-    sc: &Scenario,
-    spec: ZoneSpec,
-    runs: usize,
-    base_seed: u64,
-) -> Result<(Vec<ZoneMetrics>, bool), PolicyError> {
+/// and scores it with [`GillZone::of_scenario`]. Runs go in parallel and are merged in index
+/// order, so the result does not depend on the thread count.
+pub fn zone_monte_carlo(sc: &Scenario, spec: ZoneSpec, runs: usize, base_seed: u64) -> Result<ZoneRuns, PolicyError> {
     let silent = PolicySpec::new("none", sc)?;
-    let mut healthy = true;
-    let mut metrics = Vec::with_capacity(runs);
-    for i in 0..runs as u64 {
-        let mut zone = GillZone::new(spec, 0, 0);
-        let mut policy = silent.build(sc)?;
-        healthy &= run(sc, &mut policy, run_seed(base_seed, i), &Faults::default(), &mut zone).fleet.healthy;
-        metrics.push(zone.metrics());
-    }
-    Ok((metrics, healthy))
+    let per_run: Vec<(ZoneMetrics, bool, BinSums)> = (0..runs as u64)
+        .into_par_iter()
+        .map(|i| {
+            let mut zone = GillZone::of_scenario(spec, sc);
+            let mut policy = silent.build(sc)?;
+            let healthy = run(sc, &mut policy, run_seed(base_seed, i), &Faults::default(), &mut zone).fleet.healthy;
+            Ok((zone.metrics(), healthy, zone.bins))
+        })
+        .collect::<Result<_, PolicyError>>()?;
+    let healthy = per_run.iter().all(|r| r.1);
+    let profile = merge_bins(per_run.iter().map(|r| r.2.clone()), spec.profile_bin_m);
+    Ok(ZoneRuns { runs: per_run.into_iter().map(|r| r.0).collect(), healthy, profile })
 }
 
 #[cfg(test)]
@@ -163,5 +326,57 @@ mod tests {
         let mut none = GillZone::new(ZoneSpec::table5(), 0, 0);
         none.on_sample(0.0, Vec3::new(0.0, 0.0, 0.0), &[row(100.0, 103.0, 4.0)]);
         assert_eq!(none.metrics(), ZoneMetrics::default());
+    }
+
+    #[test]
+    fn a_scored_buoy_gives_its_filter_and_saturation_errors_and_the_run_stops_past_the_zone_when_asked() {
+        // A 1 m × 1 m zone centred on (0, 0): 128 m to each side.
+        let zone = Zone::centred(0.0, 0.0, 1.0, 1.0);
+        let spec = ZoneSpec { stop_past_zone: true, ..ZoneSpec::table5() };
+        let mut z = GillZone::new(spec, 0, 0).with_buoy(zone);
+        // Inside the zone, estimate 3-4-5 m off; then 10 m north of the zone's edge, estimate exact.
+        let at = |x: f64, y: f64, est: [f64; 2]| BuoySample { truth: Vec3::new(x, y, 1.0), estimates: vec![est] };
+        z.on_buoys(0.0, &[at(0.0, 0.0, [3.0, 4.0])]);
+        z.on_buoys(1.0, &[at(0.0, 138.0, [0.0, 138.0])]);
+        let m = z.metrics();
+        assert_eq!((m.buoy_error, m.saturation_error), (Some(2.5), Some(5.0)));
+        let ship = Vec3::new(100.0, 0.0, 0.0);
+        z.on_ships(0.0, &[ship]);
+        z.on_sample(0.0, Vec3::new(0.0, 0.0, 0.0), &[row(150.0, 150.0, 0.0)]);
+        assert!(!z.stop(), "x_rel 50 m is inside the zone");
+        z.on_sample(0.0, Vec3::new(0.0, 0.0, 0.0), &[row(180.0, 180.0, 0.0)]);
+        assert!(z.stop(), "x_rel 80 m is past it");
+        // Unscored, a buoy changes nothing, and without the flag the run goes on.
+        let mut plain = GillZone::new(ZoneSpec::table5(), 0, 0);
+        plain.on_buoys(0.0, &[at(0.0, 138.0, [3.0, 4.0])]);
+        plain.on_ships(0.0, &[ship]);
+        plain.on_sample(0.0, Vec3::new(0.0, 0.0, 0.0), &[row(180.0, 180.0, 0.0)]);
+        assert_eq!((plain.metrics().buoy_error, plain.metrics().saturation_error, plain.stop()), (None, None, false));
+    }
+
+    #[test]
+    fn a_run_that_never_reached_the_zone_is_named_in_the_summary() {
+        let reached = ZoneMetrics { zone_error: Some(1.0), zone_samples: 3, ..ZoneMetrics::default() };
+        let runs = ZoneRuns { runs: vec![reached, ZoneMetrics::default()], healthy: true, profile: Vec::new() };
+        let err = runs.summary(7).unwrap_err().to_string();
+        assert!(err.contains("run 1") && err.contains(&run_seed(7, 1).to_string()), "{err}");
+        let ok = ZoneRuns { runs: vec![reached, reached], ..runs };
+        assert_eq!(ok.summary(7).unwrap().zone_error.mean, 1.0);
+    }
+
+    #[test]
+    fn a_zone_monte_carlo_is_identical_on_one_and_two_threads_and_scores_the_heard_buoy() {
+        let sc = table5_scenario(Configuration::HblTwo).unwrap();
+        let on = |threads| {
+            let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+            pool.install(|| zone_monte_carlo(&sc, ZoneSpec::table5(), 4, 3).unwrap())
+        };
+        let (one, two) = (on(1), on(2));
+        assert_eq!((&one.runs, one.healthy, &one.profile), (&two.runs, two.healthy, &two.profile));
+        assert!(one.runs.iter().all(|m| m.zone_samples > 40 && m.buoy_error.is_some()), "{:?}", one.runs);
+        // MSBL's cycle never has the buoy transmit: its filter and saturation are not scored.
+        let msbl = table5_scenario(Configuration::Msbl).unwrap();
+        let runs = zone_monte_carlo(&msbl, ZoneSpec::table5(), 2, 3).unwrap().runs;
+        assert!(runs.iter().all(|m| m.buoy_error.is_none() && m.saturation_error.is_none()), "{runs:?}");
     }
 }
