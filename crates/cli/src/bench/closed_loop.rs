@@ -2,12 +2,13 @@
 //! 10 Hz EKFs) with the planner and the issue-9 realism: the default scenario's channel (Gill
 //! outliers, sound-speed profile, air time, collisions, half-duplex), the BELLHOP grid and the
 //! current-estimating filters; wall time (median of reps), real-time factor and the split by
-//! engine phase. The grid is computed (or read from its disk cache) before the timed runs, and
-//! its time reported apart.
+//! engine phase (from one more run with the phase clock). The grid is computed (or read from its
+//! disk cache) before the timed runs, and its time reported apart.
 
 use anyhow::{Context, Result};
 use coopnav_nav::{AuvModel, CurrentParams};
 use coopnav_sim::closed_loop::{self, Faults, PhaseClock, PolicySpec, Scenario};
+use coopnav_sim::models::filter::FilterRate;
 use coopnav_sim::models::tl::{GridModel, TlModel};
 use serde_json::json;
 use std::path::Path;
@@ -44,6 +45,10 @@ pub struct Args {
     /// The survey filters' states: 7 with the current, or the thesis's 5.
     #[arg(long, value_enum, default_value = "current")]
     filter: FilterStates,
+    /// Run the survey filters every PERIOD s instead of every truth step (`[filter] rate`
+    /// `decimated`: a speed option that changes the results; default: every step).
+    #[arg(long, value_name = "PERIOD")]
+    filter_period: Option<f64>,
 }
 
 /// Target wall time of issue 9: ≥ 5×10⁴ × real time for 3 h.
@@ -59,23 +64,26 @@ pub fn run(args: Args) -> Result<()> {
     if let FilterStates::Current = args.filter {
         sc.filter.model = AuvModel::Current(CurrentParams::default());
     }
+    if let Some(period_s) = args.filter_period {
+        sc.filter.rate = FilterRate::Decimated { period_s };
+    }
     let prepare = Instant::now();
     sc.validate(Path::new("bench closed-loop"))
         .context("the benchmark scenario (BELLHOP grid: --tl analytic runs without it)")?;
     let prepare_s = prepare.elapsed().as_secs_f64();
     let spec = PolicySpec::new(&args.policy, &sc)?;
-    let mut timings = Vec::new();
-    let mut last = None;
+    // The timed repetitions report to no observer (reading the clock at every phase end costs
+    // about 5 % of a run); one more run with the phase clock gives the split.
+    let mut walls = Vec::new();
     for _ in 0..args.reps.max(1) {
         let mut policy = spec.build(&sc)?;
-        let mut clock = PhaseClock::start();
-        let r = closed_loop::run(&sc, &mut policy, sc.seed, &Faults::default(), &mut clock);
-        timings.push((r.wall_s, clock.timing));
-        last = Some(r);
+        walls.push(closed_loop::run(&sc, &mut policy, sc.seed, &Faults::default(), &mut ()).wall_s);
     }
-    timings.sort_by(|a, b| a.0.total_cmp(&b.0));
-    let (wall_s, t) = timings[timings.len() / 2];
-    let r = last.expect("at least one repetition");
+    walls.sort_by(f64::total_cmp);
+    let wall_s = walls[walls.len() / 2];
+    let mut clock = PhaseClock::start();
+    let r = closed_loop::run(&sc, &mut spec.build(&sc)?, sc.seed, &Faults::default(), &mut clock);
+    let t = clock.timing;
     let out = json!({
         "target": "closed-loop",
         "mission_s": sc.duration_s,
@@ -87,10 +95,12 @@ pub fn run(args: Args) -> Result<()> {
         "policy": args.policy,
         "tl": serde_json::to_value(&sc.comms.tl)?,
         "filter_model": serde_json::to_value(sc.filter.model)?,
+        "filter_rate": serde_json::to_value(sc.filter.rate)?,
         "tl_prepare_s (grid computed or read from disk, untimed below)": prepare_s,
         "parallel_planner": args.parallel,
-        "reps": timings.len(),
+        "reps": walls.len(),
         "wall_s": wall_s,
+        "wall_s (the run split by phase, clock read at every phase end)": r.wall_s,
         "real_time_factor": sc.duration_s / wall_s,
         "target_wall_s": TARGET_S,
         "meets_target": wall_s <= TARGET_S,

@@ -5,7 +5,7 @@
 pub use crate::engine::health::Health;
 use crate::models::buoy::{BuoySpec, MAX_BUOYS};
 use crate::models::channel::Channel;
-use crate::models::filter::FilterSpec;
+use crate::models::filter::{FilterRate, FilterSpec};
 use crate::models::finish::Finish;
 use crate::models::minipacket;
 use crate::models::schedule::{longest_air, payload_problem, Fit, Schedule};
@@ -105,7 +105,7 @@ fn default_filter() -> FilterSpec {
     let thesis = AuvParams::default();
     let q = [CLOSED_LOOP_Q_EN, CLOSED_LOOP_Q_EN, thesis.q[2], thesis.q[3], thesis.q[4]];
     let params = AuvParams { range_noise: RangeNoise { sigma_time: 1e-4, ..RangeNoise::default() }, q, ..thesis };
-    FilterSpec { model: AuvModel::Thesis, params }
+    FilterSpec { model: AuvModel::Thesis, params, rate: FilterRate::EveryStep }
 }
 
 /// Position process noise of the closed loop's filters, m² per 0.1 s step (see [`default_filter`]).
@@ -358,6 +358,7 @@ impl Scenario {
         self.validate_comms(&mut p);
         self.validate_sensors(&mut p);
         self.filter.check_fields("filter.", &mut p);
+        p.extend(self.filter.rate.problem("filter.", self.dt));
         p.check("health.divergence_window_s", self.health.divergence_window_s, |v| v > 0.0, "a finite number > 0");
         self.validate_planner(&mut p);
         if p.is_empty() && !matches!(self.comms.tl, TlModel::Analytic(_)) {

@@ -30,11 +30,15 @@ pub struct InFlight<P> {
     /// (transmitter, start, end) of every transmission.
     transmissions: Vec<(Owner, f64, f64)>,
     capture_margin_db: Option<f64>,
+    /// The earliest end of an addressed arrival not yet delivered (∞: none): until then a step
+    /// has nothing to deliver, and the pruning can wait (it only drops what can no longer
+    /// overlap an arrival in flight).
+    next_end: f64,
 }
 
 impl<P> InFlight<P> {
     pub fn new(capture_margin_db: Option<f64>) -> Self {
-        InFlight { arrivals: Vec::new(), transmissions: Vec::new(), capture_margin_db }
+        InFlight { arrivals: Vec::new(), transmissions: Vec::new(), capture_margin_db, next_end: f64::INFINITY }
     }
 
     pub fn transmit(&mut self, from: Owner, start: f64, end: f64) {
@@ -42,12 +46,18 @@ impl<P> InFlight<P> {
     }
 
     pub fn push(&mut self, arrival: Arrival<P>) {
+        if arrival.payload.is_some() {
+            self.next_end = self.next_end.min(arrival.end);
+        }
         self.arrivals.push(arrival);
     }
 
     /// The addressed arrivals that end by `t`, in end-time order, each with whether it survived
     /// half-duplex and collisions. Call once every transmission starting before `t` is pushed.
     pub fn due(&mut self, t: f64) -> Vec<(Arrival<()>, P, bool)> {
+        if self.next_end > t {
+            return Vec::new();
+        }
         let mut ready: Vec<usize> = (0..self.arrivals.len())
             .filter(|&i| self.arrivals[i].payload.is_some() && self.arrivals[i].end <= t)
             .collect();
@@ -72,6 +82,8 @@ impl<P> InFlight<P> {
             .collect();
         self.arrivals.retain(|a| a.payload.is_some() || a.end > t - KEEP_S);
         self.transmissions.retain(|tx| tx.2 > t - KEEP_S);
+        self.next_end =
+            self.arrivals.iter().filter(|a| a.payload.is_some()).map(|a| a.end).fold(f64::INFINITY, f64::min);
         out
     }
 

@@ -223,7 +223,7 @@ impl<'a> Engine<'a> {
         obs.on_phase_end(Phase::Transmit);
         self.deliver(t_next, obs);
         obs.on_phase_end(Phase::Deliver);
-        self.sense(t_next);
+        self.sense(step, t_next);
         obs.on_phase_end(Phase::Sense);
         let per_second = ((1.0 / self.sc.dt).round() as u64).max(1);
         if (step + 1) % per_second == 0 {

@@ -347,11 +347,23 @@ impl Engine<'_> {
         }
     }
 
-    /// Filters to `t_next`: prediction, speed and compass; a surfaced AUV's GPS once a second.
-    pub(super) fn sense(&mut self, t_next: f64) {
+    /// Filters to `t_next` at the end of truth step `step` (every step, or every few with a
+    /// decimated filter rate): prediction, speed and compass; a surfaced AUV's GPS once a second.
+    pub(super) fn sense(&mut self, step: u64, t_next: f64) {
         let whole_second = (t_next - t_next.round()).abs() < 1e-6;
+        let every = self.sc.filter.rate.steps(self.sc.dt);
+        let filter_step = (step + 1) % every == 0;
         for a in self.auvs.iter_mut() {
-            a.ekf.predict_to(t_next, a.yaw_measured);
+            let yaw_rate = if every == 1 {
+                a.yaw_measured
+            } else {
+                a.yaw_sum += a.yaw_measured;
+                if !filter_step {
+                    continue;
+                }
+                std::mem::take(&mut a.yaw_sum) / every as f64
+            };
+            a.ekf.predict_to(t_next, yaw_rate);
             a.sense(self.sc);
             if let Finish::Surface { gps_sd_m, .. } = self.sc.fleet.finish {
                 if whole_second && a.at_surface() {

@@ -335,3 +335,22 @@ fn an_auv_cna_surfaces_for_a_fix_and_dives_back() {
         assert!(deep_again.is_some_and(|t| t < climbs[1]), "{policy}: {deep_again:?} before {}", climbs[1]);
     }
 }
+
+/// A filter run every 0.5 s (`[filter] rate` decimated) dead-reckons like one run every step:
+/// the same sensors and streams, so nearly the same error, but not the same run; surfaced, it
+/// still takes its GPS fix every second.
+#[test]
+fn a_decimated_filter_dead_reckons_like_one_run_every_step() {
+    let every = short_survey(Finish::Surface { ascent_rate_m_s: 0.5, gps_sd_m: 3.0 }, 1500.0);
+    let mut decimated = every.clone();
+    decimated.filter.rate = crate::models::filter::FilterRate::Decimated { period_s: 0.5 };
+    decimated.validate(std::path::Path::new("t")).unwrap();
+    let (_, a) = traced(&every, "none", 3);
+    let (_, b) = traced(&decimated, "none", 3);
+    for t in [200.0, 450.0] {
+        let (ea, eb) = (error_at(&a, 0, t), error_at(&b, 0, t));
+        assert!((ea - eb).abs() < 0.2 * ea + 1.0, "t = {t}: every step {ea:.2} m, every 0.5 s {eb:.2} m");
+    }
+    assert_ne!(error_at(&a, 0, 450.0), error_at(&b, 0, 450.0), "the rate is used");
+    assert!(error_at(&b, 0, 1500.0) < 10.0, "the surfaced AUV's GPS fixes are taken");
+}

@@ -58,6 +58,9 @@ pub struct SurveyAuv {
     pub clock: Clock,
     /// Yaw rate measured over the current step (the filter's prediction input).
     pub yaw_measured: f64,
+    /// The readings summed since the filter's last step (a decimated filter predicts with their
+    /// mean, [`crate::models::filter::FilterRate`]).
+    pub yaw_sum: f64,
     compass: CompassBias,
     rng_speed: ChaCha8Rng,
     rng_white: ChaCha8Rng,
@@ -105,6 +108,7 @@ impl SurveyAuv {
             ekf: AuvFilter::new(&sc.filter.model, 0.0, ex, ey, 0.0, heading, sc.filter.params.clone()),
             clock: sc.channel.clocks.draw(&mut rng(stream::CLOCK)),
             yaw_measured: 0.0,
+            yaw_sum: 0.0,
             compass: CompassBias::draw(s.compass_bias_step_deg, s.compass_bias_iid, &mut rng(stream::COMPASS_MAP)),
             rng_speed: rng(stream::SPEED),
             rng_white: rng(stream::COMPASS_WHITE),

@@ -315,7 +315,8 @@ mod disk {
         }
         let values: Vec<f32> =
             bytes[newline + 1..].chunks_exact(4).map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]])).collect();
-        let per_field = values.len() / (lattice.nx * lattice.ny * spec.bearings).max(1);
+        // One field per bearing of every anchor of every layer.
+        let per_field = values.len() / (lattice.anchors().len() * spec.bearings).max(1);
         let mut fields = values.chunks(per_field.max(1)).map(<[f32]>::to_vec);
         let grids = lattice
             .anchors()
@@ -432,6 +433,37 @@ mod tests {
         let g = GridModel { source_depth_step_m: 10.0, ..GridModel::default() };
         let (asc, _) = layout(&g, &Scenario::example());
         assert_eq!(asc.source_depths, [0.0, 20.0]);
+    }
+
+    #[test]
+    fn a_grid_of_several_layers_reads_back_from_disk() {
+        let lattice = LatticeSpec {
+            origin: (0.0, 0.0),
+            spacing: 100.0,
+            nx: 2,
+            ny: 1,
+            source_depths: vec![0.0, 20.0],
+            depth_tolerance: 1.0,
+        };
+        // 3 ranges × 3 depths per field, every value distinct.
+        let spec = GridSpec { bearings: 2, range_step: 10.0, max_range: 30.0, depth_step: 5.0, max_depth: 10.0 };
+        let mut next = 0.0f32;
+        let grids: Vec<CachedGrid> = lattice
+            .anchors()
+            .into_iter()
+            .map(|a| {
+                let fields = (0..2).map(|_| (0..9).map(|_| (next += 1.0, next).1).collect()).collect();
+                CachedGrid::from_fields(a, spec.clone(), fields).unwrap()
+            })
+            .collect();
+        let written = AnchorLattice::from_grids(lattice.clone(), grids).unwrap();
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("grid.bin");
+        disk::write(dir.path(), &path, "key", &written).unwrap();
+        let read = disk::read(&path, "key", &lattice, &spec).expect("the stored grid reads back");
+        let fields = |l: &AnchorLattice| l.grids().iter().map(|g| g.fields().to_vec()).collect::<Vec<_>>();
+        assert_eq!(fields(&read), fields(&written));
+        assert!(disk::read(&path, "another key", &lattice, &spec).is_none());
     }
 
     #[test]
