@@ -64,10 +64,13 @@ class Planner:
         errors: FloatArray,
         forecast: FloatArray,
         estimates: Optional[FloatArray] = None,
+        cna_variance: float = 0.0,
     ) -> Dict[str, Any]:
         """One decision from ``cna_pose`` [x, y, z, heading_rad(, pitch_rad)], ``errors`` (N, 5) and
         ``forecast`` (N, levels, 3), the AUV positions at t + tau, t + 2 tau, ...; ``estimates``
-        (N, 4: p_ee, p_en, p_nn, process_noise) for the estimator-aware cost.
+        (N, 4: p_ee, p_en, p_nn, process_noise) for the estimator-aware cost; ``cna_variance``
+        (m² per horizontal axis, >= 0) is the CNA's own position variance, added to each ping's
+        range variance by that cost (0: the term is off).
 
         Returns ``heading``, ``pitch`` (rad) and ``next`` (x, y, z) of the next waypoint, ``cost``,
         ``levels_searched``, ``levels_requested``, ``option``, ``nodes``, ``turn``, ``pitch_change``.

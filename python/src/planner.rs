@@ -133,9 +133,11 @@ impl Planner {
 
     /// One decision at time `t` from `cna_pose` [x, y, z, heading_rad(, pitch_rad)], the AUVs'
     /// modelled `errors` (N, 5) and `forecast` (N, levels, 3): their positions at t + τ, t + 2τ, ….
-    /// `estimates` (N, 4: p_ee, p_en, p_nn, process_noise) feed the estimator-aware cost.
+    /// `estimates` (N, 4: p_ee, p_en, p_nn, process_noise) feed the estimator-aware cost, and
+    /// `cna_variance` (m² per horizontal axis, ≥ 0) is the CNA's own position variance it adds to
+    /// every ping's range variance; 0, the default, is the cost as before that term existed.
     /// Returns heading and pitch of the next waypoint, the cost, the levels searched, ….
-    #[pyo3(signature = (t, cna_pose, errors, forecast, estimates = None))]
+    #[pyo3(signature = (t, cna_pose, errors, forecast, estimates = None, cna_variance = 0.0))]
     fn decide<'py>(
         &mut self,
         py: Python<'py>,
@@ -144,7 +146,13 @@ impl Planner {
         errors: PyReadonlyArray2<'_, f64>,
         forecast: PyReadonlyArray3<'_, f64>,
         estimates: Option<PyReadonlyArray2<'_, f64>>,
+        cna_variance: f64,
     ) -> PyResult<Bound<'py, PyDict>> {
+        if !(cna_variance.is_finite() && cna_variance >= 0.0) {
+            return Err(PyValueError::new_err(format!(
+                "cna_variance: expected a finite variance >= 0 m², got {cna_variance}"
+            )));
+        }
         let cna = pose(cna_pose.as_slice()?)?;
         let errors = errors_of(&errors)?;
         let estimates = estimates_of(estimates.as_ref())?;
@@ -158,15 +166,8 @@ impl Planner {
         let inner = &mut self.inner;
         let d = py
             .detach(|| {
-                // The Python API takes no CNA variance: 0 is the cost as before it existed.
-                let input = PlanInput {
-                    t,
-                    cna,
-                    errors: &errors,
-                    estimates: &estimates,
-                    cna_variance: 0.0,
-                    forecast: &forecast,
-                };
+                let input =
+                    PlanInput { t, cna, errors: &errors, estimates: &estimates, cna_variance, forecast: &forecast };
                 inner.decide(&input)
             })
             .map_err(value_error)?;

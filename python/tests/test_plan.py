@@ -83,9 +83,14 @@ def test_the_bench_workload_decides_as_the_rust_bench(cli):
     row = next(r for r in bench["results"] if (r["workload"]["n"], r["workload"]["a"], r["workload"]["l"]) == (5, 7, 5)
                and r["workload"]["cost"]["kind"] == "estimator")
     planner, args = workload({"kind": "estimator"})
-    decision = planner.decide(*args)
+    # The Rust workload gives its CNA a variance of 1 m² per axis (coopnav_plan::workload).
+    decision = planner.decide(*args, cna_variance=1.0)
     assert decision["option"] == row["decision"]
     assert decision["cost"] == row["min_cost"]
+    # The term is used: without it the cost is lower.
+    assert planner.decide(*args)["cost"] < decision["cost"]
+    with pytest.raises(ValueError, match="cna_variance"):
+        planner.decide(*args, cna_variance=-1.0)
 
 
 def test_bad_planner_input_raises_value_error_naming_the_field():
