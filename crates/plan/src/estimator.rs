@@ -255,8 +255,9 @@ impl LinkTable {
 
 /// Steps 1–3 of the module's derivation: the expected covariance [P_ee, P_en, P_nn] after τ of
 /// growth (`q_tau` per axis) and a ping from `cna` (its own horizontal variance `cna_variance`
-/// per axis, m²) to the AUV at `auv` that arrives with probability `success(slant range)`. Shared by the planner's cost and the closed loop's model
-/// of the AUVs' filters, so both use one formula.
+/// per axis, m²) to the AUV at `auv` that arrives with probability `success(slant range)`.
+/// Shared by the planner's cost and the closed loop's model of the AUVs' filters, so both use
+/// one formula.
 #[inline(always)]
 pub fn expected_posterior(
     cov: &[f64; 3],

@@ -2,8 +2,9 @@
 //! dead reckoning drifts: on a fixed period, or when its own horizontal σ (which it knows from its
 //! navigation filter) reaches a threshold. It climbs straight up at its pitch-limited rate,
 //! stays at the surface for the fix time, takes a fix of the configured σ and goes back to work,
-//! diving to the depth it left (policies that keep the current depth would otherwise stay up). The climb and the wait are what it costs:
-//! meanwhile the CNA follows no policy, whichever it is. Checked at each decision (every τ).
+//! diving to the depth it left (policies that keep the current depth would otherwise stay up).
+//! The climb and the wait are what it costs: meanwhile the CNA follows no policy, whichever it
+//! is. Checked at each decision (every τ).
 //! Invented parameters (no thesis value): the period, threshold, fix time and fix σ.
 
 use coopnav_core::validation::Problems;
