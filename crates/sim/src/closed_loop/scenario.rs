@@ -724,7 +724,8 @@ mod tests {
         assert!(e.contains("sigma_tim"), "{e}");
     }
 
-    /// NaN, infinite and negative sensor noise, a bad channel model and a bad finish behaviour:
+    /// NaN, infinite and negative sensor noise, a bad channel model, a bad finish behaviour and a
+    /// negative stand-off radius:
     /// every one named with its path in one error, and the sensors' unused keys are refused.
     #[test]
     fn every_bad_field_is_reported_at_once() {
@@ -735,7 +736,8 @@ mod tests {
             .replace("p_outlier = 0.0555", "p_outlier = -0.1")
             .replace("capture_margin_db = 6.0", "capture_margin_db = -1.0")
             .replace("radius_m = 50.0", "radius_m = 0.0")
-            .replace("divergence_window_s = 60.0", "divergence_window_s = nan");
+            .replace("divergence_window_s = 60.0", "divergence_window_s = nan")
+            .replace("standoff_radius_m = 150.0", "standoff_radius_m = -150.0");
         let e = err(&text);
         for field in [
             "sensors.speed_sd",
@@ -745,10 +747,11 @@ mod tests {
             "channel.collisions.capture_margin_db",
             "fleet.finish.radius_m",
             "health.divergence_window_s",
+            "cna.standoff_radius_m",
         ] {
             assert!(e.contains(&format!("field {field} = ")), "{field} missing from: {e}");
         }
-        assert!(e.contains("7 bad fields") && e.contains("s.toml"), "{e}");
+        assert!(e.contains("8 bad fields") && e.contains("s.toml"), "{e}");
         let e = err(&EXAMPLE.replace("yaw_rate_white_deg_s = 0.05", "yaw_rate_white_deg_s = 0.05\ndgps_sd = 0.1"));
         assert!(e.contains("dgps_sd"), "{e}");
         let e = err(&EXAMPLE.replace("p_outlier = 0.0555", "p_outliers = 0.0555"));
