@@ -8,8 +8,9 @@
 //!
 //! Seeds: the planner's settings chosen by experiment (the aggregate `sigma_sum`, the range bias,
 //! the cost-to-go, the level-0 penalty and the reach cost-to-go from 5 AUVs on, L with the AUV
-//! CNA) were picked on base seed [`TUNING_SEED`] (runs `run_seed(1000, 0..R)`, R = 6 to 40); the evaluation uses the base seed
-//! of `--seed` (default 1, runs `run_seed(1, 0..runs)`) and refuses the tuning seed. The
+//! CNA) were picked on base seed [`TUNING_SEED`] (runs `run_seed(1000, 0..R)`, R = 6 to 40); the
+//! evaluation uses the base seed of `--seed` (default 1, runs `run_seed(1, 0..runs)`) and refuses
+//! the tuning seed. The
 //! baselines run exactly as configured elsewhere (nothing is tuned for or against them).
 
 use super::{Check, Experiment, ExperimentError, ReproOptions, ReproReport, Size};

@@ -5,8 +5,9 @@
 //! with B buoys their slots follow the CNA's, every slot τ/(1 + B + N); `gill_cycle` is Gill's MSBL /
 //! HBL Short / HBL Long cycle (gill digest §4, Table 1) of 2 s mini-packet slots from ship0 and
 //! buoy0; `tdma` lists the slots, and a survey AUV's slot may name the rate policy its status
-//! messages use (`rate_policy`, a [`RatePolicySpec`]; otherwise the comms default). Validation refuses a slot shorter than its packet's air time plus
-//! the longest expected travel time plus a guard, naming the slot, and a message too long for its rate.
+//! messages use (`rate_policy`, a [`RatePolicySpec`]; otherwise the comms default). Validation
+//! refuses a slot shorter than its packet's air time plus the longest expected travel time plus a
+//! guard, naming the slot, and a message too long for its rate.
 
 use super::channel::{air_time, capacity};
 use coopnav_acomms::selector::RatePolicySpec;

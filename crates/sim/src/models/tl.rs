@@ -54,8 +54,9 @@ pub struct GridModel {
     /// The lattice covers the survey blocks and the CNA's start, widened by this much.
     pub margin_m: f64,
     /// Spacing of the source layers over a depth span a transmitter moves through (an
-    /// altitude-keeping survey AUV, an AUV CNA). Invented; measured (acomms `tl::cached` tests): a source 4 m from the layers either
-    /// side of it, 8 m apart, read 0.6–2.0 dB off a direct run.
+    /// altitude-keeping survey AUV, an AUV CNA). Invented; measured (acomms `tl::cached` tests):
+    /// a source 4 m from the layers either side of it, 8 m apart, read 0.6–2.0 dB off a direct
+    /// run.
     pub source_depth_step_m: f64,
     /// Directory of the disk cache (default: `coopnav-tl` in the system temporary directory).
     pub cache_dir: Option<PathBuf>,

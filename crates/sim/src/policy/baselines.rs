@@ -1,7 +1,8 @@
 //! The baselines the planner is judged against: no CNA at all, fixed patterns over the survey
-//! area, loitering at the fleet's centroid (on top of it, or on a stand-off circle around it), trailing one AUV, relaying between a base and an AUV,
-//! and a pre-deployment plan flown open-loop. Each is deliberately simple and stateless except
-//! for where it is along its own pattern.
+//! area, loitering at the fleet's centroid (on top of it, or on a stand-off circle around it),
+//! trailing one AUV, relaying between a base and an AUV, and a pre-deployment plan flown
+//! open-loop. Each is deliberately simple and stateless except for where it is along its own
+//! pattern.
 
 use super::{CnaCommand, CnaPolicy, PolicyContext};
 use coopnav_core::{Heading, Vec3};
@@ -139,8 +140,9 @@ impl CnaPolicy for CentroidStandoff {
         let (dx, dy) = (ctx.cna.pos.x - c.x, ctx.cna.pos.y - c.y);
         // From the CNA's bearing about the centroid (its heading's side when it sits on it), one
         // period's travel further along the circle; from off the circle, the bearing's point on it.
-        let bearing = if dx.hypot(dy) > 1e-9 { dy.atan2(dx) } else { ctx.cna.heading.radians() };
-        let on_circle = (dx.hypot(dy) - self.radius).abs() <= ctx.speed * ctx.tau;
+        let distance = dx.hypot(dy);
+        let bearing = if distance > 1e-9 { dy.atan2(dx) } else { ctx.cna.heading.radians() };
+        let on_circle = (distance - self.radius).abs() <= ctx.speed * ctx.tau;
         let advance = if on_circle && self.radius > 0.0 { ctx.speed * ctx.tau / self.radius } else { 0.0 };
         let angle = bearing + advance;
         let target = (c.x + self.radius * angle.cos(), c.y + self.radius * angle.sin());
