@@ -8,10 +8,10 @@
 use super::{Check, Experiment, ExperimentError, ReproOptions, ReproReport, Size};
 use crate::closed_loop::Scenario;
 use crate::hbl::grid::{buoy_grid, engine_cell, optimal_region, GridSpec};
-use crate::hbl::mc::{welch_95, Stats};
 use crate::hbl::profile::ProfileBin;
 use crate::hbl::zone::{table5_file, table5_scenario, zone_monte_carlo, ZoneError, ZoneSpec, ZoneSummary};
 use crate::models::schedule::{GillCycle, Schedule};
+use crate::stats::{welch_95, Stats};
 use coopnav_nav::codec::Zone;
 use coopnav_nav::cycle::Configuration;
 use serde_json::json;

@@ -1,13 +1,12 @@
 //! The buoy-location grid (digest §5.7 item 1, §10 A14): a zero-drift Monte Carlo per candidate
 //! buoy position north of the path, the region within a tolerance of the best cell, and CSV
-//! output (the SVG heat map is in [`super::plot`]). The caller says how one cell runs: the old
-//! HBL loop ([`old_loop_cell`]) or the engine ([`engine_cell`]).
+//! output (the SVG heat map is in [`super::plot`]). The caller says how one cell runs (on the
+//! engine: [`engine_cell`]).
 
-use super::config::{Drift, Scenario};
-use super::mc::{monte_carlo, McError, Stats};
 use super::zone::{zone_monte_carlo, ZoneError, ZoneSpec};
 use crate::closed_loop::Scenario as EngineScenario;
 use crate::models::buoy::Drift as EngineDrift;
+use crate::stats::Stats;
 use coopnav_core::validation::{InvalidFields, Problems};
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
@@ -32,8 +31,6 @@ impl Default for GridSpec {
 pub enum GridError {
     #[error("grid spec: {0}")]
     Fields(#[from] InvalidFields),
-    #[error(transparent)]
-    Mc(#[from] McError),
     #[error(transparent)]
     Zone(#[from] ZoneError),
     #[error("grid: the scenario has no buoy to place")]
@@ -111,21 +108,6 @@ pub fn buoy_grid(
         progress(i as u64 + 1);
     }
     Ok(out)
-}
-
-/// A cell on the old HBL loop: `base` with the buoy moored at the cell, `runs` runs from `seed`
-/// (the same base seed in every cell: common random numbers across cells).
-pub fn old_loop_cell(
-    base: &Scenario,
-    runs: usize,
-    seed: u64,
-) -> impl Fn([f64; 2]) -> Result<Stats, GridError> + Sync + '_ {
-    move |[x, y]| {
-        let mut sc = base.clone();
-        sc.buoy.fixed = Some([x, y]);
-        sc.buoy.drift = Drift::None;
-        Ok(monte_carlo(&sc, runs, seed, &|_| {})?.summary.zone_error)
-    }
 }
 
 /// A cell on the engine: scenario `base` with its buoy 0 moored at the cell (its zone as the
