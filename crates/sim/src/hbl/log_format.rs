@@ -12,7 +12,7 @@ pub enum LogFormatError {
     StorageWithoutOrigin(LatLonStorage),
 }
 
-/// How `coopnav hbl simulate` writes its log (`--geodetic-origin`, `--buoy-fix-storage`).
+/// How `coopnav hbl simulate` writes its log (the `--log-format` file).
 #[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct LogFormat {
