@@ -4,7 +4,7 @@
 //! the across-path error in the approach window just before the zone, the error profile against
 //! x_rel (the thesis's Figs. 16, 19, 21), and, where the schedule has buoy 0 transmit, the AUV's
 //! buoy-filter error and the buoy's saturation error over the whole run (Table 4). The engine
-//! samples once a second; the old HBL loop scored every 0.1 s step and the saturation at the
+//! samples once a second; the former HBL loop scored every 0.1 s step and the saturation at the
 //! buoy's slots only.
 
 use super::profile::{add_to_bin, merge_bins, BinSums, ProfileBin};
