@@ -51,7 +51,9 @@ pub enum Command {
         #[arg(long, default_value_t = 250)]
         runs: usize,
     },
-    /// The buoy-location grid: CSV plus an SVG heat map.
+    /// The buoy-location grid: CSV plus an SVG heat map. Each run ends once the AUV is past the
+    /// zone; the scenario's duration_s and lane are raised to at least 400 s and 360 m first, so an
+    /// AUV that a buoy on its path pulls off course still reaches the zone.
     Grid {
         #[command(flatten)]
         common: Common,
@@ -371,16 +373,19 @@ fn montecarlo(c: &Common, runs: usize) -> Result<()> {
 }
 
 fn grid_cmd(c: &Common, grid_path: Option<&Path>) -> Result<()> {
-    let sc = scenario(c)?;
+    let mut sc = scenario(c)?;
     let spec: GridSpec = match grid_path {
         Some(p) => toml::from_str(&input::read(p, c.allow_large)?).with_context(|| format!("in {}", p.display()))?,
         None => GridSpec::default(),
     };
     spec.validate()
         .with_context(|| grid_path.map_or("the default grid spec".into(), |p| format!("in {}", p.display())))?;
+    grid::lengthen_for_grid(&mut sc);
+    sc.validate(Path::new(&scenario_name(c)))?;
     limits::check(work::hbl_grid(&sc, &spec), c.allow_large)?;
     let pb = bar(spec.cells().len() as u64);
-    let cell = grid::engine_cell(&sc, zone_spec(&sc), spec.runs_per_cell, c.seed)?;
+    let zone = ZoneSpec { stop_past_zone: true, ..zone_spec(&sc) };
+    let cell = grid::engine_cell(&sc, zone, spec.runs_per_cell, c.seed)?;
     let cells = grid::buoy_grid(&spec, &|n| pb.set_position(n), &cell)?;
     pb.finish_and_clear();
     let dir = RunDir::create(&c.out, c.force)?;

@@ -110,6 +110,20 @@ pub fn buoy_grid(
     Ok(out)
 }
 
+/// The grid's runs end once the AUV is past the zone, or at the former HBL loop's cap of 400 s:
+/// a buoy on the path near the AUV's start can pull the AUV's filter into the mirror solution and
+/// the AUV, steering on it, off the path, so it reaches the zone late (cell (−79, 10) m, run 82
+/// of the full grid, did not by Table 5's 130 s). The lane is long enough for 400 s.
+pub const GRID_MIN_DURATION_S: f64 = 400.0;
+pub const GRID_MIN_LANE_M: f64 = 360.0;
+
+/// Gives `sc` at least [`GRID_MIN_DURATION_S`] and a lane of at least [`GRID_MIN_LANE_M`]
+/// (revalidate it after).
+pub fn lengthen_for_grid(sc: &mut EngineScenario) {
+    sc.duration_s = sc.duration_s.max(GRID_MIN_DURATION_S);
+    sc.fleet.lane_length = sc.fleet.lane_length.max(GRID_MIN_LANE_M);
+}
+
 /// A cell on the engine: scenario `base` with its buoy 0 moored at the cell (its zone as the
 /// file gives it), `runs` runs from `seed`, scored in `zone`.
 pub fn engine_cell(
