@@ -200,3 +200,38 @@ impl Observer for PassRecorder {
         self.zone.stop()
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::hbl::zone::table5_scenario;
+    use coopnav_nav::cycle::Configuration;
+
+    #[test]
+    fn the_log_holds_every_filter_step_and_every_range_the_auv_decoded() {
+        let sc = table5_scenario(Configuration::HblTwo).unwrap();
+        let (pass, result) = record_pass(&sc, ZoneSpec::table5(), LogFormat::default(), 5).unwrap();
+        let count = |f: fn(&Record) -> bool| pass.log.iter().filter(|e| f(&e.record)).count();
+        let steps = (sc.duration_s / sc.dt).round() as usize;
+        assert_eq!(count(|r| matches!(r, Record::Init { .. })), 1);
+        assert_eq!(count(|r| matches!(r, Record::Speed(_))), steps);
+        assert_eq!(count(|r| matches!(r, Record::Heading { .. })), steps);
+        assert_eq!(count(|r| matches!(r, Record::YawRate { .. })), steps);
+        assert_eq!(count(|r| matches!(r, Record::Truth { .. })), steps);
+        assert_eq!(count(|r| matches!(r, Record::ShipFix { .. })), steps);
+        // Gill's mixture always leaves a usable range: every decoded ship or buoy packet is logged.
+        let a = &result.auvs[0];
+        let ranges = count(|r| matches!(r, Record::Range { .. }));
+        assert_eq!(ranges as u64, a.downlink.received + a.buoy_link.received);
+        assert!(a.ranges_applied <= ranges as u64 && ranges > 20, "{ranges} ranges, {} applied", a.ranges_applied);
+        let buoy_ranges = count(|r| matches!(r, Record::Range { src: Transmitter::Buoy, .. }));
+        assert!(buoy_ranges > 0 && count(|r| matches!(r, Record::BuoyFix { .. })) >= buoy_ranges);
+        // One row a second, whose truth is the logged truth at that time.
+        assert_eq!(pass.rows.len(), sc.duration_s as usize);
+        let row = pass.rows[9];
+        let logged = pass.log.iter().find(|e| (e.t - row.t).abs() < 1e-9 && matches!(e.record, Record::Truth { .. }));
+        assert_eq!(logged.map(|e| e.record), Some(Record::Truth { e: row.auv_true[0], n: row.auv_true[1] }));
+        let sorted = pass.sorted_log();
+        assert!(sorted.windows(2).all(|w| w[0].t <= w[1].t) && sorted.len() == pass.log.len());
+    }
+}
