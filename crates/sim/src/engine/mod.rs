@@ -151,6 +151,9 @@ pub fn run(sc: &Scenario, policy: &mut Policy, seed: u64, faults: &Faults, obs: 
         let ((x, y), (speed, heading)) = (a.ekf.position(), a.ekf.speed_heading());
         obs.on_filter_start(&FilterStart { auv, x, y, speed, heading });
     }
+    for (ship, s) in engine.ships.iter().enumerate() {
+        obs.on_ship_pose(&ShipPose { t: 0.0, ship, pos: s.pos, heading: s.psi });
+    }
     obs.on_phase_end(Phase::Setup);
     let steps = (sc.duration_s / sc.dt).round() as u64;
     for step in 0..steps {

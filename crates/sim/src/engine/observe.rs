@@ -153,7 +153,7 @@ pub trait Observer {
     fn on_filter_start(&mut self, _start: &FilterStart) {}
     /// Every survey AUV's every filter step (the dead-reckoning stream a field log holds).
     fn on_dead_reckoning(&mut self, _dr: &DeadReckoning) {}
-    /// Every ship at the end of every truth step.
+    /// Every ship at the start of the run and at the end of every truth step.
     fn on_ship_pose(&mut self, _pose: &ShipPose) {}
     /// Every buoy GPS fix broadcast, at its transmit time.
     fn on_buoy_fix(&mut self, _fix: &BuoyFix) {}

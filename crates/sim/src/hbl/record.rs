@@ -2,7 +2,7 @@
 //! zone metric ([`GillZone`]), one [`PassRow`] per second (AUV, ship and buoy truth and the AUV's
 //! estimates of them, x_rel: what the plots and the MOOS export read), and the run as a
 //! post-processing log (`coopnav_nav::post`): the AUV filter's start, its dead-reckoning readings
-//! at every filter step, the ship's DGPS fix at every truth step, each buoy GPS fix as broadcast,
+//! at every filter step, the ship's DGPS fix at the start and every truth step, each buoy GPS fix as broadcast,
 //! and each decoded range from the ship's modems and the buoy.
 
 use super::log_format::LogFormat;
@@ -218,7 +218,8 @@ mod tests {
         assert_eq!(count(|r| matches!(r, Record::Heading { .. })), steps);
         assert_eq!(count(|r| matches!(r, Record::YawRate { .. })), steps);
         assert_eq!(count(|r| matches!(r, Record::Truth { .. })), steps);
-        assert_eq!(count(|r| matches!(r, Record::ShipFix { .. })), steps);
+        // A ship fix at the start, so the first range (sent at t = 0) has one.
+        assert_eq!(count(|r| matches!(r, Record::ShipFix { .. })), steps + 1);
         // Gill's mixture always leaves a usable range: every decoded ship or buoy packet is logged.
         let a = &result.auvs[0];
         let ranges = count(|r| matches!(r, Record::Range { .. }));
@@ -231,6 +232,21 @@ mod tests {
         let row = pass.rows[9];
         let logged = pass.log.iter().find(|e| (e.t - row.t).abs() < 1e-9 && matches!(e.record, Record::Truth { .. }));
         assert_eq!(logged.map(|e| e.record), Some(Record::Truth { e: row.auv_true[0], n: row.auv_true[1] }));
+        // Every range has its transponder's fix at most one step before its transmit time.
+        for e in &pass.log {
+            let Record::Range { src, travel_time } = e.record else { continue };
+            let t_tx = e.t - travel_time;
+            let fixed = pass.log.iter().any(|f| {
+                let kind = match (src, f.record) {
+                    (Transmitter::Ship(_), Record::ShipFix { .. }) | (Transmitter::Buoy, Record::BuoyFix { .. }) => {
+                        true
+                    }
+                    _ => false,
+                };
+                kind && f.t <= t_tx + 1e-9 && f.t >= t_tx - sc.dt - 1e-9
+            });
+            assert!(fixed, "the range at {} s ({src:?}) has no fix at its transmit time {t_tx} s", e.t);
+        }
         let sorted = pass.sorted_log();
         assert!(sorted.windows(2).all(|w| w[0].t <= w[1].t) && sorted.len() == pass.log.len());
     }
