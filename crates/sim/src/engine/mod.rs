@@ -14,6 +14,7 @@ pub mod health;
 mod inflight;
 mod mini;
 pub mod observe;
+mod peer;
 mod phases;
 mod vehicles;
 
@@ -22,18 +23,21 @@ use crate::closed_loop::planner_policy::{ErrorTracker, PlannerStats};
 use crate::closed_loop::policies::{cna_start, Policy};
 use crate::closed_loop::scenario::Scenario;
 use crate::models::channel::Clock;
+use crate::models::peer::StatusFormat;
 use crate::models::schedule::Slot;
 use crate::models::surfacing::OwnNav;
 use crate::policy::ReportedCov;
 use coopnav_acomms::tl::{TlError, TransmissionLoss, TL_CEILING};
-use coopnav_core::{Bathymetry, SeedStream, Vec3};
+use coopnav_core::{Bathymetry, Iver2State, SeedStream, Vec3};
 use coopnav_plan::predict::UnderwayPredictor;
 use coopnav_plan::AuvForecast;
 use inflight::InFlight;
 use mini::SurfaceFilters;
 pub use observe::{
-    BuoySample, CommsEvent, Decision, Observer, Phase, PhaseClock, StatusChoice, Timing, Trace, TraceRow,
+    BuoySample, CommsEvent, Decision, Observer, Phase, PhaseClock, ShadowSample, StatusChoice, StatusFrames,
+    StatusSent, Timing, Trace, TraceRow,
 };
+use peer::{PeerLink, Plans};
 use phases::Payload;
 use rand_chacha::ChaCha8Rng;
 use serde::Serialize;
@@ -129,6 +133,10 @@ struct Engine<'a> {
     ships: Vec<Ship>,
     /// Per survey AUV, its filters of the ships and buoys it hears mini-packets from.
     surface: Vec<SurfaceFilters>,
+    /// Per survey AUV, its side of Nams's link (empty unless `comms.status_format` is Nams's).
+    peers: Vec<PeerLink>,
+    /// Per survey AUV, the channel draws of its statuses at the other survey AUVs.
+    peer_draws: Vec<ChaCha8Rng>,
     air: InFlight<Payload>,
     /// The scenario's transmission-loss model, built once for the run.
     tl: Arc<dyn TransmissionLoss>,
@@ -191,11 +199,12 @@ impl<'a> Engine<'a> {
             faults,
             bathy,
             slots: sc.comms.schedule.slots(sc.comms.tau, n, sc.buoys.len()),
-            auvs,
             cna,
             buoys: (0..sc.buoys.len()).map(|i| Buoy::new(sc, i, &streams)).collect(),
             ships: (0..sc.ships.len()).map(|i| Ship::new(sc, i, &streams)).collect(),
             surface: (0..n).map(|_| SurfaceFilters::new(sc)).collect(),
+            peers: peer_links(sc, &auvs),
+            peer_draws: (0..n).map(|k| streams.rng(peer::STREAM_BASE + k as u64)).collect(),
             air: InFlight::new(sc.channel.collisions.capture_margin_db),
             tl: sc.comms.tl.provider(sc).unwrap_or_else(|e| {
                 // Validation builds the provider first, so this is a scenario built in code.
@@ -203,6 +212,7 @@ impl<'a> Engine<'a> {
                 Arc::new(Unavailable)
             }),
             tl_failure_reported: Cell::new(false),
+            auvs,
             next_decision: 0,
             next_slot: 0,
             status_sent: vec![0; n],
@@ -274,6 +284,23 @@ impl<'a> Engine<'a> {
     }
 }
 
+/// Every survey AUV's side of Nams's link, when the statuses are Nams's frame 0.
+fn peer_links(sc: &Scenario, auvs: &[SurveyAuv]) -> Vec<PeerLink> {
+    let StatusFormat::NamsFrame0 { estimator } = sc.comms.status_format else { return Vec::new() };
+    let plans = Plans {
+        waypoints: auvs.iter().map(|a| a.ctrl.waypoints().to_vec()).collect(),
+        starts: auvs.iter().map(|a| Iver2State::at_rest(a.truth, a.ctrl.state.heading)).collect(),
+        target: sc.fleet.depth,
+        speed: sc.fleet.speed,
+    };
+    (0..auvs.len())
+        .map(|k| {
+            let rates = vehicles::status_policy(sc, k).rates().unwrap_or_default();
+            PeerLink::new(k, &rates, estimator, &plans)
+        })
+        .collect()
+}
+
 /// A transmission-loss model that could not be built: every packet is lost.
 struct Unavailable;
 
@@ -305,5 +332,7 @@ fn metrics(k: usize, a: &AuvTally) -> AuvMetrics {
     }
 }
 
+#[cfg(test)]
+mod peer_tests;
 #[cfg(test)]
 mod tests;
