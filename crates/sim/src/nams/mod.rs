@@ -11,5 +11,5 @@ pub mod scenario;
 pub mod world;
 
 pub use batch::{run_experiment, Cell, ExperimentResult};
-pub use metrics::RunMetrics;
+pub use metrics::{LinkTally, RunMetrics};
 pub use scenario::{Behaviour, ExperimentConfig, Scenario};

@@ -104,7 +104,7 @@ pub fn run(
     let mut nodes =
         [node(0, p, scenario, cfg, behaviour, &seeds, origin)?, node(1, p, scenario, cfg, behaviour, &seeds, origin)?];
     let success = SuccessModel { noise_db: scenario.noise_db, ..cfg.success.clone() };
-    let mut tally = Tally::default();
+    let mut tally = Tally::for_vehicles(2);
     for k in 0..p.samples.len() {
         let slot = k as u64;
         let t = k as f64 * p.slot_len;
@@ -157,8 +157,7 @@ pub fn run(
         tally.bytes_net += gross - if decoded.is_some() { bytes.len() as u64 } else { 0 };
         if let Some(f) = decoded {
             rx.estimator.on_status(&f.status, t);
-            tally.status_times.push(t);
-            tally.status_times_by_rx[r].push(t);
+            tally.status_received(r, t);
         }
     }
     Ok(RunMetrics::from_tally(&tally, p.duration, p.mean_distance))
