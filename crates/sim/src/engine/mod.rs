@@ -152,8 +152,31 @@ struct Engine<'a> {
 
 /// Runs `policy` over scenario `sc` with run seed `seed`, reporting to `obs`.
 pub fn run(sc: &Scenario, policy: &mut Policy, seed: u64, faults: &Faults, obs: &mut dyn Observer) -> RunResult {
+    run_on(sc, policy, seed, faults, None, obs)
+}
+
+/// [`run`] on a transmission-loss model the caller built (one model shared by an experiment's many
+/// runs, e.g. a BELLHOP grid of its own layout) instead of the scenario's `comms.tl`.
+pub fn run_with_tl(
+    sc: &Scenario,
+    policy: &mut Policy,
+    seed: u64,
+    tl: Arc<dyn TransmissionLoss>,
+    obs: &mut dyn Observer,
+) -> RunResult {
+    run_on(sc, policy, seed, &Faults::default(), Some(tl), obs)
+}
+
+fn run_on(
+    sc: &Scenario,
+    policy: &mut Policy,
+    seed: u64,
+    faults: &Faults,
+    tl: Option<Arc<dyn TransmissionLoss>>,
+    obs: &mut dyn Observer,
+) -> RunResult {
     let t_start = Instant::now();
-    let mut engine = Engine::new(sc, policy, seed, faults);
+    let mut engine = Engine::new(sc, policy, seed, faults, tl);
     obs.on_phase_end(Phase::Setup);
     let steps = (sc.duration_s / sc.dt).round() as u64;
     for step in 0..steps {
@@ -174,7 +197,13 @@ pub fn run_traced(sc: &Scenario, policy: &mut Policy, seed: u64, faults: &Faults
 }
 
 impl<'a> Engine<'a> {
-    fn new(sc: &'a Scenario, policy: &'a mut Policy, seed: u64, faults: &'a Faults) -> Self {
+    fn new(
+        sc: &'a Scenario,
+        policy: &'a mut Policy,
+        seed: u64,
+        faults: &'a Faults,
+        tl: Option<Arc<dyn TransmissionLoss>>,
+    ) -> Self {
         let streams = SeedStream::new(seed);
         let n = sc.fleet.n_auvs;
         let bathy = sc.bathymetry();
@@ -206,7 +235,7 @@ impl<'a> Engine<'a> {
             peers: peer_links(sc, &auvs),
             peer_draws: (0..n).map(|k| streams.rng(peer::STREAM_BASE + k as u64)).collect(),
             air: InFlight::new(sc.channel.collisions.capture_margin_db),
-            tl: sc.comms.tl.provider(sc).unwrap_or_else(|e| {
+            tl: tl.map_or_else(|| sc.comms.tl.provider(sc), Ok).unwrap_or_else(|e| {
                 // Validation builds the provider first, so this is a scenario built in code.
                 tracing::error!(error = %e, "transmission loss unavailable: every packet is lost");
                 Arc::new(Unavailable)

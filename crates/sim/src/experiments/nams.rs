@@ -13,6 +13,7 @@ use crate::nams::{run_experiment, Behaviour, Cell, ExperimentConfig, ExperimentR
 use coopnav_acomms::tl::analytic::Thorp;
 use coopnav_acomms::TransmissionLoss;
 use std::fmt::Write as _;
+use std::sync::Arc;
 
 const ID: &str = "nams-tables-9-11";
 
@@ -49,7 +50,7 @@ const THESIS: [(&str, [(f64, f64); 3]); 2] = [
 
 fn tables_9_11(opts: &ReproOptions) -> Result<ReproReport, ExperimentError> {
     let tl = default_tl();
-    report(opts, &tl, &format!("analytic spreading + Thorp absorption, k = {}", tl.k), &|_| {})
+    report(opts, Arc::new(tl), &format!("analytic spreading + Thorp absorption, k = {}", tl.k), &|_| {})
 }
 
 fn best_control<'a>(r: &'a ExperimentResult, scenario: &str) -> Option<&'a Cell> {
@@ -62,7 +63,7 @@ fn best_control<'a>(r: &'a ExperimentResult, scenario: &str) -> Option<&'a Cell>
 /// Runs the experiment on `tl` and formats the report.
 pub fn report(
     opts: &ReproOptions,
-    tl: &dyn TransmissionLoss,
+    tl: Arc<dyn TransmissionLoss>,
     tl_label: &str,
     progress: &(dyn Fn(u64) + Sync),
 ) -> Result<ReproReport, ExperimentError> {
@@ -216,23 +217,23 @@ mod tests {
             max_time: Some(1800.0),
             ..ExperimentConfig::default()
         };
-        let tl = default_tl();
+        let tl: Arc<dyn TransmissionLoss> = Arc::new(default_tl());
         let go = |threads| {
             let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
-            pool.install(|| serde_json::to_string(&run_experiment(&cfg, &tl, &|_| {}).unwrap()).unwrap())
+            pool.install(|| serde_json::to_string(&run_experiment(&cfg, tl.clone(), &|_| {}).unwrap()).unwrap())
         };
         assert_eq!(go(1), go(2));
     }
 
     #[test]
     fn bad_configuration_is_rejected_before_running() {
-        let tl = default_tl();
+        let tl: Arc<dyn TransmissionLoss> = Arc::new(default_tl());
         let bad = ExperimentConfig { repetitions: 0, ..ExperimentConfig::default() };
-        let e = run_experiment(&bad, &tl, &|_| {}).unwrap_err().to_string();
+        let e = run_experiment(&bad, tl.clone(), &|_| {}).unwrap_err().to_string();
         assert!(e.contains("repetitions"), "{e}");
         let mut s = Scenario::thesis(1);
         s.noise_db = -3.0;
         let bad = ExperimentConfig { scenarios: vec![s], ..ExperimentConfig::default() };
-        assert!(run_experiment(&bad, &tl, &|_| {}).unwrap_err().to_string().contains("noise_db"));
+        assert!(run_experiment(&bad, tl.clone(), &|_| {}).unwrap_err().to_string().contains("noise_db"));
     }
 }
