@@ -10,7 +10,7 @@ use coopnav_acomms::tl::bellhop::{AcousticEnv, Bellhop};
 use coopnav_acomms::tl::cached::{CachedGrid, GridSpec};
 use coopnav_acomms::TransmissionLoss;
 use coopnav_core::{Bathymetry, Vec3};
-use coopnav_sim::nams::{run_experiment, ExperimentConfig};
+use coopnav_sim::nams::{run_experiment, ExperimentConfig, ExperimentTl};
 use coopnav_sim::output::{Manifest, RunDir};
 use indicatif::ProgressBar;
 use serde::{Deserialize, Serialize};
@@ -115,7 +115,7 @@ pub fn run(args: Args) -> Result<()> {
     };
     let cfg = &file.experiment;
     let pb = ProgressBar::new((cfg.scenarios.len() * cfg.behaviours.len() * cfg.repetitions) as u64);
-    let result = run_experiment(cfg, tl, &|k| pb.inc(k))?;
+    let result = run_experiment(cfg, &ExperimentTl::Shared(tl), &|k| pb.inc(k))?;
     pb.finish_and_clear();
     println!("{:<14} {:<16} {:>9} {:>9} {:>6} {:>6}", "scenario", "behaviour", "BW B/s", "period s", "duty", "score");
     for c in &result.cells {

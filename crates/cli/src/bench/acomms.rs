@@ -10,7 +10,7 @@ use coopnav_acomms::workload::{sample_frame0, TrackerExchange};
 use coopnav_acomms::TransmissionLoss;
 use coopnav_core::{Bathymetry, Shelf, Vec3};
 use coopnav_sim::experiments::nams::default_tl;
-use coopnav_sim::nams::{run_experiment, ExperimentConfig, ExperimentResult};
+use coopnav_sim::nams::{run_experiment, ExperimentConfig, ExperimentResult, ExperimentTl};
 use indicatif::{ProgressBar, ProgressStyle};
 use serde_json::{json, Value};
 use std::hint::black_box;
@@ -51,7 +51,7 @@ fn experiment(tl: Arc<dyn TransmissionLoss>, label: &str, reps: usize) -> Result
     let n = (cfg.scenarios.len() * cfg.behaviours.len() * reps) as u64;
     let pb = bar(n, "experiment");
     let t = Instant::now();
-    let r = run_experiment(&cfg, tl, &|k| pb.inc(k))?;
+    let r = run_experiment(&cfg, &ExperimentTl::Shared(tl), &|k| pb.inc(k))?;
     let secs = t.elapsed().as_secs_f64();
     pb.finish_and_clear();
     Ok(json!({"tl": label, "runs": n, "seconds": secs, "threads": rayon::current_num_threads(), "cells": summary(&r)}))

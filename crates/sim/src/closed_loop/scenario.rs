@@ -19,9 +19,9 @@ use crate::scenario_file::{self, overlay, Problems};
 use coopnav_acomms::node_report::{BODY_BITS, HEADER_BITS};
 use coopnav_acomms::selector::AdaptiveConfig;
 use coopnav_acomms::status::CovTrailer;
-use coopnav_acomms::{Rate, SuccessModel};
+use coopnav_acomms::{Rate, Receiver, SuccessModel};
 use coopnav_core::validation::CheckFields;
-use coopnav_core::{Bathymetry, CompassDeg, DepthTarget, Heading, Lawnmower, Shelf};
+use coopnav_core::{Bathymetry, CompassDeg, DepthTarget, Heading, Iver2Params, Lawnmower, Shelf};
 use coopnav_nav::{AuvModel, AuvParams, RangeNoise};
 use coopnav_plan::predict::{PredictorConfig, WaypointUse};
 use coopnav_plan::{
@@ -158,6 +158,10 @@ pub struct Fleet {
     /// Each survey AUV's own block (one per AUV; empty: side by side from `origin`).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub lawnmowers: Vec<MowerSpec>,
+    /// The survey AUVs' IVER2 dynamics (nams digest §4.2; default `vehicle.m`'s constants), which
+    /// the other vehicles' shadow estimates also fly.
+    #[serde(default)]
+    pub vehicle: Iver2Params,
 }
 
 fn default_seafloor() -> f64 {
@@ -244,6 +248,8 @@ pub struct Comms {
     pub mini_packet_air_s: f64,
     /// Who a survey AUV's status is addressed to (`cna` or `cna_and_auvs`).
     pub status_to: StatusTo,
+    /// The survey AUVs' modems receiving each other's statuses (Table 5's partial-drop column).
+    pub peer_receiver: Receiver,
     /// What a status carries (`{ kind = "node_report" }` or Nams's `{ kind = "nams_frame0", … }`).
     pub status_format: StatusFormat,
 }
@@ -262,6 +268,7 @@ impl Default for Comms {
             max_range_m: 1000.0,
             mini_packet_air_s: minipacket::DEFAULT_AIR_S,
             status_to: StatusTo::default(),
+            peer_receiver: Receiver::Iver2,
             status_format: StatusFormat::default(),
         }
     }
@@ -433,6 +440,9 @@ impl Scenario {
         }
         p.non_negative("fleet.init_position_sd", f.init_position_sd);
         p.extend(f.finish.problems("fleet.finish."));
+        if let Err(e) = f.vehicle.validate() {
+            p.push("fleet.vehicle", e, "the IVER2 model's ranges");
+        }
         if !(f.lawnmowers.is_empty() || f.lawnmowers.len() == f.n_auvs) {
             p.push("fleet.lawnmowers", format!("{} entries", f.lawnmowers.len()), "none, or one per survey AUV");
         }

@@ -20,6 +20,7 @@ pub struct Plans {
     pub starts: Vec<Iver2State>,
     pub target: DepthTarget,
     pub speed: f64,
+    pub vehicle: Iver2Params,
 }
 
 /// Stream ids of the channel draws of AUV k's statuses at the other survey AUVs: this + k.
@@ -121,16 +122,15 @@ impl PeerLink {
 /// The shadow of AUV `k`: pre-planned, it knows `k`'s plan and start; dynamic, nothing until a
 /// report.
 fn shadow(k: usize, mode: EstimatorMode, plans: &Plans) -> ShadowEstimator {
-    let params = Iver2Params::default();
     match mode {
         EstimatorMode::PrePlanned => ShadowEstimator::new(
             Knowledge::PrePlanned { plan: plans.waypoints[k].clone() },
-            params,
+            plans.vehicle,
             Some(plans.starts[k]),
         ),
         EstimatorMode::Dynamic => ShadowEstimator::new(
             Knowledge::Dynamic { target: plans.target, speed: plans.speed, origin: LocalOrigin::default() },
-            params,
+            plans.vehicle,
             None,
         ),
     }
@@ -149,6 +149,7 @@ mod tests {
             starts: vec![at(0.0, 0.0), at(500.0, 500.0)],
             target: DepthTarget::Depth { depth: 10.0 },
             speed: 1.5,
+            vehicle: Iver2Params::default(),
         }
     }
 

@@ -28,7 +28,7 @@ use coopnav_acomms::node_report::NodeReport;
 use coopnav_acomms::selector::{Choice, Outcome};
 use coopnav_acomms::status::{CovTrailer, CovarianceReport};
 use coopnav_acomms::status::{Frame0, LocalOrigin, NextWaypoint};
-use coopnav_acomms::{Rate, Receiver, Reception};
+use coopnav_acomms::{Rate, Reception};
 use coopnav_core::{Heading, Vec3};
 use coopnav_nav::{RangeMeasurement, StateKind, UpdateOutcome};
 use coopnav_plan::predict::StatusReport;
@@ -273,7 +273,7 @@ impl Engine<'_> {
             let tl = self.tl_db(&from, &p0);
             let payload = to_peers.then(|| {
                 let lost = silent || self.silent(m, t_tx);
-                let drawn = sc.comms.success.draw(rate, tl, Receiver::Iver2, &mut self.peer_draws[j]);
+                let drawn = sc.comms.success.draw(rate, tl, sc.comms.peer_receiver, &mut self.peer_draws[j]);
                 let reception = if lost { Reception { frames: 0, ..drawn } } else { drawn };
                 Payload::Status { rate, slot_id, bytes: bytes.clone(), decoded: reception.frame0(), reception }
             });

@@ -8,7 +8,8 @@ use super::scenario::ExperimentConfig;
 use super::setup::{engine_scenario, slot_length};
 use crate::closed_loop::scenario::{Scenario as EngineScenario, ScenarioError};
 use crate::closed_loop::PolicySpec;
-use crate::engine::run_with_tl;
+use crate::engine::{run, run_with_tl, Faults};
+use crate::models::tl::TlModel;
 use coopnav_acomms::TransmissionLoss;
 use coopnav_core::run_seed;
 use rayon::prelude::*;
@@ -24,6 +25,17 @@ pub enum BatchError {
     Scenario(#[from] ScenarioError),
     #[error("the silent CNA: {0}")]
     Policy(String),
+}
+
+/// The transmission loss an experiment's runs see.
+#[derive(Clone)]
+pub enum ExperimentTl {
+    /// One model the caller built, shared by every run (analytic, or a grid of its own layout).
+    Shared(Arc<dyn TransmissionLoss>),
+    /// The model each cell's engine scenario builds over its own layout: a BELLHOP grid over the
+    /// cell's square, shelf and sound-speed profile, computed once per layout (then read from the
+    /// disk cache) when the cell is built.
+    PerCell(TlModel),
 }
 
 /// Results of one (scenario, behaviour).
@@ -53,7 +65,7 @@ impl ExperimentResult {
 /// Runs the whole experiment on `tl`; `progress(1)` after every run.
 pub fn run_experiment(
     cfg: &ExperimentConfig,
-    tl: Arc<dyn TransmissionLoss>,
+    tl: &ExperimentTl,
     progress: &(dyn Fn(u64) + Sync),
 ) -> Result<ExperimentResult, BatchError> {
     cfg.validate().map_err(BatchError::Config)?;
@@ -62,7 +74,13 @@ pub fn run_experiment(
     let (ns, nb, nr) = (cfg.scenarios.len(), cfg.behaviours.len(), cfg.repetitions);
     let cells: Vec<EngineScenario> = (0..ns * nb)
         .into_par_iter()
-        .map(|j| engine_scenario(&cfg.scenarios[j / nb], cfg, &cfg.behaviours[j % nb], slot_lens[j % nb]))
+        .map(|j| {
+            let own_tl = match tl {
+                ExperimentTl::Shared(_) => None,
+                ExperimentTl::PerCell(model) => Some(model),
+            };
+            engine_scenario(&cfg.scenarios[j / nb], cfg, &cfg.behaviours[j % nb], slot_lens[j % nb], own_tl)
+        })
         .collect::<Result<_, _>>()?;
     let runs = (0..ns * nb * nr)
         .into_par_iter()
@@ -72,7 +90,11 @@ pub fn run_experiment(
             let silent = PolicySpec::new("none", sc).and_then(|p| p.build(sc));
             let mut policy = silent.map_err(|e| BatchError::Policy(e.to_string()))?;
             let mut tally = LinkTally::new(sc.fleet.n_auvs);
-            run_with_tl(sc, &mut policy, run_seed(run_seed(cfg.seed, s as u64), rep as u64), tl.clone(), &mut tally);
+            let seed = run_seed(run_seed(cfg.seed, s as u64), rep as u64);
+            match tl {
+                ExperimentTl::Shared(shared) => run_with_tl(sc, &mut policy, seed, shared.clone(), &mut tally),
+                ExperimentTl::PerCell(_) => run(sc, &mut policy, seed, &Faults::default(), &mut tally),
+            };
             progress(1);
             Ok(tally.metrics())
         })
@@ -120,7 +142,7 @@ mod tests {
             repetitions: 8,
             ..cfg
         };
-        run_experiment(&cfg, Arc::new(Flat(tl_db)), &|_| {}).unwrap().cells[0].mean
+        run_experiment(&cfg, &ExperimentTl::Shared(Arc::new(Flat(tl_db))), &|_| {}).unwrap().cells[0].mean
     }
 
     fn mean_bw(behaviour: Behaviour, tl_db: f64) -> RunMetrics {

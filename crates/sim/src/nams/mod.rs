@@ -11,6 +11,6 @@ pub mod metrics;
 pub mod scenario;
 pub mod setup;
 
-pub use batch::{run_experiment, Cell, ExperimentResult};
+pub use batch::{run_experiment, Cell, ExperimentResult, ExperimentTl};
 pub use metrics::{LinkTally, RunMetrics};
 pub use scenario::{Behaviour, ExperimentConfig, Scenario};

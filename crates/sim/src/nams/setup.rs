@@ -10,8 +10,9 @@ use super::scenario::{Behaviour, ExperimentConfig, Scenario};
 use crate::closed_loop::scenario::{Scenario as EngineScenario, ScenarioError};
 use crate::models::peer::StatusFormat;
 use crate::models::schedule::{Schedule, SlotSpec};
+use crate::models::tl::TlModel;
 use coopnav_acomms::SuccessModel;
-use coopnav_core::{Bathymetry, DepthTarget, Heading, Iver2, Iver2Params, Iver2State, Vec3, Waypoint};
+use coopnav_core::{Bathymetry, DepthTarget, Heading, Iver2, Iver2State, Vec3, Waypoint};
 use std::path::Path;
 
 /// The engine file every cell starts from (Nams's scenario 1).
@@ -25,12 +26,14 @@ pub fn slot_length(cfg: &ExperimentConfig, behaviour: &Behaviour) -> Result<f64,
     Ok(cfg.tdma.slot_length(behaviour.rates()?, cfg.ack))
 }
 
-/// The engine scenario of one cell; `slot_s` is [`slot_length`]'s.
+/// The engine scenario of one cell; `slot_s` is [`slot_length`]'s; `tl`, when given, replaces the
+/// template's analytic model (a BELLHOP grid is built here, by the validation).
 pub fn engine_scenario(
     scenario: &Scenario,
     cfg: &ExperimentConfig,
     behaviour: &Behaviour,
     slot_s: f64,
+    tl: Option<&TlModel>,
 ) -> Result<EngineScenario, ScenarioError> {
     let file = Path::new("scenarios/nams-1.toml");
     let mut sc = EngineScenario::parse(TEMPLATE, file)?;
@@ -41,6 +44,7 @@ pub fn engine_scenario(
     f.speed = scenario.speed;
     f.depth = DepthTarget::Altitude { altitude: scenario.altitude };
     f.shelf = Some(cfg.shelf.clone());
+    f.vehicle = cfg.vehicle;
     if let Some(far) = f.lawnmowers.get_mut(1) {
         far.origin = (square, square);
     }
@@ -59,6 +63,10 @@ pub fn engine_scenario(
     // The square's diagonal, with room.
     c.max_range_m = 1.5 * square;
     c.success = SuccessModel { noise_db: scenario.noise_db, ..cfg.success.clone() };
+    c.peer_receiver = scenario.receiver;
+    if let Some(tl) = tl {
+        c.tl = tl.clone();
+    }
     sc.duration_s = mission_duration(&sc, slot_s).min(cfg.max_time.unwrap_or(MAX_MISSION));
     sc.validate(Path::new(&format!("{} ({}, {})", file.display(), scenario.name, behaviour.label())))?;
     Ok(sc)
@@ -95,5 +103,5 @@ fn flown(sc: &EngineScenario, k: usize, bathy: &Bathymetry) -> Iver2 {
         DepthTarget::Depth { depth } => depth,
     };
     let start = Iver2State::at_rest(Vec3::new(a.x, a.y, depth), Heading::from_radians((b.y - a.y).atan2(b.x - a.x)));
-    Iver2::new(Iver2Params::default(), start, plan)
+    Iver2::new(f.vehicle, start, plan)
 }
