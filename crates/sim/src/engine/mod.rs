@@ -9,6 +9,8 @@
 //! drifting) whose position broadcasts the AUVs range to as well, ships on a fixed track, the
 //! comms schedule of the scenario. Ships and buoys may send 13-bit mini-packets (Gill's cycles):
 //! each survey AUV filters their states from the components and ranges to them ([`mini`]).
+//! Survey AUVs may also address their statuses to each other as Nams's frame 0, with the
+//! packet-success tracker, shadow estimates and rate feedback of [`peer`].
 
 pub mod health;
 mod inflight;
