@@ -116,10 +116,6 @@ impl Tdma {
         let base = if rates.into_iter().any(|r| r == Rate::R5) { self.rate5_slot } else { self.base_slot };
         base + if ack { self.ack_extra } else { 0.0 }
     }
-    /// Owner of slot `k` among `n` vehicles (round-robin from vehicle 0).
-    pub fn owner(k: u64, n: usize) -> usize {
-        (k % n as u64) as usize
-    }
 }
 
 #[cfg(test)]
@@ -144,6 +140,5 @@ mod tests {
         assert_eq!(t.slot_length([Rate::R0, Rate::R1, Rate::R4], false), 10.0);
         assert_eq!(t.slot_length([Rate::R0, Rate::R5], false), 15.0);
         assert_eq!(t.slot_length([Rate::R1], true), 12.0);
-        assert_eq!(Tdma::owner(7, 2), 1);
     }
 }

@@ -10,7 +10,7 @@ use coopnav_acomms::tl::bellhop::{AcousticEnv, Bellhop};
 use coopnav_acomms::tl::cached::{CachedGrid, GridSpec};
 use coopnav_acomms::TransmissionLoss;
 use coopnav_core::{Bathymetry, Vec3};
-use coopnav_sim::nams::{run_experiment, ExperimentConfig};
+use coopnav_sim::nams::{run_experiment, ExperimentConfig, ExperimentTl};
 use coopnav_sim::output::{Manifest, RunDir};
 use indicatif::ProgressBar;
 use serde::{Deserialize, Serialize};
@@ -59,11 +59,11 @@ pub(crate) struct File {
     tl: TlChoice,
 }
 
-fn provider(tl: &TlChoice, cfg: &ExperimentConfig) -> Result<Box<dyn TransmissionLoss>> {
+fn provider(tl: &TlChoice, cfg: &ExperimentConfig) -> Result<Arc<dyn TransmissionLoss>> {
     Ok(match *tl {
         TlChoice::Analytic { k } => {
             anyhow::ensure!(k > 0.0 && k <= 4.0, "tl.k = {k} must be in (0, 4]");
-            Box::new(Thorp { k, ..Thorp::default() })
+            Arc::new(Thorp { k, ..Thorp::default() })
         }
         TlChoice::BellhopGrid { anchor, bearings, range_step, depth_step } => {
             let bathy = Arc::new(Bathymetry::shelf(&cfg.shelf)?);
@@ -79,7 +79,7 @@ fn provider(tl: &TlChoice, cfg: &ExperimentConfig) -> Result<Box<dyn Transmissio
             let pb = ProgressBar::new(bearings as u64).with_message("bellhop grid");
             let grid = CachedGrid::build(&bh, Vec3::new(anchor[0], anchor[1], anchor[2]), spec, &|k| pb.inc(k))?;
             pb.finish_and_clear();
-            Box::new(grid)
+            Arc::new(grid)
         }
     })
 }
@@ -115,7 +115,7 @@ pub fn run(args: Args) -> Result<()> {
     };
     let cfg = &file.experiment;
     let pb = ProgressBar::new((cfg.scenarios.len() * cfg.behaviours.len() * cfg.repetitions) as u64);
-    let result = run_experiment(cfg, tl.as_ref(), &|k| pb.inc(k))?;
+    let result = run_experiment(cfg, &ExperimentTl::Shared(tl), &|k| pb.inc(k))?;
     pb.finish_and_clear();
     println!("{:<14} {:<16} {:>9} {:>9} {:>6} {:>6}", "scenario", "behaviour", "BW B/s", "period s", "duty", "score");
     for c in &result.cells {

@@ -3,6 +3,7 @@
 
 use coopnav_sim::closed_loop::{run, Faults, PolicySpec, Scenario};
 use coopnav_sim::hbl::zone::{zone_monte_carlo, ZoneSpec};
+use coopnav_sim::models::peer::StatusTo;
 use coopnav_sim::models::schedule::Owner;
 use std::path::{Path, PathBuf};
 
@@ -42,13 +43,21 @@ fn runs_reduced(file: &PathBuf) -> coopnav_sim::closed_loop::RunResult {
     r
 }
 
-/// Every AUV applied a range and, where the schedule gives it status slots, its status reached
-/// the CNA: the example's geometry serves the whole fleet under its own transmission loss.
+/// Every AUV applied a range (where the schedule has a ranging source: Nams's files have only the
+/// AUVs' own slots) and, where the schedule gives it status slots for the CNA, its status reached
+/// the CNA: the example's geometry serves the whole fleet under its own transmission loss. (Nams's
+/// statuses are for the other vehicle: `nams_scenarios_run_on_the_engine_with_nams_metrics`.)
 fn assert_every_auv_served(file: &PathBuf, r: &coopnav_sim::closed_loop::RunResult) {
     let sc = Scenario::load(file).unwrap();
     let slots = sc.comms.schedule.slots(sc.comms.tau, sc.fleet.n_auvs, sc.buoys.len());
-    let reports = |k: usize| slots.iter().any(|s| s.owner == Owner::Auv(k));
-    let served = r.auvs.iter().enumerate().all(|(k, a)| a.ranges_applied > 0 && (!reports(k) || a.uplink.received > 0));
+    let for_cna = sc.comms.status_to == StatusTo::Cna;
+    let reports = |k: usize| for_cna && slots.iter().any(|s| s.owner == Owner::Auv(k));
+    let ranging = slots.iter().any(|s| !matches!(s.owner, Owner::Auv(_)));
+    let served = r
+        .auvs
+        .iter()
+        .enumerate()
+        .all(|(k, a)| (!ranging || a.ranges_applied > 0) && (!reports(k) || a.uplink.received > 0));
     assert!(served, "{file:?}: {:?}", r.auvs);
 }
 
@@ -126,4 +135,31 @@ fn a_gill_file_that_cannot_run_is_refused_naming_every_field() {
     );
     let e = Scenario::parse(&tdma, Path::new("tdma.toml")).unwrap_err().to_string();
     assert!(e.contains("comms.schedule.slots[0].message") && e.contains("comms.schedule.slot 0 (ship0.port"), "{e}");
+}
+
+/// Nams's four scenarios on the engine, each its whole mission (about 1.1 h and 4.4 h: fast,
+/// without a planner) with Nams's Table 7 metrics as the observer: statuses reach the other
+/// vehicle, the 6 dB noisier scenario delivers less, the larger square is farther apart and there
+/// the selector stays silent while the other vehicle is beyond its status bins.
+#[test]
+fn nams_scenarios_run_on_the_engine_with_nams_metrics() {
+    use coopnav_sim::nams::{LinkTally, RunMetrics};
+    let metrics = |n: usize| -> RunMetrics {
+        let file = Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("../../scenarios/nams-{n}.toml"));
+        let sc = Scenario::load(&file).unwrap_or_else(|e| panic!("{e}"));
+        let mut policy = PolicySpec::new("none", &sc).unwrap().build(&sc).unwrap();
+        let mut tally = LinkTally::new(sc.fleet.n_auvs);
+        let r = run(&sc, &mut policy, sc.seed, &Faults::default(), &mut tally);
+        assert!(r.fleet.healthy, "nams-{n}");
+        tally.metrics()
+    };
+    let m: Vec<RunMetrics> = (1..=4).map(metrics).collect();
+    for (i, x) in m.iter().enumerate() {
+        eprintln!("nams-{}: {x:?}", i + 1);
+        assert!(x.bandwidth > 0.0 && x.bandwidth_net < x.bandwidth && x.duration > 3000.0, "nams-{}: {x:?}", i + 1);
+        assert!(x.status_period < 300.0 && x.header_bytes_mean > 1.0, "nams-{}: {x:?}", i + 1);
+    }
+    assert!(m[1].bandwidth < m[0].bandwidth && m[3].bandwidth < m[2].bandwidth);
+    assert!(m[2].mean_distance > 2.0 * m[0].mean_distance);
+    assert!(m[0].duty_cycle == 1.0 && m[2].duty_cycle < 1.0, "{} / {}", m[0].duty_cycle, m[2].duty_cycle);
 }

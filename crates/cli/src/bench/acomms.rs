@@ -10,7 +10,7 @@ use coopnav_acomms::workload::{sample_frame0, TrackerExchange};
 use coopnav_acomms::TransmissionLoss;
 use coopnav_core::{Bathymetry, Shelf, Vec3};
 use coopnav_sim::experiments::nams::default_tl;
-use coopnav_sim::nams::{run_experiment, ExperimentConfig, ExperimentResult};
+use coopnav_sim::nams::{run_experiment, ExperimentConfig, ExperimentResult, ExperimentTl};
 use indicatif::{ProgressBar, ProgressStyle};
 use serde_json::{json, Value};
 use std::hint::black_box;
@@ -46,12 +46,12 @@ fn summary(r: &ExperimentResult) -> Value {
     Value::Array(rows)
 }
 
-fn experiment(tl: &dyn TransmissionLoss, label: &str, reps: usize) -> Result<Value> {
+fn experiment(tl: Arc<dyn TransmissionLoss>, label: &str, reps: usize) -> Result<Value> {
     let cfg = ExperimentConfig { repetitions: reps, ..ExperimentConfig::default() };
     let n = (cfg.scenarios.len() * cfg.behaviours.len() * reps) as u64;
     let pb = bar(n, "experiment");
     let t = Instant::now();
-    let r = run_experiment(&cfg, tl, &|k| pb.inc(k))?;
+    let r = run_experiment(&cfg, &ExperimentTl::Shared(tl), &|k| pb.inc(k))?;
     let secs = t.elapsed().as_secs_f64();
     pb.finish_and_clear();
     Ok(json!({"tl": label, "runs": n, "seconds": secs, "threads": rayon::current_num_threads(), "cells": summary(&r)}))
@@ -105,14 +105,14 @@ fn bellhop(reps: usize) -> Result<Value> {
     let lookups = rate(0.5, || {
         black_box(grid.tl(black_box(&src), black_box(&rx)).ok());
     });
-    let tl_cached = grid.tl(&src, &rx)?;
-    let exp = experiment(&grid, "cached BELLHOP grid (8 bearings from (1000, 1000, 30))", reps)?;
+    let (tl_cached, grid_bytes) = (grid.tl(&src, &rx)?, grid.bytes());
+    let exp = experiment(Arc::new(grid), "cached BELLHOP grid (8 bearings from (1000, 1000, 30))", reps)?;
     Ok(json!({
         "one_run_seconds": one_run,
         "tl_direct_db": tl_direct,
         "tl_cached_db": tl_cached,
         "grid_build_seconds": build,
-        "grid_bytes": grid.bytes(),
+        "grid_bytes": grid_bytes,
         "cached_lookup_seconds": 1.0 / lookups,
         "speedup_cached_vs_run": one_run * lookups,
         "experiment": exp,
@@ -122,7 +122,7 @@ fn bellhop(reps: usize) -> Result<Value> {
 pub fn run(args: Args) -> Result<()> {
     anyhow::ensure!((1..=10_000).contains(&args.reps), "--reps {} must be in [1, 10000]", args.reps);
     let tl = default_tl();
-    let analytic = experiment(&tl, &format!("analytic, k = {}", tl.k), args.reps)?;
+    let analytic = experiment(Arc::new(tl), &format!("analytic, k = {}", tl.k), args.reps)?;
     let pb = bar(8, "analytic grid");
     let grid = CachedGrid::build(
         &tl,
@@ -131,7 +131,7 @@ pub fn run(args: Args) -> Result<()> {
         &|k| pb.inc(k),
     )?;
     pb.finish_and_clear();
-    let cached = experiment(&grid, "cached grid of the analytic model", args.reps)?;
+    let cached = experiment(Arc::new(grid), "cached grid of the analytic model", args.reps)?;
     let bellhop = if args.no_bellhop { json!({"skipped": "--no-bellhop"}) } else { bellhop(args.reps)? };
     let out = json!({"target": "acomms", "experiment_analytic": analytic, "experiment_cached_analytic": cached, "tracker": tracker()?, "bellhop": bellhop});
     println!("{}", serde_json::to_string_pretty(&out)?);

@@ -8,6 +8,8 @@ use crate::models::channel::Channel;
 use crate::models::filter::{FilterRate, FilterSpec};
 use crate::models::finish::Finish;
 use crate::models::minipacket;
+use crate::models::mower::MowerSpec;
+use crate::models::peer::{mask_width, StatusFormat, StatusTo};
 use crate::models::schedule::{longest_air, payload_problem, Fit, Schedule};
 use crate::models::ship::{ShipSpec, MAX_SHIPS};
 use crate::models::surfacing::Surfacing;
@@ -17,9 +19,9 @@ use crate::scenario_file::{self, overlay, Problems};
 use coopnav_acomms::node_report::{BODY_BITS, HEADER_BITS};
 use coopnav_acomms::selector::AdaptiveConfig;
 use coopnav_acomms::status::CovTrailer;
-use coopnav_acomms::{Rate, SuccessModel};
+use coopnav_acomms::{Rate, Receiver, SuccessModel};
 use coopnav_core::validation::CheckFields;
-use coopnav_core::{Bathymetry, CompassDeg, DepthTarget, Heading, Lawnmower, Shelf};
+use coopnav_core::{Bathymetry, CompassDeg, DepthTarget, Heading, Iver2Params, Lawnmower, Shelf};
 use coopnav_nav::{AuvModel, AuvParams, RangeNoise};
 use coopnav_plan::predict::{PredictorConfig, WaypointUse};
 use coopnav_plan::{
@@ -153,6 +155,13 @@ pub struct Fleet {
     /// What a survey AUV does once its lawnmower is flown.
     #[serde(default)]
     pub finish: Finish,
+    /// Each survey AUV's own block (one per AUV; empty: side by side from `origin`).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub lawnmowers: Vec<MowerSpec>,
+    /// The survey AUVs' IVER2 dynamics (nams digest §4.2; default `vehicle.m`'s constants), which
+    /// the other vehicles' shadow estimates also fly.
+    #[serde(default)]
+    pub vehicle: Iver2Params,
 }
 
 fn default_seafloor() -> f64 {
@@ -237,6 +246,12 @@ pub struct Comms {
     pub max_range_m: f64,
     /// Air time of a 13-bit mini-packet, s (see [`minipacket::DEFAULT_AIR_S`]).
     pub mini_packet_air_s: f64,
+    /// Who a survey AUV's status is addressed to (`cna` or `cna_and_auvs`).
+    pub status_to: StatusTo,
+    /// The survey AUVs' modems receiving each other's statuses (Table 5's partial-drop column).
+    pub peer_receiver: Receiver,
+    /// What a status carries (`{ kind = "node_report" }` or Nams's `{ kind = "nams_frame0", … }`).
+    pub status_format: StatusFormat,
 }
 
 impl Default for Comms {
@@ -252,6 +267,9 @@ impl Default for Comms {
             slot_guard_s: 0.1,
             max_range_m: 1000.0,
             mini_packet_air_s: minipacket::DEFAULT_AIR_S,
+            status_to: StatusTo::default(),
+            peer_receiver: Receiver::Iver2,
+            status_format: StatusFormat::default(),
         }
     }
 }
@@ -427,6 +445,15 @@ impl Scenario {
         }
         p.non_negative("fleet.init_position_sd", f.init_position_sd);
         p.extend(f.finish.problems("fleet.finish."));
+        if let Err(e) = f.vehicle.validate() {
+            p.push("fleet.vehicle", e, "the IVER2 model's ranges");
+        }
+        if !(f.lawnmowers.is_empty() || f.lawnmowers.len() == f.n_auvs) {
+            p.push("fleet.lawnmowers", format!("{} entries", f.lawnmowers.len()), "none, or one per survey AUV");
+        }
+        for (k, m) in f.lawnmowers.iter().enumerate() {
+            p.extend(m.problems(&format!("fleet.lawnmowers[{k}].")));
+        }
         for (field, v) in [("fleet.origin[0]", f.origin.0), ("fleet.origin[1]", f.origin.1)] {
             p.check(field, v, |v| v.abs() < 10_000.0, "within ±10 000 m (status message range ±16 000 m)");
         }
@@ -517,7 +544,24 @@ impl Scenario {
         // The status message (node report and covariance trailer), and the CNA's broadcast: its
         // position report with one ack bit per AUV.
         let report_bytes = (HEADER_BITS + BODY_BITS).div_ceil(8) as usize;
-        let status_bytes = report_bytes + CovTrailer::BYTES;
+        let status_bytes = match c.status_format {
+            StatusFormat::NodeReport => report_bytes + CovTrailer::BYTES,
+            // Nams's status and its (possibly empty) header in frame 0.
+            StatusFormat::NamsFrame0 { estimator } => {
+                let rates = (0..self.fleet.n_auvs)
+                    .filter_map(|k| c.schedule.status_policy(k).and_then(|s| s.rates().ok()))
+                    .chain([status_rates.clone()]);
+                let widest = rates.map(|r| mask_width(&r)).max_by_key(|w| w.entry_bits());
+                StatusFormat::nams_frame0_bytes(estimator, widest.unwrap_or(coopnav_acomms::tracker::MaskWidth::Narrow))
+            }
+        };
+        if let StatusFormat::NamsFrame0 { .. } = c.status_format {
+            for rate in &status_rates {
+                if status_bytes > rate.spec().frame_bytes {
+                    p.push("comms.status_format", format!("rate {rate}"), "a rate whose frame 0 holds the Nams status");
+                }
+            }
+        }
         let broadcast_bytes = report_bytes + self.fleet.n_auvs.div_ceil(8);
         p.extend(payload_problem("comms.cna_rate", c.cna_rate, broadcast_bytes));
         for rate in &status_rates {
@@ -640,11 +684,15 @@ impl Scenario {
         let heading = Heading::from(CompassDeg(f.lane_heading_compass_deg));
         let (ux, uy) = heading.unit();
         let off = k as f64 * f.block_offset;
+        let (origin, lane_heading, spacing) = match f.lawnmowers.get(k) {
+            Some(m) => (m.origin, Heading::from(CompassDeg(m.lane_heading_compass_deg)), m.spacing(f.lane_spacing)),
+            None => ((f.origin.0 + uy * off, f.origin.1 - ux * off), heading, -f.lane_spacing),
+        };
         Lawnmower {
-            origin: (f.origin.0 + uy * off, f.origin.1 - ux * off),
-            lane_heading: heading,
+            origin,
+            lane_heading,
             lane_length: f.lane_length,
-            spacing: -f.lane_spacing,
+            spacing,
             lanes: f.lanes,
             speed: f.speed,
             depth: coopnav_core::DepthProfile::Constant {

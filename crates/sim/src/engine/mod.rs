@@ -9,11 +9,14 @@
 //! drifting) whose position broadcasts the AUVs range to as well, ships on a fixed track, the
 //! comms schedule of the scenario. Ships and buoys may send 13-bit mini-packets (Gill's cycles):
 //! each survey AUV filters their states from the components and ranges to them ([`mini`]).
+//! Survey AUVs may also address their statuses to each other as Nams's frame 0, with the
+//! packet-success tracker, shadow estimates and rate feedback of [`peer`].
 
 pub mod health;
 mod inflight;
 mod mini;
 pub mod observe;
+mod peer;
 mod phases;
 mod vehicles;
 
@@ -22,19 +25,21 @@ use crate::closed_loop::planner_policy::{ErrorTracker, PlannerStats};
 use crate::closed_loop::policies::{cna_start, Policy};
 use crate::closed_loop::scenario::Scenario;
 use crate::models::channel::Clock;
+use crate::models::peer::StatusFormat;
 use crate::models::schedule::Slot;
 use crate::models::surfacing::OwnNav;
 use crate::policy::ReportedCov;
 use coopnav_acomms::tl::{TlError, TransmissionLoss, TL_CEILING};
-use coopnav_core::{Bathymetry, SeedStream, Vec3};
+use coopnav_core::{Bathymetry, Iver2State, SeedStream, Vec3};
 use coopnav_plan::predict::UnderwayPredictor;
 use coopnav_plan::AuvForecast;
 use inflight::InFlight;
 use mini::SurfaceFilters;
 pub use observe::{
     BuoyFix, BuoySample, CommsEvent, DeadReckoning, Decision, FilterStart, Observer, Phase, PhaseClock, RangeHeard,
-    ShipPose, ShipSample, StatusChoice, Timing, Trace, TraceRow,
+    ShadowSample, ShipPose, ShipSample, StatusChoice, StatusFrames, StatusSent, Timing, Trace, TraceRow,
 };
+use peer::{PeerLink, Plans};
 use phases::Payload;
 use rand_chacha::ChaCha8Rng;
 use serde::Serialize;
@@ -130,6 +135,10 @@ struct Engine<'a> {
     ships: Vec<Ship>,
     /// Per survey AUV, its filters of the ships and buoys it hears mini-packets from.
     surface: Vec<SurfaceFilters>,
+    /// Per survey AUV, its side of Nams's link (empty unless `comms.status_format` is Nams's).
+    peers: Vec<PeerLink>,
+    /// Per survey AUV, the channel draws of its statuses at the other survey AUVs.
+    peer_draws: Vec<ChaCha8Rng>,
     air: InFlight<Payload>,
     /// The scenario's transmission-loss model, built once for the run.
     tl: Arc<dyn TransmissionLoss>,
@@ -145,8 +154,31 @@ struct Engine<'a> {
 
 /// Runs `policy` over scenario `sc` with run seed `seed`, reporting to `obs`.
 pub fn run(sc: &Scenario, policy: &mut Policy, seed: u64, faults: &Faults, obs: &mut dyn Observer) -> RunResult {
+    run_on(sc, policy, seed, faults, None, obs)
+}
+
+/// [`run`] on a transmission-loss model the caller built (one model shared by an experiment's many
+/// runs, e.g. a BELLHOP grid of its own layout) instead of the scenario's `comms.tl`.
+pub fn run_with_tl(
+    sc: &Scenario,
+    policy: &mut Policy,
+    seed: u64,
+    tl: Arc<dyn TransmissionLoss>,
+    obs: &mut dyn Observer,
+) -> RunResult {
+    run_on(sc, policy, seed, &Faults::default(), Some(tl), obs)
+}
+
+fn run_on(
+    sc: &Scenario,
+    policy: &mut Policy,
+    seed: u64,
+    faults: &Faults,
+    tl: Option<Arc<dyn TransmissionLoss>>,
+    obs: &mut dyn Observer,
+) -> RunResult {
     let t_start = Instant::now();
-    let mut engine = Engine::new(sc, policy, seed, faults);
+    let mut engine = Engine::new(sc, policy, seed, faults, tl);
     for (auv, a) in engine.auvs.iter().enumerate() {
         let ((x, y), (speed, heading)) = (a.ekf.position(), a.ekf.speed_heading());
         obs.on_filter_start(&FilterStart { auv, x, y, speed, heading });
@@ -174,7 +206,13 @@ pub fn run_traced(sc: &Scenario, policy: &mut Policy, seed: u64, faults: &Faults
 }
 
 impl<'a> Engine<'a> {
-    fn new(sc: &'a Scenario, policy: &'a mut Policy, seed: u64, faults: &'a Faults) -> Self {
+    fn new(
+        sc: &'a Scenario,
+        policy: &'a mut Policy,
+        seed: u64,
+        faults: &'a Faults,
+        tl: Option<Arc<dyn TransmissionLoss>>,
+    ) -> Self {
         let streams = SeedStream::new(seed);
         let n = sc.fleet.n_auvs;
         let bathy = sc.bathymetry();
@@ -199,18 +237,20 @@ impl<'a> Engine<'a> {
             faults,
             bathy,
             slots: sc.comms.schedule.slots(sc.comms.tau, n, sc.buoys.len()),
-            auvs,
             cna,
             buoys: (0..sc.buoys.len()).map(|i| Buoy::new(sc, i, &streams)).collect(),
             ships: (0..sc.ships.len()).map(|i| Ship::new(sc, i, &streams)).collect(),
             surface: (0..n).map(|_| SurfaceFilters::new(sc)).collect(),
+            peers: peer_links(sc, &auvs),
+            peer_draws: (0..n).map(|k| streams.rng(peer::STREAM_BASE + k as u64)).collect(),
             air: InFlight::new(sc.channel.collisions.capture_margin_db),
-            tl: sc.comms.tl.provider(sc).unwrap_or_else(|e| {
+            tl: tl.map_or_else(|| sc.comms.tl.provider(sc), Ok).unwrap_or_else(|e| {
                 // Validation builds the provider first, so this is a scenario built in code.
                 tracing::error!(error = %e, "transmission loss unavailable: every packet is lost");
                 Arc::new(Unavailable)
             }),
             tl_failure_reported: Cell::new(false),
+            auvs,
             next_decision: 0,
             next_slot: 0,
             status_sent: vec![0; n],
@@ -282,6 +322,24 @@ impl<'a> Engine<'a> {
     }
 }
 
+/// Every survey AUV's side of Nams's link, when the statuses are Nams's frame 0.
+fn peer_links(sc: &Scenario, auvs: &[SurveyAuv]) -> Vec<PeerLink> {
+    let StatusFormat::NamsFrame0 { estimator } = sc.comms.status_format else { return Vec::new() };
+    let plans = Plans {
+        waypoints: auvs.iter().map(|a| a.ctrl.waypoints().to_vec()).collect(),
+        starts: auvs.iter().map(|a| Iver2State::at_rest(a.truth, a.ctrl.state.heading)).collect(),
+        target: sc.fleet.depth,
+        speed: sc.fleet.speed,
+        vehicle: sc.fleet.vehicle,
+    };
+    (0..auvs.len())
+        .map(|k| {
+            let rates = vehicles::status_policy(sc, k).rates().unwrap_or_default();
+            PeerLink::new(k, &rates, estimator, &plans)
+        })
+        .collect()
+}
+
 /// A transmission-loss model that could not be built: every packet is lost.
 struct Unavailable;
 
@@ -313,5 +371,7 @@ fn metrics(k: usize, a: &AuvTally) -> AuvMetrics {
     }
 }
 
+#[cfg(test)]
+mod peer_tests;
 #[cfg(test)]
 mod tests;

@@ -5,6 +5,7 @@
 
 use crate::models::schedule::Owner;
 use coopnav_acomms::selector::Choice;
+use coopnav_acomms::Rate;
 use coopnav_core::Vec3;
 use serde::Serialize;
 use std::time::Instant;
@@ -127,6 +128,44 @@ pub struct StatusChoice {
     pub choice: Choice,
 }
 
+/// A survey AUV's status as sent: its rate and the tracking header in its frame 0 (Nams's frame 0;
+/// no header in a node report).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct StatusSent {
+    pub t: f64,
+    pub auv: usize,
+    pub rate: Rate,
+    pub header_entries: usize,
+    pub header_bits: usize,
+}
+
+/// A survey AUV's status arriving at another survey AUV (`comms.status_to = "cna_and_auvs"`): how
+/// many of its frames arrived (after collisions and half-duplex), and the frame-0 bytes spent on
+/// header and status when frame 0 was decoded.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct StatusFrames {
+    /// Transmission time, s.
+    pub t: f64,
+    pub from: usize,
+    pub to: usize,
+    pub rate: Rate,
+    pub frames_received: u32,
+    pub frames_sent: u32,
+    pub frame_bytes: usize,
+    pub frame0_bytes: Option<usize>,
+}
+
+/// At a survey AUV's status slot (Nams's frame 0): where its shadow estimate of another survey AUV
+/// is, against that vehicle's truth.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct ShadowSample {
+    pub t: f64,
+    pub auv: usize,
+    pub peer: usize,
+    /// Horizontal distance from the estimate to the truth, m.
+    pub error: f64,
+}
+
 /// A CNA decision: where it was (true position) and the point it now steers for (none: hold).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Decision {
@@ -161,6 +200,12 @@ pub trait Observer {
     fn on_range(&mut self, _range: &RangeHeard) {}
     /// Every survey AUV's status slot, with its rate policy's choice.
     fn on_status_choice(&mut self, _choice: &StatusChoice) {}
+    /// A survey AUV's status leaving, with the header its frame 0 carries.
+    fn on_status_sent(&mut self, _sent: &StatusSent) {}
+    /// A survey AUV's status arriving at another survey AUV, frames counted.
+    fn on_status_frames(&mut self, _frames: &StatusFrames) {}
+    /// A survey AUV's shadow estimate of another, at its status slot.
+    fn on_shadow(&mut self, _sample: &ShadowSample) {}
     /// A packet whose fate is known (at the end of its arrival).
     fn on_packet(&mut self, _event: &CommsEvent) {}
     /// A phase of the run ended: the set-up once, then each phase of every step, in order.

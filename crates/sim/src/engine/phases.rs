@@ -8,8 +8,10 @@
 use super::health::nees_2d;
 use super::inflight::Arrival;
 use super::observe::{
-    BuoyFix, CommsEvent, DeadReckoning, Decision, Observer, RangeHeard, ShipPose, StatusChoice, TraceRow,
+    BuoyFix, CommsEvent, DeadReckoning, Decision, Observer, RangeHeard, ShadowSample, ShipPose, StatusChoice,
+    StatusFrames, StatusSent, TraceRow,
 };
+use super::peer::PeerLink;
 use super::vehicles::lerp;
 use super::vehicles::SurveyAuv;
 use super::{Engine, FleetView};
@@ -19,6 +21,7 @@ use crate::hbl::noise::normal;
 use crate::models::channel::{air_time, Clock};
 use crate::models::finish::Finish;
 use crate::models::minipacket::SUCCESS_RATE;
+use crate::models::peer::{StatusFormat, StatusTo};
 use crate::models::schedule::{Message, Owner};
 use crate::models::surfacing::Step;
 use crate::policy::ReportedCov;
@@ -27,7 +30,8 @@ use coopnav_acomms::codec::{DecodeError, EncodeError};
 use coopnav_acomms::node_report::NodeReport;
 use coopnav_acomms::selector::{Choice, Outcome};
 use coopnav_acomms::status::{CovTrailer, CovarianceReport};
-use coopnav_acomms::Rate;
+use coopnav_acomms::status::{Frame0, LocalOrigin, NextWaypoint};
+use coopnav_acomms::{Rate, Reception};
 use coopnav_core::{Heading, Vec3};
 use coopnav_nav::{RangeMeasurement, StateKind, UpdateOutcome};
 use coopnav_plan::predict::StatusReport;
@@ -41,8 +45,9 @@ pub enum Payload {
     Broadcast { rate: Rate, fix: Vec3, travel_time: Option<f64>, acked: Vec<u64>, decoded: bool },
     /// A buoy's position broadcast: its GPS fix and the travel time the receiver measured.
     Position { rate: Rate, fix: Vec3, travel_time: Option<f64>, decoded: bool },
-    /// A survey AUV's status message through the wire format.
-    Status { rate: Rate, slot_id: u64, bytes: Vec<u8>, decoded: bool },
+    /// A survey AUV's status message through the wire format, and which of its frames the
+    /// channel let through to this receiver.
+    Status { rate: Rate, slot_id: u64, bytes: Vec<u8>, decoded: bool, reception: Reception },
     /// A ship's or buoy's 13-bit mini-packet: one decoded state component and the travel time
     /// the receiver measured (see [`super::mini`]).
     Mini { kind: StateKind, value: f64, travel_time: Option<f64>, decoded: bool },
@@ -158,7 +163,7 @@ impl Engine<'_> {
                 (Message::Mini(kind), owner) => self.mini_broadcast(owner, kind, t_tx, frac, obs),
                 (Message::Packet, Owner::Cna) => self.broadcast(t_tx, frac),
                 (Message::Packet, Owner::Buoy(b)) => self.buoy_broadcast(b, t_tx, frac, obs),
-                (Message::Packet, Owner::Auv(j)) => self.send_status(j, t_tx, frac, obs),
+                (Message::Packet, Owner::Auv(j)) => self.send_status(j, self.next_slot - 1, t_tx, frac, obs),
                 // Validation refuses a ship slot without a component.
                 (Message::Packet, Owner::Ship(..)) => {}
             }
@@ -218,27 +223,42 @@ impl Engine<'_> {
         self.air.push(arrival(Owner::Buoy(b), Owner::Cna, t_tx, tt, air, tl, None));
     }
 
-    /// Survey AUV `j`'s status slot: its selector picks the rate (or silence); the message goes
-    /// through the wire format to the CNA, and reaches the other AUVs as interference.
-    fn send_status(&mut self, j: usize, t_tx: f64, frac: f64, obs: &mut dyn Observer) {
+    /// Survey AUV `j`'s status slot (network slot `net_slot`): its selector picks the rate (or
+    /// silence); the message goes to the CNA (and, with `comms.status_to = "cna_and_auvs"`, to
+    /// every other survey AUV; otherwise it reaches them as interference).
+    fn send_status(&mut self, j: usize, net_slot: u64, t_tx: f64, frac: f64, obs: &mut dyn Observer) {
         let sc = self.sc;
-        let slot_id = self.status_sent[j];
+        let nams = !self.peers.is_empty();
+        // Nams's tracker counts network slots; the CNA's acks count each AUV's own.
+        let slot_id = if nams { net_slot } else { self.status_sent[j] };
         self.status_sent[j] += 1;
         let silent = self.silent(j, t_tx);
+        let distance = if nams {
+            self.peer_distance(j, t_tx, frac, obs)
+        } else {
+            let a = &self.auvs[j];
+            let (ex, ey) = a.ekf.position();
+            a.cna_heard.map(|c| (c.x - ex).hypot(c.y - ey))
+        };
         let a = &mut self.auvs[j];
-        let (ex, ey) = a.ekf.position();
-        let distance = a.cna_heard.map(|c| (c.x - ex).hypot(c.y - ey));
         let choice = a.selector.choose(slot_id, distance);
         obs.on_status_choice(&StatusChoice { t: t_tx, auv: j, distance, choice });
         let Choice::Transmit(rate) = choice else { return };
-        let bytes = match status_with_covariance(a, j, t_tx) {
+        let encoded = match self.peers.get_mut(j) {
+            Some(link) => nams_frame0(link, a, slot_id, rate),
+            None => status_with_covariance(a, j, t_tx).map(|bytes| (bytes, 0, 0)),
+        };
+        let (bytes, header_entries, header_bits) = match encoded {
             Ok(b) => b,
             Err(e) => {
                 tracing::warn!(t = t_tx, auv = j, error = %e, "status message cannot be encoded; not sent");
                 return;
             }
         };
-        a.unacked.push(slot_id);
+        obs.on_status_sent(&StatusSent { t: t_tx, auv: j, rate, header_entries, header_bits });
+        if !nams {
+            a.unacked.push(slot_id);
+        }
         let from = lerp(a.prev, a.truth, frac);
         let craft = &self.cna.craft;
         let (c0, cv) = (lerp(craft.prev, craft.pos, frac), (craft.pos - craft.prev) * (1.0 / sc.dt));
@@ -246,16 +266,42 @@ impl Engine<'_> {
         let air = air_time(rate);
         let tt = sc.channel.sound_speed.travel_time(from, |d| c0 + cv * d);
         let rng_up = &mut self.auvs[j].rng_up;
-        let decoded = sc.comms.success.draw(rate, tl, receiver(true), rng_up).frame0() && !silent;
+        let reception = sc.comms.success.draw(rate, tl, receiver(true), rng_up);
+        let decoded = reception.frame0() && !silent;
         self.air.transmit(Owner::Auv(j), t_tx, t_tx + air);
-        let payload = Payload::Status { rate, slot_id, bytes, decoded };
+        let to_peers = sc.comms.status_to == StatusTo::CnaAndAuvs;
+        let payload = Payload::Status { rate, slot_id, bytes: bytes.clone(), decoded, reception };
         self.air.push(arrival(Owner::Auv(j), Owner::Cna, t_tx, tt, air, tl, Some(payload)));
-        for (m, other) in self.auvs.iter().enumerate().filter(|(m, _)| *m != j) {
+        for m in (0..self.auvs.len()).filter(|m| *m != j) {
+            let other = &self.auvs[m];
             let (p0, v) = (lerp(other.prev, other.truth, frac), other.velocity(sc.dt));
             let tt = sc.channel.sound_speed.travel_time(from, |d| p0 + v * d);
             let tl = self.tl_db(&from, &p0);
-            self.air.push(arrival(Owner::Auv(j), Owner::Auv(m), t_tx, tt, air, tl, None));
+            let payload = to_peers.then(|| {
+                let lost = silent || self.silent(m, t_tx);
+                let drawn = sc.comms.success.draw(rate, tl, sc.comms.peer_receiver, &mut self.peer_draws[j]);
+                let reception = if lost { Reception { frames: 0, ..drawn } } else { drawn };
+                Payload::Status { rate, slot_id, bytes: bytes.clone(), decoded: reception.frame0(), reception }
+            });
+            self.air.push(arrival(Owner::Auv(j), Owner::Auv(m), t_tx, tt, air, tl, payload));
         }
+    }
+
+    /// Before AUV `j`'s Nams slot: its rate policy hears what its tracker resolved, and the
+    /// distance it decides on is the one to its farthest shadowed peer (from its own estimate).
+    fn peer_distance(&mut self, j: usize, t_tx: f64, frac: f64, obs: &mut dyn Observer) -> Option<f64> {
+        let (outcomes, heard) = self.peers[j].take_feedback();
+        self.auvs[j].selector.feedback(&outcomes, heard);
+        let (ex, ey) = self.auvs[j].ekf.position();
+        let mut farthest: Option<f64> = None;
+        for m in (0..self.auvs.len()).filter(|m| *m != j) {
+            let Some(e) = self.peers[j].estimate(m, t_tx, &self.bathy) else { continue };
+            let truth = lerp(self.auvs[m].prev, self.auvs[m].truth, frac);
+            obs.on_shadow(&ShadowSample { t: t_tx, auv: j, peer: m, error: (e.x - truth.x).hypot(e.y - truth.y) });
+            let d = (e.x - ex).hypot(e.y - ey);
+            farthest = Some(farthest.map_or(d, |f| f.max(d)));
+        }
+        farthest
     }
 
     /// Every addressed packet whose arrival ended by `t_next`, in time order.
@@ -271,23 +317,23 @@ impl Engine<'_> {
                         self.hear_broadcast(k, &meta, fix, travel_time, &acked);
                     }
                 }
-                (Payload::Status { rate, slot_id, bytes, decoded }, Owner::Auv(_) | Owner::Cna) => {
+                (Payload::Status { rate, slot_id, bytes, decoded, .. }, Owner::Cna) => {
                     let Owner::Auv(j) = meta.from else { continue };
-                    let message = (decoded && survived).then(|| read_status(&bytes)).and_then(Result::ok);
+                    let message = (decoded && survived).then(|| self.read_at_cna(j, &bytes, meta.t_tx)).flatten();
                     self.tallies[j].up.record(rate.index(), message.is_some());
                     obs.on_packet(&event(&meta, "up", j, decoded, survived));
-                    if let Some((m, cov)) = message {
-                        let t = resolve_time(m.time_of_day, meta.t_tx);
+                    if let Some((report, cov)) = message {
                         self.cna.acked[j].push(slot_id);
-                        self.cna.reported[j] = Some(ReportedCov { t, cov: cov.to_cov() });
-                        self.cna.predictors[j].receive(StatusReport {
-                            t,
-                            pos: Vec3::new(m.x, m.y, m.depth),
-                            speed: m.speed,
-                            heading: m.heading,
-                            waypoints: m.waypoints,
-                        });
+                        if let Some(cov) = cov {
+                            self.cna.reported[j] = Some(cov);
+                        }
+                        self.cna.predictors[j].receive(report);
                     }
+                }
+                (Payload::Status { rate, slot_id, bytes, reception, .. }, Owner::Auv(m)) => {
+                    let Owner::Auv(j) = meta.from else { continue };
+                    let rx = if survived { reception } else { Reception { frames: 0, ..reception } };
+                    self.hear_status(m, j, (rate, slot_id), rx, &bytes, meta.t_tx, obs);
                 }
                 (Payload::Position { rate, fix, travel_time, decoded }, Owner::Auv(k)) => {
                     let received = decoded && survived;
@@ -315,6 +361,63 @@ impl Engine<'_> {
                 | (Payload::Status { .. }, Owner::Buoy(_) | Owner::Ship(..)) => {}
             }
         }
+    }
+
+    /// What the CNA reads of AUV `j`'s status sent at `t_tx`: the report its predictor takes and,
+    /// from a node report's trailer, the AUV's covariance (None: not decodable).
+    fn read_at_cna(&self, j: usize, bytes: &[u8], t_tx: f64) -> Option<(StatusReport, Option<ReportedCov>)> {
+        let Some(link) = self.peers.get(j) else {
+            let (m, cov) = read_status(bytes).ok()?;
+            let t = resolve_time(m.time_of_day, t_tx);
+            let pos = Vec3::new(m.x, m.y, m.depth);
+            let report = StatusReport { t, pos, speed: m.speed, heading: m.heading, waypoints: m.waypoints };
+            return Some((report, Some(ReportedCov { t, cov: cov.to_cov() })));
+        };
+        let status = Frame0::decode(bytes, link.width()).ok()?.status;
+        // The CNA knows the plans: a waypoint id names the next three of AUV j's.
+        let waypoints = match status.next {
+            NextWaypoint::Id(id) => {
+                self.auvs[j].ctrl.waypoints().iter().skip(id as usize).take(3).map(|w| (w.x, w.y)).collect()
+            }
+            NextWaypoint::LatLon { lat, lon } => vec![LocalOrigin::default().to_local(lat, lon)],
+        };
+        let s = status;
+        Some((StatusReport { t: t_tx, pos: s.pos, speed: s.speed, heading: s.heading, waypoints }, None))
+    }
+
+    /// AUV `m` received `rx` of AUV `j`'s status (`rate`, slot `slot_id`) sent at `t_tx`: with Nams's
+    /// frame 0 its tracker and shadow of `j` learn from it; the observer counts the frames.
+    #[allow(clippy::too_many_arguments)]
+    fn hear_status(
+        &mut self,
+        m: usize,
+        j: usize,
+        (rate, slot_id): (Rate, u64),
+        rx: Reception,
+        bytes: &[u8],
+        t_tx: f64,
+        obs: &mut dyn Observer,
+    ) {
+        let frame0_bytes = match self.peers.get(j).map(PeerLink::width) {
+            Some(width) => match self.peers[m].on_packet(j, slot_id, rx, bytes, width, t_tx) {
+                Ok(heard) => heard.frame0_bytes,
+                Err(e) => {
+                    tracing::warn!(t = t_tx, from = j, to = m, error = %e, "a peer's frame 0 does not decode");
+                    None
+                }
+            },
+            None => rx.frame0().then_some(bytes.len()),
+        };
+        obs.on_status_frames(&StatusFrames {
+            t: t_tx,
+            from: j,
+            to: m,
+            rate,
+            frames_received: rx.count(),
+            frames_sent: u32::from(rx.n_frames),
+            frame_bytes: rate.spec().frame_bytes,
+            frame0_bytes,
+        });
     }
 
     /// AUV `k` decoded the CNA's broadcast at the end of its arrival: the acknowledgements feed
@@ -487,6 +590,25 @@ fn status_with_covariance(a: &SurveyAuv, k: usize, t: f64) -> Result<Vec<u8>, En
     let mut bytes = a.status(k, t).encode()?;
     bytes.extend(CovTrailer::encode(&CovarianceReport::from_cov(a.ekf.position_cov()))?);
     Ok(bytes)
+}
+
+/// AUV `a`'s Nams frame 0 for its network slot `slot` at `rate` (the status from its own estimate),
+/// with the header's entries and bits.
+fn nams_frame0(
+    link: &mut PeerLink,
+    a: &SurveyAuv,
+    slot: u64,
+    rate: Rate,
+) -> Result<(Vec<u8>, usize, usize), EncodeError> {
+    let (ex, ey) = a.ekf.position();
+    let (speed, psi) = a.ekf.speed_heading();
+    let next = a.ctrl.next_waypoint();
+    let wp = a.ctrl.waypoints().get(next).or(a.ctrl.waypoints().last()).map_or((ex, ey), |w| (w.x, w.y));
+    let pos = Vec3::new(ex, ey, a.truth.z);
+    let latlon = LocalOrigin::default().to_latlon(wp.0, wp.1);
+    let status = StatusFormat::nams_status(link.mode(), pos, Heading::from_radians(psi), speed, (next, latlon));
+    let f = link.frame0(slot, rate, status)?;
+    Ok((f.bytes, f.header_entries, f.header_bits))
 }
 
 /// Splits a received status into its node report and covariance trailer and decodes both.

@@ -14,7 +14,7 @@ use coopnav_acomms::node_report::{NodeReport, VehicleType};
 use coopnav_acomms::selector::{RatePolicy, RatePolicySpec};
 use coopnav_acomms::Rate;
 use coopnav_core::{
-    hypot_within, wrap_pi, Bathymetry, DepthTarget, Heading, Iver2, Iver2Params, Iver2State, SeedStream, Vec3, Waypoint,
+    hypot_within, wrap_pi, Bathymetry, DepthTarget, Heading, Iver2, Iver2State, SeedStream, Vec3, Waypoint,
 };
 use coopnav_nav::{AuvFilter, Side, StateKind};
 use rand_chacha::ChaCha8Rng;
@@ -102,7 +102,7 @@ impl SurveyAuv {
         state.altitude = bottom - z0;
         let s = &sc.sensors;
         SurveyAuv {
-            ctrl: Iver2::new(Iver2Params::default(), state, waypoints),
+            ctrl: Iver2::new(sc.fleet.vehicle, state, waypoints),
             truth,
             prev: truth,
             ekf: AuvFilter::new(&sc.filter.model, 0.0, ex, ey, 0.0, heading, sc.filter.params.clone()),

@@ -3,13 +3,16 @@
 //! ([`ship`]), the acoustic channel's truth side ([`channel`]), the 13-bit mini-packet
 //! ([`minipacket`]), the comms schedule ([`schedule`]), what a vehicle does after its mission ([`finish`]) and what the
 //! survey AUVs' filters assume ([`filter`]), the transmission loss ([`tl`]) and when an AUV CNA
-//! surfaces for a GPS fix ([`surfacing`]).
+//! surfaces for a GPS fix ([`surfacing`]), a survey AUV's own lawnmower ([`mower`]) and what its
+//! status carries to whom ([`peer`]).
 
 pub mod buoy;
 pub mod channel;
 pub mod filter;
 pub mod finish;
 pub mod minipacket;
+pub mod mower;
+pub mod peer;
 pub mod schedule;
 pub mod ship;
 pub mod surfacing;

@@ -4,7 +4,13 @@
 //! score = 0.5·BW/19.2 + 0.3·(1 − duty) + 0.2·mean f(P), f(P) = 1 if P ≤ Th else Th/P ("half
 //! score per doubling", continuous form), Th = 60·(1 + floor(d̄/500)) s. Reconstructed: digest
 //! §8 item 19.
+//!
+//! [`LinkTally`] collects the same counts from the one engine (a Nams scenario file run with
+//! `comms.status_format = "nams_frame0"` and `comms.status_to = "cna_and_auvs"`).
 
+use crate::engine::{Observer, ShadowSample, StatusChoice, StatusFrames, StatusSent, TraceRow};
+use coopnav_acomms::selector::Choice;
+use coopnav_core::Vec3;
 use serde::Serialize;
 
 /// Bandwidth ceiling of Table 7: rate 1 (192 B) every 10 s at 100 % success, B/s.
@@ -22,7 +28,7 @@ pub struct Tally {
     /// Times of status receptions (frame 0 arrived), both directions, in order.
     pub status_times: Vec<f64>,
     /// Per-direction status receptions (receiver index).
-    pub status_times_by_rx: [Vec<f64>; 2],
+    pub status_times_by_rx: Vec<Vec<f64>>,
     pub header_bits: u64,
     pub queue_len_sum: u64,
     pub queue_len_max: u64,
@@ -32,6 +38,87 @@ pub struct Tally {
     pub estimate_error_sum: f64,
     pub estimate_error_max: f64,
     pub decisions: u64,
+}
+
+impl Tally {
+    /// Nothing yet, among `n` vehicles (a direction never heard counts the whole mission as one
+    /// period).
+    pub fn for_vehicles(n: usize) -> Self {
+        Tally { status_times_by_rx: vec![Vec::new(); n], ..Tally::default() }
+    }
+
+    /// A status (frame 0) sent at `t` was received by vehicle `rx`.
+    pub fn status_received(&mut self, rx: usize, t: f64) {
+        self.status_times.push(t);
+        if self.status_times_by_rx.len() <= rx {
+            self.status_times_by_rx.resize(rx + 1, Vec::new());
+        }
+        self.status_times_by_rx[rx].push(t);
+    }
+}
+
+/// Nams's counts from an engine run: every survey AUV's status slots, the frames its statuses
+/// deliver to the other survey AUVs, its shadow estimates, and the vehicles' mean distance apart.
+#[derive(Debug, Clone)]
+pub struct LinkTally {
+    pub tally: Tally,
+    distance_sum: f64,
+    distance_samples: u64,
+    last_t: f64,
+}
+
+impl LinkTally {
+    /// A tally of a run with `n_auvs` survey AUVs.
+    pub fn new(n_auvs: usize) -> Self {
+        LinkTally { tally: Tally::for_vehicles(n_auvs), distance_sum: 0.0, distance_samples: 0, last_t: 0.0 }
+    }
+
+    /// Table 7's metrics over the run so far.
+    pub fn metrics(&self) -> RunMetrics {
+        let mean_distance = self.distance_sum / self.distance_samples.max(1) as f64;
+        RunMetrics::from_tally(&self.tally, self.last_t, mean_distance)
+    }
+}
+
+impl Observer for LinkTally {
+    fn on_status_choice(&mut self, choice: &StatusChoice) {
+        let t = &mut self.tally;
+        t.opportunities += 1;
+        if let Choice::Transmit(rate) = choice.choice {
+            t.transmissions += 1;
+            t.rate_use[rate.index() as usize] += 1;
+        }
+    }
+    fn on_status_sent(&mut self, sent: &StatusSent) {
+        let t = &mut self.tally;
+        t.header_bits += sent.header_bits as u64;
+        t.queue_len_sum += sent.header_entries as u64;
+        t.queue_len_max = t.queue_len_max.max(sent.header_entries as u64);
+    }
+    fn on_status_frames(&mut self, f: &StatusFrames) {
+        let gross = u64::from(f.frames_received) * f.frame_bytes as u64;
+        self.tally.bytes_gross += gross;
+        self.tally.bytes_net += gross - f.frame0_bytes.unwrap_or(0) as u64;
+        if f.frame0_bytes.is_some() {
+            self.tally.status_received(f.to, f.t);
+        }
+    }
+    fn on_shadow(&mut self, sample: &ShadowSample) {
+        let t = &mut self.tally;
+        t.estimate_error_sum += sample.error;
+        t.estimate_error_max = t.estimate_error_max.max(sample.error);
+        t.decisions += 1;
+    }
+    /// Every pair of survey AUVs' true horizontal distance, once a second.
+    fn on_sample(&mut self, t: f64, _cna: Vec3, rows: &[TraceRow]) {
+        for (i, a) in rows.iter().enumerate() {
+            for b in &rows[i + 1..] {
+                self.distance_sum += (a.true_x - b.true_x).hypot(a.true_y - b.true_y);
+                self.distance_samples += 1;
+            }
+        }
+        self.last_t = t;
+    }
 }
 
 /// Metrics of one run.

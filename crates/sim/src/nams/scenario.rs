@@ -1,6 +1,7 @@
 //! Scenarios (thesis Table 6), behaviours (§5.4: three controls and the adaptive selector, each a
 //! [`RatePolicySpec`]) and the experiment configuration, validated before anything runs.
 
+pub use crate::models::peer::EstimatorMode;
 use crate::scenario_file::{Problems, ScenarioError};
 use coopnav_acomms::selector::RatePolicySpec;
 use coopnav_acomms::{Receiver, SuccessModel, Tdma};
@@ -73,16 +74,6 @@ impl Scenario {
 /// A rate-selection behaviour: the rate policy both vehicles run (`{ kind = "fixed", rate = 1 }`,
 /// `{ kind = "alternating", rates = [0, 5] }`, `{ kind = "adaptive", … }`).
 pub type Behaviour = RatePolicySpec;
-
-/// How the collaborator's position is estimated.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum EstimatorMode {
-    /// Mission plans known to both (status carries a 1-byte waypoint id).
-    PrePlanned,
-    /// Plans unknown (status carries the next waypoint's lat/lon; stop there).
-    Dynamic,
-}
 
 /// Everything an experiment needs besides the TL provider.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
