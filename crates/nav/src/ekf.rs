@@ -87,9 +87,6 @@ impl<const N: usize> Ekf<N> {
     /// angle in radians, kept wrapped to (-π, π].
     pub fn new(t0: f64, x0: SVector<f64, N>, p0: SMatrix<f64, N, N>, angles: [bool; N]) -> Self {
         let mut e = Ekf { x: x0, p: p0, t: t0, angles, history: None, predicts: 0, updates: 0 };
-        // P stays exactly symmetric from here on (every step symmetrises it), which the scalar
-        // update relies on; a symmetric p0 is unchanged by this.
-        symmetrise_in_place(&mut e.p);
         e.wrap_state();
         e
     }
@@ -200,15 +197,26 @@ impl<const N: usize> Ekf<N> {
         }
         let k = pht.map(|v| v / s);
         // B = P − k (P hᵀ)ᵀ, then P⁺ = B − (B hᵀ) kᵀ + r k kᵀ = B + c kᵀ with c = r k − B hᵀ.
-        // B hᵀ needs only h's columns of B, so P⁺ is written in one pass: entry (i, j) is
-        // (p − kᵢ (P hᵀ)ⱼ) + cᵢ kⱼ, each off-diagonal pair averaged as [`symmetrise`] averages it.
+        // B hᵀ needs only h's columns of B, so P⁺ is written in one pass, every entry rounded
+        // as in the two-pass form, (p − kᵢ (P hᵀ)ⱼ) + cᵢ kⱼ, and each off-diagonal pair averaged
+        // as [`symmetrise`] averages it.
         let b = |i: usize, j: usize| p[j][i] - k[i] * pht[j];
         let bht = seen.times(b, &h);
         let mut c = [0.0; N];
         for (i, v) in c.iter_mut().enumerate() {
             *v = r * k[i] - bht[i];
         }
-        let p_new = SMatrix::<f64, N, N>::from_data(nalgebra::ArrayStorage(rank_one_posterior(p, &k, &pht, &c)));
+        let entry = |i: usize, j: usize| b(i, j) + c[i] * k[j];
+        let mut columns = [[0.0; N]; N];
+        for j in 0..N {
+            columns[j][j] = entry(j, j);
+            for i in 0..j {
+                let v = 0.5 * (entry(i, j) + entry(j, i));
+                columns[j][i] = v;
+                columns[i][j] = v;
+            }
+        }
+        let p_new = SMatrix::<f64, N, N>::from_data(nalgebra::ArrayStorage(columns));
         let x_new = self.x + SVector::<f64, N>::from(k) * innovation;
         self.commit(x_new, p_new).map_or(UpdateOutcome::Unusable, |()| UpdateOutcome::Applied { nis })
     }
@@ -323,30 +331,6 @@ impl<const N: usize> NonZero<N> {
     }
 }
 
-/// The columns of P⁺ = B + c kᵀ (B = P − k (P hᵀ)ᵀ) with each off-diagonal pair averaged:
-/// column j holds ½((p − kᵢ (P hᵀ)ⱼ + cᵢ kⱼ) + (p − kⱼ (P hᵀ)ᵢ + cⱼ kᵢ)) and the diagonal
-/// p − kⱼ (P hᵀ)ⱼ + cⱼ kⱼ. P is exactly symmetric (every step of [`Ekf`] leaves it so), so entry
-/// (j, i) of P is entry (i, j) and both terms of a pair read column j: the loops run down
-/// contiguous columns and vectorise, with every entry rounded as in the pairwise form.
-fn rank_one_posterior<const N: usize>(p: &[[f64; N]; N], k: &[f64; N], pht: &[f64; N], c: &[f64; N]) -> [[f64; N]; N] {
-    let mut columns = [[0.0; N]; N];
-    for (j, p_column) in p.iter().enumerate() {
-        let (kj, phtj, cj) = (k[j], pht[j], c[j]);
-        for i in 0..j {
-            let upper = (p_column[i] - k[i] * phtj) + c[i] * kj;
-            let lower = (p_column[i] - kj * pht[i]) + cj * k[i];
-            columns[j][i] = 0.5 * (upper + lower);
-        }
-        columns[j][j] = (p_column[j] - kj * phtj) + cj * kj;
-    }
-    for j in 1..N {
-        for i in 0..j {
-            columns[i][j] = columns[j][i];
-        }
-    }
-    columns
-}
-
 /// [`symmetrise`] in place, mirroring the averaged upper triangle.
 fn symmetrise_in_place<const N: usize>(m: &mut SMatrix<f64, N, N>) {
     // `columns[j][i]` is entry (i, j).
@@ -377,30 +361,19 @@ fn all_finite(v: &[f64]) -> bool {
 }
 
 /// P ← F P Fᵀ + diag(q) for F = I + G, G given by its non-zero entries (row, column, value),
-/// symmetrised: O(N²) per entry instead of two dense products. P must be exactly symmetric (as
-/// [`Ekf`] keeps it).
+/// symmetrised: O(N²) per entry instead of two dense products.
 pub fn propagate_covariance<const N: usize>(
     p: &mut SMatrix<f64, N, N>,
     g: &[(usize, usize, f64)],
     q_diag: &SVector<f64, N>,
 ) {
-    // A = F P = P + G P, then P⁻ = A Fᵀ = A + A Gᵀ; `columns[c][r]` is entry (r, c). Row i of
-    // A is row i of P plus v times row j of P for each entry (i, j, v) of G, in G's order; P is
-    // symmetric, so its row j is its column j and the sums run down contiguous columns. Only
-    // G's rows of A differ from P; they are copied into A's columns afterwards.
+    // A = F P = P + G P (rows of G read the old P), then P⁻ = A Fᵀ = A + A Gᵀ (columns);
+    // `columns[c][r]` is entry (r, c).
     let old = p.data.0;
-    let mut rows = old;
-    let mut changed = [false; N];
-    for &(i, j, v) in g {
-        for (x, &p_jc) in rows[i].iter_mut().zip(&old[j]) {
-            *x += v * p_jc;
-        }
-        changed[i] = true;
-    }
     let columns = &mut p.data.0;
-    for i in (0..N).filter(|&i| changed[i]) {
-        for (column, &a_ic) in columns.iter_mut().zip(&rows[i]) {
-            column[i] = a_ic;
+    for &(i, j, v) in g {
+        for (column, old_column) in columns.iter_mut().zip(&old) {
+            column[i] += v * old_column[j];
         }
     }
     let a = *columns;
@@ -498,25 +471,6 @@ mod tests {
         assert!((nis - nis_dense).abs() < 1e-12);
         assert!((dense.p() - fast.p()).abs().max() < 1e-12 && (dense.x() - fast.x()).abs().max() < 1e-12);
         assert!(!fast.predict_sparse(2.0, x, &[(3, 0, 1.0)], &q), "an entry outside the matrix is refused");
-    }
-
-    /// The scalar update and the sparse prediction read P's rows as its columns: P must stay
-    /// symmetric bit for bit, from an asymmetric p0 on.
-    #[test]
-    fn covariance_stays_exactly_symmetric() {
-        let p0 = SMatrix::<f64, 4, 4>::from_fn(|i, j| if i == j { 3.0 + i as f64 } else { 0.1 * (i + 2 * j) as f64 });
-        let mut e = Ekf::new(0.0, SVector::zeros(), p0, [false, false, true, false]);
-        let exactly_symmetric = |e: &Ekf<4>| *e.p() == e.p().transpose();
-        assert!(exactly_symmetric(&e), "{}", e.p());
-        let g = [(0, 2, 0.3), (1, 3, -0.7), (0, 3, 0.11), (1, 1, 0.05)];
-        let q = SVector::<f64, 4>::new(0.01, 0.02, 0.003, 0.0);
-        for step in 1..50 {
-            assert!(e.predict_sparse(step as f64, *e.x(), &g, &q));
-            assert!(exactly_symmetric(&e), "after prediction {step}: {}", e.p());
-            let h = SMatrix::<f64, 1, 4>::new(0.0, 0.6, 1.0, -0.8);
-            assert!(e.update_scalar(0.3, h, 0.2, &Gate::OFF).applied());
-            assert!(exactly_symmetric(&e), "after update {step}: {}", e.p());
-        }
     }
 
     #[test]
