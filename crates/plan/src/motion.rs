@@ -31,6 +31,12 @@ pub enum CnaKind {
         /// Deepest allowed depth, m. Reconstructed: digest A5 (100 m).
         #[serde(default = "default_max_depth")]
         max_depth: f64,
+        /// How many tree levels offer the pitch options, from level 0 (≥ 1); deeper levels hold
+        /// the pitch (Δφ = 0, heading options only). None: every level. Issue 10's sloping
+        /// scenario: the A·B options per level force a short look-ahead, and deeper pitch options
+        /// seldom pay (measured, `experiments::closed_loop::PITCH_LEVELS`).
+        #[serde(default)]
+        pitch_levels: Option<usize>,
     },
 }
 
@@ -56,6 +62,7 @@ impl CnaKind {
             max_pitch_deg: default_max_pitch(),
             min_depth: 0.0,
             max_depth: default_max_depth(),
+            pitch_levels: None,
         }
     }
 }
@@ -145,9 +152,14 @@ impl CheckFields for MotionConfig {
                 "> 0 with max_turn_rate_deg_s * tau < 180 degrees (so hard left and hard right never overlap)",
             );
         }
-        if let CnaKind::Auv { pitch_options, max_pitch_rate_deg_s, max_pitch_deg, min_depth, max_depth } = self.cna {
+        if let CnaKind::Auv { pitch_options, max_pitch_rate_deg_s, max_pitch_deg, min_depth, max_depth, pitch_levels } =
+            self.cna
+        {
             if pitch_options < 1 {
                 p.push(format!("{prefix}cna.pitch_options"), pitch_options.to_string(), ">= 1");
+            }
+            if pitch_levels == Some(0) {
+                p.push(format!("{prefix}cna.pitch_levels"), "0", ">= 1 (or absent: every level)");
             }
             p.non_negative(&format!("{prefix}cna.max_pitch_rate_deg_s"), max_pitch_rate_deg_s);
             p.check(&format!("{prefix}cna.max_pitch_deg"), max_pitch_deg, |v| v > 0.0 && v < 90.0, "in (0, 90)");
@@ -173,6 +185,15 @@ impl MotionConfig {
             }
         };
         psi.iter().flat_map(|&dpsi| phi.iter().map(move |&dphi| MotionOption { dpsi, dphi })).collect()
+    }
+
+    /// How many tree levels, from level 0, offer the pitch options (`CnaKind::Auv::pitch_levels`;
+    /// `usize::MAX`: every level).
+    pub(crate) fn pitch_levels(&self) -> usize {
+        match self.cna {
+            CnaKind::Asc {} => usize::MAX,
+            CnaKind::Auv { pitch_levels, .. } => pitch_levels.unwrap_or(usize::MAX),
+        }
     }
 
     pub(crate) fn fast_options(&self) -> Vec<FastOption> {

@@ -330,6 +330,8 @@ impl LookAheadPlanner {
             limits: cfg.limits,
             penalties: cfg.penalties,
             all_options: (0..g.options.len()).collect(),
+            held_pitch_options: least_pitch(&g.options),
+            pitch_levels: cfg.motion.pitch_levels(),
             options: g.options,
             root_options: g.root_options,
             depth: g.depth,
@@ -406,6 +408,12 @@ impl LookAheadPlanner {
         }
         best.ok_or(PlanError::Deadline)
     }
+}
+
+/// The options with the smallest pitch change (Δφ = 0 with an odd number of pitch options).
+fn least_pitch(options: &[FastOption]) -> Vec<usize> {
+    let least = options.iter().map(|o| o.dphi.abs()).fold(f64::INFINITY, f64::min);
+    (0..options.len()).filter(|&i| options[i].dphi.abs() <= least).collect()
 }
 
 impl Planner for LookAheadPlanner {

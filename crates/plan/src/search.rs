@@ -333,8 +333,13 @@ fn parallel_search<M: CostModel>(tree: &Tree<M>, shared: &Shared) -> SearchOutco
     let worker = || (Ctx::new(shared, tree), vec![tree.root_state[0]; tree.n * split], levels(tree));
     let (mut first, mut prefix, mut lv) = worker();
     // The enumeration expanded every node of the top `split` levels.
-    let m = tree.n_options() as u64;
-    first.nodes += tree.root_options.len() as u64 * (0..split as u32).map(|l| m.pow(l)).sum::<u64>();
+    let mut width = 1u64;
+    first.nodes += (0..split)
+        .map(|l| {
+            width *= tree.level_options(l).len() as u64;
+            width
+        })
+        .sum::<u64>();
     first.dive = true;
     search_task(tree, &tasks[0], split, &mut prefix, &mut lv[split..], &mut first);
     first.dive = false;

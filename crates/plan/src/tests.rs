@@ -85,8 +85,10 @@ prop_compose! {
                   covs in prop::collection::vec((0.1f64..30.0, 0.1f64..30.0, -0.95f64..0.95, 0.0f64..0.2), 5),
                   estimator in any::<bool>(), aggregate in 0usize..4, sigma_m in 0.05f64..3.0, per_km_m in 0.0f64..5.0,
                   bias_per_km_m in prop_oneof![Just(0.0), 0.0f64..10.0], terminal_levels in prop_oneof![Just(0.0), 0.0f64..8.0], reach_success in prop_oneof![Just(0.0), 0.0f64..1.0],
-                  link_mid in 300.0f64..3000.0, cna_variance in prop_oneof![Just(0.0), 0.0f64..60.0]) -> Instance {
-        let cna = if auv_cna { CnaKind::auv(b) } else { CnaKind::Asc {} };
+                  link_mid in 300.0f64..3000.0, cna_variance in prop_oneof![Just(0.0), 0.0f64..60.0],
+                  pitch_levels in prop_oneof![Just(None), (1usize..4).prop_map(Some)]) -> Instance {
+        let mut cna = if auv_cna { CnaKind::auv(b) } else { CnaKind::Asc {} };
+        if let CnaKind::Auv { pitch_levels: levels, .. } = &mut cna { *levels = pitch_levels; }
         let m = a * if auv_cna { b } else { 1 };
         // Keep the brute force affordable: at most ~20k leaves.
         let mut l = l;
@@ -135,6 +137,31 @@ fn leaf_count_is_options_to_the_levels() {
         assert_eq!(d.nodes, (a as u64).pow(l as u32 + 1) * (l as u64 + 1), "A={a} L={l}");
         assert_eq!(d.levels_searched, l + 1);
     }
+}
+
+#[test]
+fn deeper_levels_hold_the_pitch_from_pitch_levels_on() {
+    // 3 headings × 3 pitches of ±45°, allowed up to 60°: all 9 options at level 0.
+    let cna = |pitch_levels| CnaKind::Auv {
+        pitch_options: 3,
+        max_pitch_rate_deg_s: 1.5,
+        max_pitch_deg: 60.0,
+        min_depth: 0.0,
+        max_depth: 1000.0,
+        pitch_levels,
+    };
+    for (pitch_levels, leaves) in [(None, 9u64.pow(4)), (Some(1), 9 * 27), (Some(2), 81 * 9), (Some(9), 9u64.pow(4))] {
+        let mut cfg = asc(3, 3, PenaltyCase::C1);
+        cfg.motion.cna = cna(pitch_levels);
+        let mut inst = instance_fixed(cfg);
+        inst.cna.pos.z = 500.0;
+        let d = inst.decide(exact(Algorithm::BruteForce, false));
+        assert_eq!(d.nodes, leaves * 4, "pitch_levels {pitch_levels:?}");
+    }
+    let mut cfg = asc(3, 1, PenaltyCase::C1);
+    cfg.motion.cna = cna(Some(0));
+    let e = cfg.validate().unwrap_err().to_string();
+    assert!(e.contains("motion.cna.pitch_levels"), "{e}");
 }
 
 fn instance_fixed(cfg: PlannerConfig) -> Instance {

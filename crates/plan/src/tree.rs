@@ -24,8 +24,14 @@ pub(crate) struct Tree<M: CostModel> {
     pub options: Vec<FastOption>,
     /// Level-0 options left after removing those that break AUV-CNA limits (A5).
     pub root_options: Vec<usize>,
-    /// Every option index, 0..A·B (the options of levels ≥ 1).
+    /// Every option index, 0..A·B (the options of levels ≥ 1 that offer the pitch options).
     pub all_options: Vec<usize>,
+    /// The options that hold the pitch (least |Δφ|: 0 with an odd number of pitch options), those
+    /// of the levels from `pitch_levels` on.
+    pub held_pitch_options: Vec<usize>,
+    /// Levels below this one offer every option, deeper ones `held_pitch_options` only
+    /// (`CnaKind::Auv::pitch_levels`; ≥ depth: every level).
+    pub pitch_levels: usize,
     /// Number of levels (L + 1, or fewer when the forecast ends: A11).
     pub depth: usize,
     pub n: usize,
@@ -102,8 +108,10 @@ impl<M: CostModel> Tree<M> {
     pub fn level_options(&self, level: usize) -> &[usize] {
         if level == 0 {
             &self.root_options
-        } else {
+        } else if level < self.pitch_levels {
             &self.all_options
+        } else {
+            &self.held_pitch_options
         }
     }
 

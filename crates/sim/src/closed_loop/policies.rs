@@ -12,8 +12,8 @@ use crate::predeploy::scenario::Mission;
 use coopnav_acomms::Receiver;
 use coopnav_core::{CompassDeg, Heading, Vec3};
 use coopnav_plan::{
-    AuvEstimate, CnaPose, CostSpec, Deadline, EstimatorSpec, LinkTable, LookAheadPlanner, PenaltyCase, PlanError,
-    RangeNoise,
+    AuvEstimate, CnaKind, CnaPose, CostSpec, Deadline, EstimatorSpec, LinkTable, LookAheadPlanner, PenaltyCase,
+    PlanError, RangeNoise,
 };
 use thiserror::Error;
 
@@ -141,6 +141,9 @@ fn build(name: &str, sc: &Scenario, planned: Option<&TimedWaypoints>) -> Result<
                     cfg.penalties = case.penalties();
                 }
                 cfg.look_ahead = p.estimator_look_ahead.unwrap_or(cfg.look_ahead);
+                if let CnaKind::Auv { pitch_levels, .. } = &mut cfg.motion.cna {
+                    *pitch_levels = p.estimator_pitch_levels;
+                }
             }
             let mut policy =
                 PlannerPolicy::new(cfg, n, p.sigma0, p.eps0, likelihood, Some((start, noise))).map_err(plan_err)?;

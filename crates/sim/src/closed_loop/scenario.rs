@@ -315,6 +315,11 @@ pub struct Planner {
     /// L of `planner-estimator` (default: `look_ahead`).
     #[serde(default)]
     pub estimator_look_ahead: Option<usize>,
+    /// With an AUV CNA, how many levels of `planner-estimator`'s tree offer the pitch options, from
+    /// level 0 (≥ 1; deeper levels hold the pitch; default: every level). Fewer pitch levels make
+    /// a deeper look-ahead affordable (coopnav_plan `CnaKind::Auv::pitch_levels`).
+    #[serde(default)]
+    pub estimator_pitch_levels: Option<usize>,
     /// Whether `planner-estimator` adds the CNA's own horizontal variance (GPS σ², or an AUV
     /// CNA's navigation variance since its last fix) to each ping's range variance (coopnav_plan
     /// estimator step 2); false scores every broadcast position as exact.
@@ -568,6 +573,9 @@ impl Scenario {
                 own.for_each(|bad| p.push("planner.estimator_look_ahead", bad.value, bad.allowed));
             }
         }
+        if pl.estimator_pitch_levels == Some(0) {
+            p.push("planner.estimator_pitch_levels", "0", ">= 1 (or absent: every level)");
+        }
         if pl.start_after_reports == 0 {
             p.push("planner.start_after_reports", "0", ">= 1");
         }
@@ -765,10 +773,10 @@ mod tests {
         let text = EXAMPLE.replace(
             "[planner]\n",
             "[planner]\nestimator_penalty_case = \"99\"\nestimator_look_ahead = 70\nestimator_terminal_levels = -1.0\n\
-             estimator_bias_per_km = -2.0\nestimator_reach_success = 1.5\n",
+             estimator_bias_per_km = -2.0\nestimator_reach_success = 1.5\nestimator_pitch_levels = 0\n",
         );
         let e = err(&text);
-        for field in ["penalty_case", "look_ahead", "terminal_levels", "bias_per_km", "reach_success"] {
+        for field in ["penalty_case", "look_ahead", "terminal_levels", "bias_per_km", "reach_success", "pitch_levels"] {
             assert!(e.contains(&format!("planner.estimator_{field}")), "{field}: {e}");
         }
         let ok =

@@ -7,8 +7,8 @@
 //! entirely below zero; every other cell is printed with its measured cause.
 //!
 //! Seeds: the planner's settings chosen by experiment (the aggregate `sigma_sum`, the range bias,
-//! the cost-to-go, the level-0 penalty and the reach cost-to-go from 5 AUVs on, L with the AUV
-//! CNA) were picked on base seed [`TUNING_SEED`] (runs `run_seed(1000, 0..R)`, R = 6 to 40); the
+//! the cost-to-go, the level-0 penalty and the reach cost-to-go from 5 AUVs on, L and the pitch
+//! levels with the AUV CNA) were picked on base seed [`TUNING_SEED`] (runs `run_seed(1000, 0..R)`, R = 6 to 40); the
 //! evaluation uses the base seed of `--seed` (default 1, runs `run_seed(1, 0..runs)`) and refuses
 //! the tuning seed. The
 //! baselines run exactly as configured elsewhere (nothing is tuned for or against them).
@@ -53,11 +53,18 @@ pub struct Setting {
     pub name: &'static str,
     pub n: Vec<usize>,
     pub base: Scenario,
-    /// L of `planner-estimator` (Hudson's `planner` keeps L = 5): 5 with the ASC (5 options per
-    /// level); 3 with the AUV CNA, whose 15 options per level make L = 5 with the terminal cost
-    /// about 20× slower (measured, two 900 s missions: 0.6 s without the terminal cost, 13.4 s
-    /// with it).
-    pub estimator_look_ahead: usize,
+    /// L of `planner-estimator` for N AUVs (Hudson's `planner` keeps L = 5): 5 with the ASC (5
+    /// options per level); with the AUV CNA, whose pitch options are then offered at level 0 only
+    /// ([`Setting::estimator_pitch_levels`]), [`auv_cna_look_ahead`].
+    pub estimator_look_ahead: fn(usize) -> usize,
+    /// `planner.estimator_pitch_levels`: None with the ASC; 1 with the AUV CNA. All 15 options at
+    /// every level made L = 5 about 20× slower than L = 3 (two 900 s missions: 0.6 s without the
+    /// terminal cost, 13.4 s with it), so the previous evaluation ran L = 3. The pitch options do
+    /// not pay in the sloping scenario: a ±45° pitch step (1.5°/s over τ) breaks the 30° limit, so
+    /// level 0 drops them and deeper levels double their cost. Tuning seed, N = 5, 20 runs: L = 3
+    /// 5.28 m with 15 options per level and with pitch options at level 0 only (identical runs);
+    /// L = 5 with them at level 0 only 4.98 m (centroid-standoff 4.90 m), L = 7 4.98 m.
+    pub estimator_pitch_levels: Option<usize>,
 }
 
 /// The estimator-aware planner's settings, chosen on base seed [`TUNING_SEED`] (6 runs per
@@ -98,14 +105,37 @@ pub const REACH_SUCCESS: f64 = 0.79;
 /// weak to replace the penalty (N = 5, tuning seed, case 3: 9.7 m with H = 10, 7.3 m with 20).
 pub const SPREAD_TERMINAL_LEVELS: f64 = 20.0;
 
+/// L of `planner-estimator` with the AUV CNA (pitch options at level 0 only) for N AUVs: 3 below
+/// 3 AUVs, 5 from 3 on. Tuning seed, sloping scenario, 20 runs, L = 3 / L = 5: N = 1 3.60 / 3.81 m,
+/// N = 2 3.80 / 3.77 m, N = 3 4.37 / 4.10 m, N = 5 5.28 / 4.98 m, N = 8 7.03 / 6.98 m (L = 6:
+/// 6.91 m, twice the time).
+pub fn auv_cna_look_ahead(n: usize) -> usize {
+    if n < 3 {
+        3
+    } else {
+        5
+    }
+}
+
 impl Setting {
+    /// A scenario with an ASC CNA: L = 5, every option at every level.
+    pub fn asc(name: &'static str, n: Vec<usize>, base: Scenario) -> Self {
+        Setting { name, n, base, estimator_look_ahead: |_| 5, estimator_pitch_levels: None }
+    }
+
+    /// A scenario with an AUV CNA: [`auv_cna_look_ahead`], the pitch options at level 0 only.
+    pub fn auv_cna(name: &'static str, n: Vec<usize>, base: Scenario) -> Self {
+        Setting { name, n, base, estimator_look_ahead: auv_cna_look_ahead, estimator_pitch_levels: Some(1) }
+    }
+
     /// The mission for `n` AUVs, with the evaluation's planner settings and seed.
     pub fn scenario(&self, n: usize, seed: u64, duration: Option<f64>) -> Scenario {
         let mut sc = self.base.with_auvs(n);
         sc.seed = seed;
         sc.planner.heading_options = 5;
         sc.planner.look_ahead = 5;
-        sc.planner.estimator_look_ahead = Some(self.estimator_look_ahead);
+        sc.planner.estimator_look_ahead = Some((self.estimator_look_ahead)(n));
+        sc.planner.estimator_pitch_levels = self.estimator_pitch_levels;
         sc.planner.estimator_aggregate = Aggregate::SigmaSum;
         sc.planner.estimator_bias_per_km = Some(BIAS_PER_KM);
         sc.planner.estimator_terminal_levels = TERMINAL_LEVELS;
@@ -135,17 +165,14 @@ pub fn setup(opts: &ReproOptions) -> Result<(Vec<Setting>, usize, Option<f64>), 
     Ok(match opts.size {
         Size::Full => (
             vec![
-                Setting { name: "current", n: vec![1, 2, 3, 5, 8], base: current, estimator_look_ahead: 5 },
-                Setting { name: "sloping-auv-cna", n: vec![1, 2, 3, 5, 8], base: sloping, estimator_look_ahead: 3 },
+                Setting::asc("current", vec![1, 2, 3, 5, 8], current),
+                Setting::auv_cna("sloping-auv-cna", vec![1, 2, 3, 5, 8], sloping),
             ],
             100,
             None,
         ),
         Size::Reduced => (
-            vec![
-                Setting { name: "current", n: vec![1, 3], base: current, estimator_look_ahead: 5 },
-                Setting { name: "sloping-auv-cna", n: vec![2], base: sloping, estimator_look_ahead: 3 },
-            ],
+            vec![Setting::asc("current", vec![1, 3], current), Setting::auv_cna("sloping-auv-cna", vec![2], sloping)],
             4,
             Some(900.0),
         ),
@@ -199,8 +226,8 @@ pub fn evaluate(
     }
     let mut table = format!(
         "True mean navigation error of the survey AUVs (m), {runs} runs per policy and cell, base seed {seed} \
-         (settings chosen on base seed {TUNING_SEED}); planners A=5, L=5; planner-estimator: L=5 (ASC) or 3 \
-         (AUV CNA), aggregate sigma_sum, range bias {BIAS_PER_KM} m/km, {TERMINAL_LEVELS} levels of cost-to-go; from \
+         (settings chosen on base seed {TUNING_SEED}); planners A=5, L=5; planner-estimator: L=5 (with the AUV \
+         CNA: its pitch options at level 0 only, L=3 below 3 AUVs), aggregate sigma_sum, range bias {BIAS_PER_KM} m/km, {TERMINAL_LEVELS} levels of cost-to-go; from \
          {SPREAD_FLEET_MIN_AUVS} AUVs on no level-0 distance penalty, the reach cost-to-go (p_u {REACH_SUCCESS}) and \
          {SPREAD_TERMINAL_LEVELS} levels.\n\
          Every difference is planner-estimator minus the baseline, paired by run; a cell is won when its 95 % CI \
