@@ -13,7 +13,7 @@ use coopnav_acomms::status::{CovFrame0, CovStatus, CovarianceReport, Frame0, Nex
 use coopnav_acomms::tracker::{HeaderEntry, MaskWidth, TrackingHeader};
 use coopnav_core::{Bathymetry, CompassDeg, Heading, Vec3};
 use coopnav_nav::codec::{Direction, MiniPacket, Sentence};
-use coopnav_nav::cycle::Cycle;
+use coopnav_nav::cycle::{Configuration, Cycle};
 use coopnav_nav::post::{self, PostConfig};
 use coopnav_sim::{closed_loop, hbl, predeploy};
 use rand::{Rng, SeedableRng};
@@ -96,10 +96,10 @@ fn plan_parse(b: &[u8]) -> bool {
 }
 
 fn hbl_seed() -> Vec<u8> {
-    toml::to_string_pretty(&hbl::Scenario::default()).expect("the default HBL scenario serialises").into()
+    hbl::zone::table5_file(Configuration::HblTwo).1.into()
 }
 fn hbl_parse(b: &[u8]) -> bool {
-    hbl::Scenario::from_toml(&text(b)).is_ok()
+    hbl::scenario::parse(&text(b), Path::new("fuzz.toml")).is_ok()
 }
 
 fn cycle_seed() -> Vec<u8> {

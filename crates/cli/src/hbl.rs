@@ -4,12 +4,19 @@ use crate::alog_import;
 use crate::input;
 use anyhow::{Context, Result};
 use coopnav_core::limits;
+use coopnav_nav::cycle::Configuration;
 use coopnav_nav::fieldlog::{BeaconId, FieldLog, TimeBase};
 use coopnav_nav::post::{self, PostConfig, PostSample, RangeResidual};
 use coopnav_nav::post_tune::{self, Scored, TuneOptions, TuneReport};
+use coopnav_sim::closed_loop::Scenario;
 use coopnav_sim::hbl::grid::{self, GridSpec};
+use coopnav_sim::hbl::log_format::LogFormat;
+use coopnav_sim::hbl::record::record_pass;
 use coopnav_sim::hbl::tune::{tune, Coefficient, Objective, TuneSpec};
-use coopnav_sim::hbl::{monte_carlo_profiled, plot, run, Scenario};
+use coopnav_sim::hbl::zone::{
+    table5_file, table5_scenario, zone_monte_carlo_with_progress, RunCounts, ZoneMetrics, ZoneSpec,
+};
+use coopnav_sim::hbl::{plot, scenario as hbl_scenario};
 use coopnav_sim::output::{Manifest, RunDir};
 use coopnav_sim::work;
 
@@ -22,13 +29,19 @@ use std::path::{Path, PathBuf};
 
 #[derive(clap::Subcommand)]
 pub enum Command {
-    /// One run: tracks, errors and a post-processing log (CSV), summary.json, SVG plots.
+    /// One run on the mission engine: tracks and errors once a second (trace.csv), the
+    /// post-processing log (log.csv: dead reckoning every filter step, ship fixes every truth step,
+    /// buoy fixes and ranges as they happen), summary.json, SVG plots, MOOS files.
     Simulate {
         #[command(flatten)]
         common: Common,
         /// Replay run I of a Monte Carlo with the same --seed (its runs are 0 … runs − 1).
         #[arg(long, default_value_t = 0)]
         run: u64,
+        /// How log.csv is written (TOML: geodetic_origin, buoy_fix_storage; `hbl example
+        /// log-format`); metres by default.
+        #[arg(long)]
+        log_format: Option<PathBuf>,
     },
     /// A Monte Carlo of one scenario: per-run CSV, summary.json, and the mean error profile
     /// against x_rel (profile.csv, profile.svg: total, along- and across-path).
@@ -38,7 +51,9 @@ pub enum Command {
         #[arg(long, default_value_t = 250)]
         runs: usize,
     },
-    /// The buoy-location grid: CSV plus an SVG heat map.
+    /// The buoy-location grid: CSV plus an SVG heat map. Each run ends once the AUV is past the
+    /// zone; the scenario's duration_s and lane are raised to at least 400 s and 360 m first, so an
+    /// AUV that a buoy on its path pulls off course still reaches the zone.
     Grid {
         #[command(flatten)]
         common: Common,
@@ -54,8 +69,8 @@ pub enum Command {
         #[arg(long)]
         spec: PathBuf,
     },
-    /// Print a documented starting file: the Table 5 scenario, a grid, a tuning spec or a
-    /// post-processing config, every field at its default (edit and pass back with --config etc.).
+    /// Print a documented starting file: the Table 5 scenario (an engine scenario file), a grid, a
+    /// tuning spec, a log format or a post-processing config (edit and pass back with --config etc.).
     Example {
         #[arg(value_enum, default_value_t = ExampleKind::Scenario)]
         kind: ExampleKind,
@@ -110,6 +125,8 @@ pub enum ExampleKind {
     Grid,
     /// `tune --spec`.
     Tune,
+    /// `simulate --log-format`.
+    LogFormat,
     /// `postprocess --config`.
     Post,
     /// `postprocess --alog-map`.
@@ -118,7 +135,9 @@ pub enum ExampleKind {
 
 #[derive(clap::Args)]
 pub struct Common {
-    /// Scenario TOML; defaults to the Table 5 HBL Two set-up.
+    /// Engine scenario TOML (as `coopnav simulate` reads; `hbl example scenario`); defaults to
+    /// Gill's Table 5 HBL Two set-up (scenarios/gill-table5-hbl-two.toml). Survey AUV 0 meets
+    /// ships[0]; buoys[0] is the HBL buoy; the zone is Table 5's along the survey lane.
     #[arg(long)]
     config: Option<PathBuf>,
     #[arg(long, default_value_t = 1)]
@@ -136,8 +155,8 @@ pub struct Common {
 
 fn scenario(c: &Common) -> Result<Scenario> {
     match &c.config {
-        Some(p) => Scenario::from_toml(&input::read(p, c.allow_large)?).with_context(|| format!("in {}", p.display())),
-        None => Ok(Scenario::default()),
+        Some(p) => Ok(hbl_scenario::parse(&input::read(p, c.allow_large)?, p)?),
+        None => Ok(table5_scenario(Configuration::HblTwo)?),
     }
 }
 
@@ -155,7 +174,7 @@ fn manifest(dir: &RunDir, command: &str, seed: u64, inputs: serde_json::Value) -
 
 pub fn run_command(cmd: Command) -> Result<()> {
     match cmd {
-        Command::Simulate { common, run } => simulate(&common, run),
+        Command::Simulate { common, run, log_format } => simulate(&common, run, log_format.as_deref()),
         Command::Montecarlo { common, runs } => montecarlo(&common, runs),
         Command::Grid { common, grid } => grid_cmd(&common, grid.as_deref()),
         Command::Tune { common, spec } => tune_cmd(&common, &spec),
@@ -189,11 +208,12 @@ const ORIGIN_HINT: &str =
 
 fn example(kind: ExampleKind) -> Result<()> {
     let text = match kind {
-        // Absent options don't serialise: show the geodetic one where it belongs.
-        ExampleKind::Scenario => toml::to_string_pretty(&Scenario::default())?.replacen(
-            "[log]\n",
-            &format!("[log]\n{}\n", ORIGIN_HINT.replacen("origin", "geodetic_origin", 1)),
-            1,
+        ExampleKind::Scenario => table5_file(Configuration::HblTwo).1.to_string(),
+        // Absent options don't serialise: show the geodetic one.
+        ExampleKind::LogFormat => format!(
+            "{}\n{}",
+            ORIGIN_HINT.replacen("origin", "geodetic_origin", 1),
+            toml::to_string_pretty(&LogFormat::default())?
         ),
         ExampleKind::Grid => toml::to_string_pretty(&GridSpec::default())?,
         ExampleKind::Tune => toml::to_string_pretty(&TuneSpec {
@@ -207,29 +227,65 @@ fn example(kind: ExampleKind) -> Result<()> {
         ExampleKind::AlogMap => toml::to_string_pretty(&crate::alog_import::AlogMapping::default())?,
     };
     let what = match kind {
-        ExampleKind::Scenario => "HBL scenario (Gill 2013 Table 5, HBL Two) for --config",
+        ExampleKind::Scenario => "HBL scenario (Gill 2013 Table 5, HBL Two; an engine scenario file) for --config",
+        ExampleKind::LogFormat => "log format for `hbl simulate --log-format`",
         ExampleKind::Grid => "buoy-location grid for `hbl grid --grid`",
         ExampleKind::Tune => "tuning spec for `hbl tune --spec`",
         ExampleKind::Post => "post-processing config for `hbl postprocess --config`",
         ExampleKind::AlogMap => "MOOS variable mapping for `hbl postprocess --log X.alog --alog-map`",
     };
     println!("# coopnav {what}.");
-    println!("# Every field is at its default and optional: keep only what you change. Units and the");
-    println!("# thesis source of each field: the rustdoc of coopnav_sim::hbl and coopnav_nav (`cargo doc --open`).");
+    if let ExampleKind::Scenario = kind {
+        println!("# The file `coopnav reproduce gill-table-5` runs; the scenario format is in scenarios/README.md.");
+    } else {
+        println!("# Every field is at its default and optional: keep only what you change. Units and the");
+        println!(
+            "# thesis source of each field: the rustdoc of coopnav_sim::hbl and coopnav_nav (`cargo doc --open`)."
+        );
+    }
     print!("{text}");
     Ok(())
 }
 
-fn simulate(c: &Common, index: u64) -> Result<()> {
+/// The zone of a pass in `sc`: Gill's Table 5 zone along the survey lane's direction.
+fn zone_spec(sc: &Scenario) -> ZoneSpec {
+    ZoneSpec { path_compass_deg: sc.fleet.lane_heading_compass_deg, ..ZoneSpec::table5() }
+}
+
+/// The name a summary line gives the scenario: its file, or the default's.
+fn scenario_name(c: &Common) -> String {
+    c.config.as_ref().map_or(table5_file(Configuration::HblTwo).0.to_string(), |p| p.display().to_string())
+}
+
+fn log_format(path: Option<&Path>, allow_large: bool) -> Result<LogFormat> {
+    let format: LogFormat = match path {
+        Some(p) => toml::from_str(&input::read(p, allow_large)?).with_context(|| format!("in {}", p.display()))?,
+        None => LogFormat::default(),
+    };
+    format.validate().with_context(|| path.map_or(String::new(), |p| format!("in {}", p.display())))?;
+    Ok(format)
+}
+
+/// `hbl simulate`'s summary: the zone figures and the run's counts.
+#[derive(Serialize)]
+struct PassSummary {
+    #[serde(flatten)]
+    zone: ZoneMetrics,
+    #[serde(flatten)]
+    counts: RunCounts,
+}
+
+fn simulate(c: &Common, index: u64, log_path: Option<&Path>) -> Result<()> {
     let sc = scenario(c)?;
-    let cycle = sc.resolved_cycle()?;
+    let format = log_format(log_path, c.allow_large)?;
     limits::check(work::hbl_runs(&sc, 1.0, "one run", true), c.allow_large)?;
-    let (metrics, trace) = run(&sc, &cycle, coopnav_core::run_seed(c.seed, index), true);
-    let trace = trace.context("the simulator returned no trace")?;
+    let zone = zone_spec(&sc);
+    let (pass, result) = record_pass(&sc, zone, format.clone(), coopnav_core::run_seed(c.seed, index))?;
+    let summary = PassSummary { zone: pass.zone.metrics(), counts: RunCounts::of(&result, 0) };
     let dir = RunDir::create(&c.out, c.force)?;
-    manifest(&dir, "hbl simulate", c.seed, json!({ "scenario": sc, "run": index }))?;
+    manifest(&dir, "hbl simulate", c.seed, json!({ "scenario": sc, "run": index, "log_format": format }))?;
     let mut csv = String::from("t,x_rel,auv_e,auv_n,est_e,est_n,sd_e,sd_n,ship_e,ship_n,ship_est_e,ship_est_n,buoy_e,buoy_n,buoy_est_e,buoy_est_n,error\n");
-    for r in &trace.rows {
+    for r in &pass.rows {
         let o = |v: Option<[f64; 2]>, i: usize| v.map_or(String::new(), |p| p[i].to_string());
         csv.push_str(&format!(
             "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}\n",
@@ -254,32 +310,32 @@ fn simulate(c: &Common, index: u64) -> Result<()> {
     }
     dir.write_bytes("trace.csv", csv)?;
     let mut log = Vec::new();
-    post::write_log(&mut log, &trace.log, sc.log.frame().as_ref())?;
+    post::write_log(&mut log, &pass.sorted_log(), format.frame().as_ref())?;
     dir.write_bytes("log.csv", log)?;
-    dir.write_bytes("tracks.svg", plot::tracks(&trace.rows)?)?;
-    dir.write_bytes(
-        "error_vs_xrel.svg",
-        plot::error_vs_xrel(&trace.rows, (sc.geometry.zone_min, sc.geometry.zone_max))?,
-    )?;
-    dir.write_json("summary.json", &metrics)?;
-    coopnav_sim::moos_export::write_moos_files(&dir, &coopnav_sim::moos_export::hbl_run(&sc, &trace))?;
+    dir.write_bytes("tracks.svg", plot::tracks(&pass.rows)?)?;
+    dir.write_bytes("error_vs_xrel.svg", plot::error_vs_xrel(&pass.rows, (zone.zone_min, zone.zone_max))?)?;
+    dir.write_json("summary.json", &summary)?;
+    coopnav_sim::moos_export::write_moos_files(&dir, &coopnav_sim::moos_export::hbl_run(&pass.rows, format.frame()))?;
     let out = dir.finish()?;
-    println!("zone error {:.3} m; wrote {}", metrics.zone_error.unwrap_or(f64::NAN), out.display());
+    println!("zone error {:.3} m; wrote {}", summary.zone.zone_error.unwrap_or(f64::NAN), out.display());
     Ok(())
 }
 
 fn montecarlo(c: &Common, runs: usize) -> Result<()> {
     let sc = scenario(c)?;
-    sc.validate()?;
+    if runs < 2 {
+        anyhow::bail!("--runs {runs}: a Monte Carlo needs at least 2 runs");
+    }
     limits::check(work::hbl_runs(&sc, runs as f64, "--runs", false), c.allow_large)?;
+    let zone = ZoneSpec { profile_bin_m: PROFILE_BIN_M, ..zone_spec(&sc) };
     let pb = bar(runs as u64);
-    let r = monte_carlo_profiled(&sc, runs, c.seed, PROFILE_BIN_M, &|n| pb.set_position(n))?;
+    let r = zone_monte_carlo_with_progress(&sc, zone, runs, c.seed, &|n| pb.set_position(n))?;
     pb.finish_and_clear();
-    let bins = r.profile.as_deref().unwrap_or_default();
+    let summary = r.summary(c.seed)?;
     let dir = RunDir::create(&c.out, c.force)?;
     manifest(&dir, "hbl montecarlo", c.seed, json!({ "scenario": sc, "runs": runs }))?;
     let mut csv = String::from("run,zone_error,zone_parallel,zone_perpendicular,approach_perpendicular,buoy_error,saturation_error,ranges_received,ranges_applied,healthy\n");
-    for (i, m) in r.runs.iter().enumerate() {
+    for (i, (m, n)) in r.runs.iter().zip(&r.counts).enumerate() {
         let o = |v: Option<f64>| v.map_or(String::new(), |x| x.to_string());
         csv.push_str(&format!(
             "{i},{},{},{},{},{},{},{},{},{}\n",
@@ -289,24 +345,24 @@ fn montecarlo(c: &Common, runs: usize) -> Result<()> {
             o(m.approach_perpendicular),
             o(m.buoy_error),
             o(m.saturation_error),
-            m.ranges_received,
-            m.ranges_applied,
-            m.healthy
+            n.ranges_received,
+            n.ranges_applied,
+            n.healthy
         ));
     }
     dir.write_bytes("runs.csv", csv)?;
     let mut profile = String::from("x_rel,samples,error,parallel,perpendicular\n");
-    for b in bins {
+    for b in &r.profile {
         profile.push_str(&format!("{},{},{},{},{}\n", b.x_rel, b.samples, b.error, b.parallel, b.perpendicular));
     }
     dir.write_bytes("profile.csv", profile)?;
-    dir.write_bytes("profile.svg", plot::profile(bins, (sc.geometry.zone_min, sc.geometry.zone_max))?)?;
-    dir.write_json("summary.json", &r.summary)?;
+    dir.write_bytes("profile.svg", plot::profile(&r.profile, (zone.zone_min, zone.zone_max))?)?;
+    dir.write_json("summary.json", &json!({ "runs": runs, "base_seed": c.seed, "summary": summary }))?;
     let out = dir.finish()?;
-    let z = r.summary.zone_error;
+    let z = summary.zone_error;
     println!(
         "{}: zone error {:.3} ± {:.3} m (SE {:.3}, {} runs); wrote {}",
-        r.summary.configuration,
+        scenario_name(c),
         z.mean,
         z.sd,
         z.se,
@@ -317,16 +373,20 @@ fn montecarlo(c: &Common, runs: usize) -> Result<()> {
 }
 
 fn grid_cmd(c: &Common, grid_path: Option<&Path>) -> Result<()> {
-    let sc = scenario(c)?;
+    let mut sc = scenario(c)?;
     let spec: GridSpec = match grid_path {
         Some(p) => toml::from_str(&input::read(p, c.allow_large)?).with_context(|| format!("in {}", p.display()))?,
         None => GridSpec::default(),
     };
     spec.validate()
         .with_context(|| grid_path.map_or("the default grid spec".into(), |p| format!("in {}", p.display())))?;
+    grid::lengthen_for_grid(&mut sc);
+    sc.validate(Path::new(&scenario_name(c)))?;
     limits::check(work::hbl_grid(&sc, &spec), c.allow_large)?;
     let pb = bar(spec.cells().len() as u64);
-    let cells = grid::buoy_grid(&spec, &|n| pb.set_position(n), &grid::old_loop_cell(&sc, spec.runs_per_cell, c.seed))?;
+    let zone = ZoneSpec { stop_past_zone: true, ..zone_spec(&sc) };
+    let cell = grid::engine_cell(&sc, zone, spec.runs_per_cell, c.seed)?;
+    let cells = grid::buoy_grid(&spec, &|n| pb.set_position(n), &cell)?;
     pb.finish_and_clear();
     let dir = RunDir::create(&c.out, c.force)?;
     manifest(&dir, "hbl grid", c.seed, json!({ "scenario": sc, "grid": spec }))?;
@@ -347,7 +407,7 @@ fn tune_cmd(c: &Common, spec_path: &Path) -> Result<()> {
         .with_context(|| format!("in {}", spec_path.display()))?;
     spec.validate().with_context(|| format!("in {}", spec_path.display()))?;
     limits::check(work::hbl_tune(&sc, &spec), c.allow_large)?;
-    let r = tune(&sc, &spec)?;
+    let r = tune(&sc, zone_spec(&sc), &spec)?;
     let dir = RunDir::create(&c.out, c.force)?;
     manifest(&dir, "hbl tune", spec.seed, json!({ "scenario": sc, "spec": spec }))?;
     dir.write_json("summary.json", &r)?;

@@ -126,10 +126,11 @@ fn simulate_lanes_and_heading_options_1e9() {
 }
 
 #[test]
-fn hbl_dt_1e_minus_9() {
+fn hbl_duration_1e9() {
     let tmp = tempfile::tempdir().unwrap();
-    std::fs::write(tmp.path().join("h.toml"), "dt = 1e-9\n").unwrap();
-    refused(tmp.path(), &["hbl", "simulate", "--config", "h.toml", "-o", "out"], &["max_duration_s / dt"]);
+    let long = [("duration_s = 130.0", "duration_s = 1e9")];
+    edited_example(tmp.path(), &["hbl", "example", "scenario"], "h.toml", &long);
+    refused(tmp.path(), &["hbl", "simulate", "--config", "h.toml", "-o", "out"], &["duration_s / dt"]);
 }
 
 #[test]

@@ -58,7 +58,7 @@ fn examples_load_back() {
         std::fs::write(&path, &out.stdout).unwrap();
         path
     };
-    let (scenario, post) = (write("scenario"), write("post"));
+    let (scenario, post, format) = (write("scenario"), write("post"), write("log-format"));
     let mc = tmp.path().join("mc");
     let out = coopnav(
         tmp.path(),
@@ -66,7 +66,11 @@ fn examples_load_back() {
     );
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let sim = tmp.path().join("sim");
-    assert!(coopnav(tmp.path(), &["hbl", "simulate", "--out", sim.to_str().unwrap()]).status.success());
+    let out = coopnav(
+        tmp.path(),
+        &["hbl", "simulate", "--log-format", format.to_str().unwrap(), "--out", sim.to_str().unwrap()],
+    );
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let pp = tmp.path().join("pp");
     let out = coopnav(
         tmp.path(),
@@ -88,6 +92,7 @@ fn examples_load_back() {
 fn bad_config_exits_nonzero_and_writes_nothing() {
     let tmp = tempfile::tempdir().unwrap();
     let cfg = tmp.path().join("bad.toml");
+    // A file of the former `hbl` scenario format.
     std::fs::write(&cfg, "[acoustic]\np_drop = 0.7\n").unwrap();
     let out_dir = tmp.path().join("mc");
     let out = coopnav(
@@ -96,7 +101,7 @@ fn bad_config_exits_nonzero_and_writes_nothing() {
     );
     assert!(!out.status.success());
     let err = String::from_utf8_lossy(&out.stderr);
-    assert!(err.contains("bad.toml") && err.contains("sum to 1"), "{err}");
+    assert!(err.contains("bad.toml") && err.contains("former") && err.contains("hbl example scenario"), "{err}");
     assert!(!out_dir.exists());
     let log = tmp.path().join("log.csv");
     std::fs::write(&log, "t,kind,src,v1,v2,v3,v4\n0,init,,0,0,0.85,90\n1,range,99,0.1,,,\n").unwrap();
@@ -113,11 +118,13 @@ fn bad_config_exits_nonzero_and_writes_nothing() {
 fn geodetic_log_needs_the_origin_to_postprocess() {
     let tmp = tempfile::tempdir().unwrap();
     let origin = "{ lat_deg = 47.97, lon_deg = -116.5, height_m = 630.0 }";
-    let sc = tmp.path().join("sc.toml");
-    std::fs::write(&sc, format!("[log]\ngeodetic_origin = {origin}\nbuoy_fix_storage = \"f32_lost_bit\"\n")).unwrap();
+    let format = tmp.path().join("log.toml");
+    std::fs::write(&format, format!("geodetic_origin = {origin}\nbuoy_fix_storage = \"f32_lost_bit\"\n")).unwrap();
     let sim = tmp.path().join("sim");
-    let out =
-        coopnav(tmp.path(), &["hbl", "simulate", "--config", sc.to_str().unwrap(), "--out", sim.to_str().unwrap()]);
+    let out = coopnav(
+        tmp.path(),
+        &["hbl", "simulate", "--log-format", format.to_str().unwrap(), "--out", sim.to_str().unwrap()],
+    );
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let log = sim.join("log.csv");
     assert!(std::fs::read_to_string(&log).unwrap().contains(",buoy_fix_ll,"));

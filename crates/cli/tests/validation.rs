@@ -60,22 +60,25 @@ fn plan_scenario_names_every_bad_field() {
 #[test]
 fn hbl_scenario_names_every_bad_field() {
     let tmp = tempfile::tempdir().unwrap();
-    let text = "dt = nan\n[geometry]\nauv_speed = -1.0\n[sensors]\nspeed_sd = -0.1\n[acoustic]\nclock_drift_sd_us_h = inf\n\
-                [buoy]\ncircular_fraction = 1.5\n[filters.auv]\nsigma_speed = nan\n[filters.outriggers]\ndepth = -1.0\n";
-    std::fs::write(tmp.path().join("bad.toml"), text).unwrap();
+    let out = coopnav(tmp.path(), &["hbl", "example", "scenario"]);
+    let text = String::from_utf8(out.stdout).unwrap();
+    let mut bad = text.clone();
+    for (good, wrong) in [
+        ("speed = 0.85", "speed = -1.0"),
+        ("speed_sd = 0.05\n", "speed_sd = -0.1\n"),
+        ("circular_fraction = 0.5", "circular_fraction = 1.5"),
+        ("separation = 9.3", "separation = -1.0"),
+        ("gps_sd_m = 0.1\n", "gps_sd_m = nan\n"),
+    ] {
+        assert!(bad.contains(good), "{good} not in the example");
+        bad = bad.replacen(good, wrong, 1);
+    }
+    std::fs::write(tmp.path().join("bad.toml"), bad).unwrap();
     refused_naming_every_field(
         tmp.path(),
         &["hbl", "simulate", "--config", "bad.toml", "-o", "out"],
         Some("bad.toml"),
-        &[
-            "dt",
-            "geometry.auv_speed",
-            "sensors.speed_sd",
-            "acoustic.clock_drift_sd_us_h",
-            "buoy.circular_fraction",
-            "filters.auv.sigma_speed",
-            "filters.outriggers.depth",
-        ],
+        &["fleet.speed", "sensors.speed_sd", "buoys[0].drift.circular_fraction", "ships[0].outriggers.separation"],
     );
 }
 

@@ -17,4 +17,5 @@ pub mod policy;
 pub mod predeploy;
 pub mod report;
 pub mod scenario_file;
+pub mod stats;
 pub mod work;

@@ -4,10 +4,10 @@
 //! `run.alog` (mapping: `coopnav_moos::export`) with its interactive `replay.html`.
 
 use crate::closed_loop::{self, RunResult as ClosedLoopResult};
-use crate::hbl;
+use crate::hbl::PassRow;
 use crate::output::{RunDir, WriteError};
 use crate::predeploy::{Mission, RunResult as PlanResult};
-use coopnav_core::{CompassDeg, LatLon};
+use coopnav_core::{CompassDeg, LatLon, LocalFrame};
 use coopnav_moos::{
     mission_files, replay, write_run_alog, Leg, MissionFiles, MissionSpec, Pulse, PulseKind, Role, RunLog, Sample,
     Vehicle, Waypoint, SIMULATED_LOG_START,
@@ -140,12 +140,11 @@ pub fn plan_run(mission: &Mission, result: &PlanResult) -> RunLog {
     }
 }
 
-/// A Gill (2013) pass (`hbl simulate`): the AUV's truth and estimate (1σ = √(σ_E² + σ_N²)), the
-/// ship (CNA) true and as estimated, and the buoy when there is one; LAT/LON when the scenario's
-/// log has a geodetic origin. The world is planar, so depths are 0.
-pub fn hbl_run(sc: &hbl::Scenario, trace: &hbl::Trace) -> RunLog {
-    let rows = &trace.rows;
-    let track = |f: &dyn Fn(&hbl::TraceRow) -> Option<[f64; 2]>| -> Vec<Sample> {
+/// A Gill (2013) pass (`hbl simulate`, one row a second): the AUV's truth and estimate (1σ =
+/// √(σ_E² + σ_N²)), the ship (CNA) true and as the AUV estimates it, and the buoy when it is
+/// scored; LAT/LON when the log has a geodetic origin. Depths are written as 0.
+pub fn hbl_run(rows: &[PassRow], origin: Option<LocalFrame>) -> RunLog {
+    let track = |f: &dyn Fn(&PassRow) -> Option<[f64; 2]>| -> Vec<Sample> {
         rows.iter().filter_map(|r| f(r).map(|p| sample(r.t, p[0], p[1], 0.0))).collect()
     };
     let estimate: Vec<Sample> = rows
@@ -166,7 +165,7 @@ pub fn hbl_run(sc: &hbl::Scenario, trace: &hbl::Trace) -> RunLog {
         scenario: "hbl: an AUV passing under a ship (Gill 2013)".into(),
         command: "hbl simulate".into(),
         version: version(),
-        origin: sc.log.frame(),
+        origin,
         vehicles,
         pulses: Vec::new(),
         legs: Vec::new(),

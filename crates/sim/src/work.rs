@@ -8,7 +8,7 @@
 
 use crate::hbl::grid::GridSpec;
 use crate::hbl::tune::TuneSpec;
-use crate::{closed_loop, hbl, predeploy};
+use crate::{closed_loop, predeploy};
 use coopnav_core::limits::{
     Estimate, MAX_BYTES, MAX_PLANNER_LEAVES, MAX_PLANNER_UPDATES, MAX_POINTS, MAX_VEHICLE_STEPS,
 };
@@ -20,8 +20,6 @@ use coopnav_plan::{CnaKind, MotionConfig};
 const TRACK_SAMPLE_BYTES: f64 = 32.0;
 /// Bytes of one recorded per-AUV row (planner step record, closed-loop time-series row).
 const RECORD_ROW_BYTES: f64 = 200.0;
-/// Vehicles an HBL world steps: the survey AUV, the ship and the buoy.
-const HBL_VEHICLES: f64 = 3.0;
 
 /// A lawnmower's duration (s) from its description: lanes plus the turns between them.
 fn lawnmower_duration(lanes: usize, lane_length: f64, spacing: f64, speed: f64) -> f64 {
@@ -117,29 +115,25 @@ pub fn closed_loop(sc: &closed_loop::Scenario, runs: usize, policies: usize) -> 
     out
 }
 
-/// `runs` HBL runs of `sc` (`runs_fields` says where the count comes from); `recorded`: one run
-/// keeps its whole trace and log.
-pub fn hbl_runs(sc: &hbl::Scenario, runs: f64, runs_fields: &str, recorded: bool) -> Vec<Estimate> {
-    let steps = sc.max_duration_s / sc.dt;
+/// `runs` runs of a Gill pass in engine scenario `sc` (`runs_fields` says where the count comes
+/// from); `recorded`: one run keeps its post-processing log (a few rows per truth step).
+pub fn hbl_runs(sc: &closed_loop::Scenario, runs: f64, runs_fields: &str, recorded: bool) -> Vec<Estimate> {
+    let steps = sc.duration_s / sc.dt;
+    let vehicles = (sc.fleet.n_auvs + 1 + sc.ships.len() + sc.buoys.len()) as f64;
     let mut out = vec![Estimate::new(
         "simulated vehicle-steps",
-        format!("max_duration_s / dt x {runs_fields}"),
-        steps * HBL_VEHICLES * runs,
+        format!("duration_s / dt x (fleet.n_auvs + 1 + ships + buoys) x {runs_fields}"),
+        steps * vehicles * runs,
         MAX_VEHICLE_STEPS,
     )];
     if recorded {
-        out.push(Estimate::new(
-            "memory of the trace (bytes)",
-            "max_duration_s / dt",
-            steps * RECORD_ROW_BYTES,
-            MAX_BYTES,
-        ));
+        out.push(Estimate::new("memory of the log (bytes)", "duration_s / dt", steps * RECORD_ROW_BYTES, MAX_BYTES));
     }
     out
 }
 
 /// The buoy-location grid: its cells, and every cell's Monte Carlo.
-pub fn hbl_grid(sc: &hbl::Scenario, spec: &GridSpec) -> Vec<Estimate> {
+pub fn hbl_grid(sc: &closed_loop::Scenario, spec: &GridSpec) -> Vec<Estimate> {
     let cells = spec.cell_count();
     let mut out = vec![Estimate::new("grid cells", "grid x, y, spacing", cells, MAX_POINTS)];
     out.extend(hbl_runs(sc, cells * spec.runs_per_cell as f64, "grid cells x runs_per_cell", false));
@@ -148,7 +142,7 @@ pub fn hbl_grid(sc: &hbl::Scenario, spec: &GridSpec) -> Vec<Estimate> {
 
 /// Nelder–Mead tuning: at most `max_iters` iterations of up to n + 1 evaluations (a shrink), each a
 /// Monte Carlo of `runs` runs.
-pub fn hbl_tune(sc: &hbl::Scenario, spec: &TuneSpec) -> Vec<Estimate> {
+pub fn hbl_tune(sc: &closed_loop::Scenario, spec: &TuneSpec) -> Vec<Estimate> {
     let evaluations = (spec.max_iters as f64 + 1.0) * (spec.coefficients.len() as f64 + 1.0);
     hbl_runs(sc, evaluations * spec.runs as f64, "tune runs x (max_iters + 1) x (coefficients + 1)", false)
 }
@@ -244,13 +238,10 @@ mod tests {
         let long = closed_loop::Scenario { duration_s: 1e9, ..sim };
         assert!(check(closed_loop(&long, 1, 1), false).unwrap_err().to_string().contains("duration_s / dt"));
 
-        let hbl = hbl::Scenario::default();
+        let hbl = crate::hbl::zone::table5_scenario(coopnav_nav::cycle::Configuration::HblTwo).unwrap();
         assert!(check(hbl_runs(&hbl, 250.0, "--runs", false), false).is_ok());
         assert!(check(hbl_grid(&hbl, &GridSpec::default()), false).is_ok());
-        let fine = hbl::Scenario { dt: 1e-9, ..hbl::Scenario::default() };
-        assert!(check(hbl_runs(&fine, 1.0, "1 run", true), false)
-            .unwrap_err()
-            .to_string()
-            .contains("max_duration_s / dt"));
+        let fine = closed_loop::Scenario { dt: 1e-9, ..hbl.clone() };
+        assert!(check(hbl_runs(&fine, 1.0, "1 run", true), false).unwrap_err().to_string().contains("duration_s / dt"));
     }
 }

@@ -5,28 +5,29 @@
 use coopnav_core::{run_seed, Geodetic, LatLon, LatLonStorage};
 use coopnav_nav::cycle::Configuration;
 use coopnav_nav::post::{postprocess, read_log, write_log, Entry, PostConfig, PostResult, Record};
-use coopnav_sim::hbl::{run, Scenario};
+use coopnav_sim::hbl::log_format::LogFormat;
+use coopnav_sim::hbl::record::record_pass;
+use coopnav_sim::hbl::zone::{table5_scenario, ZoneSpec};
 
 fn pend_oreille() -> Geodetic {
     Geodetic::new(LatLon::new(47.97, -116.5).unwrap(), 630.0).unwrap()
 }
 
-fn scenario(origin: Option<Geodetic>, storage: LatLonStorage) -> Scenario {
-    let mut sc = Scenario::table5(Configuration::HblTwo);
-    sc.log.geodetic_origin = origin;
-    sc.log.buoy_fix_storage = storage;
-    sc.validate().unwrap();
-    sc
+fn scenario(origin: Option<Geodetic>, storage: LatLonStorage) -> LogFormat {
+    let format = LogFormat { geodetic_origin: origin, buoy_fix_storage: storage };
+    format.validate().unwrap();
+    format
 }
 
-/// Simulates run `i`, writes its log as the cli does, reads it back with the matching config.
-fn simulate_and_postprocess(sc: &Scenario, i: u64) -> (String, Vec<Entry>, PostResult) {
-    let (_, tr) = run(sc, &sc.resolved_cycle().unwrap(), run_seed(5, i), true);
-    let log = tr.unwrap().log;
-    let frame = sc.log.frame();
+/// Simulates run `i` of Table 5's HBL Two file, writes its log as the cli does (in format `format`),
+/// reads it back with the matching config.
+fn simulate_and_postprocess(format: &LogFormat, i: u64) -> (String, Vec<Entry>, PostResult) {
+    let sc = table5_scenario(Configuration::HblTwo).unwrap();
+    let log = record_pass(&sc, ZoneSpec::table5(), format.clone(), run_seed(5, i)).unwrap().0.sorted_log();
+    let frame = format.frame();
     let mut csv = Vec::new();
     write_log(&mut csv, &log, frame.as_ref()).unwrap();
-    let cfg = PostConfig { origin: sc.log.geodetic_origin, ..PostConfig::default() };
+    let cfg = PostConfig { origin: format.geodetic_origin, ..PostConfig::default() };
     let entries = read_log(csv.as_slice(), cfg.frame().as_ref()).unwrap();
     let r = postprocess(&entries, &cfg).unwrap();
     (String::from_utf8(csv).unwrap(), log, r)

@@ -1,43 +1,61 @@
-//! Behaviour of the HBL world: determinism across thread counts, common random numbers across
-//! configurations, robustness of the filters under hostile conditions, and the simulator →
+//! Gill's pass on the mission engine: determinism across thread counts, common random numbers
+//! across configurations, robustness of the filters under hostile conditions, and the engine →
 //! log → post-processing → RTS pipeline end to end.
 
 use coopnav_core::run_seed;
-use coopnav_nav::cycle::{Configuration, Cycle, SlotContent};
-use coopnav_nav::post::{postprocess, read_log, write_log, PostConfig};
+use coopnav_nav::cycle::Configuration;
+use coopnav_nav::post::{postprocess, read_log, write_log, Entry, PostConfig, Record};
 use coopnav_nav::smoother::SmootherKind;
-use coopnav_sim::hbl::{monte_carlo, run, Scenario};
+use coopnav_sim::closed_loop::Scenario;
+use coopnav_sim::hbl::log_format::LogFormat;
+use coopnav_sim::hbl::record::record_pass;
+use coopnav_sim::hbl::zone::{table5_file, table5_scenario, zone_monte_carlo, ZoneSpec};
+use std::path::Path;
 
 #[test]
 fn monte_carlo_is_identical_on_one_and_two_threads() {
-    let sc = Scenario::table5(Configuration::HblOne);
+    let sc = table5_scenario(Configuration::HblOne).unwrap();
     let pool = |n| rayon::ThreadPoolBuilder::new().num_threads(n).build().unwrap();
-    let one = pool(1).install(|| monte_carlo(&sc, 12, 7, &|_| {}).unwrap());
-    let two = pool(2).install(|| monte_carlo(&sc, 12, 7, &|_| {}).unwrap());
-    assert_eq!(one.runs, two.runs);
-    assert_eq!(one.summary, two.summary);
+    let one = pool(1).install(|| zone_monte_carlo(&sc, ZoneSpec::table5(), 12, 7).unwrap());
+    let two = pool(2).install(|| zone_monte_carlo(&sc, ZoneSpec::table5(), 12, 7).unwrap());
+    assert_eq!((&one.runs, &one.counts, &one.profile), (&two.runs, &two.counts, &two.profile));
+    assert_eq!(one.summary(7).unwrap(), two.summary(7).unwrap());
+}
+
+/// The first logged truth of the AUV and fix of the ship (t = 0.1 s, before any packet ends).
+fn start(log: &[Entry]) -> (Record, Record) {
+    let first = |f: fn(&Record) -> bool| log.iter().find(|e| f(&e.record)).unwrap().record;
+    (first(|r| matches!(r, Record::Truth { .. })), first(|r| matches!(r, Record::ShipFix { .. })))
 }
 
 #[test]
 fn configurations_share_their_noise() {
     let seed = run_seed(3, 0);
-    let start = |c| {
-        let sc = Scenario::table5(c);
-        let (_, tr) = run(&sc, &sc.resolved_cycle().unwrap(), seed, true);
-        let r = tr.unwrap().rows[0];
-        (r.auv_true, r.ship_true)
+    let start_of = |c| {
+        let sc = table5_scenario(c).unwrap();
+        start(&record_pass(&sc, ZoneSpec::table5(), LogFormat::default(), seed).unwrap().0.log)
     };
-    assert_eq!(start(Configuration::Msbl), start(Configuration::HblTwo));
-    assert_eq!(start(Configuration::HblOne), start(Configuration::HblTwo));
+    assert_eq!(start_of(Configuration::Msbl), start_of(Configuration::HblTwo));
+    assert_eq!(start_of(Configuration::HblOne), start_of(Configuration::HblTwo));
+}
+
+/// Table 5's HBL Two file with each (old, new) text replacement made (each must match).
+fn edited(replacements: &[(&str, &str)]) -> Scenario {
+    let (name, text) = table5_file(Configuration::HblTwo);
+    let mut text = text.to_string();
+    for (old, new) in replacements {
+        assert!(text.contains(old), "{old} not in {name}");
+        text = text.replace(old, new);
+    }
+    Scenario::parse(&text, Path::new(name)).unwrap()
 }
 
 fn assert_healthy(sc: &Scenario, what: &str) {
-    sc.validate().unwrap();
-    let cycle = sc.resolved_cycle().unwrap();
     for i in 0..6 {
-        let (m, tr) = run(sc, &cycle, run_seed(11, i), true);
-        assert!(m.healthy, "{what}: run {i} lost positive definiteness or went non-finite");
-        for r in tr.unwrap().rows {
+        let (pass, result) = record_pass(sc, ZoneSpec::table5(), LogFormat::default(), run_seed(11, i)).unwrap();
+        assert!(result.fleet.healthy, "{what}: run {i} went non-finite");
+        assert!(pass.zone.metrics().zone_error.is_some(), "{what}: run {i} never reached the zone");
+        for r in &pass.rows {
             assert!(r.auv_est.iter().chain(&r.auv_sd).all(|v| v.is_finite()), "{what}: run {i} at t = {}", r.t);
         }
     }
@@ -45,62 +63,63 @@ fn assert_healthy(sc: &Scenario, what: &str) {
 
 #[test]
 fn robust_to_dropped_messages() {
-    let mut sc = Scenario::default();
-    sc.acoustic.p_drop = 0.8;
-    sc.acoustic.p_slightly_long = 0.1;
-    sc.acoustic.p_slightly_short = 0.05;
-    sc.acoustic.p_outlier = 0.05;
-    assert_healthy(&sc, "80% drops");
+    // 20 % of mini-packets decoded instead of 90 %.
+    assert_healthy(&edited(&[("p_a = 0.90", "p_a = 0.20")]), "80% drops");
 }
 
 #[test]
 fn robust_to_outliers() {
-    let mut sc = Scenario::default();
-    sc.acoustic.p_outlier = 0.5;
-    sc.acoustic.p_slightly_long = 0.2;
-    sc.acoustic.p_slightly_short = 0.2;
-    sc.acoustic.p_drop = 0.1;
-    assert_healthy(&sc, "50% 5-10 m outliers");
+    let mixture = "p_slightly_long = 0.5556, p_slightly_short = 0.3889, p_outlier = 0.0555";
+    let hostile = "p_slightly_long = 0.2222, p_slightly_short = 0.2222, p_outlier = 0.5556";
+    assert_healthy(&edited(&[(mixture, hostile)]), "50% 5-10 m outliers");
 }
 
 #[test]
 fn robust_to_minute_long_gaps() {
-    let mut sc = Scenario::default();
-    let mut slots = vec![SlotContent::ShipEast, SlotContent::BuoyNorth, SlotContent::ShipNorth];
-    slots.extend(std::iter::repeat(SlotContent::Silent).take(45)); // 90 s of silence per cycle
-    sc.custom_cycle = Some(Cycle { name: "gappy".into(), slot_seconds: 2.0, slots });
+    // Three mini-packets, then 90 s of silence per 96 s cycle.
+    let gappy = r#"schedule = { kind = "tdma", slots = [{ who = "ship0.port", start_s = 0.0, length_s = 2.0, message = "east" }, { who = "buoy0", start_s = 2.0, length_s = 2.0, message = "north" }, { who = "ship0.starboard", start_s = 4.0, length_s = 2.0, message = "north" }] }"#;
+    let sc = edited(&[
+        ("tau = 20.0", "tau = 96.0"),
+        // The silent CNA's turn over one τ must stay under 180° (the planner's rule).
+        ("heading_compass_deg = 0.0\nspeed = 1.0", "heading_compass_deg = 0.0\nspeed = 1.0\nmax_turn_rate_deg_s = 1.0"),
+        (r#"schedule = { kind = "gill_cycle", cycle = "hbl_long", configuration = "hbl_two" }"#, gappy),
+    ]);
     assert_healthy(&sc, "90 s gaps");
 }
 
 #[test]
 fn robust_to_clock_drift_and_sound_speed_bias() {
-    let mut sc = Scenario::default();
-    sc.acoustic.clock_drift = true;
-    // Exaggerated: ~0.1 s/h, i.e. metres of range error within the run.
-    sc.acoustic.clock_drift_mean_us_h = 1e5;
-    sc.acoustic.filter_sound_speed_bias = 20.0;
+    // Exaggerated: clocks drifting ~30 ppm (~0.1 s/h, metres of range error within the run), and
+    // a filter assuming 1520 m/s in 1500 m/s water.
+    let sc = edited(&[
+        (
+            "sound_speed = { kind = \"constant\", c = 1500.0 }",
+            "sound_speed = { kind = \"constant\", c = 1500.0 }\nclocks = { offset_sd_s = 0.0, drift_sd_ppm = 30.0 }",
+        ),
+        ("range_noise = { sigma_time = 1.2e-3 }", "range_noise = { sigma_time = 1.2e-3, sound_speed = 1520.0 }"),
+    ]);
     assert_healthy(&sc, "clock drift");
 }
 
 #[test]
 fn robust_with_the_buoy_on_the_path_and_the_ship_overhead() {
     // The AUV passes directly under the buoy (and, at the crossing, within metres of the ship).
-    let mut sc = Scenario::default();
-    sc.buoy.fixed = Some([20.0, 0.0]);
-    sc.buoy.drift = coopnav_sim::hbl::config::Drift::None;
-    sc.init.position_sd = 0.0;
+    let mut sc = table5_scenario(Configuration::HblTwo).unwrap();
+    sc.buoys[0].x = 20.0;
+    sc.buoys[0].y = 0.0;
+    sc.buoys[0].drift = coopnav_sim::models::buoy::Drift::Moored;
+    sc.fleet.init_position_sd = 0.0;
     assert_healthy(&sc, "buoy overhead");
 }
 
 #[test]
 fn simulated_logs_postprocess_end_to_end() {
-    let sc = Scenario::table5(Configuration::HblTwo);
-    let cycle = sc.resolved_cycle().unwrap();
+    let sc = table5_scenario(Configuration::HblTwo).unwrap();
     let (mut filt, mut smooth, mut nees, mut n) = (0.0, 0.0, 0.0, 0.0);
     for i in 0..8 {
-        let (_, tr) = run(&sc, &cycle, run_seed(21, i), true);
+        let (pass, _) = record_pass(&sc, ZoneSpec::table5(), LogFormat::default(), run_seed(21, i)).unwrap();
         let mut csv = Vec::new();
-        write_log(&mut csv, &tr.unwrap().log, None).unwrap();
+        write_log(&mut csv, &pass.sorted_log(), None).unwrap();
         let entries = read_log(csv.as_slice(), None).unwrap();
         let r = postprocess(&entries, &PostConfig::default()).unwrap();
         let s = r.summary;
@@ -120,6 +139,7 @@ fn simulated_logs_postprocess_end_to_end() {
         n += 1.0;
     }
     let (filt, smooth, nees) = (filt / n, smooth / n, nees / n);
+    eprintln!("8 runs: mean filtered error {filt:.3} m, smoothed {smooth:.3} m, smoothed NEES {nees:.2}");
     assert!(smooth <= filt, "smoothed {smooth} vs filtered {filt}");
     // Consistency: a 2-D NEES averages 2 for a consistent filter; allow a wide band since the
     // transponder positions carry unmodelled DGPS error.

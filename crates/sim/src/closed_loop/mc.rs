@@ -6,7 +6,7 @@
 use super::policies::{PolicyError, PolicySpec};
 use super::scenario::Scenario;
 use crate::engine::{run, Faults, Observer, RunResult};
-use crate::hbl::mc::{t_975, Stats};
+use crate::stats::{t_975, Stats};
 use coopnav_core::run_seed;
 use rayon::prelude::*;
 use serde::Serialize;

@@ -6,7 +6,7 @@
 //! half-duplex, collisions and the channel's success draw apply as to every packet.
 
 use super::inflight::Arrival;
-use super::observe::BuoySample;
+use super::observe::{BuoyFix, BuoySample, Observer, ShipSample};
 use super::phases::{arrival, measured_travel, Payload};
 use super::vehicles::lerp;
 use super::Engine;
@@ -39,6 +39,11 @@ impl SurfaceFilters {
         self.filters[self.n_ships + b].position_at(t)
     }
 
+    /// Where this filter of ship `i` puts its reference point at `t` (extrapolated).
+    pub fn ship_at(&self, i: usize, t: f64) -> [f64; 2] {
+        self.filters[i].position_at(t)
+    }
+
     fn of(&mut self, owner: Owner) -> Option<&mut SurfaceEkf> {
         let i = match owner {
             Owner::Ship(i, _) => i,
@@ -60,9 +65,22 @@ impl Engine<'_> {
             .collect()
     }
 
+    /// Every ship's truth at `t` and every survey AUV's estimate of it.
+    pub(super) fn ship_samples(&self, t: f64) -> Vec<ShipSample> {
+        let estimates = |i| self.surface.iter().map(|s| s.ship_at(i, t)).collect();
+        self.ships.iter().enumerate().map(|(i, ship)| ShipSample { truth: ship.pos, estimates: estimates(i) }).collect()
+    }
+
     /// `owner`'s mini-packet carrying `kind`, sent at `t_tx` (fraction `frac` of the step): an
     /// arrival with its own range at every survey AUV; it reaches the CNA as interference.
-    pub(super) fn mini_broadcast(&mut self, owner: Owner, kind: StateKind, t_tx: f64, frac: f64) {
+    pub(super) fn mini_broadcast(
+        &mut self,
+        owner: Owner,
+        kind: StateKind,
+        t_tx: f64,
+        frac: f64,
+        obs: &mut dyn Observer,
+    ) {
         let sc = self.sc;
         let (from, value, sender_clock) = match owner {
             Owner::Ship(i, side) => {
@@ -71,6 +89,7 @@ impl Engine<'_> {
             }
             Owner::Buoy(b) => {
                 let fix = self.buoys[b].gps_fix(t_tx);
+                obs.on_buoy_fix(&BuoyFix { t: t_tx, buoy: b, fix });
                 let value = quantised(kind, [fix.x, fix.y], 0.0, 0.0, &sc.buoys[b].zone());
                 (self.buoys[b].position(t_tx), value, self.buoys[b].clock)
             }

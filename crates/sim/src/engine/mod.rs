@@ -32,7 +32,8 @@ use coopnav_plan::AuvForecast;
 use inflight::InFlight;
 use mini::SurfaceFilters;
 pub use observe::{
-    BuoySample, CommsEvent, Decision, Observer, Phase, PhaseClock, StatusChoice, Timing, Trace, TraceRow,
+    BuoyFix, BuoySample, CommsEvent, DeadReckoning, Decision, FilterStart, Observer, Phase, PhaseClock, RangeHeard,
+    ShipPose, ShipSample, StatusChoice, Timing, Trace, TraceRow,
 };
 use phases::Payload;
 use rand_chacha::ChaCha8Rng;
@@ -146,6 +147,13 @@ struct Engine<'a> {
 pub fn run(sc: &Scenario, policy: &mut Policy, seed: u64, faults: &Faults, obs: &mut dyn Observer) -> RunResult {
     let t_start = Instant::now();
     let mut engine = Engine::new(sc, policy, seed, faults);
+    for (auv, a) in engine.auvs.iter().enumerate() {
+        let ((x, y), (speed, heading)) = (a.ekf.position(), a.ekf.speed_heading());
+        obs.on_filter_start(&FilterStart { auv, x, y, speed, heading });
+    }
+    for (ship, s) in engine.ships.iter().enumerate() {
+        obs.on_ship_pose(&ShipPose { t: 0.0, ship, pos: s.pos, heading: s.psi });
+    }
     obs.on_phase_end(Phase::Setup);
     let steps = (sc.duration_s / sc.dt).round() as u64;
     for step in 0..steps {
@@ -217,13 +225,13 @@ impl<'a> Engine<'a> {
         let t_next = t + self.sc.dt;
         self.decide(t_next, obs);
         obs.on_phase_end(Phase::Decide);
-        self.advance();
+        self.advance(t_next, obs);
         obs.on_phase_end(Phase::Advance);
         self.transmit(t, t_next, obs);
         obs.on_phase_end(Phase::Transmit);
         self.deliver(t_next, obs);
         obs.on_phase_end(Phase::Deliver);
-        self.sense(step, t_next);
+        self.sense(step, t_next, obs);
         obs.on_phase_end(Phase::Sense);
         let per_second = ((1.0 / self.sc.dt).round() as u64).max(1);
         if (step + 1) % per_second == 0 {

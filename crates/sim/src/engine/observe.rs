@@ -3,6 +3,7 @@
 //! end of every phase of a step; the caller keeps what it wants (`()` keeps nothing, [`Trace`]
 //! keeps the time series, [`PhaseClock`] the wall time of each phase).
 
+use crate::models::schedule::Owner;
 use coopnav_acomms::selector::Choice;
 use coopnav_core::Vec3;
 use serde::Serialize;
@@ -57,6 +58,65 @@ pub struct BuoySample {
     pub estimates: Vec<[f64; 2]>,
 }
 
+/// A ship at a sample: its reference point's true position and, per survey AUV (by index), where
+/// that AUV's filter of the ship (fed by its mini-packets) puts it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ShipSample {
+    pub truth: Vec3,
+    pub estimates: Vec<[f64; 2]>,
+}
+
+/// A survey AUV's filter at the start of the run: its position estimate (m), speed (m/s) and
+/// math heading (rad).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FilterStart {
+    pub auv: usize,
+    pub x: f64,
+    pub y: f64,
+    pub speed: f64,
+    pub heading: f64,
+}
+
+/// What one survey AUV's filter step was given: the heading-rate reading it predicted with
+/// (math sense, rad/s), the speed and compass readings it then took (m/s; math heading, rad),
+/// and the AUV's true position at the step's end `t`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct DeadReckoning {
+    pub t: f64,
+    pub auv: usize,
+    pub yaw_rate: f64,
+    pub speed: f64,
+    pub heading: f64,
+    pub truth: Vec3,
+}
+
+/// A usable range a survey AUV decoded: the sender, its transmit time and the travel time the
+/// AUV measured (on its own clock).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RangeHeard {
+    pub t_tx: f64,
+    pub auv: usize,
+    pub from: Owner,
+    pub travel_time: f64,
+}
+
+/// A ship's truth at the end of a step: its reference point and math heading (rad).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ShipPose {
+    pub t: f64,
+    pub ship: usize,
+    pub pos: Vec3,
+    pub heading: f64,
+}
+
+/// The GPS fix a buoy broadcast (whole or as a mini-packet component) at `t`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct BuoyFix {
+    pub t: f64,
+    pub buoy: usize,
+    pub fix: Vec3,
+}
+
 /// A survey AUV's status slot: what its rate policy chose, from its estimated distance to the
 /// CNA (none before it has heard the CNA).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
@@ -86,6 +146,19 @@ pub trait Observer {
     /// Just before each `on_sample`, in a scenario with buoys: buoy i's truth and what every
     /// survey AUV's filter of it holds, at index i.
     fn on_buoys(&mut self, _t: f64, _buoys: &[BuoySample]) {}
+    /// Just before each `on_sample`, in a scenario with ships: ship i's truth and what every survey
+    /// AUV's filter of it holds, at index i.
+    fn on_ship_samples(&mut self, _t: f64, _ships: &[ShipSample]) {}
+    /// Every survey AUV's filter as the run starts (after the set-up).
+    fn on_filter_start(&mut self, _start: &FilterStart) {}
+    /// Every survey AUV's every filter step (the dead-reckoning stream a field log holds).
+    fn on_dead_reckoning(&mut self, _dr: &DeadReckoning) {}
+    /// Every ship at the start of the run and at the end of every truth step.
+    fn on_ship_pose(&mut self, _pose: &ShipPose) {}
+    /// Every buoy GPS fix broadcast, at its transmit time.
+    fn on_buoy_fix(&mut self, _fix: &BuoyFix) {}
+    /// A survey AUV decoded a packet with a usable range (before its filter applies it).
+    fn on_range(&mut self, _range: &RangeHeard) {}
     /// Every survey AUV's status slot, with its rate policy's choice.
     fn on_status_choice(&mut self, _choice: &StatusChoice) {}
     /// A packet whose fate is known (at the end of its arrival).

@@ -7,7 +7,9 @@
 
 use super::health::nees_2d;
 use super::inflight::Arrival;
-use super::observe::{CommsEvent, Decision, Observer, StatusChoice, TraceRow};
+use super::observe::{
+    BuoyFix, CommsEvent, DeadReckoning, Decision, Observer, RangeHeard, ShipPose, StatusChoice, TraceRow,
+};
 use super::vehicles::lerp;
 use super::vehicles::SurveyAuv;
 use super::{Engine, FleetView};
@@ -123,12 +125,14 @@ impl Engine<'_> {
         Vec3::new(p.x + cna.nav_error.0, p.y + cna.nav_error.1, p.z)
     }
 
-    /// Truth: the CNA craft, then every survey AUV (after its finish behaviour's action).
-    pub(super) fn advance(&mut self) {
+    /// Truth to `t_next`: the CNA craft, the ships, then every survey AUV (after its finish
+    /// behaviour's action).
+    pub(super) fn advance(&mut self, t_next: f64, obs: &mut dyn Observer) {
         let sc = self.sc;
         self.cna.craft.step(sc.cna.speed, sc.cna.max_turn_rate_deg_s.to_radians(), sc.dt);
-        for (ship, spec) in self.ships.iter_mut().zip(&sc.ships) {
+        for (i, (ship, spec)) in self.ships.iter_mut().zip(&sc.ships).enumerate() {
             ship.step(spec, sc.dt);
+            obs.on_ship_pose(&ShipPose { t: t_next, ship: i, pos: ship.pos, heading: ship.psi });
         }
         for a in self.auvs.iter_mut() {
             let action = sc.fleet.finish.act(a.ctrl.is_complete(), a.ekf.position(), a.station);
@@ -151,9 +155,9 @@ impl Engine<'_> {
             self.next_slot += 1;
             let frac = ((t_tx - t) / self.sc.dt).clamp(0.0, 1.0);
             match (slot.message, slot.owner) {
-                (Message::Mini(kind), owner) => self.mini_broadcast(owner, kind, t_tx, frac),
+                (Message::Mini(kind), owner) => self.mini_broadcast(owner, kind, t_tx, frac, obs),
                 (Message::Packet, Owner::Cna) => self.broadcast(t_tx, frac),
-                (Message::Packet, Owner::Buoy(b)) => self.buoy_broadcast(b, t_tx, frac),
+                (Message::Packet, Owner::Buoy(b)) => self.buoy_broadcast(b, t_tx, frac, obs),
                 (Message::Packet, Owner::Auv(j)) => self.send_status(j, t_tx, frac, obs),
                 // Validation refuses a ship slot without a component.
                 (Message::Packet, Owner::Ship(..)) => {}
@@ -189,10 +193,11 @@ impl Engine<'_> {
 
     /// Buoy `b`'s slot: its GPS position, one packet, an arrival (with its own range) at every
     /// survey AUV; it reaches the CNA as interference.
-    fn buoy_broadcast(&mut self, b: usize, t_tx: f64, frac: f64) {
+    fn buoy_broadcast(&mut self, b: usize, t_tx: f64, frac: f64, obs: &mut dyn Observer) {
         let sc = self.sc;
         let buoy = &mut self.buoys[b];
         let (rate, from, fix) = (buoy.rate, buoy.position(t_tx), buoy.gps_fix(t_tx));
+        obs.on_buoy_fix(&BuoyFix { t: t_tx, buoy: b, fix });
         let air = air_time(rate);
         self.air.transmit(Owner::Buoy(b), t_tx, t_tx + air);
         for k in 0..self.auvs.len() {
@@ -262,6 +267,7 @@ impl Engine<'_> {
                     self.tallies[k].down.record(rate.index(), received);
                     obs.on_packet(&event(&meta, "down", k, decoded, survived));
                     if received {
+                        heard(obs, &meta, k, travel_time);
                         self.hear_broadcast(k, &meta, fix, travel_time, &acked);
                     }
                 }
@@ -288,6 +294,7 @@ impl Engine<'_> {
                     self.tallies[k].buoys.record(rate.index(), received);
                     obs.on_packet(&event(&meta, "buoy", k, decoded, survived));
                     if received {
+                        heard(obs, &meta, k, travel_time);
                         self.apply_range(k, &meta, fix, travel_time);
                     }
                 }
@@ -300,6 +307,7 @@ impl Engine<'_> {
                     stats.record(SUCCESS_RATE.index(), received);
                     obs.on_packet(&event(&meta, direction, k, decoded, survived));
                     if received {
+                        heard(obs, &meta, k, travel_time);
                         self.hear_mini(k, &meta, kind, value, travel_time);
                     }
                 }
@@ -349,11 +357,11 @@ impl Engine<'_> {
 
     /// Filters to `t_next` at the end of truth step `step` (every step, or every few with a
     /// decimated filter rate): prediction, speed and compass; a surfaced AUV's GPS once a second.
-    pub(super) fn sense(&mut self, step: u64, t_next: f64) {
+    pub(super) fn sense(&mut self, step: u64, t_next: f64, obs: &mut dyn Observer) {
         let whole_second = (t_next - t_next.round()).abs() < 1e-6;
         let every = self.sc.filter.rate.steps(self.sc.dt);
         let filter_step = (step + 1) % every == 0;
-        for a in self.auvs.iter_mut() {
+        for (k, a) in self.auvs.iter_mut().enumerate() {
             let yaw_rate = if every == 1 {
                 a.yaw_measured
             } else {
@@ -364,7 +372,8 @@ impl Engine<'_> {
                 std::mem::take(&mut a.yaw_sum) / every as f64
             };
             a.ekf.predict_to(t_next, yaw_rate);
-            a.sense(self.sc);
+            let (speed, heading) = a.sense(self.sc);
+            obs.on_dead_reckoning(&DeadReckoning { t: t_next, auv: k, yaw_rate, speed, heading, truth: a.truth });
             if let Finish::Surface { gps_sd_m, .. } = self.sc.fleet.finish {
                 if whole_second && a.at_surface() {
                     a.gps_fix(gps_sd_m);
@@ -378,6 +387,9 @@ impl Engine<'_> {
         if !self.ships.is_empty() {
             let ships: Vec<Vec3> = self.ships.iter().map(|s| s.pos).collect();
             obs.on_ships(t, &ships);
+        }
+        if !self.ships.is_empty() {
+            obs.on_ship_samples(t, &self.ship_samples(t));
         }
         if !self.buoys.is_empty() {
             obs.on_buoys(t, &self.buoy_samples(t));
@@ -450,6 +462,13 @@ pub(super) fn arrival(
     payload: Option<Payload>,
 ) -> Arrival<Payload> {
     Arrival { from, to, t_tx, start: t_tx + travel, end: t_tx + travel + air, level_db: -tl, payload }
+}
+
+/// Reports AUV `k`'s decoded packet with a usable range.
+fn heard(obs: &mut dyn Observer, meta: &Arrival<()>, k: usize, travel_time: Option<f64>) {
+    if let Some(travel_time) = travel_time {
+        obs.on_range(&RangeHeard { t_tx: meta.t_tx, auv: k, from: meta.from, travel_time });
+    }
 }
 
 fn event(meta: &Arrival<()>, direction: &'static str, auv: usize, decoded: bool, survived: bool) -> CommsEvent {

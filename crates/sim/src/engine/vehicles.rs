@@ -173,14 +173,17 @@ impl SurveyAuv {
         self.adrift && self.truth.z <= 0.0
     }
 
-    /// Speed and compass updates at the filter's current time.
-    pub fn sense(&mut self, sc: &Scenario) {
+    /// Speed and compass updates at the filter's current time; returns the readings (m/s; math
+    /// heading, rad).
+    pub fn sense(&mut self, sc: &Scenario) -> (f64, f64) {
         let s = &sc.sensors;
         let psi = self.ctrl.state.heading.radians();
-        self.ekf.update_speed(self.ctrl.state.speed + s.speed_sd * normal(&mut self.rng_speed));
-        self.ekf.update_heading(wrap_pi(
-            psi + self.compass.at(psi) + s.compass_white_deg.to_radians() * normal(&mut self.rng_white),
-        ));
+        let speed = self.ctrl.state.speed + s.speed_sd * normal(&mut self.rng_speed);
+        let heading =
+            wrap_pi(psi + self.compass.at(psi) + s.compass_white_deg.to_radians() * normal(&mut self.rng_white));
+        self.ekf.update_speed(speed);
+        self.ekf.update_heading(heading);
+        (speed, heading)
     }
 
     /// A GPS fix of the horizontal position (σ `sd` per axis), as a surfaced AUV takes.

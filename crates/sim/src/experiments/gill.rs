@@ -7,11 +7,11 @@
 
 use super::{Check, Experiment, ExperimentError, ReproOptions, ReproReport, Size};
 use crate::closed_loop::Scenario;
-use crate::hbl::grid::{buoy_grid, engine_cell, optimal_region, GridSpec};
-use crate::hbl::mc::{welch_95, Stats};
+use crate::hbl::grid::{buoy_grid, engine_cell, lengthen_for_grid, optimal_region, GridSpec};
 use crate::hbl::profile::ProfileBin;
 use crate::hbl::zone::{table5_file, table5_scenario, zone_monte_carlo, ZoneError, ZoneSpec, ZoneSummary};
 use crate::models::schedule::{GillCycle, Schedule};
+use crate::stats::{welch_95, Stats};
 use coopnav_nav::codec::Zone;
 use coopnav_nav::cycle::Configuration;
 use serde_json::json;
@@ -437,13 +437,6 @@ fn finest_within_factor(rows: &[([f64; 2], f64, f64, f64, ZoneSummary)], factor:
     )
 }
 
-/// The grid's runs end once the AUV is past the zone, or at the old HBL loop's cap of 400 s: a
-/// buoy on the path near the AUV's start can pull the AUV's filter into the mirror solution and
-/// the AUV, steering on it, off the path, so it reaches the zone late (cell (−79, 10) m, run 82
-/// of the full grid, did not by Table 5's 130 s). The lane is long enough for 400 s.
-const GRID_MAX_DURATION_S: f64 = 400.0;
-const GRID_LANE_M: f64 = 360.0;
-
 fn buoy_grid_exp(o: &ReproOptions) -> Result<ReproReport, ExperimentError> {
     let id = "gill-buoy-grid";
     let spec = match o.size {
@@ -451,8 +444,7 @@ fn buoy_grid_exp(o: &ReproOptions) -> Result<ReproReport, ExperimentError> {
         Size::Reduced => GridSpec { x: [-70.0, 110.0], y: [0.0, 90.0], spacing: 45.0, runs_per_cell: 20 },
     };
     let mut base = engine_scenario(id, Configuration::HblTwo)?;
-    base.duration_s = GRID_MAX_DURATION_S;
-    base.fleet.lane_length = GRID_LANE_M;
+    lengthen_for_grid(&mut base);
     let base = revalidated(id, base, hbl_two_file())?;
     let zone = ZoneSpec { stop_past_zone: true, ..ZoneSpec::table5() };
     let cell = engine_cell(&base, zone, spec.runs_per_cell, o.seed).map_err(|e| failed(id, e))?;

@@ -1,13 +1,12 @@
 //! The buoy-location grid (digest §5.7 item 1, §10 A14): a zero-drift Monte Carlo per candidate
 //! buoy position north of the path, the region within a tolerance of the best cell, and CSV
-//! output (the SVG heat map is in [`super::plot`]). The caller says how one cell runs: the old
-//! HBL loop ([`old_loop_cell`]) or the engine ([`engine_cell`]).
+//! output (the SVG heat map is in [`super::plot`]). The caller says how one cell runs (on the
+//! engine: [`engine_cell`]).
 
-use super::config::{Drift, Scenario};
-use super::mc::{monte_carlo, McError, Stats};
 use super::zone::{zone_monte_carlo, ZoneError, ZoneSpec};
 use crate::closed_loop::Scenario as EngineScenario;
 use crate::models::buoy::Drift as EngineDrift;
+use crate::stats::Stats;
 use coopnav_core::validation::{InvalidFields, Problems};
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
@@ -32,8 +31,6 @@ impl Default for GridSpec {
 pub enum GridError {
     #[error("grid spec: {0}")]
     Fields(#[from] InvalidFields),
-    #[error(transparent)]
-    Mc(#[from] McError),
     #[error(transparent)]
     Zone(#[from] ZoneError),
     #[error("grid: the scenario has no buoy to place")]
@@ -113,19 +110,18 @@ pub fn buoy_grid(
     Ok(out)
 }
 
-/// A cell on the old HBL loop: `base` with the buoy moored at the cell, `runs` runs from `seed`
-/// (the same base seed in every cell: common random numbers across cells).
-pub fn old_loop_cell(
-    base: &Scenario,
-    runs: usize,
-    seed: u64,
-) -> impl Fn([f64; 2]) -> Result<Stats, GridError> + Sync + '_ {
-    move |[x, y]| {
-        let mut sc = base.clone();
-        sc.buoy.fixed = Some([x, y]);
-        sc.buoy.drift = Drift::None;
-        Ok(monte_carlo(&sc, runs, seed, &|_| {})?.summary.zone_error)
-    }
+/// The grid's runs end once the AUV is past the zone, or at the former HBL loop's cap of 400 s:
+/// a buoy on the path near the AUV's start can pull the AUV's filter into the mirror solution and
+/// the AUV, steering on it, off the path, so it reaches the zone late (cell (−79, 10) m, run 82
+/// of the full grid, did not by Table 5's 130 s). The lane is long enough for 400 s.
+pub const GRID_MIN_DURATION_S: f64 = 400.0;
+pub const GRID_MIN_LANE_M: f64 = 360.0;
+
+/// Gives `sc` at least [`GRID_MIN_DURATION_S`] and a lane of at least [`GRID_MIN_LANE_M`]
+/// (revalidate it after).
+pub fn lengthen_for_grid(sc: &mut EngineScenario) {
+    sc.duration_s = sc.duration_s.max(GRID_MIN_DURATION_S);
+    sc.fleet.lane_length = sc.fleet.lane_length.max(GRID_MIN_LANE_M);
 }
 
 /// A cell on the engine: scenario `base` with its buoy 0 moored at the cell (its zone as the

@@ -2,11 +2,17 @@
 //! or as latitude/longitude about a geodetic origin like the field logs, optionally with the buoy
 //! fixes rounded the way the UI AUV's Rabbit stored them (float32, maybe one more bit lost).
 
-use super::config::ConfigError;
 use coopnav_core::{Geodetic, LatLonStorage, LocalFrame};
 use serde::{Deserialize, Serialize};
+use thiserror::Error;
 
-/// The scenario's `[log]` section.
+#[derive(Debug, Error)]
+pub enum LogFormatError {
+    #[error("buoy fix storage {0:?} needs a geodetic origin (the rounding happens in latitude/longitude); give the origin or store \"f64\"")]
+    StorageWithoutOrigin(LatLonStorage),
+}
+
+/// How `coopnav hbl simulate` writes its log (the `--log-format` file).
 #[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct LogFormat {
@@ -19,9 +25,9 @@ pub struct LogFormat {
 }
 
 impl LogFormat {
-    pub fn validate(&self) -> Result<(), ConfigError> {
+    pub fn validate(&self) -> Result<(), LogFormatError> {
         if self.buoy_fix_storage != LatLonStorage::F64 && self.geodetic_origin.is_none() {
-            return Err(ConfigError::LogStorage(self.buoy_fix_storage));
+            return Err(LogFormatError::StorageWithoutOrigin(self.buoy_fix_storage));
         }
         Ok(())
     }
@@ -49,33 +55,27 @@ impl LogFormat {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::hbl::Scenario;
+    use coopnav_core::LatLon;
+
+    fn geodetic(storage: LatLonStorage) -> LogFormat {
+        let origin = Geodetic::new(LatLon::new(47.97, -116.5).unwrap(), 0.0).unwrap();
+        LogFormat { geodetic_origin: Some(origin), buoy_fix_storage: storage }
+    }
 
     #[test]
     fn storage_without_an_origin_is_rejected() {
-        let e = Scenario::from_toml("[log]\nbuoy_fix_storage = \"f32\"\n").unwrap_err().to_string();
-        assert!(e.contains("log.buoy_fix_storage") && e.contains("log.geodetic_origin"), "{e}");
-        let e = Scenario::from_toml("[log]\ngeodetic_origin = { lat_deg = 91.0, lon_deg = 0.0 }\n")
-            .unwrap_err()
-            .to_string();
-        assert!(e.contains("latitude 91"), "{e}");
-        let e = Scenario::from_toml("[log]\nf32 = true\n").unwrap_err().to_string();
-        assert!(e.contains("f32"), "{e}");
-        let sc = Scenario::from_toml(
-            "[log]\ngeodetic_origin = { lat_deg = 47.97, lon_deg = -116.5 }\nbuoy_fix_storage = \"f32_lost_bit\"\n",
-        )
-        .unwrap();
-        assert_eq!(sc.log.buoy_fix_storage, LatLonStorage::F32LostBit);
+        let bare = LogFormat { geodetic_origin: None, buoy_fix_storage: LatLonStorage::F32 };
+        let e = bare.validate().unwrap_err().to_string();
+        assert!(e.contains("F32") && e.contains("geodetic origin"), "{e}");
+        geodetic(LatLonStorage::F32LostBit).validate().unwrap();
+        LogFormat::default().validate().unwrap();
     }
 
     #[test]
     fn stored_fixes_land_on_the_float32_grid() {
-        let sc = Scenario::from_toml(
-            "[log]\ngeodetic_origin = { lat_deg = 47.97, lon_deg = -116.5 }\nbuoy_fix_storage = \"f32\"\n",
-        )
-        .unwrap();
-        let f = sc.log.frame().unwrap();
-        let (e, n) = sc.log.stored_buoy_fix(20.3, 80.1);
+        let log = geodetic(LatLonStorage::F32);
+        let f = log.frame().unwrap();
+        let (e, n) = log.stored_buoy_fix(20.3, 80.1);
         // Moved by at most half a grid step (0.285 m E, 0.212 m N), and exactly onto f32 values.
         assert!((e - 20.3).abs() <= 0.29 && (n - 80.1).abs() <= 0.22, "{e} {n}");
         let ll = f.from_plane(e, n).unwrap();

@@ -1,9 +1,8 @@
-//! Noise sources of the HBL world (digest §5.4–§5.5): the compass-bias map, the acoustic range
-//! error mixture, and buoy drift. Each draws from its own seeded stream; draws are made in a
-//! fixed pattern whatever the configuration, so MSBL, HBL One and HBL Two runs with the same
-//! seed see the same noise (common random numbers).
+//! Noise sources of Gill's simulation (digest §5.4–§5.5) that the engine's models draw from: the
+//! compass-bias map, the acoustic range-error mixture ([`Acoustic`], [`draw_reception`]) and buoy
+//! drift. Each draws from the stream it is given in a fixed pattern whatever the configuration,
+//! so MSBL, HBL One and HBL Two runs with the same seed see the same noise (common random numbers).
 
-use super::config::{Acoustic, Buoy, Drift};
 use coopnav_core::rem_euclid;
 use rand::Rng;
 use rand_chacha::ChaCha8Rng;
@@ -11,18 +10,48 @@ use rand_distr::StandardNormal;
 use serde::{Deserialize, Serialize};
 use std::f64::consts::TAU;
 
-/// Stream ids of one run, one per noise source.
-pub mod stream {
-    pub const AUV_INIT: u64 = 1;
-    pub const SHIP_INIT: u64 = 2;
-    pub const BUOY: u64 = 3;
-    pub const SPEED: u64 = 4;
-    pub const COMPASS_MAP: u64 = 5;
-    pub const COMPASS_WHITE: u64 = 6;
-    pub const YAW_RATE: u64 = 7;
-    pub const SLOTS: u64 = 8;
-    pub const CLOCK: u64 = 9;
-    pub const LOG: u64 = 10;
+/// Gill's range-error mixture of a message (digest §5.4, §2.4): uniform "slight" errors up to
+/// `slight_max_m` long or short, uniform `outlier_min_m`–`outlier_max_m` outliers, and drops; the
+/// four shares sum to 1.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Acoustic {
+    pub p_slightly_long: f64,
+    pub p_slightly_short: f64,
+    pub p_outlier: f64,
+    pub p_drop: f64,
+    pub slight_max_m: f64,
+    pub outlier_min_m: f64,
+    pub outlier_max_m: f64,
+}
+
+impl Default for Acoustic {
+    fn default() -> Self {
+        Acoustic {
+            p_slightly_long: 0.50,
+            p_slightly_short: 0.35,
+            p_outlier: 0.05,
+            p_drop: 0.10,
+            slight_max_m: 0.20,
+            outlier_min_m: 5.0,
+            outlier_max_m: 10.0,
+        }
+    }
+}
+
+impl Acoustic {
+    /// Mean square of the range error of a *received* message under the thesis's mixture
+    /// (digest §5.4: uniform "slight" errors and uniform 5–10 m outliers), in m².
+    pub fn received_error_mean_square(&self) -> f64 {
+        let uniform_sq = |a: f64, b: f64| (a * a + a * b + b * b) / 3.0;
+        let received = self.p_slightly_long + self.p_slightly_short + self.p_outlier;
+        let sum = (self.p_slightly_long + self.p_slightly_short) * uniform_sq(0.0, self.slight_max_m)
+            + self.p_outlier * uniform_sq(self.outlier_min_m, self.outlier_max_m);
+        if received > 0.0 {
+            sum / received
+        } else {
+            0.0
+        }
+    }
 }
 
 pub fn normal(rng: &mut ChaCha8Rng) -> f64 {
@@ -102,26 +131,6 @@ pub struct LakeDrift {
 }
 
 impl BuoyMotion {
-    /// Draws initial position and drift; always the same number of draws.
-    pub fn draw(b: &Buoy, rng: &mut ChaCha8Rng) -> Self {
-        let (ux, uy): (f64, f64) = (rng.gen(), rng.gen());
-        let p0 = b.fixed.unwrap_or([
-            b.region_x[0] + ux * (b.region_x[1] - b.region_x[0]),
-            b.region_y[0] + uy * (b.region_y[1] - b.region_y[0]),
-        ]);
-        let lake = LakeDrift {
-            mean_m_s: b.drift_mean,
-            sd_m_s: b.drift_sd,
-            circular_fraction: b.circular_fraction,
-            circular_radius_m: b.circular_radius,
-        };
-        let drifting = BuoyMotion::lake(p0, &lake, rng);
-        match b.drift {
-            Drift::None => BuoyMotion::moored(p0),
-            Drift::Lake => drifting,
-        }
-    }
-
     pub fn moored(p0: [f64; 2]) -> Self {
         BuoyMotion::Linear { p0, v: [0.0, 0.0] }
     }
@@ -158,7 +167,6 @@ impl BuoyMotion {
 
 #[cfg(test)]
 mod tests {
-    use super::super::config::Sensors;
     use super::*;
     use coopnav_core::SeedStream;
 
@@ -214,18 +222,29 @@ mod tests {
 
     #[test]
     fn drift_speed_and_circle() {
-        let b = Buoy { drift_mean: 0.1, drift_sd: 0.0, circular_fraction: 1.0, ..Buoy::default() };
-        let m = BuoyMotion::draw(&b, &mut SeedStream::new(3).rng(3));
+        let lake = LakeDrift { mean_m_s: 0.1, sd_m_s: 0.0, circular_fraction: 1.0, circular_radius_m: 200.0 };
+        let m = BuoyMotion::lake([20.0, 65.0], &lake, &mut SeedStream::new(3).rng(3));
+        assert!(matches!(m, BuoyMotion::Circular { .. }), "{m:?}");
         let (p0, p1) = (m.at(0.0), m.at(1.0));
+        assert!((p0[0] - 20.0).abs() < 1e-9 && (p0[1] - 65.0).abs() < 1e-9, "{p0:?}");
         assert!(((p1[0] - p0[0]).hypot(p1[1] - p0[1]) - 0.1).abs() < 1e-4);
-        let still = Buoy { drift: Drift::None, fixed: Some([5.0, 6.0]), ..Buoy::default() };
-        assert_eq!(BuoyMotion::draw(&still, &mut SeedStream::new(3).rng(3)).at(100.0), [5.0, 6.0]);
+        assert_eq!(BuoyMotion::moored([5.0, 6.0]).at(100.0), [5.0, 6.0]);
+    }
+
+    /// The AUV filter's default timing noise is matched to this range-error mixture (see
+    /// `coopnav_nav::RangeNoise`); the two defaults must not drift apart.
+    #[test]
+    fn default_range_noise_matches_the_channel() {
+        let rms = Acoustic::default().received_error_mean_square().sqrt();
+        let noise = coopnav_nav::AuvParams::default().range_noise;
+        let filter = noise.sound_speed * noise.sigma_time;
+        assert!((filter - rms).abs() < 0.01 * rms, "filter σ at zero range {filter} m vs channel RMS {rms} m");
     }
 
     #[test]
     fn compass_map_is_continuous_for_a_walk() {
-        let s = Sensors::default();
-        let m = CompassBias::draw(s.compass_bias_step_deg, s.compass_bias_iid, &mut SeedStream::new(9).rng(5));
+        // Gill's 0.047° step (digest §5.4, A12).
+        let m = CompassBias::draw(0.047, false, &mut SeedStream::new(9).rng(5));
         let d = (m.at(0.0) - m.at(0.0175)).abs();
         assert!(d < 0.047f64.to_radians() * 5.0);
     }

@@ -4,7 +4,7 @@
 
 use super::grid::GridCell;
 use super::profile::ProfileBin;
-use super::world::TraceRow;
+use super::record::PassRow;
 use crate::plot::{line_svg, track_svg, Labels, Series};
 use plotters::prelude::*;
 
@@ -107,9 +107,9 @@ where
 }
 
 /// True and estimated AUV tracks, the ship and (when there is one) the buoy.
-pub fn tracks(rows: &[TraceRow]) -> Result<String, PlotError> {
+pub fn tracks(rows: &[PassRow]) -> Result<String, PlotError> {
     let line =
-        |f: fn(&TraceRow) -> Option<[f64; 2]>| rows.iter().filter_map(f).map(|p| (p[0], p[1])).collect::<Vec<_>>();
+        |f: fn(&PassRow) -> Option<[f64; 2]>| rows.iter().filter_map(f).map(|p| (p[0], p[1])).collect::<Vec<_>>();
     let mut series = vec![
         Series::new("AUV true", line(|r| Some(r.auv_true))),
         Series::new("AUV estimated", line(|r| Some(r.auv_est))),
@@ -131,7 +131,7 @@ fn zone_edges(zone: (f64, f64), top: f64) -> [Series; 2] {
 }
 
 /// AUV position error against x_rel, with the measurement zone's ends marked by vertical lines.
-pub fn error_vs_xrel(rows: &[TraceRow], zone: (f64, f64)) -> Result<String, PlotError> {
+pub fn error_vs_xrel(rows: &[PassRow], zone: (f64, f64)) -> Result<String, PlotError> {
     let top = rows.iter().map(|r| r.error).fold(1.0, f64::max);
     let mut series = vec![Series::new("error", rows.iter().map(|r| (r.x_rel, r.error)).collect())];
     series.extend(zone_edges(zone, top));
@@ -154,13 +154,14 @@ pub fn profile(bins: &[ProfileBin], zone: (f64, f64)) -> Result<String, PlotErro
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::hbl::{run, Scenario};
+    use crate::hbl::log_format::LogFormat;
+    use crate::hbl::record::record_pass;
+    use crate::hbl::zone::{table5_scenario, ZoneSpec};
     use coopnav_nav::cycle::Configuration;
 
-    fn rows(c: Configuration) -> (Scenario, Vec<TraceRow>) {
-        let sc = Scenario::table5(c);
-        let (_, trace) = run(&sc, &sc.resolved_cycle().unwrap(), 1, true);
-        (sc, trace.unwrap().rows)
+    fn rows(c: Configuration) -> Vec<PassRow> {
+        let sc = table5_scenario(c).unwrap();
+        record_pass(&sc, ZoneSpec::table5(), LogFormat::default(), 1).unwrap().0.rows
     }
 
     /// Whether the SVG has a text element reading exactly `name` (a legend entry).
@@ -170,18 +171,18 @@ mod tests {
 
     #[test]
     fn tracks_name_each_vehicle_and_leave_out_a_missing_buoy() {
-        let (_, hbl) = rows(Configuration::HblTwo);
+        let hbl = rows(Configuration::HblTwo);
         assert!(hbl.iter().any(|r| r.buoy_true.is_some()));
         let svg = tracks(&hbl).unwrap();
         assert!(["AUV true", "AUV estimated", "ship", "buoy"].iter().all(|n| legend(&svg, n)), "{svg}");
-        let (_, msbl) = rows(Configuration::Msbl);
+        let msbl = rows(Configuration::Msbl);
         assert!(msbl.iter().all(|r| r.buoy_true.is_none()));
         let svg = tracks(&msbl).unwrap();
         assert!(legend(&svg, "ship") && !legend(&svg, "buoy"));
     }
 
     fn cell(x: f64, mean: f64) -> GridCell {
-        GridCell { x, y: 0.0, zone_error: crate::hbl::mc::Stats { n: 1, mean, sd: 0.0, se: 0.0 } }
+        GridCell { x, y: 0.0, zone_error: crate::stats::Stats { n: 1, mean, sd: 0.0, se: 0.0 } }
     }
 
     /// Distinct fill colours of the map's cells (the colour bar's rectangles come after them).
@@ -209,8 +210,9 @@ mod tests {
 
     #[test]
     fn error_plot_marks_the_zone() {
-        let (sc, rows) = rows(Configuration::HblOne);
-        let svg = error_vs_xrel(&rows, (sc.geometry.zone_min, sc.geometry.zone_max)).unwrap();
+        let rows = rows(Configuration::HblOne);
+        let zone = ZoneSpec::table5();
+        let svg = error_vs_xrel(&rows, (zone.zone_min, zone.zone_max)).unwrap();
         assert!(legend(&svg, "zone start") && legend(&svg, "zone end") && svg.contains("x_rel"));
     }
 }

@@ -1,9 +1,10 @@
 //! Coefficient tuning (digest §5.7 item 3): a bounded Nelder–Mead search (argmin) over a chosen
-//! subset of the Table 2/3 coefficients, on the Monte Carlo cost with fixed seeds (common random
+//! subset of the Table 2/3 coefficients of an engine scenario (survey AUV 0's filter, and its
+//! filters of ship 0 and buoy 0), on the zone Monte Carlo's cost with fixed seeds (common random
 //! numbers make the cost a deterministic function of the coefficients).
 
-use super::config::Scenario;
-use super::mc::{monte_carlo, McError};
+use super::zone::{zone_monte_carlo, ZoneError, ZoneSpec};
+use crate::closed_loop::{PolicyError, Scenario};
 use argmin::core::{CostFunction, Executor, State};
 use argmin::solver::neldermead::NelderMead;
 use coopnav_core::validation::{InvalidFields, Problems};
@@ -76,49 +77,62 @@ impl Coefficient {
             Coefficient::AuvSigmaHeading => 2.0 * std::f64::consts::PI,
         }
     }
-    /// The coefficient's slot in a scenario's filters.
-    fn slot(self, sc: &mut Scenario) -> &mut f64 {
-        let f = &mut sc.filters;
+    /// Whose filter holds it: the survey AUV's own, or its filter of buoy 0 or ship 0.
+    fn vehicle(self) -> &'static str {
         match self {
-            Coefficient::AuvQEn => &mut f.auv.q[0],
-            Coefficient::BuoyPEn => &mut f.buoy.p0[0],
-            Coefficient::BuoyPSpeed => &mut f.buoy.p0[2],
-            Coefficient::BuoyPHeading => &mut f.buoy.p0[3],
-            Coefficient::BuoyQEn => &mut f.buoy.q[0],
-            Coefficient::BuoyQSpeed => &mut f.buoy.q[2],
-            Coefficient::BuoyQHeading => &mut f.buoy.q[3],
-            Coefficient::AuvQSpeed => &mut f.auv.q[2],
-            Coefficient::AuvQHeading => &mut f.auv.q[3],
-            Coefficient::AuvQBias => &mut f.auv.q[4],
-            Coefficient::AuvRangeSigmaTime => &mut f.auv.range_noise.sigma_time,
-            Coefficient::AuvSigmaSpeed => &mut f.auv.sigma_speed,
-            Coefficient::AuvSigmaHeading => &mut f.auv.sigma_heading,
-            Coefficient::ShipQEn => &mut f.ship.q[0],
-            Coefficient::ShipQSpeed => &mut f.ship.q[2],
-            Coefficient::ShipQHeading => &mut f.ship.q[3],
+            Coefficient::BuoyPEn
+            | Coefficient::BuoyPSpeed
+            | Coefficient::BuoyPHeading
+            | Coefficient::BuoyQEn
+            | Coefficient::BuoyQSpeed
+            | Coefficient::BuoyQHeading => "buoys[0]",
+            Coefficient::ShipQEn | Coefficient::ShipQSpeed | Coefficient::ShipQHeading => "ships[0]",
+            _ => "filter",
         }
     }
-    /// The E/N partner that shares the value (Table 3 ties E and N).
-    fn north_twin(self, sc: &mut Scenario) -> Option<&mut f64> {
-        let f = &mut sc.filters;
-        match self {
-            Coefficient::AuvQEn => Some(&mut f.auv.q[1]),
-            Coefficient::BuoyPEn => Some(&mut f.buoy.p0[1]),
-            Coefficient::BuoyQEn => Some(&mut f.buoy.q[1]),
-            Coefficient::ShipQEn => Some(&mut f.ship.q[1]),
-            _ => None,
-        }
+    /// The coefficient's slot in a scenario's filters, and its E/N partner that shares the value
+    /// (Table 3 ties E and N); None when the scenario lacks the vehicle.
+    fn slots(self, sc: &mut Scenario) -> Option<(&mut f64, Option<&mut f64>)> {
+        let auv = &mut sc.filter.params;
+        Some(match self {
+            Coefficient::AuvQEn => east_north(&mut auv.q),
+            Coefficient::AuvQSpeed => (&mut auv.q[2], None),
+            Coefficient::AuvQHeading => (&mut auv.q[3], None),
+            Coefficient::AuvQBias => (&mut auv.q[4], None),
+            Coefficient::AuvRangeSigmaTime => (&mut auv.range_noise.sigma_time, None),
+            Coefficient::AuvSigmaSpeed => (&mut auv.sigma_speed, None),
+            Coefficient::AuvSigmaHeading => (&mut auv.sigma_heading, None),
+            Coefficient::BuoyPEn => east_north(&mut sc.buoys.first_mut()?.filter.p0),
+            Coefficient::BuoyPSpeed => (&mut sc.buoys.first_mut()?.filter.p0[2], None),
+            Coefficient::BuoyPHeading => (&mut sc.buoys.first_mut()?.filter.p0[3], None),
+            Coefficient::BuoyQEn => east_north(&mut sc.buoys.first_mut()?.filter.q),
+            Coefficient::BuoyQSpeed => (&mut sc.buoys.first_mut()?.filter.q[2], None),
+            Coefficient::BuoyQHeading => (&mut sc.buoys.first_mut()?.filter.q[3], None),
+            Coefficient::ShipQEn => east_north(&mut sc.ships.first_mut()?.filter.q),
+            Coefficient::ShipQSpeed => (&mut sc.ships.first_mut()?.filter.q[2], None),
+            Coefficient::ShipQHeading => (&mut sc.ships.first_mut()?.filter.q[3], None),
+        })
     }
-    /// Reads through the same map as `set` (on a copy), so there is one map to keep right.
-    pub fn get(self, sc: &Scenario) -> f64 {
-        *self.slot(&mut sc.clone())
+    /// Reads through the same map as `set` (on a copy), so there is one map to keep right; None
+    /// when the scenario lacks the vehicle.
+    pub fn get(self, sc: &Scenario) -> Option<f64> {
+        self.slots(&mut sc.clone()).map(|(v, _)| *v)
     }
-    pub fn set(self, sc: &mut Scenario, v: f64) {
-        *self.slot(sc) = v;
-        if let Some(n) = self.north_twin(sc) {
+    /// Sets it (and its north twin); false when the scenario lacks the vehicle.
+    pub fn set(self, sc: &mut Scenario, v: f64) -> bool {
+        let Some((slot, twin)) = self.slots(sc) else { return false };
+        *slot = v;
+        if let Some(n) = twin {
             *n = v;
         }
+        true
     }
+}
+
+/// The east entry of a diagonal and its north partner after it.
+fn east_north(v: &mut [f64]) -> (&mut f64, Option<&mut f64>) {
+    let (east, rest) = v.split_at_mut(1);
+    (&mut east[0], rest.first_mut())
 }
 
 /// What the Monte Carlo cost measures.
@@ -178,8 +192,12 @@ pub enum TuneError {
     Fields(#[from] InvalidFields),
     #[error("tune: {name} starts at {value}, outside its bounds [0, {upper}] (Table 2)")]
     StartOutOfBounds { name: String, value: f64, upper: f64 },
+    #[error("tune: {name} is a coefficient of {vehicle}, which the scenario does not have")]
+    NoVehicle { name: String, vehicle: &'static str },
     #[error(transparent)]
-    Mc(#[from] McError),
+    Policy(#[from] PolicyError),
+    #[error(transparent)]
+    Zone(#[from] ZoneError),
     #[error("tune: the optimiser failed: {0}")]
     Optimiser(String),
 }
@@ -195,11 +213,12 @@ pub struct TuneResult {
 struct Problem<'a> {
     base: &'a Scenario,
     spec: &'a TuneSpec,
+    zone: ZoneSpec,
 }
 
 impl Problem<'_> {
     /// Unit-box coordinates → coefficient values, clamped to [tiny, upper]; the distance
-    /// outside the box is returned for the penalty.
+    /// outside the box is returned for the penalty. Every coefficient's vehicle was checked.
     fn scenario(&self, u: &[f64]) -> (Scenario, f64) {
         let mut sc = self.base.clone();
         let mut outside = 0.0;
@@ -210,12 +229,12 @@ impl Problem<'_> {
         }
         (sc, outside)
     }
-    fn evaluate(&self, u: &[f64]) -> Result<f64, McError> {
+    fn evaluate(&self, u: &[f64]) -> Result<f64, TuneError> {
         let (sc, outside) = self.scenario(u);
-        let r = monte_carlo(&sc, self.spec.runs, self.spec.seed, &|_| {})?;
+        let summary = zone_monte_carlo(&sc, self.zone, self.spec.runs, self.spec.seed)?.summary(self.spec.seed)?;
         let cost = match self.spec.objective {
-            Objective::AuvZone => r.summary.zone_error.mean,
-            Objective::BuoyMission => r.summary.buoy_error.map_or(f64::INFINITY, |s| s.mean),
+            Objective::AuvZone => summary.zone_error.mean,
+            Objective::BuoyMission => summary.buoy_error.map_or(f64::INFINITY, |s| s.mean),
         };
         Ok(cost + 10.0 * outside)
     }
@@ -229,15 +248,15 @@ impl CostFunction for Problem<'_> {
     }
 }
 
-/// Tunes the chosen coefficients of `base`, starting from their current values.
-pub fn tune(base: &Scenario, spec: &TuneSpec) -> Result<TuneResult, TuneError> {
+/// Tunes the chosen coefficients of `base` (a validated scenario), starting from their current
+/// values, each cost the zone Monte Carlo in `zone`.
+pub fn tune(base: &Scenario, zone: ZoneSpec, spec: &TuneSpec) -> Result<TuneResult, TuneError> {
     spec.validate()?;
-    base.validate().map_err(McError::from)?;
     let start: Vec<f64> = spec
         .coefficients
         .iter()
         .map(|c| {
-            let v = c.get(base);
+            let v = c.get(base).ok_or(TuneError::NoVehicle { name: format!("{c:?}"), vehicle: c.vehicle() })?;
             if (0.0..=c.upper()).contains(&v) {
                 Ok(v / c.upper())
             } else {
@@ -245,7 +264,7 @@ pub fn tune(base: &Scenario, spec: &TuneSpec) -> Result<TuneResult, TuneError> {
             }
         })
         .collect::<Result<_, _>>()?;
-    let problem = Problem { base, spec };
+    let problem = Problem { base, spec, zone };
     let start_cost = problem.evaluate(&start)?;
     // Initial simplex: the start and one vertex per coordinate, moved 20 % of the box inwards.
     let mut simplex = vec![start.clone()];
@@ -261,10 +280,10 @@ pub fn tune(base: &Scenario, spec: &TuneSpec) -> Result<TuneResult, TuneError> {
         .map_err(|e| TuneError::Optimiser(e.to_string()))?;
     let state = res.state();
     let best = state.get_best_param().cloned().unwrap_or(start);
-    let problem = Problem { base, spec };
+    let problem = Problem { base, spec, zone };
     let (best_sc, _) = problem.scenario(&best);
     Ok(TuneResult {
-        coefficients: spec.coefficients.iter().map(|c| (*c, c.get(&best_sc))).collect(),
+        coefficients: spec.coefficients.iter().filter_map(|c| Some((*c, c.get(&best_sc)?))).collect(),
         start_cost,
         best_cost: state.get_best_cost(),
         iterations: state.get_iter(),
@@ -274,12 +293,19 @@ pub fn tune(base: &Scenario, spec: &TuneSpec) -> Result<TuneResult, TuneError> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::hbl::zone::table5_scenario;
+    use coopnav_nav::cycle::Configuration;
+    use std::path::Path;
+
+    fn table5() -> Scenario {
+        table5_scenario(Configuration::HblTwo).unwrap()
+    }
 
     #[test]
     fn tuning_never_worsens_the_fixed_seed_cost() {
-        let mut base = Scenario::default();
+        let mut base = table5();
         // Start from a deliberately poor Q^A so there is something to find.
-        Coefficient::AuvQEn.set(&mut base, 2.5);
+        assert!(Coefficient::AuvQEn.set(&mut base, 2.5));
         let spec = TuneSpec {
             coefficients: vec![Coefficient::AuvQEn],
             objective: Objective::AuvZone,
@@ -287,7 +313,7 @@ mod tests {
             max_iters: 6,
             seed: 3,
         };
-        let r = tune(&base, &spec).unwrap();
+        let r = tune(&base, ZoneSpec::table5(), &spec).unwrap();
         assert!(r.best_cost <= r.start_cost + 1e-12, "{r:?}");
         let v = r.coefficients[0].1;
         assert!(v > 0.0 && v <= 3.0);
@@ -295,27 +321,27 @@ mod tests {
 
     #[test]
     fn every_coefficient_is_settable_and_starts_inside_its_bounds() {
-        let base = Scenario::default();
+        let base = table5();
         for c in Coefficient::ALL {
-            let v = c.get(&base);
+            let v = c.get(&base).unwrap();
             assert!((0.0..=c.upper()).contains(&v), "{c:?} default {v} outside [0, {}]", c.upper());
             let mut sc = base.clone();
-            c.set(&mut sc, 0.5 * c.upper());
-            assert_eq!(c.get(&sc), 0.5 * c.upper(), "{c:?}");
+            assert!(c.set(&mut sc, 0.5 * c.upper()));
+            assert_eq!(c.get(&sc), Some(0.5 * c.upper()), "{c:?}");
             let changed = Coefficient::ALL.iter().filter(|o| o.get(&sc) != o.get(&base)).count();
             assert_eq!(changed, 1, "{c:?} moved another coefficient");
-            sc.validate().unwrap();
+            sc.validate(Path::new("tuned.toml")).unwrap();
         }
         let mut sc = base.clone();
         Coefficient::ShipQEn.set(&mut sc, 2.0);
-        assert_eq!((sc.filters.ship.q[0], sc.filters.ship.q[1]), (2.0, 2.0));
+        assert_eq!((sc.ships[0].filter.q[0], sc.ships[0].filter.q[1]), (2.0, 2.0));
     }
 
     #[test]
     fn bad_specs_are_refused() {
-        let base = Scenario::default();
+        let base = table5();
         let spec = TuneSpec { coefficients: vec![], objective: Objective::AuvZone, runs: 1, max_iters: 0, seed: 1 };
-        let e = tune(&base, &spec).unwrap_err().to_string();
+        let e = tune(&base, ZoneSpec::table5(), &spec).unwrap_err().to_string();
         for field in ["coefficients = []", "runs = 1", "max_iters = 0"] {
             assert!(e.contains(&format!("field {field}: allowed")), "{field} not named in: {e}");
         }
@@ -328,6 +354,10 @@ mod tests {
             max_iters: 2,
             seed: 1,
         };
-        assert!(matches!(tune(&off, &spec), Err(TuneError::StartOutOfBounds { .. })));
+        assert!(matches!(tune(&off, ZoneSpec::table5(), &spec), Err(TuneError::StartOutOfBounds { .. })));
+        let mut no_buoy = base.clone();
+        no_buoy.buoys.clear();
+        let e = tune(&no_buoy, ZoneSpec::table5(), &spec).unwrap_err().to_string();
+        assert!(e.contains("BuoyPEn") && e.contains("buoys[0]"), "{e}");
     }
 }

@@ -4,20 +4,21 @@
 //! the across-path error in the approach window just before the zone, the error profile against
 //! x_rel (the thesis's Figs. 16, 19, 21), and, where the schedule has buoy 0 transmit, the AUV's
 //! buoy-filter error and the buoy's saturation error over the whole run (Table 4). The engine
-//! samples once a second; the old HBL loop scored every 0.1 s step and the saturation at the
+//! samples once a second; the former HBL loop scored every 0.1 s step and the saturation at the
 //! buoy's slots only.
 
-use super::mc::Stats;
 use super::profile::{add_to_bin, merge_bins, BinSums, ProfileBin};
-use crate::closed_loop::{run, Faults, PolicyError, PolicySpec, Scenario, ScenarioError};
+use crate::closed_loop::{run, Faults, PolicyError, PolicySpec, RunResult, Scenario, ScenarioError};
 use crate::engine::{BuoySample, Observer, TraceRow};
 use crate::models::schedule::Owner;
+use crate::stats::Stats;
 use coopnav_core::{run_seed, CompassDeg, Heading, Vec3};
 use coopnav_nav::codec::Zone;
 use coopnav_nav::cycle::Configuration;
 use rayon::prelude::*;
 use serde::Serialize;
 use std::path::Path;
+use std::sync::atomic::{AtomicU64, Ordering};
 use thiserror::Error;
 
 #[derive(Debug, Error)]
@@ -63,6 +64,17 @@ pub struct ZoneSpec {
 }
 
 impl ZoneSpec {
+    /// The component of (dx, dy) along the path direction (x_rel for AUV − ship).
+    pub fn along(&self, dx: f64, dy: f64) -> f64 {
+        let (ux, uy) = Heading::from(CompassDeg(self.path_compass_deg)).unit();
+        dx * ux + dy * uy
+    }
+    /// The component of (dx, dy) across the path (to its left).
+    pub fn across(&self, dx: f64, dy: f64) -> f64 {
+        let (ux, uy) = Heading::from(CompassDeg(self.path_compass_deg)).unit();
+        -dx * uy + dy * ux
+    }
+
     /// Gill's Table 5 zone (digest §5.1, A16) for an AUV running east: −30…75 m, 50 m approach,
     /// the profile in 25 m bins.
     pub fn table5() -> Self {
@@ -158,6 +170,16 @@ impl GillZone {
         }
     }
 
+    /// Whether buoy 0 is scored (the schedule has it transmit).
+    pub fn scores_buoy(&self) -> bool {
+        self.buoy_zone.is_some()
+    }
+
+    /// The scored survey AUV and ship (indices).
+    pub fn vehicles(&self) -> (usize, usize) {
+        (self.auv, self.ship)
+    }
+
     pub fn metrics(&self) -> ZoneMetrics {
         ZoneMetrics {
             zone_error: self.zone[0].get(),
@@ -171,12 +193,9 @@ impl GillZone {
     }
 
     fn score(&mut self, ship: Vec3, row: &TraceRow) {
-        let (ux, uy) = Heading::from(CompassDeg(self.spec.path_compass_deg)).unit();
-        let along = |dx: f64, dy: f64| dx * ux + dy * uy;
-        let across = |dx: f64, dy: f64| -dx * uy + dy * ux;
-        let x_rel = along(row.true_x - ship.x, row.true_y - ship.y);
+        let x_rel = self.spec.along(row.true_x - ship.x, row.true_y - ship.y);
         let (dx, dy) = (row.est_x - row.true_x, row.est_y - row.true_y);
-        let (parallel, perpendicular) = (along(dx, dy).abs(), across(dx, dy).abs());
+        let (parallel, perpendicular) = (self.spec.along(dx, dy).abs(), self.spec.across(dx, dy).abs());
         let bin = (x_rel / self.spec.profile_bin_m).floor() as i64;
         add_to_bin(self.bins.entry(bin).or_default(), [1.0, row.error, parallel, perpendicular]);
         let s = &self.spec;
@@ -212,11 +231,33 @@ impl Observer for GillZone {
     }
 }
 
-/// A zone Monte Carlo: every run's figures, whether every run was healthy, and the error profile
-/// against x_rel over all runs.
+/// What the engine counted in one run for the scored AUV: ranges it decoded (ship and buoy
+/// packets), ranges its filter applied, and whether every state stayed finite.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]
+pub struct RunCounts {
+    pub ranges_received: u64,
+    pub ranges_applied: u64,
+    pub healthy: bool,
+}
+
+impl RunCounts {
+    /// AUV `auv`'s counts in `r`.
+    pub fn of(r: &RunResult, auv: usize) -> Self {
+        let a = &r.auvs[auv];
+        RunCounts {
+            ranges_received: a.downlink.received + a.buoy_link.received,
+            ranges_applied: a.ranges_applied,
+            healthy: r.fleet.healthy,
+        }
+    }
+}
+
+/// A zone Monte Carlo: every run's figures and counts, whether every run was healthy, and the
+/// error profile against x_rel over all runs.
 #[derive(Debug, Clone)]
 pub struct ZoneRuns {
     pub runs: Vec<ZoneMetrics>,
+    pub counts: Vec<RunCounts>,
     pub healthy: bool,
     pub profile: Vec<ProfileBin>,
 }
@@ -262,19 +303,44 @@ impl ZoneRuns {
 /// and scores it with [`GillZone::of_scenario`]. Runs go in parallel and are merged in index
 /// order, so the result does not depend on the thread count.
 pub fn zone_monte_carlo(sc: &Scenario, spec: ZoneSpec, runs: usize, base_seed: u64) -> Result<ZoneRuns, PolicyError> {
+    zone_monte_carlo_with_progress(sc, spec, runs, base_seed, &|_| {})
+}
+
+/// [`zone_monte_carlo`] calling `progress` with the number of finished runs.
+pub fn zone_monte_carlo_with_progress(
+    sc: &Scenario,
+    spec: ZoneSpec,
+    runs: usize,
+    base_seed: u64,
+    progress: &(dyn Fn(u64) + Sync),
+) -> Result<ZoneRuns, PolicyError> {
     let silent = PolicySpec::new("none", sc)?;
-    let per_run: Vec<(ZoneMetrics, bool, BinSums)> = (0..runs as u64)
+    let done = AtomicU64::new(0);
+    let per_run: Vec<(ZoneMetrics, RunCounts, BinSums)> = (0..runs as u64)
         .into_par_iter()
         .map(|i| {
-            let mut zone = GillZone::of_scenario(spec, sc);
-            let mut policy = silent.build(sc)?;
-            let healthy = run(sc, &mut policy, run_seed(base_seed, i), &Faults::default(), &mut zone).fleet.healthy;
-            Ok((zone.metrics(), healthy, zone.bins))
+            let (zone, result) = zone_run(sc, &silent, run_seed(base_seed, i), GillZone::of_scenario(spec, sc))?;
+            progress(done.fetch_add(1, Ordering::Relaxed) + 1);
+            Ok((zone.metrics(), RunCounts::of(&result, zone.auv), zone.bins))
         })
         .collect::<Result<_, PolicyError>>()?;
-    let healthy = per_run.iter().all(|r| r.1);
+    let healthy = per_run.iter().all(|r| r.1.healthy);
     let profile = merge_bins(per_run.iter().map(|r| r.2.clone()), spec.profile_bin_m);
-    Ok(ZoneRuns { runs: per_run.into_iter().map(|r| r.0).collect(), healthy, profile })
+    let (runs, counts) = per_run.into_iter().map(|r| (r.0, r.1)).unzip();
+    Ok(ZoneRuns { runs, counts, healthy, profile })
+}
+
+/// One run of `sc` under `policy` with seed `seed`, scored by `observer` (a [`GillZone`] or an
+/// observer that holds one).
+pub fn zone_run<O: Observer>(
+    sc: &Scenario,
+    policy: &PolicySpec,
+    seed: u64,
+    mut observer: O,
+) -> Result<(O, RunResult), PolicyError> {
+    let mut policy = policy.build(sc)?;
+    let result = run(sc, &mut policy, seed, &Faults::default(), &mut observer);
+    Ok((observer, result))
 }
 
 #[cfg(test)]
@@ -357,7 +423,12 @@ mod tests {
     #[test]
     fn a_run_that_never_reached_the_zone_is_named_in_the_summary() {
         let reached = ZoneMetrics { zone_error: Some(1.0), zone_samples: 3, ..ZoneMetrics::default() };
-        let runs = ZoneRuns { runs: vec![reached, ZoneMetrics::default()], healthy: true, profile: Vec::new() };
+        let runs = ZoneRuns {
+            runs: vec![reached, ZoneMetrics::default()],
+            counts: vec![RunCounts::default(); 2],
+            healthy: true,
+            profile: Vec::new(),
+        };
         let err = runs.summary(7).unwrap_err().to_string();
         assert!(err.contains("run 1") && err.contains(&run_seed(7, 1).to_string()), "{err}");
         let ok = ZoneRuns { runs: vec![reached, reached], ..runs };
@@ -378,5 +449,17 @@ mod tests {
         let msbl = table5_scenario(Configuration::Msbl).unwrap();
         let runs = zone_monte_carlo(&msbl, ZoneSpec::table5(), 2, 3).unwrap().runs;
         assert!(runs.iter().all(|m| m.buoy_error.is_none() && m.saturation_error.is_none()), "{runs:?}");
+    }
+
+    #[test]
+    fn the_profile_shows_msbl_keeps_its_across_path_error_longer_than_hbl() {
+        let profile = |c| zone_monte_carlo(&table5_scenario(c).unwrap(), ZoneSpec::table5(), 24, 7).unwrap().profile;
+        let (msbl, hbl) = (profile(Configuration::Msbl), profile(Configuration::HblTwo));
+        let at = |p: &[ProfileBin], x: f64| p.iter().find(|b| (b.x_rel - x).abs() < 1.0).copied().unwrap();
+        // 50–75 m before the zone starts (x_rel −87.5 bin centre): HBL has corrected, MSBL not.
+        assert!(at(&hbl, -87.5).perpendicular < 0.6 * at(&msbl, -87.5).perpendicular, "{hbl:?}\n{msbl:?}");
+        for b in hbl.iter().chain(&msbl) {
+            assert!(b.samples > 0 && b.error.is_finite() && b.error + 1e-12 >= b.parallel.max(b.perpendicular));
+        }
     }
 }
