@@ -36,6 +36,22 @@ fn monte_carlo_is_identical_on_one_and_two_threads() {
     assert!(a.contains("\"paired\""));
 }
 
+/// The cells of a grid share one pool of runs, the larger fleet's first: each comparison is
+/// still the one its cell gives alone, on any thread count.
+#[test]
+fn a_grid_gives_each_cell_its_own_comparison() {
+    let cells = [short(1, 300.0), short(3, 300.0)];
+    let policies = vec!["planner".to_string(), "centroid".to_string()];
+    let json = |c: &Comparison| serde_json::to_string(c).unwrap();
+    let alone: Vec<String> = cells.iter().map(|sc| json(&monte_carlo(sc, &policies, 3, &|_| {}).unwrap())).collect();
+    for threads in [1, 2] {
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+        let grid = pool.install(|| monte_carlo_grid(&cells, &policies, 3, &|_| {}).unwrap());
+        assert_eq!(grid.iter().map(json).collect::<Vec<_>>(), alone, "{threads} thread(s)");
+    }
+    assert!(monte_carlo_grid(&cells, &policies, 0, &|_| {}).unwrap().iter().all(|c| c.policies.is_empty()));
+}
+
 /// Mean of the errors of AUV 0 over [from, to).
 fn window(r: &RunResult, from: f64, to: f64) -> f64 {
     let rows: Vec<f64> = r

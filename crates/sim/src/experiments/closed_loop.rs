@@ -16,7 +16,7 @@
 use super::{Check, Experiment, ExperimentError, ReproOptions, ReproReport, Size};
 use crate::closed_loop::mc::{Comparison, PolicySummary};
 use crate::closed_loop::policies::POLICY_NAMES;
-use crate::closed_loop::{comparison_table, monte_carlo, Scenario};
+use crate::closed_loop::{comparison_table, monte_carlo_grid, Scenario};
 use crate::plot::PlotError;
 use coopnav_plan::{Aggregate, PenaltyCase};
 use plotters::prelude::*;
@@ -199,7 +199,7 @@ pub struct Cell {
     pub won: bool,
 }
 
-/// Runs the experiment; `progress(done)` counts finished runs within the current cell.
+/// Runs the experiment; `progress(done)` counts the finished runs of the whole grid.
 pub fn run_with_progress(opts: &ReproOptions, progress: &(dyn Fn(u64) + Sync)) -> Result<ReproReport, ExperimentError> {
     let (settings, runs, duration) = setup(opts)?;
     evaluate(&settings, runs, duration, opts.seed, &policies(), progress)
@@ -234,16 +234,17 @@ pub fn evaluate(
          lies below zero.\n\n"
     );
     let (mut checks, mut cells, mut data) = (Vec::new(), Vec::new(), Vec::new());
-    for setting in settings {
-        for &n in &setting.n {
-            let sc = setting.scenario(n, seed, duration);
-            let c = monte_carlo(&sc, policies, runs, progress).map_err(|e| fail(e.to_string()))?;
-            let _ = writeln!(table, "scenario {}, tau = {} s", setting.name, sc.comms.tau);
-            table += &comparison_table(&c);
-            cell_checks(setting.name, &c, &mut table, &mut checks, &mut cells)?;
-            table.push('\n');
-            data.push(serde_json::to_value(&c).map_err(|e| fail(e.to_string()))?);
-        }
+    // Every cell's runs go through one pool (no cell waits for the previous cell's slowest run).
+    let names: Vec<&str> = settings.iter().flat_map(|s| s.n.iter().map(move |_| s.name)).collect();
+    let scenarios: Vec<Scenario> =
+        settings.iter().flat_map(|s| s.n.iter().map(move |&n| s.scenario(n, seed, duration))).collect();
+    let comparisons = monte_carlo_grid(&scenarios, policies, runs, progress).map_err(|e| fail(e.to_string()))?;
+    for ((name, sc), c) in names.iter().zip(&scenarios).zip(comparisons) {
+        let _ = writeln!(table, "scenario {name}, tau = {} s", sc.comms.tau);
+        table += &comparison_table(&c);
+        cell_checks(name, &c, &mut table, &mut checks, &mut cells)?;
+        table.push('\n');
+        data.push(serde_json::to_value(&c).map_err(|e| fail(e.to_string()))?);
     }
     table += &summary_grid(&cells);
     let data = serde_json::json!({ "comparisons": data, "cells": cells });
