@@ -162,6 +162,43 @@ mod tests {
     }
 
     #[test]
+    fn preplanned_shadows_track_the_peer_within_its_own_navigation_error() {
+        // The shadow extrapolates the peer's last reported estimate along its known plan, so its
+        // error against the peer's truth is the peer's navigation error plus the extrapolation's.
+        // With perfect dead reckoning only the extrapolation is left: a metre, not the 13 m mean
+        // the IVER2's sensors give (the old loop reported truth and held 5 m mean / 25 m max).
+        let cfg = ExperimentConfig::default();
+        let (scenario, behaviour) = (Scenario::thesis(1), Behaviour::Fixed { rate: Rate::R1 });
+        let slot_s = slot_length(&cfg, &behaviour).unwrap();
+        let mut sc = engine_scenario(&scenario, &cfg, &behaviour, slot_s, None).unwrap();
+        let run_once = |sc: &EngineScenario| {
+            let mut policy = PolicySpec::new("none", sc).and_then(|p| p.build(sc)).unwrap();
+            let mut tally = LinkTally::new(sc.fleet.n_auvs);
+            run_with_tl(sc, &mut policy, 7, Arc::new(Flat(30.0)), &mut tally);
+            tally.metrics()
+        };
+        let noisy = run_once(&sc);
+        sc.fleet.init_position_sd = 0.0;
+        sc.sensors = crate::closed_loop::scenario::AuvSensors {
+            speed_sd: 0.0,
+            compass_bias_step_deg: 0.0,
+            compass_bias_iid: false,
+            compass_white_deg: 0.0,
+            yaw_rate_white_deg_s: 0.0,
+        };
+        let perfect = run_once(&sc);
+        eprintln!(
+            "shadow error mean/max: sensors {:.2}/{:.1} m, perfect {:.2}/{:.1} m",
+            noisy.estimate_error_mean,
+            noisy.estimate_error_max,
+            perfect.estimate_error_mean,
+            perfect.estimate_error_max
+        );
+        assert!(perfect.estimate_error_mean < 1.0 && perfect.estimate_error_max < 5.0, "{perfect:?}");
+        assert!(noisy.estimate_error_mean > 2.0 * perfect.estimate_error_mean, "navigation error must show");
+    }
+
+    #[test]
     fn dynamic_estimates_are_worse_than_preplanned_but_bounded() {
         // Without the plan, the shadow stops at the reported next waypoint: errors grow during
         // droughts (rate 1 at 60 dB: p = 0.6) but a report resets them.
