@@ -1,16 +1,16 @@
 //! The one mission engine. It owns the loop only: every truth step runs the named phases of
-//! [`phases`] in order — decide, advance, transmit, deliver, sense, observe — and reports what
-//! it saw to an [`Observer`]. The vehicles are in [`vehicles`], packets in flight and their fate
-//! in [`inflight`], filter consistency in [`health`]; the models it plugs in (channel truth,
+//! `phases` in order — decide, advance, transmit, deliver, sense, observe — and reports what
+//! it saw to an [`Observer`]. The vehicles are in `vehicles`, packets in flight and their fate
+//! in `inflight`, filter consistency in [`health`]; the models it plugs in (channel truth,
 //! schedule, finish behaviour) in [`crate::models`].
 //!
 //! Today it runs the closed-loop scenario: survey AUVs on lawnmowers with OWTT EKFs, one CNA
 //! (ASC or AUV) steered by a [`crate::policy::CnaPolicy`], transponder buoys (moored or
 //! drifting) whose position broadcasts the AUVs range to as well, ships on a fixed track, the
 //! comms schedule of the scenario. Ships and buoys may send 13-bit mini-packets (Gill's cycles):
-//! each survey AUV filters their states from the components and ranges to them ([`mini`]).
+//! each survey AUV filters their states from the components and ranges to them (`mini`).
 //! Survey AUVs may also address their statuses to each other as Nams's frame 0, with the
-//! packet-success tracker, shadow estimates and rate feedback of [`peer`].
+//! packet-success tracker, shadow estimates and rate feedback of `peer`.
 
 pub mod health;
 mod inflight;

@@ -205,7 +205,7 @@ pub fn run_with_progress(opts: &ReproOptions, progress: &(dyn Fn(u64) + Sync)) -
     evaluate(&settings, runs, duration, opts.seed, &policies(), progress)
 }
 
-/// Every cell of `settings` with `runs` runs per policy (`policies`, [`JUDGED`] first; [`policies`]
+/// Every cell of `settings` with `runs` runs per policy (`policies`, `JUDGED` first; [`policies`]
 /// is every one) from base seed `seed` (never [`TUNING_SEED`]); `duration` overrides the missions'
 /// length.
 pub fn evaluate(

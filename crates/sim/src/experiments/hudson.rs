@@ -13,7 +13,7 @@
 //!   constant 90 m depth, CNA speed 1.5 m/s, A = 5 (A18).
 //!
 //! Bearing model (digest A3; issue 10): no one model gives both the Sec. 5.3 and the Table 6.1
-//! results, so each experiment names its own ([`BEARING_53`], [`BEARING_61`]); the configuration
+//! results, so each experiment names its own (`BEARING_53`, `BEARING_61`); the configuration
 //! default stays the horizontal bearing (`coopnav_plan::BearingMode`). Measured on the reduced
 //! forms: with the horizontal bearing an AUV CNA scores exactly like the ASC in 5 of the 7 Sec. 5.3
 //! tables (its pitch only shortens its step), and the thesis's CNA-kind ordering holds in 1 (a
