@@ -815,6 +815,12 @@ mod tests {
         assert!(e.contains("p_outliers"), "{e}");
     }
 
+    #[test]
+    fn a_survey_auv_model_outside_its_ranges_is_refused_naming_it() {
+        let e = err(&EXAMPLE.replacen("[cna]", "[fleet.vehicle]\nmax_yaw_rate = -1.0\n\n[cna]", 1));
+        assert!(e.contains("field fleet.vehicle = ") && e.contains("max_yaw_rate"), "{e}");
+    }
+
     /// Eight AUVs with τ = 30 s leave 3.3 s per slot, less than rate 0's 3.9 s of air time; τ = 44 s fits.
     #[test]
     fn the_estimator_planners_own_settings_are_checked() {
