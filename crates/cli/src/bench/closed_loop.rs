@@ -77,13 +77,12 @@ pub fn run(args: Args) -> Result<()> {
     let mut walls = Vec::new();
     for _ in 0..args.reps.max(1) {
         let mut policy = spec.build(&sc)?;
-        walls.push(on_pool(|| closed_loop::run(&sc, &mut policy, sc.seed, &Faults::default(), &mut ()).wall_s));
+        walls.push(closed_loop::run(&sc, &mut policy, sc.seed, &Faults::default(), &mut ()).wall_s);
     }
     walls.sort_by(f64::total_cmp);
     let wall_s = walls[walls.len() / 2];
     let mut clock = PhaseClock::start();
-    let mut policy = spec.build(&sc)?;
-    let r = on_pool(|| closed_loop::run(&sc, &mut policy, sc.seed, &Faults::default(), &mut clock));
+    let r = closed_loop::run(&sc, &mut spec.build(&sc)?, sc.seed, &Faults::default(), &mut clock);
     let t = clock.timing;
     let out = json!({
         "target": "closed-loop",
@@ -113,7 +112,6 @@ pub fn run(args: Args) -> Result<()> {
             "deliver (fates, collisions, range updates)": t.deliver_s,
             "sense (filter predictions, sensor updates)": t.sense_s,
             "observe (metrics, NEES)": t.observe_s,
-            "stretch (quiet steps: the survey AUVs' truth, filters and samples, split over two threads)": t.stretch_s,
         },
         "filter_steps": (sc.duration_s / sc.dt).round() * sc.fleet.n_auvs as f64,
         "planner": r.planner,
@@ -121,10 +119,4 @@ pub fn run(args: Args) -> Result<()> {
     });
     println!("{}", serde_json::to_string_pretty(&out)?);
     Ok(())
-}
-
-/// Runs `f` on a thread of rayon's pool, as the Monte Carlo's runs are: the engine then shares
-/// each quiet stretch's survey AUVs with the pool's other thread.
-fn on_pool<R: Send>(f: impl FnOnce() -> R + Send) -> R {
-    rayon::scope(|_| f())
 }

@@ -52,15 +52,10 @@ impl<P> InFlight<P> {
         self.arrivals.push(arrival);
     }
 
-    /// Whether [`Self::due`] would deliver something by `t`.
-    pub fn any_due(&self, t: f64) -> bool {
-        self.next_end <= t
-    }
-
     /// The addressed arrivals that end by `t`, in end-time order, each with whether it survived
     /// half-duplex and collisions. Call once every transmission starting before `t` is pushed.
     pub fn due(&mut self, t: f64) -> Vec<(Arrival<()>, P, bool)> {
-        if !self.any_due(t) {
+        if self.next_end > t {
             return Vec::new();
         }
         let mut ready: Vec<usize> = (0..self.arrivals.len())

@@ -18,7 +18,6 @@ mod mini;
 pub mod observe;
 mod peer;
 mod phases;
-mod stretch;
 mod vehicles;
 
 use crate::closed_loop::metrics::{AuvMetrics, ErrorStats, FleetMetrics, LinkStats};
@@ -180,17 +179,20 @@ fn run_on(
 ) -> RunResult {
     let t_start = Instant::now();
     let mut engine = Engine::new(sc, policy, seed, faults, tl);
-    engine.report_start(obs);
-    let steps = engine.steps();
-    let mut step = 0;
-    while step < steps && !obs.stop() {
-        let quiet = step..engine.quiet_until(step, steps);
-        if engine.try_stretch(quiet.clone(), obs) {
-            step = quiet.end;
-        } else {
-            engine.step(step, obs);
-            step += 1;
+    for (auv, a) in engine.auvs.iter().enumerate() {
+        let ((x, y), (speed, heading)) = (a.ekf.position(), a.ekf.speed_heading());
+        obs.on_filter_start(&FilterStart { auv, x, y, speed, heading });
+    }
+    for (ship, s) in engine.ships.iter().enumerate() {
+        obs.on_ship_pose(&ShipPose { t: 0.0, ship, pos: s.pos, heading: s.psi });
+    }
+    obs.on_phase_end(Phase::Setup);
+    let steps = (sc.duration_s / sc.dt).round() as u64;
+    for step in 0..steps {
+        if obs.stop() {
+            break;
         }
+        engine.step(step, obs);
     }
     engine.finish(seed, t_start.elapsed().as_secs_f64())
 }
@@ -257,23 +259,6 @@ impl<'a> Engine<'a> {
         }
     }
 
-    /// The filters' and ships' start, and the end of the set-up.
-    fn report_start(&self, obs: &mut dyn Observer) {
-        for (auv, a) in self.auvs.iter().enumerate() {
-            let ((x, y), (speed, heading)) = (a.ekf.position(), a.ekf.speed_heading());
-            obs.on_filter_start(&FilterStart { auv, x, y, speed, heading });
-        }
-        for (ship, s) in self.ships.iter().enumerate() {
-            obs.on_ship_pose(&ShipPose { t: 0.0, ship, pos: s.pos, heading: s.psi });
-        }
-        obs.on_phase_end(Phase::Setup);
-    }
-
-    /// Truth steps of the whole run.
-    fn steps(&self) -> u64 {
-        (self.sc.duration_s / self.sc.dt).round() as u64
-    }
-
     /// One truth step from `step · dt`, phase by phase, each end reported.
     fn step(&mut self, step: u64, obs: &mut dyn Observer) {
         let t = step as f64 * self.sc.dt;
@@ -288,7 +273,8 @@ impl<'a> Engine<'a> {
         obs.on_phase_end(Phase::Deliver);
         self.sense(step, t_next, obs);
         obs.on_phase_end(Phase::Sense);
-        if (step + 1) % self.per_second() == 0 {
+        let per_second = ((1.0 / self.sc.dt).round() as u64).max(1);
+        if (step + 1) % per_second == 0 {
             self.observe(t_next, obs);
         }
         obs.on_phase_end(Phase::Observe);
@@ -387,7 +373,5 @@ fn metrics(k: usize, a: &AuvTally) -> AuvMetrics {
 
 #[cfg(test)]
 mod peer_tests;
-#[cfg(test)]
-mod stretch_tests;
 #[cfg(test)]
 mod tests;

@@ -254,9 +254,6 @@ pub enum Phase {
     Deliver,
     Sense,
     Observe,
-    /// A quiet stretch (`engine::stretch`): several steps' advance, sense and observe of the survey
-    /// AUVs, shared out over two threads, and their observer calls.
-    Stretch,
 }
 
 /// Wall-clock time per part of a run (not part of the deterministic results).
@@ -276,8 +273,6 @@ pub struct Timing {
     pub sense_s: f64,
     /// Metrics and the observer.
     pub observe_s: f64,
-    /// Quiet stretches: the survey AUVs' truth, filters and samples between acoustic events.
-    pub stretch_s: f64,
 }
 
 /// Times every part of a run (the benchmark's observer). Reading the clock at each of a step's
@@ -309,7 +304,6 @@ impl Observer for PhaseClock {
             Phase::Deliver => &mut t.deliver_s,
             Phase::Sense => &mut t.sense_s,
             Phase::Observe => &mut t.observe_s,
-            Phase::Stretch => &mut t.stretch_s,
         };
         *slot += elapsed;
     }

@@ -14,7 +14,7 @@ use super::observe::{
 use super::peer::PeerLink;
 use super::vehicles::lerp;
 use super::vehicles::SurveyAuv;
-use super::{AuvTally, Engine, FleetView};
+use super::{Engine, FleetView};
 use crate::closed_loop::policies::receiver;
 use crate::closed_loop::scenario::Scenario;
 use crate::hbl::noise::normal;
@@ -22,7 +22,7 @@ use crate::models::channel::{air_time, Clock};
 use crate::models::finish::Finish;
 use crate::models::minipacket::SUCCESS_RATE;
 use crate::models::peer::{StatusFormat, StatusTo};
-use crate::models::schedule::{Message, Owner, Slot};
+use crate::models::schedule::{Message, Owner};
 use crate::models::surfacing::Step;
 use crate::policy::ReportedCov;
 use crate::policy::{CnaCommand, PolicyContext};
@@ -57,7 +57,7 @@ impl Engine<'_> {
     /// The CNA's decision at each m·τ: its position fix, the planner model's pings, the policy.
     pub(super) fn decide(&mut self, t_next: f64, obs: &mut dyn Observer) {
         let tau = self.sc.comms.tau;
-        if !self.decision_due(t_next) {
+        if (self.next_decision as f64) * tau >= t_next - 1e-9 {
             return;
         }
         let t_dec = self.next_decision as f64 * tau;
@@ -113,11 +113,6 @@ impl Engine<'_> {
         obs.on_decision(&Decision { t: t_dec, from: here, to: cna.craft.target });
     }
 
-    /// Whether a decision (one every τ) falls before `t_next`.
-    pub(super) fn decision_due(&self, t_next: f64) -> bool {
-        (self.next_decision as f64) * self.sc.comms.tau < t_next - 1e-9
-    }
-
     /// Draws the CNA's navigation error for this cycle and returns its position fix (`surfaced`:
     /// an AUV CNA takes its GPS fix at the surface now).
     fn cna_fix(&mut self, t_dec: f64, surfaced: bool) -> Vec3 {
@@ -145,13 +140,23 @@ impl Engine<'_> {
             obs.on_ship_pose(&ShipPose { t: t_next, ship: i, pos: ship.pos, heading: ship.psi });
         }
         for a in self.auvs.iter_mut() {
-            a.advance(sc, &self.bathy);
+            let action = sc.fleet.finish.act(a.ctrl.is_complete(), a.ekf.position(), a.station);
+            a.step_truth(sc, &self.bathy, action);
         }
     }
 
     /// Every slot starting in [t, t_next): its owner transmits.
     pub(super) fn transmit(&mut self, t: f64, t_next: f64, obs: &mut dyn Observer) {
-        while let Some((slot, t_tx)) = self.next_slot_before(t_next) {
+        let per_cycle = self.slots.len() as u64;
+        if per_cycle == 0 {
+            return;
+        }
+        loop {
+            let slot = self.slots[(self.next_slot % per_cycle) as usize];
+            let t_tx = (self.next_slot / per_cycle) as f64 * self.sc.comms.tau + slot.start_s;
+            if t_tx >= t_next - 1e-9 {
+                return;
+            }
             self.next_slot += 1;
             let frac = ((t_tx - t) / self.sc.dt).clamp(0.0, 1.0);
             match (slot.message, slot.owner) {
@@ -163,14 +168,6 @@ impl Engine<'_> {
                 (Message::Packet, Owner::Ship(..)) => {}
             }
         }
-    }
-
-    /// The next slot of the schedule and its start, if it starts before `t_next`.
-    pub(super) fn next_slot_before(&self, t_next: f64) -> Option<(Slot, f64)> {
-        let per_cycle = self.slots.len() as u64;
-        let slot = *self.slots.get((self.next_slot % per_cycle.max(1)) as usize)?;
-        let t_tx = (self.next_slot / per_cycle) as f64 * self.sc.comms.tau + slot.start_s;
-        (t_tx < t_next - 1e-9).then_some((slot, t_tx))
     }
 
     /// The CNA's broadcast: one packet, an arrival (with its own range) at every survey AUV.
@@ -464,28 +461,32 @@ impl Engine<'_> {
     /// Filters to `t_next` at the end of truth step `step` (every step, or every few with a
     /// decimated filter rate): prediction, speed and compass; a surfaced AUV's GPS once a second.
     pub(super) fn sense(&mut self, step: u64, t_next: f64, obs: &mut dyn Observer) {
-        let at = SenseStep::new(self.sc, step, t_next);
+        let whole_second = (t_next - t_next.round()).abs() < 1e-6;
+        let every = self.sc.filter.rate.steps(self.sc.dt);
+        let filter_step = (step + 1) % every == 0;
         for (k, a) in self.auvs.iter_mut().enumerate() {
-            if let Some(dr) = at.sense(self.sc, k, a) {
-                obs.on_dead_reckoning(&dr);
+            let yaw_rate = if every == 1 {
+                a.yaw_measured
+            } else {
+                a.yaw_sum += a.yaw_measured;
+                if !filter_step {
+                    continue;
+                }
+                std::mem::take(&mut a.yaw_sum) / every as f64
+            };
+            a.ekf.predict_to(t_next, yaw_rate);
+            let (speed, heading) = a.sense(self.sc);
+            obs.on_dead_reckoning(&DeadReckoning { t: t_next, auv: k, yaw_rate, speed, heading, truth: a.truth });
+            if let Finish::Surface { gps_sd_m, .. } = self.sc.fleet.finish {
+                if whole_second && a.at_surface() {
+                    a.gps_fix(gps_sd_m);
+                }
             }
         }
     }
 
     /// Once a second: true error, the filter's σ and NEES, distances, and the observer.
     pub(super) fn observe(&mut self, t: f64, obs: &mut dyn Observer) {
-        self.observe_surroundings(t, obs);
-        let cna = self.cna.craft.pos;
-        let mut rows = Vec::with_capacity(self.auvs.len());
-        for (k, (a, tally)) in self.auvs.iter().zip(self.tallies.iter_mut()).enumerate() {
-            self.finite &= a.finite();
-            rows.push(sample(self.sc, (k, a, tally), t, cna, self.cna.model.total(k)));
-        }
-        obs.on_sample(t, cna, &rows);
-    }
-
-    /// The ships' and buoys' samples at `t` (before the AUVs' own).
-    pub(super) fn observe_surroundings(&self, t: f64, obs: &mut dyn Observer) {
         if !self.ships.is_empty() {
             let ships: Vec<Vec3> = self.ships.iter().map(|s| s.pos).collect();
             obs.on_ships(t, &ships);
@@ -496,92 +497,43 @@ impl Engine<'_> {
         if !self.buoys.is_empty() {
             obs.on_buoys(t, &self.buoy_samples(t));
         }
-    }
-}
-
-/// What the sense phase of truth step `step` (ending at `t_next`) does: whether the filters step
-/// (every step, or every few with a decimated filter rate) and whether a surfaced AUV takes its
-/// once-a-second GPS fix.
-pub(super) struct SenseStep {
-    t_next: f64,
-    every: u64,
-    filter_step: bool,
-    whole_second: bool,
-}
-
-impl SenseStep {
-    pub(super) fn new(sc: &Scenario, step: u64, t_next: f64) -> Self {
-        let every = sc.filter.rate.steps(sc.dt);
-        SenseStep {
-            t_next,
-            every,
-            filter_step: (step + 1) % every == 0,
-            whole_second: (t_next - t_next.round()).abs() < 1e-6,
+        let limits = self.sc.planner.limits;
+        let cna = self.cna.craft.pos;
+        let mut rows = Vec::with_capacity(self.auvs.len());
+        for (k, (a, tally)) in self.auvs.iter().zip(self.tallies.iter_mut()).enumerate() {
+            self.finite &= a.finite();
+            let (ex, ey) = a.ekf.position();
+            let [p_ee, p_en, p_nn] = a.ekf.position_cov();
+            let (dx, dy) = (ex - a.truth.x, ey - a.truth.y);
+            let sigma = (p_ee + p_nn).max(0.0).sqrt();
+            let nees = nees_2d(dx, dy, p_ee, p_en, p_nn);
+            let error = dx.hypot(dy);
+            let d = (a.truth.x - cna.x).hypot(a.truth.y - cna.y);
+            tally.errors.push(error);
+            tally.distances.push(d);
+            tally.violations += u64::from(d < limits.min || d > limits.max);
+            tally.health.sample(&self.sc.health, t, error, sigma, nees);
+            rows.push(TraceRow {
+                t,
+                auv: k,
+                true_x: a.truth.x,
+                true_y: a.truth.y,
+                true_z: a.truth.z,
+                est_x: ex,
+                est_y: ey,
+                error,
+                est_sd: sigma,
+                p_ee,
+                p_en,
+                p_nn,
+                nees,
+                modelled: self.cna.model.total(k),
+                cna_x: cna.x,
+                cna_y: cna.y,
+                distance: d,
+            });
         }
-    }
-
-    /// AUV `k`'s part: its filter's prediction, speed and compass (what it was given is returned;
-    /// None when a decimated filter skips the step), a surfaced AUV's GPS.
-    pub(super) fn sense(&self, sc: &Scenario, k: usize, a: &mut SurveyAuv) -> Option<DeadReckoning> {
-        let yaw_rate = if self.every == 1 {
-            a.yaw_measured
-        } else {
-            a.yaw_sum += a.yaw_measured;
-            if !self.filter_step {
-                return None;
-            }
-            std::mem::take(&mut a.yaw_sum) / self.every as f64
-        };
-        a.ekf.predict_to(self.t_next, yaw_rate);
-        let (speed, heading) = a.sense(sc);
-        if let Finish::Surface { gps_sd_m, .. } = sc.fleet.finish {
-            if self.whole_second && a.at_surface() {
-                a.gps_fix(gps_sd_m);
-            }
-        }
-        Some(DeadReckoning { t: self.t_next, auv: k, yaw_rate, speed, heading, truth: a.truth })
-    }
-}
-
-/// AUV `k`'s once-a-second sample at `t`, the CNA at `cna`: its true error, the filter's σ and
-/// NEES and its distance from the CNA go to its tally; the row is returned.
-pub(super) fn sample(
-    sc: &Scenario,
-    (k, a, tally): (usize, &SurveyAuv, &mut AuvTally),
-    t: f64,
-    cna: Vec3,
-    modelled: Option<f64>,
-) -> TraceRow {
-    let limits = sc.planner.limits;
-    let (ex, ey) = a.ekf.position();
-    let [p_ee, p_en, p_nn] = a.ekf.position_cov();
-    let (dx, dy) = (ex - a.truth.x, ey - a.truth.y);
-    let sigma = (p_ee + p_nn).max(0.0).sqrt();
-    let nees = nees_2d(dx, dy, p_ee, p_en, p_nn);
-    let error = dx.hypot(dy);
-    let d = (a.truth.x - cna.x).hypot(a.truth.y - cna.y);
-    tally.errors.push(error);
-    tally.distances.push(d);
-    tally.violations += u64::from(d < limits.min || d > limits.max);
-    tally.health.sample(&sc.health, t, error, sigma, nees);
-    TraceRow {
-        t,
-        auv: k,
-        true_x: a.truth.x,
-        true_y: a.truth.y,
-        true_z: a.truth.z,
-        est_x: ex,
-        est_y: ey,
-        error,
-        est_sd: sigma,
-        p_ee,
-        p_en,
-        p_nn,
-        nees,
-        modelled,
-        cna_x: cna.x,
-        cna_y: cna.y,
-        distance: d,
+        obs.on_sample(t, cna, &rows);
     }
 }
 

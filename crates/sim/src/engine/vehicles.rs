@@ -130,15 +130,9 @@ impl SurveyAuv {
         (self.truth - self.prev) * (1.0 / dt)
     }
 
-    /// One truth step after the finish behaviour's action for where it stands.
-    pub fn advance(&mut self, sc: &Scenario, bathy: &Bathymetry) {
-        let action = sc.fleet.finish.act(self.ctrl.is_complete(), self.ekf.position(), self.station);
-        self.step_truth(sc, bathy, action);
-    }
-
     /// Applies the finish behaviour's action, then one truth step: the controller steers from
     /// the filter's estimate; the truth moves by the same displacement plus the current.
-    fn step_truth(&mut self, sc: &Scenario, bathy: &Bathymetry, action: Action) {
+    pub fn step_truth(&mut self, sc: &Scenario, bathy: &Bathymetry, action: Action) {
         let (ex, ey) = self.ekf.position();
         self.ctrl.state.pos.x = ex;
         self.ctrl.state.pos.y = ey;
