@@ -5,6 +5,8 @@
 //! [`UnderwayPredictor`] turns the reports of one AUV into a position at any future time:
 //! along the reported waypoints at the last reported speed (so waypoint ETAs are recomputed with
 //! every new report), then in a straight line, with depth held at the last reported value.
+//! Optionally it holds the AUV's mission plan as known before launch, a stand-in forecast until
+//! the reports take over ([`UnderwayPredictor::with_plan`]; not in the thesis).
 
 use crate::AuvForecast;
 use coopnav_core::{Heading, Vec3};
@@ -96,11 +98,23 @@ pub struct UnderwayPredictor {
     config: PredictorConfig,
     history: VecDeque<StatusReport>,
     received: usize,
+    /// The mission plan as the operator knew it before launch, written as a report from the
+    /// launch point; never counted as received.
+    plan: Option<StatusReport>,
 }
 
 impl UnderwayPredictor {
     pub fn new(config: PredictorConfig) -> Self {
-        UnderwayPredictor { config, history: VecDeque::new(), received: 0 }
+        UnderwayPredictor { config, history: VecDeque::new(), received: 0, plan: None }
+    }
+
+    /// The same predictor knowing the AUV's mission `plan` (launch time and point, planned speed,
+    /// every planned waypoint): [`Self::planning_position`] forecasts from it until enough real
+    /// reports arrive. An invention (not in the thesis, whose underway CNA knows nothing a priori):
+    /// a field team knows its AUVs' plans, and an AUV whose first status is lost is otherwise
+    /// never planned for.
+    pub fn with_plan(self, plan: StatusReport) -> Self {
+        UnderwayPredictor { plan: Some(plan), ..self }
     }
 
     /// Takes in a report. A report older than the newest one held (delayed or out of order)
@@ -135,9 +149,22 @@ impl UnderwayPredictor {
     /// Predicted position at time `t`, or `None` before any report. Times before the latest
     /// report return the reported position: the CNA never predicts backwards.
     pub fn position_at(&self, t: f64) -> Option<Vec3> {
-        let r = self.latest()?;
+        self.latest().map(|r| self.predicted_from(r, t))
+    }
+
+    /// The position the CNA plans with at `t`: from the reports once `min_reports` of them
+    /// arrived (the planning start rule, digest A14); before that from the mission plan if one is
+    /// known, else none.
+    pub fn planning_position(&self, t: f64, min_reports: usize) -> Option<Vec3> {
+        if self.received >= min_reports {
+            return self.position_at(t);
+        }
+        self.plan.as_ref().map(|plan| self.predicted_from(plan, t))
+    }
+
+    fn predicted_from(&self, r: &StatusReport, t: f64) -> Vec3 {
         let (x, y) = self.horizontal_at(r, t);
-        Some(Vec3::new(x, y, r.pos.z))
+        Vec3::new(x, y, r.pos.z)
     }
 
     fn horizontal_at(&self, r: &StatusReport, t: f64) -> (f64, f64) {
@@ -255,6 +282,21 @@ mod tests {
         }
         p.receive(report(200.0, 1.5, vec![]));
         assert!(close(p.position_at(900.0).unwrap(), 0.0, 0.0, 12.0));
+    }
+
+    #[test]
+    fn the_mission_plan_stands_in_until_the_start_rule_is_met() {
+        let plain = UnderwayPredictor::new(PredictorConfig::default());
+        assert!(plain.planning_position(10.0, 1).is_none(), "no plan, no report: nothing to plan with");
+        let plan = StatusReport { pos: Vec3::new(0.0, 0.0, 20.0), ..report(0.0, 1.0, vec![(0.0, 0.0), (100.0, 0.0)]) };
+        let mut p = plain.with_plan(plan);
+        assert!(close(p.planning_position(40.0, 2).unwrap(), 40.0, 0.0, 20.0));
+        assert!(p.position_at(40.0).is_none(), "the plan is not a report");
+        assert_eq!(p.reports_received(), 0);
+        p.receive(report(50.0, 0.0, vec![]));
+        // One report of two required: still the plan; with one required, the report.
+        assert!(close(p.planning_position(60.0, 2).unwrap(), 60.0, 0.0, 20.0));
+        assert!(close(p.planning_position(60.0, 1).unwrap(), 0.0, 0.0, 12.0));
     }
 
     #[test]

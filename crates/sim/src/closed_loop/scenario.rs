@@ -296,6 +296,10 @@ pub struct Planner {
     /// Reports needed from an AUV before the CNA plans for it (digest A14).
     #[serde(default = "one_usize")]
     pub start_after_reports: usize,
+    /// What the CNA plans with for an AUV it has fewer than `start_after_reports` reports of.
+    /// Written only when not the thesis's default, so existing manifests read as before.
+    #[serde(default, skip_serializing_if = "BeforeFirstReport::is_ignore")]
+    pub before_first_report: BeforeFirstReport,
     /// Thesis option: use at most min(L, 3) reported waypoints (default: all received).
     #[serde(default)]
     pub thesis_waypoints: bool,
@@ -343,6 +347,26 @@ pub struct Planner {
     /// estimator step 2); false scores every broadcast position as exact.
     #[serde(default = "yes")]
     pub estimator_cna_variance: bool,
+}
+
+/// What the CNA knows of a survey AUV before its reports meet the planning start rule (A14).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum BeforeFirstReport {
+    /// Nothing: the planner and every baseline ignore the AUV until then (the thesis, digest A14).
+    /// An AUV whose statuses never reach the CNA is never looked for.
+    #[default]
+    Ignore,
+    /// Its mission plan as the operator knew it before launch (launch point, planned lawnmower
+    /// waypoints and speed), followed from t = 0 until the reports take over. An invention, not
+    /// in the thesis: a field team knows its AUVs' plans.
+    MissionPlan,
+}
+
+impl BeforeFirstReport {
+    fn is_ignore(&self) -> bool {
+        *self == BeforeFirstReport::Ignore
+    }
 }
 
 fn yes() -> bool {
@@ -845,6 +869,18 @@ mod tests {
             (sc.planner.estimator_penalty_case.as_deref(), sc.planner.estimator_look_ahead),
             (Some("3"), Some(3))
         );
+    }
+
+    #[test]
+    fn an_auv_not_yet_heard_is_ignored_unless_the_file_gives_the_mission_plan() {
+        let plain = Scenario::parse(EXAMPLE, Path::new("e.toml")).unwrap();
+        assert_eq!(plain.planner.before_first_report, BeforeFirstReport::Ignore);
+        let line = "before_first_report = \"ignore\"";
+        let planned = EXAMPLE.replace(line, "before_first_report = \"mission_plan\"");
+        let sc = Scenario::parse(&planned, Path::new("p.toml")).unwrap();
+        assert_eq!(sc.planner.before_first_report, BeforeFirstReport::MissionPlan);
+        let e = err(&EXAMPLE.replace(line, "before_first_report = \"guess\""));
+        assert!(e.contains("before_first_report") && e.contains("mission_plan") && e.contains("s.toml"), "{e}");
     }
 
     #[test]

@@ -23,7 +23,7 @@ mod vehicles;
 use crate::closed_loop::metrics::{AuvMetrics, ErrorStats, FleetMetrics, LinkStats};
 use crate::closed_loop::planner_policy::{ErrorTracker, PlannerStats};
 use crate::closed_loop::policies::{cna_start, Policy};
-use crate::closed_loop::scenario::Scenario;
+use crate::closed_loop::scenario::{BeforeFirstReport, Scenario};
 use crate::models::channel::Clock;
 use crate::models::peer::StatusFormat;
 use crate::models::schedule::Slot;
@@ -31,7 +31,7 @@ use crate::models::surfacing::OwnNav;
 use crate::policy::ReportedCov;
 use coopnav_acomms::tl::{TlError, TransmissionLoss, TL_CEILING};
 use coopnav_core::{Bathymetry, Iver2State, SeedStream, Vec3};
-use coopnav_plan::predict::UnderwayPredictor;
+use coopnav_plan::predict::{StatusReport, UnderwayPredictor};
 use coopnav_plan::AuvForecast;
 use inflight::InFlight;
 use mini::SurfaceFilters;
@@ -73,7 +73,8 @@ pub struct RunResult {
     pub wall_s: f64,
 }
 
-/// The CNA predictors as a forecast, hiding AUVs with fewer than the required reports (A14).
+/// The CNA predictors as a forecast, hiding AUVs with fewer than the required reports (A14)
+/// unless their mission plan stands in (`planner.before_first_report`).
 pub struct FleetView<'a> {
     pub predictors: &'a [UnderwayPredictor],
     pub min_reports: usize,
@@ -84,8 +85,7 @@ impl AuvForecast for FleetView<'_> {
         self.predictors.len()
     }
     fn position(&self, k: usize, t: f64) -> Option<Vec3> {
-        let p = self.predictors.get(k)?;
-        (p.reports_received() >= self.min_reports).then(|| p.position_at(t)).flatten()
+        self.predictors.get(k)?.planning_position(t, self.min_reports)
     }
 }
 
@@ -226,7 +226,7 @@ impl<'a> Engine<'a> {
             rng_gps: streams.rng(stream::CNA_GPS),
             rng_nav: streams.rng(stream::CNA_NAV),
             clock: sc.channel.clocks.draw(&mut streams.rng(stream::CNA_CLOCK)),
-            predictors: (0..n).map(|_| UnderwayPredictor::new(sc.predictor_config())).collect(),
+            predictors: auvs.iter().map(|a| cna_predictor(sc, a)).collect(),
             model: ErrorTracker::new(n, cfg.error, sc.comms.tau, sc.planner.sigma0, sc.planner.eps0),
             acked: vec![Vec::new(); n],
             reported: vec![None; n],
@@ -320,6 +320,23 @@ impl<'a> Engine<'a> {
             wall_s,
         }
     }
+}
+
+/// The CNA's predictor of survey AUV `a`, knowing its mission plan when the scenario says the
+/// operator gave it (`planner.before_first_report = "mission_plan"`): launch point and time,
+/// planned speed and every planned waypoint, as the fleet configuration defines them.
+fn cna_predictor(sc: &Scenario, a: &SurveyAuv) -> UnderwayPredictor {
+    let predictor = UnderwayPredictor::new(sc.predictor_config());
+    if sc.planner.before_first_report == BeforeFirstReport::Ignore {
+        return predictor;
+    }
+    predictor.with_plan(StatusReport {
+        t: 0.0,
+        pos: a.truth,
+        speed: sc.fleet.speed,
+        heading: a.ctrl.state.heading,
+        waypoints: a.ctrl.waypoints().iter().map(|w| (w.x, w.y)).collect(),
+    })
 }
 
 /// Every survey AUV's side of Nams's link, when the statuses are Nams's frame 0.

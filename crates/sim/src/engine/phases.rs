@@ -35,7 +35,7 @@ use coopnav_acomms::{Rate, Reception};
 use coopnav_core::{Heading, Vec3};
 use coopnav_nav::{RangeMeasurement, StateKind, UpdateOutcome};
 use coopnav_plan::predict::StatusReport;
-use coopnav_plan::CnaPose;
+use coopnav_plan::{AuvForecast, CnaPose};
 use rand_chacha::ChaCha8Rng;
 
 /// What a packet carries to its addressee.
@@ -67,15 +67,13 @@ impl Engine<'_> {
         let fix = self.cna_fix(t_dec, matches!(step, Step::Fix { .. }));
         let transmits = self.policy.as_policy().transmits();
         let cna = &mut self.cna;
+        let fleet = FleetView { predictors: &cna.predictors, min_reports: self.sc.planner.start_after_reports };
         for k in 0..self.auvs.len() {
             if !transmits {
                 cna.model.silent(k);
                 continue;
             }
-            let min_reports = self.sc.planner.start_after_reports;
-            let seen =
-                cna.predictors[k].position_at(t_dec).filter(|_| cna.predictors[k].reports_received() >= min_reports);
-            if let Some(p) = seen {
+            if let Some(p) = fleet.position(k, t_dec) {
                 cna.model.ping(k, &fix, &p, 1.0);
             }
         }
@@ -84,7 +82,6 @@ impl Engine<'_> {
                 tally.modelled.push(e);
             }
         }
-        let fleet = FleetView { predictors: &cna.predictors, min_reports: self.sc.planner.start_after_reports };
         let pose = CnaPose { pos: fix, heading: Heading::from_radians(cna.craft.heading), pitch: 0.0 };
         let ctx = PolicyContext {
             t: t_dec,

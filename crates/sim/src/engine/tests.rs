@@ -354,3 +354,41 @@ fn a_decimated_filter_dead_reckons_like_one_run_every_step() {
     assert_ne!(error_at(&a, 0, 450.0), error_at(&b, 0, 450.0), "the rate is used");
     assert!(error_at(&b, 0, 1500.0) < 10.0, "the surfaced AUV's GPS fixes are taken");
 }
+
+/// One AUV on a short lawnmower and the CNA starting `cna_x` m east of it, far beyond where the
+/// analytic link carries a packet either way.
+fn cna_out_of_range(before: BeforeFirstReport, cna_x: f64) -> Scenario {
+    let mut sc = short_survey(Finish::Loiter { radius_m: 50.0 }, 4000.0);
+    sc.cna.x = cna_x;
+    sc.planner.before_first_report = before;
+    sc.validate(std::path::Path::new("t")).unwrap();
+    sc
+}
+
+/// Today's underway CNA (A14) never plans for an AUV it has not heard: started out of range it
+/// never goes to find it, and the AUV never gets a range. Knowing the mission plan, it goes to
+/// the AUV, which then gets ranges and whose statuses replace the plan.
+#[test]
+fn a_cna_knowing_the_mission_plan_finds_an_auv_it_has_not_heard() {
+    let far = 6000.0;
+    for policy in ["planner", "centroid"] {
+        let (ignored, trace) = traced(&cna_out_of_range(BeforeFirstReport::Ignore, far), policy, 4);
+        let a = &ignored.auvs[0];
+        assert_eq!((a.ranges_applied, a.uplink.received), (0, 0), "{policy}: the AUV is heard from {far} m");
+        let cna_moved = trace.rows.iter().map(|r| (r.cna_x - far).abs()).fold(0.0, f64::max);
+        assert!(cna_moved < 200.0, "{policy}: the CNA went {cna_moved:.0} m with no AUV to plan for");
+
+        let (planned, trace) = traced(&cna_out_of_range(BeforeFirstReport::MissionPlan, far), policy, 4);
+        let a = &planned.auvs[0];
+        assert!(
+            a.ranges_applied > 20 && a.uplink.received > 10,
+            "{policy}: {} ranges, {:?}",
+            a.ranges_applied,
+            a.uplink
+        );
+        assert!(a.distance_min < 1000.0, "{policy}: the CNA came no closer than {:.0} m", a.distance_min);
+        let late = trace.rows.iter().filter(|r| r.t >= 3600.0).map(|r| r.error).fold(0.0, f64::max);
+        let unserved = ignored.auvs[0].error.mean;
+        assert!(late < unserved, "{policy}: error {late:.1} m late in the run, {unserved:.1} m mean unserved");
+    }
+}
