@@ -16,7 +16,7 @@ pub use crate::engine::{run, run_traced, Faults, PhaseClock, RunResult, Timing};
 pub use mc::{comparison_table, monte_carlo, monte_carlo_grid, monte_carlo_until, Comparison, PolicySummary};
 pub use planner_policy::{ErrorTracker, PlannerPolicy, PlannerStats};
 pub use policies::{Policy, PolicyError, PolicySpec, POLICY_NAMES};
-pub use scenario::{Scenario, ScenarioError, EXAMPLE};
+pub use scenario::{BeforeFirstReport, Scenario, ScenarioError, EXAMPLE};
 
 #[cfg(test)]
 mod tests;
