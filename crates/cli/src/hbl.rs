@@ -92,8 +92,10 @@ pub enum Command {
         /// Replace the output directory if it exists.
         #[arg(long)]
         force: bool,
-        /// Refuse the log (exit non-zero, write nothing) when any row would not be used as logged:
-        /// rows before `init`, a second `init`, ranges without a fresh transponder fix, gated ranges.
+        /// Refuse the log (exit non-zero, write nothing) when the log itself leaves a row unusable as
+        /// logged: rows before `init`, a second `init`, ranges without a fresh transponder fix, long
+        /// silences, ranges without usable geometry. Ranges the innovation gate rejects (acoustic
+        /// outliers) are warned about, not refused: the gate catching one is the filter working.
         #[arg(long)]
         strict: bool,
         /// Run even when the estimated work or memory is above coopnav's limits (coopnav_core::limits).
@@ -470,11 +472,11 @@ fn postprocess(
         None => None,
     };
     let result = post::postprocess_rows(rows, &cfg)?;
-    let warnings = result.summary.warnings();
-    if strict && !warnings.is_empty() {
-        anyhow::bail!("{} (--strict): {}", log.display(), warnings.join("; "));
+    let faults = result.summary.log_faults();
+    if strict && !faults.is_empty() {
+        anyhow::bail!("{} (--strict): {}", log.display(), faults.join("; "));
     }
-    for w in &warnings {
+    for w in result.summary.warnings() {
         eprintln!("warning: {}: {w}", log.display());
     }
     let dir = RunDir::create(out, force)?;
