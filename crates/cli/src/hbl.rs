@@ -139,7 +139,7 @@ pub enum ExampleKind {
 pub struct Common {
     /// Engine scenario TOML (as `coopnav simulate` reads; `hbl example scenario`); defaults to
     /// Gill's Table 5 HBL Two set-up (scenarios/gill-table5-hbl-two.toml). Survey AUV 0 meets
-    /// ships[0]; buoys[0] is the HBL buoy; the zone lies along the survey lane.
+    /// `ships[0]`; `buoys[0]` is the HBL buoy; the zone lies along the survey lane.
     #[arg(long)]
     config: Option<PathBuf>,
     /// The measurement zone's near edge: x_rel = (AUV − ship) along the survey lane, m (default
