@@ -231,12 +231,14 @@ fn memo_slot(key: &str) -> Slot {
 /// may be a rayon job (an experiment's runs in a pool) holding its key's slot while other jobs wait
 /// on it: run on the caller's pool, the build's parallel work could wait on a worker blocked on
 /// that slot, or the caller, waiting for its stolen work, could pick up a run asking for the slot
-/// it holds. A plain thread waits without running other jobs, and the grid's own pool runs nothing
-/// but the grid.
+/// it holds. A plain thread waits without running other jobs, and the grid's own pool (as many
+/// threads as the caller's) runs nothing but the grid.
 fn build_apart(bellhop: &Bellhop, lattice: LatticeSpec, spec: GridSpec) -> Result<AnchorLattice, TlError> {
+    let threads = rayon::current_num_threads();
     std::thread::scope(|s| {
         let builder = s.spawn(|| {
             let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
                 .thread_name(|i| format!("bellhop-grid-{i}"))
                 .build()
                 .map_err(|e| TlError::Invalid(format!("no thread pool for the BELLHOP grid: {e}")))?;
