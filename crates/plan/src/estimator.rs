@@ -14,8 +14,12 @@
 //!    or an AUV CNA's dead-reckoning σ grown since its last fix: `PlanInput::cna_variance`). The
 //!    range is measured from the true CNA and predicted from the broadcast one, so the innovation
 //!    carries −h_xyᵀe more: the effective range variance is R(r) + σ_c²·|h_xy|². (Taken as fresh
-//!    per ping; the CNA's error is a random walk, so this under-states its correlation.) It is
-//!    ≥ R(r), so the bounds below, which use R(r_min) alone, stay valid.
+//!    per ping; the CNA's error is a random walk, so this under-states its correlation.) The
+//!    ping's information along its direction û = h/|h| is then |h|²/(R(r) + σ_c²·|h|²), which
+//!    grows with |h|² ≤ 1: at most 1/(R(r) + σ_c²). The bounds below therefore take
+//!    R_min = R(r_min) + σ_c² ([`EkfCost::noise_floor`]) with |h| = 1; with R(r_min) alone they
+//!    stayed valid but cut far fewer nodes (N = 5, A = 7, L = 7 at σ_c² = 1 m²: 507k nodes
+//!    against 63k).
 //! 3. The packet arrives with probability p_s(r) (the acoustic link's model, passed in as a
 //!    [`LinkModel`]); the expected posterior is E = (1 − p_s)·P̃ + p_s·P⁺
 //!    = P̃ − p_s·P̃hhᵀP̃ / (hᵀP̃h + R).
@@ -344,6 +348,14 @@ impl EkfCost {
         self.q_tau[k] * (m - m * m / (2.0 * h))
     }
 
+    /// R_min of the bounds at slant ranges ≥ `range_m`: the smallest range variance a ping's
+    /// information can have there, R(range) + σ_c² (step 2: the information along the ping's
+    /// direction, |h|²/(R + σ_c²·|h|²), is largest at |h| = 1), m².
+    #[inline(always)]
+    fn noise_floor(&self, range_m: f64) -> f64 {
+        self.spec.range_noise.variance(range_m) + self.cna_variance
+    }
+
     /// β(r)² of step 4 for a ping from `cna` to the AUV at `auv`, m².
     #[inline(always)]
     fn bias_variance(&self, cna: [f64; 3], auv: [f64; 3]) -> f64 {
@@ -431,7 +443,8 @@ impl CostModel for EkfCost {
     ///   (the node's own distance for the first level below);
     /// - [`EigenFloor`]: whatever the ping directions.
     ///
-    /// R ≥ R(max(0, |a − c| − spread)) at each level (R grows with range), p_s ≤ 1 and |h| ≤ 1;
+    /// R_min = R(max(0, |a − c| − spread)) + σ_c² at each level (R grows with range; σ_c² as in
+    /// step 2), p_s ≤ 1 and |h| ≤ 1;
     /// the bias term of step 4 at that shortest range is added to both (`term_bound`), and at
     /// the leaf (the last slot of `out`) step 7's growth ḡ at that range, scaled by 1/(1 + H)
     /// because the tree weights the leaf's bound by 1 + H (`Tree::rest_bound`).
@@ -458,8 +471,7 @@ impl CostModel for EkfCost {
             let turn_max = if before > b.turn { (b.turn / before) * (b.turn / before) } else { 1.0 };
             let los = [b.auv[0] - cna[0], b.auv[1] - cna[1], b.auv[2] - cna[2]];
             let nearest = (norm(los) - b.spread).max(0.0);
-            let (r_min, half_bias2) =
-                (self.spec.range_noise.variance(nearest), 0.5 * self.bias_variance_at(nearest * nearest));
+            let (r_min, half_bias2) = (self.noise_floor(nearest), 0.5 * self.bias_variance_at(nearest * nearest));
             before = (los[0] * los[0] + los[1] * los[1]).sqrt() - b.spread;
             let (trace, det) = turn.step(q, turn_max, r_min);
             let (eigen_trace, eigen_det) = eigen.step(q, r_min);
@@ -475,10 +487,10 @@ impl CostModel for EkfCost {
         }
     }
 
-    /// The eigenvalue chain ([`EigenFloor`]) from each root covariance, with R ≥ R(0) at every
-    /// level.
+    /// The eigenvalue chain ([`EigenFloor`]) from each root covariance, with R_min = R(0) + σ_c²
+    /// at every level.
     fn level_floors(&self, root: &[[f64; 3]], depth: usize) -> Vec<f64> {
-        let r_min = self.spec.range_noise.variance(0.0);
+        let r_min = self.noise_floor(0.0);
         let mut chains: Vec<EigenFloor> = root.iter().map(EigenFloor::of).collect();
         (0..depth)
             .map(|_| {
