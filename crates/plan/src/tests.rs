@@ -55,8 +55,10 @@ impl Instance {
     }
 }
 
+/// No deadline; the parallel mode shares the tree at once (no one-thread start), so the tests'
+/// small trees still run the parallel search.
 fn exact(algorithm: Algorithm, parallel: bool) -> SearchConfig {
-    SearchConfig { algorithm, parallel, deadline: Deadline::None, ..SearchConfig::default() }
+    SearchConfig { algorithm, parallel, parallel_after_nodes: 0, deadline: Deadline::None, ..SearchConfig::default() }
 }
 
 fn asc(a: usize, l: usize, case: PenaltyCase) -> PlannerConfig {
@@ -116,10 +118,11 @@ proptest! {
     #![proptest_config(ProptestConfig { cases: 300, ..ProptestConfig::default() })]
 
     #[test]
-    fn branch_and_bound_equals_brute_force(inst in instance()) {
+    fn branch_and_bound_equals_brute_force(inst in instance(), start in prop_oneof![Just(0u64), 1u64..3000]) {
         let brute = inst.decide(exact(Algorithm::BruteForce, false));
         let seq = inst.decide(exact(Algorithm::BranchAndBound, false));
-        let par = inst.decide(exact(Algorithm::BranchAndBound, true));
+        // The parallel mode, sharing the tree after `start` nodes on one thread (0: at once).
+        let par = inst.decide(SearchConfig { parallel_after_nodes: start, ..exact(Algorithm::BranchAndBound, true) });
         prop_assert_eq!(brute.option, seq.option);
         prop_assert_eq!(brute.value, seq.value);
         prop_assert_eq!(brute.option, par.option);
@@ -219,6 +222,23 @@ fn same_decisions_on_one_and_two_threads() {
     };
     let (one, two) = (run(1), run(2));
     assert_eq!((one.option, one.value, one.next), (two.option, two.value, two.next));
+}
+
+#[test]
+fn the_parallel_mode_shares_only_trees_larger_than_its_start() {
+    let inst = instance_fixed(asc(5, 4, PenaltyCase::C8));
+    let one = inst.decide(exact(Algorithm::BranchAndBound, false));
+    let after =
+        |nodes| inst.decide(SearchConfig { parallel_after_nodes: nodes, ..exact(Algorithm::BranchAndBound, true) });
+    // A start larger than the tree's search: the one-thread search itself, node for node.
+    let small = after(one.nodes);
+    assert_eq!((small.option, small.value, small.nodes), (one.option, one.value, one.nodes));
+    // Handed over part-way, or at once: the same decision and cost, the tree enumerated for tasks.
+    for nodes in [0, 1, one.nodes / 3] {
+        let shared = after(nodes);
+        assert_eq!((shared.option, shared.value), (one.option, one.value), "after {nodes} nodes");
+        assert_ne!(shared.nodes, one.nodes, "after {nodes} nodes: the tasks' enumeration counts");
+    }
 }
 
 #[test]

@@ -67,7 +67,13 @@ impl Workload {
         format!("{kind}_N{}_A{}_B{}_L{}_gap{}", self.n, self.a, self.b, self.l, self.gap)
     }
 
-    pub fn config(&self, algorithm: Algorithm, parallel: bool) -> PlannerConfig {
+    /// The search of a benchmark: `algorithm`, no deadline, on one thread or in the parallel mode
+    /// with its default one-thread start (`SearchConfig::parallel_after_nodes`).
+    pub fn search(algorithm: Algorithm, parallel: bool) -> SearchConfig {
+        SearchConfig { algorithm, parallel, deadline: Deadline::None, ..SearchConfig::default() }
+    }
+
+    pub fn config(&self, search: SearchConfig) -> PlannerConfig {
         PlannerConfig {
             look_ahead: self.l,
             motion: MotionConfig {
@@ -81,7 +87,7 @@ impl Workload {
             cost: self.cost,
             limits: DistanceLimits::default(),
             penalties: PenaltyCase::C1.penalties(),
-            search: SearchConfig { algorithm, parallel, deadline: Deadline::None, ..SearchConfig::default() },
+            search,
         }
     }
 
@@ -90,9 +96,9 @@ impl Workload {
         ((self.a * self.b) as u64).pow(self.l as u32 + 1)
     }
 
-    /// Plans one decision.
-    pub fn decide(&self, algorithm: Algorithm, parallel: bool) -> Result<Decision, PlanError> {
-        let cfg = self.config(algorithm, parallel);
+    /// Plans one decision with `search` (e.g. [`Workload::search`]).
+    pub fn decide(&self, search: SearchConfig) -> Result<Decision, PlanError> {
+        let cfg = self.config(search);
         let gap = self.gap;
         let auv = move |k: usize, t: f64| Vec3::new(gap * k as f64 + 50.0, 1.5 * t, 90.0);
         let cna = CnaPose { pos: Vec3::new(140.0, 0.0, 0.0), heading: Heading::from_radians(0.0), pitch: 0.0 };
