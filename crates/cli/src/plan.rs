@@ -1,6 +1,6 @@
 //! `coopnav plan [scenario.toml] [-o dir] [--force] [--example] [--moos [--moos-origin LAT,LON]]`:
 //! pre-deployment planning of a whole mission. Without a scenario it plans the embedded example;
-//! without -o it writes a fresh directory under runs/ (runs/plan-<name>, runs/plan-<name>-2, ...).
+//! without -o it writes a fresh directory under runs/ (`runs/plan-<name>`, `runs/plan-<name>-2`, ...).
 //! `--moos` adds MOOS-IvP mission files for the CNA (cna.moos, cna.bhv) to the run directory.
 
 use crate::scenario_args::{Loaded, ScenarioArgs, ScenarioCommand};

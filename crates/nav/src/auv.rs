@@ -5,7 +5,7 @@
 //! in its message), optionally with that position's own uncertainty.
 //!
 //! ψ is the direction the vehicle moves through the water and b the compass's offset from it, so
-//! b is the heading-bias (crab-angle) state: a vehicle that crabs 8° needs a prior p0[4] wide
+//! b is the heading-bias (crab-angle) state: a vehicle that crabs 8° needs a prior `p0[4]` wide
 //! enough to reach 8°. Headings inside are math convention (0 = east, counter-clockwise), so E
 //! advances with cos ψ and N with sin ψ; the thesis writes the same model clockwise from north.
 

@@ -311,7 +311,7 @@ pub struct PostConfig {
     pub fixes: FixMatching,
     /// Depth of the buoy transponder (m).
     pub buoy_depth: f64,
-    /// Backward pass: `ekf` (EKF-RTS, default) or `unscented` (URTS, the thesis's [25]).
+    /// Backward pass: `ekf` (EKF-RTS, default) or `unscented` (URTS, the thesis's reference 25).
     pub smoother: SmootherKind,
     /// SD (m, each axis) of a `gps` row without its own σ. Invented default (issue 12): a
     /// consumer GPS at the surface.

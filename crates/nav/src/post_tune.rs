@@ -44,7 +44,7 @@ impl Default for TuneOptions {
 pub struct Tuned {
     /// Range SD at zero range, c·σ_τ (m).
     pub range_sd_m: f64,
-    /// Per-step E and N process noise q[0] = q[1] (m²).
+    /// Per-step E and N process noise `q[0] = q[1]` (m²).
     pub q_en: f64,
     pub speed_scale: f64,
     pub heading_bias_deg: f64,

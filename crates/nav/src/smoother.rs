@@ -3,7 +3,7 @@
 //!   C_k = P⁺_k F_{k+1}ᵀ (P⁻_{k+1})⁻¹,
 //!   x^s_k = x⁺_k + C_k (x^s_{k+1} ⊖ x⁻_{k+1}),
 //!   P^s_k = P⁺_k + C_k (P^s_{k+1} − P⁻_{k+1}) C_kᵀ;
-//! the unscented pass (Särkkä's URTS, the thesis's reference [25]) instead pushes sigma points of
+//! the unscented pass (Särkkä's URTS, the thesis's reference 25) instead pushes sigma points of
 //! (x⁺_k, P⁺_k) through the nonlinear transition for the prediction and the cross-covariance.
 //! Angle components are differenced and re-wrapped in both.
 

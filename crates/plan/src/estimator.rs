@@ -50,13 +50,13 @@
 //!    leaf's term for H levels, which is right for an AUV the CNA can ping from the leaf and wrong
 //!    for one beyond the link's reach: its pings are lost (p_s ≈ 0) and its filter's covariance
 //!    grows by qτ per axis and level until the CNA gets close enough. The useful range r_u is the
-//!    shortest range at which the planner's link model p_s falls below p_u ([`useful_range`]).
+//!    shortest range at which the planner's link model p_s falls below p_u (`useful_range`).
 //!    From the leaf pose at slant range d from the AUV's leaf position, at its speed s (s·τ per
 //!    level), the CNA needs m = max(0, d − r_u)/(s·τ) levels to be within r_u (the AUV's own motion
 //!    is left out: it may open or close the distance). Level i = 1..H beyond the horizon has then
 //!    grown by qτ·min(i, m) per axis over the held leaf covariance; taking i as continuous, the
 //!    mean over the H levels is ḡ = (qτ/H)·∫₀ᴴ min(x, m) dx = qτ·(m − m²/(2H)) for m ≤ H and
-//!    qτ·H/2 beyond ([`EkfCost::reach_growth`]). The H levels then count H·term(M + ḡ·I) instead
+//!    qτ·H/2 beyond (`EkfCost::reach_growth`). The H levels then count H·term(M + ḡ·I) instead
 //!    of H·term(M): exact for the trace sum, the mean growth for the other aggregates. Each AUV is
 //!    taken alone (the CNA cannot reach every far AUV at once, so this under-states their growth);
 //!    it pulls the CNA towards the AUVs that lose most: fast-growing ones, far beyond r_u. The
@@ -64,7 +64,7 @@
 //!    order), so the leaf term stays ≥ (1 + H)·term(M) and step 6's bounds stay valid; the bound
 //!    adds ḡ at the shortest leaf range the CNA can reach (ḡ grows with d). p_u = 0 is none.
 //!
-//! Lower bound for branch-and-bound (the levels below a node; derivation in [`EkfCost::bound_rest`]):
+//! Lower bound for branch-and-bound (the levels below a node; derivation in `EkfCost::bound_rest`):
 //! E = (1 − p_s)·P̃ + p_s·P⁺ ⪰ (1 − p̄)·P̃ + p̄·G with P⁺ ⪰ G = (P̃⁻¹ + ι·ûûᵀ)⁻¹, where
 //! ι = 1/(R(r_min) + σ_c²) bounds the information of a ping that arrives and p̄ = p̄(r_min) its
 //! arrival (p̄(r) = the link's best success at ranges ≥ r, [`LinkTable::best_beyond`]; E falls

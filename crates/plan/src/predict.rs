@@ -59,7 +59,7 @@ pub enum BeyondWaypoints {
     /// (issue 10). Holding the last known point bounds the prediction by the plan the AUV sent.
     /// With no waypoint reported, the AUV is held at its reported position.
     Stop,
-    /// Keep going along the last leg into the last waypoint ([I]: an AUV that reached a waypoint
+    /// Keep going along the last leg into the last waypoint (\[I\]: an AUV that reached a waypoint
     /// rarely keeps the heading it reported on the way to the first one).
     LastLeg,
     /// The last reported heading, as the thesis's text reads (digest A13).

@@ -32,6 +32,9 @@ fn main() -> Result<(), Error> {
     let start = Instant::now();
     let c = monte_carlo(&sc, &policies, runs, &|_| {})?;
     print!("{}", comparison_table(&c));
+    // Filter consistency (2 = consistent; above: the filters' covariances understate the error).
+    let nees: Vec<String> = c.policies.iter().map(|s| format!("{} {:.2}", s.policy, s.nees_mean)).collect();
+    println!("mean NEES: {}", nees.join(", "));
     println!("wall time {:.1} s", start.elapsed().as_secs_f64());
     Ok(())
 }

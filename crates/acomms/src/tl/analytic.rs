@@ -1,6 +1,6 @@
 //! Analytic transmission loss: TL = k·10·log10(d) + α(f)·d, with Thorp's absorption α
 //! (nams digest §6.7 item 2 and §8 item 1, eq. 11 reconstructed; k = 1.5 is the value of the
-//! thesis's reference [5], 2 is spherical spreading). The thesis calls it "overly generic".
+//! thesis's reference 5, 2 is spherical spreading). The thesis calls it "overly generic".
 
 use super::{TlError, TransmissionLoss};
 use coopnav_core::Vec3;

@@ -56,6 +56,14 @@ const THESIS: [(&str, [(f64, f64); 3]); 2] = [
     ("scenario 4", [(3.6, 2.9), (102.6, 57.8), (0.38, 1.00)]),
 ];
 
+/// Why scenario 4's status-period direction is not resolved (measured on the BELLHOP grid, 40
+/// repetitions, seeds 1–3, session 21).
+const S4_PERIOD_DEVIATION: &str = "the thesis's adaptive vehicle skips 62 % of its transmit opportunities in scenario 4 \
+(duty 0.38), and that is what makes its status period 78 % longer than the control's. Ours skips only 28–30 % on the \
+synthetic shelf (duty 0.70–0.72), so the two periods end within noise of each other: on the BELLHOP grid, adaptive minus \
+fixed rate 1 was −1.6, +1.4 and +1.0 s at seeds 1, 2 and 3 (standard error of the difference 1.3–1.6 s); on the analytic \
+TL +2.0 s at seed 1. The thesis's +44.8 s is out of reach of our channel, and the sign at 40 repetitions is a coin toss.";
+
 fn tables_9_11(opts: &ReproOptions) -> Result<ReproReport, ExperimentError> {
     let tl = default_tl();
     let label = format!("analytic spreading + Thorp absorption, k = {}", tl.k);
@@ -152,7 +160,9 @@ pub fn report(
                 scenario, name, ours[k].0, ours[k].1, c.behaviour, thesis[k].0, thesis[k].1
             );
             if k > 0 {
-                checks.push(direction_check(scenario, name, ours[k], thesis[k]));
+                let check = direction_check(scenario, name, ours[k], thesis[k]);
+                let period_in_s4 = k == 1 && scenario == "scenario 4";
+                checks.push(if period_in_s4 { check.known_deviation(S4_PERIOD_DEVIATION) } else { check });
             }
         }
         let margin = 2.0 * (a.sd.bandwidth.powi(2) + c.sd.bandwidth.powi(2)).sqrt() / (cfg.repetitions as f64).sqrt();
