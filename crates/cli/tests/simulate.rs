@@ -48,3 +48,25 @@ fn example_round_trips_and_bad_files_fail_cleanly() {
     assert!(err.contains("comms.tau") && err.contains("bad.toml"), "{err}");
     assert!(!tmp.path().join("runs").exists(), "nothing written for a bad scenario");
 }
+
+/// `bench closed-loop` lists each AUV's part of its fleet mean (equal samples per AUV, so the
+/// fleet mean is the mean of theirs); on the analytic TL the CNA hears and serves every AUV.
+#[test]
+fn the_closed_loop_bench_splits_its_fleet_error_by_auv() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = coopnav(tmp.path(), &["bench", "closed-loop", "--tl", "analytic", "--reps", "1"]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let json: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let object = json.as_object().unwrap();
+    let per_auv = object.iter().find(|(k, _)| k.starts_with("per_auv")).unwrap().1.as_array().unwrap();
+    assert_eq!(per_auv.len() as u64, json["n_auvs"].as_u64().unwrap());
+    let mean = per_auv.iter().map(|a| a["mean_true_error_m"].as_f64().unwrap()).sum::<f64>() / per_auv.len() as f64;
+    let fleet = json["fleet_mean_true_error_m"].as_f64().unwrap();
+    assert!((mean - fleet).abs() < 1e-9 * fleet, "per-AUV mean {mean} vs fleet {fleet}");
+    for a in per_auv {
+        assert!(
+            a["ranges_applied"].as_u64().unwrap() > 0 && a["statuses_received_by_cna"].as_u64().unwrap() > 0,
+            "{a}"
+        );
+    }
+}

@@ -116,6 +116,16 @@ pub fn run(args: Args) -> Result<()> {
         "filter_steps": (sc.duration_s / sc.dt).round() * sc.fleet.n_auvs as f64,
         "planner": r.planner,
         "fleet_mean_true_error_m": r.fleet.error.mean,
+        "per_auv (the fleet mean's parts: an AUV whose statuses never reach the CNA is never planned for)": r
+            .auvs
+            .iter()
+            .map(|a| json!({
+                "mean_true_error_m": a.error.mean,
+                "ranges_applied": a.ranges_applied,
+                "statuses_received_by_cna": a.uplink.received,
+                "mean_distance_to_cna_m": a.distance_mean,
+            }))
+            .collect::<Vec<_>>(),
     });
     println!("{}", serde_json::to_string_pretty(&out)?);
     Ok(())
