@@ -92,8 +92,10 @@ pub enum Command {
         /// Replace the output directory if it exists.
         #[arg(long)]
         force: bool,
-        /// Refuse the log (exit non-zero, write nothing) when any row would not be used as logged:
-        /// rows before `init`, a second `init`, ranges without a fresh transponder fix, gated ranges.
+        /// Refuse the log (exit non-zero, write nothing) when the log itself leaves a row unusable as
+        /// logged: rows before `init`, a second `init`, ranges without a fresh transponder fix, long
+        /// silences, ranges without usable geometry. Ranges the innovation gate rejects (acoustic
+        /// outliers) are warned about, not refused: the gate catching one is the filter working.
         #[arg(long)]
         strict: bool,
         /// Run even when the estimated work or memory is above coopnav's limits (coopnav_core::limits).
@@ -137,9 +139,16 @@ pub enum ExampleKind {
 pub struct Common {
     /// Engine scenario TOML (as `coopnav simulate` reads; `hbl example scenario`); defaults to
     /// Gill's Table 5 HBL Two set-up (scenarios/gill-table5-hbl-two.toml). Survey AUV 0 meets
-    /// ships[0]; buoys[0] is the HBL buoy; the zone is Table 5's along the survey lane.
+    /// `ships[0]`; `buoys[0]` is the HBL buoy; the zone lies along the survey lane.
     #[arg(long)]
     config: Option<PathBuf>,
+    /// The measurement zone's near edge: x_rel = (AUV − ship) along the survey lane, m (default
+    /// −30, Gill's Table 5; below --zone-max-m).
+    #[arg(long, allow_negative_numbers = true)]
+    zone_min_m: Option<f64>,
+    /// The measurement zone's far edge, m (default 75, Gill's Table 5).
+    #[arg(long, allow_negative_numbers = true)]
+    zone_max_m: Option<f64>,
     #[arg(long, default_value_t = 1)]
     seed: u64,
     /// Output directory.
@@ -157,6 +166,16 @@ fn scenario(c: &Common) -> Result<Scenario> {
     match &c.config {
         Some(p) => Ok(hbl_scenario::parse(&input::read(p, c.allow_large)?, p)?),
         None => Ok(table5_scenario(Configuration::HblTwo)?),
+    }
+}
+
+impl Common {
+    /// The run's inputs, with the zone's edges when they were given (absent: Table 5's).
+    fn with_zone(&self, mut inputs: serde_json::Value) -> serde_json::Value {
+        if self.zone_min_m.is_some() || self.zone_max_m.is_some() {
+            inputs["zone"] = json!({ "zone_min_m": self.zone_min_m, "zone_max_m": self.zone_max_m });
+        }
+        inputs
     }
 }
 
@@ -247,9 +266,20 @@ fn example(kind: ExampleKind) -> Result<()> {
     Ok(())
 }
 
-/// The zone of a pass in `sc`: Gill's Table 5 zone along the survey lane's direction.
-fn zone_spec(sc: &Scenario) -> ZoneSpec {
-    ZoneSpec { path_compass_deg: sc.fleet.lane_heading_compass_deg, ..ZoneSpec::table5() }
+/// The zone of a pass in `sc`: along the survey lane's direction, between the edges given (by
+/// default Gill's Table 5 zone).
+fn zone_spec(sc: &Scenario, c: &Common) -> Result<ZoneSpec> {
+    let table5 = ZoneSpec::table5();
+    let (zone_min, zone_max) = (c.zone_min_m.unwrap_or(table5.zone_min), c.zone_max_m.unwrap_or(table5.zone_max));
+    if !(zone_min.is_finite() && zone_max.is_finite() && zone_min < zone_max) {
+        anyhow::bail!(
+            "--zone-min-m {zone_min} and --zone-max-m {zone_max}: the measurement zone needs finite edges, the near \
+             one below the far one (x_rel = AUV − ship along the lane, m; Gill's Table 5 zone is {} … {})",
+            table5.zone_min,
+            table5.zone_max
+        );
+    }
+    Ok(ZoneSpec { path_compass_deg: sc.fleet.lane_heading_compass_deg, zone_min, zone_max, ..table5 })
 }
 
 /// The name a summary line gives the scenario: its file, or the default's.
@@ -279,11 +309,11 @@ fn simulate(c: &Common, index: u64, log_path: Option<&Path>) -> Result<()> {
     let sc = scenario(c)?;
     let format = log_format(log_path, c.allow_large)?;
     limits::check(work::hbl_runs(&sc, 1.0, "one run", true), c.allow_large)?;
-    let zone = zone_spec(&sc);
+    let zone = zone_spec(&sc, c)?;
     let (pass, result) = record_pass(&sc, zone, format.clone(), coopnav_core::run_seed(c.seed, index))?;
     let summary = PassSummary { zone: pass.zone.metrics(), counts: RunCounts::of(&result, 0) };
     let dir = RunDir::create(&c.out, c.force)?;
-    manifest(&dir, "hbl simulate", c.seed, json!({ "scenario": sc, "run": index, "log_format": format }))?;
+    manifest(&dir, "hbl simulate", c.seed, c.with_zone(json!({ "scenario": sc, "run": index, "log_format": format })))?;
     let mut csv = String::from("t,x_rel,auv_e,auv_n,est_e,est_n,sd_e,sd_n,ship_e,ship_n,ship_est_e,ship_est_n,buoy_e,buoy_n,buoy_est_e,buoy_est_n,error\n");
     for r in &pass.rows {
         let o = |v: Option<[f64; 2]>, i: usize| v.map_or(String::new(), |p| p[i].to_string());
@@ -327,13 +357,13 @@ fn montecarlo(c: &Common, runs: usize) -> Result<()> {
         anyhow::bail!("--runs {runs}: a Monte Carlo needs at least 2 runs");
     }
     limits::check(work::hbl_runs(&sc, runs as f64, "--runs", false), c.allow_large)?;
-    let zone = ZoneSpec { profile_bin_m: PROFILE_BIN_M, ..zone_spec(&sc) };
+    let zone = ZoneSpec { profile_bin_m: PROFILE_BIN_M, ..zone_spec(&sc, c)? };
     let pb = bar(runs as u64);
     let r = zone_monte_carlo_with_progress(&sc, zone, runs, c.seed, &|n| pb.set_position(n))?;
     pb.finish_and_clear();
     let summary = r.summary(c.seed)?;
     let dir = RunDir::create(&c.out, c.force)?;
-    manifest(&dir, "hbl montecarlo", c.seed, json!({ "scenario": sc, "runs": runs }))?;
+    manifest(&dir, "hbl montecarlo", c.seed, c.with_zone(json!({ "scenario": sc, "runs": runs })))?;
     let mut csv = String::from("run,zone_error,zone_parallel,zone_perpendicular,approach_perpendicular,buoy_error,saturation_error,ranges_received,ranges_applied,healthy\n");
     for (i, (m, n)) in r.runs.iter().zip(&r.counts).enumerate() {
         let o = |v: Option<f64>| v.map_or(String::new(), |x| x.to_string());
@@ -384,12 +414,12 @@ fn grid_cmd(c: &Common, grid_path: Option<&Path>) -> Result<()> {
     sc.validate(Path::new(&scenario_name(c)))?;
     limits::check(work::hbl_grid(&sc, &spec), c.allow_large)?;
     let pb = bar(spec.cells().len() as u64);
-    let zone = ZoneSpec { stop_past_zone: true, ..zone_spec(&sc) };
+    let zone = ZoneSpec { stop_past_zone: true, ..zone_spec(&sc, c)? };
     let cell = grid::engine_cell(&sc, zone, spec.runs_per_cell, c.seed)?;
     let cells = grid::buoy_grid(&spec, &|n| pb.set_position(n), &cell)?;
     pb.finish_and_clear();
     let dir = RunDir::create(&c.out, c.force)?;
-    manifest(&dir, "hbl grid", c.seed, json!({ "scenario": sc, "grid": spec }))?;
+    manifest(&dir, "hbl grid", c.seed, c.with_zone(json!({ "scenario": sc, "grid": spec })))?;
     let mut buf = Vec::new();
     grid::write_csv(&mut buf, &cells)?;
     dir.write_bytes("grid.csv", buf)?;
@@ -407,9 +437,9 @@ fn tune_cmd(c: &Common, spec_path: &Path) -> Result<()> {
         .with_context(|| format!("in {}", spec_path.display()))?;
     spec.validate().with_context(|| format!("in {}", spec_path.display()))?;
     limits::check(work::hbl_tune(&sc, &spec), c.allow_large)?;
-    let r = tune(&sc, zone_spec(&sc), &spec)?;
+    let r = tune(&sc, zone_spec(&sc, c)?, &spec)?;
     let dir = RunDir::create(&c.out, c.force)?;
-    manifest(&dir, "hbl tune", spec.seed, json!({ "scenario": sc, "spec": spec }))?;
+    manifest(&dir, "hbl tune", spec.seed, c.with_zone(json!({ "scenario": sc, "spec": spec })))?;
     dir.write_json("summary.json", &r)?;
     let out = dir.finish()?;
     println!(
@@ -470,11 +500,11 @@ fn postprocess(
         None => None,
     };
     let result = post::postprocess_rows(rows, &cfg)?;
-    let warnings = result.summary.warnings();
-    if strict && !warnings.is_empty() {
-        anyhow::bail!("{} (--strict): {}", log.display(), warnings.join("; "));
+    let faults = result.summary.log_faults();
+    if strict && !faults.is_empty() {
+        anyhow::bail!("{} (--strict): {}", log.display(), faults.join("; "));
     }
-    for w in &warnings {
+    for w in result.summary.warnings() {
         eprintln!("warning: {}: {w}", log.display());
     }
     let dir = RunDir::create(out, force)?;

@@ -153,3 +153,44 @@ fn geodetic_log_needs_the_origin_to_postprocess() {
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     assert!(std::fs::read_to_string(post.join("summary.json")).unwrap().contains("mean_smoothed_error"));
 }
+
+/// The measurement zone's edges are options: by default Table 5's (the same bytes as giving them),
+/// a narrower zone scores fewer samples and is recorded in the manifest, and a zone whose edges
+/// are crossed is refused naming both options, writing nothing.
+#[test]
+fn the_zone_is_configurable_and_defaults_to_table_5() {
+    let tmp = tempfile::tempdir().unwrap();
+    let simulate = |name: &str, zone: &[&str]| {
+        let dir = tmp.path().join(name);
+        let mut args = vec!["hbl", "simulate", "--seed", "3", "--out", dir.to_str().unwrap()];
+        args.extend_from_slice(zone);
+        (coopnav(tmp.path(), &args), dir)
+    };
+    let read = |dir: &std::path::Path, f: &str| std::fs::read_to_string(dir.join(f)).unwrap();
+    let (out, default) = simulate("default", &[]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let (out, table5) = simulate("table5", &["--zone-min-m", "-30", "--zone-max-m", "75"]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    for f in ["summary.json", "trace.csv", "log.csv"] {
+        assert_eq!(read(&default, f), read(&table5, f), "{f}");
+    }
+    let (out, narrow) = simulate("narrow", &["--zone-min-m", "0", "--zone-max-m", "10"]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let samples = |dir: &std::path::Path| {
+        let v: serde_json::Value = serde_json::from_str(&read(dir, "summary.json")).unwrap();
+        v["zone_samples"].as_u64().unwrap()
+    };
+    // 105 m of zone against 10 m, passed at about 2.15 m/s of closing speed, 10 samples a second.
+    assert!(
+        samples(&narrow) > 0 && samples(&narrow) * 5 < samples(&default),
+        "{} vs {}",
+        samples(&narrow),
+        samples(&default)
+    );
+    let manifest: serde_json::Value = serde_json::from_str(&read(&narrow, "manifest.json")).unwrap();
+    assert_eq!(manifest["inputs"]["zone"]["zone_max_m"], 10.0);
+    let (out, crossed) = simulate("crossed", &["--zone-min-m", "20", "--zone-max-m", "10"]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success() && err.contains("--zone-min-m 20") && err.contains("--zone-max-m 10"), "{err}");
+    assert!(!crossed.exists());
+}

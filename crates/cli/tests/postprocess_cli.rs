@@ -173,3 +173,29 @@ fn bad_alog_entries_are_named() {
         coopnav(tmp.path(), &["hbl", "postprocess", "--log", log.to_str().unwrap(), "--out", dir.to_str().unwrap()]);
     assert!(String::from_utf8_lossy(&out.stderr).contains("both NAV_X and NAV_Y"));
 }
+
+/// An acoustic outlier the gate rejects is the filter working: `--strict` warns about it and still
+/// writes the run; the log's own faults stay refused (above).
+#[test]
+fn strict_accepts_a_log_whose_only_unused_range_is_a_gated_outlier() {
+    let tmp = tempfile::tempdir().unwrap();
+    let log = tmp.path().join("log.csv");
+    // The AUV sits at the origin heading north; the buoy 100 m east is fixed before each range.
+    // Ranges of 100 m, then one 40 m long (a multipath arrival), then 100 m again.
+    let mut text = String::from("t,kind,src,v1,v2,v3,v4\n0,init,,0,0,0,0\n");
+    for (k, range) in [100.0, 100.0, 140.0, 100.0].iter().enumerate() {
+        let t = 10.0 * (k + 1) as f64;
+        text += &format!("{},buoy_fix,,100,0,,\n{t},speed,,0,,,\n{t},heading,,0,,,\n", t - 1.0);
+        text += &format!("{t},range,13,{},,,\n", range / 1500.0);
+    }
+    std::fs::write(&log, text).unwrap();
+    let post = tmp.path().join("post");
+    let args = ["hbl", "postprocess", "--log", log.to_str().unwrap(), "--out", post.to_str().unwrap(), "--strict"];
+    let out = coopnav(tmp.path(), &args);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{err}");
+    assert!(err.contains("1 range(s) were rejected by the innovation gate (range_gate)"), "{err}");
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(post.join("summary.json")).unwrap()).unwrap();
+    assert_eq!((summary["ranges_gated"].as_u64(), summary["ranges_applied"].as_u64()), (Some(1), Some(3)));
+}

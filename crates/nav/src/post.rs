@@ -410,7 +410,7 @@ pub struct PostSummary {
     pub ranges_held_out: usize,
     /// Ranges with no fix of their transponder within `fixes.max_age_s` of the transmit time.
     pub ranges_without_fix: usize,
-    /// Ranges rejected by the innovation gate (`auv.range_gate`).
+    /// Ranges rejected by the innovation gate (`range_gate`).
     pub ranges_gated: usize,
     /// Ranges with no usable geometry (transponder overhead, non-finite numbers).
     pub ranges_unusable: usize,
@@ -444,25 +444,40 @@ pub struct PostSummary {
 }
 
 impl PostSummary {
-    /// One sentence per kind of row that was not used as logged (empty when every row was).
+    /// One sentence per kind of row that was not used as logged (empty when every row was): the
+    /// log's own faults, then the ranges the filter rejected.
     pub fn warnings(&self) -> Vec<String> {
-        let mut w = Vec::new();
-        let mut say = |n: usize, what: &str| {
-            if n > 0 {
-                w.push(format!("{n} {what}"));
-            }
-        };
-        say(self.rows_before_init, "row(s) timed before the first 'init' row were not processed");
-        say(self.extra_inits, "'init' row(s) after the first were ignored (the filter starts once)");
-        say(
-            self.ranges_without_fix,
-            "range(s) had no transponder fix within fixes.max_age_s of their transmit time and were not applied",
-        );
-        say(self.gaps, "silence(s) longer than max_gap_s between rows were dead-reckoned in one step (a time typo?)");
-        say(self.ranges_gated, "range(s) were rejected by the innovation gate (auv.range_gate)");
-        say(self.ranges_unusable, "range(s) had no usable geometry (transponder overhead) and were not applied");
+        let mut w = self.log_faults();
+        w.extend(self.rejections());
         w
     }
+
+    /// One sentence per kind of row the log itself left unusable as logged (what
+    /// `hbl postprocess --strict` refuses).
+    pub fn log_faults(&self) -> Vec<String> {
+        sentences(&[
+            (self.rows_before_init, "row(s) timed before the first 'init' row were not processed"),
+            (self.extra_inits, "'init' row(s) after the first were ignored (the filter starts once)"),
+            (
+                self.ranges_without_fix,
+                "range(s) had no transponder fix within fixes.max_age_s of their transmit time and were not applied",
+            ),
+            (self.gaps, "silence(s) longer than max_gap_s between rows were dead-reckoned in one step (a time typo?)"),
+            (self.ranges_unusable, "range(s) had no usable geometry (transponder overhead) and were not applied"),
+        ])
+    }
+
+    /// One sentence per kind of range the filter set aside on the evidence of the data: a gated
+    /// range is an acoustic outlier the gate caught (Gill's field ranges hold about 5 % of them,
+    /// gill digest §5.4), not a fault of the log.
+    pub fn rejections(&self) -> Vec<String> {
+        sentences(&[(self.ranges_gated, "range(s) were rejected by the innovation gate (range_gate)")])
+    }
+}
+
+/// "n what" for every count above zero.
+fn sentences(counts: &[(usize, &str)]) -> Vec<String> {
+    counts.iter().filter(|(n, _)| *n > 0).map(|(n, what)| format!("{n} {what}")).collect()
 }
 
 #[derive(Debug, Clone, PartialEq, Serialize)]

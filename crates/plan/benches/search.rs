@@ -13,15 +13,16 @@ fn search(c: &mut Criterion) {
     for w in Workload::standard() {
         let name = w.name();
         g.bench_function(format!("bnb_1thread/{name}"), |b| {
-            b.iter(|| w.decide(Algorithm::BranchAndBound, false).unwrap())
+            b.iter(|| w.decide(Workload::search(Algorithm::BranchAndBound, false)).unwrap())
         });
         if w.l >= 7 {
             g.bench_function(format!("bnb_parallel/{name}"), |b| {
-                b.iter(|| w.decide(Algorithm::BranchAndBound, true).unwrap())
+                b.iter(|| w.decide(Workload::search(Algorithm::BranchAndBound, true)).unwrap())
             });
         }
         if w.leaves() <= 1_000_000 {
-            g.bench_function(format!("brute/{name}"), |b| b.iter(|| w.decide(Algorithm::BruteForce, false).unwrap()));
+            let brute = Workload::search(Algorithm::BruteForce, false);
+            g.bench_function(format!("brute/{name}"), |b| b.iter(|| w.decide(brute).unwrap()));
         }
     }
     g.finish();

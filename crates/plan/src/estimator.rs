@@ -14,8 +14,11 @@
 //!    or an AUV CNA's dead-reckoning σ grown since its last fix: `PlanInput::cna_variance`). The
 //!    range is measured from the true CNA and predicted from the broadcast one, so the innovation
 //!    carries −h_xyᵀe more: the effective range variance is R(r) + σ_c²·|h_xy|². (Taken as fresh
-//!    per ping; the CNA's error is a random walk, so this under-states its correlation.) It is
-//!    ≥ R(r), so the bounds below, which use R(r_min) alone, stay valid.
+//!    per ping; the CNA's error is a random walk, so this under-states its correlation.) The
+//!    ping's information along its direction û = h/|h| is then |h|²/(R(r) + σ_c²·|h|²), which
+//!    grows with |h|² ≤ 1: at most 1/(R(r) + σ_c²). The bounds below therefore take that
+//!    (`EkfCost::ping_floor`) with |h| = 1; with 1/R(r_min) alone they stayed valid but cut far
+//!    fewer nodes (N = 5, A = 7, L = 7 at σ_c² = 1 m²: 507k nodes against 63k).
 //! 3. The packet arrives with probability p_s(r) (the acoustic link's model, passed in as a
 //!    [`LinkModel`]); the expected posterior is E = (1 − p_s)·P̃ + p_s·P⁺
 //!    = P̃ − p_s·P̃hhᵀP̃ / (hᵀP̃h + R).
@@ -62,8 +65,13 @@
 //!    adds ḡ at the shortest leaf range the CNA can reach (ḡ grows with d). p_u = 0 is none.
 //!
 //! Lower bound for branch-and-bound (the levels below a node; derivation in `EkfCost::bound_rest`):
-//! by operator convexity of the inverse, E ⪰ (P̃⁻¹ + p_s·hhᵀ/R)⁻¹ ⪰ (P̃⁻¹ + hhᵀ/R_min)⁻¹, so the
-//! information Y = E⁻¹ is bounded above by a diagonal matrix in the frame of the last ping's
+//! E = (1 − p_s)·P̃ + p_s·P⁺ ⪰ (1 − p̄)·P̃ + p̄·G with P⁺ ⪰ G = (P̃⁻¹ + ι·ûûᵀ)⁻¹, where
+//! ι = 1/(R(r_min) + σ_c²) bounds the information of a ping that arrives and p̄ = p̄(r_min) its
+//! arrival (p̄(r) = the link's best success at ranges ≥ r, [`LinkTable::best_beyond`]; E falls
+//! with p_s because P⁺ ⪯ P̃). A lost ping keeps the prior, so a lossy link's (1 − p̄)·P̃ is what
+//! keeps the bound close to the cost (N = 3, A = 5, L = 5, link plateau 0.8: nearly the whole
+//! tree was searched with p̄ = 1). The
+//! information Y = G⁻¹ is bounded above by a diagonal matrix in the frame of the last ping's
 //! line of sight, propagated level by level; each level's ping direction turns from the last by
 //! at most asin(reach / distance) (AUV motion plus CNA step against how close the CNA can be).
 //! Invented parameters (R's defaults) are marked; digest: hudson §2.2 (the model it replaces),
@@ -200,6 +208,8 @@ impl LinkModel for () {
 #[derive(Debug, Clone, PartialEq)]
 pub struct LinkTable {
     p: Arc<[f64]>,
+    /// `best[i]` = max of `p[i..]`: the bounds' p̄ ([`LinkTable::best_beyond`]).
+    best: Arc<[f64]>,
 }
 
 impl LinkTable {
@@ -219,12 +229,28 @@ impl LinkTable {
             }
             p.push(s);
         }
-        Ok(LinkTable { p: p.into() })
+        Ok(Self::of(p))
+    }
+
+    fn of(p: Vec<f64>) -> Self {
+        let mut best = p.clone();
+        for i in (0..best.len().saturating_sub(1)).rev() {
+            best[i] = best[i].max(best[i + 1]);
+        }
+        LinkTable { p: p.into(), best: best.into() }
     }
 
     /// A perfect link.
     pub fn perfect() -> Self {
-        LinkTable { p: vec![1.0, 1.0].into() }
+        Self::of(vec![1.0, 1.0])
+    }
+
+    /// p̄(r): an upper bound on [`LinkTable::success`] at every range ≥ `r` (the largest sample
+    /// from the one at or below `r` on; the interpolation never exceeds its two samples).
+    #[inline(always)]
+    pub fn best_beyond(&self, r: f64) -> f64 {
+        let i = ((r / Self::STEP_M) as usize).min(self.best.len() - 1);
+        self.best[i]
     }
 
     #[inline(always)]
@@ -344,6 +370,15 @@ impl EkfCost {
         self.q_tau[k] * (m - m * m / (2.0 * h))
     }
 
+    /// (ι, p̄) of the bounds at slant ranges ≥ `range_m`: the most information a ping that arrives
+    /// can carry along its direction there, 1/(R(range) + σ_c²) in 1/m² (step 2: |h|²/(R + σ_c²·|h|²)
+    /// is largest at |h| = 1, and R grows with range), and the most likely it arrives (step 3).
+    #[inline(always)]
+    fn ping_floor(&self, range_m: f64) -> Ping {
+        let iota = 1.0 / (self.spec.range_noise.variance(range_m) + self.cna_variance);
+        Ping { iota, success: self.link.best_beyond(range_m) }
+    }
+
     /// β(r)² of step 4 for a ping from `cna` to the AUV at `auv`, m².
     #[inline(always)]
     fn bias_variance(&self, cna: [f64; 3], auv: [f64; 3]) -> f64 {
@@ -431,7 +466,8 @@ impl CostModel for EkfCost {
     ///   (the node's own distance for the first level below);
     /// - [`EigenFloor`]: whatever the ping directions.
     ///
-    /// R ≥ R(max(0, |a − c| − spread)) at each level (R grows with range), p_s ≤ 1 and |h| ≤ 1;
+    /// Each level's ping is bounded by `ping_floor` at the shortest range max(0, |a − c| − spread)
+    /// the CNA can be at (R grows with range, p̄ only falls);
     /// the bias term of step 4 at that shortest range is added to both (`term_bound`), and at
     /// the leaf (the last slot of `out`) step 7's growth ḡ at that range, scaled by 1/(1 + H)
     /// because the tree weights the leaf's bound by 1 + H (`Tree::rest_bound`).
@@ -458,11 +494,10 @@ impl CostModel for EkfCost {
             let turn_max = if before > b.turn { (b.turn / before) * (b.turn / before) } else { 1.0 };
             let los = [b.auv[0] - cna[0], b.auv[1] - cna[1], b.auv[2] - cna[2]];
             let nearest = (norm(los) - b.spread).max(0.0);
-            let (r_min, half_bias2) =
-                (self.spec.range_noise.variance(nearest), 0.5 * self.bias_variance_at(nearest * nearest));
+            let (ping, half_bias2) = (self.ping_floor(nearest), 0.5 * self.bias_variance_at(nearest * nearest));
             before = (los[0] * los[0] + los[1] * los[1]).sqrt() - b.spread;
-            let (trace, det) = turn.step(q, turn_max, r_min);
-            let (eigen_trace, eigen_det) = eigen.step(q, r_min);
+            let (trace, det) = turn.step(q, turn_max, ping);
+            let (eigen_trace, eigen_det) = eigen.step(q, ping);
             let level_bound = |h: f64| self.term_bound(trace, det, h).max(self.term_bound(eigen_trace, eigen_det, h));
             let mut term = level_bound(half_bias2);
             let growth = if j == leaf { self.reach_growth(k, nearest) } else { 0.0 };
@@ -475,16 +510,16 @@ impl CostModel for EkfCost {
         }
     }
 
-    /// The eigenvalue chain ([`EigenFloor`]) from each root covariance, with R ≥ R(0) at every
-    /// level.
+    /// The eigenvalue chain ([`EigenFloor`]) from each root covariance, with ι at range 0 (the
+    /// most information a ping can carry anywhere) at every level.
     fn level_floors(&self, root: &[[f64; 3]], depth: usize) -> Vec<f64> {
-        let r_min = self.spec.range_noise.variance(0.0);
+        let ping = self.ping_floor(0.0);
         let mut chains: Vec<EigenFloor> = root.iter().map(EigenFloor::of).collect();
         (0..depth)
             .map(|_| {
                 let mut f = 0.0;
                 for (k, chain) in chains.iter_mut().enumerate() {
-                    let (trace, det) = chain.step(self.q_tau[k], r_min);
+                    let (trace, det) = chain.step(self.q_tau[k], ping);
                     f = self.combine(f, self.term(trace, det));
                 }
                 f
@@ -516,14 +551,23 @@ fn diagonal_floor(p: &[f64; 3], u: [f64; 2]) -> (f64, f64) {
     (1.0 / y_uu_max, 1.0 / ((1.0 + TANGENTIAL_SLACK) * y_tt))
 }
 
+/// What bounds one level's ping (`EkfCost::ping_floor`): ι ≥ the information along its direction
+/// if it arrives, 1/m², and p̄ ≥ the probability that it arrives.
+#[derive(Debug, Clone, Copy)]
+struct Ping {
+    iota: f64,
+    success: f64,
+}
+
 /// Lower bounds m₁ (larger) and m₂ (smaller) on the eigenvalues λ₁ ≥ λ₂ of an AUV's covariance,
 /// whatever the ping directions. One level: prediction adds qτ to both; then E = P̃ − (rank-one
-/// ⪰ 0) with |h| ≤ 1, p_s ≤ 1, R ≥ R_min gives
-/// - tr E ≥ tr P̃ − λ₁²/(λ₁ + R) = λ₂ + λ₁R/(λ₁ + R) (the reduction hᵀP̃²h/(hᵀP̃h + R) is largest
-///   along the major axis), increasing in λ₁ and λ₂;
-/// - λ₁(E) ≥ λ₂(P̃) (interlacing) and λ₁(E) ≥ tr E / 2;
-/// - λ₂(E) ≥ 1/(1/λ₂ + 1/R) (E ⪰ (P̃⁻¹ + hhᵀ/R)⁻¹ by operator convexity, whose information is at
-///   most 1/λ₂ + 1/R in any direction);
+/// ⪰ 0) gives, with R = 1/ι and p̄ of [`Ping`] (the reduction p_s·hᵀP̃²h/(hᵀP̃h + R(r) + σ_c²|h|²)
+/// equals p_s·ûᵀP̃²û/(ûᵀP̃û + R(r)/|h|² + σ_c²), whose last two terms are ≥ R):
+/// - tr E ≥ tr P̃ − p̄·λ₁²/(λ₁ + R) = λ₂ + λ₁R/(λ₁ + R) + (1 − p̄)·λ₁²/(λ₁ + R) (the reduction
+///   ûᵀP̃²û/(ûᵀP̃û + R) is largest along the major axis), increasing in λ₁ and λ₂;
+/// - λ₁(E) ≥ λ₂(P̃) (interlacing), λ₁(E) ≥ tr E / 2 and λ₁(E) ≥ (1 − p̄)·λ₁ (E ⪰ (1 − p̄)·P̃);
+/// - λ₂(E) ≥ (1 − p̄)·λ₂ + p̄/(1/λ₂ + 1/R) (E ⪰ (1 − p̄)·P̃ + p̄·(P̃⁻¹ + I/R)⁻¹, a function of P̃
+///   increasing in each eigenvalue);
 /// - det E = λ₁(E)·λ₂(E) ≥ m₁'·m₂'.
 ///
 /// It is tight for the next level (one rank-one update), which is where most nodes are cut.
@@ -541,11 +585,14 @@ impl EigenFloor {
 
     /// Advances one level; returns the bounds on (tr E, det E).
     #[inline(always)]
-    fn step(&mut self, q_tau: f64, r_min: f64) -> (f64, f64) {
+    fn step(&mut self, q_tau: f64, ping: Ping) -> (f64, f64) {
         let (l1, l2) = (self.m1 + q_tau, self.m2 + q_tau);
-        let trace = l2 + l1 * r_min / (l1 + r_min);
-        self.m2 = l2 * r_min / (l2 + r_min);
-        self.m1 = l2.max(0.5 * trace);
+        let (iota, lost) = (ping.iota, 1.0 - ping.success);
+        // λR/(λ + R) with 1/R = ι, and what a lost ping keeps of the reduction λ − λR/(λ + R).
+        let (kept1, kept2) = (l1 / (1.0 + l1 * iota), l2 / (1.0 + l2 * iota));
+        let trace = l2 + kept1 + lost * (l1 - kept1);
+        self.m2 = kept2 + lost * (l2 - kept2);
+        self.m1 = l2.max(0.5 * trace).max(lost * l1);
         (trace, self.m1 * self.m2)
     }
 }
@@ -555,8 +602,8 @@ impl EigenFloor {
 /// sight can turn. One level, with D = diag(radial + qτ, tangential + qτ) = diag(1/α, 1/β):
 /// - the ping's direction turns from the last by Δ with sin²Δ ≤ T (the line of sight moves by at
 ///   most the reach r while at least D_h long: T = (r/D_h)², or 1);
-/// - in the frame (h, n) of the new ping, E ⪰ Y⁻¹ with Y = D⁻¹ rotated by Δ plus diag(ι, 0),
-///   ι = 1/R_min (p_s ≤ 1, |h| ≤ 1, R ≥ R_min); with t = sin²Δ: Y_hh = α − t(α − β) + ι,
+/// - E ⪰ (1 − p̄)·D + p̄·G (module header) and, in the frame (h, n) of the new ping, G ⪰ Y⁻¹ with
+///   Y = D⁻¹ rotated by Δ plus diag(ι, 0) ([`Ping`]); with t = sin²Δ: Y_hh = α − t(α − β) + ι,
 ///   Y_nn = β + t(α − β), Y_hn² = t(1 − t)(α − β)², so tr Y = α + β + ι and
 ///   det Y = αβ + ι·Y_nn(t);
 /// - tr E ≥ tr Y / det Y and det E ≥ 1 / det Y are smallest where Y_nn is largest: t = T when
@@ -564,7 +611,11 @@ impl EigenFloor {
 /// - Y ⪯ diag(Y_hh + Y_hn²/(ρ·Y_nn), (1 + ρ)·Y_nn) (ρ = [`TANGENTIAL_SLACK`], as in
 ///   `diagonal_floor`), and over t ≤ T: Y_hh ≤ α + ι + T·max(β − α, 0), Y_nn ≤ β + T·max(α − β, 0)
 ///   and Y_hn²/Y_nn = t(1 − t)(α − β)²/(β + t(α − β)) ≤ T(α − β)²/(β + T(α − β)) (increasing in
-///   t), which gives the next level's (radial, tangential) in the new ping's frame.
+///   t), which gives G's (radial, tangential) in the new ping's frame;
+/// - the lost share: (1 − p̄)·D ⪰ (1 − p̄)·min(1/α, 1/β)·I in any frame, added to p̄ times G's
+///   diagonal for the next level; tr E ≥ (1 − p̄)·tr D + p̄·tr G and, by Minkowski's determinant
+///   inequality (√det is superadditive on 2×2 semi-definite matrices),
+///   det E ≥ ((1 − p̄)·√det D + p̄·√det G)².
 ///
 /// Near AUVs gain most: their line of sight may leave any cone within a few levels, but it still
 /// turns at most asin(r/D_h) per level, so the tangential variance keeps growing.
@@ -577,14 +628,15 @@ struct TurnFloor {
 impl TurnFloor {
     /// Advances one level with sin²Δ ≤ `turn_max`; returns the bounds on (tr E, det E).
     #[inline(always)]
-    fn step(&mut self, q_tau: f64, turn_max: f64, r_min: f64) -> (f64, f64) {
+    fn step(&mut self, q_tau: f64, turn_max: f64, ping: Ping) -> (f64, f64) {
         let (a, b) = (self.radial + q_tau, self.tangential + q_tau);
+        let (iota, lost) = (ping.iota, 1.0 - ping.success);
         if !(a > 0.0 && b > 0.0) {
             // A singular floor: nothing is known beyond E ⪰ 0.
             *self = TurnFloor { radial: 0.0, tangential: 0.0 };
             return (0.0, 0.0);
         }
-        let (alpha, beta, iota) = (1.0 / a, 1.0 / b, 1.0 / r_min);
+        let (alpha, beta) = (1.0 / a, 1.0 / b);
         let excess = alpha - beta;
         // Y_nn at the largest turn (≥ min(α, β) > 0), and its largest value over the turns.
         let y_nn_turned = beta + turn_max * excess;
@@ -598,7 +650,16 @@ impl TurnFloor {
         self.radial = TANGENTIAL_SLACK * y_nn_turned * tangential_den * inv;
         self.tangential = radial_den * inv;
         let inv_det = 1.0 / (alpha * beta + iota * y_nn_max);
-        ((alpha + beta + iota) * inv_det, inv_det)
+        let (trace, det) = ((alpha + beta + iota) * inv_det, inv_det);
+        if lost <= 0.0 {
+            return (trace, det);
+        }
+        let kept = lost * a.min(b);
+        let p = ping.success;
+        self.radial = p * self.radial + kept;
+        self.tangential = p * self.tangential + kept;
+        let root_det = lost * (a * b).sqrt() + p * det.sqrt();
+        (lost * (a + b) + p * trace, root_det * root_det)
     }
 }
 
@@ -621,6 +682,21 @@ mod tests {
     impl LinkModel for Linear {
         fn success(&self, r: f64) -> f64 {
             (1.0 - r / self.0).max(0.0)
+        }
+    }
+
+    /// A lossy link below a plateau that falls with range and, with a tail, rises again (so p̄ is
+    /// not the success itself).
+    struct Dipping {
+        plateau: f64,
+        mid: f64,
+        tail: f64,
+    }
+
+    impl LinkModel for Dipping {
+        fn success(&self, r: f64) -> f64 {
+            let fall = 1.0 / (1.0 + (r / self.mid).powi(4));
+            self.plateau * ((1.0 - self.tail) * fall + self.tail * r / (r + self.mid))
         }
     }
 
@@ -797,6 +873,25 @@ mod tests {
     }
 
     #[test]
+    fn the_best_success_beyond_a_range_bounds_the_link_there() {
+        let d = Dipping { plateau: 0.8, mid: 500.0, tail: 0.5 };
+        let t = LinkTable::sample(&d).unwrap();
+        // The largest interpolated success from `r` on (samples every 5 m: a 2.5 m sweep hits them).
+        let sweep = |r: f64| (0..8000).map(|i| t.success(r + i as f64 * 2.5)).fold(0.0, f64::max);
+        for r in [0.0, 3.0, 420.0, 777.7, 1500.0, 9000.0, 19_999.0] {
+            let (bound, beyond) = (t.best_beyond(r), sweep(r));
+            assert!(bound >= beyond, "{r} m: {bound} < {beyond}");
+            // No looser than the sample at or below r.
+            let below = r - r % LinkTable::STEP_M;
+            assert!(bound <= sweep(below) + 1e-12, "{r} m: {bound} above the samples from {below} m");
+        }
+        // Falling, then the tail rising to its last value, which holds beyond the table.
+        assert!(t.best_beyond(0.0) > t.best_beyond(1500.0) && t.best_beyond(1500.0) > d.success(1500.0));
+        assert_eq!(t.best_beyond(1e9), t.success(1e9));
+        assert_eq!(LinkTable::perfect().best_beyond(123.0), 1.0);
+    }
+
+    #[test]
     fn the_link_table_interpolates_and_holds_its_last_value() {
         let t = LinkTable::sample(&Linear(40_000.0)).unwrap();
         assert!((t.success(1234.5) - (1.0 - 1234.5 / 40_000.0)).abs() < 1e-12);
@@ -824,10 +919,14 @@ mod tests {
             reach in prop_oneof![Just(None), (0.0f64..8.0, 0.0f64..900.0).prop_map(Some)], auv0 in (-800.0f64..800.0, -800.0f64..800.0, 0.0f64..150.0),
             vel in (-3.0f64..3.0, -3.0f64..3.0), step in 1.0f64..60.0,
             moves in prop::collection::vec((-3.2f64..3.2, 0.0f64..1.0, -1.0f64..1.0), 1..8), circle in any::<bool>(),
+            link in prop_oneof![Just(None), (0.0f64..1.0, 20.0f64..1500.0, 0.0f64..1.0).prop_map(Some)],
         ) {
             let aggregate = [Aggregate::TraceSum, Aggregate::WorstAuv, Aggregate::LogDet, Aggregate::SigmaSum][agg];
             let mut m = biased(aggregate, vec![q], bias);
             m.cna_variance = cna_variance;
+            if let Some((plateau, mid, tail)) = link {
+                m.link = LinkTable::sample(&Dipping { plateau, mid, tail }).unwrap();
+            }
             if let Some((h, useful_range_m)) = reach {
                 m.spec.terminal_levels = h;
                 m.reach = Reach { useful_range_m, step_m: step };

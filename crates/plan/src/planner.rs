@@ -67,9 +67,15 @@ impl Default for Deadline {
 pub struct SearchConfig {
     #[serde(default)]
     pub algorithm: Algorithm,
-    /// Use rayon over the top two levels.
+    /// Use rayon over the top levels of the tree (see `parallel_after_nodes`).
     #[serde(default = "yes")]
     pub parallel: bool,
+    /// The parallel mode searches on the calling thread first and shares the rest of the tree
+    /// among rayon's threads only once it has expanded this many nodes; subtrees it finished are
+    /// not searched again. Small trees thus never pay for the threads (0 = share at once).
+    /// Invented (issue 10), measured with `coopnav bench planner`.
+    #[serde(default = "default_parallel_after_nodes")]
+    pub parallel_after_nodes: u64,
     #[serde(default)]
     pub deadline: Deadline,
     /// Relative tolerance of the tie-break: every level-0 option whose minimum path cost is within
@@ -87,11 +93,16 @@ fn default_tie_tolerance() -> f64 {
     1e-9
 }
 
+fn default_parallel_after_nodes() -> u64 {
+    2_000
+}
+
 impl Default for SearchConfig {
     fn default() -> Self {
         SearchConfig {
             algorithm: Algorithm::default(),
             parallel: true,
+            parallel_after_nodes: default_parallel_after_nodes(),
             deadline: Deadline::default(),
             tie_tolerance: default_tie_tolerance(),
         }
@@ -387,7 +398,7 @@ impl LookAheadPlanner {
         let full = build(requested)?;
         let search = |tree: &Tree<M>, shared: &Shared| match self.cfg.search.algorithm {
             Algorithm::BruteForce => brute::brute_force(tree, shared),
-            Algorithm::BranchAndBound => branch_and_bound(tree, self.cfg.search.parallel, shared),
+            Algorithm::BranchAndBound => branch_and_bound(tree, &self.cfg.search, shared),
         };
         let Some(budget) = self.cfg.budget() else {
             let out = search(&full, &Shared::new(None)).expect("no deadline, no abort");

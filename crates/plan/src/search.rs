@@ -10,14 +10,16 @@
 //!   result does not depend on thread timing;
 //! - a node is abandoned part-way through its AUVs once the partial sum is cut (`tree::Cut`).
 //!
-//! The parallel mode splits the top two or three levels into tasks ordered by their lower bound,
-//! dives greedily into the most promising one on the calling thread for a first best path, then
-//! lets every worker pull the tasks in that order, sharing the best path found (an atomic) and
-//! skipping tasks it already excludes. Only the node count varies with the thread count.
+//! The parallel mode starts as the one-thread search on the calling thread; a tree that needs
+//! more than `SearchConfig::parallel_after_nodes` nodes is then split: the top two or three levels
+//! become tasks ordered by their lower bound, and every worker pulls them in that order, sharing
+//! the best path found (an atomic, seeded by the start) and skipping the tasks the start finished
+//! or the best path excludes. Small trees never wake the threads (rayon's overhead made them
+//! slower than one thread). Only the node count varies with the thread count and the hand-over.
 
 use crate::cost_model::CostModel;
 use crate::tree::{choose, Cut, NodeRef, Tree};
-use crate::SearchOutcome;
+use crate::{SearchConfig, SearchOutcome};
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicBool, AtomicU64, AtomicUsize, Ordering};
 use std::time::Instant;
@@ -86,8 +88,21 @@ struct Ctx<'s> {
     nodes: u64,
     /// Searches entered since the clock was last read (starts at 255: each worker reads it first).
     since_clock: u32,
-    /// Follow only the cheapest child at each level (one path down: a first best path).
-    dive: bool,
+    /// The parallel mode's one-thread start (`None`: search to the end).
+    start: Option<Start>,
+}
+
+/// The one-thread start of the parallel mode (`SearchConfig::parallel_after_nodes`).
+struct Start {
+    /// Nodes it may expand before the rest of the tree is shared.
+    budget: u64,
+    /// The levels the tasks span (`split_levels`), and the path to the node being searched there.
+    split: usize,
+    path: [usize; MAX_SPLIT],
+    /// The task paths whose subtrees it searched to the end.
+    finished: Vec<[usize; MAX_SPLIT]>,
+    /// The budget ran out: the search stopped part-way.
+    spent: bool,
 }
 
 impl<'s> Ctx<'s> {
@@ -100,7 +115,7 @@ impl<'s> Ctx<'s> {
             root: usize::MAX,
             nodes: 0,
             since_clock: 255,
-            dive: false,
+            start: None,
         }
     }
     /// Anything whose lower bound is above this is cut.
@@ -115,14 +130,44 @@ impl<'s> Ctx<'s> {
             self.shared.offer(v);
         }
     }
-    /// Reads the clock every 256 subtree entries; true when the search must stop.
+    /// Reads the clock every 256 subtree entries; true when the search must stop (the deadline
+    /// passed or the start's budget is spent).
     fn out_of_time(&mut self) -> bool {
+        if let Some(start) = &mut self.start {
+            if self.nodes >= start.budget {
+                start.spent = true;
+                return true;
+            }
+        }
         self.since_clock += 1;
         if self.since_clock >= 256 {
             self.since_clock = 0;
             return self.shared.check_clock();
         }
         self.shared.abort.load(Ordering::Relaxed)
+    }
+    /// True once the search has stopped part-way (deadline or spent budget).
+    fn stopped(&self) -> bool {
+        self.start.as_ref().is_some_and(|s| s.spent) || self.shared.abort.load(Ordering::Relaxed)
+    }
+    /// Option `o` is searched at `level`.
+    fn enter(&mut self, level: usize, o: usize) {
+        if level == 0 {
+            self.root = o;
+        }
+        if let Some(start) = &mut self.start {
+            if level < start.split {
+                start.path[level] = o;
+            }
+        }
+    }
+    /// The subtree entered at `level` was searched to the end: the start records a task's.
+    fn finished(&mut self, level: usize) {
+        if let Some(start) = &mut self.start {
+            if level + 1 == start.split {
+                start.finished.push(start.path);
+            }
+        }
     }
     /// Joins another worker's findings into this one's.
     fn merge(&mut self, other: Ctx) {
@@ -199,29 +244,37 @@ fn dfs<M: CostModel>(
     let n = tree.n;
     for i in 0..lv.order.len() {
         let o = lv.order[i];
-        if level == 0 {
-            ctx.root = o;
-        }
+        ctx.enter(level, o);
         let v = acc + lv.cost[o];
         if v + tree.rest_floor[level] > ctx.bound() {
             break; // children are sorted: every later one is cut too
         }
         let child = NodeRef { pose: lv.pose[o], state: &lv.state[o * n..(o + 1) * n] };
         visit(tree, level, &child, v, deeper, ctx);
-        if ctx.dive {
-            break;
+        if ctx.stopped() {
+            return;
         }
+        ctx.finished(level);
     }
 }
 
-/// Runs the search at the tree's full depth. `None` when the deadline stopped it.
-pub(crate) fn branch_and_bound<M: CostModel>(tree: &Tree<M>, parallel: bool, shared: &Shared) -> Option<SearchOutcome> {
-    let out = if parallel && tree.depth >= 2 {
-        parallel_search(tree, shared)
-    } else {
-        let mut ctx = Ctx::new(shared, tree);
-        dfs(tree, 0, &tree.root(), 0.0, &mut levels(tree), &mut ctx);
-        ctx.outcome(tree.tie_tolerance)
+/// Runs the search at the tree's full depth (`search.parallel`: the parallel mode, its start on
+/// this thread). `None` when the deadline stopped it.
+pub(crate) fn branch_and_bound<M: CostModel>(
+    tree: &Tree<M>,
+    search: &SearchConfig,
+    shared: &Shared,
+) -> Option<SearchOutcome> {
+    let mut ctx = Ctx::new(shared, tree);
+    if search.parallel && tree.depth >= 2 {
+        let split = split_levels(tree.depth).min(tree.depth);
+        let budget = search.parallel_after_nodes;
+        ctx.start = Some(Start { budget, split, path: [0; MAX_SPLIT], finished: Vec::new(), spent: false });
+    }
+    dfs(tree, 0, &tree.root(), 0.0, &mut levels(tree), &mut ctx);
+    let out = match ctx.start.take() {
+        Some(start) if start.spent && !shared.abort.load(Ordering::Relaxed) => parallel_search(tree, ctx, start),
+        _ => ctx.outcome(tree.tie_tolerance),
     };
     (!shared.abort.load(Ordering::Relaxed)).then_some(out)
 }
@@ -324,14 +377,16 @@ fn search_task<M: CostModel>(
     visit(tree, split - 1, &node, task.cost, deeper, ctx);
 }
 
-/// The tasks of the top levels ordered by bound; a greedy dive into the first seeds the shared
-/// best path, then one worker per rayon thread pulls the tasks in order, skipping those the
-/// best path already excludes; the per-option minima are merged.
-fn parallel_search<M: CostModel>(tree: &Tree<M>, shared: &Shared) -> SearchOutcome {
-    let split = split_levels(tree.depth).min(tree.depth);
+/// The rest of the tree after the one-thread start `first` (its `start` spent): the tasks of the
+/// top levels ordered by bound, one worker per rayon thread pulling them in order, skipping those
+/// the start finished (their minima are in `first`) and those the best path already excludes;
+/// the per-option minima are merged. A subtree the start left part-way is searched again whole.
+fn parallel_search<M: CostModel>(tree: &Tree<M>, mut first: Ctx, start: Start) -> SearchOutcome {
+    let (shared, split) = (first.shared, start.split);
     let tasks = tasks(tree, split);
+    let mut finished = start.finished;
+    finished.sort_unstable();
     let worker = || (Ctx::new(shared, tree), vec![tree.root_state[0]; tree.n * split], levels(tree));
-    let (mut first, mut prefix, mut lv) = worker();
     // The enumeration expanded every node of the top `split` levels.
     let mut width = 1u64;
     first.nodes += (0..split)
@@ -340,9 +395,6 @@ fn parallel_search<M: CostModel>(tree: &Tree<M>, shared: &Shared) -> SearchOutco
             width
         })
         .sum::<u64>();
-    first.dive = true;
-    search_task(tree, &tasks[0], split, &mut prefix, &mut lv[split..], &mut first);
-    first.dive = false;
     let next = AtomicUsize::new(0);
     let threads = rayon::current_num_threads().max(1);
     let results: Vec<Ctx> = (0..threads)
@@ -353,6 +405,9 @@ fn parallel_search<M: CostModel>(tree: &Tree<M>, shared: &Shared) -> SearchOutco
                 let i = next.fetch_add(1, Ordering::Relaxed);
                 if i >= tasks.len() || shared.abort.load(Ordering::Relaxed) {
                     break;
+                }
+                if finished.binary_search(&tasks[i].path).is_ok() {
+                    continue;
                 }
                 search_task(tree, &tasks[i], split, &mut prefix, &mut lv[split..], &mut ctx);
             }

@@ -17,18 +17,19 @@ struct Instance {
     eps: Vec<f64>,
     /// Filter covariances for the estimator-aware cost.
     estimates: Vec<AuvEstimate>,
-    /// Range (m) where the test link's success probability falls to one half.
-    link_mid: f64,
+    /// The test link: range (m) where its success probability falls to half its plateau, and
+    /// the plateau.
+    link: (f64, f64),
     /// The CNA's own horizontal variance per axis, m².
     cna_variance: f64,
 }
 
-/// A link whose success falls smoothly with range: 1 / (1 + (r / mid)^4).
-struct FallingLink(f64);
+/// A link whose success falls smoothly with range from a plateau: plateau / (1 + (r / mid)^4).
+struct FallingLink(f64, f64);
 
 impl LinkModel for FallingLink {
     fn success(&self, r: f64) -> f64 {
-        1.0 / (1.0 + (r / self.0).powi(4))
+        self.1 / (1.0 + (r / self.0).powi(4))
     }
 }
 
@@ -41,7 +42,8 @@ impl Instance {
     }
     fn decide(&self, search: SearchConfig) -> Decision {
         let mut p =
-            LookAheadPlanner::with_link(PlannerConfig { search, ..self.cfg }, &FallingLink(self.link_mid)).unwrap();
+            LookAheadPlanner::with_link(PlannerConfig { search, ..self.cfg }, &FallingLink(self.link.0, self.link.1))
+                .unwrap();
         let (e, f) = (self.errors(), self.forecast());
         p.decide(&PlanInput {
             t: 0.0,
@@ -55,8 +57,10 @@ impl Instance {
     }
 }
 
+/// No deadline; the parallel mode shares the tree at once (no one-thread start), so the tests'
+/// small trees still run the parallel search.
 fn exact(algorithm: Algorithm, parallel: bool) -> SearchConfig {
-    SearchConfig { algorithm, parallel, deadline: Deadline::None, ..SearchConfig::default() }
+    SearchConfig { algorithm, parallel, parallel_after_nodes: 0, deadline: Deadline::None, ..SearchConfig::default() }
 }
 
 fn asc(a: usize, l: usize, case: PenaltyCase) -> PlannerConfig {
@@ -85,7 +89,7 @@ prop_compose! {
                   covs in prop::collection::vec((0.1f64..30.0, 0.1f64..30.0, -0.95f64..0.95, 0.0f64..0.2), 5),
                   estimator in any::<bool>(), aggregate in 0usize..4, sigma_m in 0.05f64..3.0, per_km_m in 0.0f64..5.0,
                   bias_per_km_m in prop_oneof![Just(0.0), 0.0f64..10.0], terminal_levels in prop_oneof![Just(0.0), 0.0f64..8.0], reach_success in prop_oneof![Just(0.0), 0.0f64..1.0],
-                  link_mid in 300.0f64..3000.0, cna_variance in prop_oneof![Just(0.0), 0.0f64..60.0],
+                  link in (300.0f64..3000.0, prop_oneof![Just(1.0), 0.3f64..1.0]), cna_variance in prop_oneof![Just(0.0), 0.0f64..60.0],
                   pitch_levels in prop_oneof![Just(None), (1usize..4).prop_map(Some)]) -> Instance {
         let mut cna = if auv_cna { CnaKind::auv(b) } else { CnaKind::Asc {} };
         if let CnaKind::Auv { pitch_levels: levels, .. } = &mut cna { *levels = pitch_levels; }
@@ -108,7 +112,7 @@ prop_compose! {
             let range_noise = RangeNoise { sigma_m, per_km_m };
             cfg.cost = CostSpec::Estimator(EstimatorSpec { aggregate, range_noise, bias_per_km_m, terminal_levels, reach_success });
         }
-        Instance { cfg, cna: CnaPose { pos: Vec3::new(0.0, 0.0, z), heading: Heading::from_radians(heading), pitch: 0.0 }, starts, vels, eps, estimates, link_mid, cna_variance }
+        Instance { cfg, cna: CnaPose { pos: Vec3::new(0.0, 0.0, z), heading: Heading::from_radians(heading), pitch: 0.0 }, starts, vels, eps, estimates, link, cna_variance }
     }
 }
 
@@ -116,10 +120,11 @@ proptest! {
     #![proptest_config(ProptestConfig { cases: 300, ..ProptestConfig::default() })]
 
     #[test]
-    fn branch_and_bound_equals_brute_force(inst in instance()) {
+    fn branch_and_bound_equals_brute_force(inst in instance(), start in prop_oneof![Just(0u64), 1u64..3000]) {
         let brute = inst.decide(exact(Algorithm::BruteForce, false));
         let seq = inst.decide(exact(Algorithm::BranchAndBound, false));
-        let par = inst.decide(exact(Algorithm::BranchAndBound, true));
+        // The parallel mode, sharing the tree after `start` nodes on one thread (0: at once).
+        let par = inst.decide(SearchConfig { parallel_after_nodes: start, ..exact(Algorithm::BranchAndBound, true) });
         prop_assert_eq!(brute.option, seq.option);
         prop_assert_eq!(brute.value, seq.value);
         prop_assert_eq!(brute.option, par.option);
@@ -172,7 +177,7 @@ fn instance_fixed(cfg: PlannerConfig) -> Instance {
         vels: vec![Vec3::new(0.0, 1.5, 0.0), Vec3::new(0.0, 1.5, 0.0)],
         eps: vec![1.0, 1.0],
         estimates: vec![AuvEstimate { cov: [4.0, 1.0, 2.0], process_noise: 0.05 }; 2],
-        link_mid: 1200.0,
+        link: (1200.0, 1.0),
         cna_variance: 1.0,
     }
 }
@@ -219,6 +224,23 @@ fn same_decisions_on_one_and_two_threads() {
     };
     let (one, two) = (run(1), run(2));
     assert_eq!((one.option, one.value, one.next), (two.option, two.value, two.next));
+}
+
+#[test]
+fn the_parallel_mode_shares_only_trees_larger_than_its_start() {
+    let inst = instance_fixed(asc(5, 4, PenaltyCase::C8));
+    let one = inst.decide(exact(Algorithm::BranchAndBound, false));
+    let after =
+        |nodes| inst.decide(SearchConfig { parallel_after_nodes: nodes, ..exact(Algorithm::BranchAndBound, true) });
+    // A start larger than the tree's search: the one-thread search itself, node for node.
+    let small = after(one.nodes);
+    assert_eq!((small.option, small.value, small.nodes), (one.option, one.value, one.nodes));
+    // Handed over part-way, or at once: the same decision and cost, the tree enumerated for tasks.
+    for nodes in [0, 1, one.nodes / 3] {
+        let shared = after(nodes);
+        assert_eq!((shared.option, shared.value), (one.option, one.value), "after {nodes} nodes");
+        assert_ne!(shared.nodes, one.nodes, "after {nodes} nodes: the tasks' enumeration counts");
+    }
 }
 
 #[test]
@@ -380,7 +402,7 @@ fn distance_to_far_auv(reach_success: f64) -> f64 {
     let mut cfg = asc(5, 3, PenaltyCase::C2);
     let spec = EstimatorSpec { terminal_levels: 20.0, reach_success, ..EstimatorSpec::default() };
     cfg.cost = CostSpec::Estimator(spec);
-    let mut p = LookAheadPlanner::with_link(cfg, &FallingLink(800.0)).unwrap();
+    let mut p = LookAheadPlanner::with_link(cfg, &FallingLink(800.0, 1.0)).unwrap();
     let auvs = [Vec3::new(-200.0, 0.0, 50.0), Vec3::new(1000.0, 0.0, 50.0)];
     let f = FnForecast { n: 2, f: move |k: usize, _: f64| Some(auvs[k]) };
     let estimates = [AuvEstimate { cov: [20.0, 0.0, 20.0], process_noise: 0.2 }; 2];

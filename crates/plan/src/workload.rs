@@ -4,15 +4,15 @@
 //! 1.5 m/s at 90 m depth, the CNA starting at (140, 0, 0) heading east,
 //! τ = 10 s, s = 1.5 m/s, penalty case 1. Invented where the thesis is silent (digest A17, A18).
 //! Under the estimator-aware cost every AUV starts with P = 1 m²·I and q = α/2 per axis (the
-//! same trace growth as Hudson's α), over a perfect link.
+//! same trace growth as Hudson's α), over a perfect link or a lossy one ([`PlateauLink`]).
 //!
 //! [`Workload::standard`] is the one list both the criterion bench and `coopnav bench planner` run.
 
 use crate::planner::Algorithm;
 use crate::{
-    AuvError, AuvEstimate, CnaKind, CnaPose, CostSpec, Deadline, Decision, DistanceLimits, ErrorModel, EstimatorSpec,
-    FnForecast, LookAheadPlanner, MotionConfig, PenaltyCase, PlanError, PlanInput, Planner, PlannerConfig,
-    SearchConfig,
+    Aggregate, AuvError, AuvEstimate, CnaKind, CnaPose, CostSpec, Deadline, Decision, DistanceLimits, ErrorModel,
+    EstimatorSpec, FnForecast, LinkModel, LookAheadPlanner, MotionConfig, PenaltyCase, PlanError, PlanInput, Planner,
+    PlannerConfig, SearchConfig,
 };
 use coopnav_core::{Heading, Vec3};
 use serde::Serialize;
@@ -27,18 +27,35 @@ pub struct Workload {
     /// East–west gap between neighbouring AUVs, m.
     pub gap: f64,
     pub cost: CostSpec,
+    /// A lossy link's success at short range ([`PlateauLink`]; `None`: a perfect link).
+    pub link_plateau: Option<f64>,
+}
+
+/// A lossy link for the workloads: success = plateau / (1 + (r / 1500 m)⁴). The closed loop's
+/// rate-0 curve has a plateau of about 0.8 (`REACH_SUCCESS` in the sim crate's closed-loop
+/// experiment); invented shape (issue 10).
+#[derive(Debug, Clone, Copy)]
+pub struct PlateauLink(pub f64);
+
+impl LinkModel for PlateauLink {
+    fn success(&self, slant_range_m: f64) -> f64 {
+        self.0 / (1.0 + (slant_range_m / 1500.0).powi(4))
+    }
 }
 
 impl Workload {
     /// The standard workloads: the issue-2 ones under Hudson's cost, then the issue-10 ones under
-    /// the estimator-aware cost (N = 5, A = 7, L = 5 and L = 7, targets 5 ms and 100 ms), the
-    /// last with the range bias and cost-to-go the closed-loop evaluation plans with (6 m/km,
-    /// H = 10 levels).
+    /// the estimator-aware cost (N = 5, A = 7, L = 5 and L = 7, targets 5 ms and 100 ms), then
+    /// with the range bias and cost-to-go the closed-loop evaluation plans with (6 m/km,
+    /// H = 10 levels), and last the evaluation's tree (N = 3, A = 5, L = 5, the sum of σ) over a
+    /// lossy link.
     pub fn standard() -> Vec<Workload> {
-        let hudson = |n, a, b, l, gap| Workload { n, a, b, l, gap, cost: CostSpec::Hudson };
-        let with = |l, spec| Workload { n: 5, a: 7, b: 1, l, gap: 500.0, cost: CostSpec::Estimator(spec) };
+        let hudson = |n, a, b, l, gap| Workload { n, a, b, l, gap, cost: CostSpec::Hudson, link_plateau: None };
+        let cost = CostSpec::Estimator;
+        let with = |l, spec| Workload { n: 5, a: 7, b: 1, l, gap: 500.0, cost: cost(spec), link_plateau: None };
         let estimator = |l| with(l, EstimatorSpec::default());
         let biased = EstimatorSpec { bias_per_km_m: 6.0, terminal_levels: 10.0, ..EstimatorSpec::default() };
+        let evaluation = EstimatorSpec { aggregate: Aggregate::SigmaSum, ..biased };
         vec![
             hudson(2, 5, 1, 5, 500.0),
             hudson(2, 5, 1, 5, 100.0),
@@ -51,23 +68,32 @@ impl Workload {
             estimator(5),
             estimator(7),
             with(7, biased),
+            Workload { n: 3, a: 5, l: 5, link_plateau: Some(0.8), ..with(5, evaluation) },
         ]
     }
 
     /// A short name for reports: cost kind (with the estimator's bias and cost-to-go when set)
-    /// and the N, A, B, L and gap of the workload.
+    /// and the N, A, B, L and gap of the workload, and a lossy link's plateau.
     pub fn name(&self) -> String {
         let kind = match self.cost {
             CostSpec::Hudson => "hudson".to_string(),
             CostSpec::Estimator(e) if e.bias_per_km_m > 0.0 || e.terminal_levels > 0.0 => {
-                format!("estimator_bias{}_H{}", e.bias_per_km_m, e.terminal_levels)
+                let sum = if e.aggregate == Aggregate::SigmaSum { "sigma_sum_" } else { "" };
+                format!("estimator_{sum}bias{}_H{}", e.bias_per_km_m, e.terminal_levels)
             }
             CostSpec::Estimator(_) => "estimator".to_string(),
         };
-        format!("{kind}_N{}_A{}_B{}_L{}_gap{}", self.n, self.a, self.b, self.l, self.gap)
+        let link = self.link_plateau.map_or(String::new(), |p| format!("_link{p}"));
+        format!("{kind}_N{}_A{}_B{}_L{}_gap{}{link}", self.n, self.a, self.b, self.l, self.gap)
     }
 
-    pub fn config(&self, algorithm: Algorithm, parallel: bool) -> PlannerConfig {
+    /// The search of a benchmark: `algorithm`, no deadline, on one thread or in the parallel mode
+    /// with its default one-thread start (`SearchConfig::parallel_after_nodes`).
+    pub fn search(algorithm: Algorithm, parallel: bool) -> SearchConfig {
+        SearchConfig { algorithm, parallel, deadline: Deadline::None, ..SearchConfig::default() }
+    }
+
+    pub fn config(&self, search: SearchConfig) -> PlannerConfig {
         PlannerConfig {
             look_ahead: self.l,
             motion: MotionConfig {
@@ -81,7 +107,7 @@ impl Workload {
             cost: self.cost,
             limits: DistanceLimits::default(),
             penalties: PenaltyCase::C1.penalties(),
-            search: SearchConfig { algorithm, parallel, deadline: Deadline::None, ..SearchConfig::default() },
+            search,
         }
     }
 
@@ -90,9 +116,9 @@ impl Workload {
         ((self.a * self.b) as u64).pow(self.l as u32 + 1)
     }
 
-    /// Plans one decision.
-    pub fn decide(&self, algorithm: Algorithm, parallel: bool) -> Result<Decision, PlanError> {
-        let cfg = self.config(algorithm, parallel);
+    /// Plans one decision with `search` (e.g. [`Workload::search`]).
+    pub fn decide(&self, search: SearchConfig) -> Result<Decision, PlanError> {
+        let cfg = self.config(search);
         let gap = self.gap;
         let auv = move |k: usize, t: f64| Vec3::new(gap * k as f64 + 50.0, 1.5 * t, 90.0);
         let cna = CnaPose { pos: Vec3::new(140.0, 0.0, 0.0), heading: Heading::from_radians(0.0), pitch: 0.0 };
@@ -102,6 +128,9 @@ impl Workload {
         let forecast = FnForecast { n: self.n, f: move |k: usize, t: f64| Some(auv(k, t)) };
         let input =
             PlanInput { t: 0.0, cna, errors: &errors, estimates: &estimates, cna_variance: 1.0, forecast: &forecast };
-        LookAheadPlanner::new(cfg)?.decide(&input)
+        match self.link_plateau {
+            Some(plateau) => LookAheadPlanner::with_link(cfg, &PlateauLink(plateau))?.decide(&input),
+            None => LookAheadPlanner::new(cfg)?.decide(&input),
+        }
     }
 }

@@ -17,6 +17,10 @@ pub struct Args {
     /// Skip the brute force above this many leaves.
     #[arg(long, default_value_t = 6_000_000)]
     brute_max_leaves: u64,
+    /// Nodes the parallel mode searches on one thread before it shares the tree (default: the
+    /// planner's, `SearchConfig::parallel_after_nodes`; 0 = share at once).
+    #[arg(long)]
+    parallel_after_nodes: Option<u64>,
 }
 
 /// Median wall time (s) of `reps` runs of `f`, and its last result.
@@ -42,17 +46,20 @@ fn load_average() -> Option<[f64; 3]> {
 
 pub fn run(args: Args) -> Result<()> {
     let (reps, brute_max_leaves) = (args.reps.max(1), args.brute_max_leaves);
+    let one_thread = Workload::search(Algorithm::BranchAndBound, false);
+    let mut parallel = Workload::search(Algorithm::BranchAndBound, true);
+    parallel.parallel_after_nodes = args.parallel_after_nodes.unwrap_or(parallel.parallel_after_nodes);
     let load_before = load_average();
     let mut rows = Vec::new();
     for w in Workload::standard() {
-        let (t_seq, seq) = time(reps, || Ok(w.decide(Algorithm::BranchAndBound, false)?))?;
-        let (t_par, par) = time(reps, || Ok(w.decide(Algorithm::BranchAndBound, true)?))?;
+        let (t_seq, seq) = time(reps, || Ok(w.decide(one_thread)?))?;
+        let (t_par, par) = time(reps, || Ok(w.decide(parallel)?))?;
         ensure!(
             (seq.option, seq.value) == (par.option, par.value),
             "parallel and sequential searches disagree on {w:?}"
         );
         let brute = if w.leaves() <= brute_max_leaves {
-            let (t, b) = time(1.max(reps / 2), || Ok(w.decide(Algorithm::BruteForce, false)?))?;
+            let (t, b) = time(1.max(reps / 2), || Ok(w.decide(Workload::search(Algorithm::BruteForce, false))?))?;
             ensure!(
                 (b.option, b.value) == (seq.option, seq.value),
                 "branch-and-bound and brute force disagree on {w:?}"
@@ -69,7 +76,12 @@ pub fn run(args: Args) -> Result<()> {
             "decision": seq.option,
             "min_cost": seq.value,
             "bnb_1_thread": { "seconds": t_seq, "nodes": seq.nodes },
-            "bnb_parallel": { "seconds": t_par, "nodes": par.nodes, "threads": rayon_threads() },
+            "bnb_parallel": {
+                "seconds": t_par,
+                "nodes": par.nodes,
+                "threads": rayon_threads(),
+                "after_nodes": parallel.parallel_after_nodes,
+            },
             "parallel_speedup": t_seq / t_par,
             "brute_force": brute,
             "tree_nodes_full": (1..=w.l as u32 + 1).map(|d| ((w.a * w.b) as u64).pow(d)).sum::<u64>(),

@@ -12,6 +12,7 @@
 //! Survey AUVs may also address their statuses to each other as Nams's frame 0, with the
 //! packet-success tracker, shadow estimates and rate feedback of `peer`.
 
+mod cna_rate;
 pub mod health;
 mod inflight;
 mod mini;
@@ -36,8 +37,8 @@ use coopnav_plan::AuvForecast;
 use inflight::InFlight;
 use mini::SurfaceFilters;
 pub use observe::{
-    BuoyFix, BuoySample, CommsEvent, DeadReckoning, Decision, FilterStart, Observer, Phase, PhaseClock, RangeHeard,
-    ShadowSample, ShipPose, ShipSample, StatusChoice, StatusFrames, StatusSent, Timing, Trace, TraceRow,
+    BuoyFix, BuoySample, CnaChoice, CommsEvent, DeadReckoning, Decision, FilterStart, Observer, Phase, PhaseClock,
+    RangeHeard, ShadowSample, ShipPose, ShipSample, StatusChoice, StatusFrames, StatusSent, Timing, Trace, TraceRow,
 };
 use peer::{PeerLink, Plans};
 use phases::Payload;
@@ -106,6 +107,8 @@ struct Cna {
     acked: Vec<Vec<u64>>,
     /// The newest covariance each AUV reported (the status message's trailer).
     reported: Vec<Option<ReportedCov>>,
+    /// Its broadcast's rate policy, when its slot names one.
+    rate: Option<cna_rate::CnaRate>,
 }
 
 /// Per-AUV sums for the run's metrics.
@@ -230,6 +233,11 @@ impl<'a> Engine<'a> {
             model: ErrorTracker::new(n, cfg.error, sc.comms.tau, sc.planner.sigma0, sc.planner.eps0),
             acked: vec![Vec::new(); n],
             reported: vec![None; n],
+            rate: sc
+                .comms
+                .schedule
+                .cna_policy()
+                .map(|spec| cna_rate::CnaRate::new(spec, n).expect("validated rate policy")),
         };
         Engine {
             sc,

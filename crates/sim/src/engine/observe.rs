@@ -128,6 +128,15 @@ pub struct StatusChoice {
     pub choice: Choice,
 }
 
+/// The CNA's broadcast slot, when its broadcast has a rate policy: the distance to the farthest
+/// survey AUV it has a forecast of (none before it has one), and the policy's choice.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct CnaChoice {
+    pub t: f64,
+    pub distance: Option<f64>,
+    pub choice: Choice,
+}
+
 /// A survey AUV's status as sent: its rate and the tracking header in its frame 0 (Nams's frame 0;
 /// no header in a node report).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
@@ -200,6 +209,8 @@ pub trait Observer {
     fn on_range(&mut self, _range: &RangeHeard) {}
     /// Every survey AUV's status slot, with its rate policy's choice.
     fn on_status_choice(&mut self, _choice: &StatusChoice) {}
+    /// The CNA's broadcast slot, with its rate policy's choice (only when it has one).
+    fn on_cna_choice(&mut self, _choice: &CnaChoice) {}
     /// A survey AUV's status leaving, with the header its frame 0 carries.
     fn on_status_sent(&mut self, _sent: &StatusSent) {}
     /// A survey AUV's status arriving at another survey AUV, frames counted.

@@ -8,8 +8,8 @@
 use super::health::nees_2d;
 use super::inflight::Arrival;
 use super::observe::{
-    BuoyFix, CommsEvent, DeadReckoning, Decision, Observer, RangeHeard, ShadowSample, ShipPose, StatusChoice,
-    StatusFrames, StatusSent, TraceRow,
+    BuoyFix, CnaChoice, CommsEvent, DeadReckoning, Decision, Observer, RangeHeard, ShadowSample, ShipPose,
+    StatusChoice, StatusFrames, StatusSent, TraceRow,
 };
 use super::peer::PeerLink;
 use super::vehicles::lerp;
@@ -42,12 +42,13 @@ use rand_chacha::ChaCha8Rng;
 pub enum Payload {
     /// The CNA's broadcast: its position as it knows it, the travel time the receiver measured
     /// (None: decoded without a usable range), and the statuses it acknowledges.
-    Broadcast { rate: Rate, fix: Vec3, travel_time: Option<f64>, acked: Vec<u64>, decoded: bool },
+    /// `id` counts the CNA's broadcast slots.
+    Broadcast { id: u64, rate: Rate, fix: Vec3, travel_time: Option<f64>, acked: Vec<u64>, decoded: bool },
     /// A buoy's position broadcast: its GPS fix and the travel time the receiver measured.
     Position { rate: Rate, fix: Vec3, travel_time: Option<f64>, decoded: bool },
     /// A survey AUV's status message through the wire format, and which of its frames the
-    /// channel let through to this receiver.
-    Status { rate: Rate, slot_id: u64, bytes: Vec<u8>, decoded: bool, reception: Reception },
+    /// channel let through to this receiver; to the CNA, the broadcasts it acknowledges.
+    Status { rate: Rate, slot_id: u64, bytes: Vec<u8>, decoded: bool, reception: Reception, heard_broadcasts: Vec<u64> },
     /// A ship's or buoy's 13-bit mini-packet: one decoded state component and the travel time
     /// the receiver measured (see [`super::mini`]).
     Mini { kind: StateKind, value: f64, travel_time: Option<f64>, decoded: bool },
@@ -158,7 +159,7 @@ impl Engine<'_> {
             let frac = ((t_tx - t) / self.sc.dt).clamp(0.0, 1.0);
             match (slot.message, slot.owner) {
                 (Message::Mini(kind), owner) => self.mini_broadcast(owner, kind, t_tx, frac, obs),
-                (Message::Packet, Owner::Cna) => self.broadcast(t_tx, frac),
+                (Message::Packet, Owner::Cna) => self.broadcast(t_tx, frac, obs),
                 (Message::Packet, Owner::Buoy(b)) => self.buoy_broadcast(b, t_tx, frac, obs),
                 (Message::Packet, Owner::Auv(j)) => self.send_status(j, self.next_slot - 1, t_tx, frac, obs),
                 // Validation refuses a ship slot without a component.
@@ -167,16 +168,20 @@ impl Engine<'_> {
         }
     }
 
-    /// The CNA's broadcast: one packet, an arrival (with its own range) at every survey AUV.
-    fn broadcast(&mut self, t_tx: f64, frac: f64) {
+    /// The CNA's broadcast: one packet, an arrival (with its own range) at every survey AUV, at
+    /// `comms.cna_rate` or its rate policy's choice.
+    fn broadcast(&mut self, t_tx: f64, frac: f64, obs: &mut dyn Observer) {
         if !self.policy.as_policy().transmits() {
             return;
         }
         let sc = self.sc;
-        let rate = sc.comms.cna_rate;
-        let air = air_time(rate);
         let from = lerp(self.cna.craft.prev, self.cna.craft.pos, frac);
         let fix = Vec3::new(from.x + self.cna.nav_error.0, from.y + self.cna.nav_error.1, from.z);
+        let (id, rate) = match self.cna_choice(fix, t_tx, obs) {
+            (id, Choice::Transmit(rate)) => (id, rate),
+            (_, Choice::Silent) => return,
+        };
+        let air = air_time(rate);
         self.air.transmit(Owner::Cna, t_tx, t_tx + air);
         for k in 0..self.auvs.len() {
             let silent = self.silent(k, t_tx);
@@ -187,10 +192,28 @@ impl Engine<'_> {
             let (v, clock) = (a.velocity(sc.dt), a.clock);
             let (tt, travel_time) = measured_travel(sc, from, t_tx, &self.cna.clock, (p0, v, &clock), &mut a.rng_range);
             let acked = self.cna.acked[k].clone();
-            let payload = Payload::Broadcast { rate, fix, travel_time, acked, decoded };
+            let payload = Payload::Broadcast { id, rate, fix, travel_time, acked, decoded };
             self.air.push(arrival(Owner::Cna, Owner::Auv(k), t_tx, tt, air, tl, Some(payload)));
         }
         self.cna.acked.iter_mut().for_each(Vec::clear);
+    }
+
+    /// The CNA's rate for this broadcast (and the broadcast's id): its policy's choice on the
+    /// distance from its `fix` to the farthest AUV it has a forecast of, or `comms.cna_rate`.
+    fn cna_choice(&mut self, fix: Vec3, t_tx: f64, obs: &mut dyn Observer) -> (u64, Choice) {
+        let sc = self.sc;
+        let cna = &mut self.cna;
+        let Some(policy) = cna.rate.as_mut() else { return (0, Choice::Transmit(sc.comms.cna_rate)) };
+        let distances = cna.predictors.iter().enumerate().filter_map(|(k, p)| {
+            let at = p.position_at(t_tx)?;
+            Some((k, (at.x - fix.x).hypot(at.y - fix.y)))
+        });
+        let farthest = distances.max_by(|a, b| a.1.total_cmp(&b.1));
+        let longest_air = policy.rates().into_iter().map(air_time).fold(0.0, f64::max);
+        let settled_s = longest_air + sc.comms.max_range_m / sc.channel.sound_speed.slowest();
+        let (id, choice) = policy.choose(farthest, t_tx, settled_s);
+        obs.on_cna_choice(&CnaChoice { t: t_tx, distance: farthest.map(|f| f.1), choice });
+        (id, choice)
     }
 
     /// Buoy `b`'s slot: its GPS position, one packet, an arrival (with its own range) at every
@@ -267,7 +290,8 @@ impl Engine<'_> {
         let decoded = reception.frame0() && !silent;
         self.air.transmit(Owner::Auv(j), t_tx, t_tx + air);
         let to_peers = sc.comms.status_to == StatusTo::CnaAndAuvs;
-        let payload = Payload::Status { rate, slot_id, bytes: bytes.clone(), decoded, reception };
+        let heard_broadcasts = std::mem::take(&mut self.auvs[j].heard_broadcasts);
+        let payload = Payload::Status { rate, slot_id, bytes: bytes.clone(), decoded, reception, heard_broadcasts };
         self.air.push(arrival(Owner::Auv(j), Owner::Cna, t_tx, tt, air, tl, Some(payload)));
         for m in (0..self.auvs.len()).filter(|m| *m != j) {
             let other = &self.auvs[m];
@@ -278,7 +302,15 @@ impl Engine<'_> {
                 let lost = silent || self.silent(m, t_tx);
                 let drawn = sc.comms.success.draw(rate, tl, sc.comms.peer_receiver, &mut self.peer_draws[j]);
                 let reception = if lost { Reception { frames: 0, ..drawn } } else { drawn };
-                Payload::Status { rate, slot_id, bytes: bytes.clone(), decoded: reception.frame0(), reception }
+                let decoded = reception.frame0();
+                Payload::Status {
+                    rate,
+                    slot_id,
+                    bytes: bytes.clone(),
+                    decoded,
+                    reception,
+                    heard_broadcasts: Vec::new(),
+                }
             });
             self.air.push(arrival(Owner::Auv(j), Owner::Auv(m), t_tx, tt, air, tl, payload));
         }
@@ -305,21 +337,27 @@ impl Engine<'_> {
     pub(super) fn deliver(&mut self, t_next: f64, obs: &mut dyn Observer) {
         for (meta, payload, survived) in self.air.due(t_next) {
             match (payload, meta.to) {
-                (Payload::Broadcast { rate, fix, travel_time, acked, decoded }, Owner::Auv(k)) => {
+                (Payload::Broadcast { id, rate, fix, travel_time, acked, decoded }, Owner::Auv(k)) => {
                     let received = decoded && survived;
                     self.tallies[k].down.record(rate.index(), received);
                     obs.on_packet(&event(&meta, "down", k, decoded, survived));
                     if received {
+                        if self.cna.rate.is_some() {
+                            self.auvs[k].heard_broadcasts.push(id);
+                        }
                         heard(obs, &meta, k, travel_time);
                         self.hear_broadcast(k, &meta, fix, travel_time, &acked);
                     }
                 }
-                (Payload::Status { rate, slot_id, bytes, decoded, .. }, Owner::Cna) => {
+                (Payload::Status { rate, slot_id, bytes, decoded, heard_broadcasts, .. }, Owner::Cna) => {
                     let Owner::Auv(j) = meta.from else { continue };
                     let message = (decoded && survived).then(|| self.read_at_cna(j, &bytes, meta.t_tx)).flatten();
                     self.tallies[j].up.record(rate.index(), message.is_some());
                     obs.on_packet(&event(&meta, "up", j, decoded, survived));
                     if let Some((report, cov)) = message {
+                        if let Some(policy) = self.cna.rate.as_mut() {
+                            policy.on_status(j, meta.t_tx, &heard_broadcasts);
+                        }
                         self.cna.acked[j].push(slot_id);
                         if let Some(cov) = cov {
                             self.cna.reported[j] = Some(cov);

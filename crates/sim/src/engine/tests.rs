@@ -392,3 +392,68 @@ fn a_cna_knowing_the_mission_plan_finds_an_auv_it_has_not_heard() {
         assert!(late < unserved, "{policy}: error {late:.1} m late in the run, {unserved:.1} m mean unserved");
     }
 }
+
+/// Keeps the CNA's broadcast choices.
+#[derive(Default)]
+struct CnaChoices(Vec<CnaChoice>);
+
+impl Observer for CnaChoices {
+    fn on_cna_choice(&mut self, choice: &CnaChoice) {
+        self.0.push(*choice);
+    }
+}
+
+/// The CNA's end (a `rate_policy` on its slot) on the channel of the test above: rate 4 carries
+/// nothing past about 300 m, rate 1 is robust. Its adaptive bins start with rate 4 out to 2 km.
+/// With one AUV, `centroid` keeps the CNA within 80 m of it and rate 4 stays; with two, the
+/// farthest is 300–360 m away (the CNA's forecast): its first broadcasts go at rate 4, as the
+/// bins say, then the CNA learns from that AUV's acknowledgements to fall back to rate 1, and
+/// that AUV hears far more of them than under a fixed rate 4.
+#[test]
+fn the_cnas_rate_policy_drops_its_rate_for_far_auvs_from_their_acknowledgements() {
+    use coopnav_acomms::selector::{AdaptiveConfig, Choice, RatePolicySpec};
+    use coopnav_acomms::success::SuccessCurve;
+    use coopnav_acomms::Rate;
+    let adaptive = RatePolicySpec::Adaptive(AdaptiveConfig {
+        memory: 5,
+        step: 100.0,
+        data_thresholds: [1500.0, 3000.0, 2000.0, 100.0],
+        ..AdaptiveConfig::default()
+    });
+    // The CNA's choices and the share of its broadcasts the farthest AUV decoded.
+    let go = |n_auvs: usize, cna: &RatePolicySpec| {
+        let mut sc = Scenario::example().with_auvs(n_auvs);
+        sc.duration_s = 3600.0;
+        let curve = |p_a, tl_ab, tl_bc| SuccessCurve { p_a, tl_ab, tl_bc };
+        (sc.comms.success.curves[1], sc.comms.success.curves[2]) = (curve(0.95, 60.0, 90.0), curve(0.8, 30.0, 42.0));
+        sc.comms.status_rate = Rate::R1;
+        let slot =
+            |who: String, start_s, rate_policy| SlotSpec { who, start_s, length_s: 10.0, message: None, rate_policy };
+        let auvs = (0..n_auvs).map(|k| slot(format!("auv{k}"), 10.0 * (k + 1) as f64, None));
+        let slots = std::iter::once(slot("cna".into(), 0.0, Some(cna.clone()))).chain(auvs).collect();
+        sc.comms.schedule = Schedule::Tdma { slots };
+        sc.validate(std::path::Path::new("t")).unwrap();
+        let mut p = PolicySpec::new("centroid", &sc).unwrap().build(&sc).unwrap();
+        let mut choices = CnaChoices::default();
+        let r = run(&sc, &mut p, 6, &Faults::default(), &mut choices);
+        let far = r.auvs.iter().map(|a| a.downlink).min_by_key(|l| l.received).unwrap();
+        (choices.0, far.received as f64 / far.sent.max(1) as f64)
+    };
+    let late_share = |choices: &[CnaChoice], rate| {
+        let late = &choices[2 * choices.len() / 3..];
+        late.iter().filter(|c| c.choice == Choice::Transmit(rate)).count() as f64 / late.len() as f64
+    };
+    let (near, _) = go(1, &adaptive);
+    let (far, far_success) = go(2, &adaptive);
+    let (fixed, fixed_success) = go(2, &RatePolicySpec::Fixed { rate: Rate::R4 });
+    assert!(near.len() >= 110 && far.len() >= 110, "a choice every broadcast slot");
+    assert!(late_share(&near, Rate::R4) > 0.8, "near: rate 4 in {:.2} of the last third", late_share(&near, Rate::R4));
+    let first = far.iter().find(|c| c.distance.is_some()).unwrap();
+    assert_eq!(first.choice, Choice::Transmit(Rate::R4), "the bins first say rate 4 at {:?} m", first.distance);
+    assert!(late_share(&far, Rate::R1) > 0.8, "far: rate 1 in {:.2} of the last third", late_share(&far, Rate::R1));
+    assert!(fixed.iter().all(|c| c.choice == Choice::Transmit(Rate::R4)));
+    assert!(
+        far_success > 0.5 && fixed_success < 0.3,
+        "farthest AUV decodes {far_success:.2}, fixed rate 4 {fixed_success:.2}"
+    );
+}

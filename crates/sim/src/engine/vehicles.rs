@@ -74,6 +74,9 @@ pub struct SurveyAuv {
     pub unacked: Vec<u64>,
     /// Last CNA position heard (from its broadcast).
     pub cna_heard: Option<Vec3>,
+    /// The CNA's broadcasts decoded since its last status (acknowledged in it, when the CNA's
+    /// broadcast has a rate policy).
+    pub heard_broadcasts: Vec<u64>,
     /// Propulsion off (a finished vehicle holding or surfacing).
     adrift: bool,
     /// Its last survey waypoint: where a finished vehicle loiters or holds station.
@@ -120,6 +123,7 @@ impl SurveyAuv {
             selector: status_policy(sc, k).build().expect("validated rate policy"),
             unacked: Vec::new(),
             cna_heard: None,
+            heard_broadcasts: Vec::new(),
             adrift: false,
             station: pts.last().copied().unwrap_or(start),
         }

@@ -28,7 +28,8 @@ pub enum HblScenarioError {
         "scenario {file}: this is the former `coopnav hbl` scenario format (its top-level `{key}`), which is gone: \
          the HBL tools run Gill's pass on the mission engine. Write an engine scenario file instead: \
          `coopnav hbl example scenario` prints Gill's Table 5 set-up in it (scenarios/gill-table5-hbl-two.toml; \
-         gill-table5-msbl.toml and gill-table5-hbl-one.toml are the other configurations)"
+         gill-table5-msbl.toml and gill-table5-hbl-one.toml are the other configurations); \
+         the former geometry.zone_min / zone_max are the hbl commands' --zone-min-m / --zone-max-m"
     )]
     FormerFormat { file: PathBuf, key: String },
     #[error(transparent)]

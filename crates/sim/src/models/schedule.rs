@@ -5,7 +5,8 @@
 //! with B buoys their slots follow the CNA's, every slot τ/(1 + B + N); `gill_cycle` is Gill's MSBL /
 //! HBL Short / HBL Long cycle (gill digest §4, Table 1) of 2 s mini-packet slots from ship0 and
 //! buoy0; `tdma` lists the slots, and a survey AUV's slot may name the rate policy its status
-//! messages use (`rate_policy`, a [`RatePolicySpec`]; otherwise the comms default). Validation
+//! messages use (`rate_policy`, a [`RatePolicySpec`]; otherwise the comms default), the CNA's slot
+//! the rate policy of its broadcast (otherwise `comms.cna_rate`). Validation
 //! refuses a slot shorter than its packet's air time plus the longest expected travel time plus a
 //! guard, naming the slot, and a message too long for its rate.
 
@@ -48,7 +49,8 @@ pub struct Slot {
 /// A slot as written in the file: `who = "cna"`, `"buoy0"`, …, `"ship0.port"`, `"ship0.starboard"`,
 /// … or `"auv0"`, `"auv1"`, …; `message` (`east`, `north`, `speed` or `heading`) makes it a
 /// mini-packet carrying that state component (a ship's slot must name one); `rate_policy` on a
-/// survey AUV's slot picks the rate of its status messages (every slot of one AUV names the same).
+/// survey AUV's slot picks the rate of its status messages, on the CNA's slot the rate of its
+/// broadcast (every slot of one owner names the same).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct SlotSpec {
@@ -154,8 +156,17 @@ impl Schedule {
 
     /// The rate policy survey AUV `auv`'s slots name, if any (else the comms default applies).
     pub fn status_policy(&self, auv: usize) -> Option<&RatePolicySpec> {
+        self.policy_of(Owner::Auv(auv))
+    }
+
+    /// The rate policy the CNA's slots name, if any (else its broadcast is at `comms.cna_rate`).
+    pub fn cna_policy(&self) -> Option<&RatePolicySpec> {
+        self.policy_of(Owner::Cna)
+    }
+
+    fn policy_of(&self, owner: Owner) -> Option<&RatePolicySpec> {
         let Schedule::Tdma { slots } = self else { return None };
-        slots.iter().filter(|s| parse_owner(&s.who) == Some(Owner::Auv(auv))).find_map(|s| s.rate_policy.as_ref())
+        slots.iter().filter(|s| parse_owner(&s.who) == Some(owner)).find_map(|s| s.rate_policy.as_ref())
     }
 
     /// Every problem, as (field under `prefix`, value, allowed).
@@ -208,14 +219,14 @@ impl Schedule {
                 if let Some(spec) = &s.rate_policy {
                     out.extend(rate_policy_problems(&field("rate_policy"), owner, spec, fit.status_bytes));
                     let first = match owner {
-                        Some(Owner::Auv(k)) => self.status_policy(k),
+                        Some(o @ (Owner::Auv(_) | Owner::Cna)) => self.policy_of(o),
                         _ => Some(spec),
                     };
                     if first != Some(spec) {
                         out.push((
                             field("rate_policy"),
                             format!("{spec:?}"),
-                            format!("the rate policy of {}'s first slot (one policy per AUV)", s.who),
+                            format!("the rate policy of {}'s first slot (one policy per transmitter)", s.who),
                         ));
                     }
                 }
@@ -248,7 +259,10 @@ impl Schedule {
             let who = owner_name(s.owner);
             let air = match (s.message, s.owner) {
                 (Message::Mini(_), _) | (Message::Packet, Owner::Ship(..)) => fit.mini_air_s,
-                (Message::Packet, Owner::Cna) => fit.cna_air_s,
+                (Message::Packet, Owner::Cna) => match self.cna_policy().map(RatePolicySpec::rates) {
+                    Some(Ok(rates)) => longest_air(rates),
+                    _ => fit.cna_air_s,
+                },
                 (Message::Packet, Owner::Buoy(_)) => fit.buoy_air_s,
                 (Message::Packet, Owner::Auv(k)) => match self.status_policy(k).map(RatePolicySpec::rates) {
                     Some(Ok(rates)) => longest_air(rates),
@@ -272,20 +286,28 @@ impl Schedule {
     }
 }
 
-/// A slot's `rate_policy` (at `field`): only on a survey AUV's slot, a valid policy, and every rate
-/// holding the status message.
+/// A slot's `rate_policy` (at `field`): only on a survey AUV's or the CNA's slot, a valid policy,
+/// and (an AUV's) every rate holding the status message. The CNA's broadcast (its fix and one ack
+/// per AUV) fits the smallest frame of every rate.
 fn rate_policy_problems(
     field: &str,
     owner: Option<Owner>,
     spec: &RatePolicySpec,
     status_bytes: usize,
 ) -> Vec<(String, String, String)> {
-    if !matches!(owner, Some(Owner::Auv(_))) {
-        return vec![(field.into(), format!("{spec:?}"), "no rate policy: only a survey AUV's slot names one".into())];
+    if !matches!(owner, Some(Owner::Auv(_) | Owner::Cna)) {
+        return vec![(
+            field.into(),
+            format!("{spec:?}"),
+            "no rate policy: only a survey AUV's or the CNA's slot names one".into(),
+        )];
     }
-    match spec.rates() {
-        Ok(rates) => rates.into_iter().filter_map(|r| payload_problem(field, r, status_bytes)).collect(),
-        Err(e) => vec![(field.into(), "rejected".into(), e)],
+    match (spec.rates(), owner) {
+        (Ok(rates), Some(Owner::Auv(_))) => {
+            rates.into_iter().filter_map(|r| payload_problem(field, r, status_bytes)).collect()
+        }
+        (Ok(_), _) => Vec::new(),
+        (Err(e), _) => vec![(field.into(), "rejected".into(), e)],
     }
 }
 
@@ -528,25 +550,31 @@ mod tests {
         assert_eq!(short(Some(r5.clone())).status_policy(0), Some(&r5));
         let p = short(None).problems("s.", &fit(30.0, 1));
         assert!(p.len() == 1 && p[0].0.starts_with("s.slot 1 (auv0") && p[0].2.contains("air time 3.90 s"), "{p:?}");
-        // A policy on the CNA's slot, two policies for one AUV, a rate too small for the
+        // The CNA's slot too: sized by its policy's slowest rate, not by comms.cna_rate's.
+        let cna = |length_s, policy| Schedule::Tdma { slots: vec![slot("cna", 0.0, length_s, policy)] };
+        assert!(cna(4.0, Some(r5.clone())).problems("s.", &fit(30.0, 0)).is_empty());
+        assert_eq!(cna(4.0, Some(r5.clone())).cna_policy(), Some(&r5));
+        let p = cna(4.0, None).problems("s.", &fit(30.0, 0));
+        assert!(p.len() == 1 && p[0].0.starts_with("s.slot 0 (cna") && p[0].2.contains("air time 3.90 s"), "{p:?}");
+        // A policy on a buoy's slot, two policies for one AUV, a rate too small for the
         // 40-byte status, and an invalid adaptive configuration are each named.
         let bad_adaptive = RatePolicySpec::Adaptive(AdaptiveConfig { memory: 0, ..AdaptiveConfig::default() });
         let bad = Schedule::Tdma {
             slots: vec![
-                slot("cna", 0.0, 5.0, Some(r5.clone())),
+                slot("buoy0", 0.0, 5.0, Some(r5.clone())),
                 slot("auv0", 5.0, 5.0, Some(r5.clone())),
                 slot("auv0", 10.0, 5.0, Some(RatePolicySpec::Fixed { rate: Rate::R0 })),
                 slot("auv1", 15.0, 5.0, Some(bad_adaptive)),
             ],
         };
-        let p = bad.problems("s.", &Fit { status_bytes: 40, ..fit(30.0, 2) });
+        let p = bad.problems("s.", &Fit { status_bytes: 40, n_buoys: 1, ..fit(30.0, 2) });
         let named: Vec<(&str, &str)> = p.iter().map(|p| (p.0.as_str(), p.2.as_str())).collect();
         assert_eq!(
             named,
             [
-                ("s.slots[0].rate_policy", "no rate policy: only a survey AUV's slot names one"),
+                ("s.slots[0].rate_policy", "no rate policy: only a survey AUV's or the CNA's slot names one"),
                 ("s.slots[2].rate_policy", "a rate whose frames hold the 40-byte message"),
-                ("s.slots[2].rate_policy", "the rate policy of auv0's first slot (one policy per AUV)"),
+                ("s.slots[2].rate_policy", "the rate policy of auv0's first slot (one policy per transmitter)"),
                 ("s.slots[3].rate_policy", "adaptive.memory must be ≥ 1"),
             ]
         );

@@ -191,11 +191,11 @@ fn grid(g: &GridModel, sc: &Scenario) -> Result<Arc<AnchorLattice>, TlError> {
     let mut hasher = std::collections::hash_map::DefaultHasher::new();
     key_text.hash(&mut hasher);
     let key = format!("{:016x}", hasher.finish());
-    static MEMO: OnceLock<Mutex<HashMap<String, Arc<AnchorLattice>>>> = OnceLock::new();
-    let memo = MEMO.get_or_init(Default::default);
-    // Held while computing, so concurrent runs of one scenario compute it once.
-    let mut memo = memo.lock().unwrap_or_else(|e| e.into_inner());
-    if let Some(l) = memo.get(&key) {
+    // The key's own slot, locked while its grid is read or computed: callers of one key compute
+    // it once, callers of other keys go on.
+    let slot = memo_slot(&key);
+    let mut held = slot.lock().unwrap_or_else(|e| e.into_inner());
+    if let Some(l) = held.as_ref() {
         return Ok(l.clone());
     }
     let dir = g.cache_dir.clone().unwrap_or_else(|| std::env::temp_dir().join("coopnav-tl"));
@@ -204,7 +204,7 @@ fn grid(g: &GridModel, sc: &Scenario) -> Result<Arc<AnchorLattice>, TlError> {
         Some(l) => l,
         None => {
             tracing::info!(fields, path = %path.display(), "computing the BELLHOP grid");
-            let l = AnchorLattice::build(&Bellhop::with_exe(exe, env)?, lattice, spec, &|_| {})?;
+            let l = build_apart(&Bellhop::with_exe(exe, env)?, lattice, spec)?;
             if let Err(e) = disk::write(&dir, &path, &key_text, &l) {
                 tracing::warn!(path = %path.display(), error = %e, "BELLHOP grid not cached on disk");
             }
@@ -212,8 +212,40 @@ fn grid(g: &GridModel, sc: &Scenario) -> Result<Arc<AnchorLattice>, TlError> {
         }
     };
     let l = Arc::new(lattice_grids);
-    memo.insert(key, l.clone());
+    *held = Some(l.clone());
     Ok(l)
+}
+
+/// A grid computed in this process (`None` until one is, or after a failed attempt: the next
+/// caller tries again).
+type Slot = Arc<Mutex<Option<Arc<AnchorLattice>>>>;
+
+/// The slot of `key`, handed out under a lock held only for the lookup.
+fn memo_slot(key: &str) -> Slot {
+    static SLOTS: OnceLock<Mutex<HashMap<String, Slot>>> = OnceLock::new();
+    let mut slots = SLOTS.get_or_init(Default::default).lock().unwrap_or_else(|e| e.into_inner());
+    slots.entry(key.to_string()).or_default().clone()
+}
+
+/// Computes the lattice on a rayon pool of its own, driven from a thread of its own. The caller
+/// may be a rayon job (an experiment's runs in a pool) holding its key's slot while other jobs wait
+/// on it: run on the caller's pool, the build's parallel work could wait on a worker blocked on
+/// that slot, or the caller, waiting for its stolen work, could pick up a run asking for the slot
+/// it holds. A plain thread waits without running other jobs, and the grid's own pool (as many
+/// threads as the caller's) runs nothing but the grid.
+fn build_apart(bellhop: &Bellhop, lattice: LatticeSpec, spec: GridSpec) -> Result<AnchorLattice, TlError> {
+    let threads = rayon::current_num_threads();
+    std::thread::scope(|s| {
+        let builder = s.spawn(|| {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .thread_name(|i| format!("bellhop-grid-{i}"))
+                .build()
+                .map_err(|e| TlError::Invalid(format!("no thread pool for the BELLHOP grid: {e}")))?;
+            pool.install(|| AnchorLattice::build(bellhop, lattice, spec, &|_| {}))
+        });
+        builder.join().unwrap_or_else(|panic| std::panic::resume_unwind(panic))
+    })
 }
 
 /// The anchors over the survey blocks, the CNA start and the buoys' deployments (widened by the
@@ -465,6 +497,72 @@ mod tests {
         let fields = |l: &AnchorLattice| l.grids().iter().map(|g| g.fields().to_vec()).collect::<Vec<_>>();
         assert_eq!(fields(&read), fields(&written));
         assert!(disk::read(&path, "another key", &lattice, &spec).is_none());
+    }
+
+    /// A grid of a few short BELLHOP runs: the lattice's 4 anchors × 2 source layers × `bearings`,
+    /// to `range_m` (part of the key: each round of a test gets keys of its own).
+    fn small_grid(sc: &Scenario, bearings: usize, range_m: f64, cache_dir: &std::path::Path) -> (GridModel, Scenario) {
+        let g = GridModel {
+            bearings,
+            range_step_m: 20.0,
+            anchor_spacing_m: 10_000.0,
+            margin_m: 0.0,
+            cache_dir: Some(cache_dir.to_path_buf()),
+            ..GridModel::default()
+        };
+        let mut sc = sc.clone();
+        sc.comms.max_range_m = range_m;
+        (g, sc)
+    }
+
+    #[test]
+    #[cfg_attr(not(bellhop_installed), ignore = "BELLHOP is not installed: run scripts/install-bellhop.sh")]
+    fn grids_asked_for_from_inside_a_pools_jobs_are_built_once_per_key_without_deadlock() {
+        use rayon::prelude::*;
+        let dir = tempfile::tempdir().unwrap();
+        let example = Scenario::example();
+        let (done, finished) = std::sync::mpsc::channel();
+        let cache = dir.path().to_path_buf();
+        // An experiment's runs: each does uneven parallel work of its own (so workers wait in
+        // joins and steal), then asks for its grid, on a pool smaller than the jobs. Three rounds,
+        // two keys each.
+        std::thread::spawn(move || {
+            let pool = rayon::ThreadPoolBuilder::new().num_threads(4).build().unwrap();
+            let rounds: Vec<Vec<Result<Arc<AnchorLattice>, String>>> = (0..3)
+                .map(|round| {
+                    let keys =
+                        [1, 2].map(|bearings| small_grid(&example, bearings, 200.0 + 20.0 * round as f64, &cache));
+                    pool.install(|| {
+                        (0..16)
+                            .into_par_iter()
+                            .map(|job| {
+                                (0..4).into_par_iter().for_each(|i| {
+                                    std::thread::sleep(std::time::Duration::from_millis(
+                                        ((job * 7 + i * 13) % 20) as u64,
+                                    ))
+                                });
+                                let (g, sc) = &keys[job % 2];
+                                grid(g, sc).map_err(|e| e.to_string())
+                            })
+                            .collect()
+                    })
+                })
+                .collect();
+            done.send(rounds).unwrap();
+        });
+        let rounds = finished
+            .recv_timeout(std::time::Duration::from_secs(600))
+            .expect("every job got its grid within 10 minutes (a deadlock otherwise)");
+        for grids in rounds {
+            let grids: Vec<Arc<AnchorLattice>> = grids.into_iter().collect::<Result<_, _>>().unwrap();
+            for (job, g) in grids.iter().enumerate() {
+                assert!(Arc::ptr_eq(g, &grids[job % 2]), "job {job} got its key's one grid");
+                assert_eq!(g.grids()[0].spec.bearings, 1 + job % 2);
+            }
+            assert!(!Arc::ptr_eq(&grids[0], &grids[1]), "two keys, two grids");
+        }
+        let files = std::fs::read_dir(dir.path()).unwrap().count();
+        assert_eq!(files, 6, "each key computed and cached on disk once");
     }
 
     #[test]

@@ -72,9 +72,9 @@ pub fn run_experiment(
     let slot_lens = cfg.behaviours.iter().map(|b| slot_length(cfg, b)).collect::<Result<Vec<f64>, _>>();
     let slot_lens = slot_lens.map_err(BatchError::Config)?;
     let (ns, nb, nr) = (cfg.scenarios.len(), cfg.behaviours.len(), cfg.repetitions);
-    // One after another: a BELLHOP grid is built under the grid cache's lock with rayon inside,
-    // and a rayon worker waiting on that lock could be the one the build needs.
+    // In parallel: the cells of one square share their BELLHOP grid, built once (`models::tl`).
     let cells: Vec<EngineScenario> = (0..ns * nb)
+        .into_par_iter()
         .map(|j| {
             let own_tl = match tl {
                 ExperimentTl::Shared(_) => None,
