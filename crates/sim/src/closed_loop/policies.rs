@@ -2,19 +2,21 @@
 //! baselines of [`crate::policy`], configured from the scenario (survey area, fleet, CNA start).
 
 use super::planner_policy::{LikelihoodLink, PingLikelihood, PlannerPolicy, PlannerStats};
-use super::scenario::Scenario;
+use super::scenario::{PlannerLink, Scenario};
 use crate::policy::{
     Centroid, CentroidStandoff, CnaPolicy, FixedPattern, GreedyFisher, MidpointRelay, NoCna, Rect, TimedWaypoints,
     Trail,
 };
 use crate::predeploy::runner;
 use crate::predeploy::scenario::Mission;
+use coopnav_acomms::tl::{TlError, TransmissionLoss, TL_CEILING};
 use coopnav_acomms::Receiver;
-use coopnav_core::{CompassDeg, Heading, Vec3};
+use coopnav_core::{Bathymetry, CompassDeg, DepthTarget, Heading, Vec3};
 use coopnav_plan::{
     AuvEstimate, CnaKind, CnaPose, CostSpec, Deadline, EstimatorSpec, LinkTable, LookAheadPlanner, PenaltyCase,
     PlanError, RangeNoise,
 };
+use std::sync::Arc;
 use thiserror::Error;
 
 /// Every policy name, the planners first: `planner` scores with Hudson's model, `planner-estimator`
@@ -40,6 +42,8 @@ pub enum PolicyError {
     Unknown { name: String },
     #[error("policy {name}: {source}")]
     Plan { name: String, source: PlanError },
+    #[error("policy {name}: the planner's link model (planner.link = \"scenario_channel\"): {source}")]
+    Link { name: String, source: TlError },
 }
 
 /// A configured CNA policy; the planner is kept visible for its statistics.
@@ -120,13 +124,15 @@ impl PolicySpec {
 fn build(name: &str, sc: &Scenario, planned: Option<&TimedWaypoints>) -> Result<Policy, PolicyError> {
     let n = sc.fleet.n_auvs;
     let plan_err = |source| PolicyError::Plan { name: name.to_string(), source };
+    let link_err = |source| PolicyError::Link { name: name.to_string(), source };
     let baseline: Box<dyn CnaPolicy> = match name {
         "planner" | "planner-estimator" => {
             let p = &sc.planner;
             // The estimator-aware cost always weights a ping by the link model; Hudson's planner
             // only when asked (the thesis assumes every ping arrives).
             let estimator = name == "planner-estimator";
-            let likelihood = (p.model_lost_pings || estimator).then(|| modem_likelihood(sc));
+            let likelihood =
+                (p.model_lost_pings || estimator).then(|| modem_likelihood(sc)).transpose().map_err(link_err)?;
             let (start, noise) = filter_model(sc);
             let mut cfg = sc.planner_config();
             if estimator {
@@ -160,7 +166,8 @@ fn build(name: &str, sc: &Scenario, planned: Option<&TimedWaypoints>) -> Result<
         "trail" => Box::new(Trail { auv: n / 2, range: TRAIL_RANGE, angle: std::f64::consts::PI }),
         "relay" => Box::new(MidpointRelay { base: (sc.cna.x, sc.cna.y), auv: n / 2 }),
         "greedy-fisher" => {
-            let link = LinkTable::sample(&LikelihoodLink(&modem_likelihood(sc))).map_err(plan_err)?;
+            let link =
+                LinkTable::sample(&LikelihoodLink(&modem_likelihood(sc).map_err(link_err)?)).map_err(plan_err)?;
             Box::new(GreedyFisher::new(n, link, filter_model(sc).1))
         }
         "open-loop" => match planned {
@@ -173,10 +180,72 @@ fn build(name: &str, sc: &Scenario, planned: Option<&TimedWaypoints>) -> Result<
 }
 
 /// The downlink's success probability over a slant distance, as a real CNA can know it: the
-/// modem's rate and success curves and the TL model it is configured with (never the draws).
-fn modem_likelihood(sc: &Scenario) -> PingLikelihood {
-    let (tl, success, rate) = (sc.comms.tl.assumed(), sc.comms.success.clone(), sc.comms.cna_rate);
-    Box::new(move |d: f64| success.p_success(rate, tl.at_distance(d)))
+/// modem's rate and success curves over the TL model `planner.link` names (never the draws).
+fn modem_likelihood(sc: &Scenario) -> Result<PingLikelihood, TlError> {
+    let (success, rate) = (sc.comms.success.clone(), sc.comms.cna_rate);
+    match sc.planner.link {
+        PlannerLink::Assumed => {
+            let tl = sc.comms.tl.assumed();
+            Ok(Box::new(move |d: f64| success.p_success(rate, tl.at_distance(d))))
+        }
+        PlannerLink::ScenarioChannel => {
+            let channel = ChannelSample::new(sc)?;
+            Ok(Box::new(move |d: f64| channel.mean(|tl| success.p_success(rate, tl), d)))
+        }
+    }
+}
+
+/// The scenario's own TL provider seen from where the CNA pings: from the centre of every survey
+/// block at the CNA's start depth, along [`CHANNEL_BEARINGS`] bearings, to an AUV at its mission
+/// depth. An invention (issue 10): the link depends on where the CNA is, but the planner's table
+/// depends on distance only, so it gets the mean over these sources and bearings.
+struct ChannelSample {
+    tl: Arc<dyn TransmissionLoss>,
+    sources: Vec<Vec3>,
+    bathymetry: Bathymetry,
+    depth: DepthTarget,
+}
+
+/// Bearings per source of [`ChannelSample`] (the default BELLHOP grid's own count). Invented.
+const CHANNEL_BEARINGS: usize = 16;
+
+impl ChannelSample {
+    fn new(sc: &Scenario) -> Result<Self, TlError> {
+        let z = cna_start(sc).pos.z;
+        let sources = (0..sc.fleet.n_auvs)
+            .map(|k| {
+                let corners = sc.lawnmower(k).waypoints();
+                let n = corners.len().max(1) as f64;
+                let (x, y) = corners.iter().fold((0.0, 0.0), |(a, b), (x, y)| (a + x, b + y));
+                Vec3::new(x / n, y / n, z)
+            })
+            .collect();
+        Ok(ChannelSample { tl: sc.comms.tl.provider(sc)?, sources, bathymetry: sc.bathymetry(), depth: sc.fleet.depth })
+    }
+
+    /// The mean of `success(TL)` over every source and bearing at slant distance `d`; a TL the
+    /// provider cannot give is the engine's lost packet ([`TL_CEILING`]).
+    fn mean(&self, success: impl Fn(f64) -> f64, d: f64) -> f64 {
+        let mut sum = 0.0;
+        for src in &self.sources {
+            for b in 0..CHANNEL_BEARINGS {
+                let (s, c) = (std::f64::consts::TAU * b as f64 / CHANNEL_BEARINGS as f64).sin_cos();
+                let z = self.receiver_depth(src.x + d * c, src.y + d * s);
+                let h = (d * d - (z - src.z).powi(2)).max(0.0).sqrt();
+                let rx = Vec3::new(src.x + h * c, src.y + h * s, z);
+                sum += success(self.tl.tl(src, &rx).unwrap_or(TL_CEILING));
+            }
+        }
+        sum / (self.sources.len() * CHANNEL_BEARINGS).max(1) as f64
+    }
+
+    /// A survey AUV's depth at (x, y): its depth, or the water's depth less its altitude.
+    fn receiver_depth(&self, x: f64, y: f64) -> f64 {
+        match self.depth {
+            DepthTarget::Depth { depth } => depth,
+            DepthTarget::Altitude { altitude } => (self.bathymetry.depth_at(x, y) - altitude).max(0.0),
+        }
+    }
 }
 
 /// The survey AUVs' filter as the estimator-aware planner models it: the initial horizontal
@@ -224,5 +293,53 @@ pub fn receiver(to_cna: bool) -> Receiver {
         Receiver::Barge
     } else {
         Receiver::Iver2
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::closed_loop::scenario::PlannerLink;
+
+    /// The planners' success likelihood at each distance, under `link`.
+    fn likelihood_at(sc: &Scenario, link: PlannerLink, distances: &[f64]) -> Vec<f64> {
+        let mut sc = sc.clone();
+        sc.planner.link = link;
+        let f = modem_likelihood(&sc).unwrap();
+        distances.iter().map(|&d| f(d)).collect()
+    }
+
+    #[test]
+    fn on_the_analytic_tl_the_scenario_channel_is_the_assumed_link() {
+        // Every source and bearing lands at the asked slant distance, so the analytic channel's
+        // mean is the assumed curve itself.
+        let sc = Scenario::example();
+        let distances = [100.0, 450.0, 900.0, 1300.0, 2000.0, 3000.0];
+        let assumed = likelihood_at(&sc, PlannerLink::Assumed, &distances);
+        let channel = likelihood_at(&sc, PlannerLink::ScenarioChannel, &distances);
+        for ((d, a), c) in distances.iter().zip(&assumed).zip(&channel) {
+            assert!((a - c).abs() < 1e-9, "{d} m: assumed {a}, channel {c}");
+        }
+        assert!(assumed[0] > 0.75 && assumed[5] < 0.3, "the curve falls over the distances: {assumed:?}");
+    }
+
+    #[test]
+    #[cfg_attr(not(bellhop_installed), ignore = "BELLHOP is not installed: run scripts/install-bellhop.sh")]
+    fn on_a_bellhop_grid_the_scenario_channel_is_the_grids_link() {
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenarios/full-stack.toml");
+        let sc: Scenario = toml::from_str(&std::fs::read_to_string(path).unwrap()).unwrap();
+        let distances: Vec<f64> = (1..=12).map(|i| 200.0 * i as f64).collect();
+        let assumed = likelihood_at(&sc, PlannerLink::Assumed, &distances);
+        let channel = likelihood_at(&sc, PlannerLink::ScenarioChannel, &distances);
+        for ((d, a), c) in distances.iter().zip(&assumed).zip(&channel) {
+            eprintln!("{d:6.0} m  assumed {a:.3}  channel {c:.3}");
+        }
+        // Measured on this grid (altitude-keeping AUVs over the 30-90 m shelf, the ASC at the
+        // surface): both see the modem's plateau close in, but from 1.2 km the assumed Thorp model
+        // still gives 0.71-0.39 where the grid's sea gives under 0.02.
+        assert!((assumed[0] - channel[0]).abs() < 0.05, "200 m: {} vs {}", assumed[0], channel[0]);
+        for i in 5..distances.len() {
+            assert!(assumed[i] > 0.3 && channel[i] < 0.1, "{} m: {} vs {}", distances[i], assumed[i], channel[i]);
+        }
     }
 }

@@ -307,6 +307,10 @@ pub struct Planner {
     /// false = the thesis's behaviour (every ping assumed received).
     #[serde(default)]
     pub model_lost_pings: bool,
+    /// Which channel the planners' link model (lost pings, the estimator's link table) is built
+    /// on. Written only when not the default, so existing manifests read as before.
+    #[serde(default, skip_serializing_if = "PlannerLink::is_assumed")]
+    pub link: PlannerLink,
     /// Initial modelled σ₀ and ε₀, m (Table 5.1: 1 m).
     #[serde(default = "one")]
     pub sigma0: f64,
@@ -361,6 +365,26 @@ pub enum BeforeFirstReport {
     /// waypoints and speed), followed from t = 0 until the reports take over. An invention, not
     /// in the thesis: a field team knows its AUVs' plans.
     MissionPlan,
+}
+
+/// The transmission loss behind the planners' ping success likelihood (`planner.link`).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum PlannerLink {
+    /// The analytic model the CNA is configured with (`comms.tl.assumed()`: the default Thorp
+    /// model under the BELLHOP kinds), apart from the sea it plays in.
+    #[default]
+    Assumed,
+    /// The scenario's own `comms.tl` provider, averaged over bearings from the survey blocks'
+    /// centres (policies `channel_likelihood`). An invention (issue 10): a team that has modelled
+    /// its site's acoustics gives the planner that model. Needs `analytic` or `bellhop_grid`.
+    ScenarioChannel,
+}
+
+impl PlannerLink {
+    fn is_assumed(&self) -> bool {
+        *self == PlannerLink::Assumed
+    }
 }
 
 impl BeforeFirstReport {
@@ -647,6 +671,10 @@ impl Scenario {
         if pl.start_after_reports == 0 {
             p.push("planner.start_after_reports", "0", ">= 1");
         }
+        if pl.link == PlannerLink::ScenarioChannel && self.comms.tl == TlModel::Bellhop {
+            // A direct BELLHOP run per sampled distance and bearing would take hours.
+            p.push("planner.link", "scenario_channel", "\"assumed\", or comms.tl of kind analytic or bellhop_grid");
+        }
         let ids = || PenaltyCase::ALL.iter().map(|c| c.id()).collect::<Vec<&str>>().join(", ");
         if let Some(case) = pl.estimator_penalty_case.as_ref().filter(|c| PenaltyCase::from_id(c).is_none()) {
             p.push("planner.estimator_penalty_case", case.clone(), ids());
@@ -873,6 +901,23 @@ mod tests {
             (sc.planner.estimator_penalty_case.as_deref(), sc.planner.estimator_look_ahead),
             (Some("3"), Some(3))
         );
+    }
+
+    #[test]
+    fn the_planners_link_is_the_assumed_model_unless_the_file_names_the_scenario_channel() {
+        let plain = Scenario::parse(EXAMPLE, Path::new("e.toml")).unwrap();
+        assert_eq!(plain.planner.link, PlannerLink::Assumed);
+        assert!(!toml::to_string(&plain).unwrap().contains("link"), "the default is not written");
+        let with = |link: &str| EXAMPLE.replace("[planner]\n", &format!("[planner]\nlink = \"{link}\"\n"));
+        let sc = Scenario::parse(&with("scenario_channel"), Path::new("c.toml")).unwrap();
+        assert_eq!(sc.planner.link, PlannerLink::ScenarioChannel);
+        let e = err(&with("sonar"));
+        assert!(e.contains("sonar") && e.contains("scenario_channel"), "{e}");
+        // A direct BELLHOP run per sampled distance is refused before BELLHOP is looked for.
+        let direct =
+            with("scenario_channel").replace("kind = \"analytic\", k = 1.5, freq_hz = 25000.0", "kind = \"bellhop\"");
+        let e = err(&direct);
+        assert!(e.contains("planner.link") && e.contains("bellhop_grid") && !e.contains("field comms.tl"), "{e}");
     }
 
     #[test]
