@@ -6,7 +6,8 @@
 //! `analytic` (the files written before the models existed).
 //!
 //! The planner's lost-ping likelihood keeps an analytic model ([`TlModel::assumed`]): what the
-//! CNA believes, apart from the truth.
+//! CNA believes, apart from the truth (unless `planner.link = "scenario_channel"` gives it this
+//! provider).
 
 use crate::closed_loop::policies::cna_start;
 use crate::closed_loop::scenario::Scenario;
