@@ -21,6 +21,17 @@ pub enum DepthTarget {
     Altitude { altitude: f64 },
 }
 
+impl DepthTarget {
+    /// The depth this reference asks for where the seafloor is `bottom` m deep (an altitude
+    /// deeper than the water gives a negative depth: callers that place a vehicle clamp it).
+    pub fn depth_over(self, bottom: f64) -> f64 {
+        match self {
+            DepthTarget::Depth { depth } => depth,
+            DepthTarget::Altitude { altitude } => bottom - altitude,
+        }
+    }
+}
+
 /// A mission waypoint: horizontal position, depth reference and speed through water (m/s).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct Waypoint {
@@ -208,10 +219,7 @@ impl Iver2 {
         }
         yaw_rate = yaw_rate.clamp(-p.max_yaw_rate, p.max_yaw_rate);
 
-        let depth_sp = match wp.target {
-            DepthTarget::Depth { depth } => depth,
-            DepthTarget::Altitude { altitude } => bottom - altitude,
-        };
+        let depth_sp = wp.target.depth_over(bottom);
         // The thesis's pitch loop is in degrees: deg/s per metre of depth error and per m/s of
         // the previous step's vertical speed.
         let pitch_rate_deg = (s.pos.z - depth_sp) * p.kp_pitch + p.kd_pitch * s.vertical_speed;

@@ -241,10 +241,7 @@ impl ChannelSample {
 
     /// A survey AUV's depth at (x, y): its depth, or the water's depth less its altitude.
     fn receiver_depth(&self, x: f64, y: f64) -> f64 {
-        match self.depth {
-            DepthTarget::Depth { depth } => depth,
-            DepthTarget::Altitude { altitude } => (self.bathymetry.depth_at(x, y) - altitude).max(0.0),
-        }
+        self.depth.depth_over(self.bathymetry.depth_at(x, y)).max(0.0)
     }
 }
 

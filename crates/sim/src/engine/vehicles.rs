@@ -13,9 +13,7 @@ use crate::models::ship::ShipSpec;
 use coopnav_acomms::node_report::{NodeReport, VehicleType};
 use coopnav_acomms::selector::{RatePolicy, RatePolicySpec};
 use coopnav_acomms::Rate;
-use coopnav_core::{
-    hypot_within, wrap_pi, Bathymetry, DepthTarget, Heading, Iver2, Iver2State, SeedStream, Vec3, Waypoint,
-};
+use coopnav_core::{hypot_within, wrap_pi, Bathymetry, Heading, Iver2, Iver2State, SeedStream, Vec3, Waypoint};
 use coopnav_nav::{AuvFilter, Side, StateKind};
 use rand_chacha::ChaCha8Rng;
 
@@ -93,10 +91,7 @@ impl SurveyAuv {
         let waypoints: Vec<Waypoint> =
             pts.iter().map(|&(x, y)| Waypoint { x, y, target: sc.fleet.depth, speed: sc.fleet.speed }).collect();
         let bottom = bathy.depth_at(start.0, start.1);
-        let z0 = match sc.fleet.depth {
-            DepthTarget::Depth { depth } => depth,
-            DepthTarget::Altitude { altitude } => bottom - altitude,
-        };
+        let z0 = sc.fleet.depth.depth_over(bottom);
         let truth = Vec3::new(start.0, start.1, z0);
         let mut r_init = rng(stream::INIT);
         let sd = sc.fleet.init_position_sd;

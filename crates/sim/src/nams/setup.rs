@@ -98,10 +98,7 @@ fn flown(sc: &EngineScenario, k: usize, bathy: &Bathymetry) -> Iver2 {
         .map(|(x, y)| Waypoint { x, y, target: f.depth, speed: f.speed })
         .collect();
     let (a, b) = (plan[0], plan.get(1).copied().unwrap_or(plan[0]));
-    let depth = match f.depth {
-        DepthTarget::Altitude { altitude } => (bathy.depth_at(a.x, a.y) - altitude).max(0.0),
-        DepthTarget::Depth { depth } => depth,
-    };
+    let depth = f.depth.depth_over(bathy.depth_at(a.x, a.y)).max(0.0);
     let start = Iver2State::at_rest(Vec3::new(a.x, a.y, depth), Heading::from_radians((b.y - a.y).atan2(b.x - a.x)));
     Iver2::new(f.vehicle, start, plan)
 }
