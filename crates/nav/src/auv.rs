@@ -9,7 +9,7 @@
 //! enough to reach 8°. Headings inside are math convention (0 = east, counter-clockwise), so E
 //! advances with cos ψ and N with sin ψ; the thesis writes the same model clockwise from north.
 
-use crate::ekf::{propagate_covariance, wrap_angle, Ekf, Gate, UpdateOutcome};
+use crate::ekf::{propagate_covariance, wrap_angle, Ekf, Gate, SparseRows, UpdateOutcome};
 use crate::range::{RangeMeasurement, RangeNoise};
 use coopnav_core::validation::{CheckFields, InvalidFields, Problems};
 use coopnav_core::Vec3;
@@ -148,30 +148,23 @@ fn transition_at<const M: usize>(x: &SVector<f64, M>, h: f64, turn: f64, (sin, c
 /// ∂transition/∂x at `x` (digest §3.2, F^A).
 pub fn transition_jacobian<const M: usize>(x: &SVector<f64, M>, h: f64) -> SMatrix<f64, M, M> {
     let mut f = SMatrix::<f64, M, M>::identity();
-    for (i, j, v) in transition_jacobian_entries(x, h, x[PSI].sin_cos()) {
-        f[(i, j)] += v;
+    for (i, entries) in transition_jacobian_entries(x, h, x[PSI].sin_cos()) {
+        entries.iter().for_each(|&(j, v)| f[(i, j)] += v);
     }
     f
 }
 
-/// The non-identity entries (row, column, value) of [`transition_jacobian`]: four, six with the
-/// current states (zero-valued when `M` = 5, so the array has one length); (sin ψ, cos ψ) of `x`
-/// given.
+/// The non-identity entries of [`transition_jacobian`], by row: E and N, each with its entries
+/// (column, value) at S and ψ, and at its current state when there are 7 (zero-valued at itself
+/// when `M` = 5, so the rows have one length); (sin ψ, cos ψ) of `x` given.
 fn transition_jacobian_entries<const M: usize>(
     x: &SVector<f64, M>,
     h: f64,
     (sin, cos): (f64, f64),
-) -> [(usize, usize, f64); 6] {
+) -> SparseRows<2, 3> {
     let drift = if M > CURRENT_N { h } else { 0.0 };
     let (ce, cn) = if M > CURRENT_N { (CURRENT_E, CURRENT_N) } else { (E, N) };
-    [
-        (E, S, h * cos),
-        (E, PSI, -h * x[S] * sin),
-        (N, S, h * sin),
-        (N, PSI, h * x[S] * cos),
-        (E, ce, drift),
-        (N, cn, drift),
-    ]
+    [(E, [(S, h * cos), (PSI, -h * x[S] * sin), (ce, drift)]), (N, [(S, h * sin), (PSI, h * x[S] * cos), (cn, drift)])]
 }
 
 /// The frame of a logged velocity over ground.
@@ -296,10 +289,8 @@ impl<const M: usize> AuvEkf<M> {
 
     /// Speed update with its own SD (m/s), e.g. from a log row.
     pub fn update_speed_sd(&mut self, measured: f64, sd: f64) -> UpdateOutcome {
-        let mut h = SMatrix::<f64, 1, M>::zeros();
-        h[S] = 1.0;
         let y = measured - self.ekf.x()[S];
-        self.ekf.update_scalar(y, h, sd.powi(2), &Gate::OFF)
+        self.ekf.update_units(y, [S], sd.powi(2), &Gate::OFF)
     }
 
     /// Compass update: the compass reads ψ + b (math convention, rad).
@@ -309,11 +300,8 @@ impl<const M: usize> AuvEkf<M> {
 
     /// Compass update with its own SD (rad).
     pub fn update_heading_sd(&mut self, measured: f64, sd: f64) -> UpdateOutcome {
-        let mut h = SMatrix::<f64, 1, M>::zeros();
-        h[PSI] = 1.0;
-        h[BIAS] = 1.0;
         let y = wrap_angle(measured - self.ekf.x()[PSI] - self.ekf.x()[BIAS]);
-        self.ekf.update_scalar(y, h, sd.powi(2), &Gate::OFF)
+        self.ekf.update_units(y, [PSI, BIAS], sd.powi(2), &Gate::OFF)
     }
 
     /// Position fix of the vehicle itself (GPS at the surface), SD `sd` m on each axis.
@@ -508,10 +496,8 @@ impl AuvFilter {
 impl<const M: usize> AuvEkf<M> {
     /// A direct measurement of state `i` with variance `r`.
     fn update_axis(&mut self, i: usize, measured: f64, r: f64) -> UpdateOutcome {
-        let mut h = SMatrix::<f64, 1, M>::zeros();
-        h[i] = 1.0;
         let y = measured - self.ekf.x()[i];
-        self.ekf.update_scalar(y, h, r, &Gate::OFF)
+        self.ekf.update_units(y, [i], r, &Gate::OFF)
     }
 }
 

@@ -86,7 +86,9 @@ impl<const N: usize> Ekf<N> {
     /// A filter at time `t0` with mean `x0`, covariance `p0`; `angles[i]` marks component i as an
     /// angle in radians, kept wrapped to (-π, π].
     pub fn new(t0: f64, x0: SVector<f64, N>, p0: SMatrix<f64, N, N>, angles: [bool; N]) -> Self {
-        let mut e = Ekf { x: x0, p: p0, t: t0, angles, history: None, predicts: 0, updates: 0 };
+        // Symmetric from the start (unchanged when `p0` is): every step keeps it so, which the
+        // sparse prediction relies on.
+        let mut e = Ekf { x: x0, p: symmetrise(p0), t: t0, angles, history: None, predicts: 0, updates: 0 };
         e.wrap_state();
         e
     }
@@ -141,19 +143,18 @@ impl<const N: usize> Ekf<N> {
         true
     }
 
-    /// Prediction to time `t` with a transition Jacobian F = I + G, G given by its non-zero
-    /// entries (row, column, value), and a diagonal process noise: the same P⁻ = F P Fᵀ + Q as
+    /// Prediction to time `t` with a transition Jacobian F = I + G, G given by the non-zero
+    /// entries of its rows, and a diagonal process noise: the same P⁻ = F P Fᵀ + Q as
     /// [`Self::predict`] (up to rounding), computed as two sparse row/column passes instead of
     /// two dense N×N products — the filter-rate predictions of a fleet are most of a run's time.
-    pub fn predict_sparse(
+    pub fn predict_sparse<const R: usize, const K: usize>(
         &mut self,
         t: f64,
         x_new: SVector<f64, N>,
-        g: &[(usize, usize, f64)],
+        g: &SparseRows<R, K>,
         q_diag: &SVector<f64, N>,
     ) -> bool {
-        let g_ok = g.iter().all(|&(i, j, v)| i < N && j < N && v.is_finite());
-        if !(t.is_finite() && g_ok && all_finite(x_new.as_slice()) && all_finite(q_diag.as_slice())) {
+        if !(t.is_finite() && rows_ok::<N, R, K>(g) && all_finite(x_new.as_slice()) && all_finite(q_diag.as_slice())) {
             return false;
         }
         propagate_covariance(&mut self.p, g, q_diag);
@@ -163,7 +164,9 @@ impl<const N: usize> Ekf<N> {
         self.predicts += 1;
         if let Some(h) = self.history.as_mut() {
             let mut f = SMatrix::<f64, N, N>::identity();
-            g.iter().for_each(|&(i, j, v)| f[(i, j)] += v);
+            for (i, entries) in g {
+                entries.iter().for_each(|&(j, v)| f[(*i, j)] += v);
+            }
             let q = SMatrix::<f64, N, N>::from_diagonal(q_diag);
             h.push(Step { t, f, q, x_prior: self.x, p_prior: self.p, x_post: self.x, p_post: self.p });
         }
@@ -181,11 +184,37 @@ impl<const N: usize> Ekf<N> {
         if !(innovation.is_finite() && all_finite(h.as_slice()) && r.is_finite()) {
             return UpdateOutcome::Unusable;
         }
-        let seen = NonZero::of(&h);
+        self.update_row(innovation, &Weighted { seen: NonZero::of(&h), h: &h }, r, gate)
+    }
+
+    /// [`Self::update_scalar`] for the Jacobian row h = Σ e_j over `columns` (distinct, in
+    /// increasing order): a direct reading of one state (speed) or of a sum of states (compass:
+    /// heading plus bias). Bit for bit the same result, with the row's shape known when compiled
+    /// (the filter-rate updates are most of a fleet's filter time); columns out of range or out of
+    /// order make the measurement unusable.
+    pub fn update_units<const K: usize>(
+        &mut self,
+        innovation: f64,
+        columns: [usize; K],
+        r: f64,
+        gate: &Gate,
+    ) -> UpdateOutcome {
+        let mut ordered = true;
+        for (n, &j) in columns.iter().enumerate() {
+            ordered &= j < N && (n == 0 || columns[n - 1] < j);
+        }
+        if !(innovation.is_finite() && r.is_finite() && ordered) {
+            return UpdateOutcome::Unusable;
+        }
+        self.update_row(innovation, &Units(columns), r, gate)
+    }
+
+    /// The scalar Joseph update of [`Self::update_scalar`] for a row given by its non-zero entries.
+    fn update_row(&mut self, innovation: f64, h: &impl SparseRow<N>, r: f64, gate: &Gate) -> UpdateOutcome {
         // `p[j][i]` is entry (i, j) of the column-major storage.
         let p = &self.p.data.0;
-        let pht = seen.times(|i, j| p[j][i], &h);
-        let s = seen.columns().iter().map(|&j| h[j] * pht[j]).sum::<f64>() + r;
+        let pht = h.times(|i, j| p[j][i]);
+        let s = h.dot(&pht) + r;
         if !(s > 0.0 && s.is_finite()) {
             return UpdateOutcome::Unusable;
         }
@@ -201,7 +230,7 @@ impl<const N: usize> Ekf<N> {
         // as in the two-pass form, (p − kᵢ (P hᵀ)ⱼ) + cᵢ kⱼ, and each off-diagonal pair averaged
         // as [`symmetrise`] averages it.
         let b = |i: usize, j: usize| p[j][i] - k[i] * pht[j];
-        let bht = seen.times(b, &h);
+        let bht = h.times(b);
         let mut c = [0.0; N];
         for (i, v) in c.iter_mut().enumerate() {
             *v = r * k[i] - bht[i];
@@ -216,9 +245,12 @@ impl<const N: usize> Ekf<N> {
                 columns[i][j] = v;
             }
         }
-        let p_new = SMatrix::<f64, N, N>::from_data(nalgebra::ArrayStorage(columns));
         let x_new = self.x + SVector::<f64, N>::from(k) * innovation;
-        self.commit(x_new, p_new).map_or(UpdateOutcome::Unusable, |()| UpdateOutcome::Applied { nis })
+        if !(all_finite(columns.as_flattened()) && all_finite(x_new.as_slice())) {
+            return UpdateOutcome::Unusable;
+        }
+        self.accept(x_new, SMatrix::<f64, N, N>::from_data(nalgebra::ArrayStorage(columns)));
+        UpdateOutcome::Applied { nis }
     }
 
     /// Vector update of M measurements with innovation y, Jacobian H and noise covariance R, in
@@ -255,6 +287,12 @@ impl<const N: usize> Ekf<N> {
         if !(all_finite(x_new.as_slice()) && all_finite(p_new.as_slice())) {
             return None;
         }
+        self.accept(x_new, p_new);
+        Some(())
+    }
+
+    /// Takes a posterior already checked finite; records it in the history.
+    fn accept(&mut self, x_new: SVector<f64, N>, p_new: SMatrix<f64, N, N>) {
         self.x = x_new;
         self.p = p_new;
         self.wrap_state();
@@ -263,7 +301,6 @@ impl<const N: usize> Ekf<N> {
             last.x_post = self.x;
             last.p_post = self.p;
         }
-        Some(())
     }
 
     fn wrap_state(&mut self) {
@@ -300,6 +337,15 @@ pub fn wrap_angle(a: f64) -> f64 {
     }
 }
 
+/// A scalar measurement's Jacobian row h by its non-zero entries, visited in column order (a zero
+/// term adds nothing to a sum).
+trait SparseRow<const N: usize> {
+    /// M hᵀ for M given entry by entry (`m(i, j)`).
+    fn times(&self, m: impl Fn(usize, usize) -> f64) -> [f64; N];
+    /// h v.
+    fn dot(&self, v: &[f64; N]) -> f64;
+}
+
 /// The columns where a measurement row h is non-zero, in increasing order.
 struct NonZero<const N: usize> {
     columns: [usize; N],
@@ -319,28 +365,43 @@ impl<const N: usize> NonZero<N> {
     fn columns(&self) -> &[usize] {
         &self.columns[..self.len]
     }
+}
 
-    /// M hᵀ for M given entry by entry (`m(i, j)`), summed over h's non-zero entries in column
-    /// order.
-    fn times(&self, m: impl Fn(usize, usize) -> f64, h: &SMatrix<f64, 1, N>) -> [f64; N] {
+/// A general row: its non-zero columns and their values.
+struct Weighted<'a, const N: usize> {
+    seen: NonZero<N>,
+    h: &'a SMatrix<f64, 1, N>,
+}
+
+impl<const N: usize> SparseRow<N> for Weighted<'_, N> {
+    fn times(&self, m: impl Fn(usize, usize) -> f64) -> [f64; N] {
         let mut out = [0.0; N];
         for (i, v) in out.iter_mut().enumerate() {
-            *v = self.columns().iter().map(|&j| m(i, j) * h[j]).sum();
+            *v = self.seen.columns().iter().map(|&j| m(i, j) * self.h[j]).sum();
         }
         out
     }
+
+    fn dot(&self, v: &[f64; N]) -> f64 {
+        self.seen.columns().iter().map(|&j| self.h[j] * v[j]).sum()
+    }
 }
 
-/// [`symmetrise`] in place, mirroring the averaged upper triangle.
-fn symmetrise_in_place<const N: usize>(m: &mut SMatrix<f64, N, N>) {
-    // `columns[j][i]` is entry (i, j).
-    let columns = &mut m.data.0;
-    for j in 1..N {
-        for i in 0..j {
-            let v = 0.5 * (columns[j][i] + columns[i][j]);
-            columns[j][i] = v;
-            columns[i][j] = v;
+/// A row of ones at `K` columns (in increasing order), zeros elsewhere: a product with a one is
+/// the value itself, so the sums are those of [`Weighted`] bit for bit.
+struct Units<const K: usize>([usize; K]);
+
+impl<const N: usize, const K: usize> SparseRow<N> for Units<K> {
+    fn times(&self, m: impl Fn(usize, usize) -> f64) -> [f64; N] {
+        let mut out = [0.0; N];
+        for (i, v) in out.iter_mut().enumerate() {
+            *v = self.0.iter().map(|&j| m(i, j)).sum();
         }
+        out
+    }
+
+    fn dot(&self, v: &[f64; N]) -> f64 {
+        self.0.iter().map(|&j| v[j]).sum()
     }
 }
 
@@ -360,32 +421,104 @@ fn all_finite(v: &[f64]) -> bool {
     v.iter().fold(true, |ok, x| ok & x.is_finite())
 }
 
-/// P ← F P Fᵀ + diag(q) for F = I + G, G given by its non-zero entries (row, column, value),
-/// symmetrised: O(N²) per entry instead of two dense products.
-pub fn propagate_covariance<const N: usize>(
-    p: &mut SMatrix<f64, N, N>,
-    g: &[(usize, usize, f64)],
-    q_diag: &SVector<f64, N>,
-) {
-    // A = F P = P + G P (rows of G read the old P), then P⁻ = A Fᵀ = A + A Gᵀ (columns);
-    // `columns[c][r]` is entry (r, c).
-    let old = p.data.0;
-    let columns = &mut p.data.0;
-    for &(i, j, v) in g {
-        for (column, old_column) in columns.iter_mut().zip(&old) {
-            column[i] += v * old_column[j];
+/// The non-zero entries of a sparse G, grouped by row: `R` rows, each (row, its `K` entries
+/// (column, value) in order). F = I + G is a transition Jacobian that differs from the identity
+/// in a few rows (the AUV filter's position rows).
+pub type SparseRows<const R: usize, const K: usize> = [(usize, [(usize, f64); K]); R];
+
+/// G's rows distinct and inside the matrix, its values finite (plain loops: this runs every
+/// filter step).
+fn rows_ok<const N: usize, const R: usize, const K: usize>(g: &SparseRows<R, K>) -> bool {
+    let mut ok = true;
+    for (r, (i, entries)) in g.iter().enumerate() {
+        ok &= *i < N;
+        for (other, _) in &g[..r] {
+            ok &= other != i;
+        }
+        for &(j, v) in entries {
+            ok &= j < N && v.is_finite();
         }
     }
-    let a = *columns;
-    for &(i, j, v) in g {
-        for (x, &a_rj) in columns[i].iter_mut().zip(&a[j]) {
-            *x += v * a_rj;
+    ok
+}
+
+/// The position of row `j` among G's rows.
+fn row_position<const R: usize, const K: usize>(g: &SparseRows<R, K>, j: usize) -> Option<usize> {
+    let mut found = None;
+    for (r, (i, _)) in g.iter().enumerate() {
+        if *i == j {
+            found = Some(r);
+        }
+    }
+    found
+}
+
+/// P ← F P Fᵀ + diag(q) for F = I + G, G given by its rows' non-zero entries, symmetrised:
+/// O(N·R·K) instead of two dense products.
+///
+/// A = F P = P + G P changes only G's rows, and P⁻ = A Fᵀ = A + A Gᵀ only the columns of the same
+/// indices, so only those rows are built (from the old P) and only those columns rewritten; no
+/// copy of P is taken (this runs once per AUV per filter step). Each entry is summed in its row's
+/// order, as the dense two-pass form (rows of G in pass one, its columns in pass two) sums it.
+pub fn propagate_covariance<const N: usize, const R: usize, const K: usize>(
+    p: &mut SMatrix<f64, N, N>,
+    g: &SparseRows<R, K>,
+    q_diag: &SVector<f64, N>,
+) {
+    // `columns[c][r]` is entry (r, c).
+    let columns = &mut p.data.0;
+    // A's row i: P's row i plus v times the old row j, for each entry (j, v) of G's row i.
+    let mut a_rows = [[0.0; N]; R];
+    for ((i, entries), a) in g.iter().zip(a_rows.iter_mut()) {
+        for (a_c, column) in a.iter_mut().zip(columns.iter()) {
+            *a_c = column[*i];
+        }
+        for &(j, v) in entries {
+            for (a_c, column) in a.iter_mut().zip(columns.iter()) {
+                *a_c += v * column[j];
+            }
+        }
+    }
+    for ((i, _), a) in g.iter().zip(&a_rows) {
+        for (column, &a_c) in columns.iter_mut().zip(a) {
+            column[*i] = a_c;
+        }
+    }
+    // A's columns of G's row indices, kept before the second pass rewrites them (an entry may
+    // read one of them as its column j).
+    let mut a_columns = [[0.0; N]; R];
+    for ((i, _), a) in g.iter().zip(a_columns.iter_mut()) {
+        *a = columns[*i];
+    }
+    for (i, entries) in g {
+        for &(j, v) in entries {
+            match row_position(g, j) {
+                Some(r) => {
+                    for (x, a_xj) in columns[*i].iter_mut().zip(&a_columns[r]) {
+                        *x += v * a_xj;
+                    }
+                }
+                // Column j is not rewritten by this pass (j is not a row of G, so not i either).
+                None => {
+                    for x in 0..N {
+                        columns[*i][x] += v * columns[j][x];
+                    }
+                }
+            }
         }
     }
     for i in 0..N {
-        p[(i, i)] += q_diag[i];
+        columns[i][i] += q_diag[i];
     }
-    symmetrise_in_place(p);
+    // Only pairs with an index among G's rows changed; P is kept symmetric (see [`Ekf::new`]), so
+    // every other pair is already equal.
+    for (i, _) in g {
+        for r in 0..N {
+            let v = 0.5 * (columns[*i][r] + columns[r][*i]);
+            columns[*i][r] = v;
+            columns[r][*i] = v;
+        }
+    }
 }
 
 #[cfg(test)]
@@ -453,9 +586,9 @@ mod tests {
         let p0 = SMatrix::<f64, 3, 3>::new(4.0, 0.5, -0.2, 0.5, 2.0, 0.3, -0.2, 0.3, 1.0);
         let (mut dense, mut fast) =
             (Ekf::new(0.0, SVector::zeros(), p0, [false; 3]), Ekf::new(0.0, SVector::zeros(), p0, [false; 3]));
-        let g = [(0, 1, 0.1), (0, 2, -0.3), (1, 2, 0.05)];
+        let g = [(0, [(1, 0.1), (2, -0.3)]), (1, [(2, 0.05), (0, 0.2)])];
         let mut f = SMatrix::<f64, 3, 3>::identity();
-        g.iter().for_each(|&(i, j, v)| f[(i, j)] += v);
+        g.iter().for_each(|(i, entries)| entries.iter().for_each(|&(j, v)| f[(*i, j)] += v));
         let q = SVector::<f64, 3>::new(0.01, 0.02, 0.0);
         let x = SVector::<f64, 3>::new(1.0, 2.0, 3.0);
         assert!(dense.predict(1.0, x, f, SMatrix::from_diagonal(&q)));
@@ -470,7 +603,88 @@ mod tests {
         let UpdateOutcome::Applied { nis } = fast.update_scalar(0.7, h, 0.5, &Gate::OFF) else { panic!() };
         assert!((nis - nis_dense).abs() < 1e-12);
         assert!((dense.p() - fast.p()).abs().max() < 1e-12 && (dense.x() - fast.x()).abs().max() < 1e-12);
-        assert!(!fast.predict_sparse(2.0, x, &[(3, 0, 1.0)], &q), "an entry outside the matrix is refused");
+        assert!(!fast.predict_sparse(2.0, x, &[(3, [(0, 1.0)])], &q), "an entry outside the matrix is refused");
+        assert!(!fast.predict_sparse(2.0, x, &[(0, [(1, 1.0)]), (0, [(2, 1.0)])], &q), "a row given twice is refused");
+    }
+
+    /// The dense two-pass form of [`propagate_covariance`] with G's entries flat, in the order
+    /// each row lists them: A = P + G P (rows, from the old P), P⁻ = A + A Gᵀ (columns, from A),
+    /// + Q, every pair averaged.
+    fn two_pass(p: &SMatrix<f64, 7, 7>, g: &SparseRows<2, 3>, q: &SVector<f64, 7>) -> SMatrix<f64, 7, 7> {
+        let flat: Vec<(usize, usize, f64)> =
+            g.iter().flat_map(|(i, entries)| entries.iter().map(move |&(j, v)| (*i, j, v))).collect();
+        let mut a = *p;
+        for &(i, j, v) in &flat {
+            for c in 0..7 {
+                a[(i, c)] += v * p[(j, c)];
+            }
+        }
+        let mut out = a;
+        for &(i, j, v) in &flat {
+            for r in 0..7 {
+                out[(r, i)] += v * a[(r, j)];
+            }
+        }
+        for i in 0..7 {
+            out[(i, i)] += q[i];
+        }
+        for j in 1..7 {
+            for i in 0..j {
+                let v = 0.5 * (out[(i, j)] + out[(j, i)]);
+                (out[(i, j)], out[(j, i)]) = (v, v);
+            }
+        }
+        out
+    }
+
+    #[test]
+    fn sparse_prediction_is_the_two_pass_form_bit_for_bit() {
+        let mut rng = 0x2545_f491_4f6c_dd1d_u64;
+        let mut uniform = || {
+            rng ^= rng << 13;
+            rng ^= rng >> 7;
+            rng ^= rng << 17;
+            (rng >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+        };
+        for case in 0..200 {
+            let m = SMatrix::<f64, 7, 7>::from_fn(|_, _| uniform());
+            let p = m * m.transpose() + SMatrix::identity() * 0.1;
+            let q = SVector::<f64, 7>::from_fn(|_, _| uniform().abs() * 1e-3);
+            // The AUV filter's shapes: rows 0 and 1 reading columns 2, 3 and a current state, or
+            // (5 states) a zero-valued entry at the row itself, which the second pass reads as a
+            // column it rewrites.
+            let (c0, c1, d) = if case % 2 == 0 { (5, 6, 0.1) } else { (0, 1, 0.0) };
+            let g = [(0, [(2, uniform()), (3, uniform()), (c0, d)]), (1, [(2, uniform()), (3, uniform()), (c1, d)])];
+            let mut fast = p;
+            propagate_covariance(&mut fast, &g, &q);
+            let reference = two_pass(&p, &g, &q);
+            let same = fast.iter().zip(reference.iter()).all(|(a, b)| a.to_bits() == b.to_bits());
+            assert!(same, "case {case}: {fast} vs {reference}");
+        }
+    }
+
+    #[test]
+    fn unit_rows_update_as_the_general_row_bit_for_bit() {
+        let m = SMatrix::<f64, 4, 4>::from_fn(|i, j| ((i * 4 + j) as f64 * 0.37).sin());
+        let p0 = m * m.transpose() + SMatrix::identity() * 0.05;
+        let x0 = SVector::<f64, 4>::new(1.0, -2.0, 0.5, 3.0);
+        let (mut general, mut units) = (Ekf::new(0.0, x0, p0, [false; 4]), Ekf::new(0.0, x0, p0, [false; 4]));
+        for step in 0..50 {
+            let y = (step as f64 * 0.7).cos();
+            let mut h = SMatrix::<f64, 1, 4>::zeros();
+            let out = if step % 2 == 0 {
+                h[2] = 1.0;
+                (general.update_scalar(y, h, 0.3, &Gate::OFF), units.update_units(y, [2], 0.3, &Gate::OFF))
+            } else {
+                (h[1], h[3]) = (1.0, 1.0);
+                (general.update_scalar(y, h, 0.02, &Gate::OFF), units.update_units(y, [1, 3], 0.02, &Gate::OFF))
+            };
+            assert_eq!(out.0, out.1);
+            let bits = |e: &Ekf<4>| e.p().iter().chain(e.x().iter()).map(|v| v.to_bits()).collect::<Vec<_>>();
+            assert_eq!(bits(&general), bits(&units), "step {step}");
+        }
+        assert_eq!(units.update_units(1.0, [3, 1], 0.1, &Gate::OFF), UpdateOutcome::Unusable, "out of order");
+        assert_eq!(units.update_units(1.0, [4], 0.1, &Gate::OFF), UpdateOutcome::Unusable, "outside the state");
     }
 
     #[test]
