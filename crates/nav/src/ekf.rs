@@ -650,11 +650,14 @@ mod tests {
             let m = SMatrix::<f64, 7, 7>::from_fn(|_, _| uniform());
             let p = m * m.transpose() + SMatrix::identity() * 0.1;
             let q = SVector::<f64, 7>::from_fn(|_, _| uniform().abs() * 1e-3);
-            // The AUV filter's shapes: rows 0 and 1 reading columns 2, 3 and a current state, or
-            // (5 states) a zero-valued entry at the row itself, which the second pass reads as a
-            // column it rewrites.
-            let (c0, c1, d) = if case % 2 == 0 { (5, 6, 0.1) } else { (0, 1, 0.0) };
-            let g = [(0, [(2, uniform()), (3, uniform()), (c0, d)]), (1, [(2, uniform()), (3, uniform()), (c1, d)])];
+            // The AUV filter's shape, rows 0 and 1 reading columns 2, 3 and a current state; and
+            // rows reading themselves (the 5-state filter's entries there) or each other: columns
+            // the second pass rewrites while it reads them.
+            let (c0, c1) = [(5, 6), (0, 1), (1, 0)][case % 3];
+            let g = [
+                (0, [(2, uniform()), (3, uniform()), (c0, uniform())]),
+                (1, [(2, uniform()), (3, uniform()), (c1, uniform())]),
+            ];
             let mut fast = p;
             propagate_covariance(&mut fast, &g, &q);
             let reference = two_pass(&p, &g, &q);
