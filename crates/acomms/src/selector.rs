@@ -159,6 +159,12 @@ pub struct AdaptiveConfig {
     pub d_max: f64,
     /// Leave status mode when any packet from the peer is heard (not only on a confirmed success).
     pub exit_status_on_heard: bool,
+    /// Exploration of collapsed bins (invented; the thesis has none, nams digest §3.5 and §8 item
+    /// 10): after this many own slots without a sample at a rate whose bin lies wholly nearer
+    /// than the recipient, that bin's threshold drifts out by Δ, so a rate learnt away far out
+    /// can be tried again once the vehicles close in. 0: never (the thesis's selector).
+    #[serde(skip_serializing_if = "is_zero")]
+    pub drift_after_slots: u32,
 }
 
 impl Default for AdaptiveConfig {
@@ -173,8 +179,13 @@ impl Default for AdaptiveConfig {
             status_thresholds: [2500.0, 2500.0],
             d_max: 5000.0,
             exit_status_on_heard: true,
+            drift_after_slots: 0,
         }
     }
+}
+
+fn is_zero(n: &u32) -> bool {
+    *n == 0
 }
 
 impl AdaptiveConfig {
@@ -210,6 +221,8 @@ struct BinArray {
     th: Vec<f64>,
     hist: Vec<VecDeque<bool>>,
     fresh: Vec<bool>,
+    /// Own slots since the last choice of each rate.
+    idle: Vec<u32>,
 }
 
 impl BinArray {
@@ -221,6 +234,7 @@ impl BinArray {
             th: entries.iter().map(|e| e.2).collect(),
             hist: vec![VecDeque::new(); n],
             fresh: vec![false; n],
+            idle: vec![0; n],
         };
         for i in 0..n {
             a.make_monotone(i);
@@ -249,6 +263,23 @@ impl BinArray {
             self.hist[i].pop_front();
         }
         self.fresh[i] = true;
+    }
+
+    /// The bin for distance `d` in an own slot; first, each rate whose bin lies wholly nearer
+    /// than `d` and has gone `drift_after` slots unchosen has its threshold moved out by `step`.
+    fn choose(&mut self, d: f64, drift_after: u32, step: f64, d_max: f64) -> Option<usize> {
+        for i in 0..self.th.len() {
+            if drift_after > 0 && self.th[i] <= d && self.idle[i] >= drift_after {
+                self.th[i] = (self.th[i] + step).min(d_max);
+                self.make_monotone(i);
+                self.idle[i] = 0;
+            }
+        }
+        let chosen = self.bin(d);
+        for (i, idle) in self.idle.iter_mut().enumerate() {
+            *idle = if Some(i) == chosen { 0 } else { *idle + 1 };
+        }
+        chosen
     }
 
     /// Moves each bin that got new outcomes by Δ toward its target success ratio.
@@ -377,8 +408,9 @@ impl RatePolicy for AdaptiveBins {
         // Unknown position: treat the peer as in range so a wrong or missing estimate cannot
         // lock the vehicle out (the thesis's field-trial bug, nams digest §5.3).
         let d = distance.unwrap_or(0.0);
+        let (drift_after, step, d_max) = (self.cfg.drift_after_slots, self.cfg.step, self.cfg.d_max);
         let a = self.array(mode);
-        match a.bin(d) {
+        match a.choose(d, drift_after, step, d_max) {
             Some(i) => {
                 let r = a.rates[i];
                 self.pending.insert(slot, (mode, i));
@@ -424,6 +456,37 @@ mod tests {
         assert_eq!(s.choose(2, Some(1000.0)), Choice::Transmit(Rate::R1));
         assert_eq!(s.choose(4, Some(2000.0)), Choice::Silent);
         assert_eq!(s.choose(6, None), Choice::Transmit(Rate::R4), "unknown position counts as in range");
+    }
+
+    /// Rate 4's bin collapsed by failures far out stays collapsed in the thesis's selector; with
+    /// drift it moves out by Δ every `drift_after_slots` slots without a rate-4 choice, and rate 4
+    /// is tried again once its bin reaches the recipient.
+    #[test]
+    fn a_collapsed_bin_drifts_back_out_only_when_asked() {
+        let collapsed = |drift_after_slots| {
+            let cfg = AdaptiveConfig { step: 100.0, memory: 2, drift_after_slots, ..AdaptiveConfig::default() };
+            let mut s = AdaptiveBins::new(cfg).unwrap();
+            for k in 0..4u64 {
+                assert_eq!(s.choose(k, Some(50.0)), Choice::Transmit(Rate::R4));
+                s.feedback(&[Outcome { slot: k, success: false }], true);
+            }
+            assert_eq!(s.thresholds().0[0], (Rate::R4, 0.0), "four failures at 100 m steps from 400 m");
+            s
+        };
+        // The peer is heard every slot (no status mode).
+        let choose_heard = |s: &mut AdaptiveBins, k| {
+            s.feedback(&[], true);
+            s.choose(k, Some(150.0))
+        };
+        let mut thesis = collapsed(0);
+        assert!((4..100u64).all(|k| choose_heard(&mut thesis, k) == Choice::Transmit(Rate::R1)));
+        let mut drifting = collapsed(3);
+        let r4_at: Vec<u64> =
+            (4..12u64).filter(|k| choose_heard(&mut drifting, *k) == Choice::Transmit(Rate::R4)).collect();
+        // Slots 4–6 leave rate 4 idle; slot 7 moves its bin out to 100 m (short of 150 m), slot 10
+        // to 200 m, and from then on 150 m falls in it.
+        assert_eq!(r4_at, vec![10, 11]);
+        assert_eq!(drifting.thresholds().0[0], (Rate::R4, 200.0));
     }
 
     #[test]

@@ -403,42 +403,57 @@ impl Observer for CnaChoices {
     }
 }
 
-/// The CNA's end (a `rate_policy` on its slot) on the channel of the test above: rate 4 carries
-/// nothing past about 300 m, rate 1 is robust. Its adaptive bins start with rate 4 out to 2 km.
-/// With one AUV, `centroid` keeps the CNA within 80 m of it and rate 4 stays; with two, the
-/// farthest is 300–360 m away (the CNA's forecast): its first broadcasts go at rate 4, as the
-/// bins say, then the CNA learns from that AUV's acknowledgements to fall back to rate 1, and
-/// that AUV hears far more of them than under a fixed rate 4.
-#[test]
-fn the_cnas_rate_policy_drops_its_rate_for_far_auvs_from_their_acknowledgements() {
-    use coopnav_acomms::selector::{AdaptiveConfig, Choice, RatePolicySpec};
+/// The channel of the test above with a short TDMA cycle whose CNA slot carries `cna` (the slot
+/// grammar's rate policy): rate 4 carries nothing past about 300 m, rate 1 is robust.
+fn cna_rate_scenario(n_auvs: usize, cna: &coopnav_acomms::selector::RatePolicySpec) -> Scenario {
     use coopnav_acomms::success::SuccessCurve;
     use coopnav_acomms::Rate;
-    let adaptive = RatePolicySpec::Adaptive(AdaptiveConfig {
+    let mut sc = Scenario::example().with_auvs(n_auvs);
+    sc.duration_s = 3600.0;
+    let curve = |p_a, tl_ab, tl_bc| SuccessCurve { p_a, tl_ab, tl_bc };
+    (sc.comms.success.curves[1], sc.comms.success.curves[2]) = (curve(0.95, 60.0, 90.0), curve(0.8, 30.0, 42.0));
+    sc.comms.status_rate = Rate::R1;
+    let slot =
+        |who: String, start_s, rate_policy| SlotSpec { who, start_s, length_s: 10.0, message: None, rate_policy };
+    let auvs = (0..n_auvs).map(|k| slot(format!("auv{k}"), 10.0 * (k + 1) as f64, None));
+    let slots = std::iter::once(slot("cna".into(), 0.0, Some(cna.clone()))).chain(auvs).collect();
+    sc.comms.schedule = Schedule::Tdma { slots };
+    sc
+}
+
+/// Adaptive bins that start with rate 4 out to 2 km.
+fn adaptive_cna_bins() -> coopnav_acomms::selector::RatePolicySpec {
+    use coopnav_acomms::selector::{AdaptiveConfig, RatePolicySpec};
+    RatePolicySpec::Adaptive(AdaptiveConfig {
         memory: 5,
         step: 100.0,
         data_thresholds: [1500.0, 3000.0, 2000.0, 100.0],
         ..AdaptiveConfig::default()
-    });
-    // The CNA's choices and the share of its broadcasts the farthest AUV decoded.
-    let go = |n_auvs: usize, cna: &RatePolicySpec| {
-        let mut sc = Scenario::example().with_auvs(n_auvs);
-        sc.duration_s = 3600.0;
-        let curve = |p_a, tl_ab, tl_bc| SuccessCurve { p_a, tl_ab, tl_bc };
-        (sc.comms.success.curves[1], sc.comms.success.curves[2]) = (curve(0.95, 60.0, 90.0), curve(0.8, 30.0, 42.0));
-        sc.comms.status_rate = Rate::R1;
-        let slot =
-            |who: String, start_s, rate_policy| SlotSpec { who, start_s, length_s: 10.0, message: None, rate_policy };
-        let auvs = (0..n_auvs).map(|k| slot(format!("auv{k}"), 10.0 * (k + 1) as f64, None));
-        let slots = std::iter::once(slot("cna".into(), 0.0, Some(cna.clone()))).chain(auvs).collect();
-        sc.comms.schedule = Schedule::Tdma { slots };
-        sc.validate(std::path::Path::new("t")).unwrap();
-        let mut p = PolicySpec::new("centroid", &sc).unwrap().build(&sc).unwrap();
-        let mut choices = CnaChoices::default();
-        let r = run(&sc, &mut p, 6, &Faults::default(), &mut choices);
-        let far = r.auvs.iter().map(|a| a.downlink).min_by_key(|l| l.received).unwrap();
-        (choices.0, far.received as f64 / far.sent.max(1) as f64)
-    };
+    })
+}
+
+/// `centroid`'s run of `sc`: the CNA's choices and the share of its broadcasts the AUV that
+/// decoded fewest of them decoded.
+fn cna_choices(sc: &Scenario) -> (Vec<CnaChoice>, f64) {
+    sc.validate(std::path::Path::new("t")).unwrap();
+    let mut p = PolicySpec::new("centroid", sc).unwrap().build(sc).unwrap();
+    let mut choices = CnaChoices::default();
+    let r = run(sc, &mut p, 6, &Faults::default(), &mut choices);
+    let far = r.auvs.iter().map(|a| a.downlink).min_by_key(|l| l.received).unwrap();
+    (choices.0, far.received as f64 / far.sent.max(1) as f64)
+}
+
+/// The CNA's end (a `rate_policy` on its slot) on the channel of the test above. With one AUV,
+/// `centroid` keeps the CNA within 80 m of it and rate 4 stays; with two, the farthest is
+/// 300–360 m away (the CNA's forecast): its first broadcasts go at rate 4, as the bins say, then
+/// the CNA learns from that AUV's acknowledgements to fall back to rate 1, and that AUV hears far
+/// more of them than under a fixed rate 4.
+#[test]
+fn the_cnas_rate_policy_drops_its_rate_for_far_auvs_from_their_acknowledgements() {
+    use coopnav_acomms::selector::{Choice, RatePolicySpec};
+    use coopnav_acomms::Rate;
+    let adaptive = adaptive_cna_bins();
+    let go = |n_auvs: usize, cna: &RatePolicySpec| cna_choices(&cna_rate_scenario(n_auvs, cna));
     let late_share = |choices: &[CnaChoice], rate| {
         let late = &choices[2 * choices.len() / 3..];
         late.iter().filter(|c| c.choice == Choice::Transmit(rate)).count() as f64 / late.len() as f64
@@ -456,4 +471,42 @@ fn the_cnas_rate_policy_drops_its_rate_for_far_auvs_from_their_acknowledgements(
         far_success > 0.5 && fixed_success < 0.3,
         "farthest AUV decodes {far_success:.2}, fixed rate 4 {fixed_success:.2}"
     );
+}
+
+/// One run from far to near: the CNA starts about 1.8 km from a lone AUV and `centroid` brings
+/// it in. On the way its broadcasts learn down to rate 1 (rate 4 carries nothing past about
+/// 300 m). Parked by the AUV, the thesis's selector stays at rate 1 for good (rate 4's bin has
+/// collapsed and never gets a sample again); with `drift_after_slots` the bin drifts back out
+/// and rate 4 returns.
+#[test]
+fn the_cnas_rate_policy_comes_back_up_when_the_cna_closes_in_only_with_drift() {
+    use coopnav_acomms::selector::{Choice, RatePolicySpec};
+    use coopnav_acomms::Rate;
+    let go = |drift_after_slots| {
+        let RatePolicySpec::Adaptive(mut bins) = adaptive_cna_bins() else { unreachable!() };
+        bins.drift_after_slots = drift_after_slots;
+        let mut sc = cna_rate_scenario(1, &RatePolicySpec::Adaptive(bins));
+        sc.cna.x += 1200.0;
+        cna_choices(&sc).0
+    };
+    let share = |choices: &[CnaChoice], rate| {
+        choices.iter().filter(|c| c.choice == Choice::Transmit(rate)).count() as f64 / choices.len() as f64
+    };
+    for (drift, late_rate) in [(0, Rate::R1), (6, Rate::R4)] {
+        let choices = go(drift);
+        let r4_far = |c: &&CnaChoice| c.distance.is_some_and(|d| d > 1000.0) && c.choice == Choice::Transmit(Rate::R4);
+        assert!(choices.iter().any(|c| r4_far(&c)), "drift {drift}: the bins first say rate 4 out to 2 km");
+        // Rate 1 inside rate 4's starting bin, still far from the AUV.
+        let learnt_down = |c: &CnaChoice| {
+            c.choice == Choice::Transmit(Rate::R1) && c.distance.is_some_and(|d| (200.0..1900.0).contains(&d))
+        };
+        assert!(choices.iter().any(learnt_down), "drift {drift}: never learnt down to rate 1");
+        let late = &choices[choices.len() / 2..];
+        assert!(late.iter().all(|c| c.distance.unwrap() < 150.0), "drift {drift}: the CNA is parked by the AUV");
+        assert!(
+            share(late, late_rate) > 0.8,
+            "drift {drift}: {late_rate} in {:.2} of the late half",
+            share(late, late_rate)
+        );
+    }
 }
