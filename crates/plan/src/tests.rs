@@ -126,6 +126,18 @@ prop_compose! {
 proptest! {
     #![proptest_config(ProptestConfig { cases: 300, ..ProptestConfig::default() })]
 
+    /// The search's child ordering is the library's stable sort: cheapest first, ties (many
+    /// drawn) in their present order, on few children and on many.
+    #[test]
+    fn children_are_ordered_as_a_stable_sort(costs in prop::collection::vec(prop_oneof![0u8..4, Just(9u8)], 0..60)) {
+        let cost: Vec<f64> = costs.iter().map(|&c| if c == 9 { f64::INFINITY } else { c as f64 * 0.5 }).collect();
+        let mut order: Vec<usize> = (0..cost.len()).rev().collect();
+        let mut want = order.clone();
+        want.sort_by(|&a, &b| cost[a].total_cmp(&cost[b]));
+        crate::search::sort_by_cost(&mut order, &cost);
+        prop_assert_eq!(order, want);
+    }
+
     #[test]
     fn branch_and_bound_equals_brute_force(inst in instance(), start in prop_oneof![Just(0u64), 1u64..3000]) {
         let brute = inst.decide(exact(Algorithm::BruteForce, false));
