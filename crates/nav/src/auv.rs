@@ -4,6 +4,11 @@
 //! at transmit time the caller supplies (ship outrigger, buoy, or a CNA that carries its position
 //! in its message), optionally with that position's own uncertainty.
 //!
+//! Three opt-in options against a filter that runs away under range-only geometry (issue 9; each
+//! off by default, the thesis's filter unchanged): a Gauss–Markov current
+//! ([`CurrentParams::decay`]), the iterated range update ([`IteratedRange`]) and a recovery from
+//! a gate lock-out ([`GateRecovery`]).
+//!
 //! ψ is the direction the vehicle moves through the water and b the compass's offset from it, so
 //! b is the heading-bias (crab-angle) state: a vehicle that crabs 8° needs a prior `p0[4]` wide
 //! enough to reach 8°. Headings inside are math convention (0 = east, counter-clockwise), so E
@@ -26,8 +31,8 @@ pub const BIAS: usize = 4;
 pub const CURRENT_E: usize = 5;
 pub const CURRENT_N: usize = 6;
 
-/// The current states of the 7-state filter: a random walk (constant when `q` = 0). Invented
-/// parameters (the thesis has no current state, digest §3.2; issue 12 field logs).
+/// The current states of the 7-state filter: a random walk (constant when `q` = 0), or a
+/// first-order Gauss–Markov process with `correlation_time_s`. Invented parameters (the thesis has no current state, digest §3.2; issue 12 field logs).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct CurrentParams {
@@ -77,7 +82,7 @@ impl CheckFields for CurrentParams {
 }
 
 /// The AUV filter's state vector: `{ kind = "thesis" }` (5 states) or `{ kind = "current", p0, q }`
-/// (7, with a water current).
+/// (7, with a water current; optionally `correlation_time_s`).
 #[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
 #[serde(tag = "kind", rename_all = "snake_case")]
 pub enum AuvModel {
