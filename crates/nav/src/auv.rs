@@ -63,9 +63,10 @@ impl CurrentParams {
     /// than the vehicle, issue 9). The Gauss–Markov process c_{k+1} = φ c_k + w_k, Var w_k =
     /// q·h/step_s (the random walk's noise), pulls an unsupported estimate back to zero with time
     /// constant T and holds the variance at q·T/(2·step_s)·(1 + O(h/T)) (from σ² = φ²σ² + q·h/step_s,
-    /// 1 − φ² ≈ 2h/T): with the default q, (0.3 m/s per hour)², T = 1 h keeps σ near 0.21 m/s.
-    /// T is invented (marked so): the tidal and wind-driven currents it stands for change over
-    /// hours.
+    /// 1 − φ² ≈ 2h/T): with the default q, (0.3 m/s per hour)², T = 1 h holds σ near 0.21 m/s
+    /// and T = 600 s near 0.087 m/s. T is invented (marked so). Measured on issue 9's spread
+    /// fleet over the BELLHOP grid (centroid-standoff, 20 runs): heard filters flagged 7 → 5
+    /// (T = 1 h) → 3 (30 min) → 0 (600 s); worst heard error 16.2 km → 8.2 km → 131 m → 103 m.
     pub fn decay(&self, h: f64) -> Option<f64> {
         self.correlation_time_s.map(|t| (-h / t).exp())
     }
@@ -193,7 +194,9 @@ impl RangeLinearisation {
 /// H_i (and R_i, whose transponder term depends on the line of sight) evaluated at x_i; the
 /// covariance is the Joseph update of P⁻ with the last K_i and H_i (Bell & Cathey 1993). One
 /// iteration is the EKF exactly. The gate tests the prior's innovation, as the EKF's does.
-/// Invented parameters (marked so): `iterations` and `tolerance_m`.
+/// Invented parameters (marked so): `iterations` and `tolerance_m`. Measured (issue 9, tuning
+/// seed 1000, 20 runs, centroid parked over one AUV): runs whose AUV ran beyond 500 m 7 → 0, worst
+/// 9.3 km → 96 m; it does not make the filter consistent (NEES flags 18 → 17).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct IteratedRange {
