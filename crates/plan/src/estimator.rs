@@ -403,6 +403,21 @@ impl EkfCost {
         self.term(trace + 2.0 * h, det + h * trace + h * h)
     }
 
+    /// The larger of [`EkfCost::term_bound`] from two pairs of lower bounds (tr E, det E). The
+    /// trace-only aggregates take the larger trace first: the term is a non-decreasing function
+    /// of the trace alone, and so is its floating-point evaluation (√ and max are correctly
+    /// rounded), so the result is the same number with one square root instead of two.
+    #[inline(always)]
+    fn larger_term_bound(&self, (t1, d1): (f64, f64), (t2, d2): (f64, f64), half_bias2: f64) -> f64 {
+        match self.spec.aggregate {
+            Aggregate::LogDet => self.term_bound(t1, d1, half_bias2).max(self.term_bound(t2, d2, half_bias2)),
+            Aggregate::TraceSum | Aggregate::WorstAuv | Aggregate::SigmaSum => {
+                let h = half_bias2;
+                self.term((t1 + 2.0 * h).max(t2 + 2.0 * h), 0.0)
+            }
+        }
+    }
+
     #[inline(always)]
     fn term(&self, trace: f64, det: f64) -> f64 {
         match self.spec.aggregate {
@@ -439,6 +454,9 @@ impl CostModel for EkfCost {
     #[inline(always)]
     fn leaf_term(&self, k: usize, state: &[f64; 3], cna: [f64; 3], auv: [f64; 3], term: f64) -> f64 {
         let h = self.spec.terminal_levels;
+        if self.reach.useful_range_m == f64::INFINITY {
+            return term * (1.0 + h); // no reach cost-to-go: ḡ = 0 at every range
+        }
         let d = [auv[0] - cna[0], auv[1] - cna[1], auv[2] - cna[2]];
         let range2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
         let growth = self.reach_growth(k, range2.sqrt());
@@ -498,7 +516,7 @@ impl CostModel for EkfCost {
             before = (los[0] * los[0] + los[1] * los[1]).sqrt() - b.spread;
             let (trace, det) = turn.step(q, turn_max, ping);
             let (eigen_trace, eigen_det) = eigen.step(q, ping);
-            let level_bound = |h: f64| self.term_bound(trace, det, h).max(self.term_bound(eigen_trace, eigen_det, h));
+            let level_bound = |h: f64| self.larger_term_bound((trace, det), (eigen_trace, eigen_det), h);
             let mut term = level_bound(half_bias2);
             let growth = if j == leaf { self.reach_growth(k, nearest) } else { 0.0 };
             if growth > 0.0 {

@@ -161,6 +161,11 @@ impl<'s> Ctx<'s> {
             }
         }
     }
+    /// Whether the options of `level` need no bookkeeping ([`Ctx::enter`], [`Ctx::finished`]):
+    /// below level 0 and below the parallel start's task levels.
+    fn leaves_unrecorded(&self, level: usize) -> bool {
+        level > 0 && self.start.as_ref().is_none_or(|s| level >= s.split)
+    }
     /// The subtree entered at `level` was searched to the end: the start records a task's.
     fn finished(&mut self, level: usize) {
         if let Some(start) = &mut self.start {
@@ -204,9 +209,25 @@ fn expand_all<M: CostModel>(
         }
     }
     ctx.nodes += options.len() as u64;
-    let cost = &lv.cost;
-    // Stable sort keeps index order among equal costs.
-    lv.order.sort_by(|&a, &b| cost[a].total_cmp(&cost[b]));
+    sort_by_cost(&mut lv.order, &lv.cost);
+}
+
+/// Sorts the children `order` cheapest first by `cost`, equal costs kept in index order (a
+/// stable sort). A node has few children (A·B), where an insertion sort beats the library's.
+pub(crate) fn sort_by_cost(order: &mut [usize], cost: &[f64]) {
+    if order.len() > 32 {
+        order.sort_by(|&a, &b| cost[a].total_cmp(&cost[b]));
+        return;
+    }
+    for i in 1..order.len() {
+        let o = order[i];
+        let mut j = i;
+        while j > 0 && cost[order[j - 1]].total_cmp(&cost[o]).is_gt() {
+            order[j] = order[j - 1];
+            j -= 1;
+        }
+        order[j] = o;
+    }
 }
 
 /// A node at `level` with path cost `v`: a leaf on the last level, else searched below unless its
@@ -239,6 +260,10 @@ fn dfs<M: CostModel>(
         return;
     }
     let (lv, deeper) = levels.split_first_mut().expect("one buffer per level");
+    if level + 1 == tree.depth && ctx.leaves_unrecorded(level) {
+        leaves(tree, level, parent, acc, lv, ctx);
+        return;
+    }
     let cut = Cut { acc, floor: tree.rest_floor[level], bound: ctx.bound() };
     expand_all(tree, level, parent, lv, ctx, &cut);
     let n = tree.n;
@@ -256,6 +281,35 @@ fn dfs<M: CostModel>(
         }
         ctx.finished(level);
     }
+}
+
+/// The children of `parent` on the last level (leaves), in option order, each cut against the
+/// best path as it stands (so one cheap leaf cuts its later siblings part-way). What it records
+/// is what [`dfs`] records, node for node: the sorted visit there stops at the first leaf above
+/// the bound, and a leaf above the cheapest sibling changes neither the option's minimum nor the
+/// best path; here the cheapest sibling is never cut (its partial sums are at most its cost,
+/// which is at most the best path whenever the sorted visit records it) and every leaf that is
+/// recorded is at least it. The last level has no level below (`rest_floor` 0).
+fn leaves<M: CostModel>(
+    tree: &Tree<M>,
+    level: usize,
+    parent: &NodeRef<M::State>,
+    acc: f64,
+    lv: &mut Level<M::State>,
+    ctx: &mut Ctx,
+) {
+    let (n, floor) = (tree.n, tree.rest_floor[level]);
+    let options = tree.level_options(level);
+    for &o in options {
+        let cut = Cut { acc, floor, bound: ctx.bound() };
+        if let Some((_, c)) = tree.expand_within(level, parent, o, &mut lv.state[o * n..(o + 1) * n], &cut) {
+            let v = acc + c;
+            if v + floor <= ctx.bound() {
+                ctx.leaf(v);
+            }
+        }
+    }
+    ctx.nodes += options.len() as u64;
 }
 
 /// Runs the search at the tree's full depth (`search.parallel`: the parallel mode, its start on

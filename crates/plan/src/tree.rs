@@ -145,6 +145,9 @@ impl<M: CostModel> Tree<M> {
             let (lo, hi) = (self.limits.min, self.limits.max);
             for k in 0..n {
                 for (w, b) in weight[levels.clone()].iter_mut().zip(below(k)) {
+                    if *w == 2.0 {
+                        continue; // one AUV out of the limits is enough
+                    }
                     let d = norm([b.auv[0] - p[0], b.auv[1] - p[1], b.auv[2] - p[2]]);
                     if d - b.spread > hi * (1.0 + 1e-9) || d + b.spread < lo * (1.0 - 1e-9) {
                         *w = 2.0;

@@ -79,9 +79,51 @@ fn every_bellhop_scenario_in_the_library_loads_and_runs_reduced() {
     assert!(!files.is_empty(), "the full-stack example uses the BELLHOP grid");
     for file in &files {
         let r = runs_reduced(file);
-        assert_every_auv_served(file, &r);
+        if file.ends_with(SPREAD_FLEET) {
+            assert_the_end_auvs_start_out_of_reach(file, &r);
+        } else {
+            assert_every_auv_served(file, &r);
+        }
         assert!(r.auvs.iter().any(|a| a.downlink.received < a.downlink.sent), "{file:?}: BELLHOP loses packets");
     }
+}
+
+/// The library file whose CNA starts out of its end AUVs' reach on purpose (issue 10's spread
+/// fleet): in the reduced 600 s no CNA can serve the whole fleet.
+const SPREAD_FLEET: &str = "spread-fleet.toml";
+
+/// The spread fleet's reduced run: the middle AUV, near the CNA's start, is heard; an end AUV,
+/// 1.3-2.1 km away where the grid hears nothing, never gets a ping.
+fn assert_the_end_auvs_start_out_of_reach(file: &Path, r: &coopnav_sim::closed_loop::RunResult) {
+    let (middle, ends) = (&r.auvs[2], [&r.auvs[0], &r.auvs[4]]);
+    assert!(middle.ranges_applied > 0 && middle.uplink.received > 0, "{file:?}: {:?}", r.auvs);
+    assert!(ends.iter().any(|a| a.downlink.received == 0), "{file:?}: {:?}", r.auvs);
+}
+
+/// The spread fleet's whole mission with `planner-estimator`: with the file's settings every AUV's
+/// statuses reach the CNA; with the estimator's defaults (level-0 distance penalty, the assumed
+/// link, pings counted as expected, no reach cost-to-go) an end AUV is never heard, as on the
+/// benchmark before issue 10's spread-fleet change.
+#[test]
+#[cfg_attr(not(bellhop_installed), ignore = "BELLHOP is not installed: run scripts/install-bellhop.sh")]
+fn on_the_spread_fleet_the_tuned_estimator_planner_hears_every_auv_and_its_defaults_do_not() {
+    let file = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../scenarios").join(SPREAD_FLEET);
+    let tuned = Scenario::load(&file).unwrap_or_else(|e| panic!("{e}"));
+    let mut defaults = tuned.clone();
+    defaults.planner.estimator_penalty_case = None;
+    defaults.planner.link = Default::default();
+    defaults.planner.estimator_tracking = Default::default();
+    defaults.planner.estimator_reach_success = 0.0;
+    defaults.planner.estimator_terminal_levels = 0.0;
+    let statuses = |sc: &Scenario| -> Vec<u64> {
+        let mut policy = PolicySpec::new("planner-estimator", sc).unwrap().build(sc).unwrap();
+        let r = run(sc, &mut policy, sc.seed, &Faults::default(), &mut ());
+        assert!(r.fleet.healthy);
+        r.auvs.iter().map(|a| a.uplink.received).collect()
+    };
+    let (heard, unheard) = (statuses(&tuned), statuses(&defaults));
+    assert!(heard.iter().all(|&n| n > 0), "tuned: statuses per AUV {heard:?}");
+    assert!(unheard.iter().any(|&n| n == 0), "defaults: statuses per AUV {unheard:?}");
 }
 
 #[test]

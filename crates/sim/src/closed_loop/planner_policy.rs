@@ -66,22 +66,64 @@ impl ErrorTracker {
 /// The CNA's model of each survey AUV's horizontal filter covariance. The AUVs report their
 /// filter's covariance in every status message; at each decision the model starts from the
 /// newest report it has not used yet, grown by the filter's process noise q over the report's
-/// age (the filter's own prediction), else from its previous value grown by q·τ; then it takes
-/// the expected range update of this period's ping (`coopnav_plan::expected_posterior`). Before
-/// any report it starts at the filter's initial covariance.
+/// age (the filter's own prediction), else from its previous value grown by q·τ; then, unless it
+/// counts reports only ([`CovarianceTracker::reports_only`]), it takes the expected range update of
+/// this period's ping (`coopnav_plan::expected_posterior`). Before any report it starts at the
+/// filter's initial covariance.
 #[derive(Debug, Clone)]
 pub struct CovarianceTracker {
     start: AuvEstimate,
     tau: f64,
     noise: RangeNoise,
     covs: Vec<Option<[f64; 3]>>,
+    /// Growth rate per axis each AUV's estimate is planned with, m²/s.
+    rates: Vec<f64>,
     /// Send time of the newest report each AUV's model was restarted from.
     used: Vec<f64>,
+    /// Some: pings are never credited ([`CovarianceTracker::reports_only`]).
+    unheard: Option<UnheardGrowth>,
+}
+
+/// How the filter of an AUV not heard from since launch predicts its horizontal position
+/// covariance per axis with no range: P(t) = P₀ + q·t + P_c·t² + q_c·t³/3, the position integrating
+/// an unobserved random-walk current (initial variance P_c, (m/s)²; growth q_c, (m/s)²/s; both 0
+/// without a current state). Its rate dP/dt = q + 2·P_c·t + q_c·t² is what the planner grows it by.
+/// The speed, heading and compass-bias states are left out: the AUV's sensors observe them, the
+/// current they cannot. An invention (issue 10); digest gill §3 (the filter's prediction).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct UnheardGrowth {
+    pub current_p0: f64,
+    pub current_q: f64,
+}
+
+impl UnheardGrowth {
+    /// (P(t) − P₀, dP/dt) per axis at `t` seconds after launch, for process noise `q`.
+    fn at(&self, q: f64, t: f64) -> (f64, f64) {
+        let t = t.max(0.0);
+        let grown = q * t + self.current_p0 * t * t + self.current_q * t * t * t / 3.0;
+        (grown, q + 2.0 * self.current_p0 * t + self.current_q * t * t)
+    }
 }
 
 impl CovarianceTracker {
     pub fn new(n: usize, start: AuvEstimate, tau: f64, noise: RangeNoise) -> Self {
-        CovarianceTracker { start, tau, noise, covs: vec![None; n], used: vec![f64::NEG_INFINITY; n] }
+        CovarianceTracker {
+            start,
+            tau,
+            noise,
+            covs: vec![None; n],
+            rates: vec![start.process_noise; n],
+            used: vec![f64::NEG_INFINITY; n],
+            unheard: None,
+        }
+    }
+
+    /// Counts reports only (`planner.estimator_tracking = "reports_only"`): a ping teaches the model
+    /// nothing until the AUV's report shows it; an AUV never heard from grows from launch (t = 0)
+    /// as `unheard` says.
+    pub fn reports_only(mut self, unheard: UnheardGrowth) -> Self {
+        self.unheard = Some(unheard);
+        self
     }
 
     /// AUV `k`'s covariance before this period's ping at time `t`, and the growth still to add.
@@ -99,6 +141,9 @@ impl CovarianceTracker {
     /// A ping at time `t` from `cna` at AUV `k` (at `auv`), received with probability
     /// `p_received`; `reported` is the AUV's newest covariance report.
     pub fn ping(&mut self, k: usize, t: f64, reported: Option<ReportedCov>, link: (&Vec3, &Vec3, f64)) {
+        if self.unheard.is_some() {
+            return self.predict(k, t, reported);
+        }
         let (cna, auv, p_received) = link;
         let p = p_received.clamp(0.0, 1.0);
         self.covs[k] = Some(match self.prior(k, t, reported) {
@@ -109,6 +154,24 @@ impl CovarianceTracker {
         });
     }
 
+    /// Reports only: the filter's prediction from the newest report, or from launch.
+    fn predict(&mut self, k: usize, t: f64, reported: Option<ReportedCov>) {
+        let never_heard = self.used[k] == f64::NEG_INFINITY && reported.is_none();
+        match self.unheard.filter(|_| never_heard) {
+            Some(growth) => {
+                let (grown, rate) = growth.at(self.start.process_noise, t);
+                let [a, b, c] = self.start.cov;
+                self.covs[k] = Some([a + grown, b, c + grown]);
+                self.rates[k] = rate;
+            }
+            None => {
+                self.rates[k] = self.start.process_noise;
+                let ([a, b, c], grow) = self.prior(k, t, reported).unwrap_or((self.start.cov, 0.0));
+                self.covs[k] = Some([a + grow, b, c + grow]);
+            }
+        }
+    }
+
     /// No ping this period: the covariance only grows (from a newer report if there is one).
     pub fn silent(&mut self, k: usize, t: f64, reported: Option<ReportedCov>) {
         if let Some(([a, b, c], grow)) = self.prior(k, t, reported) {
@@ -117,7 +180,7 @@ impl CovarianceTracker {
     }
 
     pub fn estimate(&self, k: usize) -> Option<AuvEstimate> {
-        self.covs[k].map(|cov| AuvEstimate { cov, process_noise: self.start.process_noise })
+        self.covs[k].map(|cov| AuvEstimate { cov, process_noise: self.rates[k] })
     }
 }
 
@@ -215,6 +278,13 @@ impl PlannerPolicy {
     /// The planner scores every broadcast position as exact (the CNA's own variance left out).
     pub fn without_cna_variance(mut self) -> Self {
         self.cna_variance = false;
+        self
+    }
+
+    /// The estimator-aware cost's covariance model counts reports only
+    /// ([`CovarianceTracker::reports_only`]); no effect under Hudson's cost.
+    pub fn with_reports_only(mut self, unheard: UnheardGrowth) -> Self {
+        self.covariances = self.covariances.map(|c| c.reports_only(unheard));
         self
     }
 
@@ -396,5 +466,36 @@ mod tests {
         // A lost ping after a report: pure growth from the report.
         t.ping(0, 150.0, Some(ReportedCov { t: 140.0, cov: [4.0, 0.0, 9.0] }), (&cna, &auv, 0.0));
         assert_eq!(t.estimate(0).unwrap().cov, [5.0, 0.0, 10.0]);
+    }
+
+    #[test]
+    fn counting_reports_only_an_unheard_auv_grows_from_launch_as_its_filter_predicts() {
+        let start = AuvEstimate { cov: [16.0, 0.0, 16.0], process_noise: 0.5 };
+        let growth = UnheardGrowth { current_p0: 0.09, current_q: 3e-5 };
+        let mut t = CovarianceTracker::new(1, start, 30.0, RangeNoise::default()).reports_only(growth);
+        let (cna, auv) = (Vec3::zeros(), Vec3::new(100.0, 0.0, 0.0));
+        // Sure pings from 100 m teach the model nothing: at 600 s after launch the covariance is
+        // P₀ + q·t + P_c·t² + q_c·t³/3 = 16 + 300 + 32,400 + 2,160 per axis, rate q + 2·P_c·t + q_c·t².
+        for step in 0..=20 {
+            t.ping(0, 30.0 * step as f64, None, (&cna, &auv, 1.0));
+        }
+        let e = t.estimate(0).unwrap();
+        let (axis, rate) = (16.0 + 300.0 + 32_400.0 + 2_160.0, 0.5 + 108.0 + 10.8);
+        assert!((e.cov[0] - axis).abs() < 1e-6 && (e.cov[2] - axis).abs() < 1e-6 && e.cov[1] == 0.0, "{e:?}");
+        assert!((e.process_noise - rate).abs() < 1e-9, "{e:?}");
+        // The first report restarts it at the filter's own covariance grown by q over its age, and
+        // the next sure ping is not credited either: q·τ more per axis; the rate is q again.
+        let report = ReportedCov { t: 620.0, cov: [40.0, 3.0, 25.0] };
+        t.ping(0, 630.0, Some(report), (&cna, &auv, 1.0));
+        assert_eq!(t.estimate(0).unwrap().cov, [45.0, 3.0, 30.0]);
+        t.ping(0, 660.0, Some(report), (&cna, &auv, 1.0));
+        assert_eq!(t.estimate(0).unwrap(), AuvEstimate { cov: [60.0, 3.0, 45.0], process_noise: 0.5 });
+        // Counting expected pings instead, the same sure pings keep the never-heard AUV small.
+        let mut expected = CovarianceTracker::new(1, start, 30.0, RangeNoise::default());
+        for step in 0..=20 {
+            expected.ping(0, 30.0 * step as f64, None, (&cna, &auv, 1.0));
+        }
+        let c = expected.estimate(0).unwrap().cov;
+        assert!(c[0] + c[2] < 1_000.0, "{c:?}");
     }
 }

@@ -1,8 +1,8 @@
 //! Which CNA policy a closed-loop run uses, by name: the underway planner or one of the
 //! baselines of [`crate::policy`], configured from the scenario (survey area, fleet, CNA start).
 
-use super::planner_policy::{LikelihoodLink, PingLikelihood, PlannerPolicy, PlannerStats};
-use super::scenario::{PlannerLink, Scenario};
+use super::planner_policy::{LikelihoodLink, PingLikelihood, PlannerPolicy, PlannerStats, UnheardGrowth};
+use super::scenario::{EstimatorTracking, PlannerLink, Scenario};
 use crate::policy::{
     Centroid, CentroidStandoff, CnaPolicy, FixedPattern, GreedyFisher, MidpointRelay, NoCna, Rect, TimedWaypoints,
     Trail,
@@ -12,6 +12,7 @@ use crate::predeploy::scenario::Mission;
 use coopnav_acomms::tl::{TlError, TransmissionLoss, TL_CEILING};
 use coopnav_acomms::Receiver;
 use coopnav_core::{Bathymetry, CompassDeg, DepthTarget, Heading, Vec3};
+use coopnav_nav::AuvModel;
 use coopnav_plan::{
     AuvEstimate, CnaKind, CnaPose, CostSpec, Deadline, EstimatorSpec, LinkTable, LookAheadPlanner, PenaltyCase,
     PlanError, RangeNoise,
@@ -156,6 +157,9 @@ fn build(name: &str, sc: &Scenario, planned: Option<&TimedWaypoints>) -> Result<
             if !p.estimator_cna_variance {
                 policy = policy.without_cna_variance();
             }
+            if p.estimator_tracking == EstimatorTracking::ReportsOnly {
+                policy = policy.with_reports_only(unheard_growth(sc));
+            }
             return Ok(Policy::Planner(Box::new(policy)));
         }
         "none" => Box::new(NoCna),
@@ -255,6 +259,15 @@ fn filter_model(sc: &Scenario) -> (AuvEstimate, RangeNoise) {
     let sigma_m = ((n.sound_speed * n.sigma_time).powi(2) + n.floor).sqrt();
     let per_km_m = 1000.0 * n.sigma_sound_speed / n.sound_speed;
     (AuvEstimate { cov: [f.p0[0], 0.0, f.p0[1]], process_noise: q }, RangeNoise { sigma_m, per_km_m })
+}
+
+/// How the survey AUVs' filters predict an unheard AUV's position covariance: with the `current`
+/// model, the current's initial variance and its random walk per second (per axis); else none.
+fn unheard_growth(sc: &Scenario) -> UnheardGrowth {
+    match sc.filter.model {
+        AuvModel::Current(c) => UnheardGrowth { current_p0: c.p0, current_q: c.q / sc.filter.params.step_s },
+        AuvModel::Thesis => UnheardGrowth { current_p0: 0.0, current_q: 0.0 },
+    }
 }
 
 /// The pre-deployment plan on the nominal survey tracks (no current, no nav error), flown by time.

@@ -311,6 +311,10 @@ pub struct Planner {
     /// on. Written only when not the default, so existing manifests read as before.
     #[serde(default, skip_serializing_if = "PlannerLink::is_assumed")]
     pub link: PlannerLink,
+    /// What `planner-estimator`'s model of an AUV's filter covariance takes between that AUV's
+    /// reports. Written only when not the default, so existing manifests read as before.
+    #[serde(default, skip_serializing_if = "EstimatorTracking::is_expected_pings")]
+    pub estimator_tracking: EstimatorTracking,
     /// Initial modelled σ₀ and ε₀, m (Table 5.1: 1 m).
     #[serde(default = "one")]
     pub sigma0: f64,
@@ -384,6 +388,29 @@ pub enum PlannerLink {
 impl PlannerLink {
     fn is_assumed(&self) -> bool {
         *self == PlannerLink::Assumed
+    }
+}
+
+/// How `planner-estimator`'s model of each AUV's filter covariance moves between that AUV's status
+/// reports (`planner.estimator_tracking`; closed loop `CovarianceTracker`).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum EstimatorTracking {
+    /// Every ping counts with the update its success probability under the planner's link model
+    /// expects, whether or not the AUV answered.
+    #[default]
+    ExpectedPings,
+    /// Only what the AUV reports counts: between reports, and from launch until the first, the
+    /// covariance grows as the AUV's filter predicts it with no range (its process noise, and with
+    /// a `current` filter model the unobserved current's variance). An invention (issue 10, the
+    /// spread fleet over BELLHOP): a CNA that never hears an AUV cannot know its pings reached it,
+    /// and with `expected_pings` it believed an AUV it never heard from was the best served.
+    ReportsOnly,
+}
+
+impl EstimatorTracking {
+    fn is_expected_pings(&self) -> bool {
+        *self == EstimatorTracking::ExpectedPings
     }
 }
 
@@ -918,6 +945,18 @@ mod tests {
             with("scenario_channel").replace("kind = \"analytic\", k = 1.5, freq_hz = 25000.0", "kind = \"bellhop\"");
         let e = err(&direct);
         assert!(e.contains("planner.link") && e.contains("bellhop_grid") && !e.contains("field comms.tl"), "{e}");
+    }
+
+    #[test]
+    fn the_estimator_counts_expected_pings_unless_the_file_asks_for_reports_only() {
+        let plain = Scenario::parse(EXAMPLE, Path::new("e.toml")).unwrap();
+        assert_eq!(plain.planner.estimator_tracking, EstimatorTracking::ExpectedPings);
+        assert!(!toml::to_string(&plain).unwrap().contains("estimator_tracking"), "the default is not written");
+        let with = |v: &str| EXAMPLE.replace("[planner]\n", &format!("[planner]\nestimator_tracking = \"{v}\"\n"));
+        let sc = Scenario::parse(&with("reports_only"), Path::new("r.toml")).unwrap();
+        assert_eq!(sc.planner.estimator_tracking, EstimatorTracking::ReportsOnly);
+        let e = err(&with("hopeful"));
+        assert!(e.contains("hopeful") && e.contains("reports_only") && e.contains("expected_pings"), "{e}");
     }
 
     #[test]
