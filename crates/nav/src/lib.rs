@@ -15,7 +15,9 @@ pub mod smoother;
 pub mod surface;
 pub mod synthetic;
 
-pub use auv::{AuvEkf, AuvFilter, AuvModel, AuvParams, CurrentParams, ParamError};
+pub use auv::{
+    AuvEkf, AuvFilter, AuvModel, AuvParams, CurrentParams, GateRecovery, IteratedRange, ParamError, RangeLinearisation,
+};
 pub use ekf::{Ekf, Gate, UpdateOutcome};
 pub use range::{RangeMeasurement, RangeNoise};
 pub use surface::{Outriggers, Side, StateKind, SurfaceEkf, SurfaceParams};

@@ -30,7 +30,7 @@
 //! (top of a second). `init` is the filter's starting estimate (the first one is used);
 //! `truth` rows (topside AUV fixes) are only used to score the result.
 
-use crate::auv::{transition, AuvEkf, AuvParams, ParamError, BIAS, CURRENT_E, CURRENT_N};
+use crate::auv::{AuvEkf, AuvParams, ParamError, BIAS, CURRENT_E, CURRENT_N};
 use crate::cycle::Transmitter;
 use crate::ekf::{Ekf, Gate, UpdateOutcome};
 use crate::fieldlog::{self, BeaconId, FieldLog, Fields, LogRow, Observation, TimeBase};
@@ -362,6 +362,10 @@ impl PostConfig {
         self.auv.check_fields("auv.", &mut p);
         if self.auv.range_gate != Gate::OFF {
             p.push("auv.range_gate", "a gate", "none here: set the top-level range_gate instead");
+        }
+        if self.auv.range_gate_recovery.is_some() {
+            // Post-processing applies each range through `update_range_with` and its own gate.
+            p.push("auv.range_gate_recovery", "a recovery", "none here: post-processing has no gate recovery");
         }
         if let AuvModel::Current(c) = &self.model {
             c.check_fields("model.", &mut p);
@@ -907,7 +911,7 @@ impl Run<'_> {
                         .ok_or(SmoothError::Singular(k + 1))?
                 }
                 SmootherKind::Unscented => {
-                    urts_step(&filtered, &q, |x| transition(x, h, h * yaw_next), &later, angles, k)?
+                    urts_step(&filtered, &q, |x| f.mean_step(x, h, yaw_next), &later, angles, k)?
                 }
             };
             backward.visit(k, &filtered, &smoothed);

@@ -183,6 +183,41 @@ fn the_nees_check_flags_a_filter_given_a_wrong_noise_model() {
     }
 }
 
+/// Issue 9: the centroid baseline parks the CNA on the single AUV's reported position, so its
+/// ranges are a few tens of metres, as long as the filter's error; the EKF, linearised about the
+/// wrong estimate, turns over-confident and the AUV, steering on it, runs away (tuning seed
+/// 1000's run 0: 9.3 km, NEES flag at 994 s). The iterated range update relinearises about the
+/// updated estimate and keeps the same run within 55 m (measured).
+#[test]
+fn the_iterated_range_update_keeps_an_overhead_ranged_filter_from_running_away() {
+    let mut sc = Scenario::example().with_auvs(1);
+    let seed = coopnav_core::rng::run_seed(1000, 0);
+    let (ekf, _) = traced(&sc, "centroid", seed);
+    sc.filter.params.range_update = coopnav_nav::RangeLinearisation::Iterated(Default::default());
+    let (iterated, _) = traced(&sc, "centroid", seed);
+    assert!(ekf.auvs[0].error.max > 1000.0, "{:?}", ekf.auvs[0].error);
+    assert!(iterated.auvs[0].error.max < 100.0, "{:?}", iterated.auvs[0].error);
+}
+
+/// Issue 9: on the bench's spread fleet (analytic TL) with the 7-state filter, the CNA loiters
+/// at a nearly constant bearing from auv2, the range never observes the current across it, and
+/// the random-walk current walks off with the estimate (base seed 1's run 1: 1.04 km, flagged at
+/// 7,864 s). A Gauss–Markov current with T = 600 s holds it to 33 m, unflagged (measured).
+#[test]
+fn a_gauss_markov_current_keeps_a_spread_fleet_filter_from_running_away() {
+    use coopnav_nav::{AuvModel, CurrentParams};
+    let mut sc = Scenario::bench();
+    let walk = CurrentParams { q: 2.5e-6, ..CurrentParams::default() };
+    sc.filter.model = AuvModel::Current(walk);
+    let seed = coopnav_core::rng::run_seed(1, 1);
+    let (random_walk, _) = traced(&sc, "centroid-standoff", seed);
+    sc.filter.model = AuvModel::Current(CurrentParams { correlation_time_s: Some(600.0), ..walk });
+    let (gauss_markov, _) = traced(&sc, "centroid-standoff", seed);
+    let (rw, gm) = (&random_walk.auvs[2], &gauss_markov.auvs[2]);
+    assert!(rw.error.max > 800.0 && rw.health.diverged_at_s.is_some(), "{:?} {:?}", rw.error, rw.health);
+    assert!(gm.error.max < 100.0 && gm.health.diverged_at_s.is_none(), "{:?} {:?}", gm.error, gm.health);
+}
+
 /// A moored buoy in the survey block: `buoys[0]` parsed as a scenario file writes it.
 fn with_buoy(mut sc: Scenario, x: f64, y: f64) -> Scenario {
     sc.buoys = vec![toml::from_str(&format!("x = {x}\ny = {y}")).unwrap()];
