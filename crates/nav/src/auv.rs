@@ -310,17 +310,18 @@ fn transition_jacobian_entries<const M: usize>(
     [(E, [(S, h * cos), (PSI, -h * x[S] * sin), (ce, drift)]), (N, [(S, h * sin), (PSI, h * x[S] * cos), (cn, drift)])]
 }
 
-/// A step's mean `x_new` and Jacobian entries `g` with a Gauss–Markov current decaying by `phi`
+/// A step's mean `x_new` and Jacobian rows `g` with a Gauss–Markov current decaying by `phi`
 /// over the step: c ← φ c (the position drift used the current at the start of the step), and
-/// the current states' diagonal entries φ − 1 added to G (F = I + G). 7-state filter only.
+/// the current states' rows, φ − 1 on their diagonal, added to G (F = I + G). 7-state filter
+/// only. The new rows carry two zero entries each, so every row has the position rows' length.
 fn decayed<const M: usize>(
     x_new: SVector<f64, M>,
-    g: [(usize, usize, f64); 6],
+    g: SparseRows<2, 3>,
     phi: f64,
-) -> (SVector<f64, M>, [(usize, usize, f64); 8]) {
-    let [a, b, c, d, e, f] = g;
-    let decay = [(CURRENT_E, CURRENT_E, phi - 1.0), (CURRENT_N, CURRENT_N, phi - 1.0)];
-    (decayed_mean(x_new, phi), [a, b, c, d, e, f, decay[0], decay[1]])
+) -> (SVector<f64, M>, SparseRows<4, 3>) {
+    let [e, n] = g;
+    let decay = |c| (c, [(c, phi - 1.0), (c, 0.0), (c, 0.0)]);
+    (decayed_mean(x_new, phi), [e, n, decay(CURRENT_E), decay(CURRENT_N)])
 }
 
 /// The current states of `x` multiplied by `phi`.
@@ -610,7 +611,8 @@ impl<const M: usize> AuvEkf<M> {
         let mut q = SVector::<f64, M>::zeros();
         (q[E], q[N]) = (added, added);
         let (t, x) = (self.ekf.t(), *self.ekf.x());
-        self.ekf.predict_sparse(t, x, &[], &q);
+        let no_transition: SparseRows<0, 1> = [];
+        self.ekf.predict_sparse(t, x, &no_transition, &q);
     }
 
     /// The range update with the range variance (m²), the transponder's horizontal SD (m, each
