@@ -85,23 +85,39 @@ pub struct CovarianceTracker {
 }
 
 /// How the filter of an AUV not heard from since launch predicts its horizontal position
-/// covariance per axis with no range: P(t) = P₀ + q·t + P_c·t² + q_c·t³/3, the position integrating
-/// an unobserved random-walk current (initial variance P_c, (m/s)²; growth q_c, (m/s)²/s; both 0
-/// without a current state). Its rate dP/dt = q + 2·P_c·t + q_c·t² is what the planner grows it by.
-/// The speed, heading and compass-bias states are left out: the AUV's sensors observe them, the
-/// current they cannot. An invention (issue 10); digest gill §3 (the filter's prediction).
+/// covariance per axis with no range: the position integrates an unobserved current (initial
+/// variance P_c, (m/s)²; noise density q_c, (m/s)²/s; both 0 without a current state). With a
+/// random-walk current P(t) = P₀ + q·t + P_c·t² + q_c·t³/3. With a Gauss–Markov current of
+/// correlation time T (`model.correlation_time_s`), writing e = exp(−t/T), the initial current
+/// contributes P_c·T²·(1 − e)² and the driven one q_c·T²·(t − 2T(1 − e) + T(1 − e²)/2) (the
+/// integrated Ornstein–Uhlenbeck process; both tend to the random walk's terms as T → ∞). The
+/// rate dP/dt (q + 2·P_c·T·e(1 − e) + q_c·T²·(1 − e)² with the decay; q + 2·P_c·t + q_c·t²
+/// without) is what the planner grows it by. The speed, heading and compass-bias states are left
+/// out: the AUV's sensors observe them, the current they cannot. An invention (issue 10); digest
+/// gill §3 (the filter's prediction).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct UnheardGrowth {
     pub current_p0: f64,
     pub current_q: f64,
+    /// The current's correlation time T, s; None: a random walk.
+    pub current_correlation_s: Option<f64>,
 }
 
 impl UnheardGrowth {
     /// (P(t) − P₀, dP/dt) per axis at `t` seconds after launch, for process noise `q`.
     fn at(&self, q: f64, t: f64) -> (f64, f64) {
         let t = t.max(0.0);
-        let grown = q * t + self.current_p0 * t * t + self.current_q * t * t * t / 3.0;
-        (grown, q + 2.0 * self.current_p0 * t + self.current_q * t * t)
+        let (p_c, q_c) = (self.current_p0, self.current_q);
+        let (current, rate) = match self.current_correlation_s {
+            None => (p_c * t * t + q_c * t * t * t / 3.0, 2.0 * p_c * t + q_c * t * t),
+            Some(tc) => {
+                let e = (-t / tc).exp();
+                let driven = tc * tc * (t - 2.0 * tc * (1.0 - e) + 0.5 * tc * (1.0 - e * e));
+                let grown = p_c * tc * tc * (1.0 - e).powi(2) + q_c * driven;
+                (grown, 2.0 * p_c * tc * e * (1.0 - e) + q_c * tc * tc * (1.0 - e).powi(2))
+            }
+        };
+        (q * t + current, q + rate)
     }
 }
 
@@ -468,10 +484,40 @@ mod tests {
         assert_eq!(t.estimate(0).unwrap().cov, [5.0, 0.0, 10.0]);
     }
 
+    /// The closed forms against the filter's own discrete prediction of [position, current] per
+    /// axis (x ← x + h·c, c ← φ·c + w, var w = q_c·h, position noise q·h; step 0.1 s), random
+    /// walk (φ = 1) and Gauss–Markov (φ = exp(−h/T)); the rate against the step-to-step growth.
+    #[test]
+    fn an_unheard_auvs_growth_is_its_filters_discrete_prediction() {
+        let (q, p_c, q_c, h) = (0.5, 0.09, 2.5e-5, 0.1);
+        for correlation in [None, Some(600.0)] {
+            let growth = UnheardGrowth { current_p0: p_c, current_q: q_c, current_correlation_s: correlation };
+            let phi = correlation.map_or(1.0, |tc: f64| (-h / tc).exp());
+            let (mut pxx, mut pxc, mut pcc) = (0.0, 0.0, p_c);
+            let mut step = 0u64;
+            for t_check in [300.0, 1800.0, 6000.0] {
+                let mut before = pxx;
+                while (step as f64) * h < t_check - 1e-9 {
+                    before = pxx;
+                    (pxx, pxc, pcc) =
+                        (pxx + 2.0 * h * pxc + h * h * pcc + q * h, phi * (pxc + h * pcc), phi * phi * pcc + q_c * h);
+                    step += 1;
+                }
+                let (grown, rate) = growth.at(q, t_check);
+                assert!((grown - pxx).abs() < 2e-3 * pxx, "{correlation:?} t = {t_check}: {grown} against {pxx}");
+                let discrete_rate = (pxx - before) / h;
+                assert!(
+                    (rate - discrete_rate).abs() < 2e-3 * discrete_rate,
+                    "{correlation:?}: {rate} against {discrete_rate}"
+                );
+            }
+        }
+    }
+
     #[test]
     fn counting_reports_only_an_unheard_auv_grows_from_launch_as_its_filter_predicts() {
         let start = AuvEstimate { cov: [16.0, 0.0, 16.0], process_noise: 0.5 };
-        let growth = UnheardGrowth { current_p0: 0.09, current_q: 3e-5 };
+        let growth = UnheardGrowth { current_p0: 0.09, current_q: 3e-5, current_correlation_s: None };
         let mut t = CovarianceTracker::new(1, start, 30.0, RangeNoise::default()).reports_only(growth);
         let (cna, auv) = (Vec3::zeros(), Vec3::new(100.0, 0.0, 0.0));
         // Sure pings from 100 m teach the model nothing: at 600 s after launch the covariance is

@@ -265,8 +265,12 @@ fn filter_model(sc: &Scenario) -> (AuvEstimate, RangeNoise) {
 /// model, the current's initial variance and its random walk per second (per axis); else none.
 fn unheard_growth(sc: &Scenario) -> UnheardGrowth {
     match sc.filter.model {
-        AuvModel::Current(c) => UnheardGrowth { current_p0: c.p0, current_q: c.q / sc.filter.params.step_s },
-        AuvModel::Thesis => UnheardGrowth { current_p0: 0.0, current_q: 0.0 },
+        AuvModel::Current(c) => UnheardGrowth {
+            current_p0: c.p0,
+            current_q: c.q / sc.filter.params.step_s,
+            current_correlation_s: c.correlation_time_s,
+        },
+        AuvModel::Thesis => UnheardGrowth { current_p0: 0.0, current_q: 0.0, current_correlation_s: None },
     }
 }
 
