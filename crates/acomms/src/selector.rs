@@ -489,6 +489,26 @@ mod tests {
         assert_eq!(drifting.thresholds().0[0], (Rate::R4, 200.0));
     }
 
+    /// `drift_after_slots` in a file: a count, refused otherwise naming the key; left out of
+    /// what is written when 0 (the thesis's selector), so older manifests read the same.
+    #[test]
+    fn drift_after_slots_is_read_checked_and_written_only_when_set() {
+        let parse = |text: &str| toml::from_str::<RatePolicySpec>(text);
+        let err = parse("kind = \"adaptive\"\ndrift_after_slots = -1").unwrap_err().to_string();
+        assert!(err.contains("drift_after_slots") || err.contains("u32"), "{err}");
+        assert!(parse("kind = \"adaptive\"\ndrift_after_slot = 3")
+            .unwrap_err()
+            .to_string()
+            .contains("drift_after_slots"));
+        let RatePolicySpec::Adaptive(cfg) = parse("kind = \"adaptive\"\ndrift_after_slots = 10").unwrap() else {
+            panic!("adaptive")
+        };
+        assert_eq!(cfg.drift_after_slots, 10);
+        let written = |cfg: AdaptiveConfig| toml::to_string(&RatePolicySpec::Adaptive(cfg)).unwrap();
+        assert!(written(cfg).contains("drift_after_slots = 10"));
+        assert!(!written(AdaptiveConfig::default()).contains("drift_after_slots"));
+    }
+
     #[test]
     fn bins_shrink_in_a_poor_channel_and_grow_in_a_good_one() {
         let mut s = adaptive();
