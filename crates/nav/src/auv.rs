@@ -355,8 +355,6 @@ pub struct RangeUpdate {
 pub struct AuvEkf<const M: usize = 5> {
     ekf: Ekf<M>,
     params: AuvParams,
-    /// Per-step process noise of the states after the thesis's five (none when `M` = 5).
-    extra_q: f64,
     /// The current states' parameters (None when `M` = 5).
     current: Option<CurrentParams>,
     /// Ranges rejected by the gate since the last one applied ([`GateRecovery`]).
@@ -368,13 +366,7 @@ impl AuvEkf<5> {
     pub fn new(t0: f64, e: f64, n: f64, speed: f64, psi: f64, params: AuvParams) -> Self {
         let x0 = AuvState::from([e, n, speed, psi, 0.0]);
         let p0 = SMatrix::<f64, 5, 5>::from_diagonal(&SVector::from(params.p0));
-        AuvEkf {
-            ekf: Ekf::new(t0, x0, p0, [false, false, false, true, true]),
-            params,
-            extra_q: 0.0,
-            current: None,
-            gated_in_row: 0,
-        }
+        AuvEkf { ekf: Ekf::new(t0, x0, p0, [false, false, false, true, true]), params, current: None, gated_in_row: 0 }
     }
 }
 
@@ -393,13 +385,7 @@ impl AuvEkf<7> {
         let [pe, pn, ps, ppsi, pb] = params.p0;
         let p0 = SMatrix::<f64, 7, 7>::from_diagonal(&SVector::from([pe, pn, ps, ppsi, pb, current.p0, current.p0]));
         let angles = [false, false, false, true, true, false, false];
-        AuvEkf {
-            ekf: Ekf::new(t0, x0, p0, angles),
-            params,
-            extra_q: current.q,
-            current: Some(current),
-            gated_in_row: 0,
-        }
+        AuvEkf { ekf: Ekf::new(t0, x0, p0, angles), params, current: Some(current), gated_in_row: 0 }
     }
 }
 
@@ -488,7 +474,9 @@ impl<const M: usize> AuvEkf<M> {
     /// The process noise of an `h`-second step, per state (Q is given per nominal step).
     fn step_q(&self, h: f64) -> SVector<f64, M> {
         let scale = h / self.params.step_s;
-        SVector::<f64, M>::from_fn(|i, _| self.params.q.get(i).copied().unwrap_or(self.extra_q) * scale)
+        // The states after the thesis's five are the current's, with its per-step noise.
+        let extra_q = self.current.map_or(0.0, |c| c.q);
+        SVector::<f64, M>::from_fn(|i, _| self.params.q.get(i).copied().unwrap_or(extra_q) * scale)
     }
 
     /// Speed-sensor update (m/s).
@@ -654,8 +642,7 @@ impl<const M: usize> AuvEkf<M> {
         prior: Innovation,
     ) -> UpdateOutcome {
         let nis = prior.value * prior.value / prior.variance;
-        let residual_ok = gate.max_abs_residual.map_or(true, |b| prior.value.abs() <= b);
-        if !(residual_ok && gate.max_nis.map_or(true, |b| nis <= b)) {
+        if !gate.admits(&[prior.value], nis) {
             return UpdateOutcome::Gated { nis };
         }
         let (x0, p) = (*self.ekf.x(), *self.ekf.p());

@@ -21,6 +21,12 @@ pub struct Gate {
 
 impl Gate {
     pub const OFF: Gate = Gate { max_abs_residual: None, max_nis: None };
+
+    /// Whether a measurement with these innovation components and NIS passes both tests.
+    pub fn admits(&self, residuals: &[f64], nis: f64) -> bool {
+        let residual_ok = self.max_abs_residual.map_or(true, |b| residuals.iter().all(|v| v.abs() <= b));
+        residual_ok && self.max_nis.map_or(true, |b| nis <= b)
+    }
 }
 
 impl CheckFields for Gate {
@@ -219,9 +225,7 @@ impl<const N: usize> Ekf<N> {
             return UpdateOutcome::Unusable;
         }
         let nis = innovation * innovation / s;
-        let residual_ok = gate.max_abs_residual.map_or(true, |b| innovation.abs() <= b);
-        let nis_ok = gate.max_nis.map_or(true, |b| nis <= b);
-        if !(residual_ok && nis_ok) {
+        if !gate.admits(&[innovation], nis) {
             return UpdateOutcome::Gated { nis };
         }
         let k = pht.map(|v| v / s);
@@ -269,9 +273,7 @@ impl<const N: usize> Ekf<N> {
         let s = symmetrise(h * pht + r);
         let Some(chol) = s.cholesky() else { return UpdateOutcome::Unusable };
         let nis = (y.transpose() * chol.solve(&y))[(0, 0)];
-        let residual_ok = gate.max_abs_residual.map_or(true, |b| y.iter().all(|v| v.abs() <= b));
-        let nis_ok = gate.max_nis.map_or(true, |b| nis <= b);
-        if !(residual_ok && nis_ok) {
+        if !gate.admits(y.as_slice(), nis) {
             return UpdateOutcome::Gated { nis };
         }
         // K = P Hᵀ S⁻¹, computed as (S⁻¹ H P)ᵀ since S and P are symmetric.
