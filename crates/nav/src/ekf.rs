@@ -2,6 +2,12 @@
 //! state, the Jacobians and the noise; this module owns the covariance algebra (Joseph-form
 //! update, symmetrisation), angle-wrapped state components, innovation gating, and the optional
 //! history of x⁻, P⁻, x⁺, P⁺, F that the RTS smoother needs.
+//!
+//! The filter-rate path (sparse prediction, unit-row updates, what they call, and the AUV
+//! filter's methods over them) is `#[inline(always)]`: a step is a few hundred operations on
+//! small arrays that separate functions pass through memory. Inlined, a 7-state step (predict,
+//! speed, compass) ran ≈ 15 % faster in a 3 M-step probe (session 23); inlining never changes a
+//! floating-point result.
 
 use coopnav_core::validation::{CheckFields, Problems};
 use coopnav_core::wrap_pi;
@@ -153,6 +159,7 @@ impl<const N: usize> Ekf<N> {
     /// entries of its rows, and a diagonal process noise: the same P⁻ = F P Fᵀ + Q as
     /// [`Self::predict`] (up to rounding), computed as two sparse row/column passes instead of
     /// two dense N×N products — the filter-rate predictions of a fleet are most of a run's time.
+    #[inline(always)]
     pub fn predict_sparse<const R: usize, const K: usize>(
         &mut self,
         t: f64,
@@ -198,6 +205,7 @@ impl<const N: usize> Ekf<N> {
     /// heading plus bias). Bit for bit the same result, with the row's shape known when compiled
     /// (the filter-rate updates are most of a fleet's filter time); columns out of range or out of
     /// order make the measurement unusable.
+    #[inline(always)]
     pub fn update_units<const K: usize>(
         &mut self,
         innovation: f64,
@@ -216,6 +224,7 @@ impl<const N: usize> Ekf<N> {
     }
 
     /// The scalar Joseph update of [`Self::update_scalar`] for a row given by its non-zero entries.
+    #[inline(always)]
     fn update_row(&mut self, innovation: f64, h: &impl SparseRow<N>, r: f64, gate: &Gate) -> UpdateOutcome {
         // `p[j][i]` is entry (i, j) of the column-major storage.
         let p = &self.p.data.0;
@@ -294,6 +303,7 @@ impl<const N: usize> Ekf<N> {
     }
 
     /// Takes a posterior already checked finite; records it in the history.
+    #[inline(always)]
     fn accept(&mut self, x_new: SVector<f64, N>, p_new: SMatrix<f64, N, N>) {
         self.x = x_new;
         self.p = p_new;
@@ -305,6 +315,7 @@ impl<const N: usize> Ekf<N> {
         }
     }
 
+    #[inline(always)]
     fn wrap_state(&mut self) {
         for (i, is_angle) in self.angles.iter().enumerate() {
             if *is_angle {
@@ -331,6 +342,7 @@ pub fn state_difference<const N: usize>(
 
 /// An angle wrapped to (-π, π]: as [`wrap_pi`], but one already inside is returned untouched
 /// (wrap_pi's remainder would round it, and costs a division the filter pays every step).
+#[inline(always)]
 pub fn wrap_angle(a: f64) -> f64 {
     if a > -std::f64::consts::PI && a <= std::f64::consts::PI {
         a
@@ -376,6 +388,7 @@ struct Weighted<'a, const N: usize> {
 }
 
 impl<const N: usize> SparseRow<N> for Weighted<'_, N> {
+    #[inline(always)]
     fn times(&self, m: impl Fn(usize, usize) -> f64) -> [f64; N] {
         let mut out = [0.0; N];
         for (i, v) in out.iter_mut().enumerate() {
@@ -384,6 +397,7 @@ impl<const N: usize> SparseRow<N> for Weighted<'_, N> {
         out
     }
 
+    #[inline(always)]
     fn dot(&self, v: &[f64; N]) -> f64 {
         self.seen.columns().iter().map(|&j| self.h[j] * v[j]).sum()
     }
@@ -394,6 +408,7 @@ impl<const N: usize> SparseRow<N> for Weighted<'_, N> {
 struct Units<const K: usize>([usize; K]);
 
 impl<const N: usize, const K: usize> SparseRow<N> for Units<K> {
+    #[inline(always)]
     fn times(&self, m: impl Fn(usize, usize) -> f64) -> [f64; N] {
         let mut out = [0.0; N];
         for (i, v) in out.iter_mut().enumerate() {
@@ -402,6 +417,7 @@ impl<const N: usize, const K: usize> SparseRow<N> for Units<K> {
         out
     }
 
+    #[inline(always)]
     fn dot(&self, v: &[f64; N]) -> f64 {
         self.0.iter().map(|&j| v[j]).sum()
     }
@@ -430,6 +446,7 @@ pub type SparseRows<const R: usize, const K: usize> = [(usize, [(usize, f64); K]
 
 /// G's rows distinct and inside the matrix, its values finite (plain loops: this runs every
 /// filter step).
+#[inline(always)]
 fn rows_ok<const N: usize, const R: usize, const K: usize>(g: &SparseRows<R, K>) -> bool {
     let mut ok = true;
     for (r, (i, entries)) in g.iter().enumerate() {
@@ -445,6 +462,7 @@ fn rows_ok<const N: usize, const R: usize, const K: usize>(g: &SparseRows<R, K>)
 }
 
 /// The position of row `j` among G's rows.
+#[inline(always)]
 fn row_position<const R: usize, const K: usize>(g: &SparseRows<R, K>, j: usize) -> Option<usize> {
     let mut found = None;
     for (r, (i, _)) in g.iter().enumerate() {
@@ -462,6 +480,7 @@ fn row_position<const R: usize, const K: usize>(g: &SparseRows<R, K>, j: usize) 
 /// indices, so only those rows are built (from the old P) and only those columns rewritten; no
 /// copy of P is taken (this runs once per AUV per filter step). Each entry is summed in its row's
 /// order, as the dense two-pass form (rows of G in pass one, its columns in pass two) sums it.
+#[inline(always)]
 pub fn propagate_covariance<const N: usize, const R: usize, const K: usize>(
     p: &mut SMatrix<f64, N, N>,
     g: &SparseRows<R, K>,
