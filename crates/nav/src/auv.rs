@@ -760,10 +760,13 @@ impl AuvFilter {
         }
     }
 
+    // The engine reads these for every vehicle at every truth step: inlined across crates.
+    #[inline]
     pub fn position(&self) -> (f64, f64) {
         each_model!(self, f => f.position())
     }
     /// Estimated speed through the water (m/s) and math heading ψ (rad).
+    #[inline]
     pub fn speed_heading(&self) -> (f64, f64) {
         each_model!(self, f => (f.state()[S], f.state()[PSI]))
     }
@@ -781,8 +784,10 @@ impl AuvFilter {
             [p[(E, E)], p[(E, N)], p[(N, N)]]
         })
     }
+    /// Every state and covariance entry finite (without an early exit, so the check vectorises).
+    #[inline]
     pub fn is_finite(&self) -> bool {
-        each_model!(self, f => f.state().iter().chain(f.ekf().p().iter()).all(|v| v.is_finite()))
+        each_model!(self, f => f.state().iter().chain(f.ekf().p().iter()).fold(true, |ok, v| ok & v.is_finite()))
     }
     pub fn predict_to(&mut self, t: f64, yaw_rate: f64) -> bool {
         each_model!(self, f => f.predict_to(t, yaw_rate))

@@ -29,6 +29,7 @@ impl Gate {
     pub const OFF: Gate = Gate { max_abs_residual: None, max_nis: None };
 
     /// Whether a measurement with these innovation components and NIS passes both tests.
+    #[inline]
     pub fn admits(&self, residuals: &[f64], nis: f64) -> bool {
         let residual_ok = self.max_abs_residual.map_or(true, |b| residuals.iter().all(|v| v.abs() <= b));
         residual_ok && self.max_nis.map_or(true, |b| nis <= b)
