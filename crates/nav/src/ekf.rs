@@ -665,15 +665,19 @@ mod tests {
         out
     }
 
+    /// Uniform numbers in [−0.5, 0.5) from a xorshift generator seeded with `seed`.
+    fn uniform_source(mut seed: u64) -> impl FnMut() -> f64 {
+        move || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            (seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+        }
+    }
+
     #[test]
     fn sparse_prediction_is_the_two_pass_form_bit_for_bit() {
-        let mut rng = 0x2545_f491_4f6c_dd1d_u64;
-        let mut uniform = || {
-            rng ^= rng << 13;
-            rng ^= rng >> 7;
-            rng ^= rng << 17;
-            (rng >> 11) as f64 / (1u64 << 53) as f64 - 0.5
-        };
+        let mut uniform = uniform_source(0x2545_f491_4f6c_dd1d);
         for case in 0..200 {
             let m = SMatrix::<f64, 7, 7>::from_fn(|_, _| uniform());
             let p = m * m.transpose() + SMatrix::identity() * 0.1;
@@ -748,13 +752,7 @@ mod tests {
 
     #[test]
     fn scalar_updates_are_the_pair_by_pair_form_bit_for_bit() {
-        let mut rng = 0x853c_49e6_748f_ea9b_u64;
-        let mut uniform = || {
-            rng ^= rng << 13;
-            rng ^= rng >> 7;
-            rng ^= rng << 17;
-            (rng >> 11) as f64 / (1u64 << 53) as f64 - 0.5
-        };
+        let mut uniform = uniform_source(0x853c_49e6_748f_ea9b);
         let bits = |m: &[f64]| m.iter().map(|v| v.to_bits()).collect::<Vec<_>>();
         for case in 0..300 {
             let m = SMatrix::<f64, 7, 7>::from_fn(|_, _| uniform());
