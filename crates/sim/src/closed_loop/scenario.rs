@@ -26,7 +26,7 @@ use coopnav_nav::{AuvModel, AuvParams, RangeNoise};
 use coopnav_plan::predict::{PredictorConfig, WaypointUse};
 use coopnav_plan::{
     Aggregate, CnaKind, Deadline, DistanceLimits, ErrorModel, MotionConfig, PenaltyCase, PlanError, PlannerConfig,
-    SearchConfig,
+    SearchConfig, TruthSpec,
 };
 use serde::{Deserialize, Serialize};
 use std::path::Path;
@@ -355,6 +355,11 @@ pub struct Planner {
     /// estimator step 2); false scores every broadcast position as exact.
     #[serde(default = "yes")]
     pub estimator_cna_variance: bool,
+    /// Some: `planner-estimator` scores the AUVs' expected true error under their filters' gains
+    /// instead of the filters' covariance (coopnav_plan `true_error`; the truth's drift, range
+    /// noise and the CNA's diffusion as the CNA believes them). Written only when set.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub estimator_truth: Option<TruthSpec>,
 }
 
 /// What the CNA knows of a survey AUV before its reports meet the planning start rule (A14).
@@ -691,6 +696,9 @@ impl Scenario {
                 let own = found.0.into_iter().filter(|bad| bad.field == "look_ahead");
                 own.for_each(|bad| p.push("planner.estimator_look_ahead", bad.value, bad.allowed));
             }
+        }
+        if let Some(truth) = &pl.estimator_truth {
+            truth.check_fields("planner.estimator_truth.", p);
         }
         if pl.estimator_pitch_levels == Some(0) {
             p.push("planner.estimator_pitch_levels", "0", ">= 1 (or absent: every level)");
