@@ -600,6 +600,58 @@ mod tests {
         assert_eq!(t.estimate(0).unwrap().cov, [5.0, 0.0, 10.0]);
     }
 
+    #[test]
+    fn the_true_error_moments_start_at_launch_inherit_the_cnas_offset_and_forget_it_at_a_fix() {
+        let start = AuvEstimate { cov: [16.0, 0.0, 16.0], process_noise: 2.0 };
+        let spec = TruthSpec {
+            drift_m2_s: 0.05,
+            range_noise: RangeNoise { sigma_m: 1.0, per_km_m: 0.0 },
+            cna_diffusion_m2_s: 0.01,
+        };
+        let mut t = CovarianceTracker::new(1, start, 30.0, RangeNoise::default()).with_truth(spec, 1.0);
+        let (cna, auv) = (Vec3::zeros(), Vec3::new(300.0, 0.0, 0.0));
+        // First known at 600 s by a lost ping: σ₀² + q_t·t = 1 + 30 per axis, no correlation yet.
+        t.set_cna_variance(4.0);
+        t.ping(0, 600.0, None, (&cna, &auv, 0.0));
+        assert_eq!(t.true_error(0).unwrap(), TrueError { s: [31.0, 0.0, 31.0], c: [0.0; 4] });
+        // No ping for 30 s: the true drift only (0.05 · 30 = 1.5 m² per axis), not the filter's q.
+        t.silent(0, 630.0, None);
+        assert_eq!(t.true_error(0).unwrap().s, [32.5, 0.0, 32.5]);
+        // A sure ping from the west with the CNA off by σ_c² = 4 m²: the filter (P̃ = 16 + 2·30 +
+        // 2·30 ≫ R) moves the east error almost onto the range's: S_ee ≈ R_t + σ_c², C_ee ≈ σ_c².
+        t.ping(0, 660.0, None, (&cna, &auv, 1.0));
+        let e = t.true_error(0).unwrap();
+        assert!((e.s[0] - 5.0).abs() < 0.2 && (e.s[2] - 34.0).abs() < 1e-9, "{e:?}");
+        assert!((e.c[0] - 4.0).abs() < 0.1 && e.c[1] == 0.0 && e.c[3] == 0.0, "{e:?}");
+        // The CNA's fix: its new error is independent of the old one, so C restarts; S is kept.
+        t.set_cna_variance(1.0);
+        let fixed = t.true_error(0).unwrap();
+        assert_eq!((fixed.s, fixed.c), (e.s, [0.0; 4]));
+        assert_eq!(t.cna_variance(), 1.0);
+    }
+
+    #[test]
+    fn the_true_error_planner_needs_its_moments() {
+        let truth = TruthSpec {
+            drift_m2_s: 0.03,
+            range_noise: RangeNoise { sigma_m: 1.8, per_km_m: 0.0 },
+            cna_diffusion_m2_s: 0.01,
+        };
+        let spec = coopnav_plan::EstimatorSpec { truth: Some(truth), ..coopnav_plan::EstimatorSpec::default() };
+        let est = PlannerConfig { cost: CostSpec::Estimator(spec), ..cfg() };
+        let start = AuvEstimate { cov: [16.0, 0.0, 16.0], process_noise: 0.1 };
+        let fleet = FnForecast { n: 2, f: |k: usize, t: f64| Some(Vec3::new(300.0 + 200.0 * k as f64, 1.5 * t, 20.0)) };
+        let cna = CnaPose { pos: Vec3::new(0.0, 0.0, 0.0), heading: Heading::from_radians(0.0), pitch: 0.0 };
+        let filters = Some((start, RangeNoise::default()));
+        let mut with = PlannerPolicy::new(est, 2, 1.0, 1.0, None, filters).unwrap().with_truth(truth, 1.0);
+        let mut without = PlannerPolicy::new(est, 2, 1.0, 1.0, None, filters).unwrap();
+        for step in 0..3 {
+            assert!(matches!(with.decide(&at_step(step, cna, &fleet)), CnaCommand::GoTo(_)));
+            assert!(matches!(without.decide(&at_step(step, cna, &fleet)), CnaCommand::Hold));
+        }
+        assert_eq!((with.stats().failures, without.stats().failures), (0, 3));
+    }
+
     /// The closed forms against the filter's own discrete prediction of [position, current] per
     /// axis (x ← x + h·c, c ← φ·c + w, var w = q_c·h, position noise q·h; step 0.1 s), random
     /// walk (φ = 1) and Gauss–Markov (φ = exp(−h/T)); the rate against the step-to-step growth.

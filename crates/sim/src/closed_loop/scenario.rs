@@ -968,6 +968,24 @@ mod tests {
     }
 
     #[test]
+    fn the_estimator_scores_its_covariance_unless_the_file_gives_a_truth_model() {
+        let plain = Scenario::parse(EXAMPLE, Path::new("e.toml")).unwrap();
+        assert_eq!(plain.planner.estimator_truth, None);
+        assert!(!toml::to_string(&plain).unwrap().contains("estimator_truth"), "the default is not written");
+        let with = |v: &str| EXAMPLE.replace("[planner]\n", &format!("[planner]\nestimator_truth = {v}\n"));
+        let truth = "{ drift_m2_s = 0.03, range_noise = { sigma_m = 1.8, per_km_m = 0.0 }, cna_diffusion_m2_s = 0.01 }";
+        let sc = Scenario::parse(&with(truth), Path::new("t.toml")).unwrap();
+        let spec = sc.planner.estimator_truth.unwrap();
+        assert_eq!((spec.drift_m2_s, spec.range_noise.sigma_m, spec.cna_diffusion_m2_s), (0.03, 1.8, 0.01));
+        let again = Scenario::parse(&toml::to_string(&sc).unwrap(), Path::new("t.toml")).unwrap();
+        assert_eq!(again.planner.estimator_truth, Some(spec));
+        let e = err(&with(&truth.replace("drift_m2_s = 0.03", "drift_m2_s = -0.03")));
+        assert!(e.contains("planner.estimator_truth.drift_m2_s") && e.contains(">= 0"), "{e}");
+        let e = err(&with(&truth.replace("cna_diffusion_m2_s", "cna_drift")));
+        assert!(e.contains("cna_drift"), "{e}");
+    }
+
+    #[test]
     fn an_auv_not_yet_heard_is_ignored_unless_the_file_gives_the_mission_plan() {
         let plain = Scenario::parse(EXAMPLE, Path::new("e.toml")).unwrap();
         assert_eq!(plain.planner.before_first_report, BeforeFirstReport::Ignore);
