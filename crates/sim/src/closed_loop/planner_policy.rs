@@ -472,8 +472,12 @@ impl CnaPolicy for PlannerPolicy {
             self.covariances.as_ref().map_or(Vec::new(), |c| known.iter().filter_map(|&k| c.estimate(k)).collect());
         let true_errors: Vec<TrueError> =
             self.covariances.as_ref().map_or(Vec::new(), |c| known.iter().filter_map(|&k| c.true_error(k)).collect());
-        let truth =
-            self.covariances.as_ref().map(|c| TruthInput { errors: &true_errors, cna_variance: c.cna_variance() });
+        // Only a tracker with the true-error moments has them (one per known AUV).
+        let truth = self
+            .covariances
+            .as_ref()
+            .filter(|_| !true_errors.is_empty())
+            .map(|c| TruthInput { errors: &true_errors, cna_variance: c.cna_variance() });
         let forecast = Known { inner: ctx.fleet, index: &known };
         let input = PlanInput {
             t: ctx.t,
