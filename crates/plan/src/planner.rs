@@ -14,6 +14,7 @@ use crate::motion::{CnaPose, FastOption, FastPose, MotionConfig, MotionOption};
 use crate::penalty::PenaltyPair;
 use crate::search::{branch_and_bound, Shared};
 use crate::tree::{reaches, rest_floors, Tree};
+use crate::true_error::{TrueErrorCost, TruthInput, TruthSpec};
 use crate::{brute, PlanError, SearchOutcome};
 use coopnav_core::validation::{CheckFields, Problems};
 use coopnav_core::Vec3;
@@ -369,11 +370,35 @@ impl LookAheadPlanner {
         Ok(self.tree(g, model, root))
     }
 
+    fn estimator_model(&self, spec: EstimatorSpec, input: &PlanInput) -> Result<EkfCost, PlanError> {
+        let motion = (self.cfg.motion.tau, self.cfg.motion.speed, input.cna_variance);
+        EkfCost::new(spec, input.estimates, motion, self.link.clone())
+    }
+
     fn estimator_tree(&self, spec: EstimatorSpec, input: &PlanInput, depth: usize) -> Result<Tree<EkfCost>, PlanError> {
         let g = self.geometry(input, depth)?;
-        let motion = (self.cfg.motion.tau, self.cfg.motion.speed, input.cna_variance);
-        let model = EkfCost::new(spec, input.estimates, motion, self.link.clone())?;
+        let model = self.estimator_model(spec, input)?;
         let root = input.estimates.iter().map(|e| e.cov).collect();
+        Ok(self.tree(g, model, root))
+    }
+
+    fn true_error_tree(
+        &self,
+        (spec, truth): (EstimatorSpec, TruthSpec),
+        input: &PlanInput,
+        known: &TruthInput,
+        depth: usize,
+    ) -> Result<Tree<TrueErrorCost>, PlanError> {
+        let g = self.geometry(input, depth)?;
+        if known.errors.len() != g.n {
+            return Err(PlanError::Input(format!(
+                "{} true-error states for {} forecast AUVs",
+                known.errors.len(),
+                g.n
+            )));
+        }
+        let root = TrueErrorCost::root(input.estimates.iter().map(|e| e.cov), known)?;
+        let model = TrueErrorCost::new(self.estimator_model(spec, input)?, truth, self.cfg.motion.tau);
         Ok(self.tree(g, model, root))
     }
 
@@ -432,10 +457,28 @@ impl Planner for LookAheadPlanner {
         "look-ahead"
     }
 
+    /// Refused under a true-error cost (`EstimatorSpec::truth`): use
+    /// [`LookAheadPlanner::decide_with_truth`].
     fn decide(&mut self, input: &PlanInput) -> Result<Decision, PlanError> {
-        match self.cfg.cost {
-            CostSpec::Hudson => self.run(|depth| self.hudson_tree(input, depth)),
-            CostSpec::Estimator(spec) => self.run(|depth| self.estimator_tree(spec, input, depth)),
+        self.decide_with_truth(input, None)
+    }
+}
+
+impl LookAheadPlanner {
+    /// One decision; `truth` (each AUV's true-error moments and the CNA's own variance) is what
+    /// the true-error cost starts from, required by it and ignored by the other costs.
+    pub fn decide_with_truth(&self, input: &PlanInput, truth: Option<&TruthInput>) -> Result<Decision, PlanError> {
+        match (self.cfg.cost, truth) {
+            (CostSpec::Hudson, _) => self.run(|depth| self.hudson_tree(input, depth)),
+            (CostSpec::Estimator(spec @ EstimatorSpec { truth: None, .. }), _) => {
+                self.run(|depth| self.estimator_tree(spec, input, depth))
+            }
+            (CostSpec::Estimator(spec @ EstimatorSpec { truth: Some(t), .. }), Some(known)) => {
+                self.run(|depth| self.true_error_tree((spec, t), input, known, depth))
+            }
+            (CostSpec::Estimator(_), None) => Err(PlanError::Input(
+                "the true-error cost (cost.truth) needs each AUV's true-error moments (decide_with_truth)".into(),
+            )),
         }
     }
 }
