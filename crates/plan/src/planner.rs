@@ -77,6 +77,14 @@ pub struct SearchConfig {
     /// Invented (issue 10), measured with `coopnav bench planner`.
     #[serde(default = "default_parallel_after_nodes")]
     pub parallel_after_nodes: u64,
+    /// ... and once this many microseconds have passed since the search began: waking the
+    /// threads and enumerating the tasks costs about 0.1 ms, so a tree whose whole search is
+    /// shorter than a few of those only loses by sharing (a 2,245-node Hudson tree of 0.2 ms ran
+    /// at 0.62× one thread when handed over at 2,000 nodes). 0 = the node count alone decides.
+    /// Invented (issue 10), measured with `coopnav bench planner`. Only the node count depends on
+    /// it (and so on timing), never the decision or its cost.
+    #[serde(default = "default_parallel_after_us")]
+    pub parallel_after_us: u64,
     #[serde(default)]
     pub deadline: Deadline,
     /// Relative tolerance of the tie-break: every level-0 option whose minimum path cost is within
@@ -98,12 +106,17 @@ fn default_parallel_after_nodes() -> u64 {
     2_000
 }
 
+fn default_parallel_after_us() -> u64 {
+    500
+}
+
 impl Default for SearchConfig {
     fn default() -> Self {
         SearchConfig {
             algorithm: Algorithm::default(),
             parallel: true,
             parallel_after_nodes: default_parallel_after_nodes(),
+            parallel_after_us: default_parallel_after_us(),
             deadline: Deadline::default(),
             tie_tolerance: default_tie_tolerance(),
         }

@@ -59,10 +59,17 @@ impl Instance {
     }
 }
 
-/// No deadline; the parallel mode shares the tree at once (no one-thread start), so the tests'
-/// small trees still run the parallel search.
+/// No deadline; the parallel mode shares the tree at once (no one-thread start, no time floor), so
+/// the tests' small trees still run the parallel search.
 fn exact(algorithm: Algorithm, parallel: bool) -> SearchConfig {
-    SearchConfig { algorithm, parallel, parallel_after_nodes: 0, deadline: Deadline::None, ..SearchConfig::default() }
+    SearchConfig {
+        algorithm,
+        parallel,
+        parallel_after_nodes: 0,
+        parallel_after_us: 0,
+        deadline: Deadline::None,
+        ..SearchConfig::default()
+    }
 }
 
 fn asc(a: usize, l: usize, case: PenaltyCase) -> PlannerConfig {
@@ -289,6 +296,9 @@ fn the_parallel_mode_shares_only_trees_larger_than_its_start() {
         assert_eq!((shared.option, shared.value), (one.option, one.value), "after {nodes} nodes");
         assert_ne!(shared.nodes, one.nodes, "after {nodes} nodes: the tasks' enumeration counts");
     }
+    // A time floor not yet passed keeps the tree on one thread whatever the node budget.
+    let floored = inst.decide(SearchConfig { parallel_after_us: 60_000_000, ..exact(Algorithm::BranchAndBound, true) });
+    assert_eq!((floored.option, floored.value, floored.nodes), (one.option, one.value, one.nodes));
 }
 
 #[test]
