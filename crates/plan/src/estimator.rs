@@ -78,6 +78,7 @@
 //! gill §3 (the filter it models).
 
 use crate::cost_model::{norm, Below, CostModel};
+use crate::true_error::TruthSpec;
 use crate::PlanError;
 use coopnav_core::validation::{CheckFields, Problems};
 use serde::{Deserialize, Serialize};
@@ -154,6 +155,10 @@ pub struct EstimatorSpec {
     /// 0 = none; it acts only with H > 0).
     #[serde(default)]
     pub reach_success: f64,
+    /// Some: score the AUVs' expected true error under their filters' gains instead of the
+    /// filters' covariance (`true_error` module); the decision then needs a `TruthInput`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub truth: Option<TruthSpec>,
 }
 
 impl CheckFields for EstimatorSpec {
@@ -163,6 +168,9 @@ impl CheckFields for EstimatorSpec {
         p.non_negative(&format!("{prefix}bias_per_km_m"), self.bias_per_km_m);
         p.non_negative(&format!("{prefix}terminal_levels"), self.terminal_levels);
         p.probability(&format!("{prefix}reach_success"), self.reach_success);
+        if let Some(truth) = &self.truth {
+            truth.check_fields(&format!("{prefix}truth."), p);
+        }
     }
 }
 
@@ -361,13 +369,19 @@ impl EkfCost {
     /// axis over the H levels beyond the horizon before the CNA is within the useful range, m².
     #[inline(always)]
     fn reach_growth(&self, k: usize, range_m: f64) -> f64 {
+        self.reach_growth_of(self.q_tau[k], range_m)
+    }
+
+    /// ḡ of step 7 for an AUV whose covariance grows by `q_tau` per axis and level.
+    #[inline(always)]
+    fn reach_growth_of(&self, q_tau: f64, range_m: f64) -> f64 {
         let h = self.spec.terminal_levels;
         let beyond = range_m - self.reach.useful_range_m;
         if !(beyond > 0.0 && h > 0.0) {
             return 0.0;
         }
         let m = (beyond / self.reach.step_m).min(h);
-        self.q_tau[k] * (m - m * m / (2.0 * h))
+        q_tau * (m - m * m / (2.0 * h))
     }
 
     /// (ι, p̄) of the bounds at slant ranges ≥ `range_m`: the most information a ping that arrives
@@ -381,7 +395,7 @@ impl EkfCost {
 
     /// β(r)² of step 4 for a ping from `cna` to the AUV at `auv`, m².
     #[inline(always)]
-    fn bias_variance(&self, cna: [f64; 3], auv: [f64; 3]) -> f64 {
+    pub(crate) fn bias_variance(&self, cna: [f64; 3], auv: [f64; 3]) -> f64 {
         let d = [auv[0] - cna[0], auv[1] - cna[1], auv[2] - cna[2]];
         self.bias_variance_at(d[0] * d[0] + d[1] * d[1] + d[2] * d[2])
     }
@@ -418,6 +432,36 @@ impl EkfCost {
         }
     }
 
+    /// Step 4 and 5's term of a covariance `cov` with the range bias variance β² (m²):
+    /// the aggregate's term of M = cov + β²/2·I.
+    #[inline(always)]
+    pub(crate) fn moments_term(&self, cov: &[f64; 3], bias2: f64) -> f64 {
+        let [a, b, c] = *cov;
+        let half_bias2 = 0.5 * bias2;
+        let (ma, mc) = (a + half_bias2, c + half_bias2);
+        self.term(ma + mc, ma * mc - b * b)
+    }
+
+    /// Steps 6 and 7 for a leaf covariance `cov` growing by `q_tau` per axis and level: the
+    /// leaf's term plus H levels at M + ḡ·I (ḡ = 0: (1 + H)·term exactly).
+    #[inline(always)]
+    pub(crate) fn leaf_term_with(&self, q_tau: f64, cov: &[f64; 3], cna: [f64; 3], auv: [f64; 3], term: f64) -> f64 {
+        let h = self.spec.terminal_levels;
+        if self.reach.useful_range_m == f64::INFINITY {
+            return term * (1.0 + h); // no reach cost-to-go: ḡ = 0 at every range
+        }
+        let d = [auv[0] - cna[0], auv[1] - cna[1], auv[2] - cna[2]];
+        let range2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
+        let growth = self.reach_growth_of(q_tau, range2.sqrt());
+        if growth <= 0.0 {
+            return term * (1.0 + h);
+        }
+        let [a, b, c] = *cov;
+        let half_bias2 = 0.5 * self.bias_variance_at(range2);
+        let (ma, mc) = (a + half_bias2, c + half_bias2);
+        term + h * self.term_bound(ma + mc, ma * mc - b * b, growth)
+    }
+
     #[inline(always)]
     fn term(&self, trace: f64, det: f64) -> f64 {
         match self.spec.aggregate {
@@ -440,9 +484,7 @@ impl CostModel for EkfCost {
             expected_posterior(parent, self.q_tau[k], cna, auv, &self.spec.range_noise, self.cna_variance, |r| {
                 link.success(r)
             });
-        let half_bias2 = 0.5 * self.bias_variance(cna, auv);
-        let (ma, mc) = (a + half_bias2, c + half_bias2);
-        ([a, b, c], self.term(ma + mc, ma * mc - b * b))
+        ([a, b, c], self.moments_term(&[a, b, c], self.bias_variance(cna, auv)))
     }
 
     /// Step 6: H levels at the leaf's term.
@@ -453,20 +495,7 @@ impl CostModel for EkfCost {
     /// Steps 6 and 7: the leaf's term plus H levels at M + ḡ·I (ḡ = 0: (1 + H)·term exactly).
     #[inline(always)]
     fn leaf_term(&self, k: usize, state: &[f64; 3], cna: [f64; 3], auv: [f64; 3], term: f64) -> f64 {
-        let h = self.spec.terminal_levels;
-        if self.reach.useful_range_m == f64::INFINITY {
-            return term * (1.0 + h); // no reach cost-to-go: ḡ = 0 at every range
-        }
-        let d = [auv[0] - cna[0], auv[1] - cna[1], auv[2] - cna[2]];
-        let range2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
-        let growth = self.reach_growth(k, range2.sqrt());
-        if growth <= 0.0 {
-            return term * (1.0 + h);
-        }
-        let [a, b, c] = *state;
-        let half_bias2 = 0.5 * self.bias_variance_at(range2);
-        let (ma, mc) = (a + half_bias2, c + half_bias2);
-        term + h * self.term_bound(ma + mc, ma * mc - b * b, growth)
+        self.leaf_term_with(self.q_tau[k], state, cna, auv, term)
     }
 
     #[inline(always)]

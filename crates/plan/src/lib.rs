@@ -20,6 +20,7 @@ mod search;
 #[cfg(test)]
 mod tests;
 mod tree;
+pub mod true_error;
 pub mod workload;
 
 pub use error_model::{AuvError, BearingMode, CostMode, ErrorModel};
@@ -32,6 +33,7 @@ pub use planner::{
     Algorithm, AuvForecast, CostSpec, Deadline, Decision, DistanceLimits, FnForecast, LookAheadPlanner, PlanInput,
     Planner, PlannerConfig, SearchConfig,
 };
+pub use true_error::{TrueError, TruthInput, TruthSpec};
 
 use thiserror::Error;
 

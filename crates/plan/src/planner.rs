@@ -14,6 +14,7 @@ use crate::motion::{CnaPose, FastOption, FastPose, MotionConfig, MotionOption};
 use crate::penalty::PenaltyPair;
 use crate::search::{branch_and_bound, Shared};
 use crate::tree::{reaches, rest_floors, Tree};
+use crate::true_error::{TrueErrorCost, TruthInput, TruthSpec};
 use crate::{brute, PlanError, SearchOutcome};
 use coopnav_core::validation::{CheckFields, Problems};
 use coopnav_core::Vec3;
@@ -76,6 +77,14 @@ pub struct SearchConfig {
     /// Invented (issue 10), measured with `coopnav bench planner`.
     #[serde(default = "default_parallel_after_nodes")]
     pub parallel_after_nodes: u64,
+    /// ... and once this many microseconds have passed since the search began: waking the
+    /// threads and enumerating the tasks costs about 0.1 ms, so a tree whose whole search is
+    /// shorter than a few of those only loses by sharing (a 2,245-node Hudson tree of 0.2 ms ran
+    /// at 0.62× one thread when handed over at 2,000 nodes). 0 = the node count alone decides.
+    /// Invented (issue 10), measured with `coopnav bench planner`. Only the node count depends on
+    /// it (and so on timing), never the decision or its cost.
+    #[serde(default = "default_parallel_after_us")]
+    pub parallel_after_us: u64,
     #[serde(default)]
     pub deadline: Deadline,
     /// Relative tolerance of the tie-break: every level-0 option whose minimum path cost is within
@@ -97,12 +106,17 @@ fn default_parallel_after_nodes() -> u64 {
     2_000
 }
 
+fn default_parallel_after_us() -> u64 {
+    500
+}
+
 impl Default for SearchConfig {
     fn default() -> Self {
         SearchConfig {
             algorithm: Algorithm::default(),
             parallel: true,
             parallel_after_nodes: default_parallel_after_nodes(),
+            parallel_after_us: default_parallel_after_us(),
             deadline: Deadline::default(),
             tie_tolerance: default_tie_tolerance(),
         }
@@ -369,11 +383,35 @@ impl LookAheadPlanner {
         Ok(self.tree(g, model, root))
     }
 
+    fn estimator_model(&self, spec: EstimatorSpec, input: &PlanInput) -> Result<EkfCost, PlanError> {
+        let motion = (self.cfg.motion.tau, self.cfg.motion.speed, input.cna_variance);
+        EkfCost::new(spec, input.estimates, motion, self.link.clone())
+    }
+
     fn estimator_tree(&self, spec: EstimatorSpec, input: &PlanInput, depth: usize) -> Result<Tree<EkfCost>, PlanError> {
         let g = self.geometry(input, depth)?;
-        let motion = (self.cfg.motion.tau, self.cfg.motion.speed, input.cna_variance);
-        let model = EkfCost::new(spec, input.estimates, motion, self.link.clone())?;
+        let model = self.estimator_model(spec, input)?;
         let root = input.estimates.iter().map(|e| e.cov).collect();
+        Ok(self.tree(g, model, root))
+    }
+
+    fn true_error_tree(
+        &self,
+        (spec, truth): (EstimatorSpec, TruthSpec),
+        input: &PlanInput,
+        known: &TruthInput,
+        depth: usize,
+    ) -> Result<Tree<TrueErrorCost>, PlanError> {
+        let g = self.geometry(input, depth)?;
+        if known.errors.len() != g.n {
+            return Err(PlanError::Input(format!(
+                "{} true-error states for {} forecast AUVs",
+                known.errors.len(),
+                g.n
+            )));
+        }
+        let root = TrueErrorCost::root(input.estimates.iter().map(|e| e.cov), known)?;
+        let model = TrueErrorCost::new(self.estimator_model(spec, input)?, truth, self.cfg.motion.tau);
         Ok(self.tree(g, model, root))
     }
 
@@ -432,10 +470,28 @@ impl Planner for LookAheadPlanner {
         "look-ahead"
     }
 
+    /// Refused under a true-error cost (`EstimatorSpec::truth`): use
+    /// [`LookAheadPlanner::decide_with_truth`].
     fn decide(&mut self, input: &PlanInput) -> Result<Decision, PlanError> {
-        match self.cfg.cost {
-            CostSpec::Hudson => self.run(|depth| self.hudson_tree(input, depth)),
-            CostSpec::Estimator(spec) => self.run(|depth| self.estimator_tree(spec, input, depth)),
+        self.decide_with_truth(input, None)
+    }
+}
+
+impl LookAheadPlanner {
+    /// One decision; `truth` (each AUV's true-error moments and the CNA's own variance) is what
+    /// the true-error cost starts from, required by it and ignored by the other costs.
+    pub fn decide_with_truth(&self, input: &PlanInput, truth: Option<&TruthInput>) -> Result<Decision, PlanError> {
+        match (self.cfg.cost, truth) {
+            (CostSpec::Hudson, _) => self.run(|depth| self.hudson_tree(input, depth)),
+            (CostSpec::Estimator(spec @ EstimatorSpec { truth: None, .. }), _) => {
+                self.run(|depth| self.estimator_tree(spec, input, depth))
+            }
+            (CostSpec::Estimator(spec @ EstimatorSpec { truth: Some(t), .. }), Some(known)) => {
+                self.run(|depth| self.true_error_tree((spec, t), input, known, depth))
+            }
+            (CostSpec::Estimator(_), None) => Err(PlanError::Input(
+                "the true-error cost (cost.truth) needs each AUV's true-error moments (decide_with_truth)".into(),
+            )),
         }
     }
 }

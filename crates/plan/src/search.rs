@@ -11,7 +11,7 @@
 //! - a node is abandoned part-way through its AUVs once the partial sum is cut (`tree::Cut`).
 //!
 //! The parallel mode starts as the one-thread search on the calling thread; a tree that needs
-//! more than `SearchConfig::parallel_after_nodes` nodes is then split: the top two or three levels
+//! more than `SearchConfig::parallel_after_nodes` nodes and `parallel_after_us` µs is then split: the top two or three levels
 //! become tasks ordered by their lower bound, and every worker pulls them in that order, sharing
 //! the best path found (an atomic, seeded by the start) and skipping the tasks the start finished
 //! or the best path excludes. Small trees never wake the threads (rayon's overhead made them
@@ -96,6 +96,8 @@ struct Ctx<'s> {
 struct Start {
     /// Nodes it may expand before the rest of the tree is shared.
     budget: u64,
+    /// Nor is it shared before this instant (`SearchConfig::parallel_after_us`; None: no floor).
+    not_before: Option<Instant>,
     /// The levels the tasks span (`split_levels`), and the path to the node being searched there.
     split: usize,
     path: [usize; MAX_SPLIT],
@@ -130,11 +132,12 @@ impl<'s> Ctx<'s> {
             self.shared.offer(v);
         }
     }
-    /// Reads the clock every 256 subtree entries; true when the search must stop (the deadline
+    /// Reads the clock every 256 subtree entries (and on each entry once the start's node budget
+    /// is spent and its time floor not yet passed); true when the search must stop (the deadline
     /// passed or the start's budget is spent).
     fn out_of_time(&mut self) -> bool {
         if let Some(start) = &mut self.start {
-            if self.nodes >= start.budget {
+            if self.nodes >= start.budget && start.not_before.is_none_or(|t| Instant::now() >= t) {
                 start.spent = true;
                 return true;
             }
@@ -323,7 +326,9 @@ pub(crate) fn branch_and_bound<M: CostModel>(
     if search.parallel && tree.depth >= 2 {
         let split = split_levels(tree.depth).min(tree.depth);
         let budget = search.parallel_after_nodes;
-        ctx.start = Some(Start { budget, split, path: [0; MAX_SPLIT], finished: Vec::new(), spent: false });
+        let floor = std::time::Duration::from_micros(search.parallel_after_us);
+        let not_before = (search.parallel_after_us > 0).then(|| Instant::now() + floor);
+        ctx.start = Some(Start { budget, not_before, split, path: [0; MAX_SPLIT], finished: Vec::new(), spent: false });
     }
     dfs(tree, 0, &tree.root(), 0.0, &mut levels(tree), &mut ctx);
     let out = match ctx.start.take() {

@@ -22,6 +22,8 @@ struct Instance {
     link: (f64, f64),
     /// The CNA's own horizontal variance per axis, m².
     cna_variance: f64,
+    /// The true-error cost's input: each AUV's moments and the CNA's true variance.
+    truth: (Vec<TrueError>, f64),
 }
 
 /// A link whose success falls smoothly with range from a plateau: plateau / (1 + (r / mid)^4).
@@ -41,26 +43,33 @@ impl Instance {
         FnForecast { n: self.starts.len(), f: move |k: usize, t: f64| Some(self.starts[k] + self.vels[k] * t) }
     }
     fn decide(&self, search: SearchConfig) -> Decision {
-        let mut p =
+        let p =
             LookAheadPlanner::with_link(PlannerConfig { search, ..self.cfg }, &FallingLink(self.link.0, self.link.1))
                 .unwrap();
         let (e, f) = (self.errors(), self.forecast());
-        p.decide(&PlanInput {
+        let input = PlanInput {
             t: 0.0,
             cna: self.cna,
             errors: &e,
             estimates: &self.estimates,
             cna_variance: self.cna_variance,
             forecast: &f,
-        })
-        .unwrap()
+        };
+        p.decide_with_truth(&input, Some(&TruthInput { errors: &self.truth.0, cna_variance: self.truth.1 })).unwrap()
     }
 }
 
-/// No deadline; the parallel mode shares the tree at once (no one-thread start), so the tests'
-/// small trees still run the parallel search.
+/// No deadline; the parallel mode shares the tree at once (no one-thread start, no time floor), so
+/// the tests' small trees still run the parallel search.
 fn exact(algorithm: Algorithm, parallel: bool) -> SearchConfig {
-    SearchConfig { algorithm, parallel, parallel_after_nodes: 0, deadline: Deadline::None, ..SearchConfig::default() }
+    SearchConfig {
+        algorithm,
+        parallel,
+        parallel_after_nodes: 0,
+        parallel_after_us: 0,
+        deadline: Deadline::None,
+        ..SearchConfig::default()
+    }
 }
 
 fn asc(a: usize, l: usize, case: PenaltyCase) -> PlannerConfig {
@@ -88,6 +97,29 @@ fn unheard_cov() -> impl Strategy<Value = (f64, f64, f64, f64)> {
     (1.0e2f64..1.0e7, 1.0e2f64..1.0e7, -0.95f64..0.95, 0.5f64..3000.0)
 }
 
+/// The true-error cost's settings and inputs for up to 5 AUVs: S positive semi-definite, C any
+/// matrix with |C_ij|² ≤ S_ii·v (a valid joint covariance is not needed for exactness).
+fn true_error_setting() -> impl Strategy<Value = (TruthSpec, Vec<TrueError>, f64)> {
+    let spec = (0.0f64..0.5, 0.05f64..3.0, 0.0f64..5.0, prop_oneof![Just(0.0), 0.0f64..0.05]).prop_map(
+        |(drift_m2_s, sigma_m, per_km_m, cna_diffusion_m2_s)| TruthSpec {
+            drift_m2_s,
+            range_noise: RangeNoise { sigma_m, per_km_m },
+            cna_diffusion_m2_s,
+        },
+    );
+    let error = (0.01f64..30.0, 0.01f64..30.0, -0.95f64..0.95, prop::array::uniform4(-0.9f64..0.9));
+    (spec, prop::collection::vec(error, 5), 0.0f64..20.0).prop_map(|(spec, errors, v)| {
+        let errors = errors
+            .into_iter()
+            .map(|(se, sn, rho, c)| {
+                let (ce, cn) = ((se * v).sqrt(), (sn * v).sqrt());
+                TrueError { s: [se, rho * (se * sn).sqrt(), sn], c: [c[0] * ce, c[1] * ce, c[2] * cn, c[3] * cn] }
+            })
+            .collect();
+        (spec, errors, v)
+    })
+}
+
 prop_compose! {
     fn instance()(n in 1usize..=5, a in 2usize..=7, b in 1usize..=4, l in 0usize..=4, auv_cna in any::<bool>(),
                   case in 0usize..21, speed in 0.5f64..4.0, heading in -3.1f64..3.1, cna_z in 0.0f64..100.0,
@@ -97,7 +129,8 @@ prop_compose! {
                   estimator in any::<bool>(), aggregate in 0usize..4, sigma_m in 0.05f64..3.0, per_km_m in 0.0f64..5.0,
                   bias_per_km_m in prop_oneof![Just(0.0), 0.0f64..10.0], terminal_levels in prop_oneof![Just(0.0), 0.0f64..8.0], reach_success in prop_oneof![Just(0.0), 0.0f64..1.0],
                   link in (300.0f64..3000.0, prop_oneof![Just(1.0), 0.3f64..1.0]), cna_variance in prop_oneof![Just(0.0), 0.0f64..60.0],
-                  pitch_levels in prop_oneof![Just(None), (1usize..4).prop_map(Some)]) -> Instance {
+                  pitch_levels in prop_oneof![Just(None), (1usize..4).prop_map(Some)],
+                  truth in prop_oneof![Just(None), true_error_setting().prop_map(Some)]) -> Instance {
         let mut cna = if auv_cna { CnaKind::auv(b) } else { CnaKind::Asc {} };
         if let CnaKind::Auv { pitch_levels: levels, .. } = &mut cna { *levels = pitch_levels; }
         let m = a * if auv_cna { b } else { 1 };
@@ -117,9 +150,11 @@ prop_compose! {
         if estimator {
             let aggregate = [Aggregate::TraceSum, Aggregate::WorstAuv, Aggregate::LogDet, Aggregate::SigmaSum][aggregate];
             let range_noise = RangeNoise { sigma_m, per_km_m };
-            cfg.cost = CostSpec::Estimator(EstimatorSpec { aggregate, range_noise, bias_per_km_m, terminal_levels, reach_success });
+            let spec = truth.as_ref().map(|t: &(TruthSpec, Vec<TrueError>, f64)| t.0);
+            cfg.cost = CostSpec::Estimator(EstimatorSpec { aggregate, range_noise, bias_per_km_m, terminal_levels, reach_success, truth: spec });
         }
-        Instance { cfg, cna: CnaPose { pos: Vec3::new(0.0, 0.0, z), heading: Heading::from_radians(heading), pitch: 0.0 }, starts, vels, eps, estimates, link, cna_variance }
+        let truth = truth.map_or((vec![TrueError::default(); n], 0.0), |(_, errors, v)| (errors[..n].to_vec(), v));
+        Instance { cfg, cna: CnaPose { pos: Vec3::new(0.0, 0.0, z), heading: Heading::from_radians(heading), pitch: 0.0 }, starts, vels, eps, estimates, link, cna_variance, truth }
     }
 }
 
@@ -198,6 +233,7 @@ fn instance_fixed(cfg: PlannerConfig) -> Instance {
         estimates: vec![AuvEstimate { cov: [4.0, 1.0, 2.0], process_noise: 0.05 }; 2],
         link: (1200.0, 1.0),
         cna_variance: 1.0,
+        truth: (vec![TrueError::default(); 2], 0.0),
     }
 }
 
@@ -260,6 +296,9 @@ fn the_parallel_mode_shares_only_trees_larger_than_its_start() {
         assert_eq!((shared.option, shared.value), (one.option, one.value), "after {nodes} nodes");
         assert_ne!(shared.nodes, one.nodes, "after {nodes} nodes: the tasks' enumeration counts");
     }
+    // A time floor not yet passed keeps the tree on one thread whatever the node budget.
+    let floored = inst.decide(SearchConfig { parallel_after_us: 60_000_000, ..exact(Algorithm::BranchAndBound, true) });
+    assert_eq!((floored.option, floored.value, floored.nodes), (one.option, one.value, one.nodes));
 }
 
 #[test]

@@ -21,6 +21,10 @@ pub struct Args {
     /// planner's, `SearchConfig::parallel_after_nodes`; 0 = share at once).
     #[arg(long)]
     parallel_after_nodes: Option<u64>,
+    /// ... nor before this many microseconds (default: the planner's,
+    /// `SearchConfig::parallel_after_us`; 0 = the node count alone).
+    #[arg(long)]
+    parallel_after_us: Option<u64>,
 }
 
 /// Median wall time (s) of `reps` runs of `f`, and its last result.
@@ -49,6 +53,7 @@ pub fn run(args: Args) -> Result<()> {
     let one_thread = Workload::search(Algorithm::BranchAndBound, false);
     let mut parallel = Workload::search(Algorithm::BranchAndBound, true);
     parallel.parallel_after_nodes = args.parallel_after_nodes.unwrap_or(parallel.parallel_after_nodes);
+    parallel.parallel_after_us = args.parallel_after_us.unwrap_or(parallel.parallel_after_us);
     let load_before = load_average();
     let mut rows = Vec::new();
     for w in Workload::standard() {
@@ -81,6 +86,7 @@ pub fn run(args: Args) -> Result<()> {
                 "nodes": par.nodes,
                 "threads": rayon_threads(),
                 "after_nodes": parallel.parallel_after_nodes,
+                "after_us": parallel.parallel_after_us,
             },
             "parallel_speedup": t_seq / t_par,
             "brute_force": brute,

@@ -7,10 +7,10 @@
 
 use crate::policy::{CnaCommand, CnaPolicy, PolicyContext, ReportedCov};
 use coopnav_core::Vec3;
-use coopnav_plan::Planner as _;
+use coopnav_plan::true_error::{true_error_step, Growth, PingNoise, TrueState};
 use coopnav_plan::{
     expected_posterior, AuvError, AuvEstimate, AuvForecast, CostSpec, ErrorModel, LinkModel, LookAheadPlanner,
-    PlanError, PlanInput, PlannerConfig, RangeNoise,
+    PlanError, PlanInput, PlannerConfig, RangeNoise, TrueError, TruthInput, TruthSpec,
 };
 use serde::Serialize;
 
@@ -82,6 +82,70 @@ pub struct CovarianceTracker {
     used: Vec<f64>,
     /// Some: pings are never credited ([`CovarianceTracker::reports_only`]).
     unheard: Option<UnheardGrowth>,
+    /// Some: the true-error moments are tracked too ([`CovarianceTracker::with_truth`]).
+    truth: Option<TruthTracker>,
+}
+
+/// The CNA's model of each survey AUV's TRUE error moments (S, C of `coopnav_plan::true_error`),
+/// stepped at every ping by the same recursion the true-error cost scores with, with the gain of
+/// the tracked filter covariance. Reports cannot restart it (an AUV does not know its true error):
+/// an AUV starts, when first known at time t, at S = (σ₀² + q_t·t)·I (σ₀ its launch position
+/// error) and C = 0. When the CNA's own variance falls (a fix), its new error is independent of
+/// the old one, so every C restarts at 0. An invention (issue 10, session 23).
+#[derive(Debug, Clone)]
+struct TruthTracker {
+    spec: TruthSpec,
+    launch_variance: f64,
+    errors: Vec<Option<(f64, TrueError)>>,
+    cna_variance: f64,
+}
+
+impl TruthTracker {
+    /// AUV `k`'s moments at time `t` before this period's ping: grown by the true drift since
+    /// they were last stepped, or their start.
+    fn grown(&self, k: usize, t: f64) -> TrueError {
+        let q = self.spec.drift_m2_s;
+        match self.errors[k] {
+            Some((since, mut e)) => {
+                let grow = q * (t - since).max(0.0);
+                e.s[0] += grow;
+                e.s[2] += grow;
+                e
+            }
+            None => {
+                let axis = self.launch_variance + q * t.max(0.0);
+                TrueError { s: [axis, 0.0, axis], c: [0.0; 4] }
+            }
+        }
+    }
+
+    /// The CNA's own variance at this decision; a fall restarts every C.
+    fn set_cna_variance(&mut self, v: f64) {
+        if v < self.cna_variance {
+            for (_, e) in self.errors.iter_mut().flatten() {
+                e.c = [0.0; 4];
+            }
+        }
+        self.cna_variance = v;
+    }
+
+    /// A ping at time `t` from `cna` at AUV `k` (at `auv`), received with probability `p`, under
+    /// the filter covariance `prior` grown by `grow` per axis.
+    fn ping(&mut self, k: usize, t: f64, (prior, grow): ([f64; 3], f64), link: (&Vec3, &Vec3, f64), noise: RangeNoise) {
+        let (cna, auv, p) = link;
+        let state = TrueState { p: prior, truth: self.grown(k, t), v: self.cna_variance };
+        let growth = Growth { filter: grow, truth: 0.0, cna: 0.0 };
+        let ping_noise = PingNoise { filter: noise, filter_cna_variance: 0.0, truth: self.spec.range_noise };
+        let next = true_error_step(&state, growth, [cna.x, cna.y, cna.z], [auv.x, auv.y, auv.z], &ping_noise, |_| p);
+        self.errors[k] = Some((t, next.truth));
+    }
+
+    /// No ping credited: the moments only grow.
+    fn silent(&mut self, k: usize, t: f64) {
+        if self.errors[k].is_some() {
+            self.errors[k] = Some((t, self.grown(k, t)));
+        }
+    }
 }
 
 /// How the filter of an AUV not heard from since launch predicts its horizontal position
@@ -131,7 +195,33 @@ impl CovarianceTracker {
             rates: vec![start.process_noise; n],
             used: vec![f64::NEG_INFINITY; n],
             unheard: None,
+            truth: None,
         }
+    }
+
+    /// Tracks the AUVs' true-error moments too (`TruthTracker`), each starting from a launch
+    /// position variance `launch_variance` per axis, m².
+    pub fn with_truth(mut self, spec: TruthSpec, launch_variance: f64) -> Self {
+        let n = self.covs.len();
+        self.truth = Some(TruthTracker { spec, launch_variance, errors: vec![None; n], cna_variance: 0.0 });
+        self
+    }
+
+    /// The CNA's own horizontal variance at this decision (the true-error moments' v).
+    pub fn set_cna_variance(&mut self, v: f64) {
+        if let Some(truth) = self.truth.as_mut() {
+            truth.set_cna_variance(v);
+        }
+    }
+
+    /// AUV `k`'s true-error moments, once known (with [`CovarianceTracker::with_truth`]).
+    pub fn true_error(&self, k: usize) -> Option<TrueError> {
+        self.truth.as_ref().and_then(|truth| truth.errors[k].map(|(_, e)| e))
+    }
+
+    /// The CNA's own variance the true-error moments were last stepped with, m².
+    pub fn cna_variance(&self) -> f64 {
+        self.truth.as_ref().map_or(0.0, |truth| truth.cna_variance)
     }
 
     /// Counts reports only (`planner.estimator_tracking = "reports_only"`): a ping teaches the model
@@ -162,7 +252,11 @@ impl CovarianceTracker {
         }
         let (cna, auv, p_received) = link;
         let p = p_received.clamp(0.0, 1.0);
-        self.covs[k] = Some(match self.prior(k, t, reported) {
+        let prior = self.prior(k, t, reported);
+        if let Some(truth) = self.truth.as_mut() {
+            truth.ping(k, t, prior.unwrap_or((self.start.cov, 0.0)), (cna, auv, p), self.noise);
+        }
+        self.covs[k] = Some(match prior {
             None => self.start.cov,
             Some((prior, grow)) => {
                 expected_posterior(&prior, grow, [cna.x, cna.y, cna.z], [auv.x, auv.y, auv.z], &self.noise, 0.0, |_| p)
@@ -170,8 +264,12 @@ impl CovarianceTracker {
         });
     }
 
-    /// Reports only: the filter's prediction from the newest report, or from launch.
+    /// Reports only: the filter's prediction from the newest report, or from launch; the true
+    /// error grows (a ping is not credited to it either).
     fn predict(&mut self, k: usize, t: f64, reported: Option<ReportedCov>) {
+        if let Some(truth) = self.truth.as_mut() {
+            truth.errors[k] = Some((t, truth.grown(k, t)));
+        }
         let never_heard = self.used[k] == f64::NEG_INFINITY && reported.is_none();
         match self.unheard.filter(|_| never_heard) {
             Some(growth) => {
@@ -190,6 +288,9 @@ impl CovarianceTracker {
 
     /// No ping this period: the covariance only grows (from a newer report if there is one).
     pub fn silent(&mut self, k: usize, t: f64, reported: Option<ReportedCov>) {
+        if let Some(truth) = self.truth.as_mut() {
+            truth.silent(k, t);
+        }
         if let Some(([a, b, c], grow)) = self.prior(k, t, reported) {
             self.covs[k] = Some([a + grow, b, c + grow]);
         }
@@ -297,6 +398,13 @@ impl PlannerPolicy {
         self
     }
 
+    /// The true-error cost's model of the AUVs' true errors (`CovarianceTracker::with_truth`);
+    /// no effect under Hudson's cost.
+    pub fn with_truth(mut self, spec: TruthSpec, launch_variance: f64) -> Self {
+        self.covariances = self.covariances.map(|c| c.with_truth(spec, launch_variance));
+        self
+    }
+
     /// The estimator-aware cost's covariance model counts reports only
     /// ([`CovarianceTracker::reports_only`]); no effect under Hudson's cost.
     pub fn with_reports_only(mut self, unheard: UnheardGrowth) -> Self {
@@ -333,6 +441,9 @@ impl CnaPolicy for PlannerPolicy {
     fn decide(&mut self, ctx: &PolicyContext) -> CnaCommand {
         self.stats.decisions += 1;
         let n = ctx.fleet.n_auvs();
+        if let Some(c) = self.covariances.as_mut() {
+            c.set_cna_variance(ctx.cna_variance);
+        }
         let mut known = Vec::with_capacity(n);
         for k in 0..n {
             match ctx.fleet.position(k, ctx.t) {
@@ -359,15 +470,24 @@ impl CnaPolicy for PlannerPolicy {
         let errors: Vec<AuvError> = known.iter().filter_map(|&k| self.tracker.error(k).copied()).collect();
         let estimates: Vec<AuvEstimate> =
             self.covariances.as_ref().map_or(Vec::new(), |c| known.iter().filter_map(|&k| c.estimate(k)).collect());
+        let true_errors: Vec<TrueError> =
+            self.covariances.as_ref().map_or(Vec::new(), |c| known.iter().filter_map(|&k| c.true_error(k)).collect());
+        // Only a tracker with the true-error moments has them (one per known AUV).
+        let truth = self
+            .covariances
+            .as_ref()
+            .filter(|_| !true_errors.is_empty())
+            .map(|c| TruthInput { errors: &true_errors, cna_variance: c.cna_variance() });
         let forecast = Known { inner: ctx.fleet, index: &known };
-        match self.planner.decide(&PlanInput {
+        let input = PlanInput {
             t: ctx.t,
             cna: ctx.cna,
             errors: &errors,
             estimates: &estimates,
             cna_variance: if self.cna_variance { ctx.cna_variance } else { 0.0 },
             forecast: &forecast,
-        }) {
+        };
+        match self.planner.decide_with_truth(&input, truth.as_ref()) {
             Ok(d) => {
                 if d.levels_searched < d.levels_requested {
                     self.stats.deadline_misses += 1;
@@ -482,6 +602,58 @@ mod tests {
         // A lost ping after a report: pure growth from the report.
         t.ping(0, 150.0, Some(ReportedCov { t: 140.0, cov: [4.0, 0.0, 9.0] }), (&cna, &auv, 0.0));
         assert_eq!(t.estimate(0).unwrap().cov, [5.0, 0.0, 10.0]);
+    }
+
+    #[test]
+    fn the_true_error_moments_start_at_launch_inherit_the_cnas_offset_and_forget_it_at_a_fix() {
+        let start = AuvEstimate { cov: [16.0, 0.0, 16.0], process_noise: 2.0 };
+        let spec = TruthSpec {
+            drift_m2_s: 0.05,
+            range_noise: RangeNoise { sigma_m: 1.0, per_km_m: 0.0 },
+            cna_diffusion_m2_s: 0.01,
+        };
+        let mut t = CovarianceTracker::new(1, start, 30.0, RangeNoise::default()).with_truth(spec, 1.0);
+        let (cna, auv) = (Vec3::zeros(), Vec3::new(300.0, 0.0, 0.0));
+        // First known at 600 s by a lost ping: σ₀² + q_t·t = 1 + 30 per axis, no correlation yet.
+        t.set_cna_variance(4.0);
+        t.ping(0, 600.0, None, (&cna, &auv, 0.0));
+        assert_eq!(t.true_error(0).unwrap(), TrueError { s: [31.0, 0.0, 31.0], c: [0.0; 4] });
+        // No ping for 30 s: the true drift only (0.05 · 30 = 1.5 m² per axis), not the filter's q.
+        t.silent(0, 630.0, None);
+        assert_eq!(t.true_error(0).unwrap().s, [32.5, 0.0, 32.5]);
+        // A sure ping from the west with the CNA off by σ_c² = 4 m²: the filter (P̃ = 16 + 2·30 +
+        // 2·30 ≫ R) moves the east error almost onto the range's: S_ee ≈ R_t + σ_c², C_ee ≈ σ_c².
+        t.ping(0, 660.0, None, (&cna, &auv, 1.0));
+        let e = t.true_error(0).unwrap();
+        assert!((e.s[0] - 5.0).abs() < 0.2 && (e.s[2] - 34.0).abs() < 1e-9, "{e:?}");
+        assert!((e.c[0] - 4.0).abs() < 0.1 && e.c[1] == 0.0 && e.c[3] == 0.0, "{e:?}");
+        // The CNA's fix: its new error is independent of the old one, so C restarts; S is kept.
+        t.set_cna_variance(1.0);
+        let fixed = t.true_error(0).unwrap();
+        assert_eq!((fixed.s, fixed.c), (e.s, [0.0; 4]));
+        assert_eq!(t.cna_variance(), 1.0);
+    }
+
+    #[test]
+    fn the_true_error_planner_needs_its_moments() {
+        let truth = TruthSpec {
+            drift_m2_s: 0.03,
+            range_noise: RangeNoise { sigma_m: 1.8, per_km_m: 0.0 },
+            cna_diffusion_m2_s: 0.01,
+        };
+        let spec = coopnav_plan::EstimatorSpec { truth: Some(truth), ..coopnav_plan::EstimatorSpec::default() };
+        let est = PlannerConfig { cost: CostSpec::Estimator(spec), ..cfg() };
+        let start = AuvEstimate { cov: [16.0, 0.0, 16.0], process_noise: 0.1 };
+        let fleet = FnForecast { n: 2, f: |k: usize, t: f64| Some(Vec3::new(300.0 + 200.0 * k as f64, 1.5 * t, 20.0)) };
+        let cna = CnaPose { pos: Vec3::new(0.0, 0.0, 0.0), heading: Heading::from_radians(0.0), pitch: 0.0 };
+        let filters = Some((start, RangeNoise::default()));
+        let mut with = PlannerPolicy::new(est, 2, 1.0, 1.0, None, filters).unwrap().with_truth(truth, 1.0);
+        let mut without = PlannerPolicy::new(est, 2, 1.0, 1.0, None, filters).unwrap();
+        for step in 0..3 {
+            assert!(matches!(with.decide(&at_step(step, cna, &fleet)), CnaCommand::GoTo(_)));
+            assert!(matches!(without.decide(&at_step(step, cna, &fleet)), CnaCommand::Hold));
+        }
+        assert_eq!((with.stats().failures, without.stats().failures), (0, 3));
     }
 
     /// The closed forms against the filter's own discrete prediction of [position, current] per

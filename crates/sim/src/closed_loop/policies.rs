@@ -143,6 +143,7 @@ fn build(name: &str, sc: &Scenario, planned: Option<&TimedWaypoints>) -> Result<
                     bias_per_km_m: p.estimator_bias_per_km.unwrap_or(noise.per_km_m),
                     terminal_levels: p.estimator_terminal_levels,
                     reach_success: p.estimator_reach_success,
+                    truth: p.estimator_truth,
                 });
                 if let Some(case) = p.estimator_penalty_case.as_deref().and_then(PenaltyCase::from_id) {
                     cfg.penalties = case.penalties();
@@ -156,6 +157,9 @@ fn build(name: &str, sc: &Scenario, planned: Option<&TimedWaypoints>) -> Result<
                 PlannerPolicy::new(cfg, n, p.sigma0, p.eps0, likelihood, Some((start, noise))).map_err(plan_err)?;
             if !p.estimator_cna_variance {
                 policy = policy.without_cna_variance();
+            }
+            if let Some(truth) = p.estimator_truth.filter(|_| estimator) {
+                policy = policy.with_truth(truth, sc.fleet.init_position_sd.powi(2));
             }
             if p.estimator_tracking == EstimatorTracking::ReportsOnly {
                 policy = policy.with_reports_only(unheard_growth(sc));

@@ -26,7 +26,7 @@ use coopnav_nav::{AuvModel, AuvParams, RangeNoise};
 use coopnav_plan::predict::{PredictorConfig, WaypointUse};
 use coopnav_plan::{
     Aggregate, CnaKind, Deadline, DistanceLimits, ErrorModel, MotionConfig, PenaltyCase, PlanError, PlannerConfig,
-    SearchConfig,
+    SearchConfig, TruthSpec,
 };
 use serde::{Deserialize, Serialize};
 use std::path::Path;
@@ -355,6 +355,11 @@ pub struct Planner {
     /// estimator step 2); false scores every broadcast position as exact.
     #[serde(default = "yes")]
     pub estimator_cna_variance: bool,
+    /// Some: `planner-estimator` scores the AUVs' expected true error under their filters' gains
+    /// instead of the filters' covariance (coopnav_plan `true_error`; the truth's drift, range
+    /// noise and the CNA's diffusion as the CNA believes them). Written only when set.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub estimator_truth: Option<TruthSpec>,
 }
 
 /// What the CNA knows of a survey AUV before its reports meet the planning start rule (A14).
@@ -692,6 +697,9 @@ impl Scenario {
                 own.for_each(|bad| p.push("planner.estimator_look_ahead", bad.value, bad.allowed));
             }
         }
+        if let Some(truth) = &pl.estimator_truth {
+            truth.check_fields("planner.estimator_truth.", p);
+        }
         if pl.estimator_pitch_levels == Some(0) {
             p.push("planner.estimator_pitch_levels", "0", ">= 1 (or absent: every level)");
         }
@@ -957,6 +965,24 @@ mod tests {
         assert_eq!(sc.planner.estimator_tracking, EstimatorTracking::ReportsOnly);
         let e = err(&with("hopeful"));
         assert!(e.contains("hopeful") && e.contains("reports_only") && e.contains("expected_pings"), "{e}");
+    }
+
+    #[test]
+    fn the_estimator_scores_its_covariance_unless_the_file_gives_a_truth_model() {
+        let plain = Scenario::parse(EXAMPLE, Path::new("e.toml")).unwrap();
+        assert_eq!(plain.planner.estimator_truth, None);
+        assert!(!toml::to_string(&plain).unwrap().contains("estimator_truth"), "the default is not written");
+        let with = |v: &str| EXAMPLE.replace("[planner]\n", &format!("[planner]\nestimator_truth = {v}\n"));
+        let truth = "{ drift_m2_s = 0.03, range_noise = { sigma_m = 1.8, per_km_m = 0.0 }, cna_diffusion_m2_s = 0.01 }";
+        let sc = Scenario::parse(&with(truth), Path::new("t.toml")).unwrap();
+        let spec = sc.planner.estimator_truth.unwrap();
+        assert_eq!((spec.drift_m2_s, spec.range_noise.sigma_m, spec.cna_diffusion_m2_s), (0.03, 1.8, 0.01));
+        let again = Scenario::parse(&toml::to_string(&sc).unwrap(), Path::new("t.toml")).unwrap();
+        assert_eq!(again.planner.estimator_truth, Some(spec));
+        let e = err(&with(&truth.replace("drift_m2_s = 0.03", "drift_m2_s = -0.03")));
+        assert!(e.contains("planner.estimator_truth.drift_m2_s") && e.contains(">= 0"), "{e}");
+        let e = err(&with(&truth.replace("cna_diffusion_m2_s", "cna_drift")));
+        assert!(e.contains("cna_drift"), "{e}");
     }
 
     #[test]
