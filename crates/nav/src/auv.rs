@@ -276,6 +276,7 @@ pub fn transition<const M: usize>(x: &SVector<f64, M>, h: f64, turn: f64) -> SVe
 
 /// [`transition`] with (sin ψ, cos ψ) of `x` already computed (the filter's step shares them
 /// with its Jacobian).
+#[inline(always)]
 fn transition_at<const M: usize>(x: &SVector<f64, M>, h: f64, turn: f64, (sin, cos): (f64, f64)) -> SVector<f64, M> {
     let mut next = *x;
     next[E] += h * x[S] * cos;
@@ -300,6 +301,7 @@ pub fn transition_jacobian<const M: usize>(x: &SVector<f64, M>, h: f64) -> SMatr
 /// The non-identity entries of [`transition_jacobian`], by row: E and N, each with its entries
 /// (column, value) at S and ψ, and at its current state when there are 7 (zero-valued at itself
 /// when `M` = 5, so the rows have one length); (sin ψ, cos ψ) of `x` given.
+#[inline(always)]
 fn transition_jacobian_entries<const M: usize>(
     x: &SVector<f64, M>,
     h: f64,
@@ -408,6 +410,7 @@ impl<const M: usize> AuvEkf<M> {
 
     /// Dead-reckons to time `t` with the measured heading rate `yaw_rate` (rad/s, math sense)
     /// held over the interval (eq. 7). Does nothing if `t` is not after the filter time.
+    #[inline(always)]
     pub fn predict_to(&mut self, t: f64, yaw_rate: f64) -> bool {
         let h = t - self.ekf.t();
         if !(h > 0.0) {
@@ -429,6 +432,7 @@ impl<const M: usize> AuvEkf<M> {
 
     /// The Gauss–Markov current's decay over `h` seconds ([`CurrentParams::decay`]); None for
     /// the thesis's states and for a random-walk current.
+    #[inline(always)]
     fn current_decay(&self, h: f64) -> Option<f64> {
         self.current.and_then(|c| c.decay(h))
     }
@@ -472,6 +476,7 @@ impl<const M: usize> AuvEkf<M> {
     }
 
     /// The process noise of an `h`-second step, per state (Q is given per nominal step).
+    #[inline(always)]
     fn step_q(&self, h: f64) -> SVector<f64, M> {
         let scale = h / self.params.step_s;
         // The states after the thesis's five are the current's, with its per-step noise.
@@ -480,22 +485,26 @@ impl<const M: usize> AuvEkf<M> {
     }
 
     /// Speed-sensor update (m/s).
+    #[inline(always)]
     pub fn update_speed(&mut self, measured: f64) -> UpdateOutcome {
         self.update_speed_sd(measured, self.params.sigma_speed)
     }
 
     /// Speed update with its own SD (m/s), e.g. from a log row.
+    #[inline(always)]
     pub fn update_speed_sd(&mut self, measured: f64, sd: f64) -> UpdateOutcome {
         let y = measured - self.ekf.x()[S];
         self.ekf.update_units(y, [S], sd.powi(2), &Gate::OFF)
     }
 
     /// Compass update: the compass reads ψ + b (math convention, rad).
+    #[inline(always)]
     pub fn update_heading(&mut self, measured: f64) -> UpdateOutcome {
         self.update_heading_sd(measured, self.params.sigma_heading)
     }
 
     /// Compass update with its own SD (rad).
+    #[inline(always)]
     pub fn update_heading_sd(&mut self, measured: f64, sd: f64) -> UpdateOutcome {
         let y = wrap_angle(measured - self.ekf.x()[PSI] - self.ekf.x()[BIAS]);
         self.ekf.update_units(y, [PSI, BIAS], sd.powi(2), &Gate::OFF)
@@ -751,10 +760,13 @@ impl AuvFilter {
         }
     }
 
+    // The engine reads these for every vehicle at every truth step: inlined across crates.
+    #[inline]
     pub fn position(&self) -> (f64, f64) {
         each_model!(self, f => f.position())
     }
     /// Estimated speed through the water (m/s) and math heading ψ (rad).
+    #[inline]
     pub fn speed_heading(&self) -> (f64, f64) {
         each_model!(self, f => (f.state()[S], f.state()[PSI]))
     }
@@ -772,15 +784,22 @@ impl AuvFilter {
             [p[(E, E)], p[(E, N)], p[(N, N)]]
         })
     }
+    /// Every state and covariance entry finite: over the storage's slices, without an early exit,
+    /// so the check vectorises (nalgebra's matrix iterators cost about ten times as much).
+    #[inline]
     pub fn is_finite(&self) -> bool {
-        each_model!(self, f => f.state().iter().chain(f.ekf().p().iter()).all(|v| v.is_finite()))
+        let finite = |v: &[f64]| v.iter().fold(true, |ok, x| ok & x.is_finite());
+        each_model!(self, f => finite(f.state().as_slice()) & finite(f.ekf().p().as_slice()))
     }
+    #[inline]
     pub fn predict_to(&mut self, t: f64, yaw_rate: f64) -> bool {
         each_model!(self, f => f.predict_to(t, yaw_rate))
     }
+    #[inline(always)]
     pub fn update_speed(&mut self, measured: f64) -> UpdateOutcome {
         each_model!(self, f => f.update_speed(measured))
     }
+    #[inline(always)]
     pub fn update_heading(&mut self, measured: f64) -> UpdateOutcome {
         each_model!(self, f => f.update_heading(measured))
     }

@@ -2,6 +2,12 @@
 //! state, the Jacobians and the noise; this module owns the covariance algebra (Joseph-form
 //! update, symmetrisation), angle-wrapped state components, innovation gating, and the optional
 //! history of x⁻, P⁻, x⁺, P⁺, F that the RTS smoother needs.
+//!
+//! The filter-rate path (sparse prediction, unit-row updates, what they call, and the AUV
+//! filter's methods over them) is `#[inline(always)]`: a step is a few hundred operations on
+//! small arrays that separate functions pass through memory. Inlined, a 7-state step (predict,
+//! speed, compass) ran ≈ 15 % faster in a 3 M-step probe (session 23); inlining never changes a
+//! floating-point result.
 
 use coopnav_core::validation::{CheckFields, Problems};
 use coopnav_core::wrap_pi;
@@ -23,6 +29,7 @@ impl Gate {
     pub const OFF: Gate = Gate { max_abs_residual: None, max_nis: None };
 
     /// Whether a measurement with these innovation components and NIS passes both tests.
+    #[inline]
     pub fn admits(&self, residuals: &[f64], nis: f64) -> bool {
         let residual_ok = self.max_abs_residual.map_or(true, |b| residuals.iter().all(|v| v.abs() <= b));
         residual_ok && self.max_nis.map_or(true, |b| nis <= b)
@@ -153,6 +160,7 @@ impl<const N: usize> Ekf<N> {
     /// entries of its rows, and a diagonal process noise: the same P⁻ = F P Fᵀ + Q as
     /// [`Self::predict`] (up to rounding), computed as two sparse row/column passes instead of
     /// two dense N×N products — the filter-rate predictions of a fleet are most of a run's time.
+    #[inline(always)]
     pub fn predict_sparse<const R: usize, const K: usize>(
         &mut self,
         t: f64,
@@ -198,6 +206,7 @@ impl<const N: usize> Ekf<N> {
     /// heading plus bias). Bit for bit the same result, with the row's shape known when compiled
     /// (the filter-rate updates are most of a fleet's filter time); columns out of range or out of
     /// order make the measurement unusable.
+    #[inline(always)]
     pub fn update_units<const K: usize>(
         &mut self,
         innovation: f64,
@@ -216,6 +225,7 @@ impl<const N: usize> Ekf<N> {
     }
 
     /// The scalar Joseph update of [`Self::update_scalar`] for a row given by its non-zero entries.
+    #[inline(always)]
     fn update_row(&mut self, innovation: f64, h: &impl SparseRow<N>, r: f64, gate: &Gate) -> UpdateOutcome {
         // `p[j][i]` is entry (i, j) of the column-major storage.
         let p = &self.p.data.0;
@@ -239,12 +249,18 @@ impl<const N: usize> Ekf<N> {
         for (i, v) in c.iter_mut().enumerate() {
             *v = r * k[i] - bht[i];
         }
-        let entry = |i: usize, j: usize| b(i, j) + c[i] * k[j];
+        // Every entry first, down the contiguous columns (the compiler vectorises it), then each
+        // pair averaged in place: the same numbers as entry by entry, pair by pair, ≈ 15 % less
+        // time per filter step.
         let mut columns = [[0.0; N]; N];
-        for j in 0..N {
-            columns[j][j] = entry(j, j);
+        for (j, column) in columns.iter_mut().enumerate() {
+            for (i, v) in column.iter_mut().enumerate() {
+                *v = b(i, j) + c[i] * k[j];
+            }
+        }
+        for j in 1..N {
             for i in 0..j {
-                let v = 0.5 * (entry(i, j) + entry(j, i));
+                let v = 0.5 * (columns[j][i] + columns[i][j]);
                 columns[j][i] = v;
                 columns[i][j] = v;
             }
@@ -294,6 +310,7 @@ impl<const N: usize> Ekf<N> {
     }
 
     /// Takes a posterior already checked finite; records it in the history.
+    #[inline(always)]
     fn accept(&mut self, x_new: SVector<f64, N>, p_new: SMatrix<f64, N, N>) {
         self.x = x_new;
         self.p = p_new;
@@ -305,6 +322,7 @@ impl<const N: usize> Ekf<N> {
         }
     }
 
+    #[inline(always)]
     fn wrap_state(&mut self) {
         for (i, is_angle) in self.angles.iter().enumerate() {
             if *is_angle {
@@ -331,6 +349,7 @@ pub fn state_difference<const N: usize>(
 
 /// An angle wrapped to (-π, π]: as [`wrap_pi`], but one already inside is returned untouched
 /// (wrap_pi's remainder would round it, and costs a division the filter pays every step).
+#[inline(always)]
 pub fn wrap_angle(a: f64) -> f64 {
     if a > -std::f64::consts::PI && a <= std::f64::consts::PI {
         a
@@ -376,6 +395,7 @@ struct Weighted<'a, const N: usize> {
 }
 
 impl<const N: usize> SparseRow<N> for Weighted<'_, N> {
+    #[inline(always)]
     fn times(&self, m: impl Fn(usize, usize) -> f64) -> [f64; N] {
         let mut out = [0.0; N];
         for (i, v) in out.iter_mut().enumerate() {
@@ -384,6 +404,7 @@ impl<const N: usize> SparseRow<N> for Weighted<'_, N> {
         out
     }
 
+    #[inline(always)]
     fn dot(&self, v: &[f64; N]) -> f64 {
         self.seen.columns().iter().map(|&j| self.h[j] * v[j]).sum()
     }
@@ -394,6 +415,7 @@ impl<const N: usize> SparseRow<N> for Weighted<'_, N> {
 struct Units<const K: usize>([usize; K]);
 
 impl<const N: usize, const K: usize> SparseRow<N> for Units<K> {
+    #[inline(always)]
     fn times(&self, m: impl Fn(usize, usize) -> f64) -> [f64; N] {
         let mut out = [0.0; N];
         for (i, v) in out.iter_mut().enumerate() {
@@ -402,6 +424,7 @@ impl<const N: usize, const K: usize> SparseRow<N> for Units<K> {
         out
     }
 
+    #[inline(always)]
     fn dot(&self, v: &[f64; N]) -> f64 {
         self.0.iter().map(|&j| v[j]).sum()
     }
@@ -430,6 +453,7 @@ pub type SparseRows<const R: usize, const K: usize> = [(usize, [(usize, f64); K]
 
 /// G's rows distinct and inside the matrix, its values finite (plain loops: this runs every
 /// filter step).
+#[inline(always)]
 fn rows_ok<const N: usize, const R: usize, const K: usize>(g: &SparseRows<R, K>) -> bool {
     let mut ok = true;
     for (r, (i, entries)) in g.iter().enumerate() {
@@ -445,6 +469,7 @@ fn rows_ok<const N: usize, const R: usize, const K: usize>(g: &SparseRows<R, K>)
 }
 
 /// The position of row `j` among G's rows.
+#[inline(always)]
 fn row_position<const R: usize, const K: usize>(g: &SparseRows<R, K>, j: usize) -> Option<usize> {
     let mut found = None;
     for (r, (i, _)) in g.iter().enumerate() {
@@ -462,6 +487,7 @@ fn row_position<const R: usize, const K: usize>(g: &SparseRows<R, K>, j: usize) 
 /// indices, so only those rows are built (from the old P) and only those columns rewritten; no
 /// copy of P is taken (this runs once per AUV per filter step). Each entry is summed in its row's
 /// order, as the dense two-pass form (rows of G in pass one, its columns in pass two) sums it.
+#[inline(always)]
 pub fn propagate_covariance<const N: usize, const R: usize, const K: usize>(
     p: &mut SMatrix<f64, N, N>,
     g: &SparseRows<R, K>,
@@ -639,15 +665,19 @@ mod tests {
         out
     }
 
+    /// Uniform numbers in [−0.5, 0.5) from a xorshift generator seeded with `seed`.
+    fn uniform_source(mut seed: u64) -> impl FnMut() -> f64 {
+        move || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            (seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+        }
+    }
+
     #[test]
     fn sparse_prediction_is_the_two_pass_form_bit_for_bit() {
-        let mut rng = 0x2545_f491_4f6c_dd1d_u64;
-        let mut uniform = || {
-            rng ^= rng << 13;
-            rng ^= rng >> 7;
-            rng ^= rng << 17;
-            (rng >> 11) as f64 / (1u64 << 53) as f64 - 0.5
-        };
+        let mut uniform = uniform_source(0x2545_f491_4f6c_dd1d);
         for case in 0..200 {
             let m = SMatrix::<f64, 7, 7>::from_fn(|_, _| uniform());
             let p = m * m.transpose() + SMatrix::identity() * 0.1;
@@ -690,6 +720,68 @@ mod tests {
         }
         assert_eq!(units.update_units(1.0, [3, 1], 0.1, &Gate::OFF), UpdateOutcome::Unusable, "out of order");
         assert_eq!(units.update_units(1.0, [4], 0.1, &Gate::OFF), UpdateOutcome::Unusable, "outside the state");
+    }
+
+    /// The scalar Joseph update written out pair by pair, as the filter computed it before its
+    /// entries were built column by column: P hᵀ, s, k, B = P − k (P hᵀ)ᵀ, c = r k − B hᵀ, each
+    /// entry (bᵢⱼ + cᵢ kⱼ) and each pair averaged; products with h over its non-zero columns.
+    fn joseph_pair_by_pair(
+        p: &SMatrix<f64, 7, 7>,
+        x: &SVector<f64, 7>,
+        h: &SMatrix<f64, 1, 7>,
+        r: f64,
+        y: f64,
+    ) -> (SMatrix<f64, 7, 7>, SVector<f64, 7>) {
+        let nz: Vec<usize> = (0..7).filter(|&j| h[j] != 0.0).collect();
+        let pht: Vec<f64> = (0..7).map(|i| nz.iter().map(|&j| p[(i, j)] * h[j]).sum()).collect();
+        let s = nz.iter().map(|&j| h[j] * pht[j]).sum::<f64>() + r;
+        let k: Vec<f64> = pht.iter().map(|v| v / s).collect();
+        let b = |i: usize, j: usize| p[(i, j)] - k[i] * pht[j];
+        let c: Vec<f64> = (0..7).map(|i| r * k[i] - nz.iter().map(|&j| b(i, j) * h[j]).sum::<f64>()).collect();
+        let entry = |i: usize, j: usize| b(i, j) + c[i] * k[j];
+        let mut out = SMatrix::<f64, 7, 7>::zeros();
+        for j in 0..7 {
+            out[(j, j)] = entry(j, j);
+            for i in 0..j {
+                let v = 0.5 * (entry(i, j) + entry(j, i));
+                (out[(i, j)], out[(j, i)]) = (v, v);
+            }
+        }
+        (out, x + SVector::<f64, 7>::from_iterator(k) * y)
+    }
+
+    #[test]
+    fn scalar_updates_are_the_pair_by_pair_form_bit_for_bit() {
+        let mut uniform = uniform_source(0x853c_49e6_748f_ea9b);
+        let bits = |m: &[f64]| m.iter().map(|v| v.to_bits()).collect::<Vec<_>>();
+        for case in 0..300 {
+            let m = SMatrix::<f64, 7, 7>::from_fn(|_, _| uniform());
+            let p = m * m.transpose() + SMatrix::identity() * 0.01;
+            let x = SVector::<f64, 7>::from_fn(|_, _| uniform());
+            let (y, r) = (uniform(), uniform().abs() * 1e-2 + 1e-6);
+            // A general row (a range's: two position entries), then the unit rows of the AUV
+            // filter's speed and compass readings.
+            let mut h = SMatrix::<f64, 1, 7>::zeros();
+            let mut filter = Ekf::new(0.0, x, p, [false; 7]);
+            let out = match case % 3 {
+                0 => {
+                    (h[0], h[1]) = (uniform(), uniform());
+                    filter.update_scalar(y, h, r, &Gate::OFF)
+                }
+                1 => {
+                    h[2] = 1.0;
+                    filter.update_units(y, [2], r, &Gate::OFF)
+                }
+                _ => {
+                    (h[3], h[4]) = (1.0, 1.0);
+                    filter.update_units(y, [3, 4], r, &Gate::OFF)
+                }
+            };
+            assert!(out.applied(), "case {case}: {out:?}");
+            let (p_ref, x_ref) = joseph_pair_by_pair(&p, &x, &h, r, y);
+            assert_eq!(bits(filter.p().as_slice()), bits(p_ref.as_slice()), "case {case}");
+            assert_eq!(bits(filter.x().as_slice()), bits(x_ref.as_slice()), "case {case}");
+        }
     }
 
     #[test]

@@ -153,6 +153,8 @@ struct Engine<'a> {
     status_sent: Vec<u64>,
     tallies: Vec<AuvTally>,
     finite: bool,
+    /// Truth steps per second (the observe phase runs once a second).
+    per_second: u64,
 }
 
 /// Runs `policy` over scenario `sc` with run seed `seed`, reporting to `obs`.
@@ -264,6 +266,7 @@ impl<'a> Engine<'a> {
             status_sent: vec![0; n],
             tallies: (0..n).map(|_| AuvTally::default()).collect(),
             finite: true,
+            per_second: ((1.0 / sc.dt).round() as u64).max(1),
         }
     }
 
@@ -281,8 +284,7 @@ impl<'a> Engine<'a> {
         obs.on_phase_end(Phase::Deliver);
         self.sense(step, t_next, obs);
         obs.on_phase_end(Phase::Sense);
-        let per_second = ((1.0 / self.sc.dt).round() as u64).max(1);
-        if (step + 1) % per_second == 0 {
+        if (step + 1) % self.per_second == 0 {
             self.observe(t_next, obs);
         }
         obs.on_phase_end(Phase::Observe);
