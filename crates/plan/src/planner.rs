@@ -81,8 +81,10 @@ pub struct SearchConfig {
     /// threads and enumerating the tasks costs about 0.1 ms, so a tree whose whole search is
     /// shorter than a few of those only loses by sharing (a 2,245-node Hudson tree of 0.2 ms ran
     /// at 0.62× one thread when handed over at 2,000 nodes). 0 = the node count alone decides.
-    /// Invented (issue 10), measured with `coopnav bench planner`. Only the node count depends on
-    /// it (and so on timing), never the decision or its cost.
+    /// Invented (issue 10), measured with `coopnav bench planner` (session 23, quiet, 3 alternations:
+    /// that tree 0.65–0.68× → 0.99×; the 0.5–2 ms trees' speed-ups vary 0.6–1.6× from run to run
+    /// either way). Only the node count depends on it (and so on timing), never the decision or
+    /// its cost.
     #[serde(default = "default_parallel_after_us")]
     pub parallel_after_us: u64,
     #[serde(default)]
@@ -107,7 +109,7 @@ fn default_parallel_after_nodes() -> u64 {
 }
 
 fn default_parallel_after_us() -> u64 {
-    500
+    250
 }
 
 impl Default for SearchConfig {
