@@ -432,7 +432,11 @@ impl LookAheadPlanner {
     }
 
     /// Searches the trees `build(depth)` makes: the full depth when there is no deadline, else
-    /// iterative deepening where the deepest level completed before the deadline decides.
+    /// iterative deepening where the deepest level completed before the deadline decides. Once
+    /// the whole tree surely fits in what is left of the budget ([`surely_fits`]), the levels
+    /// between are skipped and the full depth is searched next: it decides whenever it completes,
+    /// as it would have after them, and a deadline it still misses leaves the deepest level
+    /// completed before it.
     fn run<M: CostModel>(&self, build: impl Fn(usize) -> Result<Tree<M>, PlanError>) -> Result<Decision, PlanError> {
         let requested = self.cfg.look_ahead + 1;
         let full = build(requested)?;
@@ -447,18 +451,41 @@ impl LookAheadPlanner {
         let deadline = Instant::now() + budget;
         let mut best: Option<Decision> = None;
         let mut nodes = 0;
-        for depth in 1..=full.depth {
-            let tree = build(depth)?;
-            match search(&tree, &Shared::new(Some(deadline))) {
-                Some(out) => {
-                    nodes += out.nodes;
-                    best = Some(Decision { nodes, ..self.decision(&tree, out, requested) });
-                }
-                None => break,
+        let mut depth = 1;
+        loop {
+            let started = Instant::now();
+            let shallower;
+            let tree = if depth == full.depth {
+                &full
+            } else {
+                shallower = build(depth)?;
+                &shallower
+            };
+            let Some(out) = search(tree, &Shared::new(Some(deadline))) else { break };
+            nodes += out.nodes;
+            best = Some(Decision { nodes, ..self.decision(tree, out, requested) });
+            if depth == full.depth {
+                break;
             }
+            let per_node = started.elapsed().as_secs_f64() / out.nodes.max(1) as f64;
+            let left = deadline.saturating_duration_since(Instant::now()).as_secs_f64();
+            depth = if surely_fits(&full, per_node, left) { full.depth } else { depth + 1 };
         }
         best.ok_or(PlanError::Deadline)
     }
+}
+
+/// How much longer than its measured share a node of the full tree may take before a search
+/// that was judged to fit misses the deadline anyway ([`surely_fits`]): machine noise.
+const FIT_MARGIN: f64 = 10.0;
+
+/// Whether `tree`'s search surely completes in `left` seconds, at `per_node` seconds per node
+/// as measured on a shallower tree (its build included): every node of it expanded (no
+/// pruning), each node also paying for a bound over at most `depth` levels below, each level
+/// about one more expansion, and [`FIT_MARGIN`] on top. The decision never depends on it, only
+/// which shallower levels are searched first.
+fn surely_fits<M: CostModel>(tree: &Tree<M>, per_node: f64, left: f64) -> bool {
+    tree.nodes_above(tree.depth) as f64 * per_node * (1.0 + tree.depth as f64) * FIT_MARGIN < left
 }
 
 /// The options with the smallest pitch change (Δφ = 0 with an odd number of pitch options).

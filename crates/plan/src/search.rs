@@ -447,13 +447,7 @@ fn parallel_search<M: CostModel>(tree: &Tree<M>, mut first: Ctx, start: Start) -
     finished.sort_unstable();
     let worker = || (Ctx::new(shared, tree), vec![tree.root_state[0]; tree.n * split], levels(tree));
     // The enumeration expanded every node of the top `split` levels.
-    let mut width = 1u64;
-    first.nodes += (0..split)
-        .map(|l| {
-            width *= tree.level_options(l).len() as u64;
-            width
-        })
-        .sum::<u64>();
+    first.nodes += tree.nodes_above(split);
     let next = AtomicUsize::new(0);
     let threads = rayon::current_num_threads().max(1);
     let results: Vec<Ctx> = (0..threads)

@@ -115,6 +115,17 @@ impl<M: CostModel> Tree<M> {
         }
     }
 
+    /// How many nodes the top `levels` levels hold (every option expanded).
+    pub fn nodes_above(&self, levels: usize) -> u64 {
+        let mut width = 1u64;
+        (0..levels)
+            .map(|l| {
+                width *= self.level_options(l).len() as u64;
+                width
+            })
+            .sum()
+    }
+
     /// The factor of the last level's terms, 1 + H (`CostModel::terminal_levels`).
     #[inline(always)]
     pub fn leaf_weight(&self) -> f64 {
