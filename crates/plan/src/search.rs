@@ -104,12 +104,13 @@ impl BoundStats {
     /// Whether to compute the bound at the next node of this level, `levels_below` above the leaves.
     #[inline(always)]
     fn worth_trying(&mut self, levels_below: usize) -> bool {
-        if self.tried < Self::WARM_UP {
+        // Until a subtree below was searched, what a cut saves is unknown.
+        if self.tried < Self::WARM_UP || self.searched == 0 {
             return true;
         }
         // cut/tried · below/searched ≥ COST · levels_below, without the divisions.
         let saved = self.cut as f64 * self.below as f64;
-        if saved >= Self::COST * levels_below as f64 * (self.tried * self.searched.max(1)) as f64 {
+        if saved >= Self::COST * levels_below as f64 * (self.tried * self.searched) as f64 {
             return true;
         }
         self.skipped += 1;
@@ -539,4 +540,42 @@ fn parallel_search<M: CostModel>(tree: &Tree<M>, mut first: Ctx, start: Start) -
         first.merge(r);
     }
     first.outcome(tree.tie_tolerance)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::BoundStats;
+
+    /// Feeds `nodes` tries at a level `levels_below` above the leaves, where the bound cuts one
+    /// node in `cut_every` and an uncut subtree holds `below` nodes; returns how many it computed.
+    fn computed(levels_below: usize, cut_every: u64, below: u64, nodes: u64) -> u64 {
+        let mut stats = BoundStats::default();
+        let mut computed = 0;
+        for i in 0..nodes {
+            let cut = (i + 1) % cut_every == 0;
+            if stats.worth_trying(levels_below) {
+                computed += 1;
+                stats.record(cut);
+                if cut {
+                    continue;
+                }
+            }
+            stats.searched(below);
+        }
+        computed
+    }
+
+    #[test]
+    fn a_bound_is_computed_where_its_cuts_save_more_than_it_costs() {
+        // Cuts every node one level above 5 leaves: always worth it.
+        assert_eq!(computed(1, 1, 5, 1000), 1000);
+        // Cuts one node in 10, whose subtree holds 1,000 nodes, four levels up: worth it.
+        assert_eq!(computed(4, 10, 1000, 1000), 1000);
+        // Never cuts: the warm-up, then one node in SAMPLE.
+        let (warm, sample) = (BoundStats::WARM_UP, BoundStats::SAMPLE);
+        assert_eq!(computed(3, u64::MAX, 100, 1000), warm + (1000 - warm) / sample);
+        // Cuts one node in 25 above 12-node subtrees, two levels up (the sloping N = 5 tree's level
+        // 3: it saves 0.5 node per try against its cost of 2): skipped after the warm-up.
+        assert!(computed(2, 25, 12, 1000) < warm + 1000 / sample + 1);
+    }
 }

@@ -310,6 +310,8 @@ fn deadline_returns_the_deepest_completed_level() {
     });
     let exact_d = generous.decide(exact(Algorithm::BranchAndBound, false));
     assert_eq!((full.option, full.value, full.levels_searched), (exact_d.option, exact_d.value, 4));
+    // 5⁴ leaves surely fit in a minute: after level 0 (its 5 options) only the full depth is searched.
+    assert_eq!(full.nodes, 5 + exact_d.nodes, "the levels between were searched too");
     // Odd and even option counts, sequential and parallel: the clock must be read in every mode.
     for (a, parallel) in [(7, false), (6, true), (8, false)] {
         let inst = instance_fixed(asc(a, 12, PenaltyCase::C2));
