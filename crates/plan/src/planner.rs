@@ -50,7 +50,8 @@ pub enum Algorithm {
 pub enum Deadline {
     /// Search the full depth, however long it takes (deterministic).
     None,
-    /// τ minus a margin (seconds): iterative deepening, the deepest completed level wins.
+    /// τ minus a margin (seconds): iterative deepening, the deepest completed level wins (levels
+    /// are skipped once the full tree surely fits in the budget left: `LookAheadPlanner::run`).
     TauMinus { margin_s: f64 },
     /// A fixed budget in seconds, with iterative deepening.
     Seconds { seconds: f64 },

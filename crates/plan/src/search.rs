@@ -8,7 +8,9 @@
 //! - the decision is `tree::choose` of those per-option minima (lowest option index among the
 //!   ties), the same rule as the brute force; workers' minima are merged per option, so the
 //!   result does not depend on thread timing;
-//! - a node is abandoned part-way through its AUVs once the partial sum is cut (`tree::Cut`).
+//! - a node is abandoned part-way through its AUVs once the partial sum is cut (`tree::Cut`);
+//! - the bound below a node is computed only at the levels where its cuts have paid for it so
+//!   far (`BoundStats`); a bound not computed cuts nothing, so this changes only node counts.
 //!
 //! The parallel mode starts as the one-thread search on the calling thread; a tree that needs
 //! more than `SearchConfig::parallel_after_nodes` nodes and `parallel_after_us` µs is then split: the top two or three levels
