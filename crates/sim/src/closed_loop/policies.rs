@@ -150,7 +150,7 @@ fn build(name: &str, sc: &Scenario, planned: Option<&TimedWaypoints>) -> Result<
                 cfg.cost = CostSpec::Estimator(EstimatorSpec {
                     range_noise: noise,
                     aggregate: p.estimator_aggregate,
-                    bias_per_km_m: p.estimator_bias_per_km.unwrap_or(noise.per_km_m),
+                    bias_per_km_m: p.estimator_bias_per_km,
                     terminal_levels: p.estimator_terminal_levels,
                     reach_success: p.estimator_reach_success,
                     truth: p.estimator_truth,
