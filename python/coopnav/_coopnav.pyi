@@ -140,7 +140,7 @@ class TransmissionLoss:
         """TL along a radial: shape (len(depths), len(ranges))."""
 
 def p_success(rate: int, tl_db: FloatArray, noise_db: float = 0.0, model: Optional[Settings] = None) -> FloatArray: ...
-def simulate(scenario: Scenario, policy: str = "planner", seed: Optional[int] = None) -> Dict[str, Any]:
+def simulate(scenario: Scenario, policy: str = "planner-estimator", seed: Optional[int] = None) -> Dict[str, Any]:
     """One closed-loop mission: ``timeseries``, ``comms``, ``cna`` (numpy columns) and ``summary``."""
 def monte_carlo(
     scenario: Scenario, policies: List[str], runs: int, seed: Optional[int] = None, allow_large: bool = False

@@ -84,7 +84,7 @@ fn comms<'py>(py: Python<'py>, events: &[CommsEvent]) -> PyResult<Bound<'py, PyD
 /// `coopnav simulate` runs it. Returns a dict: `timeseries`, `comms`, `cna` (dicts of numpy
 /// columns) and `summary` (summary.json's content).
 #[pyfunction]
-#[pyo3(signature = (scenario, policy = "planner", seed = None))]
+#[pyo3(signature = (scenario, policy = "planner-estimator", seed = None))]
 fn simulate<'py>(
     py: Python<'py>,
     scenario: &Scenario,

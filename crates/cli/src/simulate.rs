@@ -18,7 +18,7 @@ pub struct Args {
     /// CNA policies, comma-separated: planner, planner-estimator, none, racetrack, zigzag,
     /// centroid, centroid-standoff, trail, relay, open-loop, greedy-fisher. One run writes a run directory for the
     /// first; --runs compares them all, each paired with the first.
-    #[arg(long, value_delimiter = ',', default_value = "planner")]
+    #[arg(long, value_delimiter = ',', default_value = "planner-estimator")]
     policy: Vec<String>,
     /// Monte Carlo runs per policy (comparison table instead of a run directory).
     #[arg(long)]

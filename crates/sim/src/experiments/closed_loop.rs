@@ -16,9 +16,12 @@
 use super::{Check, Experiment, ExperimentError, ReproOptions, ReproReport, Size};
 use crate::closed_loop::mc::{Comparison, PolicySummary};
 use crate::closed_loop::policies::POLICY_NAMES;
+use crate::closed_loop::scenario::{
+    ESTIMATOR_AGGREGATE, ESTIMATOR_BIAS_PER_KM, ESTIMATOR_CNA_VARIANCE, ESTIMATOR_TERMINAL_LEVELS,
+};
 use crate::closed_loop::{comparison_table, monte_carlo_grid, Scenario};
 use crate::plot::PlotError;
-use coopnav_plan::{Aggregate, PenaltyCase};
+use coopnav_plan::PenaltyCase;
 use plotters::prelude::*;
 use serde::{Deserialize, Serialize};
 use std::fmt::Write as _;
@@ -66,22 +69,6 @@ pub struct Setting {
     /// L = 5 with them at level 0 only 4.98 m (centroid-standoff 4.90 m), L = 7 4.98 m.
     pub estimator_pitch_levels: Option<usize>,
 }
-
-/// The estimator-aware planner's settings, chosen on base seed [`TUNING_SEED`] (6 runs per
-/// cell, `examples/closed_loop_tune.rs`): the range bias it assumes, m per km (6: three times
-/// the filters' configured 3 m/s sound-speed uncertainty, within the ±11 m/s span of the
-/// scenarios' profiles), and the levels of cost-to-go at each leaf. On the default mission with
-/// current at N = 3: 10.2 m with neither, 10.2 m with the bias alone, 8.2 m with the terminal
-/// cost alone, 6.0 m with both.
-pub const BIAS_PER_KM: f64 = 6.0;
-
-/// Whether `planner-estimator` adds the CNA's own variance to each ping's range variance
-/// (coopnav_plan estimator step 2). Off: on the tuning seed (20 runs, N = 3) it changed nothing
-/// measurable: with the ASC 5.91 m on, 5.90 m off; with the surfacing AUV CNA 4.40 m on, 4.37 m
-/// off. A common CNA offset moves every AUV's estimate alike, which a per-ping noise term cannot
-/// express (see the issue 10 README).
-pub const CNA_VARIANCE: bool = false;
-pub const TERMINAL_LEVELS: f64 = 10.0;
 
 /// From this many AUVs on (a fleet spread wider than the link's plateau), `planner-estimator`
 /// runs without the level-0 distance penalty (Table 5.2 case 3, look-ahead doubling only) and
@@ -136,10 +123,10 @@ impl Setting {
         sc.planner.look_ahead = 5;
         sc.planner.estimator_look_ahead = Some((self.estimator_look_ahead)(n));
         sc.planner.estimator_pitch_levels = self.estimator_pitch_levels;
-        sc.planner.estimator_aggregate = Aggregate::SigmaSum;
-        sc.planner.estimator_bias_per_km = Some(BIAS_PER_KM);
-        sc.planner.estimator_terminal_levels = TERMINAL_LEVELS;
-        sc.planner.estimator_cna_variance = CNA_VARIANCE;
+        sc.planner.estimator_aggregate = ESTIMATOR_AGGREGATE;
+        sc.planner.estimator_bias_per_km = ESTIMATOR_BIAS_PER_KM;
+        sc.planner.estimator_terminal_levels = ESTIMATOR_TERMINAL_LEVELS;
+        sc.planner.estimator_cna_variance = ESTIMATOR_CNA_VARIANCE;
         if n >= SPREAD_FLEET_MIN_AUVS {
             sc.planner.estimator_penalty_case = Some(PenaltyCase::C3.id().to_string());
             sc.planner.estimator_reach_success = REACH_SUCCESS;
@@ -227,7 +214,7 @@ pub fn evaluate(
     let mut table = format!(
         "True mean navigation error of the survey AUVs (m), {runs} runs per policy and cell, base seed {seed} \
          (settings chosen on base seed {TUNING_SEED}); planners A=5, L=5; planner-estimator: L=5 (with the AUV \
-         CNA: its pitch options at level 0 only, L=3 below 3 AUVs), aggregate sigma_sum, range bias {BIAS_PER_KM} m/km, {TERMINAL_LEVELS} levels of cost-to-go; from \
+         CNA: its pitch options at level 0 only, L=3 below 3 AUVs), aggregate sigma_sum, range bias {ESTIMATOR_BIAS_PER_KM} m/km, {ESTIMATOR_TERMINAL_LEVELS} levels of cost-to-go; from \
          {SPREAD_FLEET_MIN_AUVS} AUVs on no level-0 distance penalty, the reach cost-to-go (p_u {REACH_SUCCESS}) and \
          {SPREAD_TERMINAL_LEVELS} levels.\n\
          Every difference is planner-estimator minus the baseline, paired by run; a cell is won when its 95 % CI \
@@ -487,7 +474,7 @@ mod tests {
         for setting in &settings {
             let (small, spread) = (setting.scenario(3, 1, None).planner, setting.scenario(5, 1, None).planner);
             assert_eq!((small.estimator_penalty_case, small.estimator_reach_success), (None, 0.0));
-            assert_eq!(small.estimator_terminal_levels, TERMINAL_LEVELS);
+            assert_eq!(small.estimator_terminal_levels, ESTIMATOR_TERMINAL_LEVELS);
             assert_eq!(spread.estimator_penalty_case.as_deref(), Some(PenaltyCase::C3.id()));
             assert_eq!((spread.estimator_reach_success, spread.estimator_terminal_levels), (0.79, 20.0));
         }
