@@ -77,12 +77,12 @@ impl Shared {
 }
 
 /// What the bound below a node ([`Tree::rest_bound`]) bought at one level: how often it cut
-/// the node's subtree, and how many nodes the subtrees it did not cut held. It costs about an
-/// expansion per level below, and far above the leaves, where the last level's weight (1 + H)
-/// dominates every path and the CNA may yet move anywhere, it seldom cuts (N = 5, L = 5, the
-/// sloping scenario: none of the nodes of levels 0–2 and 4 % of level 3's, against 74 % one level
-/// above the leaves). So a level where the nodes its cuts saved fall short of its cost (measured
-/// in nodes, [`BoundStats::COST`] per level below) is searched without it, but for one node in
+/// the node's subtree, and how many nodes the subtrees it did not cut held. The estimator-aware
+/// bound costs about an expansion per level below (`CostModel::BOUND_COST`), and far above the
+/// leaves, where the last level's weight (1 + H) dominates every path and the CNA may yet move
+/// anywhere, it seldom cuts (N = 5, L = 5, the sloping scenario: none of the nodes of levels 0–2
+/// and 4 % of level 3's, against 74 % one level above the leaves). So a level where the nodes its
+/// cuts saved fall short of its cost is searched without it, but for one node in
 /// [`BoundStats::SAMPLE`] that keeps the count current. A bound not computed cuts nothing, so only
 /// the node count depends on this, never the decision or its cost.
 #[derive(Debug, Clone, Copy, Default)]
@@ -98,21 +98,20 @@ struct BoundStats {
 impl BoundStats {
     /// Tries at a level before the counts decide.
     const WARM_UP: u64 = 16;
-    /// What a bound costs per level below the node, in nodes expanded.
-    const COST: f64 = 1.0;
     /// A level searched without the bound still tries it at one node in this many.
     const SAMPLE: u64 = 16;
 
-    /// Whether to compute the bound at the next node of this level, `levels_below` above the leaves.
+    /// Whether to compute the bound at the next node of this level, where it costs as much as
+    /// expanding `cost` nodes (0: always).
     #[inline(always)]
-    fn worth_trying(&mut self, levels_below: usize) -> bool {
+    fn worth_trying(&mut self, cost: f64) -> bool {
         // Until a subtree below was searched, what a cut saves is unknown.
         if self.tried < Self::WARM_UP || self.searched == 0 {
             return true;
         }
-        // cut/tried · below/searched ≥ COST · levels_below, without the divisions.
+        // cut/tried · below/searched ≥ cost, without the divisions.
         let saved = self.cut as f64 * self.below as f64;
-        if saved >= Self::COST * levels_below as f64 * (self.tried * self.searched) as f64 {
+        if saved >= cost * (self.tried * self.searched) as f64 {
             return true;
         }
         self.skipped += 1;
@@ -308,7 +307,7 @@ fn visit<M: CostModel>(
         ctx.leaf(v);
         return;
     }
-    if ctx.bounds[level].worth_trying(tree.depth - 1 - level) {
+    if ctx.bounds[level].worth_trying(M::BOUND_COST * (tree.depth - 1 - level) as f64) {
         let cut = v + tree.rest_bound(level, node, ctx.bound() - v) > ctx.bound();
         ctx.bounds[level].record(cut);
         if cut {
@@ -555,7 +554,7 @@ mod tests {
         let mut computed = 0;
         for i in 0..nodes {
             let cut = (i + 1) % cut_every == 0;
-            if stats.worth_trying(levels_below) {
+            if stats.worth_trying(levels_below as f64) {
                 computed += 1;
                 stats.record(cut);
                 if cut {
@@ -579,5 +578,12 @@ mod tests {
         // Cuts one node in 25 above 12-node subtrees, two levels up (the sloping N = 5 tree's level
         // 3: it saves 0.5 node per try against its cost of 2): skipped after the warm-up.
         assert!(computed(2, 25, 12, 1000) < warm + 1000 / sample + 1);
+        // A cost of 0 (Hudson's bound): always computed, whatever it saves.
+        let mut stats = BoundStats::default();
+        for _ in 0..1000 {
+            assert!(stats.worth_trying(0.0));
+            stats.record(false);
+            stats.searched(1);
+        }
     }
 }
