@@ -111,7 +111,7 @@ impl BoundStats {
         }
         // cut/tried · below/searched ≥ cost, without the divisions.
         let saved = self.cut as f64 * self.below as f64;
-        if saved >= cost * (self.tried * self.searched) as f64 {
+        if saved >= cost * self.tried as f64 * self.searched as f64 {
             return true;
         }
         self.skipped += 1;
