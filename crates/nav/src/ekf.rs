@@ -267,8 +267,9 @@ impl<const N: usize> Ekf<N> {
         first: &UnitReading<A>,
         second: &UnitReading<B>,
     ) -> (bool, [UpdateOutcome; 2]) {
-        let predictable =
-            t.is_finite() && rows_ok::<N, R, K>(g) && all_finite(x_new.as_slice()) && all_finite(q_diag.as_slice());
+        // A non-finite mean, noise or reading would leave a non-finite entry at the end, which
+        // the check there catches; only what it cannot see is checked first.
+        let predictable = t.is_finite() && rows_ok::<N, R, K>(g);
         if !(predictable && self.history.is_none() && first.usable::<N>() && second.usable::<N>()) {
             return self.predict_then_read(t, x_new, g, q_diag, first, second);
         }
@@ -278,7 +279,8 @@ impl<const N: usize> Ekf<N> {
         propagate_covariance(&mut self.p, g, q_diag);
         wrap_angles(&mut self.x, &self.angles);
         let outcomes = joseph_two_readings(&mut self.x, &mut self.p, &self.angles, first, second);
-        let finite = self.is_finite();
+        // P is symmetric here (every stage writes each pair once), so its upper triangle is all of it.
+        let finite = all_finite(self.x.as_slice()) & upper_triangle_finite(&self.p);
         let Some(outcomes) = outcomes.filter(|_| finite) else {
             (self.x, self.p) = before;
             return self.predict_then_read(t, x_new, g, q_diag, first, second);
@@ -646,6 +648,16 @@ fn all_finite(v: &[f64]) -> bool {
     let mut ok = true;
     for x in v {
         ok &= x.is_finite();
+    }
+    ok
+}
+
+/// Every entry on and above the diagonal finite.
+#[inline(always)]
+fn upper_triangle_finite<const N: usize>(p: &SMatrix<f64, N, N>) -> bool {
+    let mut ok = true;
+    for (j, column) in p.data.0.iter().enumerate() {
+        ok &= all_finite(&column[..=j]);
     }
     ok
 }
