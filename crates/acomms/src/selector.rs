@@ -31,6 +31,10 @@ pub trait RatePolicy: Send {
     /// Decision for own slot `slot`, given the estimated distance to the recipient (None when
     /// nothing is known of it yet).
     fn choose(&mut self, slot: u64, distance: Option<f64>) -> Choice;
+    /// The success a planner may count on for this policy's packet to a recipient at one distance,
+    /// given each rate's modelled success there (`success`), once the policy has settled on the
+    /// link: what it sends there, weighted by how often (silence counts as 0).
+    fn settled_success(&self, success: &dyn Fn(Rate) -> f64) -> f64;
 }
 
 /// A rate policy as a file names it (`kind = "fixed" | "alternating" | "adaptive"`): the one
@@ -107,6 +111,9 @@ impl RatePolicy for FixedRate {
     fn choose(&mut self, _: u64, _: Option<f64>) -> Choice {
         Choice::Transmit(self.rate)
     }
+    fn settled_success(&self, success: &dyn Fn(Rate) -> f64) -> f64 {
+        success(self.rate)
+    }
 }
 
 /// Transmit every own slot, cycling through `rates` (Schneider & Schmidt: 0 and 5).
@@ -134,6 +141,10 @@ impl RatePolicy for Alternating {
         let r = self.rates[self.turn % self.rates.len()];
         self.turn += 1;
         Choice::Transmit(r)
+    }
+    /// Each rate of the cycle equally often.
+    fn settled_success(&self, success: &dyn Fn(Rate) -> f64) -> f64 {
+        self.rates.iter().map(|r| success(*r)).sum::<f64>() / self.rates.len() as f64
     }
 }
 
@@ -282,6 +293,12 @@ impl BinArray {
         chosen
     }
 
+    /// The success of the fastest rate whose success reaches its target, if any (the bin a settled
+    /// array picks at the distance `success` describes).
+    fn settled_success(&self, success: &dyn Fn(Rate) -> f64) -> Option<f64> {
+        self.rates.iter().zip(&self.targets).map(|(r, t)| (success(*r), *t)).find(|(p, t)| p >= t).map(|(p, _)| p)
+    }
+
     /// Moves each bin that got new outcomes by Δ toward its target success ratio.
     fn adapt(&mut self, c: &AdaptiveConfig) {
         for i in 0..self.th.len() {
@@ -420,6 +437,14 @@ impl RatePolicy for AdaptiveBins {
             None => Choice::Silent,
         }
     }
+    /// Invented (nams digest §3.5; the thesis never asks what its selector converges to): each
+    /// bin's threshold moves until its rate's success there meets the rate's target, so with
+    /// success falling with distance the settled selector sends at the fastest data rate whose
+    /// success reaches its target; where none does, at the fastest such status rate (status
+    /// mode); where none of those does either, it is silent.
+    fn settled_success(&self, success: &dyn Fn(Rate) -> f64) -> f64 {
+        [&self.data, &self.status].into_iter().find_map(|a| a.settled_success(success)).unwrap_or(0.0)
+    }
 }
 
 #[cfg(test)]
@@ -534,6 +559,50 @@ mod tests {
         t.choose(100, Some(100.0));
         t.feedback(&[Outcome { slot: 100, success: true }], true); // window: 3/10 → on target
         assert_eq!(t.thresholds().0[0].1, before);
+    }
+
+    #[test]
+    fn settled_success_is_what_each_policy_delivers_once_it_has_learnt_the_link() {
+        use rand::{rngs::StdRng, Rng, SeedableRng};
+        // The share of own slots delivered over the last 2,000 of 4,000 at one distance, the
+        // link giving each rate the success `table` says.
+        let delivered = |policy: &mut dyn RatePolicy, d: f64, table: &dyn Fn(Rate) -> f64| {
+            let mut rng = StdRng::seed_from_u64(7);
+            let mut hits = 0;
+            for slot in 0..4000u64 {
+                let success = match policy.choose(slot, Some(d)) {
+                    Choice::Transmit(r) => rng.gen_bool(table(r)),
+                    Choice::Silent => false,
+                };
+                policy.feedback(&[Outcome { slot, success }], true);
+                hits += usize::from(slot >= 2000 && success);
+            }
+            hits as f64 / 2000.0
+        };
+        let link = |r4: f64, r1: f64| {
+            move |r: Rate| {
+                if r == Rate::R4 {
+                    r4
+                } else if r == Rate::R1 {
+                    r1
+                } else {
+                    0.95
+                }
+            }
+        };
+        // Rate 4 meets its target; it does not but rate 1 does; neither does (silent).
+        for (d, r4, r1, settled) in [(300.0, 0.7, 0.9, 0.7), (300.0, 0.05, 0.8, 0.8), (1000.0, 0.0, 0.1, 0.0)] {
+            let table = link(r4, r1);
+            let mut s = adaptive();
+            assert_eq!(s.settled_success(&table), settled);
+            let got = delivered(&mut s, d, &table);
+            assert!((got - settled).abs() < 0.05, "{d} m, r4 {r4} r1 {r1}: delivered {got}, settled {settled}");
+        }
+        let table = link(0.2, 0.6);
+        let mut alternating = Alternating::new(vec![Rate::R4, Rate::R1]);
+        assert!((alternating.settled_success(&table) - 0.4).abs() < 1e-12);
+        assert!((delivered(&mut alternating, 1000.0, &table) - 0.4).abs() < 0.05);
+        assert_eq!(FixedRate { rate: Rate::R1 }.settled_success(&table), 0.6);
     }
 
     #[test]

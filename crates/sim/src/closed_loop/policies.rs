@@ -9,6 +9,7 @@ use crate::policy::{
 };
 use crate::predeploy::runner;
 use crate::predeploy::scenario::Mission;
+use coopnav_acomms::selector::{FixedRate, RatePolicy};
 use coopnav_acomms::tl::{TlError, TransmissionLoss, TL_CEILING};
 use coopnav_acomms::Receiver;
 use coopnav_core::{Bathymetry, CompassDeg, DepthTarget, Heading, Vec3};
@@ -43,8 +44,17 @@ pub enum PolicyError {
     Unknown { name: String },
     #[error("policy {name}: {source}")]
     Plan { name: String, source: PlanError },
-    #[error("policy {name}: the planner's link model (planner.link = \"scenario_channel\"): {source}")]
-    Link { name: String, source: TlError },
+    #[error("policy {name}: {source}")]
+    Link { name: String, source: LinkError },
+}
+
+/// Why the planners' link model could not be built.
+#[derive(Debug, Error)]
+pub enum LinkError {
+    #[error("the planner's link model (planner.link = \"scenario_channel\"): {0}")]
+    Channel(#[from] TlError),
+    #[error("the CNA slot's rate_policy: {0}")]
+    RatePolicy(String),
 }
 
 /// A configured CNA policy; the planner is kept visible for its statistics.
@@ -188,17 +198,26 @@ fn build(name: &str, sc: &Scenario, planned: Option<&TimedWaypoints>) -> Result<
 }
 
 /// The downlink's success probability over a slant distance, as a real CNA can know it: the
-/// modem's rate and success curves over the TL model `planner.link` names (never the draws).
-fn modem_likelihood(sc: &Scenario) -> Result<PingLikelihood, TlError> {
-    let (success, rate) = (sc.comms.success.clone(), sc.comms.cna_rate);
+/// modem's success curves over the TL model `planner.link` names (never the draws), at
+/// `comms.cna_rate` or, when the CNA's slots name a rate policy, at what that policy sends once it
+/// has settled on this link ([`RatePolicy::settled_success`]; the engine's policy decides on the
+/// farthest AUV, so for a nearer one this counts a faster rate than it gets, pessimistic where a
+/// slower rate carries further).
+fn modem_likelihood(sc: &Scenario) -> Result<PingLikelihood, LinkError> {
+    let success = sc.comms.success.clone();
+    let policy: Box<dyn RatePolicy> = match sc.comms.schedule.cna_policy() {
+        Some(spec) => spec.build().map_err(LinkError::RatePolicy)?,
+        None => Box::new(FixedRate { rate: sc.comms.cna_rate }),
+    };
+    let at_tl = move |tl: f64| policy.settled_success(&|rate| success.p_success(rate, tl));
     match sc.planner.link {
         PlannerLink::Assumed => {
             let tl = sc.comms.tl.assumed();
-            Ok(Box::new(move |d: f64| success.p_success(rate, tl.at_distance(d))))
+            Ok(Box::new(move |d: f64| at_tl(tl.at_distance(d))))
         }
         PlannerLink::ScenarioChannel => {
             let channel = ChannelSample::new(sc)?;
-            Ok(Box::new(move |d: f64| channel.mean(|tl| success.p_success(rate, tl), d)))
+            Ok(Box::new(move |d: f64| channel.mean(&at_tl, d)))
         }
     }
 }
@@ -339,6 +358,38 @@ mod tests {
             assert!((a - c).abs() < 1e-9, "{d} m: assumed {a}, channel {c}");
         }
         assert!(assumed[0] > 0.75 && assumed[5] < 0.3, "the curve falls over the distances: {assumed:?}");
+    }
+
+    #[test]
+    fn a_rate_policy_on_the_cnas_slot_sets_the_planners_link() {
+        use crate::models::schedule::{Schedule, SlotSpec};
+        use coopnav_acomms::{selector::RatePolicySpec, Rate};
+        let mut sc = Scenario::example();
+        let tl = sc.comms.tl.assumed();
+        let distances = [100.0, 900.0, 1300.0, 2000.0];
+        let curve = |rate| -> Vec<f64> {
+            distances.iter().map(|&d| sc.comms.success.p_success(rate, tl.at_distance(d))).collect()
+        };
+        let (r0, r5) = (curve(Rate::R0), curve(Rate::R5));
+        assert_eq!(sc.comms.cna_rate, Rate::R0);
+        assert_eq!(likelihood_at(&sc, PlannerLink::Assumed, &distances), r0, "no policy: comms.cna_rate");
+        let on_cna_slot = |policy| Schedule::Tdma {
+            slots: vec![SlotSpec {
+                who: "cna".into(),
+                start_s: 0.0,
+                length_s: 10.0,
+                message: None,
+                rate_policy: Some(policy),
+            }],
+        };
+        sc.comms.schedule = on_cna_slot(RatePolicySpec::Fixed { rate: Rate::R5 });
+        assert_eq!(likelihood_at(&sc, PlannerLink::Assumed, &distances), r5);
+        sc.comms.schedule = on_cna_slot(RatePolicySpec::Alternating { rates: vec![Rate::R0, Rate::R5] });
+        let mean: Vec<f64> = r0.iter().zip(&r5).map(|(a, b)| (a + b) / 2.0).collect();
+        for (got, want) in likelihood_at(&sc, PlannerLink::Assumed, &distances).iter().zip(&mean) {
+            assert!((got - want).abs() < 1e-12, "alternating: {got} against {want}");
+        }
+        assert!(r0.iter().zip(&r5).any(|(a, b)| (a - b).abs() > 0.1), "rates 0 and 5 differ: {r0:?} {r5:?}");
     }
 
     #[test]
