@@ -14,7 +14,7 @@
 //! enough to reach 8°. Headings inside are math convention (0 = east, counter-clockwise), so E
 //! advances with cos ψ and N with sin ψ; the thesis writes the same model clockwise from north.
 
-use crate::ekf::{propagate_covariance, wrap_angle, Ekf, Gate, SparseRows, UpdateOutcome};
+use crate::ekf::{propagate_covariance, wrap_angle, Ekf, Gate, SparseRows, UnitReading, UpdateOutcome};
 use crate::range::{RangeMeasurement, RangeNoise};
 use coopnav_core::validation::{CheckFields, InvalidFields, Problems};
 use coopnav_core::Vec3;
@@ -416,11 +416,7 @@ impl<const M: usize> AuvEkf<M> {
         if !(h > 0.0) {
             return false;
         }
-        let x = *self.ekf.x();
-        let sin_cos = x[PSI].sin_cos();
-        let x_new = transition_at(&x, h, h * yaw_rate, sin_cos);
-        let q = self.step_q(h);
-        let g = transition_jacobian_entries(&x, h, sin_cos);
+        let (x_new, g, q) = self.step_model(h, yaw_rate);
         match self.current_decay(h) {
             None => self.ekf.predict_sparse(t, x_new, &g, &q),
             Some(phi) => {
@@ -428,6 +424,42 @@ impl<const M: usize> AuvEkf<M> {
                 self.ekf.predict_sparse(t, x_new, &g, &q)
             }
         }
+    }
+
+    /// One filter-rate step: [`Self::predict_to`] `t`, then [`Self::update_speed`] with `speed`
+    /// and [`Self::update_heading`] with `heading`, bit for bit, run as one
+    /// ([`Ekf::predict_and_read`]). Returns whether it predicted and the two updates' outcomes.
+    #[inline(always)]
+    pub fn dead_reckoning_step(
+        &mut self,
+        t: f64,
+        yaw_rate: f64,
+        speed: f64,
+        heading: f64,
+    ) -> (bool, [UpdateOutcome; 2]) {
+        let speed = speed_reading(speed, self.params.sigma_speed);
+        let compass = compass_reading(heading, self.params.sigma_heading);
+        let h = t - self.ekf.t();
+        if !(h > 0.0) {
+            return (false, [self.ekf.update_reading(&speed), self.ekf.update_reading(&compass)]);
+        }
+        let (x_new, g, q) = self.step_model(h, yaw_rate);
+        match self.current_decay(h) {
+            None => self.ekf.predict_and_read(t, x_new, &g, &q, &speed, &compass),
+            Some(phi) => {
+                let (x_new, g) = decayed(x_new, g, phi);
+                self.ekf.predict_and_read(t, x_new, &g, &q, &speed, &compass)
+            }
+        }
+    }
+
+    /// The mean, the Jacobian's rows and the process noise of an `h`-second step at heading rate
+    /// `yaw_rate`, before a Gauss–Markov current's decay.
+    #[inline(always)]
+    fn step_model(&self, h: f64, yaw_rate: f64) -> (SVector<f64, M>, SparseRows<2, 3>, SVector<f64, M>) {
+        let x = *self.ekf.x();
+        let sin_cos = x[PSI].sin_cos();
+        (transition_at(&x, h, h * yaw_rate, sin_cos), transition_jacobian_entries(&x, h, sin_cos), self.step_q(h))
     }
 
     /// The Gauss–Markov current's decay over `h` seconds ([`CurrentParams::decay`]); None for
@@ -493,8 +525,7 @@ impl<const M: usize> AuvEkf<M> {
     /// Speed update with its own SD (m/s), e.g. from a log row.
     #[inline(always)]
     pub fn update_speed_sd(&mut self, measured: f64, sd: f64) -> UpdateOutcome {
-        let y = measured - self.ekf.x()[S];
-        self.ekf.update_units(y, [S], sd.powi(2), &Gate::OFF)
+        self.ekf.update_reading(&speed_reading(measured, sd))
     }
 
     /// Compass update: the compass reads ψ + b (math convention, rad).
@@ -506,8 +537,7 @@ impl<const M: usize> AuvEkf<M> {
     /// Compass update with its own SD (rad).
     #[inline(always)]
     pub fn update_heading_sd(&mut self, measured: f64, sd: f64) -> UpdateOutcome {
-        let y = wrap_angle(measured - self.ekf.x()[PSI] - self.ekf.x()[BIAS]);
-        self.ekf.update_units(y, [PSI, BIAS], sd.powi(2), &Gate::OFF)
+        self.ekf.update_reading(&compass_reading(measured, sd))
     }
 
     /// Position fix of the vehicle itself (GPS at the surface), SD `sd` m on each axis.
@@ -695,6 +725,18 @@ impl<const M: usize> AuvEkf<M> {
     }
 }
 
+/// A speed log's reading (m/s) of S, with its SD.
+#[inline(always)]
+fn speed_reading(measured: f64, sd: f64) -> UnitReading<1> {
+    UnitReading { columns: [S], value: measured, variance: sd.powi(2), angle: false }
+}
+
+/// A compass reading (math heading, rad) of ψ + b, with its SD.
+#[inline(always)]
+fn compass_reading(measured: f64, sd: f64) -> UnitReading<2> {
+    UnitReading { columns: [PSI, BIAS], value: measured, variance: sd.powi(2), angle: true }
+}
+
 /// A range's innovation z − h(x⁻) and its variance H P⁻ Hᵀ + R.
 #[derive(Debug, Clone, Copy)]
 struct Innovation {
@@ -784,12 +826,10 @@ impl AuvFilter {
             [p[(E, E)], p[(E, N)], p[(N, N)]]
         })
     }
-    /// Every state and covariance entry finite: over the storage's slices, without an early exit,
-    /// so the check vectorises (nalgebra's matrix iterators cost about ten times as much).
+    /// Every state and covariance entry finite ([`Ekf::is_finite`]).
     #[inline]
     pub fn is_finite(&self) -> bool {
-        let finite = |v: &[f64]| v.iter().fold(true, |ok, x| ok & x.is_finite());
-        each_model!(self, f => finite(f.state().as_slice()) & finite(f.ekf().p().as_slice()))
+        each_model!(self, f => f.ekf().is_finite())
     }
     #[inline]
     pub fn predict_to(&mut self, t: f64, yaw_rate: f64) -> bool {
@@ -802,6 +842,17 @@ impl AuvFilter {
     #[inline(always)]
     pub fn update_heading(&mut self, measured: f64) -> UpdateOutcome {
         each_model!(self, f => f.update_heading(measured))
+    }
+    /// [`AuvEkf::dead_reckoning_step`].
+    #[inline(always)]
+    pub fn dead_reckoning_step(
+        &mut self,
+        t: f64,
+        yaw_rate: f64,
+        speed: f64,
+        heading: f64,
+    ) -> (bool, [UpdateOutcome; 2]) {
+        each_model!(self, f => f.dead_reckoning_step(t, yaw_rate, speed, heading))
     }
     pub fn update_range(&mut self, m: &RangeMeasurement, auv_depth: Option<f64>) -> UpdateOutcome {
         each_model!(self, f => f.update_range(m, auv_depth))
@@ -1047,6 +1098,62 @@ mod tests {
         }
         let t = CurrentParams { correlation_time_s: Some(0.0), ..CurrentParams::default() };
         assert!(AuvModel::Current(t).validate("model.").unwrap_err().to_string().contains("model.correlation_time_s"));
+    }
+
+    /// Runs `steps` filter steps on two copies of `filter`, one by [`AuvEkf::dead_reckoning_step`]
+    /// and one by its three calls, with readings from `reading(k)` = (dt, yaw rate, speed,
+    /// heading), and asserts every step's outcomes, states, covariances and counts agree bit for bit.
+    fn fused_equals_three_calls<const M: usize>(
+        filter: AuvEkf<M>,
+        steps: usize,
+        mut reading: impl FnMut(usize) -> (f64, f64, f64, f64),
+    ) {
+        let (mut fused, mut calls) = (filter.clone(), filter);
+        let bits = |f: &AuvEkf<M>| f.state().iter().chain(f.ekf().p().iter()).map(|v| v.to_bits()).collect::<Vec<_>>();
+        let mut t = fused.ekf().t();
+        for k in 0..steps {
+            let (dt, yaw_rate, speed, heading) = reading(k);
+            t += dt;
+            let one = fused.dead_reckoning_step(t, yaw_rate, speed, heading);
+            let three = (calls.predict_to(t, yaw_rate), [calls.update_speed(speed), calls.update_heading(heading)]);
+            assert_eq!(one, three, "step {k}");
+            assert_eq!(bits(&fused), bits(&calls), "step {k}");
+            assert_eq!((fused.ekf().t(), fused.ekf().counts()), (calls.ekf().t(), calls.ekf().counts()), "step {k}");
+        }
+    }
+
+    #[test]
+    fn the_fused_filter_step_is_its_three_calls_bit_for_bit() {
+        let mut seed = 0x9e37_79b9_7f4a_7c15_u64;
+        let mut uniform = move || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            (seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+        };
+        let mut readings = move |k: usize| {
+            // A turning vehicle crossing the ±π seam; every 97th step repeats the filter's time
+            // (no prediction), every 89th reads a NaN speed (the speed update is unusable).
+            let dt = if k % 97 == 5 { 0.0 } else { 0.1 };
+            let speed = if k % 89 == 7 { f64::NAN } else { 1.5 + 0.1 * uniform() };
+            let heading = wrap_angle(3.0 + 0.02 * k as f64 + 0.05 * uniform());
+            (dt, 0.2 + 0.01 * uniform(), speed, heading)
+        };
+        let params = AuvParams::default();
+        fused_equals_three_calls(AuvEkf::new(0.0, 10.0, -5.0, 1.5, 3.0, params.clone()), 3000, &mut readings);
+        let walk = CurrentParams::default();
+        fused_equals_three_calls(
+            AuvEkf::with_current(0.0, 0.0, 0.0, 1.5, 3.0, params.clone(), walk),
+            3000,
+            &mut readings,
+        );
+        let gauss_markov = CurrentParams { correlation_time_s: Some(600.0), ..walk };
+        let current = AuvEkf::with_current(0.0, 0.0, 0.0, 1.5, 3.0, params.clone(), gauss_markov);
+        fused_equals_three_calls(current, 3000, &mut readings);
+        // A filter recording its history runs the three calls, and records them.
+        let mut recording = AuvEkf::new(0.0, 10.0, -5.0, 1.5, 3.0, params);
+        recording.ekf_mut().record_history();
+        fused_equals_three_calls(recording, 50, &mut readings);
     }
 
     #[test]

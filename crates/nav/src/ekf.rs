@@ -7,7 +7,8 @@
 //! filter's methods over them) is `#[inline(always)]`: a step is a few hundred operations on
 //! small arrays that separate functions pass through memory. Inlined, a 7-state step (predict,
 //! speed, compass) ran ≈ 15 % faster in a 3 M-step probe (session 23); inlining never changes a
-//! floating-point result.
+//! floating-point result. The AUV filter's step (prediction, speed, compass) runs as one
+//! ([`Ekf::predict_and_read`]), bit for bit its three calls.
 
 use coopnav_core::validation::{CheckFields, Problems};
 use coopnav_core::wrap_pi;
@@ -134,6 +135,12 @@ impl<const N: usize> Ekf<N> {
     pub fn history(&self) -> Option<&[Step<N>]> {
         self.history.as_deref()
     }
+    /// Every state and covariance entry finite: over the storage's slices, without an early exit,
+    /// so the check vectorises (nalgebra's matrix iterators cost about ten times as much).
+    #[inline]
+    pub fn is_finite(&self) -> bool {
+        all_finite(self.x.as_slice()) & all_finite(self.p.as_slice())
+    }
     /// Number of predictions and of applied measurement updates so far.
     pub fn counts(&self) -> (u64, u64) {
         (self.predicts, self.updates)
@@ -214,11 +221,7 @@ impl<const N: usize> Ekf<N> {
         r: f64,
         gate: &Gate,
     ) -> UpdateOutcome {
-        let mut ordered = true;
-        for (n, &j) in columns.iter().enumerate() {
-            ordered &= j < N && (n == 0 || columns[n - 1] < j);
-        }
-        if !(innovation.is_finite() && r.is_finite() && ordered) {
+        if !(innovation.is_finite() && r.is_finite() && columns_in_order::<N, K>(&columns)) {
             return UpdateOutcome::Unusable;
         }
         self.update_row(innovation, &Units(columns), r, gate)
@@ -227,50 +230,81 @@ impl<const N: usize> Ekf<N> {
     /// The scalar Joseph update of [`Self::update_scalar`] for a row given by its non-zero entries.
     #[inline(always)]
     fn update_row(&mut self, innovation: f64, h: &impl SparseRow<N>, r: f64, gate: &Gate) -> UpdateOutcome {
-        // `p[j][i]` is entry (i, j) of the column-major storage.
-        let p = &self.p.data.0;
-        let pht = h.times(|i, j| p[j][i]);
-        let s = h.dot(&pht) + r;
-        if !(s > 0.0 && s.is_finite()) {
+        let (mut x, mut p) = (self.x, self.p);
+        let outcome = joseph_update(&mut x, &mut p, innovation, h, r, gate);
+        if !outcome.applied() {
+            return outcome;
+        }
+        if !(all_finite(p.as_slice()) && all_finite(x.as_slice())) {
             return UpdateOutcome::Unusable;
         }
-        let nis = innovation * innovation / s;
-        if !gate.admits(&[innovation], nis) {
-            return UpdateOutcome::Gated { nis };
+        self.accept(x, p);
+        outcome
+    }
+
+    /// [`Self::update_units`] for a reading of the sum of the states at its columns: the
+    /// innovation is its value minus each of those states in turn, wrapped when the sum is an angle.
+    #[inline(always)]
+    pub fn update_reading<const K: usize>(&mut self, reading: &UnitReading<K>) -> UpdateOutcome {
+        let innovation = reading.innovation(&self.x);
+        self.update_units(innovation, reading.columns, reading.variance, &Gate::OFF)
+    }
+
+    /// [`Self::predict_sparse`], then [`Self::update_reading`] for `first` and then `second`: bit
+    /// for bit the three calls, run as one step in place, the two updates in one pass over P, and
+    /// checked once (a fleet's filters run this ten times a second per AUV: most of a run's time).
+    ///
+    /// Every entry that goes non-finite stays non-finite to the end of the step (each stage adds
+    /// to the entries it reads, `wrap_angle` keeps a non-finite angle non-finite), so a finite
+    /// result means every call would have succeeded as it did here; anything else (and a filter
+    /// recording its history, or a prediction it would refuse) restores the state and runs the
+    /// three calls.
+    #[inline(always)]
+    pub fn predict_and_read<const R: usize, const K: usize, const A: usize, const B: usize>(
+        &mut self,
+        t: f64,
+        x_new: SVector<f64, N>,
+        g: &SparseRows<R, K>,
+        q_diag: &SVector<f64, N>,
+        first: &UnitReading<A>,
+        second: &UnitReading<B>,
+    ) -> (bool, [UpdateOutcome; 2]) {
+        // A non-finite mean, noise or reading would leave a non-finite entry at the end, which
+        // the check there catches; only what it cannot see is checked first.
+        let predictable = t.is_finite() && rows_ok::<N, R, K>(g);
+        if !(predictable && self.history.is_none() && first.usable::<N>() && second.usable::<N>()) {
+            return self.predict_then_read(t, x_new, g, q_diag, first, second);
         }
-        let k = pht.map(|v| v / s);
-        // B = P − k (P hᵀ)ᵀ, then P⁺ = B − (B hᵀ) kᵀ + r k kᵀ = B + c kᵀ with c = r k − B hᵀ.
-        // B hᵀ needs only h's columns of B, so P⁺ is written in one pass, every entry rounded
-        // as in the two-pass form, (p − kᵢ (P hᵀ)ⱼ) + cᵢ kⱼ, and each off-diagonal pair averaged
-        // as [`symmetrise`] averages it.
-        let b = |i: usize, j: usize| p[j][i] - k[i] * pht[j];
-        let bht = h.times(b);
-        let mut c = [0.0; N];
-        for (i, v) in c.iter_mut().enumerate() {
-            *v = r * k[i] - bht[i];
-        }
-        // Every entry first, down the contiguous columns (the compiler vectorises it), then each
-        // pair averaged in place: the same numbers as entry by entry, pair by pair, ≈ 15 % less
-        // time per filter step.
-        let mut columns = [[0.0; N]; N];
-        for (j, column) in columns.iter_mut().enumerate() {
-            for (i, v) in column.iter_mut().enumerate() {
-                *v = b(i, j) + c[i] * k[j];
-            }
-        }
-        for j in 1..N {
-            for i in 0..j {
-                let v = 0.5 * (columns[j][i] + columns[i][j]);
-                columns[j][i] = v;
-                columns[i][j] = v;
-            }
-        }
-        let x_new = self.x + SVector::<f64, N>::from(k) * innovation;
-        if !(all_finite(columns.as_flattened()) && all_finite(x_new.as_slice())) {
-            return UpdateOutcome::Unusable;
-        }
-        self.accept(x_new, SMatrix::<f64, N, N>::from_data(nalgebra::ArrayStorage(columns)));
-        UpdateOutcome::Applied { nis }
+        // Worked in place; the state before is kept for a step that has to be run call by call.
+        let before = (self.x, self.p);
+        self.x = x_new;
+        propagate_covariance(&mut self.p, g, q_diag);
+        wrap_angles(&mut self.x, &self.angles);
+        let outcomes = joseph_two_readings(&mut self.x, &mut self.p, &self.angles, first, second);
+        // P is symmetric here (every stage writes each pair once), so its upper triangle is all of it.
+        let finite = all_finite(self.x.as_slice()) & upper_triangle_finite(&self.p);
+        let Some(outcomes) = outcomes.filter(|_| finite) else {
+            (self.x, self.p) = before;
+            return self.predict_then_read(t, x_new, g, q_diag, first, second);
+        };
+        self.t = t;
+        self.predicts += 1;
+        self.updates += 2;
+        (true, outcomes)
+    }
+
+    /// The three calls [`Self::predict_and_read`] stands for, one after the other.
+    fn predict_then_read<const R: usize, const K: usize, const A: usize, const B: usize>(
+        &mut self,
+        t: f64,
+        x_new: SVector<f64, N>,
+        g: &SparseRows<R, K>,
+        q_diag: &SVector<f64, N>,
+        first: &UnitReading<A>,
+        second: &UnitReading<B>,
+    ) -> (bool, [UpdateOutcome; 2]) {
+        let predicted = self.predict_sparse(t, x_new, g, q_diag);
+        (predicted, [self.update_reading(first), self.update_reading(second)])
     }
 
     /// Vector update of M measurements with innovation y, Jacobian H and noise covariance R, in
@@ -324,12 +358,174 @@ impl<const N: usize> Ekf<N> {
 
     #[inline(always)]
     fn wrap_state(&mut self) {
-        for (i, is_angle) in self.angles.iter().enumerate() {
-            if *is_angle {
-                self.x[i] = wrap_angle(self.x[i]);
-            }
+        wrap_angles(&mut self.x, &self.angles);
+    }
+}
+
+/// The components of `x` that are angles wrapped to (-π, π].
+#[inline(always)]
+fn wrap_angles<const N: usize>(x: &mut SVector<f64, N>, angles: &[bool; N]) {
+    for (i, is_angle) in angles.iter().enumerate() {
+        if *is_angle {
+            x[i] = wrap_angle(x[i]);
         }
     }
+}
+
+/// A scalar reading of the sum of the states at `columns` (distinct, in increasing order): a
+/// speed log reads one state, a compass two (heading plus its bias).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct UnitReading<const K: usize> {
+    pub columns: [usize; K],
+    pub value: f64,
+    /// The reading's noise variance.
+    pub variance: f64,
+    /// The sum is an angle: its innovation is wrapped to (-π, π].
+    pub angle: bool,
+}
+
+impl<const K: usize> UnitReading<K> {
+    /// z − h x: the value minus each read state in turn, wrapped for an angle.
+    #[inline(always)]
+    fn innovation<const N: usize>(&self, x: &SVector<f64, N>) -> f64 {
+        let y = self.columns.iter().fold(self.value, |y, &j| y - x[j]);
+        if self.angle {
+            wrap_angle(y)
+        } else {
+            y
+        }
+    }
+
+    /// What [`Ekf::update_units`] requires of a reading before it looks at the state: finite
+    /// numbers, columns in increasing order inside an `N`-state vector.
+    #[inline(always)]
+    fn usable<const N: usize>(&self) -> bool {
+        columns_in_order::<N, K>(&self.columns) && self.value.is_finite() && self.variance.is_finite()
+    }
+}
+
+/// The gain k = P hᵀ/s and w = s k/2 − P hᵀ of [`joseph_update`] from P hᵀ and s.
+#[inline(always)]
+fn gain<const N: usize>(pht: &[f64; N], s: f64) -> ([f64; N], [f64; N]) {
+    let (half_s, inverse_s) = (0.5 * s, 1.0 / s);
+    let (mut k, mut w) = ([0.0; N], [0.0; N]);
+    for i in 0..N {
+        k[i] = pht[i] * inverse_s;
+        w[i] = half_s * k[i] - pht[i];
+    }
+    (k, w)
+}
+
+/// Sets every entry (i, j) of the symmetric matrix `columns` (column-major) to `entry(i, j, old
+/// value)`, for an `entry` whose result at (j, i) is bitwise the same: computed once per pair, on
+/// and above the diagonal, and copied below it.
+#[inline(always)]
+fn for_upper_triangle<const N: usize>(columns: &mut [[f64; N]; N], entry: impl Fn(usize, usize, f64) -> f64) {
+    for j in 0..N {
+        for i in 0..=j {
+            let v = entry(i, j, columns[j][i]);
+            columns[j][i] = v;
+            columns[i][j] = v;
+        }
+    }
+}
+
+/// Entry (i, j) of k wᵀ + w kᵀ, the same two products summed in the same order as entry (j, i).
+#[inline(always)]
+fn rank_two<const N: usize>(k: &[f64; N], w: &[f64; N], i: usize, j: usize) -> f64 {
+    k[i] * w[j] + w[i] * k[j]
+}
+
+/// [`joseph_update`] for `first`, then for `second`, bit for bit, in one pass over P: the second
+/// gain needs only the columns of P⁺ it reads, computed entry by entry as the pass computes them.
+/// None unless both are applied (the caller then runs them one at a time); `x` is wrapped by
+/// `angles` after each, as [`Ekf`] wraps its state.
+#[inline(always)]
+fn joseph_two_readings<const N: usize, const A: usize, const B: usize>(
+    x: &mut SVector<f64, N>,
+    p: &mut SMatrix<f64, N, N>,
+    angles: &[bool; N],
+    first: &UnitReading<A>,
+    second: &UnitReading<B>,
+) -> Option<[UpdateOutcome; 2]> {
+    let columns = &mut p.data.0;
+    let (first_row, second_row) = (Units(first.columns), Units(second.columns));
+    let y1 = first.innovation(x);
+    let pht1: [f64; N] = first_row.times(|i, j| columns[j][i]);
+    let s1 = first_row.dot(&pht1) + first.variance;
+    if !(s1 > 0.0 && s1.is_finite()) {
+        return None;
+    }
+    let (k1, w1) = gain(&pht1, s1);
+    for (x_i, k_i) in x.iter_mut().zip(&k1) {
+        *x_i += k_i * y1;
+    }
+    wrap_angles(x, angles);
+    let y2 = second.innovation(x);
+    let pht2: [f64; N] = second_row.times(|i, j| columns[j][i] + rank_two(&k1, &w1, i, j));
+    let s2 = second_row.dot(&pht2) + second.variance;
+    if !(s2 > 0.0 && s2.is_finite()) {
+        return None;
+    }
+    let (k2, w2) = gain(&pht2, s2);
+    for_upper_triangle(columns, |i, j, v| (v + rank_two(&k1, &w1, i, j)) + rank_two(&k2, &w2, i, j));
+    for (x_i, k_i) in x.iter_mut().zip(&k2) {
+        *x_i += k_i * y2;
+    }
+    wrap_angles(x, angles);
+    Some([UpdateOutcome::Applied { nis: y1 * y1 / s1 }, UpdateOutcome::Applied { nis: y2 * y2 / s2 }])
+}
+
+/// Columns in increasing order, each inside an `N`-state vector.
+#[inline(always)]
+fn columns_in_order<const N: usize, const K: usize>(columns: &[usize; K]) -> bool {
+    let mut ordered = true;
+    for (n, &j) in columns.iter().enumerate() {
+        ordered &= j < N && (n == 0 || columns[n - 1] < j);
+    }
+    ordered
+}
+
+/// The scalar Joseph update P⁺ = (I − k h) P (I − k h)ᵀ + r k kᵀ, x⁺ = x + k y of `x` and `p` in
+/// place, for a row h given by its non-zero entries; `p` must be symmetric. Gated or unusable
+/// (s = h P hᵀ + r not positive and finite): both left as they were.
+///
+/// With P hᵀ = p̄ and k = p̄/s, the Joseph form expands for any gain k to P − k p̄ᵀ − p̄ kᵀ + s k kᵀ
+/// = P + k wᵀ + w kᵀ with w = s k/2 − p̄: s k − p̄ is the gain's rounding residual, kept, so P⁺ is
+/// insensitive to first order to k's rounding as the Joseph form is (the plain P − k p̄ᵀ is not),
+/// and k is p̄ times one reciprocal of s (a division per entry: a 7-state step took 200 ns against
+/// 140–147 ns in a 3 M-step probe, session 24).
+/// Each entry is pᵢⱼ + (kᵢ wⱼ + wᵢ kⱼ): its mirror adds the same two products in the other order,
+/// and a floating-point sum does not depend on the order of two terms, so the entries on and above
+/// the diagonal are computed and copied below it, and P⁺ is exactly symmetric with no averaging.
+/// (Session 24: this replaced the form B = P − k p̄ᵀ, B + (r k − B hᵀ) kᵀ, pairs averaged, which
+/// rounded differently: every figure moved by ≈ 1e-13 relative, listed in the branch's report.)
+#[inline(always)]
+fn joseph_update<const N: usize>(
+    x: &mut SVector<f64, N>,
+    p: &mut SMatrix<f64, N, N>,
+    innovation: f64,
+    h: &impl SparseRow<N>,
+    r: f64,
+    gate: &Gate,
+) -> UpdateOutcome {
+    // `columns[j][i]` is entry (i, j) of the column-major storage.
+    let columns = &mut p.data.0;
+    let pht = h.times(|i, j| columns[j][i]);
+    let s = h.dot(&pht) + r;
+    if !(s > 0.0 && s.is_finite()) {
+        return UpdateOutcome::Unusable;
+    }
+    let nis = innovation * innovation / s;
+    if !gate.admits(&[innovation], nis) {
+        return UpdateOutcome::Gated { nis };
+    }
+    let (k, w) = gain(&pht, s);
+    for_upper_triangle(columns, |i, j, v| v + rank_two(&k, &w, i, j));
+    for (x_i, k_i) in x.iter_mut().zip(&k) {
+        *x_i += k_i * innovation;
+    }
+    UpdateOutcome::Applied { nis }
 }
 
 /// Difference a − b of two states, with angle components wrapped to (-π, π].
@@ -399,14 +595,14 @@ impl<const N: usize> SparseRow<N> for Weighted<'_, N> {
     fn times(&self, m: impl Fn(usize, usize) -> f64) -> [f64; N] {
         let mut out = [0.0; N];
         for (i, v) in out.iter_mut().enumerate() {
-            *v = self.seen.columns().iter().map(|&j| m(i, j) * self.h[j]).sum();
+            *v = sum_over(self.seen.columns(), |j| m(i, j) * self.h[j]);
         }
         out
     }
 
     #[inline(always)]
     fn dot(&self, v: &[f64; N]) -> f64 {
-        self.seen.columns().iter().map(|&j| self.h[j] * v[j]).sum()
+        sum_over(self.seen.columns(), |j| self.h[j] * v[j])
     }
 }
 
@@ -419,15 +615,26 @@ impl<const N: usize, const K: usize> SparseRow<N> for Units<K> {
     fn times(&self, m: impl Fn(usize, usize) -> f64) -> [f64; N] {
         let mut out = [0.0; N];
         for (i, v) in out.iter_mut().enumerate() {
-            *v = self.0.iter().map(|&j| m(i, j)).sum();
+            *v = sum_over(&self.0, |j| m(i, j));
         }
         out
     }
 
     #[inline(always)]
     fn dot(&self, v: &[f64; N]) -> f64 {
-        self.0.iter().map(|&j| v[j]).sum()
+        sum_over(&self.0, |j| v[j])
     }
+}
+
+/// Σ `term(j)` over `columns` in order, from 0 (a plain loop: an iterator's `sum` is not always
+/// inlined, and this runs for every entry of P hᵀ).
+#[inline(always)]
+fn sum_over(columns: &[usize], term: impl Fn(usize) -> f64) -> f64 {
+    let mut sum = 0.0;
+    for &j in columns {
+        sum += term(j);
+    }
+    sum
 }
 
 /// (M + Mᵀ)/2: removes the round-off asymmetry that would otherwise accumulate.
@@ -441,9 +648,23 @@ pub fn is_positive_definite<const N: usize>(m: &SMatrix<f64, N, N>) -> bool {
 }
 
 /// Every value finite; without an early exit, so the check vectorises (it runs on every step).
-#[inline]
+#[inline(always)]
 fn all_finite(v: &[f64]) -> bool {
-    v.iter().fold(true, |ok, x| ok & x.is_finite())
+    let mut ok = true;
+    for x in v {
+        ok &= x.is_finite();
+    }
+    ok
+}
+
+/// Every entry on and above the diagonal finite.
+#[inline(always)]
+fn upper_triangle_finite<const N: usize>(p: &SMatrix<f64, N, N>) -> bool {
+    let mut ok = true;
+    for (j, column) in p.data.0.iter().enumerate() {
+        ok &= all_finite(&column[..=j]);
+    }
+    ok
 }
 
 /// The non-zero entries of a sparse G, grouped by row: `R` rows, each (row, its `K` entries
@@ -468,25 +689,16 @@ fn rows_ok<const N: usize, const R: usize, const K: usize>(g: &SparseRows<R, K>)
     ok
 }
 
-/// The position of row `j` among G's rows.
-#[inline(always)]
-fn row_position<const R: usize, const K: usize>(g: &SparseRows<R, K>, j: usize) -> Option<usize> {
-    let mut found = None;
-    for (r, (i, _)) in g.iter().enumerate() {
-        if *i == j {
-            found = Some(r);
-        }
-    }
-    found
-}
-
 /// P ← F P Fᵀ + diag(q) for F = I + G, G given by its rows' non-zero entries, symmetrised:
-/// O(N·R·K) instead of two dense products.
+/// O(N·R·K) instead of two dense products; `p` must be symmetric (see [`Ekf::new`]).
 ///
 /// A = F P = P + G P changes only G's rows, and P⁻ = A Fᵀ = A + A Gᵀ only the columns of the same
-/// indices, so only those rows are built (from the old P) and only those columns rewritten; no
-/// copy of P is taken (this runs once per AUV per filter step). Each entry is summed in its row's
-/// order, as the dense two-pass form (rows of G in pass one, its columns in pass two) sums it.
+/// indices. Bit for bit the dense two-pass form (rows of G in pass one, its columns in pass two,
+/// each entry summed in its row's order, every pair averaged), with P's symmetry doing half the
+/// work: A's row i is P's column i plus v times column j for each entry (j, v), the same
+/// numbers as the rows; an entry of P⁻ with one index among G's rows, i, is A(i, c) = A(c, i)
+/// summed in the same order on both sides of the diagonal, so only the block of pairs where both
+/// indices are G's rows is computed twice and averaged (this runs once per AUV per filter step).
 #[inline(always)]
 pub fn propagate_covariance<const N: usize, const R: usize, const K: usize>(
     p: &mut SMatrix<f64, N, N>,
@@ -495,56 +707,35 @@ pub fn propagate_covariance<const N: usize, const R: usize, const K: usize>(
 ) {
     // `columns[c][r]` is entry (r, c).
     let columns = &mut p.data.0;
-    // A's row i: P's row i plus v times the old row j, for each entry (j, v) of G's row i.
     let mut a_rows = [[0.0; N]; R];
     for ((i, entries), a) in g.iter().zip(a_rows.iter_mut()) {
-        for (a_c, column) in a.iter_mut().zip(columns.iter()) {
-            *a_c = column[*i];
-        }
+        *a = columns[*i];
         for &(j, v) in entries {
-            for (a_c, column) in a.iter_mut().zip(columns.iter()) {
-                *a_c += v * column[j];
+            for (a_c, p_jc) in a.iter_mut().zip(&columns[j]) {
+                *a_c += v * p_jc;
             }
         }
+    }
+    // P⁻(i_r, i_s) = A(i_r, i_s) + Σ v A(i_r, l) over G's row s: pass two's column i_s at row i_r.
+    let mut block = [[0.0; R]; R];
+    for (r, a) in a_rows.iter().enumerate() {
+        for (s, (i_s, entries)) in g.iter().enumerate() {
+            block[r][s] = entries.iter().fold(a[*i_s], |sum, &(l, v)| sum + v * a[l]);
+        }
+        block[r][r] += q_diag[g[r].0];
+    }
+    for (c, column) in columns.iter_mut().enumerate() {
+        column[c] += q_diag[c];
     }
     for ((i, _), a) in g.iter().zip(&a_rows) {
-        for (column, &a_c) in columns.iter_mut().zip(a) {
-            column[*i] = a_c;
+        for (c, &a_c) in a.iter().enumerate() {
+            columns[c][*i] = a_c;
         }
+        columns[*i] = *a;
     }
-    // A's columns of G's row indices, kept before the second pass rewrites them (an entry may
-    // read one of them as its column j).
-    let mut a_columns = [[0.0; N]; R];
-    for ((i, _), a) in g.iter().zip(a_columns.iter_mut()) {
-        *a = columns[*i];
-    }
-    for (i, entries) in g {
-        for &(j, v) in entries {
-            match row_position(g, j) {
-                Some(r) => {
-                    for (x, a_xj) in columns[*i].iter_mut().zip(&a_columns[r]) {
-                        *x += v * a_xj;
-                    }
-                }
-                // Column j is not rewritten by this pass (j is not a row of G, so not i either).
-                None => {
-                    for x in 0..N {
-                        columns[*i][x] += v * columns[j][x];
-                    }
-                }
-            }
-        }
-    }
-    for i in 0..N {
-        columns[i][i] += q_diag[i];
-    }
-    // Only pairs with an index among G's rows changed; P is kept symmetric (see [`Ekf::new`]), so
-    // every other pair is already equal.
-    for (i, _) in g {
-        for r in 0..N {
-            let v = 0.5 * (columns[*i][r] + columns[r][*i]);
-            columns[*i][r] = v;
-            columns[r][*i] = v;
+    for (r, (i_r, _)) in g.iter().enumerate() {
+        for (s, (i_s, _)) in g.iter().enumerate() {
+            columns[*i_s][*i_r] = 0.5 * (block[r][s] + block[s][r]);
         }
     }
 }
@@ -722,65 +913,53 @@ mod tests {
         assert_eq!(units.update_units(1.0, [4], 0.1, &Gate::OFF), UpdateOutcome::Unusable, "outside the state");
     }
 
-    /// The scalar Joseph update written out pair by pair, as the filter computed it before its
-    /// entries were built column by column: P hᵀ, s, k, B = P − k (P hᵀ)ᵀ, c = r k − B hᵀ, each
-    /// entry (bᵢⱼ + cᵢ kⱼ) and each pair averaged; products with h over its non-zero columns.
-    fn joseph_pair_by_pair(
+    /// The scalar Joseph update as written in the textbook, with dense matrices: k = P hᵀ/s,
+    /// s = h P hᵀ + r, P⁺ = (I − k h) P (I − k h)ᵀ + r k kᵀ, x⁺ = x + k y.
+    fn dense_joseph(
         p: &SMatrix<f64, 7, 7>,
         x: &SVector<f64, 7>,
         h: &SMatrix<f64, 1, 7>,
         r: f64,
         y: f64,
     ) -> (SMatrix<f64, 7, 7>, SVector<f64, 7>) {
-        let nz: Vec<usize> = (0..7).filter(|&j| h[j] != 0.0).collect();
-        let pht: Vec<f64> = (0..7).map(|i| nz.iter().map(|&j| p[(i, j)] * h[j]).sum()).collect();
-        let s = nz.iter().map(|&j| h[j] * pht[j]).sum::<f64>() + r;
-        let k: Vec<f64> = pht.iter().map(|v| v / s).collect();
-        let b = |i: usize, j: usize| p[(i, j)] - k[i] * pht[j];
-        let c: Vec<f64> = (0..7).map(|i| r * k[i] - nz.iter().map(|&j| b(i, j) * h[j]).sum::<f64>()).collect();
-        let entry = |i: usize, j: usize| b(i, j) + c[i] * k[j];
-        let mut out = SMatrix::<f64, 7, 7>::zeros();
-        for j in 0..7 {
-            out[(j, j)] = entry(j, j);
-            for i in 0..j {
-                let v = 0.5 * (entry(i, j) + entry(j, i));
-                (out[(i, j)], out[(j, i)]) = (v, v);
-            }
-        }
-        (out, x + SVector::<f64, 7>::from_iterator(k) * y)
+        let s = (h * p * h.transpose())[(0, 0)] + r;
+        let k = p * h.transpose() / s;
+        let a = SMatrix::<f64, 7, 7>::identity() - k * h;
+        (a * p * a.transpose() + k * k.transpose() * r, x + k * y)
     }
 
     #[test]
-    fn scalar_updates_are_the_pair_by_pair_form_bit_for_bit() {
+    fn scalar_updates_are_the_dense_joseph_form_exactly_symmetric_and_positive_definite() {
         let mut uniform = uniform_source(0x853c_49e6_748f_ea9b);
-        let bits = |m: &[f64]| m.iter().map(|v| v.to_bits()).collect::<Vec<_>>();
         for case in 0..300 {
             let m = SMatrix::<f64, 7, 7>::from_fn(|_, _| uniform());
-            let p = m * m.transpose() + SMatrix::identity() * 0.01;
-            let x = SVector::<f64, 7>::from_fn(|_, _| uniform());
-            let (y, r) = (uniform(), uniform().abs() * 1e-2 + 1e-6);
+            let p = m * m.transpose() + SMatrix::identity() * 0.1;
+            let x = SVector::<f64, 7>::from_fn(|_, _| uniform() * 100.0);
+            let y = uniform() * 10.0;
             // A general row (a range's: two position entries), then the unit rows of the AUV
-            // filter's speed and compass readings.
+            // filter's speed and compass readings; r from 5 % to 105 % of h P hᵀ.
             let mut h = SMatrix::<f64, 1, 7>::zeros();
+            match case % 3 {
+                0 => (h[0], h[1]) = (uniform(), uniform()),
+                1 => h[2] = 1.0,
+                _ => (h[3], h[4]) = (1.0, 1.0),
+            }
+            let r = (h * p * h.transpose())[(0, 0)] * (0.55 + uniform());
             let mut filter = Ekf::new(0.0, x, p, [false; 7]);
             let out = match case % 3 {
-                0 => {
-                    (h[0], h[1]) = (uniform(), uniform());
-                    filter.update_scalar(y, h, r, &Gate::OFF)
-                }
-                1 => {
-                    h[2] = 1.0;
-                    filter.update_units(y, [2], r, &Gate::OFF)
-                }
-                _ => {
-                    (h[3], h[4]) = (1.0, 1.0);
-                    filter.update_units(y, [3, 4], r, &Gate::OFF)
-                }
+                0 => filter.update_scalar(y, h, r, &Gate::OFF),
+                1 => filter.update_units(y, [2], r, &Gate::OFF),
+                _ => filter.update_units(y, [3, 4], r, &Gate::OFF),
             };
             assert!(out.applied(), "case {case}: {out:?}");
-            let (p_ref, x_ref) = joseph_pair_by_pair(&p, &x, &h, r, y);
-            assert_eq!(bits(filter.p().as_slice()), bits(p_ref.as_slice()), "case {case}");
-            assert_eq!(bits(filter.x().as_slice()), bits(x_ref.as_slice()), "case {case}");
+            let (p_ref, x_ref) = dense_joseph(&p, &x, &h, r, y);
+            let p_error = (filter.p() - p_ref).abs().max() / p_ref.abs().max();
+            let x_error = (filter.x() - x_ref).abs().max() / x_ref.abs().max();
+            assert!(p_error <= 1e-12 && x_error <= 1e-12, "case {case}: relative error P {p_error:e}, x {x_error:e}");
+            let p_new = filter.p();
+            let symmetric = (0..7).all(|i| (0..7).all(|j| p_new[(i, j)].to_bits() == p_new[(j, i)].to_bits()));
+            assert!(symmetric, "case {case}: {p_new}");
+            assert!(is_positive_definite(p_new), "case {case}: {p_new}");
         }
     }
 

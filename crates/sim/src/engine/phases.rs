@@ -509,8 +509,7 @@ impl Engine<'_> {
                 }
                 std::mem::take(&mut a.yaw_sum) / every as f64
             };
-            a.ekf.predict_to(t_next, yaw_rate);
-            let (speed, heading) = a.sense(self.sc);
+            let (speed, heading) = a.sense(self.sc, t_next, yaw_rate);
             obs.on_dead_reckoning(&DeadReckoning { t: t_next, auv: k, yaw_rate, speed, heading, truth: a.truth });
             if let Finish::Surface { gps_sd_m, .. } = self.sc.fleet.finish {
                 if whole_second && a.at_surface() {

@@ -172,16 +172,16 @@ impl SurveyAuv {
         self.adrift && self.truth.z <= 0.0
     }
 
-    /// Speed and compass updates at the filter's current time; returns the readings (m/s; math
-    /// heading, rad).
-    pub fn sense(&mut self, sc: &Scenario) -> (f64, f64) {
+    /// One filter step to `t` at heading rate `yaw_rate`: prediction, then the speed and compass
+    /// updates; returns the readings (m/s; math heading, rad).
+    #[inline]
+    pub fn sense(&mut self, sc: &Scenario, t: f64, yaw_rate: f64) -> (f64, f64) {
         let s = &sc.sensors;
         let psi = self.ctrl.state.heading.radians();
         let speed = self.ctrl.state.speed + s.speed_sd * normal(&mut self.rng_speed);
         let heading =
             wrap_pi(psi + self.compass.at(psi) + s.compass_white_deg.to_radians() * normal(&mut self.rng_white));
-        self.ekf.update_speed(speed);
-        self.ekf.update_heading(heading);
+        self.ekf.dead_reckoning_step(t, yaw_rate, speed, heading);
         (speed, heading)
     }
 

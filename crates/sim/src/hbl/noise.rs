@@ -83,10 +83,19 @@ impl CompassBias {
         CompassBias { table }
     }
     /// Bias at a math-convention heading (rad), looked up at the rounded compass degree.
+    #[inline]
     pub fn at(&self, psi: f64) -> f64 {
         let compass = rem_euclid(90.0 - psi.to_degrees(), 360.0);
-        self.table[(compass.round() as usize) % 360]
+        self.table[round_non_negative(compass) % 360]
     }
+}
+
+/// `v.round() as usize` for v ≥ 0 (or NaN, 0), without libm's `round` call (the compass bias
+/// is looked up for every AUV at every filter step): v − ⌊v⌋ is exact, so the half-way test is.
+#[inline]
+fn round_non_negative(v: f64) -> usize {
+    let whole = v as usize;
+    whole + usize::from(v - whole as f64 >= 0.5)
 }
 
 /// The fate of one acoustic message.
@@ -169,6 +178,17 @@ impl BuoyMotion {
 mod tests {
     use super::*;
     use coopnav_core::SeedStream;
+
+    #[test]
+    fn compass_degree_rounding_is_libm_round() {
+        let halves = (0..=720).map(|k| f64::from(k) * 0.5);
+        let near_halves = halves.clone().flat_map(|v| [v.next_down().max(0.0), v.next_up()]);
+        let mut rng = SeedStream::new(9).rng(0);
+        let uniform = (0..100_000).map(|_| rng.gen::<f64>() * 360.0);
+        for v in halves.chain(near_halves).chain(uniform).chain([0.49999999999999994, 359.5, f64::NAN]) {
+            assert_eq!(round_non_negative(v), v.round() as usize, "{v:e}");
+        }
+    }
 
     #[test]
     fn reception_mixture_matches_the_thesis_shares() {
