@@ -115,15 +115,16 @@ impl<M: CostModel> Tree<M> {
         }
     }
 
-    /// How many nodes the top `levels` levels hold (every option expanded).
+    /// How many nodes the top `levels` levels hold (every option expanded), saturating at
+    /// `u64::MAX` (a deadline's fit check asks it of the full tree, whatever its size).
     pub fn nodes_above(&self, levels: usize) -> u64 {
         let mut width = 1u64;
         (0..levels)
             .map(|l| {
-                width *= self.level_options(l).len() as u64;
+                width = width.saturating_mul(self.level_options(l).len() as u64);
                 width
             })
-            .sum()
+            .fold(0, u64::saturating_add)
     }
 
     /// The factor of the last level's terms, 1 + H (`CostModel::terminal_levels`).
