@@ -60,6 +60,7 @@ fn timeseries<'py>(py: Python<'py>, rows: &[TraceRow]) -> PyResult<Bound<'py, Py
             ("modelled", col(|r| or_nan(r.modelled))),
             ("cna_x", col(|r| r.cna_x)),
             ("cna_y", col(|r| r.cna_y)),
+            ("cna_z", col(|r| r.cna_z)),
             ("distance", col(|r| r.distance)),
         ],
     )
@@ -107,8 +108,9 @@ fn simulate<'py>(
         py,
         [
             ("t", column(py, trace.cna.iter().map(|c| c.0)).into_any()),
-            ("x", column(py, trace.cna.iter().map(|c| c.1)).into_any()),
-            ("y", column(py, trace.cna.iter().map(|c| c.2)).into_any()),
+            ("x", column(py, trace.cna.iter().map(|c| c.1.x)).into_any()),
+            ("y", column(py, trace.cna.iter().map(|c| c.1.y)).into_any()),
+            ("z", column(py, trace.cna.iter().map(|c| c.1.z)).into_any()),
         ],
     )?;
     let out = PyDict::new(py);

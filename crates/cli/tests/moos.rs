@@ -32,6 +32,20 @@ fn short_simulation(dir: &Path) -> PathBuf {
     out
 }
 
+/// The AUV-CNA library file (its CNA surfaces for GPS fixes once its σ passes 3 m), 1,200 s, in
+/// `dir/auv-cna`.
+fn short_auv_cna_simulation(dir: &Path) -> PathBuf {
+    let file = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenarios/sloping-auv-cna.toml");
+    let text = std::fs::read_to_string(file).unwrap();
+    let short = text.replace("duration_s = 3600.0", "duration_s = 1200.0");
+    assert_ne!(short, text, "the library file's duration line moved");
+    let scenario = dir.join("auv-cna.toml");
+    std::fs::write(&scenario, short).unwrap();
+    let out = dir.join("auv-cna");
+    succeed(&["simulate", scenario.to_str().unwrap(), "--policy", "centroid-standoff", "-o", out.to_str().unwrap()]);
+    out
+}
+
 /// A CSV file as rows of named fields.
 fn csv_rows(path: &Path) -> Vec<HashMap<String, String>> {
     let text = std::fs::read_to_string(path).unwrap();
@@ -57,6 +71,24 @@ fn reports(log: &Alog) -> HashMap<(String, i64), &AlogEntry> {
 
 fn close(a: f64, b: f64, tol: f64, what: &str) {
     assert!((a - b).abs() <= tol, "{what}: {a} vs {b}");
+}
+
+/// An AUV CNA's NODE_REPORTs carry its true depth: cruising, climbing and at the surface.
+#[test]
+fn an_auv_cnas_alog_depth_is_its_true_depth() {
+    let tmp = tempfile::tempdir().unwrap();
+    let run = short_auv_cna_simulation(tmp.path());
+    let log = read_alog_file(&run.join("run.alog")).unwrap();
+    let by_key = reports(&log);
+    let rows = csv_rows(&run.join("timeseries.csv"));
+    let mut depths = Vec::new();
+    for row in rows.iter().filter(|r| r["auv"] == "0") {
+        let cna = by_key[&("cna".to_string(), (num(row, "t") * 1000.0).round() as i64)];
+        close(field(cna, "DEP"), num(row, "cna_z"), 5e-4, "cna depth");
+        depths.push(num(row, "cna_z"));
+    }
+    let (shallowest, deepest) = depths.iter().fold((f64::MAX, f64::MIN), |(lo, hi), &z| (lo.min(z), hi.max(z)));
+    assert!(shallowest < 0.5 && deepest > 9.5, "the CNA cruises at 10 m and surfaces: {shallowest}..{deepest} m");
 }
 
 #[test]
@@ -85,6 +117,7 @@ fn the_simulate_alog_holds_every_vehicle_track_of_the_time_series() {
         }
         close(field(cna, "X"), num(row, "cna_x"), 5e-4, "cna x");
         close(field(cna, "Y"), num(row, "cna_y"), 5e-4, "cna y");
+        close(field(cna, "DEP"), 0.0, 0.0, "a surface craft's depth");
         assert_eq!((truth.field("GROUP"), estimate.field("GROUP")), (Some("truth"), Some("estimate")));
     }
     let vehicles = 2 * 3 + 1;

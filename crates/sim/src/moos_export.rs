@@ -7,7 +7,7 @@ use crate::closed_loop::{self, RunResult as ClosedLoopResult};
 use crate::hbl::PassRow;
 use crate::output::{RunDir, WriteError};
 use crate::predeploy::{Mission, RunResult as PlanResult};
-use coopnav_core::{CompassDeg, LatLon, LocalFrame};
+use coopnav_core::{CompassDeg, LatLon, LocalFrame, Vec3};
 use coopnav_moos::{
     mission_files, replay, write_run_alog, Leg, MissionFiles, MissionSpec, Pulse, PulseKind, Role, RunLog, Sample,
     Vehicle, Waypoint, SIMULATED_LOG_START,
@@ -61,11 +61,10 @@ pub fn closed_loop_run(sc: &closed_loop::Scenario, result: &ClosedLoopResult) ->
         vehicles.push(vehicle(auv_name(k), Role::Truth, "auv", truth));
         vehicles.push(vehicle(format!("{}_est", auv_name(k)), Role::Estimate, "auv", estimate));
     }
-    let (cna_kind, cna_depth) = match &sc.cna.auv {
-        Some(auv) => ("auv", auv.depth),
-        None => ("ship", 0.0),
-    };
-    let cna = trace.cna.iter().map(|&(t, x, y)| sample(t, x, y, cna_depth)).collect();
+    // An AUV CNA's true depth (it dives and surfaces); a ship's transducer depth is not its DEP.
+    let cna_kind = if sc.cna.auv.is_some() { "auv" } else { "ship" };
+    let depth = |p: Vec3| if sc.cna.auv.is_some() { p.z } else { 0.0 };
+    let cna = trace.cna.iter().map(|&(t, p)| sample(t, p.x, p.y, depth(p))).collect();
     vehicles.push(vehicle("cna".into(), Role::Cna, cna_kind, cna));
     let pulses = trace
         .comms

@@ -34,6 +34,8 @@ pub struct TraceRow {
     pub modelled: Option<f64>,
     pub cna_x: f64,
     pub cna_y: f64,
+    /// The CNA's true depth, m (an AUV CNA dives and surfaces; a surface craft's transducer depth).
+    pub cna_z: f64,
     pub distance: f64,
 }
 
@@ -235,8 +237,8 @@ impl Observer for () {}
 pub struct Trace {
     pub rows: Vec<TraceRow>,
     pub comms: Vec<CommsEvent>,
-    /// CNA true track (t, x, y) every second.
-    pub cna: Vec<(f64, f64, f64)>,
+    /// CNA true track (t, position) every second; an AUV CNA's depth included.
+    pub cna: Vec<(f64, Vec3)>,
     pub decisions: Vec<Decision>,
 }
 
@@ -246,7 +248,7 @@ impl Observer for Trace {
     }
     fn on_sample(&mut self, t: f64, cna: Vec3, rows: &[TraceRow]) {
         self.rows.extend_from_slice(rows);
-        self.cna.push((t, cna.x, cna.y));
+        self.cna.push((t, cna));
     }
     fn on_packet(&mut self, event: &CommsEvent) {
         self.comms.push(*event);

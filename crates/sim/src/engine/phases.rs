@@ -564,6 +564,7 @@ impl Engine<'_> {
                 modelled: self.cna.model.total(k),
                 cna_x: cna.x,
                 cna_y: cna.y,
+                cna_z: cna.z,
                 distance: d,
             });
         }

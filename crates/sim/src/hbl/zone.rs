@@ -366,6 +366,7 @@ mod tests {
             modelled: None,
             cna_x: 0.0,
             cna_y: 0.0,
+            cna_z: 0.0,
             distance: 0.0,
         }
     }
