@@ -33,6 +33,15 @@
 //!    uncertainty, never the true sound speed), the expected squared true error is about
 //!    M = E + β(r)²/2·I, β(r) = k_b·r/1000 (isotropic: the bias's direction turns with the line of
 //!    sight). k_b = 0 is the covariance alone.
+//!    With a known sound-speed profile (a CTD cast the CNA holds; [`BiasTable`], issue 10,
+//!    session 25) the scale error is no longer a belief but f(z_c, z_a) = c_f/c̄ − 1 between the
+//!    CNA's depth and the AUV's (c_f the speed the AUVs' filters assume, c̄ the harmonic mean of the
+//!    water between): a range over r is measured r·(1 + f), and the filter, which knows both
+//!    depths, moves its horizontal estimate along the line of sight by f·r/|h_xy| until the range
+//!    fits. β² becomes (k_b·r/1000)² + f²r²/|h_xy|² (k_b then stands for what the profile leaves
+//!    out). In the thesis's summer profile f ranges from −0.4 % to +0.7 % with the two depths, so
+//!    the CNA's depth decides the bias as much as its distance does. The bounds take the smallest
+//!    |f| in the table (|h_xy| ≤ 1 only raises the term).
 //! 5. Level cost over the N AUVs ([`Aggregate`]) of M: Σ tr M (default), max tr M (worst AUV),
 //!    Σ ln(1 + det M / 1 m⁴) (log-det, shifted by one so costs stay ≥ 0 as the penalties and the
 //!    search require), or Σ √tr M (the sum of 1-σ, m). The path cost is the sum of the level costs,
@@ -287,6 +296,66 @@ impl LinkTable {
     }
 }
 
+/// The range scale error the CNA expects for a ping between two depths (step 4 with a known
+/// sound-speed profile): f(z_cna, z_auv) = c_f / c̄(z_cna, z_auv) − 1, with c_f the speed the
+/// AUVs' filters convert travel times with and c̄ the harmonic-mean speed of the water between the
+/// two depths (a straight ray), so a range over r is measured r·(1 + f). Sampled every
+/// [`BiasTable::STEP_M`] of depth for both ends and interpolated bilinearly (depths beyond the
+/// table hold its last row or column), so the search never calls back into the sound-speed model.
+#[derive(Debug, Clone, PartialEq)]
+pub struct BiasTable {
+    f: Arc<[f64]>,
+    n: usize,
+    /// min |f| over the table: what the bounds may assume at any pair of depths.
+    min_abs: f64,
+}
+
+/// Where a known-sign scale error enters the horizontal estimate: 1/|h_xy|² is floored here, so a
+/// ping from almost overhead (which the distance limits forbid anyway) costs a large finite bias.
+const BIAS_H2_FLOOR: f64 = 0.05;
+
+impl BiasTable {
+    pub const STEP_M: f64 = 2.0;
+
+    /// Samples `scale_error(z_cna, z_auv)` on depths 0..=`max_depth_m`.
+    pub fn sample(max_depth_m: f64, scale_error: impl Fn(f64, f64) -> f64) -> Result<Self, PlanError> {
+        if !(max_depth_m.is_finite() && max_depth_m >= 0.0) {
+            return Err(PlanError::Input(format!("bias table: depth {max_depth_m} m is not a finite number >= 0")));
+        }
+        let n = (max_depth_m / Self::STEP_M).ceil() as usize + 1;
+        let mut f = Vec::with_capacity(n * n);
+        for i in 0..n {
+            for j in 0..n {
+                let v = scale_error(i as f64 * Self::STEP_M, j as f64 * Self::STEP_M);
+                if !v.is_finite() {
+                    return Err(PlanError::Input(format!(
+                        "bias table: scale error {v} at depths {i}, {j} is not finite"
+                    )));
+                }
+                f.push(v);
+            }
+        }
+        let min_abs = f.iter().fold(f64::INFINITY, |m, v| m.min(v.abs()));
+        Ok(BiasTable { f: f.into(), n, min_abs })
+    }
+
+    /// f at CNA depth `z_cna` and AUV depth `z_auv`, m.
+    #[inline(always)]
+    pub fn scale_error(&self, z_cna: f64, z_auv: f64) -> f64 {
+        if self.n == 1 {
+            return self.f[0];
+        }
+        let last = (self.n - 1) as f64;
+        let (x, y) = ((z_cna.max(0.0) / Self::STEP_M).min(last), (z_auv.max(0.0) / Self::STEP_M).min(last));
+        let (i, j) = ((x as usize).min(self.n - 2), (y as usize).min(self.n - 2));
+        let (u, v) = (x - i as f64, y - j as f64);
+        let at = |a: usize, b: usize| self.f[a * self.n + b];
+        let top = at(i, j) + (at(i, j + 1) - at(i, j)) * v;
+        let bottom = at(i + 1, j) + (at(i + 1, j + 1) - at(i + 1, j)) * v;
+        top + (bottom - top) * u
+    }
+}
+
 /// Steps 1–3 of the module's derivation: the expected covariance [P_ee, P_en, P_nn] after τ of
 /// growth (`q_tau` per axis) and a ping from `cna` (its own horizontal variance `cna_variance`
 /// per axis, m²) to the AUV at `auv` that arrives with probability `success(slant range)`.
@@ -334,6 +403,8 @@ pub(crate) struct EkfCost {
     pub cna_variance: f64,
     /// Step 7: the useful range r_u (m) and the CNA's step s·τ (m per level).
     pub reach: Reach,
+    /// Step 4 from a known sound-speed profile instead of `bias_per_km_m`.
+    pub bias: Option<BiasTable>,
 }
 
 /// What step 7 needs of the CNA and its link.
@@ -362,7 +433,7 @@ impl EkfCost {
         }
         let reach = Reach { useful_range_m: link.useful_range(spec.reach_success), step_m: speed * tau };
         let q_tau = estimates.iter().map(|e| e.process_noise * tau).collect();
-        Ok(EkfCost { spec, q_tau, link, cna_variance, reach })
+        Ok(EkfCost { spec, q_tau, link, cna_variance, reach, bias: None })
     }
 
     /// ḡ of step 7 for AUV `k` at slant range `range_m` from the leaf pose: the mean growth per
@@ -397,14 +468,22 @@ impl EkfCost {
     #[inline(always)]
     pub(crate) fn bias_variance(&self, cna: [f64; 3], auv: [f64; 3]) -> f64 {
         let d = [auv[0] - cna[0], auv[1] - cna[1], auv[2] - cna[2]];
-        self.bias_variance_at(d[0] * d[0] + d[1] * d[1] + d[2] * d[2])
+        let range2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
+        let k2 = self.spec.bias_per_km_m * self.spec.bias_per_km_m * 1e-6;
+        let Some(table) = &self.bias else { return k2 * range2 };
+        // The filter moves its estimate along the horizontal line of sight until the range fits:
+        // a range error f·r becomes f·r/|h_xy| horizontally.
+        let f = table.scale_error(cna[2], auv[2]);
+        let h2 = if range2 > 0.0 { (d[0] * d[0] + d[1] * d[1]) / range2 } else { 1.0 };
+        k2 * range2 + f * f * range2 / h2.max(BIAS_H2_FLOOR)
     }
 
     /// β(r)² of step 4 for a squared range `range2`, m².
     #[inline(always)]
     fn bias_variance_at(&self, range2: f64) -> f64 {
         let k2 = self.spec.bias_per_km_m * self.spec.bias_per_km_m * 1e-6;
-        k2 * range2
+        let f2 = self.bias.as_ref().map_or(0.0, |t| t.min_abs * t.min_abs); // |h_xy| ≤ 1 only raises it
+        (k2 + f2) * range2
     }
 
     /// A lower bound on a level's term from lower bounds on tr E and det E and the half bias
@@ -457,7 +536,7 @@ impl EkfCost {
             return term * (1.0 + h);
         }
         let [a, b, c] = *cov;
-        let half_bias2 = 0.5 * self.bias_variance_at(range2);
+        let half_bias2 = 0.5 * self.bias_variance(cna, auv);
         let (ma, mc) = (a + half_bias2, c + half_bias2);
         term + h * self.term_bound(ma + mc, ma * mc - b * b, growth)
     }
@@ -752,12 +831,12 @@ mod tests {
 
     fn biased(aggregate: Aggregate, q_tau: Vec<f64>, bias_per_km_m: f64) -> EkfCost {
         let spec = EstimatorSpec { aggregate, bias_per_km_m, ..EstimatorSpec::default() };
-        EkfCost { spec, q_tau, link: LinkTable::perfect(), cna_variance: 0.0, reach: NO_REACH }
+        EkfCost { spec, q_tau, link: LinkTable::perfect(), cna_variance: 0.0, reach: NO_REACH, bias: None }
     }
 
     fn model(aggregate: Aggregate, q_tau: Vec<f64>, link: LinkTable) -> EkfCost {
         let spec = EstimatorSpec { aggregate, ..EstimatorSpec::default() };
-        EkfCost { spec, q_tau, link, cna_variance: 0.0, reach: NO_REACH }
+        EkfCost { spec, q_tau, link, cna_variance: 0.0, reach: NO_REACH, bias: None }
     }
 
     #[test]
@@ -837,10 +916,44 @@ mod tests {
         assert!(want > c0);
     }
 
+    /// The table returns its function at the samples, is exact between them for a function linear
+    /// in each depth, holds its edges beyond, and the bias term is k_b's plus f²r²/|h_xy|².
+    #[test]
+    fn a_bias_table_interpolates_its_scale_error_and_prices_the_line_of_sight() {
+        let f = |zc: f64, za: f64| 1e-3 + 2e-5 * zc - 3e-5 * za + 1e-7 * zc * za;
+        let t = BiasTable::sample(100.0, f).unwrap();
+        // Bilinear interpolation is exact for a bilinear function, at samples and between them.
+        for (zc, za) in [(0.0, 0.0), (10.0, 60.0), (100.0, 34.0), (1.3, 7.7), (55.5, 0.4), (99.9, 99.1)] {
+            assert!((t.scale_error(zc, za) - f(zc, za)).abs() < 1e-15, "{zc} {za}");
+        }
+        assert_eq!(t.scale_error(-5.0, 250.0), t.scale_error(0.0, 100.0));
+        // f crosses zero inside the table (f(0, 40) = −2e-4 < 0 < f(0, 0)): the bounds assume none.
+        assert!(t.min_abs < 1e-4, "{}", t.min_abs);
+        let mut m = biased(Aggregate::TraceSum, vec![0.0], 3.0);
+        m.bias = Some(t.clone());
+        let (cna, auv) = ([0.0, 0.0, 10.0], [300.0, 400.0, 70.0]);
+        let (r2, h2) = (250_000.0 + 3600.0, 250_000.0 / 253_600.0);
+        let want = 9e-6 * r2 + f(10.0, 70.0).powi(2) * r2 / h2;
+        let got = m.bias_variance(cna, auv);
+        assert!((got - want).abs() < 1e-9 * want, "{got} vs {want}");
+        assert_eq!(m.bias_variance_at(r2), (9e-6 + t.min_abs * t.min_abs) * r2);
+        let constant = BiasTable::sample(50.0, |_, _| -0.002).unwrap();
+        assert_eq!(constant.min_abs, 0.002);
+        assert!(BiasTable::sample(f64::NAN, f).is_err());
+        assert!(BiasTable::sample(10.0, |_, _| f64::INFINITY).unwrap_err().to_string().contains("not finite"));
+    }
+
     #[test]
     fn the_terminal_cost_is_h_levels_and_settings_are_checked() {
         let spec = EstimatorSpec { terminal_levels: 3.0, ..EstimatorSpec::default() };
-        let m = EkfCost { spec, q_tau: vec![0.0], link: LinkTable::perfect(), cna_variance: 0.0, reach: NO_REACH };
+        let m = EkfCost {
+            spec,
+            q_tau: vec![0.0],
+            link: LinkTable::perfect(),
+            cna_variance: 0.0,
+            reach: NO_REACH,
+            bias: None,
+        };
         assert_eq!(m.terminal_levels(), 3.0);
         assert_eq!(model(Aggregate::TraceSum, vec![0.0], LinkTable::perfect()).terminal_levels(), 0.0);
         for bad in [
@@ -863,6 +976,7 @@ mod tests {
             link: LinkTable::perfect(),
             cna_variance: 0.0,
             reach: Reach { useful_range_m: 500.0, step_m: 60.0 },
+            bias: None,
         };
         let start = [4.0, 1.0, 2.0];
         for (east, growth) in [(400.0, 0.0), (620.0, 3.0), (1400.0, 4.0)] {
@@ -873,7 +987,14 @@ mod tests {
             assert!((got - want).abs() < 1e-9 * want, "{east} m: {got} vs {want}");
         }
         // Off (p_u = 0 or H = 0): (1 + H)·term exactly.
-        let off = EkfCost { spec, q_tau: vec![2.0], link: LinkTable::perfect(), cna_variance: 0.0, reach: NO_REACH };
+        let off = EkfCost {
+            spec,
+            q_tau: vec![2.0],
+            link: LinkTable::perfect(),
+            cna_variance: 0.0,
+            reach: NO_REACH,
+            bias: None,
+        };
         let (p, term) = off.update(0, &start, [0.0; 3], [1400.0, 0.0, 0.0]);
         assert_eq!(off.leaf_term(0, &p, [0.0; 3], [1400.0, 0.0, 0.0], term), 5.0 * term);
     }

@@ -24,7 +24,9 @@ pub mod true_error;
 pub mod workload;
 
 pub use error_model::{AuvError, BearingMode, CostMode, ErrorModel};
-pub use estimator::{expected_posterior, Aggregate, AuvEstimate, EstimatorSpec, LinkModel, LinkTable, RangeNoise};
+pub use estimator::{
+    expected_posterior, Aggregate, AuvEstimate, BiasTable, EstimatorSpec, LinkModel, LinkTable, RangeNoise,
+};
 pub use motion::{CnaKind, CnaPose, MotionConfig, MotionOption};
 pub use penalty::{
     Doubling, NoPenalty, Penalty, PenaltyCase, PenaltyFn, PenaltyPair, ScaledViolation, SideTerm, Violation,

@@ -37,6 +37,13 @@ pub enum CnaKind {
         /// seldom pay (measured, `experiments::closed_loop::PITCH_LEVELS`).
         #[serde(default)]
         pitch_levels: Option<usize>,
+        /// The CNA as the closed loop's engine flies it (issue 10, session 25): every step starts
+        /// level and pitches by its option alone, cut at `max_pitch_deg`, and its depth stops at
+        /// `min_depth`/`max_depth` (the craft reaches the commanded depth and holds it). False: the
+        /// thesis's model, the pitch carried from level to level and any excess penalised, under
+        /// which a ±45° option (1.5°/s over 30 s) always breaks the 30° limit.
+        #[serde(default)]
+        level_off: bool,
     },
 }
 
@@ -63,6 +70,7 @@ impl CnaKind {
             min_depth: 0.0,
             max_depth: default_max_depth(),
             pitch_levels: None,
+            level_off: false,
         }
     }
 }
@@ -152,8 +160,15 @@ impl CheckFields for MotionConfig {
                 "> 0 with max_turn_rate_deg_s * tau < 180 degrees (so hard left and hard right never overlap)",
             );
         }
-        if let CnaKind::Auv { pitch_options, max_pitch_rate_deg_s, max_pitch_deg, min_depth, max_depth, pitch_levels } =
-            self.cna
+        if let CnaKind::Auv {
+            pitch_options,
+            max_pitch_rate_deg_s,
+            max_pitch_deg,
+            min_depth,
+            max_depth,
+            pitch_levels,
+            ..
+        } = self.cna
         {
             if pitch_options < 1 {
                 p.push(format!("{prefix}cna.pitch_options"), pitch_options.to_string(), ">= 1");
@@ -206,9 +221,18 @@ impl MotionConfig {
         let ch = p.ch * o.cd - p.sh * o.sd;
         let sh = p.sh * o.cd + p.ch * o.sd;
         let d = self.speed * self.tau;
-        let phi = p.phi + o.dphi;
+        let mut phi = p.phi + o.dphi;
+        if let CnaKind::Auv { level_off: true, max_pitch_deg, .. } = self.cna {
+            // The engine's CNA levels off at each commanded depth: every step starts level.
+            let max = max_pitch_deg.to_radians();
+            phi = o.dphi.clamp(-max, max);
+        }
         let (sp, cp) = if phi == 0.0 { (0.0, 1.0) } else { phi.sin_cos() };
-        FastPose { p: [p.p[0] + d * ch * cp, p.p[1] + d * sh * cp, p.p[2] - d * sp], ch, sh, phi }
+        let mut z = p.p[2] - d * sp;
+        if let CnaKind::Auv { level_off: true, min_depth, max_depth, .. } = self.cna {
+            z = z.clamp(min_depth, max_depth);
+        }
+        FastPose { p: [p.p[0] + d * ch * cp, p.p[1] + d * sh * cp, z], ch, sh, phi }
     }
 
     /// How far a pose breaks the AUV-CNA pitch and depth limits (0 = within limits; else metres:
@@ -261,6 +285,39 @@ mod tests {
         assert!((moved - 60.0).abs() < 1e-9);
         assert!(q.p[2] < 50.0);
         assert!(c.limit_violation(&q) > 0.0, "45 deg pitch breaks the 30 deg limit");
+    }
+
+    /// Levelling off (the closed loop's AUV CNA): every step starts level, its pitch is cut at
+    /// the limit and its depth kept within [min_depth, max_depth]; the thesis's model instead
+    /// carries the pitch on and breaks the limits.
+    #[test]
+    fn a_levelling_cna_cuts_its_pitch_and_depth_at_the_limits() {
+        let auv = |level_off| CnaKind::Auv {
+            pitch_options: 3,
+            max_pitch_rate_deg_s: 1.5,
+            max_pitch_deg: 30.0,
+            min_depth: 0.0,
+            max_depth: 40.0,
+            pitch_levels: None,
+            level_off,
+        };
+        let (thesis, level) = (cfg(3, auv(false)), cfg(3, auv(true)));
+        let p = FastPose::from_pose(&CnaPose {
+            pos: Vec3::new(0.0, 0.0, 10.0),
+            heading: Heading::from_radians(0.0),
+            pitch: 0.0,
+        });
+        let [down, _, up] = [3, 4, 5].map(|i| level.fast_options()[i]); // Δψ = 0, Δφ = −45°, 0, +45°
+        let climbed = level.step(&p, &up);
+        assert_eq!(climbed.p[2], 0.0, "60 m at 30° would climb 30 m: it levels off at the surface");
+        assert!((climbed.phi - 30f64.to_radians()).abs() < 1e-12 && level.limit_violation(&climbed) == 0.0);
+        assert!((climbed.p[0] - 60.0 * 30f64.to_radians().cos()).abs() < 1e-9);
+        let dived = level.step(&level.step(&p, &down), &down);
+        assert_eq!(dived.p[2], 40.0, "two 30 m dives from 10 m stop at 40 m");
+        let held = level.step(&climbed, &level.fast_options()[4]);
+        assert_eq!((held.phi, held.p[2]), (0.0, 0.0), "the next step starts level");
+        let broken = thesis.step(&p, &up);
+        assert!(broken.p[2] < 0.0 && thesis.limit_violation(&broken) > 0.0);
     }
 
     #[test]

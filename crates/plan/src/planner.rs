@@ -9,7 +9,7 @@
 
 use crate::cost_model::{CostModel, HudsonCost, Tangential};
 use crate::error_model::{to_arr, AuvError, ErrorModel};
-use crate::estimator::{AuvEstimate, EkfCost, EstimatorSpec, LinkModel, LinkTable};
+use crate::estimator::{AuvEstimate, BiasTable, EkfCost, EstimatorSpec, LinkModel, LinkTable};
 use crate::motion::{CnaPose, FastOption, FastPose, MotionConfig, MotionOption};
 use crate::penalty::PenaltyPair;
 use crate::search::{branch_and_bound, Shared};
@@ -282,6 +282,8 @@ pub trait Planner {
 pub struct LookAheadPlanner {
     cfg: PlannerConfig,
     link: LinkTable,
+    /// The estimator-aware cost's range bias from a known sound-speed profile (step 4).
+    bias: Option<BiasTable>,
 }
 
 /// The cost-independent part of a tree: predicted AUV positions and the CNA's options.
@@ -298,13 +300,20 @@ impl LookAheadPlanner {
     /// A planner with a perfect acoustic link.
     pub fn new(cfg: PlannerConfig) -> Result<Self, PlanError> {
         cfg.validate()?;
-        Ok(LookAheadPlanner { cfg, link: LinkTable::perfect() })
+        Ok(LookAheadPlanner { cfg, link: LinkTable::perfect(), bias: None })
     }
 
     /// A planner whose estimator-aware cost weights each ping by `link`'s success probability.
     pub fn with_link(cfg: PlannerConfig, link: &dyn LinkModel) -> Result<Self, PlanError> {
         cfg.validate()?;
-        Ok(LookAheadPlanner { cfg, link: LinkTable::sample(link)? })
+        Ok(LookAheadPlanner { cfg, link: LinkTable::sample(link)?, bias: None })
+    }
+
+    /// The estimator-aware cost's range bias from `table` (the scale error between two depths)
+    /// instead of `bias_per_km_m`.
+    pub fn with_bias(mut self, table: BiasTable) -> Self {
+        self.bias = Some(table);
+        self
     }
 
     pub fn config(&self) -> &PlannerConfig {
@@ -388,7 +397,9 @@ impl LookAheadPlanner {
 
     fn estimator_model(&self, spec: EstimatorSpec, input: &PlanInput) -> Result<EkfCost, PlanError> {
         let motion = (self.cfg.motion.tau, self.cfg.motion.speed, input.cna_variance);
-        EkfCost::new(spec, input.estimates, motion, self.link.clone())
+        let mut model = EkfCost::new(spec, input.estimates, motion, self.link.clone())?;
+        model.bias = self.bias.clone();
+        Ok(model)
     }
 
     fn estimator_tree(&self, spec: EstimatorSpec, input: &PlanInput, depth: usize) -> Result<Tree<EkfCost>, PlanError> {

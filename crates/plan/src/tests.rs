@@ -24,6 +24,9 @@ struct Instance {
     cna_variance: f64,
     /// The true-error cost's input: each AUV's moments and the CNA's true variance.
     truth: (Vec<TrueError>, f64),
+    /// A depth-dependent range scale error (the bias table's slope per metre of each depth and
+    /// its offset), for the estimator-aware cost.
+    bias: Option<(f64, f64, f64)>,
 }
 
 /// A link whose success falls smoothly with range from a plateau: plateau / (1 + (r / mid)^4).
@@ -43,9 +46,12 @@ impl Instance {
         FnForecast { n: self.starts.len(), f: move |k: usize, t: f64| Some(self.starts[k] + self.vels[k] * t) }
     }
     fn decide(&self, search: SearchConfig) -> Decision {
-        let p =
+        let mut p =
             LookAheadPlanner::with_link(PlannerConfig { search, ..self.cfg }, &FallingLink(self.link.0, self.link.1))
                 .unwrap();
+        if let Some((a, b, c)) = self.bias {
+            p = p.with_bias(crate::BiasTable::sample(150.0, |zc, za| a * zc + b * za + c).unwrap());
+        }
         let (e, f) = (self.errors(), self.forecast());
         let input = PlanInput {
             t: 0.0,
@@ -129,10 +135,11 @@ prop_compose! {
                   estimator in any::<bool>(), aggregate in 0usize..4, sigma_m in 0.05f64..3.0, per_km_m in 0.0f64..5.0,
                   bias_per_km_m in prop_oneof![Just(0.0), 0.0f64..10.0], terminal_levels in prop_oneof![Just(0.0), 0.0f64..8.0], reach_success in prop_oneof![Just(0.0), 0.0f64..1.0],
                   link in (300.0f64..3000.0, prop_oneof![Just(1.0), 0.3f64..1.0]), cna_variance in prop_oneof![Just(0.0), 0.0f64..60.0],
-                  pitch_levels in prop_oneof![Just(None), (1usize..4).prop_map(Some)],
+                  pitch_levels in prop_oneof![Just(None), (1usize..4).prop_map(Some)], level_off in any::<bool>(),
+                  bias in prop_oneof![Just(None), (-5e-5f64..5e-5, -5e-5f64..5e-5, -0.03f64..0.03).prop_map(Some)],
                   truth in prop_oneof![Just(None), true_error_setting().prop_map(Some)]) -> Instance {
         let mut cna = if auv_cna { CnaKind::auv(b) } else { CnaKind::Asc {} };
-        if let CnaKind::Auv { pitch_levels: levels, .. } = &mut cna { *levels = pitch_levels; }
+        if let CnaKind::Auv { pitch_levels: levels, level_off: off, .. } = &mut cna { *levels = pitch_levels; *off = level_off; }
         let m = a * if auv_cna { b } else { 1 };
         // Keep the brute force affordable: at most ~20k leaves.
         let mut l = l;
@@ -154,7 +161,7 @@ prop_compose! {
             cfg.cost = CostSpec::Estimator(EstimatorSpec { aggregate, range_noise, bias_per_km_m, terminal_levels, reach_success, truth: spec });
         }
         let truth = truth.map_or((vec![TrueError::default(); n], 0.0), |(_, errors, v)| (errors[..n].to_vec(), v));
-        Instance { cfg, cna: CnaPose { pos: Vec3::new(0.0, 0.0, z), heading: Heading::from_radians(heading), pitch: 0.0 }, starts, vels, eps, estimates, link, cna_variance, truth }
+        Instance { cfg, cna: CnaPose { pos: Vec3::new(0.0, 0.0, z), heading: Heading::from_radians(heading), pitch: 0.0 }, starts, vels, eps, estimates, link, cna_variance, truth, bias }
     }
 }
 
@@ -208,6 +215,7 @@ fn deeper_levels_hold_the_pitch_from_pitch_levels_on() {
         min_depth: 0.0,
         max_depth: 1000.0,
         pitch_levels,
+        level_off: false,
     };
     for (pitch_levels, leaves) in [(None, 9u64.pow(4)), (Some(1), 9 * 27), (Some(2), 81 * 9), (Some(9), 9u64.pow(4))] {
         let mut cfg = asc(3, 3, PenaltyCase::C1);
@@ -234,6 +242,7 @@ fn instance_fixed(cfg: PlannerConfig) -> Instance {
         link: (1200.0, 1.0),
         cna_variance: 1.0,
         truth: (vec![TrueError::default(); 2], 0.0),
+        bias: None,
     }
 }
 

@@ -392,6 +392,12 @@ impl PlannerPolicy {
         Ok(PlannerPolicy { planner, tracker, covariances, lost_pings, cna_variance: true, stats, levels_total: 0 })
     }
 
+    /// The estimator-aware cost's range bias from a known sound-speed profile (`BiasTable`).
+    pub fn with_bias(mut self, table: coopnav_plan::BiasTable) -> Self {
+        self.planner = self.planner.with_bias(table);
+        self
+    }
+
     /// The planner scores every broadcast position as exact (the CNA's own variance left out).
     pub fn without_cna_variance(mut self) -> Self {
         self.cna_variance = false;

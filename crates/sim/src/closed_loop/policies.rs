@@ -131,6 +131,9 @@ impl PolicySpec {
     }
 }
 
+/// Deepest CNA or AUV depth the planner's bias table covers, m (deeper holds its last value).
+const BIAS_TABLE_DEPTH_M: f64 = 200.0;
+
 /// Builds policy `name` for scenario `sc` (`planned`: a precomputed open-loop plan).
 fn build(name: &str, sc: &Scenario, planned: Option<&TimedWaypoints>) -> Result<Policy, PolicyError> {
     let n = sc.fleet.n_auvs;
@@ -159,14 +162,26 @@ fn build(name: &str, sc: &Scenario, planned: Option<&TimedWaypoints>) -> Result<
                     cfg.penalties = case.penalties();
                 }
                 cfg.look_ahead = p.estimator_look_ahead.unwrap_or(cfg.look_ahead);
-                if let CnaKind::Auv { pitch_levels, .. } = &mut cfg.motion.cna {
+                if let CnaKind::Auv { pitch_levels, level_off, .. } = &mut cfg.motion.cna {
                     *pitch_levels = p.estimator_pitch_levels;
+                    *level_off = p.estimator_level_off;
                 }
             }
             let mut policy =
                 PlannerPolicy::new(cfg, n, p.sigma0, p.eps0, likelihood, Some((start, noise))).map_err(plan_err)?;
             if !p.estimator_cna_variance {
                 policy = policy.without_cna_variance();
+            }
+            if estimator && p.estimator_bias_profile {
+                // The scale error a range between two depths carries: travel time at the water's
+                // harmonic-mean speed, converted at the filters' (the engine's straight-ray model).
+                let nominal = sc.filter.params.range_noise.sound_speed;
+                let speed = &sc.channel.sound_speed;
+                let table = coopnav_plan::BiasTable::sample(BIAS_TABLE_DEPTH_M, |z_cna, z_auv| {
+                    nominal / speed.mean_between(z_cna, z_auv) - 1.0
+                })
+                .map_err(plan_err)?;
+                policy = policy.with_bias(table);
             }
             if let Some(truth) = p.estimator_truth.filter(|_| estimator) {
                 policy = policy.with_truth(truth, sc.fleet.init_position_sd.powi(2));

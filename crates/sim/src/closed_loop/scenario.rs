@@ -331,6 +331,19 @@ pub struct Planner {
     /// is 1000·σ_c/c (2 m/km for their default σ_c = 3 m/s).
     #[serde(default = "estimator_bias_per_km")]
     pub estimator_bias_per_km: f64,
+    /// `planner-estimator` also prices the range bias `channel.sound_speed` causes, as a CTD cast
+    /// the CNA holds: the scale error between the CNA's depth and each AUV's against the speed the
+    /// filters assume, on top of `estimator_bias_per_km` (coopnav_plan estimator step 4,
+    /// `BiasTable`; an invention of issue 10, session 25). With an AUV CNA and
+    /// `estimator_level_off` it lets the planner choose the CNA's depth.
+    #[serde(default)]
+    pub estimator_bias_profile: bool,
+    /// `planner-estimator` models the AUV CNA as the engine flies it: each step starts level, its
+    /// pitch is cut at the limit and its depth at the depth limits (coopnav_plan
+    /// `CnaKind::Auv::level_off`); false is the thesis's model, where a ±45° pitch step breaks the
+    /// 30° limit and so the CNA never changes depth.
+    #[serde(default)]
+    pub estimator_level_off: bool,
     /// Levels of cost-to-go `planner-estimator` counts at each leaf (estimator step 6; 0 = none;
     /// default [`ESTIMATOR_TERMINAL_LEVELS`]).
     #[serde(default = "estimator_terminal_levels")]
