@@ -306,8 +306,9 @@ impl LinkTable {
 pub struct BiasTable {
     f: Arc<[f64]>,
     n: usize,
-    /// min |f| over the table: what the bounds may assume at any pair of depths.
-    min_abs: f64,
+    /// Per AUV-depth sample j: the smallest |f| the interpolation can give at any CNA depth for an
+    /// AUV between samples j and j + 1 (0 when f changes sign there): what the bounds may assume.
+    floor_by_auv: Arc<[f64]>,
 }
 
 /// Where a known-sign scale error enters the horizontal estimate: 1/|h_xy|² is floored here, so a
@@ -335,8 +336,31 @@ impl BiasTable {
                 f.push(v);
             }
         }
-        let min_abs = f.iter().fold(f64::INFINITY, |m, v| m.min(v.abs()));
-        Ok(BiasTable { f: f.into(), n, min_abs })
+        // Bilinear values lie within the range of their four samples, so within columns j, j + 1.
+        let column = |j: usize| {
+            (0..n).map(|i| f[i * n + j]).fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| (lo.min(v), hi.max(v)))
+        };
+        let floor_by_auv = (0..n)
+            .map(|j| {
+                let ((lo1, hi1), (lo2, hi2)) = (column(j), column((j + 1).min(n - 1)));
+                let (lo, hi) = (lo1.min(lo2), hi1.max(hi2));
+                if lo > 0.0 {
+                    lo
+                } else if hi < 0.0 {
+                    -hi
+                } else {
+                    0.0
+                }
+            })
+            .collect();
+        Ok(BiasTable { f: f.into(), n, floor_by_auv })
+    }
+
+    /// A lower bound on |f| for an AUV at depth `z_auv` and the CNA at any depth.
+    #[inline(always)]
+    pub fn floor(&self, z_auv: f64) -> f64 {
+        let j = ((z_auv.max(0.0) / Self::STEP_M) as usize).min(self.n - 1);
+        self.floor_by_auv[j]
     }
 
     /// f at CNA depth `z_cna` and AUV depth `z_auv`, m.
@@ -478,11 +502,12 @@ impl EkfCost {
         k2 * range2 + f * f * range2 / h2.max(BIAS_H2_FLOOR)
     }
 
-    /// β(r)² of step 4 for a squared range `range2`, m².
+    /// A lower bound on β² of step 4 at a squared range `range2` to an AUV at depth `z_auv`, from
+    /// the CNA at any depth, m² (|h_xy| ≤ 1 only raises the profile's term).
     #[inline(always)]
-    fn bias_variance_at(&self, range2: f64) -> f64 {
+    fn bias_variance_floor(&self, z_auv: f64, range2: f64) -> f64 {
         let k2 = self.spec.bias_per_km_m * self.spec.bias_per_km_m * 1e-6;
-        let f2 = self.bias.as_ref().map_or(0.0, |t| t.min_abs * t.min_abs); // |h_xy| ≤ 1 only raises it
+        let f2 = self.bias.as_ref().map_or(0.0, |t| t.floor(z_auv) * t.floor(z_auv));
         (k2 + f2) * range2
     }
 
@@ -620,7 +645,8 @@ impl CostModel for EkfCost {
             let turn_max = if before > b.turn { (b.turn / before) * (b.turn / before) } else { 1.0 };
             let los = [b.auv[0] - cna[0], b.auv[1] - cna[1], b.auv[2] - cna[2]];
             let nearest = (norm(los) - b.spread).max(0.0);
-            let (ping, half_bias2) = (self.ping_floor(nearest), 0.5 * self.bias_variance_at(nearest * nearest));
+            let (ping, half_bias2) =
+                (self.ping_floor(nearest), 0.5 * self.bias_variance_floor(b.auv[2], nearest * nearest));
             before = (los[0] * los[0] + los[1] * los[1]).sqrt() - b.spread;
             let (trace, det) = turn.step(q, turn_max, ping);
             let (eigen_trace, eigen_det) = eigen.step(q, ping);
@@ -927,8 +953,15 @@ mod tests {
             assert!((t.scale_error(zc, za) - f(zc, za)).abs() < 1e-15, "{zc} {za}");
         }
         assert_eq!(t.scale_error(-5.0, 250.0), t.scale_error(0.0, 100.0));
-        // f crosses zero inside the table (f(0, 40) = −2e-4 < 0 < f(0, 0)): the bounds assume none.
-        assert!(t.min_abs < 1e-4, "{}", t.min_abs);
+        // The bounds' floor: between the AUV samples at 0 and 2 m f spans [f(0, 2), f(100, 0)] =
+        // [9.4e-4, 3e-3] > 0; at the AUV's 40 m f(0, 40) = −2e-4 and f(100, 40) = 3.4e-3 change sign,
+        // so none.
+        assert!((t.floor(0.0) - 9.4e-4).abs() < 1e-15 && t.floor(1.0) == t.floor(0.0), "{}", t.floor(0.0));
+        assert_eq!(t.floor(40.0), 0.0);
+        for za in [0.0, 13.0, 40.0, 77.7, 150.0] {
+            let smallest = (0..=1000).map(|i| t.scale_error(i as f64 * 0.1, za).abs()).fold(f64::INFINITY, f64::min);
+            assert!(t.floor(za) <= smallest, "{za}: {} > {smallest}", t.floor(za));
+        }
         let mut m = biased(Aggregate::TraceSum, vec![0.0], 3.0);
         m.bias = Some(t.clone());
         let (cna, auv) = ([0.0, 0.0, 10.0], [300.0, 400.0, 70.0]);
@@ -936,9 +969,9 @@ mod tests {
         let want = 9e-6 * r2 + f(10.0, 70.0).powi(2) * r2 / h2;
         let got = m.bias_variance(cna, auv);
         assert!((got - want).abs() < 1e-9 * want, "{got} vs {want}");
-        assert_eq!(m.bias_variance_at(r2), (9e-6 + t.min_abs * t.min_abs) * r2);
+        assert_eq!(m.bias_variance_floor(0.0, r2), (9e-6 + t.floor(0.0) * t.floor(0.0)) * r2);
         let constant = BiasTable::sample(50.0, |_, _| -0.002).unwrap();
-        assert_eq!(constant.min_abs, 0.002);
+        assert_eq!(constant.floor(25.0), 0.002);
         assert!(BiasTable::sample(f64::NAN, f).is_err());
         assert!(BiasTable::sample(10.0, |_, _| f64::INFINITY).unwrap_err().to_string().contains("not finite"));
     }
