@@ -11,9 +11,9 @@
 //!   and the true state, the future noise unknown).
 //!
 //! The rollout and POLICIES run on the same TUNING-seed runs (base seed 1000, paired by run); the
-//! rollout is the reference of the printed comparison. Then, per policy: mean CNA–AUV distance and
-//! time outside the distance limits; for the rollout its CPU time per run and how often it took the
-//! base's own first move.
+//! rollout is the reference of the printed comparison. Then, per policy: where its CNA sat (mean
+//! CNA–AUV distance, time inside / beyond the distance limits, distance from the AUVs' centroid,
+//! depth); for the rollout its time per run and how often it took the base's own first move.
 //!
 //! `cargo run --release -p coopnav-sim --example closed_loop_headroom -- RUNS SCENARIO N POLICIES
 //! [DURATION_S|-] [HORIZON_S] [REDRAWS] [BASE]`
@@ -66,18 +66,22 @@ fn main() -> Result<(), Error> {
     // One job per (policy, run), the rollout's first; each run on its own, results in job order.
     let jobs: Vec<(Option<&PolicySpec>, usize)> =
         [None].into_iter().chain(specs.iter().map(Some)).flat_map(|p| (0..runs).map(move |r| (p, r))).collect();
-    let done: Vec<(RunResult, Option<RolloutStats>)> = jobs
+    let done: Vec<(RunResult, Geometry, Option<RolloutStats>)> = jobs
         .par_iter()
         .map(|&(spec, r)| {
             let seed = run_seed(sc.seed, r as u64);
             match spec {
-                None => rollout.run(seed).map(|(result, stats)| (result, Some(stats))),
-                Some(spec) => Ok((run(&sc, &mut spec.build(&sc)?, seed, &Faults::default(), &mut ()), None)),
+                None => rollout.run(seed),
+                Some(spec) => {
+                    let mut geometry = Geometry::new(&sc);
+                    let r = run(&sc, &mut spec.build(&sc)?, seed, &Faults::default(), &mut geometry);
+                    Ok((r, geometry, None))
+                }
             }
         })
         .collect::<Result<_, Error>>()?;
     let names: Vec<String> = [format!("rollout({base_name})")].into_iter().chain(policies).collect();
-    let results: Vec<RunResult> = done.iter().map(|(r, _)| r.clone()).collect();
+    let results: Vec<RunResult> = done.iter().map(|(r, _, _)| r.clone()).collect();
     let c = compare(&sc, &names, runs, &results);
     println!(
         "{} N = {}, tau = {} s, {} s missions; rollout horizon {horizon} s, {}",
@@ -92,15 +96,25 @@ fn main() -> Result<(), Error> {
         }
     );
     print!("{}", comparison_table(&c));
-    println!("policy: mean CNA-AUV distance (m), time outside the distance limits (%)");
-    for (name, rs) in names.iter().zip(results.chunks(runs)) {
-        let auvs = || rs.iter().flat_map(|r| &r.auvs);
-        let count = auvs().count().max(1) as f64;
-        let distance = auvs().map(|a| a.distance_mean).sum::<f64>() / count;
-        let outside = 100.0 * auvs().map(|a| a.limit_violation).sum::<f64>() / count;
-        println!("  {name:<28} {distance:7.0} {outside:6.1}");
+    println!(
+        "policy: CNA-AUV distance mean (m), time closer than {} m / farther than {} m (%), CNA to the AUVs' centroid (m), \
+         CNA depth (m)",
+        sc.planner.limits.min, sc.planner.limits.max
+    );
+    for (name, runs_of) in names.iter().zip(done.chunks(runs)) {
+        let g = runs_of.iter().fold(Geometry::new(&sc), |acc, (_, g, _)| acc.merged(g));
+        let n = g.samples.max(1) as f64;
+        let pct = |c: usize| 100.0 * c as f64 / n;
+        println!(
+            "  {name:<28} {:7.0} {:6.1} {:6.1} {:7.0} {:6.1}",
+            g.distance / n,
+            pct(g.closer),
+            pct(g.farther),
+            g.to_centroid / g.instants.max(1) as f64,
+            g.depth / g.instants.max(1) as f64
+        );
     }
-    let stats: Vec<&RolloutStats> = done.iter().filter_map(|(_, s)| s.as_ref()).collect();
+    let stats: Vec<&RolloutStats> = done.iter().filter_map(|(_, _, s)| s.as_ref()).collect();
     let decisions: usize = stats.iter().map(|s| s.decisions).sum();
     let same: usize = stats.iter().map(|s| s.base_move_taken).sum();
     let known: usize = stats.iter().map(|s| s.base_move_known).sum();
@@ -157,7 +171,7 @@ struct RolloutStats {
 }
 
 impl Rollout<'_> {
-    fn run(&self, seed: u64) -> Result<(RunResult, RolloutStats), Error> {
+    fn run(&self, seed: u64) -> Result<(RunResult, Geometry, Option<RolloutStats>), Error> {
         let start = Instant::now();
         let sc = self.sc;
         let motion = sc.planner_config().motion;
@@ -165,7 +179,8 @@ impl Rollout<'_> {
         let faults = Faults::default();
         let steered = Arc::new(Mutex::new(Steered::new(self.base.build(sc)?, motion)));
         let mut policy = Policy::Baseline(Box::new(Handle(Arc::clone(&steered))));
-        let mut mission = Mission::new(sc, &mut policy, seed, &faults, &mut ());
+        let mut geometry = Geometry::new(sc);
+        let mut mission = Mission::new(sc, &mut policy, seed, &faults, &mut geometry);
         let horizon_steps = (self.horizon / sc.dt).round() as u64;
         let mut stats = RolloutStats { decisions: 0, options: 0, base_move_known: 0, base_move_taken: 0, cpu_s: 0.0 };
         while !mission.done() {
@@ -194,20 +209,20 @@ impl Rollout<'_> {
                 let chosen = best.map(|(_, i)| i);
                 steered.lock().expect("one thread per run").option = chosen;
                 stats.decisions += 1;
-                mission.step(&mut ());
+                mission.step(&mut geometry);
                 let s = steered.lock().expect("one thread per run");
                 if let (Some(base_move), Some(i)) = (s.base_move, chosen) {
                     stats.base_move_known += 1;
                     stats.base_move_taken += usize::from(base_move == i);
                 }
             } else {
-                mission.step(&mut ());
+                mission.step(&mut geometry);
             }
         }
         let mut result = mission.finish();
         result.policy = "rollout".into();
         stats.cpu_s = start.elapsed().as_secs_f64();
-        Ok((result, stats))
+        Ok((result, geometry, Some(stats)))
     }
 
     /// Mean true error over the horizon of `mission` forked with option `i` first, then the base
@@ -320,5 +335,67 @@ impl Observer for MeanError {
     fn on_sample(&mut self, _t: f64, _cna: Vec3, rows: &[TraceRow]) {
         self.sum += rows.iter().map(|r| r.error).sum::<f64>();
         self.n += rows.len();
+    }
+}
+
+/// Where the CNA sat relative to the survey AUVs, summed over a run's once-a-second samples.
+#[derive(Clone, Copy)]
+struct Geometry {
+    min: f64,
+    max: f64,
+    /// Per AUV sample: the sum of distances, and the samples closer than `min` and farther than `max`.
+    samples: usize,
+    distance: f64,
+    closer: usize,
+    farther: usize,
+    /// Per instant: the CNA's horizontal distance from the AUVs' true centroid, and its depth.
+    instants: usize,
+    to_centroid: f64,
+    depth: f64,
+}
+
+impl Geometry {
+    fn new(sc: &Scenario) -> Self {
+        let (min, max) = (sc.planner.limits.min, sc.planner.limits.max);
+        Geometry {
+            min,
+            max,
+            samples: 0,
+            distance: 0.0,
+            closer: 0,
+            farther: 0,
+            instants: 0,
+            to_centroid: 0.0,
+            depth: 0.0,
+        }
+    }
+
+    fn merged(self, o: &Geometry) -> Self {
+        Geometry {
+            samples: self.samples + o.samples,
+            distance: self.distance + o.distance,
+            closer: self.closer + o.closer,
+            farther: self.farther + o.farther,
+            instants: self.instants + o.instants,
+            to_centroid: self.to_centroid + o.to_centroid,
+            depth: self.depth + o.depth,
+            ..self
+        }
+    }
+}
+
+impl Observer for Geometry {
+    fn on_sample(&mut self, _t: f64, cna: Vec3, rows: &[TraceRow]) {
+        for r in rows {
+            self.samples += 1;
+            self.distance += r.distance;
+            self.closer += usize::from(r.distance < self.min);
+            self.farther += usize::from(r.distance > self.max);
+        }
+        let n = rows.len().max(1) as f64;
+        let (cx, cy) = (rows.iter().map(|r| r.true_x).sum::<f64>() / n, rows.iter().map(|r| r.true_y).sum::<f64>() / n);
+        self.instants += 1;
+        self.to_centroid += (cna.x - cx).hypot(cna.y - cy);
+        self.depth += cna.z;
     }
 }
