@@ -126,6 +126,13 @@ fn main() -> Result<(), Error> {
         100.0 * same as f64 / known.max(1) as f64,
         cpu / runs.max(1) as f64
     );
+    let per_known = |f: fn(&RolloutStats) -> f64| stats.iter().map(|s| f(s)).sum::<f64>() / known.max(1) as f64;
+    println!(
+        "rollout scores (mean error over the horizon, per decision): worst option minus best {:.3} m, the base's move \
+         minus best {:.3} m",
+        per_known(|s| s.spread),
+        per_known(|s| s.base_regret)
+    );
     println!("wall time {:.1} s", start.elapsed().as_secs_f64());
     Ok(())
 }
@@ -167,6 +174,10 @@ struct RolloutStats {
     /// Decisions where the base's own command was one of the options, and where the rollout took it.
     base_move_known: usize,
     base_move_taken: usize,
+    /// Over those decisions, summed: the worst option's score minus the best's, and the base's
+    /// move's score minus the best's, m.
+    spread: f64,
+    base_regret: f64,
     cpu_s: f64,
 }
 
@@ -182,7 +193,15 @@ impl Rollout<'_> {
         let mut geometry = Geometry::new(sc);
         let mut mission = Mission::new(sc, &mut policy, seed, &faults, &mut geometry);
         let horizon_steps = (self.horizon / sc.dt).round() as u64;
-        let mut stats = RolloutStats { decisions: 0, options: 0, base_move_known: 0, base_move_taken: 0, cpu_s: 0.0 };
+        let mut stats = RolloutStats {
+            decisions: 0,
+            options: 0,
+            base_move_known: 0,
+            base_move_taken: 0,
+            spread: 0.0,
+            base_regret: 0.0,
+            cpu_s: 0.0,
+        };
         while !mission.done() {
             if mission.decides_next() {
                 let before = steered.lock().expect("one thread per run").copy(self)?;
@@ -190,7 +209,8 @@ impl Rollout<'_> {
                     0 => vec![None],
                     k => (0..k).map(|j| Some(run_seed(seed, (stats.decisions * k + j + 1) as u64))).collect(),
                 };
-                let mut best: Option<(f64, usize)> = None;
+                // Each option's score (None: off limits), in option order.
+                let mut scores: Vec<Option<f64>> = Vec::with_capacity(options.len());
                 for i in 0..options.len() {
                     let mut total = Some(0.0);
                     for &draw in &draws {
@@ -199,21 +219,26 @@ impl Rollout<'_> {
                             _ => None,
                         };
                     }
-                    let Some(total) = total else { continue };
-                    stats.options += 1;
-                    let score = total / draws.len() as f64;
-                    if best.is_none_or(|(b, _)| score < b) {
-                        best = Some((score, i));
-                    }
+                    scores.push(total.map(|t| t / draws.len() as f64));
                 }
+                let valid = || scores.iter().enumerate().filter_map(|(i, s)| s.map(|s| (s, i)));
+                // The first lowest score: ties by option order.
+                let best = valid().fold(None, |b: Option<(f64, usize)>, (s, i)| match b {
+                    Some((bs, _)) if bs <= s => b,
+                    _ => Some((s, i)),
+                });
+                stats.options += valid().count();
                 let chosen = best.map(|(_, i)| i);
                 steered.lock().expect("one thread per run").option = chosen;
                 stats.decisions += 1;
                 mission.step(&mut geometry);
                 let s = steered.lock().expect("one thread per run");
-                if let (Some(base_move), Some(i)) = (s.base_move, chosen) {
+                if let (Some(base_move), Some((low, i))) = (s.base_move, best) {
                     stats.base_move_known += 1;
                     stats.base_move_taken += usize::from(base_move == i);
+                    let high = valid().map(|(s, _)| s).fold(low, f64::max);
+                    stats.spread += high - low;
+                    stats.base_regret += scores[base_move].map_or(0.0, |s| s - low);
                 }
             } else {
                 mission.step(&mut geometry);
