@@ -22,7 +22,7 @@ pub struct Outcome {
 }
 
 /// A rate-selection policy.
-pub trait RatePolicy: Send {
+pub trait RatePolicy: Send + RatePolicyClone {
     fn name(&self) -> String;
     /// Every rate the policy may use (drives the TDMA slot length and the header mask width).
     fn rates(&self) -> Vec<Rate>;
@@ -35,6 +35,24 @@ pub trait RatePolicy: Send {
     /// given each rate's modelled success there (`success`), once the policy has settled on the
     /// link: what it sends there, weighted by how often (silence counts as 0).
     fn settled_success(&self, success: &dyn Fn(Rate) -> f64) -> f64;
+}
+
+/// A boxed [`RatePolicy`] can be copied with its state (a forked mission copies its vehicles'
+/// selectors); every `Clone` policy has it.
+pub trait RatePolicyClone {
+    fn clone_box(&self) -> Box<dyn RatePolicy>;
+}
+
+impl<T: RatePolicy + Clone + 'static> RatePolicyClone for T {
+    fn clone_box(&self) -> Box<dyn RatePolicy> {
+        Box::new(self.clone())
+    }
+}
+
+impl Clone for Box<dyn RatePolicy> {
+    fn clone(&self) -> Self {
+        (**self).clone_box()
+    }
 }
 
 /// A rate policy as a file names it (`kind = "fixed" | "alternating" | "adaptive"`): the one

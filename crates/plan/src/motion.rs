@@ -202,6 +202,15 @@ impl MotionConfig {
         psi.iter().flat_map(|&dpsi| phi.iter().map(move |&dphi| MotionOption { dpsi, dphi })).collect()
     }
 
+    /// The pose one step of option `o` from `pose` reaches, and whether it keeps the AUV CNA's
+    /// pitch and depth limits (always for an ASC): a level-0 child of the search, for callers
+    /// that score the options themselves (the headroom example's rollouts).
+    pub fn next(&self, pose: &CnaPose, o: &MotionOption) -> (CnaPose, bool) {
+        let fast = FastOption { cd: o.dpsi.cos(), sd: o.dpsi.sin(), dphi: o.dphi };
+        let p = self.step(&FastPose::from_pose(pose), &fast);
+        (p.to_pose(), self.limit_violation(&p) == 0.0)
+    }
+
     /// How many tree levels, from level 0, offer the pitch options (`CnaKind::Auv::pitch_levels`;
     /// `usize::MAX`: every level).
     pub(crate) fn pitch_levels(&self) -> usize {
@@ -318,6 +327,19 @@ mod tests {
         assert_eq!((held.phi, held.p[2]), (0.0, 0.0), "the next step starts level");
         let broken = thesis.step(&p, &up);
         assert!(broken.p[2] < 0.0 && thesis.limit_violation(&broken) > 0.0);
+    }
+
+    #[test]
+    fn next_is_the_searchs_step_with_its_limit_check() {
+        let c = cfg(3, CnaKind::auv(3));
+        let pose = CnaPose { pos: Vec3::new(0.0, 0.0, 50.0), heading: Heading::from_radians(0.0), pitch: 0.0 };
+        let options = c.options();
+        // Δψ = 0, Δφ = 0: 60 m east, within limits; Δφ = +45°: the search's own pose, off limits.
+        let (level, ok) = c.next(&pose, &options[4]);
+        assert!((level.pos - Vec3::new(60.0, 0.0, 50.0)).norm() < 1e-9 && ok, "{level:?}");
+        let (up, ok) = c.next(&pose, &options[5]);
+        assert_eq!(up, c.step(&FastPose::from_pose(&pose), &c.fast_options()[5]).to_pose());
+        assert!(!ok);
     }
 
     #[test]

@@ -156,9 +156,8 @@ fn grid_until(
     let per_cell = policies.len() * runs;
     Ok(scenarios
         .iter()
-        .zip(&specs)
         .enumerate()
-        .map(|(c, (sc, specs))| compare(sc, specs, runs, &results[c * per_cell..(c + 1) * per_cell]))
+        .map(|(c, sc)| compare(sc, policies, runs, &results[c * per_cell..(c + 1) * per_cell]))
         .collect())
 }
 
@@ -197,11 +196,12 @@ fn longest_first<J: Sync, R: Send>(jobs: &[J], cost: impl Fn(&J) -> f64, work: i
     finished.into_iter().map(|(_, r)| r).collect()
 }
 
-/// The comparison of one cell from its runs (policy by policy, runs in index order): the first
-/// policy (the reference) paired with each other one.
-fn compare(sc: &Scenario, specs: &[PolicySpec], runs: usize, results: &[RunResult]) -> Comparison {
+/// The comparison of one cell from its runs (`runs` per policy of `names`, policy by policy, runs
+/// in index order): the first policy (the reference) paired with each other one. Public for runs
+/// made outside [`monte_carlo`] (the headroom example's rollouts).
+pub fn compare(sc: &Scenario, names: &[String], runs: usize, results: &[RunResult]) -> Comparison {
     let summaries: Vec<PolicySummary> =
-        results.chunks(runs.max(1)).zip(specs).map(|(rs, s)| summarise(&s.name, rs)).collect();
+        results.chunks(runs.max(1)).zip(names).map(|(rs, name)| summarise(name, rs)).collect();
     let paired = match summaries.split_first() {
         Some((reference, others)) => others
             .iter()

@@ -13,7 +13,7 @@ pub mod policies;
 pub mod scenario;
 
 pub use crate::engine::{run, run_traced, Faults, PhaseClock, RunResult, Timing};
-pub use mc::{comparison_table, monte_carlo, monte_carlo_grid, monte_carlo_until, Comparison, PolicySummary};
+pub use mc::{compare, comparison_table, monte_carlo, monte_carlo_grid, monte_carlo_until, Comparison, PolicySummary};
 pub use planner_policy::{ErrorTracker, PlannerPolicy, PlannerStats};
 pub use policies::{Policy, PolicyError, PolicySpec, POLICY_NAMES};
 pub use scenario::{BeforeFirstReport, Scenario, ScenarioError, EXAMPLE};

@@ -318,7 +318,26 @@ pub struct PlannerStats {
 }
 
 /// The success likelihood the planner assumes for a ping over a given slant distance.
-pub type PingLikelihood = Box<dyn Fn(f64) -> f64 + Send>;
+pub type PingLikelihood = Box<dyn Likelihood>;
+
+/// A ping likelihood that can be copied (a forked mission copies its planner); every `Clone`
+/// closure is one.
+pub trait Likelihood: Fn(f64) -> f64 + Send {
+    fn clone_box(&self) -> PingLikelihood;
+}
+
+impl<F: Fn(f64) -> f64 + Send + Clone + 'static> Likelihood for F {
+    fn clone_box(&self) -> PingLikelihood {
+        Box::new(self.clone())
+    }
+}
+
+impl Clone for PingLikelihood {
+    fn clone(&self) -> Self {
+        // The boxed closure's own copy (the box itself is a `Likelihood` too).
+        (**self).clone_box()
+    }
+}
 
 /// The ping likelihood as the planner's link model.
 pub(crate) struct LikelihoodLink<'a>(pub &'a PingLikelihood);
@@ -330,6 +349,7 @@ impl LinkModel for LikelihoodLink<'_> {
 }
 
 /// The underway look-ahead planner behind [`CnaPolicy`].
+#[derive(Clone)]
 pub struct PlannerPolicy {
     planner: LookAheadPlanner,
     tracker: ErrorTracker,

@@ -241,6 +241,7 @@ fn modem_likelihood(sc: &Scenario) -> Result<PingLikelihood, LinkError> {
 /// block at the CNA's start depth, along [`CHANNEL_BEARINGS`] bearings, to an AUV at its mission
 /// depth. An invention (issue 10): the link depends on where the CNA is, but the planner's table
 /// depends on distance only, so it gets the mean over these sources and bearings.
+#[derive(Clone)]
 struct ChannelSample {
     tl: Arc<dyn TransmissionLoss>,
     sources: Vec<Vec3>,

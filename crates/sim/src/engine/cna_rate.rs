@@ -12,6 +12,7 @@
 
 use coopnav_acomms::selector::{Choice, Outcome, RatePolicy, RatePolicySpec};
 
+#[derive(Clone)]
 pub struct CnaRate {
     selector: Box<dyn RatePolicy>,
     /// Broadcasts sent (the id of the next one).

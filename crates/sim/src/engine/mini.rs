@@ -22,6 +22,7 @@ use std::f64::consts::FRAC_PI_2;
 /// What every survey AUV knows of the ships and buoys from their mini-packets: one filter per
 /// vehicle (ships first, then buoys), started from the vehicle's nominal start — the state a
 /// mission start hands over by radio (digest §2.1).
+#[derive(Clone)]
 pub struct SurfaceFilters {
     filters: Vec<SurfaceEkf>,
     n_ships: usize,

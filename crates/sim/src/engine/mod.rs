@@ -91,6 +91,7 @@ impl AuvForecast for FleetView<'_> {
 }
 
 /// The CNA: its craft, its own navigation, its clock, and what it knows of the fleet.
+#[derive(Clone)]
 struct Cna {
     craft: Craft,
     /// Its broadcast position minus its truth (GPS error for an ASC, a random walk for an AUV),
@@ -112,7 +113,7 @@ struct Cna {
 }
 
 /// Per-AUV sums for the run's metrics.
-#[derive(Default)]
+#[derive(Clone, Default)]
 struct AuvTally {
     errors: Vec<f64>,
     distances: Vec<f64>,
@@ -182,24 +183,90 @@ fn run_on(
     tl: Option<Arc<dyn TransmissionLoss>>,
     obs: &mut dyn Observer,
 ) -> RunResult {
-    let t_start = Instant::now();
-    let mut engine = Engine::new(sc, policy, seed, faults, tl);
-    for (auv, a) in engine.auvs.iter().enumerate() {
-        let ((x, y), (speed, heading)) = (a.ekf.position(), a.ekf.speed_heading());
-        obs.on_filter_start(&FilterStart { auv, x, y, speed, heading });
-    }
-    for (ship, s) in engine.ships.iter().enumerate() {
-        obs.on_ship_pose(&ShipPose { t: 0.0, ship, pos: s.pos, heading: s.psi });
-    }
-    obs.on_phase_end(Phase::Setup);
-    let steps = (sc.duration_s / sc.dt).round() as u64;
-    for step in 0..steps {
+    let mut mission = Mission::start(Engine::new(sc, policy, seed, faults, tl), seed, obs);
+    while !mission.done() {
         if obs.stop() {
             break;
         }
-        engine.step(step, obs);
+        mission.step(obs);
     }
-    engine.finish(seed, t_start.elapsed().as_secs_f64())
+    mission.finish()
+}
+
+/// A run its caller steps, and may fork: a copy of the whole state at a step, driven on by
+/// another policy (clairvoyant rollouts measure how much any CNA path could gain,
+/// `examples/closed_loop_headroom.rs`). [`run`] is a `Mission` stepped to its end.
+pub struct Mission<'a> {
+    engine: Engine<'a>,
+    seed: u64,
+    /// The next truth step, and the run's count.
+    step: u64,
+    steps: u64,
+    t_start: Instant,
+}
+
+impl<'a> Mission<'a> {
+    /// Runs `policy` over scenario `sc` with run seed `seed` (the set-up reported to `obs`).
+    pub fn new(
+        sc: &'a Scenario,
+        policy: &'a mut Policy,
+        seed: u64,
+        faults: &'a Faults,
+        obs: &mut dyn Observer,
+    ) -> Self {
+        Mission::start(Engine::new(sc, policy, seed, faults, None), seed, obs)
+    }
+
+    fn start(engine: Engine<'a>, seed: u64, obs: &mut dyn Observer) -> Self {
+        let t_start = Instant::now();
+        for (auv, a) in engine.auvs.iter().enumerate() {
+            let ((x, y), (speed, heading)) = (a.ekf.position(), a.ekf.speed_heading());
+            obs.on_filter_start(&FilterStart { auv, x, y, speed, heading });
+        }
+        for (ship, s) in engine.ships.iter().enumerate() {
+            obs.on_ship_pose(&ShipPose { t: 0.0, ship, pos: s.pos, heading: s.psi });
+        }
+        obs.on_phase_end(Phase::Setup);
+        let steps = (engine.sc.duration_s / engine.sc.dt).round() as u64;
+        Mission { engine, seed, step: 0, steps, t_start }
+    }
+
+    pub fn done(&self) -> bool {
+        self.step >= self.steps
+    }
+
+    /// Time at the start of the next step, s.
+    pub fn t(&self) -> f64 {
+        self.step as f64 * self.engine.sc.dt
+    }
+
+    /// Whether the next step opens with a CNA decision.
+    pub fn decides_next(&self) -> bool {
+        self.engine.decision_due((self.step + 1) as f64 * self.engine.sc.dt)
+    }
+
+    /// One truth step.
+    pub fn step(&mut self, obs: &mut dyn Observer) {
+        self.engine.step(self.step, obs);
+        self.step += 1;
+    }
+
+    /// A copy of this run as it stands, driven by `policy` from here on. `redraw`: None keeps this
+    /// run's own future random draws (the copy sees the same noise); Some(seed) draws every noise
+    /// source afresh from run seed `seed`. The state drawn at the start (clocks, compass-bias maps,
+    /// buoy motion) is kept either way.
+    pub fn fork<'b>(&'b self, policy: &'b mut Policy, redraw: Option<u64>) -> Mission<'b> {
+        let mut engine = self.engine.fork(policy);
+        if let Some(seed) = redraw {
+            engine.redraw(&SeedStream::new(seed));
+        }
+        Mission { engine, seed: self.seed, step: self.step, steps: self.steps, t_start: Instant::now() }
+    }
+
+    /// The metrics of the steps run.
+    pub fn finish(self) -> RunResult {
+        self.engine.finish(self.seed, self.t_start.elapsed().as_secs_f64())
+    }
 }
 
 /// [`run`] keeping the whole time series in the result.
@@ -267,6 +334,44 @@ impl<'a> Engine<'a> {
             tallies: (0..n).map(|_| AuvTally::default()).collect(),
             finite: true,
             per_second: ((1.0 / sc.dt).round() as u64).max(1),
+        }
+    }
+
+    /// This state with `policy` in place of its own (`Mission::fork`).
+    fn fork<'b>(&'b self, policy: &'b mut Policy) -> Engine<'b> {
+        Engine {
+            sc: self.sc,
+            policy,
+            faults: self.faults,
+            bathy: self.bathy.clone(),
+            slots: self.slots.clone(),
+            auvs: self.auvs.clone(),
+            cna: self.cna.clone(),
+            buoys: self.buoys.clone(),
+            ships: self.ships.clone(),
+            surface: self.surface.clone(),
+            peers: self.peers.clone(),
+            peer_draws: self.peer_draws.clone(),
+            air: self.air.clone(),
+            tl: Arc::clone(&self.tl),
+            tl_failure_reported: self.tl_failure_reported.clone(),
+            next_decision: self.next_decision,
+            next_slot: self.next_slot,
+            status_sent: self.status_sent.clone(),
+            tallies: self.tallies.clone(),
+            finite: self.finite,
+            per_second: self.per_second,
+        }
+    }
+
+    /// Every noise stream from here on drawn from `streams` (`Mission::fork`).
+    fn redraw(&mut self, streams: &SeedStream) {
+        self.auvs.iter_mut().for_each(|a| a.redraw(streams));
+        self.buoys.iter_mut().for_each(|b| b.redraw(streams));
+        self.ships.iter_mut().for_each(|s| s.redraw(streams));
+        let cna = &mut self.cna;
+        for r in self.peer_draws.iter_mut().chain([&mut cna.rng_gps, &mut cna.rng_nav]) {
+            vehicles::redraw(r, streams);
         }
     }
 

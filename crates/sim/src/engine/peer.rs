@@ -26,6 +26,7 @@ pub struct Plans {
 /// Stream ids of the channel draws of AUV k's statuses at the other survey AUVs: this + k.
 pub const STREAM_BASE: u64 = 30_000;
 
+#[derive(Clone)]
 pub struct PeerLink {
     mode: EstimatorMode,
     tracker: Tracker,

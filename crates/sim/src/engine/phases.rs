@@ -39,6 +39,7 @@ use coopnav_plan::{AuvForecast, CnaPose};
 use rand_chacha::ChaCha8Rng;
 
 /// What a packet carries to its addressee.
+#[derive(Clone)]
 pub enum Payload {
     /// The CNA's broadcast: its position as it knows it, the travel time the receiver measured
     /// (None: decoded without a usable range), and the statuses it acknowledges.
@@ -56,9 +57,14 @@ pub enum Payload {
 
 impl Engine<'_> {
     /// The CNA's decision at each m·τ: its position fix, the planner model's pings, the policy.
+    /// Whether the CNA's next decision falls in the step ending at `t_next`.
+    pub(super) fn decision_due(&self, t_next: f64) -> bool {
+        (self.next_decision as f64) * self.sc.comms.tau < t_next - 1e-9
+    }
+
     pub(super) fn decide(&mut self, t_next: f64, obs: &mut dyn Observer) {
         let tau = self.sc.comms.tau;
-        if (self.next_decision as f64) * tau >= t_next - 1e-9 {
+        if !self.decision_due(t_next) {
             return;
         }
         let t_dec = self.next_decision as f64 * tau;

@@ -545,3 +545,35 @@ fn the_cnas_rate_policy_comes_back_up_when_the_cna_closes_in_only_with_drift() {
         );
     }
 }
+
+/// A fork at mid-run on the run's own draws, with a fresh copy of a stateless policy, ends
+/// exactly where the run ends (every piece of state was copied); fresh draws end elsewhere, and
+/// the same fresh draws in the same place. A `Mission` stepped to its end is [`run`].
+#[test]
+fn a_fork_on_the_runs_own_draws_finishes_the_run_exactly() {
+    let mut sc = Scenario::example().with_auvs(2);
+    sc.duration_s = 900.0;
+    let spec = PolicySpec::new("centroid-standoff", &sc).unwrap();
+    let build = || spec.build(&sc).unwrap();
+    let faults = Faults::default();
+    let finish = |mut m: Mission| {
+        while !m.done() {
+            m.step(&mut ());
+        }
+        m.finish().fleet
+    };
+    let mut policy = build();
+    let mut mission = Mission::new(&sc, &mut policy, 11, &faults, &mut ());
+    while mission.t() < 450.0 {
+        mission.step(&mut ());
+    }
+    let (mut own, mut fresh, mut again) = (build(), build(), build());
+    let own = finish(mission.fork(&mut own, None));
+    let fresh = finish(mission.fork(&mut fresh, Some(5)));
+    let again = finish(mission.fork(&mut again, Some(5)));
+    let whole = finish(mission);
+    assert_eq!(own, whole);
+    assert_ne!(fresh, whole);
+    assert_eq!(fresh, again);
+    assert_eq!(run(&sc, &mut build(), 11, &faults, &mut ()).fleet, whole);
+}

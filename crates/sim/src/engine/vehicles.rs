@@ -46,7 +46,14 @@ pub mod stream {
     pub const SHIP_LINK: u64 = 3;
 }
 
+/// `rng` replaced by the generator of its own stream id under `streams`: fresh draws from here on
+/// that still differ from every other source's.
+pub fn redraw(rng: &mut ChaCha8Rng, streams: &SeedStream) {
+    *rng = streams.rng(rng.get_stream());
+}
+
 /// A survey AUV.
+#[derive(Clone)]
 pub struct SurveyAuv {
     pub ctrl: Iver2,
     /// True position at the end of the last step, and at its start.
@@ -121,6 +128,21 @@ impl SurveyAuv {
             heard_broadcasts: Vec::new(),
             adrift: false,
             station: pts.last().copied().unwrap_or(start),
+        }
+    }
+
+    /// Its noise streams from here on drawn from `streams` (each keeps its stream id).
+    pub fn redraw(&mut self, streams: &SeedStream) {
+        for r in [
+            &mut self.rng_speed,
+            &mut self.rng_white,
+            &mut self.rng_yaw,
+            &mut self.rng_gps,
+            &mut self.rng_range,
+            &mut self.rng_down,
+            &mut self.rng_up,
+        ] {
+            redraw(r, streams);
         }
     }
 
@@ -238,6 +260,7 @@ pub fn lerp(a: Vec3, b: Vec3, f: f64) -> Vec3 {
 
 /// The CNA craft: steers to its commanded point at transit speed with a turn-rate limit and holds
 /// station on arrival; an AUV CNA also moves towards the commanded depth, pitch-limited.
+#[derive(Clone)]
 pub struct Craft {
     pub pos: Vec3,
     pub prev: Vec3,
@@ -266,6 +289,7 @@ impl Craft {
 }
 
 /// A transponder buoy: where it truly is, what its GPS reads and its modem's clock.
+#[derive(Clone)]
 pub struct Buoy {
     motion: BuoyMotion,
     depth: f64,
@@ -291,6 +315,12 @@ impl Buoy {
         }
     }
 
+    /// Its noise streams from here on drawn from `streams`.
+    pub fn redraw(&mut self, streams: &SeedStream) {
+        redraw(&mut self.rng_gps, streams);
+        redraw(&mut self.rng_link, streams);
+    }
+
     /// Its transducer's true position at `t`.
     pub fn position(&self, t: f64) -> Vec3 {
         let [x, y] = self.motion.at(t);
@@ -307,6 +337,7 @@ impl Buoy {
 
 /// A ship on its fixed track: its truth (a unicycle its pilot steers back onto the track), what
 /// its broadcasts measure, and its modems' clock.
+#[derive(Clone)]
 pub struct Ship {
     /// True position of its reference point at the end of the last step, and at its start.
     pub pos: Vec3,
@@ -320,6 +351,12 @@ pub struct Ship {
 }
 
 impl Ship {
+    /// Its noise streams from here on drawn from `streams`.
+    pub fn redraw(&mut self, streams: &SeedStream) {
+        redraw(&mut self.rng_sensors, streams);
+        redraw(&mut self.rng_link, streams);
+    }
+
     /// Ship `i` at its nominal start, scattered as its spec says (its own stream).
     pub fn new(sc: &Scenario, i: usize, streams: &SeedStream) -> Self {
         let spec = &sc.ships[i];
