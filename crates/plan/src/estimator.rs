@@ -39,9 +39,10 @@
 //!    water between): a range over r is measured r·(1 + f), and the filter, which knows both
 //!    depths, moves its horizontal estimate along the line of sight by f·r/|h_xy| until the range
 //!    fits. β² becomes (k_b·r/1000)² + f²r²/|h_xy|² (k_b then stands for what the profile leaves
-//!    out). In the thesis's summer profile f ranges from −0.4 % to +0.7 % with the two depths, so
-//!    the CNA's depth decides the bias as much as its distance does. The bounds take the smallest
-//!    |f| in the table (|h_xy| ≤ 1 only raises the term).
+//!    out). In the scenarios' summer profile (invented, `SoundSpeed::summer`) f ranges from −0.4 % to
+//!    +0.7 % with the two depths, so the CNA's depth decides the bias as much as its distance does.
+//!    The bounds take the smallest |f| the table gives for the AUV's depth at any CNA depth
+//!    ([`BiasTable::floor`]; |h_xy| ≤ 1 only raises the term).
 //! 5. Level cost over the N AUVs ([`Aggregate`]) of M: Σ tr M (default), max tr M (worst AUV),
 //!    Σ ln(1 + det M / 1 m⁴) (log-det, shifted by one so costs stay ≥ 0 as the penalties and the
 //!    search require), or Σ √tr M (the sum of 1-σ, m). The path cost is the sum of the level costs,
@@ -363,7 +364,7 @@ impl BiasTable {
         self.floor_by_auv[j]
     }
 
-    /// f at CNA depth `z_cna` and AUV depth `z_auv`, m.
+    /// f (dimensionless) at CNA depth `z_cna` and AUV depth `z_auv` (m).
     #[inline(always)]
     pub fn scale_error(&self, z_cna: f64, z_auv: f64) -> f64 {
         if self.n == 1 {
@@ -427,7 +428,7 @@ pub(crate) struct EkfCost {
     pub cna_variance: f64,
     /// Step 7: the useful range r_u (m) and the CNA's step s·τ (m per level).
     pub reach: Reach,
-    /// Step 4 from a known sound-speed profile instead of `bias_per_km_m`.
+    /// Step 4's scale error from a known sound-speed profile, on top of `bias_per_km_m`.
     pub bias: Option<BiasTable>,
 }
 

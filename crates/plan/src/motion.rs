@@ -230,17 +230,17 @@ impl MotionConfig {
         let ch = p.ch * o.cd - p.sh * o.sd;
         let sh = p.sh * o.cd + p.ch * o.sd;
         let d = self.speed * self.tau;
-        let mut phi = p.phi + o.dphi;
-        if let CnaKind::Auv { level_off: true, max_pitch_deg, .. } = self.cna {
-            // The engine's CNA levels off at each commanded depth: every step starts level.
-            let max = max_pitch_deg.to_radians();
-            phi = o.dphi.clamp(-max, max);
-        }
+        // The engine's CNA levels off at each commanded depth: with `level_off` every step starts level.
+        let (phi, depths) = match self.cna {
+            CnaKind::Auv { level_off: true, max_pitch_deg, min_depth, max_depth, .. } => {
+                let max = max_pitch_deg.to_radians();
+                (o.dphi.clamp(-max, max), Some((min_depth, max_depth)))
+            }
+            _ => (p.phi + o.dphi, None),
+        };
         let (sp, cp) = if phi == 0.0 { (0.0, 1.0) } else { phi.sin_cos() };
-        let mut z = p.p[2] - d * sp;
-        if let CnaKind::Auv { level_off: true, min_depth, max_depth, .. } = self.cna {
-            z = z.clamp(min_depth, max_depth);
-        }
+        let z = p.p[2] - d * sp;
+        let z = depths.map_or(z, |(lo, hi)| z.clamp(lo, hi));
         FastPose { p: [p.p[0] + d * ch * cp, p.p[1] + d * sh * cp, z], ch, sh, phi }
     }
 
