@@ -314,6 +314,8 @@ pub struct BiasTable {
 
 /// Where a known-sign scale error enters the horizontal estimate: 1/|h_xy|² is floored here, so a
 /// ping from almost overhead (which the distance limits forbid anyway) costs a large finite bias.
+/// Invented (issue 10, session 25; the filter it models is digest gill §3): a numerical guard, not
+/// a model of the sea, so it is not a scenario key.
 const BIAS_H2_FLOOR: f64 = 0.05;
 
 impl BiasTable {
