@@ -97,7 +97,7 @@ pub fn survey_area(sc: &Scenario) -> Rect {
 
 /// The CNA's start pose.
 pub fn cna_start(sc: &Scenario) -> CnaPose {
-    let z = sc.cna.auv.as_ref().map_or(0.0, |a| a.depth);
+    let z = sc.cna_cruise_depth();
     CnaPose {
         pos: Vec3::new(sc.cna.x, sc.cna.y, z),
         heading: Heading::from(CompassDeg(sc.cna.heading_compass_deg)),

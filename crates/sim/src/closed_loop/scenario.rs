@@ -206,14 +206,67 @@ fn default_standoff() -> f64 {
 pub struct AuvCna {
     /// Pitch options B of the planner (≥ 1).
     pub pitch_options: usize,
-    /// Start depth, m.
-    pub depth: f64,
+    /// Cruise depth: where it starts and what every fixed-path policy holds.
+    pub depth: CruiseDepth,
     /// Growth of the CNA's own horizontal position-error variance, m²/s per axis (a random walk:
     /// what it broadcasts is its truth plus this error). Invented: no thesis value.
     pub nav_diffusion: f64,
     /// When it climbs for a GPS fix (None: never; [`Surfacing`]).
     #[serde(default)]
     pub surfacing: Option<Surfacing>,
+}
+
+/// An AUV CNA's cruise depth: metres, or `"cast"`, the fixed depth its CTD cast favours for the
+/// fleet ([`Scenario::cna_cruise_depth`]).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(try_from = "DepthWord", into = "DepthWord")]
+pub enum CruiseDepth {
+    Metres(f64),
+    Cast,
+}
+
+/// How [`CruiseDepth`] is written in a scenario file.
+#[derive(Serialize, Deserialize)]
+#[serde(untagged)]
+enum DepthWord {
+    Metres(f64),
+    Word(String),
+}
+
+const CAST_WORD: &str = "cast";
+
+impl TryFrom<DepthWord> for CruiseDepth {
+    type Error = String;
+    fn try_from(w: DepthWord) -> Result<Self, String> {
+        match w {
+            DepthWord::Metres(z) => Ok(CruiseDepth::Metres(z)),
+            DepthWord::Word(word) if word == CAST_WORD => Ok(CruiseDepth::Cast),
+            DepthWord::Word(word) => Err(format!("`{word}`: expected a depth in metres or \"{CAST_WORD}\"")),
+        }
+    }
+}
+
+impl From<CruiseDepth> for DepthWord {
+    fn from(d: CruiseDepth) -> Self {
+        match d {
+            CruiseDepth::Metres(z) => DepthWord::Metres(z),
+            CruiseDepth::Cast => DepthWord::Word(CAST_WORD.into()),
+        }
+    }
+}
+
+/// Spacing of the track points `"cast"` weighs, m.
+pub const CAST_SAMPLE_M: f64 = 25.0;
+
+/// Points every `step` m along the polyline through `waypoints`, both ends included.
+fn along(waypoints: &[(f64, f64)], step: f64) -> Vec<(f64, f64)> {
+    let mut out: Vec<(f64, f64)> = waypoints.first().copied().into_iter().collect();
+    for w in waypoints.windows(2) {
+        let (dx, dy) = (w[1].0 - w[0].0, w[1].1 - w[0].1);
+        let n = ((dx.hypot(dy) / step).ceil() as usize).max(1);
+        out.extend((1..=n).map(|i| (w[0].0 + dx * i as f64 / n as f64, w[0].1 + dy * i as f64 / n as f64)));
+    }
+    out
 }
 
 fn default_turn_rate() -> f64 {
@@ -618,12 +671,14 @@ impl Scenario {
             if a.pitch_options == 0 {
                 p.push("cna.auv.pitch_options", "0", ">= 1");
             }
-            p.check(
-                "cna.auv.depth",
-                a.depth,
-                |v| (0.0..100.0).contains(&v),
-                "0 <= depth < 100 m (the planner's AUV-CNA depth limits)",
-            );
+            if let CruiseDepth::Metres(z) = a.depth {
+                p.check(
+                    "cna.auv.depth",
+                    z,
+                    |v| (0.0..100.0).contains(&v),
+                    "0 <= depth < 100 m (the planner's AUV-CNA depth limits), or \"cast\"",
+                );
+            }
             p.non_negative("cna.auv.nav_diffusion", a.nav_diffusion);
             if let Some(s) = &a.surfacing {
                 s.validate("cna.auv.surfacing.", p);
@@ -786,6 +841,30 @@ impl Scenario {
             None => flat(),
         };
         grid.or_else(|_| flat()).expect("validated scenarios always give a grid")
+    }
+
+    /// The CNA's cruise depth, m: 0 for an ASC, `cna.auv.depth` for an AUV, with `"cast"` the
+    /// depth in the planner's limits that [`least_biased_depth`](crate::models::channel::SoundSpeed::least_biased_depth) picks for the survey
+    /// plan's AUV depths (sampled every [`CAST_SAMPLE_M`] along each lawnmower) at the filters'
+    /// sound speed.
+    pub fn cna_cruise_depth(&self) -> f64 {
+        match self.cna.auv.as_ref().map(|a| a.depth) {
+            None => 0.0,
+            Some(CruiseDepth::Metres(z)) => z,
+            Some(CruiseDepth::Cast) => {
+                let limits = match self.planner_config().motion.cna {
+                    CnaKind::Auv { min_depth, max_depth, .. } => (min_depth, max_depth),
+                    CnaKind::Asc {} => (0.0, 0.0),
+                };
+                let bathy = self.bathymetry();
+                let depths: Vec<f64> = (0..self.fleet.n_auvs)
+                    .flat_map(|k| along(&self.lawnmower(k).waypoints(), CAST_SAMPLE_M))
+                    .map(|(x, y)| self.fleet.depth.depth_over(bathy.depth_at(x, y)))
+                    .collect();
+                let nominal = self.filter.params.range_noise.sound_speed;
+                self.channel.sound_speed.least_biased_depth(nominal, &depths, limits)
+            }
+        }
     }
 
     /// The look-ahead planner's configuration for this scenario.

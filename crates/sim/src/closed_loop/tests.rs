@@ -194,7 +194,12 @@ fn status_rates_follow_the_fixed_rate_or_the_adaptive_selector() {
 fn an_auv_cna_plans_with_pitch_and_broadcasts_its_own_estimate() {
     let mut sc = short(2, 1200.0);
     sc.planner.look_ahead = 2;
-    sc.cna.auv = Some(scenario::AuvCna { pitch_options: 3, depth: 10.0, nav_diffusion: 0.01, surfacing: None });
+    sc.cna.auv = Some(scenario::AuvCna {
+        pitch_options: 3,
+        depth: scenario::CruiseDepth::Metres(10.0),
+        nav_diffusion: 0.01,
+        surfacing: None,
+    });
     sc.validate(std::path::Path::new("t")).unwrap();
     let r = one_run(&sc, "planner", 6, true, &Faults::default());
     let dr = one_run(&sc, "none", 6, false, &Faults::default());
@@ -203,4 +208,25 @@ fn an_auv_cna_plans_with_pitch_and_broadcasts_its_own_estimate() {
     assert_eq!((p.failures, p.min_levels_searched), (0, 3));
     assert!(r.auvs.iter().all(|a| a.ranges_applied > 0));
     assert!(r.fleet.error.mean < dr.fleet.error.mean / 2.0, "{} vs DR {}", r.fleet.error.mean, dr.fleet.error.mean);
+}
+
+#[test]
+fn a_cast_cruise_depth_follows_the_fleets_depths_and_reads_back() {
+    let file = include_str!("../../../../scenarios/sloping-auv-cna.toml");
+    let sc: Scenario = toml::from_str(file).unwrap();
+    assert_eq!(sc.cna.auv.as_ref().map(|a| a.depth), Some(scenario::CruiseDepth::Cast));
+    // One AUV over the shelf's shallow end (20–38 m) wants the CNA below the warm surface layer;
+    // eight, most of them at 80 m in the slow deep water, want it in the fastest water on top.
+    let (one, eight) = (sc.with_auvs(1).cna_cruise_depth(), sc.with_auvs(8).cna_cruise_depth());
+    assert!((5.0..=25.0).contains(&one) && eight < one, "1 AUV: {one} m, 8 AUVs: {eight} m");
+    assert_eq!(policies::cna_start(&sc.with_auvs(1)).pos.z, one);
+    let again: Scenario = toml::from_str(&toml::to_string(&sc).unwrap()).unwrap();
+    assert_eq!(again, sc);
+    let mut fixed = sc.clone();
+    fixed.cna.auv.as_mut().unwrap().depth = scenario::CruiseDepth::Metres(12.5);
+    assert!(toml::to_string(&fixed).unwrap().contains("depth = 12.5"));
+    assert_eq!(fixed.cna_cruise_depth(), 12.5);
+    let bad = file.replace("depth = \"cast\"", "depth = \"deep\"");
+    let err = toml::from_str::<Scenario>(&bad).unwrap_err().to_string();
+    assert!(err.contains("`deep`: expected a depth in metres or \"cast\""), "{err}");
 }

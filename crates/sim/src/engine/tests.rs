@@ -348,12 +348,17 @@ fn a_ship_on_a_fixed_track_converges_onto_it_and_keeps_its_speed() {
 /// dives back to its working depth, and does it again as its σ regrows; every policy alike.
 #[test]
 fn an_auv_cna_surfaces_for_a_fix_and_dives_back() {
-    use crate::closed_loop::scenario::AuvCna;
+    use crate::closed_loop::scenario::{AuvCna, CruiseDepth};
     use crate::models::surfacing::{SurfaceWhen, Surfacing};
     let mut sc = short_survey(Finish::Loiter { radius_m: 50.0 }, 900.0);
     // σ² grows 0.05 m²/s: σ = 2 m after 80 s, then 1 + 0.05·t reaches 4 m² 60 s after each fix.
     let surfacing = Surfacing { when: SurfaceWhen::Sigma { sigma_m: 2.0 }, fix_time_s: 30.0, gps_sd_m: 1.0 };
-    sc.cna.auv = Some(AuvCna { pitch_options: 1, depth: 10.0, nav_diffusion: 0.05, surfacing: Some(surfacing) });
+    sc.cna.auv = Some(AuvCna {
+        pitch_options: 1,
+        depth: CruiseDepth::Metres(10.0),
+        nav_diffusion: 0.05,
+        surfacing: Some(surfacing),
+    });
     for policy in ["centroid", "planner"] {
         let (r, trace) = traced(&sc, policy, 4);
         assert!(r.fleet.healthy, "{policy}");

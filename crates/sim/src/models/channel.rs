@@ -150,6 +150,10 @@ impl RangeError {
     }
 }
 
+/// Relative difference under which two depths' costs count as a tie
+/// ([`SoundSpeed::least_biased_depth`]).
+const TIE_TOLERANCE: f64 = 1e-9;
+
 /// The true sound speed. Travel time follows a straight ray between the two depths at the
 /// harmonic-mean speed of the layers it crosses (no refraction: an invented simplification, no
 /// thesis gives the ray model), so ranges the filters compute at their nominal speed carry the
@@ -214,6 +218,38 @@ impl SoundSpeed {
             })
             .sum();
         (hi - lo) / slowness
+    }
+
+    /// The whole-metre depth in `[lo, hi]` from which ranges to `auv_depths` (each rounded to the
+    /// metre, every sample weighing the same) carry the least mean-squared scale error
+    /// (nominal / c̄ − 1)² when converted at `nominal`: the fixed cruise depth a team holding this
+    /// profile as its CTD cast would pick (an invented rule, issue 10 session 26). Ties go to the
+    /// shallowest; `lo` itself when `auv_depths` is empty.
+    pub fn least_biased_depth(&self, nominal: f64, auv_depths: &[f64], (lo, hi): (f64, f64)) -> f64 {
+        let top = lo.ceil().max(0.0) as usize;
+        let deepest = auv_depths.iter().fold(hi, |d, &z| d.max(z)).floor().max(top as f64) as usize;
+        // Slowness from `top` down to each whole metre, exact over the profile's linear pieces.
+        let mut slowness = vec![0.0; deepest - top + 1];
+        for i in 1..slowness.len() {
+            let z = (top + i) as f64;
+            slowness[i] = slowness[i - 1] + 1.0 / self.mean_between(z - 1.0, z);
+        }
+        let mut weight = vec![0usize; slowness.len()];
+        for &z in auv_depths {
+            weight[(z.round().max(top as f64) as usize - top).min(deepest - top)] += 1;
+        }
+        let scale_error = |i: usize, j: usize| match i.abs_diff(j) {
+            0 => nominal / self.at((top + i) as f64) - 1.0,
+            dz => nominal * (slowness[i] - slowness[j]).abs() / dz as f64 - 1.0,
+        };
+        let cost =
+            |i: usize| weight.iter().enumerate().map(|(j, &w)| w as f64 * scale_error(i, j).powi(2)).sum::<f64>();
+        let last = (hi.floor() as usize).clamp(top, deepest) - top;
+        let costs: Vec<f64> = (0..=last).map(cost).collect();
+        let least = costs.iter().copied().fold(f64::INFINITY, f64::min);
+        // Rounding in the running sums must not pick a deeper depth of the same cost.
+        let shallowest = costs.iter().position(|&c| c <= least * (1.0 + TIE_TOLERANCE)).unwrap_or(0);
+        (top + shallowest) as f64
     }
 
     /// Slowest speed anywhere (the longest travel time a schedule must allow for).
@@ -346,6 +382,34 @@ mod tests {
         let bias = (1000.0f64.hypot(20.0)) - 1500.0 * tt;
         assert!(bias > 2.0 && bias < 6.0, "{bias}");
         assert_eq!(SoundSpeed::Constant { c: 1480.0 }.mean_between(3.0, 50.0), 1480.0);
+    }
+
+    #[test]
+    fn the_least_biased_depth_is_the_brute_force_minimum_of_the_mean_squared_scale_error() {
+        let s = SoundSpeed::summer();
+        // Written out from `mean_between` at every whole-metre depth, no running sums.
+        let brute = |auvs: &[f64], (lo, hi): (usize, usize)| {
+            let cost = |z: usize| {
+                auvs.iter().map(|&a| (1500.0 / s.mean_between(z as f64, a.round()) - 1.0).powi(2)).sum::<f64>()
+            };
+            (lo..=hi).fold(lo, |b, z| if cost(z) < cost(b) { z } else { b }) as f64
+        };
+        let cases: [(&[f64], (usize, usize)); 5] = [
+            (&[20.0, 22.4, 37.6], (0, 100)),
+            (&[20.0, 40.0, 60.0, 80.0], (0, 100)),
+            (&[55.0], (0, 100)),
+            (&[55.0], (3, 40)),
+            (&[5.2, 7.9, 9.6, 80.0, 80.0], (2, 60)),
+        ];
+        for (auvs, (lo, hi)) in cases {
+            let got = s.least_biased_depth(1500.0, auvs, (lo as f64, hi as f64));
+            assert_eq!(got, brute(auvs, (lo, hi)), "{auvs:?} in [{lo}, {hi}]");
+        }
+        // The water is at the filters' speed at 20.6 m: from 20 m to AUVs at 21 m the harmonic
+        // mean is within 0.1 m/s of it (|f| 5e-5), from 21 m or 19 m it is 0.35 m/s and 0.5 m/s off.
+        assert_eq!(s.least_biased_depth(1500.0, &[21.0; 4], (0.0, 100.0)), 20.0);
+        // Constant water biases every depth alike: the shallowest allowed.
+        assert_eq!(SoundSpeed::Constant { c: 1490.0 }.least_biased_depth(1500.0, &[30.0, 70.0], (4.0, 90.0)), 4.0);
     }
 
     #[test]
