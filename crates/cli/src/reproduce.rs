@@ -3,7 +3,9 @@
 //! a documented known deviation, 1 some check failed without one (or the run itself failed).
 
 use anyhow::{bail, Result};
-use coopnav_sim::experiments::{self, Check, ReproOptions, Size};
+use coopnav_sim::experiments::{self, Check, ReproOptions, ReproReport, Size};
+use coopnav_sim::output::{Manifest, RunDir};
+use std::path::PathBuf;
 use std::process::ExitCode;
 
 /// Exit status when the only failed checks are documented known deviations.
@@ -44,6 +46,12 @@ pub struct Args {
     /// Also print the numbers as JSON.
     #[arg(long)]
     json: bool,
+    /// Also write the table, the numbers (report.json) and the plots to this directory.
+    #[arg(short, long = "output", alias = "out")]
+    out: Option<PathBuf>,
+    /// Replace an existing output directory.
+    #[arg(long)]
+    force: bool,
 }
 
 pub fn run(args: Args) -> Result<ExitCode> {
@@ -55,13 +63,23 @@ pub fn run(args: Args) -> Result<ExitCode> {
     }
     let id = args.id.unwrap_or_default();
     let opts = ReproOptions { size: if args.reduced { Size::Reduced } else { Size::Full }, seed: args.seed };
+    // Refuse a bad output directory before the work, not after it.
+    let dir = args.out.as_ref().map(|p| RunDir::create(p, args.force)).transpose()?;
     let report = experiments::run(&id, &opts)?;
-    println!("{}", report.table);
-    for c in &report.checks {
-        println!("{}", c.line());
-    }
+    let text = printed(&report);
+    println!("{text}");
     if args.json {
         println!("{}", serde_json::to_string_pretty(&report)?);
+    }
+    if let Some(dir) = dir {
+        dir.write_text("table.txt", &text)?;
+        dir.write_json("report.json", &report)?;
+        for (name, svg) in &report.plots {
+            dir.write_text(name, svg)?;
+        }
+        let inputs = serde_json::json!({ "id": id, "reduced": args.reduced, "seed": args.seed });
+        dir.write_json("manifest.json", &Manifest::new("reproduce", Some(args.seed), inputs))?;
+        eprintln!("wrote {}", dir.finish()?.display());
     }
     match outcome(&report.checks) {
         Outcome::AllPassed => Ok(ExitCode::SUCCESS),
@@ -76,6 +94,12 @@ pub fn run(args: Args) -> Result<ExitCode> {
             bail!("{}: {n} property check(s) failed without a documented reason; see above", report.id)
         }
     }
+}
+
+/// The table and one line per check, as printed.
+fn printed(report: &ReproReport) -> String {
+    let lines: Vec<String> = report.checks.iter().map(Check::line).collect();
+    format!("{}\n{}", report.table, lines.join("\n"))
 }
 
 #[cfg(test)]

@@ -18,6 +18,7 @@ fn every_directory_writer_takes_dash_o_output() {
         &["hbl", "grid"],
         &["hbl", "tune"],
         &["hbl", "postprocess"],
+        &["reproduce"],
     ];
     for command in commands {
         let help = coopnav(tmp.path(), &[command, &["--help"][..]].concat());

@@ -40,8 +40,8 @@ const REDUCED: &[Reduced] = &[
         input: None,
     },
     Reduced {
-        readme: "reproduce closed-loop-vs-baselines",
-        run: "reproduce closed-loop-vs-baselines --reduced",
+        readme: "reproduce closed-loop-vs-baselines -o closed-loop",
+        run: "reproduce closed-loop-vs-baselines --reduced -o closed-loop",
         input: None,
     },
     Reduced { readme: "reproduce <id>", run: "reproduce hudson-table-5.8 --reduced", input: None },
@@ -79,7 +79,7 @@ const REDUCED: &[Reduced] = &[
 /// Commands (as run) whose property checks fail on today's main, with why: they must still run
 /// to completion and report their checks (exit 1 or 3, `[FAIL` lines), never crash.
 const CHECKS_FAILING: &[(&str, &str)] = &[(
-    "reproduce closed-loop-vs-baselines --reduced",
+    "reproduce closed-loop-vs-baselines --reduced -o closed-loop",
     "the estimator-aware planner does not win every cell of the reduced evaluation (issue 10 report, 2026-11-26: \
      4 runs of 15 minutes; sloping N = 2 ties, current N = 3 ties centroid-standoff)",
 )];

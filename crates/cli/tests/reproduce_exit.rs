@@ -41,3 +41,28 @@ fn an_unknown_experiment_exits_1() {
     assert_eq!(out.status.code(), Some(1));
     assert!(String::from_utf8_lossy(&out.stderr).contains("no-such-table"));
 }
+
+#[test]
+fn the_closed_loop_evaluation_writes_its_table_numbers_and_difference_plots() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = coopnav(tmp.path(), &["reproduce", "closed-loop-vs-baselines", "--reduced", "-o", "eval"]);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert_eq!(out.status.code(), Some(expected_status(&stdout)), "{stdout}");
+    let dir = tmp.path().join("eval");
+    let table = std::fs::read_to_string(dir.join("table.txt")).unwrap();
+    assert_eq!(format!("{table}\n"), stdout, "table.txt is what the run printed");
+    let report: serde_json::Value = serde_json::from_slice(&std::fs::read(dir.join("report.json")).unwrap()).unwrap();
+    let cells = report["data"]["cells"].as_array().unwrap();
+    // The reduced grid: current N = 1 and 3, sloping N = 2; ten baselines each.
+    assert_eq!(cells.len(), 30);
+    for scenario in ["current", "sloping-auv-cna"] {
+        let svg = std::fs::read_to_string(dir.join(format!("differences-{scenario}.svg"))).unwrap();
+        let own = cells.iter().filter(|c| c["scenario"] == scenario);
+        for c in own {
+            let label = format!("{scenario} N={} vs {}", c["n"], c["baseline"].as_str().unwrap());
+            assert!(svg.contains(&label), "{scenario}: no interval labelled {label}");
+        }
+    }
+    let again = coopnav(tmp.path(), &["reproduce", "closed-loop-vs-baselines", "--reduced", "-o", "eval"]);
+    assert!(String::from_utf8_lossy(&again.stderr).contains("--force"), "an existing directory is refused first");
+}

@@ -23,6 +23,7 @@ use crate::closed_loop::{comparison_table, monte_carlo_grid, Scenario};
 use crate::plot::PlotError;
 use coopnav_plan::PenaltyCase;
 use plotters::prelude::*;
+use plotters::style::text_anchor::{HPos, Pos, VPos};
 use serde::{Deserialize, Serialize};
 use std::fmt::Write as _;
 
@@ -282,8 +283,13 @@ pub fn evaluate(
         data.push(serde_json::to_value(&c).map_err(|e| fail(e.to_string()))?);
     }
     table += &summary_grid(&cells);
+    let mut plots = Vec::new();
+    for s in settings {
+        let own: Vec<Cell> = cells.iter().filter(|c| c.scenario == s.name).cloned().collect();
+        plots.push((format!("differences-{}.svg", s.name), difference_svg(&own).map_err(|e| fail(e.to_string()))?));
+    }
     let data = serde_json::json!({ "comparisons": data, "cells": cells });
-    Ok(ReproReport { id: ID.into(), table, checks, data })
+    Ok(ReproReport { plots, ..ReproReport::new(ID.into(), table, checks, data) })
 }
 
 /// The checks of one comparison: one per baseline (won or not, with the cause), filter health.
@@ -446,20 +452,20 @@ pub fn difference_svg(cells: &[Cell]) -> Result<String, PlotError> {
             .y_label_area_size(260)
             .build_cartesian_2d((lo - pad)..(hi + pad), 0.0..rows as f64)
             .map_err(|x| e(&x))?;
-        let label = |y: &f64| {
-            let i = rows.saturating_sub(1 + y.floor().max(0.0) as usize);
-            cells.get(i).map_or(String::new(), |c| format!("{} N={} vs {}", c.scenario, c.n, c.baseline))
-        };
         chart
             .configure_mesh()
-            .y_labels(rows)
-            .y_label_formatter(&label)
+            .y_labels(0)
             .x_desc("difference, m (negative = planner better)")
             .draw()
             .map_err(|x| e(&x))?;
         chart.draw_series(LineSeries::new([(0.0, 0.0), (0.0, rows as f64)], BLACK)).map_err(|x| e(&x))?;
+        // One label per interval, beside it (the mesh's own labels thin out to "nice" ticks).
+        let label_style = TextStyle::from(("sans-serif", 11).into_font()).pos(Pos::new(HPos::Right, VPos::Center));
         for (i, c) in cells.iter().enumerate() {
             let y = (rows - 1 - i) as f64 + 0.5;
+            let (px, py) = chart.backend_coord(&(lo - pad, y));
+            let text = format!("{} N={} vs {}", c.scenario, c.n, c.baseline);
+            root.draw(&Text::new(text, (px - 8, py), label_style.clone())).map_err(|x| e(&x))?;
             let colour = if c.won { GREEN } else { RED };
             let clip = |v: f64| v.clamp(lo - pad, hi + pad);
             chart

@@ -242,7 +242,7 @@ fn table_5(o: &ReproOptions) -> Result<ReproReport, ExperimentError> {
     ));
     let data = json!({ "runs": n, "seed": o.seed, "results": rows.iter().map(|(c, sim, field, p, g)| json!({
         "configuration": c.label(), "thesis_simulation": sim, "thesis_field": field, "ours": p, "ours_gated": g })).collect::<Vec<_>>() });
-    Ok(ReproReport { id: ID5.into(), table, checks, data })
+    Ok(ReproReport::new(ID5.into(), table, checks, data))
 }
 
 /// `sc` with its Gill cycle replaced by `cycle` (same configuration), τ set to its period.
@@ -294,7 +294,7 @@ fn cycles(o: &ReproOptions) -> Result<ReproReport, ExperimentError> {
     )
     .known_deviation(CYCLES_DEVIATION)];
     let data = json!({ "runs": n, "short": short, "long": long, "welch_long_minus_short": ci });
-    Ok(ReproReport { id: id.into(), table, checks, data })
+    Ok(ReproReport::new(id.into(), table, checks, data))
 }
 
 /// Table 4 grids (E × N, m), thesis buoy / AUV / saturation errors.
@@ -410,7 +410,7 @@ fn table_4(o: &ReproOptions) -> Result<ReproReport, ExperimentError> {
     ];
     let data = json!({ "runs": n, "buoy_zone_centre": centre, "rows": rows.iter().map(|(res, tb, ta, ts, s)| json!({
         "grid": res, "thesis": { "buoy": tb, "auv": ta, "saturation": ts }, "ours": s })).collect::<Vec<_>>() });
-    Ok(ReproReport { id: id.into(), table, checks, data })
+    Ok(ReproReport::new(id.into(), table, checks, data))
 }
 
 /// The finest grids' buoy, AUV and saturation errors each within `factor` of the thesis's (the
@@ -505,5 +505,5 @@ fn buoy_grid_exp(o: &ReproOptions) -> Result<ReproReport, ExperimentError> {
         ),
     ];
     let data = json!({ "spec": spec, "cells": cells, "optimal_region": best });
-    Ok(ReproReport { id: id.into(), table, checks, data })
+    Ok(ReproReport::new(id.into(), table, checks, data))
 }

@@ -356,12 +356,12 @@ fn table_53(
     }
     let mut checks = checks_53(&rows, &setups, n, 10.0);
     checks.push(cna_kind_order(&rows, sort, thesis));
-    Ok(ReproReport {
-        id: id.into(),
+    Ok(ReproReport::new(
+        id.into(),
         table,
         checks,
-        data: serde_json::to_value(&rows[..rows.len().min(20)]).unwrap_or_default(),
-    })
+        serde_json::to_value(&rows[..rows.len().min(20)]).unwrap_or_default(),
+    ))
 }
 
 /// The thesis's top row says whether an AUV CNA or the ASC wins the table; ours must agree: the
@@ -579,12 +579,12 @@ fn t61(opts: &ReproOptions) -> Result<ReproReport, ExperimentError> {
              invented (digest 5.4); the best rows match (2.22 m floor) but the greedy two-option rows do not",
         ),
     ];
-    Ok(ReproReport {
-        id: id.into(),
+    Ok(ReproReport::new(
+        id.into(),
         table,
         checks,
-        data: serde_json::to_value(&rows[..rows.len().min(30)]).unwrap_or_default(),
-    })
+        serde_json::to_value(&rows[..rows.len().min(30)]).unwrap_or_default(),
+    ))
 }
 
 /// Sec. 5.1–5.2: every Table 5.2 case, ASC, N = 2 and 5, τ = 10 s, A = 5, s = 1.5 m/s.
@@ -694,7 +694,7 @@ fn penalty_cases(opts: &ReproOptions) -> Result<ReproReport, ExperimentError> {
         flip(1003.0, 99.0) && !flip(1001.0, 99.0),
         "1003 + 2*99 = 1201 flips; 1001 + 2*99 = 1199 does not".to_string(),
     ));
-    Ok(ReproReport { id: id.into(), table, checks, data: serde_json::Value::Array(data) })
+    Ok(ReproReport::new(id.into(), table, checks, serde_json::Value::Array(data)))
 }
 
 /// One AUV on a straight northward line from (0, 0, 90); the CNA starts 1.05 km east of it.

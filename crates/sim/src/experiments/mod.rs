@@ -78,16 +78,23 @@ impl Check {
 }
 
 /// What a reproduction returns: a human-readable table (ours beside the thesis's), the checks,
-/// and the same numbers as JSON.
+/// the same numbers as JSON, and its plots (SVG, each with its file name; `reproduce -o` writes
+/// them).
 #[derive(Debug, Clone, Serialize)]
 pub struct ReproReport {
     pub id: String,
     pub table: String,
     pub checks: Vec<Check>,
     pub data: serde_json::Value,
+    #[serde(skip)]
+    pub plots: Vec<(String, String)>,
 }
 
 impl ReproReport {
+    pub fn new(id: String, table: String, checks: Vec<Check>, data: serde_json::Value) -> Self {
+        ReproReport { id, table, checks, data, plots: Vec::new() }
+    }
+
     pub fn all_passed(&self) -> bool {
         self.checks.iter().all(|c| c.passed)
     }

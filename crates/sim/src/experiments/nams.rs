@@ -177,12 +177,7 @@ pub fn report(
         data.push(serde_json::json!({"scenario": scenario, "adaptive": a, "best_control": c, "thesis": {"bandwidth": thesis[0], "status_period": thesis[1], "duty_cycle": thesis[2]}}));
     }
     let _ = writeln!(t, "\nAbsolute values differ from the thesis by construction (no Bedford Basin bathymetry: the synthetic shelf, and the TL above); the thesis's own channel gave rate 1 only ≈ 38 % success in scenario 1.");
-    Ok(ReproReport {
-        id: id.into(),
-        table: t,
-        checks,
-        data: serde_json::json!({"cells": result.cells, "tables": data}),
-    })
+    Ok(ReproReport::new(id.into(), t, checks, serde_json::json!({"cells": result.cells, "tables": data})))
 }
 
 /// Tables 10–11 (status period, duty cycle): adaptive vs best control lie the thesis's way round
