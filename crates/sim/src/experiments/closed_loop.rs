@@ -116,7 +116,7 @@ pub const DEPTH_AWARE_BIAS_PER_KM: f64 = 3.0;
 pub const DEPTH_AWARE_MIN_AUVS: usize = 2;
 
 /// L of `planner-estimator` with the AUV CNA (pitch options at level 0 only) for N AUVs: 3 for
-/// one AUV, 5 from 2 on, 4 from 5 on. Tuning seed, sloping scenario, 20 runs, L = 3 / L = 5: N = 1 3.60 / 3.81 m,
+/// one AUV, 5 for 2 to 5, 4 from 6 on. Tuning seed, sloping scenario, 20 runs, L = 3 / L = 5: N = 1 3.60 / 3.81 m,
 /// N = 2 3.80 / 3.77 m, N = 3 4.37 / 4.10 m, N = 5 5.28 / 4.98 m, N = 8 7.03 / 6.98 m (L = 6:
 /// 6.91 m, twice the time). From [`SPREAD_FLEET_MIN_AUVS`] on, 4: once the CNA chooses its depth
 /// ([`DEPTH_AWARE_BIAS_PER_KM`]) every pitch option at level 0 keeps a full subtree, and L = 5
@@ -125,11 +125,13 @@ pub const DEPTH_AWARE_MIN_AUVS: usize = 2;
 /// 5.95 → 6.03 m on the tuning seed (N = 3 would lose 3.94 → 4.09 m, and keeps L = 5).
 /// Session 26, with every policy cruising at the cast's depth (`cna.auv.depth = "cast"`), 100
 /// runs: N = 2 L = 3 3.99 m, L = 4 3.95, L = 5 3.86, L = 6 3.81 (3× L = 5's time); N = 1 L = 3
-/// 3.70, L = 4 and 5 3.74. So 5 from 2 AUVs on.
+/// 3.70, L = 4 and 5 3.74. So 5 from 2 AUVs on. N = 5 L = 4 4.78 m (ties centroid-standoff −0.08
+/// and trail −0.08), L = 5 4.65 m (−0.21 and −0.21, both won): 5 at N = 5 too. N = 8 L = 4 6.12,
+/// L = 5 6.02 m (trail +0.07, −0.03: a tie either way, at twice the time): 4 from 6 AUVs on.
 pub fn auv_cna_look_ahead(n: usize) -> usize {
     if n < 2 {
         3
-    } else if n < SPREAD_FLEET_MIN_AUVS {
+    } else if n <= 5 {
         5
     } else {
         4
@@ -261,7 +263,7 @@ pub fn evaluate(
     let mut table = format!(
         "True mean navigation error of the survey AUVs (m), {runs} runs per policy and cell, base seed {seed} \
          (settings chosen on base seed {TUNING_SEED}); planners A=5, L=5; planner-estimator: L=5 (with the AUV \
-         CNA: every policy cruising at the depth the sound-speed profile favours for the fleet, its pitch options at level 0 only, L=3 with one AUV and 4 from 5 on, from 2 AUVs on its depth chosen by the profile with the \
+         CNA: every policy cruising at the depth the sound-speed profile favours for the fleet, its pitch options at level 0 only, L=3 with one AUV and 4 from 6 on, from 2 AUVs on its depth chosen by the profile with the \
          range bias the profile gives plus {DEPTH_AWARE_BIAS_PER_KM} m/km, levelling off at each step's depth), \
          aggregate sigma_sum, range bias {ESTIMATOR_BIAS_PER_KM} m/km, {ESTIMATOR_TERMINAL_LEVELS} levels of cost-to-go; from \
          {SPREAD_FLEET_MIN_AUVS} AUVs on no level-0 distance penalty, the reach cost-to-go (p_u {REACH_SUCCESS}) and \
