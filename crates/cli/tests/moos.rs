@@ -37,8 +37,12 @@ fn short_simulation(dir: &Path) -> PathBuf {
 fn short_auv_cna_simulation(dir: &Path) -> PathBuf {
     let file = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenarios/sloping-auv-cna.toml");
     let text = std::fs::read_to_string(file).unwrap();
-    let short = text.replace("duration_s = 3600.0", "duration_s = 1200.0");
-    assert_ne!(short, text, "the library file's duration line moved");
+    // A cruise depth of its own: the file's "cast" depth for 3 AUVs is the surface, where the CNA
+    // would never change depth.
+    for line in ["duration_s = 3600.0", "depth = \"cast\""] {
+        assert!(text.contains(line), "the library file's `{line}` moved");
+    }
+    let short = text.replace("duration_s = 3600.0", "duration_s = 1200.0").replace("depth = \"cast\"", "depth = 10.0");
     let scenario = dir.join("auv-cna.toml");
     std::fs::write(&scenario, short).unwrap();
     let out = dir.join("auv-cna");
