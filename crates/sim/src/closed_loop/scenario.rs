@@ -338,7 +338,8 @@ pub struct Planner {
     pub estimator_bias_per_km: f64,
     /// `planner-estimator` also prices the range bias `channel.sound_speed` causes, as a CTD cast
     /// the CNA holds: the scale error between the CNA's depth and each AUV's against the speed the
-    /// filters assume, on top of `estimator_bias_per_km` (coopnav_plan estimator step 4,
+    /// filters convert at (`filter.sound_speed`: none where they convert with the water's own cast),
+    /// on top of `estimator_bias_per_km` (coopnav_plan estimator step 4,
     /// `BiasTable`; an invention of issue 10, session 25). With an AUV CNA and
     /// `estimator_level_off` it lets the planner choose the CNA's depth.
     #[serde(default)]
