@@ -174,11 +174,12 @@ fn build(name: &str, sc: &Scenario, planned: Option<&TimedWaypoints>) -> Result<
             }
             if estimator && p.estimator_bias_profile {
                 // The scale error a range between two depths carries: travel time at the water's
-                // harmonic-mean speed, converted at the filters' (the engine's straight-ray model).
-                let nominal = sc.filter.params.range_noise.sound_speed;
-                let speed = &sc.channel.sound_speed;
+                // harmonic-mean speed, converted at the filters' (the engine's straight-ray model;
+                // none where the filters convert with a cast of this water, `filter.sound_speed`).
+                let filters = sc.filter.range_speed(&sc.channel.sound_speed);
+                let water = &sc.channel.sound_speed;
                 let table = coopnav_plan::BiasTable::sample(BIAS_TABLE_DEPTH_M, |z_cna, z_auv| {
-                    nominal / speed.mean_between(z_cna, z_auv) - 1.0
+                    filters.between(z_cna, z_auv) / water.mean_between(z_cna, z_auv) - 1.0
                 })
                 .map_err(plan_err)?;
                 policy = policy.with_bias(table);

@@ -5,7 +5,7 @@
 pub use crate::engine::health::Health;
 use crate::models::buoy::{BuoySpec, MAX_BUOYS};
 use crate::models::channel::Channel;
-use crate::models::filter::{FilterRate, FilterSpec};
+use crate::models::filter::{FilterRate, FilterSoundSpeed, FilterSpec};
 use crate::models::finish::Finish;
 use crate::models::minipacket;
 use crate::models::mower::MowerSpec;
@@ -107,7 +107,12 @@ fn default_filter() -> FilterSpec {
     let thesis = AuvParams::default();
     let q = [CLOSED_LOOP_Q_EN, CLOSED_LOOP_Q_EN, thesis.q[2], thesis.q[3], thesis.q[4]];
     let params = AuvParams { range_noise: RangeNoise { sigma_time: 1e-4, ..RangeNoise::default() }, q, ..thesis };
-    FilterSpec { model: AuvModel::Thesis, params, rate: FilterRate::EveryStep }
+    FilterSpec {
+        model: AuvModel::Thesis,
+        params,
+        rate: FilterRate::EveryStep,
+        sound_speed: FilterSoundSpeed::Constant {},
+    }
 }
 
 /// Position process noise of the closed loop's filters, m² per 0.1 s step: a fifth of Gill's Table 3
@@ -386,7 +391,8 @@ pub struct Planner {
     pub estimator_bias_per_km: f64,
     /// `planner-estimator` also prices the range bias `channel.sound_speed` causes, as a CTD cast
     /// the CNA holds: the scale error between the CNA's depth and each AUV's against the speed the
-    /// filters assume, on top of `estimator_bias_per_km` (coopnav_plan estimator step 4,
+    /// filters convert at (`filter.sound_speed`: none where they convert with the water's own cast),
+    /// on top of `estimator_bias_per_km` (coopnav_plan estimator step 4,
     /// `BiasTable`; an invention of issue 10, session 25). With an AUV CNA and
     /// `estimator_level_off` it lets the planner choose the CNA's depth.
     #[serde(default)]
@@ -1000,6 +1006,19 @@ mod tests {
         assert_eq!(s.filter.params.q, plain.filter.params.q);
         let e = err(&format!("{EXAMPLE}\n[filter.range_noise]\nsigma_tim = 1e-3\n"));
         assert!(e.contains("sigma_tim"), "{e}");
+    }
+
+    /// The filters' own cast is checked as `channel.sound_speed` is, under its own field path.
+    #[test]
+    fn a_filters_own_cast_is_validated_by_field() {
+        let cast = "sound_speed = { kind = \"cast\", points = [[0.0, 1510.0], [0.0, 1200.0]] }";
+        let e = err(&format!("{EXAMPLE}\n[filter]\n{cast}\n"));
+        assert!(e.contains("filter.sound_speed.points[1][0]") && e.contains("strictly increasing"), "{e}");
+        assert!(e.contains("filter.sound_speed.points[1][1]") && e.contains("1300..=1700"), "{e}");
+        let empty = err(&format!("{EXAMPLE}\n[filter]\nsound_speed = {{ kind = \"cast\", points = [] }}\n"));
+        assert!(empty.contains("filter.sound_speed.points"), "{empty}");
+        let ok = format!("{EXAMPLE}\n[filter]\nsound_speed = {{ kind = \"cast\" }}\n");
+        Scenario::parse(&ok, Path::new("ok.toml")).unwrap();
     }
 
     /// NaN, infinite and negative sensor noise, a bad channel model, a bad finish behaviour and a

@@ -26,6 +26,7 @@ use crate::closed_loop::planner_policy::{ErrorTracker, PlannerStats};
 use crate::closed_loop::policies::{cna_start, Policy};
 use crate::closed_loop::scenario::{BeforeFirstReport, Scenario};
 use crate::models::channel::Clock;
+use crate::models::filter::RangeSpeed;
 use crate::models::peer::StatusFormat;
 use crate::models::schedule::Slot;
 use crate::models::surfacing::OwnNav;
@@ -144,6 +145,8 @@ struct Engine<'a> {
     /// Per survey AUV, the channel draws of its statuses at the other survey AUVs.
     peer_draws: Vec<ChaCha8Rng>,
     air: InFlight<Payload>,
+    /// How the survey AUVs' filters turn travel times into ranges (`filter.sound_speed`).
+    range_speed: RangeSpeed,
     /// The scenario's transmission-loss model, built once for the run.
     tl: Arc<dyn TransmissionLoss>,
     /// Whether a failed transmission-loss lookup was reported (once per run: it repeats per packet).
@@ -321,6 +324,7 @@ impl<'a> Engine<'a> {
             peers: peer_links(sc, &auvs),
             peer_draws: (0..n).map(|k| streams.rng(peer::STREAM_BASE + k as u64)).collect(),
             air: InFlight::new(sc.channel.collisions.capture_margin_db),
+            range_speed: sc.filter.range_speed(&sc.channel.sound_speed),
             tl: tl.map_or_else(|| sc.comms.tl.provider(sc), Ok).unwrap_or_else(|e| {
                 // Validation builds the provider first, so this is a scenario built in code.
                 tracing::error!(error = %e, "transmission loss unavailable: every packet is lost");
@@ -353,6 +357,7 @@ impl<'a> Engine<'a> {
             peers: self.peers.clone(),
             peer_draws: self.peer_draws.clone(),
             air: self.air.clone(),
+            range_speed: self.range_speed.clone(),
             tl: Arc::clone(&self.tl),
             tl_failure_reported: self.tl_failure_reported.clone(),
             next_decision: self.next_decision,

@@ -475,8 +475,9 @@ impl Engine<'_> {
     /// AUV `k`'s filter applies the range of a decoded broadcast from a transponder at `fix`. The
     /// range was measured at the start of the arrival; the modem driver moves the transponder by
     /// the AUV's own dead-reckoned motion over the decode delay, so the filter can apply it now.
+    /// The travel time becomes a range at the speed `filter.sound_speed` gives between the
+    /// transponder's reported depth and the AUV's measured one.
     pub(super) fn apply_range(&mut self, k: usize, meta: &Arrival<()>, fix: Vec3, travel_time: Option<f64>) {
-        let sc = self.sc;
         let a = &mut self.auvs[k];
         let Some(travel_time) = travel_time else { return };
         a.ekf.predict_to(meta.end, a.yaw_measured);
@@ -485,7 +486,7 @@ impl Engine<'_> {
         let delay = meta.end - meta.start;
         let shift = Vec3::new((speed * psi.cos() + ce) * delay, (speed * psi.sin() + cn) * delay, 0.0);
         let m = RangeMeasurement {
-            range: sc.filter.params.range_noise.sound_speed * travel_time,
+            range: self.range_speed.between(fix.z, a.truth.z) * travel_time,
             travel_time,
             transponder: fix + shift,
         };

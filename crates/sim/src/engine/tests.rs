@@ -582,3 +582,35 @@ fn a_fork_on_the_runs_own_draws_finishes_the_run_exactly() {
     assert_eq!(fresh, again);
     assert_eq!(run(&sc, &mut build(), 11, &faults, &mut ()).fleet, whole);
 }
+
+/// Issue 10, session 26: with the sea's range noise, the dead-reckoning errors and the CNA's GPS
+/// error off, an AUV at 80 m ranged from the surface under the summer profile keeps the profile's
+/// scale error (1500 / c̄ − 1, about +0.3 %) while its filter converts at 1500 m/s, and loses it
+/// when the filter converts with a cast of the water (`filter.sound_speed`): its error is then the
+/// one it has in water of the filter's constant 1500 m/s.
+#[test]
+fn a_filter_converting_with_the_cast_loses_the_profiles_range_bias() {
+    use crate::models::channel::RangeError;
+    use crate::models::filter::FilterSoundSpeed;
+    let mut sc = Scenario::example().with_auvs(1);
+    sc.duration_s = 1800.0;
+    sc.fleet.depth = coopnav_core::DepthTarget::Depth { depth: 80.0 };
+    (sc.fleet.current, sc.fleet.init_position_sd, sc.cna.gps_sd) = ((0.0, 0.0), 0.0, 0.0);
+    let s = &mut sc.sensors;
+    (s.speed_sd, s.compass_bias_step_deg, s.compass_white_deg, s.yaw_rate_white_deg_s) = (0.0, 0.0, 0.0, 0.0);
+    sc.channel.range_error = RangeError::Gaussian { extra_sd: 0.0 };
+    let noise = &mut sc.filter.params.range_noise;
+    (noise.sigma_sound_speed, noise.sigma_time) = (0.0, 1e-6);
+    sc.validate(std::path::Path::new("t")).unwrap();
+    let (constant, _) = traced(&sc, "centroid-standoff", 3);
+    sc.filter.sound_speed = FilterSoundSpeed::Cast { points: None };
+    let (cast, _) = traced(&sc, "centroid-standoff", 3);
+    // The error left without any profile: water at the filter's 1500 m/s.
+    sc.channel.sound_speed = crate::models::channel::SoundSpeed::Constant { c: 1500.0 };
+    let (matched, _) = traced(&sc, "centroid-standoff", 3);
+    let [constant, cast, matched] = [constant, cast, matched].map(|r| r.auvs[0].error.mean);
+    // Measured: 1.473, 0.4728 and 0.4728 m (the cast's and the matched run's differ in the 5th
+    // digit: their travel times, so their arrival times, differ).
+    assert!(constant > 2.0 * matched, "{constant} against {matched}");
+    assert!((cast - matched).abs() < 0.01 * matched, "{cast} against {matched}");
+}

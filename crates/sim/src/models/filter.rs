@@ -2,24 +2,84 @@
 //! `[sensors]`): the state vector (`model`: the thesis's 5 states, or 7 with a water current) and
 //! the coefficients of the nav crate's [`AuvParams`], in one table:
 //! `[filter] model = { kind = "current" }`, `sigma_speed = 0.05`, … Absent keys keep the defaults.
-//! `rate` says how often the filters run ([`FilterRate`]).
+//! `rate` says how often the filters run ([`FilterRate`]), `sound_speed` how they turn a travel
+//! time into a range ([`FilterSoundSpeed`]).
 
+use crate::models::channel::SoundSpeed;
 use coopnav_core::validation::{CheckFields, Problems};
 use coopnav_nav::{AuvModel, AuvParams};
 use serde::{Deserialize, Serialize};
 
-/// The `[filter]` table: [`AuvParams`]'s keys plus `model` and `rate`.
+/// The `[filter]` table: [`AuvParams`]'s keys plus `model`, `rate` and `sound_speed`.
 #[derive(Debug, Clone, PartialEq)]
 pub struct FilterSpec {
     pub model: AuvModel,
     pub params: AuvParams,
     pub rate: FilterRate,
+    pub sound_speed: FilterSoundSpeed,
 }
 
 impl CheckFields for FilterSpec {
     fn check_fields(&self, prefix: &str, p: &mut Problems) {
         self.model.check_fields(&format!("{prefix}model."), p);
         self.params.check_fields(prefix, p);
+        if let FilterSoundSpeed::Cast { points: Some(points) } = &self.sound_speed {
+            p.extend(SoundSpeed::Profile { points: points.clone() }.problems(&format!("{prefix}{SOUND_SPEED_KEY}.")));
+        }
+    }
+}
+
+impl FilterSpec {
+    /// How these filters convert travel times in water whose true sound speed is `channel` (a
+    /// cast without points of its own is a cast of that water).
+    pub fn range_speed(&self, channel: &SoundSpeed) -> RangeSpeed {
+        let cast = match &self.sound_speed {
+            FilterSoundSpeed::Constant {} => None,
+            FilterSoundSpeed::Cast { points: None } => Some(channel.clone()),
+            FilterSoundSpeed::Cast { points: Some(points) } => Some(SoundSpeed::Profile { points: points.clone() }),
+        };
+        RangeSpeed { nominal: self.params.range_noise.sound_speed, cast }
+    }
+}
+
+/// The speed at which a survey AUV's filter converts a one-way travel time to a range:
+/// `{ kind = "constant" }` (the default, the thesis's: every travel time at
+/// `range_noise.sound_speed`) or `{ kind = "cast" }`, the harmonic-mean speed of a CTD cast between
+/// the transponder's depth (as its packet reports it) and the AUV's own (its depth sensor), as a
+/// field team converts with its cast (issue 10, session 26). The cast is `channel.sound_speed`
+/// unless `points = [[depth m, speed m/s], ...]` give one of its own (a real cast is not the
+/// water: an older cast, another station). Either way the range's variance stays the travel
+/// time's (`range_noise`).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
+pub enum FilterSoundSpeed {
+    /// A struct variant, so that `{ kind = "constant", c = … }` is refused rather than ignored
+    /// (the speed is `range_noise.sound_speed`).
+    Constant {},
+    Cast {
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        points: Option<Vec<[f64; 2]>>,
+    },
+}
+
+impl Default for FilterSoundSpeed {
+    fn default() -> Self {
+        FilterSoundSpeed::Constant {}
+    }
+}
+
+/// [`FilterSoundSpeed`] resolved against the scenario's channel, built once per run.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RangeSpeed {
+    nominal: f64,
+    cast: Option<SoundSpeed>,
+}
+
+impl RangeSpeed {
+    /// Speed (m/s) at which a travel time between a transponder at depth `z_transponder` and an
+    /// AUV at depth `z_auv` becomes a range.
+    pub fn between(&self, z_transponder: f64, z_auv: f64) -> f64 {
+        self.cast.as_ref().map_or(self.nominal, |cast| cast.mean_between(z_transponder, z_auv))
     }
 }
 
@@ -71,6 +131,7 @@ fn whole_steps(period_s: f64, dt: f64) -> Option<u64> {
 
 const MODEL_KEY: &str = "model";
 const RATE_KEY: &str = "rate";
+const SOUND_SPEED_KEY: &str = "sound_speed";
 
 impl Serialize for FilterSpec {
     fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
@@ -79,9 +140,13 @@ impl Serialize for FilterSpec {
         let model = toml::Value::try_from(self.model).map_err(S::Error::custom)?;
         if let toml::Value::Table(t) = &mut table {
             t.insert(MODEL_KEY.into(), model);
-            // Written only when set, so the files and manifests of every-step runs stay as they were.
+            // Written only when set, so the files and manifests of earlier runs stay as they were.
             if self.rate != FilterRate::EveryStep {
                 t.insert(RATE_KEY.into(), toml::Value::try_from(self.rate).map_err(S::Error::custom)?);
+            }
+            if self.sound_speed != (FilterSoundSpeed::Constant {}) {
+                let speed = toml::Value::try_from(&self.sound_speed).map_err(S::Error::custom)?;
+                t.insert(SOUND_SPEED_KEY.into(), speed);
             }
         }
         table.serialize(s)
@@ -89,8 +154,8 @@ impl Serialize for FilterSpec {
 }
 
 impl<'de> Deserialize<'de> for FilterSpec {
-    /// `model` and `rate` are taken out of the table; the rest must be [`AuvParams`]'s keys
-    /// (unknown keys are refused there, by name).
+    /// `model`, `rate` and `sound_speed` are taken out of the table; the rest must be
+    /// [`AuvParams`]'s keys (unknown keys are refused there, by name).
     fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
         use serde::de::Error;
         let mut value = toml::Value::deserialize(d)?;
@@ -103,14 +168,63 @@ impl<'de> Deserialize<'de> for FilterSpec {
             Some(r) => r.try_into().map_err(|e| D::Error::custom(format!("{RATE_KEY}: {e}")))?,
             None => FilterRate::default(),
         };
-        Ok(FilterSpec { model, params: value.try_into().map_err(D::Error::custom)?, rate })
+        let sound_speed = match take(SOUND_SPEED_KEY) {
+            Some(s) => s.try_into().map_err(|e| D::Error::custom(format!("{SOUND_SPEED_KEY}: {e}")))?,
+            None => FilterSoundSpeed::default(),
+        };
+        Ok(FilterSpec { model, params: value.try_into().map_err(D::Error::custom)?, rate, sound_speed })
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use coopnav_core::Vec3;
     use coopnav_nav::CurrentParams;
+
+    #[test]
+    fn a_cast_of_the_water_turns_a_travel_time_into_the_true_range_and_the_constant_speed_does_not() {
+        let water = SoundSpeed::summer();
+        let (transponder, auv) = (Vec3::new(0.0, 0.0, 2.0), Vec3::new(600.0, 300.0, 80.0));
+        let truth = (auv - transponder).norm();
+        let travel_time = water.travel_time(transponder, |_| auv);
+        let error = |toml_text: &str| {
+            let spec: FilterSpec = toml::from_str(toml_text).unwrap();
+            spec.range_speed(&water).between(transponder.z, auv.z) * travel_time / truth - 1.0
+        };
+        assert!(error("sound_speed = { kind = \"cast\" }\n").abs() < 1e-9);
+        // At 1500 m/s the range carries the scale error f = 1500 / c̄ − 1 (+0.3 % here).
+        let f = 1500.0 / water.mean_between(2.0, 80.0) - 1.0;
+        assert!(f > 2e-3, "{f}");
+        assert!((error("") - f).abs() < 1e-9);
+        assert!((error("sound_speed = { kind = \"constant\" }\n") - f).abs() < 1e-9);
+        // A cast of its own, 2 m/s slower than the water everywhere: ranges about 0.13 % short.
+        let slow = "sound_speed = { kind = \"cast\", points = [[0.0, 1508.0], [10.0, 1507.0], [30.0, 1490.0], [100.0, 1486.0]] }\n";
+        assert!((-1.5e-3..-1.2e-3).contains(&error(slow)), "{}", error(slow));
+    }
+
+    #[test]
+    fn the_sound_speed_key_is_read_written_only_when_set_and_its_mistakes_named() {
+        let constant: FilterSpec = toml::from_str("sigma_speed = 0.2\n").unwrap();
+        assert_eq!(constant.sound_speed, FilterSoundSpeed::Constant {});
+        let written: toml::Table = toml::from_str(&toml::to_string(&constant).unwrap()).unwrap();
+        assert!(!written.contains_key("sound_speed"), "written as before: {written}");
+        for text in
+            ["sound_speed = { kind = \"cast\" }\n", "sound_speed = { kind = \"cast\", points = [[0.0, 1500.0]] }\n"]
+        {
+            let spec: FilterSpec = toml::from_str(text).unwrap();
+            let back: FilterSpec = toml::from_str(&toml::to_string(&spec).unwrap()).unwrap();
+            assert_eq!(back, spec, "round trip of {text}");
+        }
+        for (text, named) in [
+            ("sound_speed = { kind = \"cats\" }\n", "cats"),
+            ("sound_speed = { kind = \"cast\", pionts = [[0.0, 1500.0]] }\n", "pionts"),
+            ("sound_speed = { kind = \"constant\", c = 1490.0 }\n", "`c`"),
+        ] {
+            let e = toml::from_str::<FilterSpec>(text).unwrap_err().to_string();
+            assert!(e.contains("sound_speed") && e.contains(named), "{text}: {e}");
+        }
+    }
 
     #[test]
     fn the_model_key_selects_the_state_vector_and_the_rest_are_coefficients() {
