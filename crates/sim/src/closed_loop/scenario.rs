@@ -851,8 +851,8 @@ impl Scenario {
 
     /// The CNA's cruise depth, m: 0 for an ASC, `cna.auv.depth` for an AUV, with `"cast"` the
     /// depth in the planner's limits that [`least_biased_depth`](crate::models::channel::SoundSpeed::least_biased_depth) picks for the survey
-    /// plan's AUV depths (sampled every [`CAST_SAMPLE_M`] along each lawnmower) at the filters'
-    /// sound speed.
+    /// plan's AUV depths (sampled every [`CAST_SAMPLE_M`] along each lawnmower) at the speeds the
+    /// filters convert at (`filter.sound_speed`).
     pub fn cna_cruise_depth(&self) -> f64 {
         match self.cna.auv.as_ref().map(|a| a.depth) {
             None => 0.0,
@@ -867,8 +867,8 @@ impl Scenario {
                     .flat_map(|k| along(&self.lawnmower(k).waypoints(), CAST_SAMPLE_M))
                     .map(|(x, y)| self.fleet.depth.depth_over(bathy.depth_at(x, y)))
                     .collect();
-                let nominal = self.filter.params.range_noise.sound_speed;
-                self.channel.sound_speed.least_biased_depth(nominal, &depths, limits)
+                let filters = self.filter.range_speed(&self.channel.sound_speed).conversion();
+                self.channel.sound_speed.least_biased_depth(&filters, &depths, limits)
             }
         }
     }

@@ -222,25 +222,31 @@ impl SoundSpeed {
 
     /// The whole-metre depth in `[lo, hi]` from which ranges to `auv_depths` (each rounded to the
     /// metre, every sample weighing the same) carry the least mean-squared scale error
-    /// (nominal / c̄ − 1)² when converted at `nominal`: the fixed cruise depth a team holding this
-    /// profile as its CTD cast would pick (an invented rule, issue 10 session 26). Ties go to the
-    /// shallowest; `lo` itself when `auv_depths` is empty.
-    pub fn least_biased_depth(&self, nominal: f64, auv_depths: &[f64], (lo, hi): (f64, f64)) -> f64 {
+    /// (c̄_filters / c̄_water − 1)² when the filters convert travel times at the harmonic-mean speeds
+    /// of `filters` (a constant: the thesis's fixed speed; a cast: `filter.sound_speed`): the fixed
+    /// cruise depth a team holding this profile as its CTD cast would pick (an invented rule,
+    /// issue 10 session 26). Ties go to the shallowest; `lo` itself when `auv_depths` is empty.
+    pub fn least_biased_depth(&self, filters: &SoundSpeed, auv_depths: &[f64], (lo, hi): (f64, f64)) -> f64 {
         let top = lo.ceil().max(0.0) as usize;
         let deepest = auv_depths.iter().fold(hi, |d, &z| d.max(z)).floor().max(top as f64) as usize;
-        // Slowness from `top` down to each whole metre, exact over the profile's linear pieces.
-        let mut slowness = vec![0.0; deepest - top + 1];
-        for i in 1..slowness.len() {
-            let z = (top + i) as f64;
-            slowness[i] = slowness[i - 1] + 1.0 / self.mean_between(z - 1.0, z);
-        }
-        let mut weight = vec![0usize; slowness.len()];
+        // Slowness from `top` down to each whole metre, exact over the profiles' linear pieces.
+        let slowness = |s: &SoundSpeed| {
+            let mut sum = vec![0.0; deepest - top + 1];
+            for i in 1..sum.len() {
+                let z = (top + i) as f64;
+                sum[i] = sum[i - 1] + 1.0 / s.mean_between(z - 1.0, z);
+            }
+            sum
+        };
+        let (water, filter) = (slowness(self), slowness(filters));
+        let mut weight = vec![0usize; water.len()];
         for &z in auv_depths {
             weight[(z.round().max(top as f64) as usize - top).min(deepest - top)] += 1;
         }
+        // c̄_f / c̄_w = (dz / S_f) / (dz / S_w) = S_w / S_f.
         let scale_error = |i: usize, j: usize| match i.abs_diff(j) {
-            0 => nominal / self.at((top + i) as f64) - 1.0,
-            dz => nominal * (slowness[i] - slowness[j]).abs() / dz as f64 - 1.0,
+            0 => filters.at((top + i) as f64) / self.at((top + i) as f64) - 1.0,
+            _ => (water[i] - water[j]) / (filter[i] - filter[j]) - 1.0,
         };
         let cost =
             |i: usize| weight.iter().enumerate().map(|(j, &w)| w as f64 * scale_error(i, j).powi(2)).sum::<f64>();
@@ -386,7 +392,7 @@ mod tests {
 
     #[test]
     fn the_least_biased_depth_is_the_brute_force_minimum_of_the_mean_squared_scale_error() {
-        let s = SoundSpeed::summer();
+        let (s, filters) = (SoundSpeed::summer(), SoundSpeed::Constant { c: 1500.0 });
         // Written out from `mean_between` at every whole-metre depth, no running sums.
         let brute = |auvs: &[f64], (lo, hi): (usize, usize)| {
             let cost = |z: usize| {
@@ -402,14 +408,16 @@ mod tests {
             (&[5.2, 7.9, 9.6, 80.0, 80.0], (2, 60)),
         ];
         for (auvs, (lo, hi)) in cases {
-            let got = s.least_biased_depth(1500.0, auvs, (lo as f64, hi as f64));
+            let got = s.least_biased_depth(&filters, auvs, (lo as f64, hi as f64));
             assert_eq!(got, brute(auvs, (lo, hi)), "{auvs:?} in [{lo}, {hi}]");
         }
         // The water is at the filters' speed at 20.6 m: from 20 m to AUVs at 21 m the harmonic
         // mean is within 0.1 m/s of it (|f| 5e-5), from 21 m or 19 m it is 0.35 m/s and 0.5 m/s off.
-        assert_eq!(s.least_biased_depth(1500.0, &[21.0; 4], (0.0, 100.0)), 20.0);
+        assert_eq!(s.least_biased_depth(&filters, &[21.0; 4], (0.0, 100.0)), 20.0);
         // Constant water biases every depth alike: the shallowest allowed.
-        assert_eq!(SoundSpeed::Constant { c: 1490.0 }.least_biased_depth(1500.0, &[30.0, 70.0], (4.0, 90.0)), 4.0);
+        assert_eq!(SoundSpeed::Constant { c: 1490.0 }.least_biased_depth(&filters, &[30.0, 70.0], (4.0, 90.0)), 4.0);
+        // Filters that convert with a cast of this very water have no bias anywhere: the shallowest.
+        assert_eq!(s.least_biased_depth(&s, &[20.0, 80.0], (3.0, 90.0)), 3.0);
     }
 
     #[test]

@@ -76,6 +76,11 @@ pub struct RangeSpeed {
 }
 
 impl RangeSpeed {
+    /// The speeds these filters convert at, as a profile (a constant one without a cast).
+    pub fn conversion(&self) -> SoundSpeed {
+        self.cast.clone().unwrap_or(SoundSpeed::Constant { c: self.nominal })
+    }
+
     /// Speed (m/s) at which a travel time between a transponder at depth `z_transponder` and an
     /// AUV at depth `z_auv` becomes a range.
     pub fn between(&self, z_transponder: f64, z_auv: f64) -> f64 {
