@@ -850,9 +850,11 @@ impl Scenario {
     }
 
     /// The CNA's cruise depth, m: 0 for an ASC, `cna.auv.depth` for an AUV, with `"cast"` the
-    /// depth in the planner's limits that [`least_biased_depth`](crate::models::channel::SoundSpeed::least_biased_depth) picks for the survey
+    /// depth in the planner's limits that [`SoundSpeed::least_biased_depth`] picks for the survey
     /// plan's AUV depths (sampled every [`CAST_SAMPLE_M`] along each lawnmower) at the speeds the
     /// filters convert at (`filter.sound_speed`).
+    ///
+    /// [`SoundSpeed::least_biased_depth`]: crate::models::channel::SoundSpeed::least_biased_depth
     pub fn cna_cruise_depth(&self) -> f64 {
         match self.cna.auv.as_ref().map(|a| a.depth) {
             None => 0.0,
