@@ -858,9 +858,13 @@ mod tests {
     /// No reach cost-to-go: every AUV is within reach.
     const NO_REACH: Reach = Reach { useful_range_m: f64::INFINITY, step_m: 1.0 };
 
+    /// A perfect link, an exactly known CNA and no bias table: `spec`'s terms alone.
+    fn perfect(spec: EstimatorSpec, q_tau: Vec<f64>, reach: Reach) -> EkfCost {
+        EkfCost { spec, q_tau, link: LinkTable::perfect(), cna_variance: 0.0, reach, bias: None }
+    }
+
     fn biased(aggregate: Aggregate, q_tau: Vec<f64>, bias_per_km_m: f64) -> EkfCost {
-        let spec = EstimatorSpec { aggregate, bias_per_km_m, ..EstimatorSpec::default() };
-        EkfCost { spec, q_tau, link: LinkTable::perfect(), cna_variance: 0.0, reach: NO_REACH, bias: None }
+        perfect(EstimatorSpec { aggregate, bias_per_km_m, ..EstimatorSpec::default() }, q_tau, NO_REACH)
     }
 
     fn model(aggregate: Aggregate, q_tau: Vec<f64>, link: LinkTable) -> EkfCost {
@@ -982,14 +986,7 @@ mod tests {
     #[test]
     fn the_terminal_cost_is_h_levels_and_settings_are_checked() {
         let spec = EstimatorSpec { terminal_levels: 3.0, ..EstimatorSpec::default() };
-        let m = EkfCost {
-            spec,
-            q_tau: vec![0.0],
-            link: LinkTable::perfect(),
-            cna_variance: 0.0,
-            reach: NO_REACH,
-            bias: None,
-        };
+        let m = perfect(spec, vec![0.0], NO_REACH);
         assert_eq!(m.terminal_levels(), 3.0);
         assert_eq!(model(Aggregate::TraceSum, vec![0.0], LinkTable::perfect()).terminal_levels(), 0.0);
         for bad in [
@@ -1006,14 +1003,7 @@ mod tests {
         // qτ = 2 m², H = 4, s·τ = 60 m, r_u = 500 m. At 620 m: m = 2 levels, ḡ = 2·(2 − 4/8) = 3 m²;
         // at 1400 m: m ≥ H, ḡ = qτ·H/2 = 4 m²; within r_u nothing. Trace sum: term + H·(tr M + 2ḡ).
         let spec = EstimatorSpec { terminal_levels: 4.0, ..EstimatorSpec::default() };
-        let m = EkfCost {
-            spec,
-            q_tau: vec![2.0],
-            link: LinkTable::perfect(),
-            cna_variance: 0.0,
-            reach: Reach { useful_range_m: 500.0, step_m: 60.0 },
-            bias: None,
-        };
+        let m = perfect(spec, vec![2.0], Reach { useful_range_m: 500.0, step_m: 60.0 });
         let start = [4.0, 1.0, 2.0];
         for (east, growth) in [(400.0, 0.0), (620.0, 3.0), (1400.0, 4.0)] {
             let auv = [east, 0.0, 0.0];
@@ -1023,14 +1013,7 @@ mod tests {
             assert!((got - want).abs() < 1e-9 * want, "{east} m: {got} vs {want}");
         }
         // Off (p_u = 0 or H = 0): (1 + H)·term exactly.
-        let off = EkfCost {
-            spec,
-            q_tau: vec![2.0],
-            link: LinkTable::perfect(),
-            cna_variance: 0.0,
-            reach: NO_REACH,
-            bias: None,
-        };
+        let off = perfect(spec, vec![2.0], NO_REACH);
         let (p, term) = off.update(0, &start, [0.0; 3], [1400.0, 0.0, 0.0]);
         assert_eq!(off.leaf_term(0, &p, [0.0; 3], [1400.0, 0.0, 0.0], term), 5.0 * term);
     }
