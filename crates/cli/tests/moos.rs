@@ -66,6 +66,11 @@ fn field(e: &AlogEntry, key: &str) -> f64 {
     e.field(key).unwrap_or_else(|| panic!("no {key} in {}", e.value)).parse().unwrap()
 }
 
+/// The NODE_REPORT key of vehicle `name` at a time-series row's time.
+fn at_row(name: &str, row: &HashMap<String, String>) -> (String, i64) {
+    (name.to_string(), (num(row, "t") * 1000.0).round() as i64)
+}
+
 /// NODE_REPORTs by (NAME, time in ms).
 fn reports(log: &Alog) -> HashMap<(String, i64), &AlogEntry> {
     log.postings("NODE_REPORT")
@@ -87,7 +92,7 @@ fn an_auv_cnas_alog_depth_is_its_true_depth() {
     let rows = csv_rows(&run.join("timeseries.csv"));
     let mut depths = Vec::new();
     for row in rows.iter().filter(|r| r["auv"] == "0") {
-        let cna = by_key[&("cna".to_string(), (num(row, "t") * 1000.0).round() as i64)];
+        let cna = by_key[&at_row("cna", row)];
         close(field(cna, "DEP"), num(row, "cna_z"), 5e-4, "cna depth");
         depths.push(num(row, "cna_z"));
     }
@@ -104,11 +109,10 @@ fn the_simulate_alog_holds_every_vehicle_track_of_the_time_series() {
     let rows = csv_rows(&run.join("timeseries.csv"));
     assert!(rows.len() >= 3 * 299, "{} rows", rows.len());
     for row in &rows {
-        let key = |name: String| (name, (num(row, "t") * 1000.0).round() as i64);
         let auv = format!("auv{}", num(row, "auv") as usize + 1);
-        let truth = by_key.get(&key(auv.clone())).unwrap_or_else(|| panic!("no report of {auv} at {}", row["t"]));
-        let estimate = by_key[&key(format!("{auv}_est"))];
-        let cna = by_key[&key("cna".into())];
+        let truth = by_key.get(&at_row(&auv, row)).unwrap_or_else(|| panic!("no report of {auv} at {}", row["t"]));
+        let estimate = by_key[&at_row(&format!("{auv}_est"), row)];
+        let cna = by_key[&at_row("cna", row)];
         // The alog keeps millimetres.
         close(field(truth, "X"), num(row, "true_x"), 5e-4, "true x");
         close(field(truth, "Y"), num(row, "true_y"), 5e-4, "true y");
