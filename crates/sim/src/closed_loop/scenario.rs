@@ -1003,23 +1003,30 @@ mod tests {
     fn partial_filter_tables_keep_the_closed_loop_channel() {
         let plain = Scenario::parse(EXAMPLE, Path::new("e.toml")).unwrap();
         assert_eq!(plain.filter.params.range_noise.sigma_time, 1e-4);
-        let s = Scenario::parse(&format!("{EXAMPLE}\n[filter]\nsigma_speed = 0.2\n"), Path::new("f.toml")).unwrap();
+        let s = Scenario::parse(&with_filter_line("sigma_speed = 0.2"), Path::new("f.toml")).unwrap();
         assert_eq!((s.filter.params.sigma_speed, s.filter.params.range_noise.sigma_time), (0.2, 1e-4));
         assert_eq!(s.filter.params.q, plain.filter.params.q);
+        assert_eq!(s.filter.params.range_update, plain.filter.params.range_update);
         let e = err(&format!("{EXAMPLE}\n[filter.range_noise]\nsigma_tim = 1e-3\n"));
         assert!(e.contains("sigma_tim"), "{e}");
+    }
+
+    /// The example with `line` added to its `[filter]` table.
+    fn with_filter_line(line: &str) -> String {
+        assert!(EXAMPLE.contains("\n[filter]\n"), "the example has no [filter] table");
+        EXAMPLE.replacen("\n[filter]\n", &format!("\n[filter]\n{line}\n"), 1)
     }
 
     /// The filters' own cast is checked as `channel.sound_speed` is, under its own field path.
     #[test]
     fn a_filters_own_cast_is_validated_by_field() {
         let cast = "sound_speed = { kind = \"cast\", points = [[0.0, 1510.0], [0.0, 1200.0]] }";
-        let e = err(&format!("{EXAMPLE}\n[filter]\n{cast}\n"));
+        let e = err(&with_filter_line(cast));
         assert!(e.contains("filter.sound_speed.points[1][0]") && e.contains("strictly increasing"), "{e}");
         assert!(e.contains("filter.sound_speed.points[1][1]") && e.contains("1300..=1700"), "{e}");
-        let empty = err(&format!("{EXAMPLE}\n[filter]\nsound_speed = {{ kind = \"cast\", points = [] }}\n"));
+        let empty = err(&with_filter_line("sound_speed = { kind = \"cast\", points = [] }"));
         assert!(empty.contains("filter.sound_speed.points"), "{empty}");
-        let ok = format!("{EXAMPLE}\n[filter]\nsound_speed = {{ kind = \"cast\" }}\n");
+        let ok = with_filter_line("sound_speed = { kind = \"cast\" }");
         Scenario::parse(&ok, Path::new("ok.toml")).unwrap();
     }
 
