@@ -17,6 +17,7 @@ pub mod synthetic;
 
 pub use auv::{
     AuvEkf, AuvFilter, AuvModel, AuvParams, CurrentParams, GateRecovery, IteratedRange, ParamError, RangeLinearisation,
+    RangeOutliers,
 };
 pub use ekf::{Ekf, Gate, UpdateOutcome};
 pub use range::{RangeMeasurement, RangeNoise};
