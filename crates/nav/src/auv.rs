@@ -424,6 +424,12 @@ pub struct RangeUpdate {
     pub variance: f64,
 }
 
+impl RangeUpdate {
+    /// A range with no line of sight (directly overhead in 2-D): nothing to update.
+    const UNUSABLE: RangeUpdate =
+        RangeUpdate { outcome: UpdateOutcome::Unusable, innovation: f64::NAN, variance: f64::NAN };
+}
+
 /// The AUV navigation filter with `M` = 5 (thesis) or 7 (with current) states.
 #[derive(Debug, Clone)]
 pub struct AuvEkf<const M: usize = 5> {
@@ -709,20 +715,18 @@ impl<const M: usize> AuvEkf<M> {
         transponder_sd: f64,
         gate: &Gate,
     ) -> RangeUpdate {
-        let Some((predicted, h)) = self.range_jacobian(&m.transponder, auv_depth) else {
-            return RangeUpdate { outcome: UpdateOutcome::Unusable, innovation: f64::NAN, variance: f64::NAN };
+        let Some((h, _, Innovation { value: y, variance: s })) =
+            self.range_prior(m, auv_depth, range_variance, transponder_sd)
+        else {
+            return RangeUpdate::UNUSABLE;
         };
-        let r = with_transponder_variance(range_variance, transponder_sd, &h);
-        let p_ht = self.ekf.p() * h.transpose();
-        let s = (h * p_ht)[(0, 0)] + r;
-        let y = m.range - predicted;
         let w = outliers.inlier_probability(y, s);
         if !(w >= OUTLIER_ONLY) {
             return RangeUpdate { outcome: UpdateOutcome::Gated { nis: y * y / s }, innovation: y, variance: s };
         }
+        let shift = self.ekf.p() * h.transpose() * (y / s);
         let up = self.update_range_with(m, auv_depth, range_variance + (1.0 / w - 1.0) * s, transponder_sd, gate);
         if up.outcome.applied() && w < 1.0 {
-            let shift = p_ht * (y / s);
             let (t, x) = (self.ekf.t(), *self.ekf.x());
             let spread = shift * shift.transpose() * (w * (1.0 - w));
             self.ekf.predict(t, x, SMatrix::identity(), spread);
@@ -762,20 +766,32 @@ impl<const M: usize> AuvEkf<M> {
         transponder_sd: f64,
         gate: &Gate,
     ) -> RangeUpdate {
-        let Some((predicted, h)) = self.range_jacobian(&m.transponder, auv_depth) else {
-            return RangeUpdate { outcome: UpdateOutcome::Unusable, innovation: f64::NAN, variance: f64::NAN };
+        let Some((h, r, prior)) = self.range_prior(m, auv_depth, range_variance, transponder_sd) else {
+            return RangeUpdate::UNUSABLE;
         };
-        let r = with_transponder_variance(range_variance, transponder_sd, &h);
-        let innovation = m.range - predicted;
-        let variance = (h * self.ekf.p() * h.transpose())[(0, 0)] + r;
+        let Innovation { value: innovation, variance } = prior;
         let outcome = match self.params.range_update {
             RangeLinearisation::Ekf => self.ekf.update_scalar(innovation, h, r, gate),
             RangeLinearisation::Iterated(it) => {
-                let prior = Innovation { value: innovation, variance };
                 self.update_range_iterated(m, auv_depth, range_variance, transponder_sd, gate, it, prior)
             }
         };
         RangeUpdate { outcome, innovation, variance }
+    }
+
+    /// A range's line of sight h, its noise variance with the transponder's term, and its
+    /// innovation z − h(x⁻) with variance h P⁻ hᵀ + R; None directly overhead in 2-D.
+    fn range_prior(
+        &self,
+        m: &RangeMeasurement,
+        auv_depth: Option<f64>,
+        range_variance: f64,
+        transponder_sd: f64,
+    ) -> Option<(SMatrix<f64, 1, M>, f64, Innovation)> {
+        let (predicted, h) = self.range_jacobian(&m.transponder, auv_depth)?;
+        let r = with_transponder_variance(range_variance, transponder_sd, &h);
+        let variance = (h * self.ekf.p() * h.transpose())[(0, 0)] + r;
+        Some((h, r, Innovation { value: m.range - predicted, variance }))
     }
 
     /// The iterated EKF range update ([`IteratedRange`]), gated on the `prior` innovation.
