@@ -1017,6 +1017,19 @@ mod tests {
         EXAMPLE.replacen("\n[filter]\n", &format!("\n[filter]\n{line}\n"), 1)
     }
 
+    /// A filter's outlier model is checked under its field path, and its keys are spelt out.
+    #[test]
+    fn a_filters_outlier_model_is_validated_by_field() {
+        let bad = err(&with_filter_line("range_outliers = { probability = 1.5, min_m = 5.0, max_m = 2.0 }"));
+        assert!(bad.contains("filter.range_outliers.probability = 1.5: allowed a probability in [0, 1)"), "{bad}");
+        assert!(bad.contains("filter.range_outliers.max_m = 2: allowed a finite length above min_m"), "{bad}");
+        let misspelt = err(&with_filter_line("range_outliers = { probability = 0.05, min_m = 5.0, max = 10.0 }"));
+        assert!(misspelt.contains("unknown field `max`") && misspelt.contains("max_m"), "{misspelt}");
+        let ok = with_filter_line("range_outliers = { probability = 0.0555, min_m = 5.0, max_m = 10.0 }");
+        let s = Scenario::parse(&ok, Path::new("ok.toml")).unwrap();
+        assert_eq!(s.filter.params.range_outliers, Some(coopnav_nav::RangeOutliers::GILL));
+    }
+
     /// The filters' own cast is checked as `channel.sound_speed` is, under its own field path.
     #[test]
     fn a_filters_own_cast_is_validated_by_field() {
