@@ -144,11 +144,11 @@ pub struct AuvParams {
 /// hypotheses' posteriors and takes an outlier to carry no information (its 5 m spread is wider
 /// than the position σ it would inform): x⁺ = x⁻ + w·K·y, P⁺ = P⁻ − w·K·S·Kᵀ + w(1 − w)·(K·y)(K·y)ᵀ,
 /// K = P⁻hᵀ/S. The first two terms are the Kalman update with the range variance R raised to
-/// R + (1/w − 1)·S; the last is added as process noise at the filter's time. Why: a filter that takes a 5–10 m outlier as Gaussian moves
-/// its estimate most of the way to it, and from a steady line of sight the next pings do not
-/// undo it (measured in issue 10, session 27: with Gaussian ranges planner-estimator's N = 1
-/// error is 0.5 m lower, zigzag's 0.3 m). The class figures are the thesis's; using them in the
-/// filter is invented (marked so).
+/// R + (1/w − 1)·S; the last is added as process noise at the filter's time. Why: a filter that
+/// takes a 5–10 m outlier as Gaussian moves its estimate most of the way to it, and from a steady
+/// line of sight the next pings do not undo it (measured in issue 10, session 27: with Gaussian
+/// ranges planner-estimator's N = 1 error is 0.5 m lower, zigzag's 0.3 m). The class figures are
+/// the thesis's; using them in the filter is invented (marked so).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct RangeOutliers {
