@@ -140,15 +140,12 @@ pub struct AuvParams {
 /// A range is an inlier, innovation y ~ N(0, S), with probability 1 − p, or an outlier, y = e + v
 /// with e ~ U(min_m, max_m) and v ~ N(0, S), with probability p. Its inlier probability is
 /// w = (1 − p)·N(y; 0, S) / [(1 − p)·N(y; 0, S) + p·(Φ((y − min)/√S) − Φ((y − max)/√S))/(max − min)],
-/// and the update is the probabilistic-data-association one, which moment-matches the two
-/// hypotheses' posteriors and takes an outlier to carry no information (its 5 m spread is wider
-/// than the position σ it would inform): x⁺ = x⁻ + w·K·y, P⁺ = P⁻ − w·K·S·Kᵀ + w(1 − w)·(K·y)(K·y)ᵀ,
-/// K = P⁻hᵀ/S. The first two terms are the Kalman update with the range variance R raised to
-/// R + (1/w − 1)·S; the last is added as process noise at the filter's time. Why: a filter that
-/// takes a 5–10 m outlier as Gaussian moves its estimate most of the way to it, and from a steady
-/// line of sight the next pings do not undo it (measured in issue 10, session 27: with Gaussian
-/// ranges planner-estimator's N = 1 error is 0.5 m lower, zigzag's 0.3 m). The class figures are
-/// the thesis's; using them in the filter is invented (marked so).
+/// and an outlier is taken to carry no information (its 5 m spread is wider than the position σ it
+/// would inform). How w enters the update is [`OutlierUpdate`]. Why: a filter that takes a 5–10 m
+/// outlier as Gaussian moves its estimate most of the way to it, and from a steady line of sight
+/// the next pings do not undo it (measured in issue 10, session 27: with Gaussian ranges
+/// planner-estimator's N = 1 error is 0.5 m lower, zigzag's 0.3 m). The class figures are the
+/// thesis's; using them in the filter is invented (marked so).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct RangeOutliers {
@@ -157,11 +154,32 @@ pub struct RangeOutliers {
     /// How much longer than the true range an outlier is, at least and at most (m; min < max).
     pub min_m: f64,
     pub max_m: f64,
+    /// How the inlier probability enters the update (default: weighted).
+    #[serde(default)]
+    pub update: OutlierUpdate,
+}
+
+/// How a range's inlier probability w ([`RangeOutliers`]) enters the Kalman update, K = P⁻hᵀ/S.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum OutlierUpdate {
+    /// The Kalman update with the range variance R raised to R + (1/w − 1)·S: x⁺ = x⁻ + w·K·y,
+    /// P⁺ = P⁻ − w·K·S·Kᵀ, the robust Kalman filters' reweighting with the mixture's weight. The
+    /// default: measured best in issue 10, session 28 (below).
+    #[default]
+    Weighted,
+    /// The probabilistic-data-association update: the weighted one plus the hypotheses' spread
+    /// w(1 − w)·(K·y)(K·y)ᵀ as process noise, which moment-matches the two posteriors. Measured
+    /// (issue 10, session 28, tuning seed): a CNA parked over an AUV's estimate, whose ranges
+    /// are all long as an outlier is, sees the spread inflate P along a move the linearisation
+    /// gets wrong there; centroid's N = 1 error with a water current went 16 → 69 m (weighted: 23).
+    Pda,
 }
 
 impl RangeOutliers {
     /// Gill's simulated outliers as the closed loop's channel draws them: 5.55 % of ranges, 5–10 m long.
-    pub const GILL: RangeOutliers = RangeOutliers { probability: 0.0555, min_m: 5.0, max_m: 10.0 };
+    pub const GILL: RangeOutliers =
+        RangeOutliers { probability: 0.0555, min_m: 5.0, max_m: 10.0, update: OutlierUpdate::Weighted };
 
     /// The probability w that a range with innovation `y` (m) is an inlier, its inlier
     /// innovation variance being `s` (m²).
@@ -703,8 +721,9 @@ impl<const M: usize> AuvEkf<M> {
     }
 
     /// The range update of a filter that expects `outliers` ([`RangeOutliers`]): the Kalman update
-    /// with the range variance raised by (1/w − 1)·S, then the spread w(1 − w)·(K·y)(K·y)ᵀ as
-    /// process noise. A range with w below `OUTLIER_ONLY` is refused as [`UpdateOutcome::Gated`].
+    /// with the range variance raised by (1/w − 1)·S, then for [`OutlierUpdate::Pda`] the spread
+    /// w(1 − w)·(K·y)(K·y)ᵀ as process noise. A range with w below `OUTLIER_ONLY` is refused as
+    /// [`UpdateOutcome::Gated`].
     fn update_range_expecting(
         &mut self,
         outliers: RangeOutliers,
@@ -725,7 +744,7 @@ impl<const M: usize> AuvEkf<M> {
         }
         let shift = self.ekf.p() * h.transpose() * (y / s);
         let up = self.update_range_with(m, auv_depth, range_variance + (1.0 / w - 1.0) * s, transponder_sd, gate);
-        if up.outcome.applied() && w < 1.0 {
+        if outliers.update == OutlierUpdate::Pda && up.outcome.applied() && w < 1.0 {
             let (t, x) = (self.ekf.t(), *self.ekf.x());
             let spread = shift * shift.transpose() * (w * (1.0 - w));
             self.ekf.predict(t, x, SMatrix::identity(), spread);
@@ -1312,10 +1331,13 @@ mod tests {
     }
 
     #[test]
-    fn an_expected_outlier_moves_the_estimate_by_its_inlier_share_with_the_mixtures_spread() {
+    fn an_expected_outlier_moves_the_estimate_by_its_inlier_share_and_pda_adds_the_spread() {
         let at = Vec3::new(100.0, 0.0, 0.0);
         let expecting = AuvParams { range_outliers: Some(RangeOutliers::GILL), ..AuvParams::default() };
-        for measured in [99.7, 94.0, 92.5, 80.0] {
+        let pda = RangeOutliers { update: OutlierUpdate::Pda, ..RangeOutliers::GILL };
+        let cases = [99.7, 94.0, 92.5, 80.0].into_iter().flat_map(|m| [(m, RangeOutliers::GILL), (m, pda)]);
+        for (measured, outliers) in cases {
+            let expecting = AuvParams { range_outliers: Some(outliers), ..expecting.clone() };
             let mut plain = AuvEkf::new(0.0, 0.0, 0.0, 0.0, 0.0, AuvParams::default());
             let mut robust = AuvEkf::new(0.0, 0.0, 0.0, 0.0, 0.0, expecting.clone());
             let (p0, x0) = (*robust.ekf().p(), *robust.ekf().x());
@@ -1328,7 +1350,11 @@ mod tests {
             let w = RangeOutliers::GILL.inlier_probability(y, s);
             let k: SVector<f64, 5> = p0.column(E) * (-1.0 / s);
             let mean = x0 + k * (w * y);
-            let cov = p0 - k * k.transpose() * (w * s) + (k * y) * (k * y).transpose() * (w * (1.0 - w));
+            let spread = match outliers.update {
+                OutlierUpdate::Weighted => 0.0,
+                OutlierUpdate::Pda => w * (1.0 - w),
+            };
+            let cov = p0 - k * k.transpose() * (w * s) + (k * y) * (k * y).transpose() * spread;
             assert!(outcome.applied(), "{measured}: {outcome:?}");
             assert!((robust.ekf().x() - mean).amax() < 1e-9, "{measured}: {} vs {mean}", robust.ekf().x());
             assert!((robust.ekf().p() - cov).amax() < 1e-9, "{measured}: {} vs {cov}", robust.ekf().p());
@@ -1361,9 +1387,19 @@ mod tests {
             toml::from_str("range_outliers = { probability = 0.0555, min_m = 5.0, max_m = 10.0 }\n").unwrap();
         assert_eq!(set.range_outliers, Some(RangeOutliers::GILL));
         assert_eq!(toml::from_str::<AuvParams>(&toml::to_string(&set).unwrap()).unwrap(), set, "round trip");
+        let pda: AuvParams =
+            toml::from_str("range_outliers = { probability = 0.0555, min_m = 5.0, max_m = 10.0, update = \"pda\" }\n")
+                .unwrap();
+        assert_eq!(pda.range_outliers.map(|o| o.update), Some(OutlierUpdate::Pda));
+        let e = toml::from_str::<AuvParams>(
+            "range_outliers = { probability = 0.0555, min_m = 5.0, max_m = 10.0, update = \"spread\" }\n",
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(e.contains("unknown variant `spread`, expected `weighted` or `pda`"), "{e}");
         assert!(!toml::to_string(&AuvParams::default()).unwrap().contains("range_outliers"));
         let bad = AuvParams {
-            range_outliers: Some(RangeOutliers { probability: 1.0, min_m: 5.0, max_m: 5.0 }),
+            range_outliers: Some(RangeOutliers { probability: 1.0, min_m: 5.0, max_m: 5.0, ..RangeOutliers::GILL }),
             ..AuvParams::default()
         };
         let e = bad.validate("filter.").unwrap_err().to_string();

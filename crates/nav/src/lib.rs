@@ -16,8 +16,8 @@ pub mod surface;
 pub mod synthetic;
 
 pub use auv::{
-    AuvEkf, AuvFilter, AuvModel, AuvParams, CurrentParams, GateRecovery, IteratedRange, ParamError, RangeLinearisation,
-    RangeOutliers,
+    AuvEkf, AuvFilter, AuvModel, AuvParams, CurrentParams, GateRecovery, IteratedRange, OutlierUpdate, ParamError,
+    RangeLinearisation, RangeOutliers,
 };
 pub use ekf::{Ekf, Gate, UpdateOutcome};
 pub use range::{RangeMeasurement, RangeNoise};

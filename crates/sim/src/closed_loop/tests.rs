@@ -210,26 +210,30 @@ fn an_auv_cna_plans_with_pitch_and_broadcasts_its_own_estimate() {
     assert!(r.fleet.error.mean < dr.fleet.error.mean / 2.0, "{} vs DR {}", r.fleet.error.mean, dr.fleet.error.mean);
 }
 
-/// Filters that expect the channel's outliers (`filter.range_outliers`, the sloping file's
-/// commented line): over the same runs (same draws), ranges weighted by their inlier probability
-/// leave a smaller error than ranges all taken as Gaussian.
+/// Filters that expect the channel's outliers (`filter.range_outliers`, on in the sloping file):
+/// over the same runs (same draws), ranges weighted by their inlier probability leave a smaller
+/// error than ranges all taken as Gaussian, and so do the PDA update's.
 #[test]
 fn filters_expecting_the_channels_outliers_navigate_better_on_the_same_draws() {
     let file = include_str!("../../../../scenarios/sloping-auv-cna.toml");
-    let gaussian = toml::from_str::<Scenario>(file).unwrap().with_auvs(1);
-    assert_eq!(gaussian.filter.params.range_outliers, None);
-    let line = "range_outliers = { probability = 0.0555, min_m = 5.0, max_m = 10.0 }";
-    assert!(file.contains(&format!("# {line}")), "the file shows the option it was measured with");
-    let mut expecting = gaussian.clone();
-    expecting.filter.params.range_outliers = Some(coopnav_nav::RangeOutliers::GILL);
+    let expecting = toml::from_str::<Scenario>(file).unwrap().with_auvs(1);
+    assert_eq!(expecting.filter.params.range_outliers, Some(coopnav_nav::RangeOutliers::GILL));
+    let mut gaussian = expecting.clone();
+    gaussian.filter.params.range_outliers = None;
+    let mut pda = expecting.clone();
+    pda.filter.params.range_outliers = Some(coopnav_nav::RangeOutliers {
+        update: coopnav_nav::OutlierUpdate::Pda,
+        ..coopnav_nav::RangeOutliers::GILL
+    });
     let mean_error = |sc: &Scenario| {
         let runs: Vec<f64> = (0..12)
             .map(|k| one_run(sc, "centroid-standoff", 70 + k, false, &Faults::default()).fleet.error.mean)
             .collect();
         runs.iter().sum::<f64>() / runs.len() as f64
     };
-    let (with, without) = (mean_error(&expecting), mean_error(&gaussian));
-    assert!(with < without - 0.1, "expecting outliers {with:.2} m, all Gaussian {without:.2} m");
+    let (weighted, with_spread, without) = (mean_error(&expecting), mean_error(&pda), mean_error(&gaussian));
+    assert!(weighted < without - 0.1, "weighted {weighted:.2} m, all Gaussian {without:.2} m");
+    assert!(with_spread < without - 0.1, "PDA {with_spread:.2} m, all Gaussian {without:.2} m");
 }
 
 #[test]

@@ -106,8 +106,10 @@ pub const SPREAD_TERMINAL_LEVELS: f64 = 20.0;
 /// water): N = 3 4.53, N = 5 6.28, N = 8 9.04; profile, levelling off and k_b 6: 3.98 / 3.80 /
 /// 4.04 / 4.66 / 6.97 with the thesis's pitch carried over levels; with every step starting level
 /// and k_b 3: 3.75 / 3.75 / 3.94 / 4.62 / 5.95. The same runs' centroid-standoff: 3.90 / 3.64 /
-/// 4.22 / 4.90 / 6.93.
-pub const DEPTH_AWARE_BIAS_PER_KM: f64 = 3.0;
+/// 4.22 / 4.90 / 6.93. Session 28, 100 runs, once the filters expect Gill's outliers
+/// (`filter.range_outliers` in the scenario file): k_b 3 → 6 gave N = 2 3.55 → 3.51, N = 5 4.39 →
+/// 4.36, N = 8 5.95 → 5.82 m (racetrack −0.04 → −0.16, won), N = 3 3.77 either way.
+pub const DEPTH_AWARE_BIAS_PER_KM: f64 = 6.0;
 
 /// From this many AUVs on the AUV CNA chooses its depth ([`DEPTH_AWARE_BIAS_PER_KM`]): with one
 /// AUV, over the shallow end of the shelf where the profile's scale error is small at 10 m, it
