@@ -4,6 +4,13 @@
 //! Derivation, per AUV and look-ahead level of τ seconds (P = [[a, b], [b, c]] east/north, m²):
 //! 1. Prediction: P̃ = P + q·τ·I, with q (m²/s) the horizontal process noise the AUV's filter
 //!    adds per second and axis (reported with P, [`AuvEstimate`]).
+//!    Step 1b (issue 10, session 28; invented): a water current c (m/s) the AUVs' filters do not
+//!    model, as the CNA measures it (`unmodelled_current`), moves each AUV's true position by cτ
+//!    per level while its filter's covariance does not see it. The error it leaves is along c,
+//!    deterministic, and removed only by pings whose line of sight has a component along c. Taken
+//!    as a random walk along c that reaches the deterministic m·cτ after m levels unobserved,
+//!    m = `drift_levels`: P̃ gains m·(cτ)(cτ)ᵀ per level. The growth is ⪰ 0 and the update is
+//!    monotone in P̃, so the bounds below, which leave it out, stay lower bounds.
 //! 2. Ping from the CNA at p to the AUV at x, slant range r = |x − p|. The range's Jacobian with
 //!    respect to the AUV's horizontal position is h = (x − p)_xy / r (|h| ≤ 1: a CNA right above
 //!    the AUV tells it nothing horizontally, which is the 3-D geometry). Range noise variance
@@ -147,7 +154,7 @@ impl RangeNoise {
 }
 
 /// The estimator-aware cost's settings (`[planner.cost] kind = "estimator"`).
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, Default)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct EstimatorSpec {
     #[serde(default)]
@@ -165,14 +172,48 @@ pub struct EstimatorSpec {
     /// 0 = none; it acts only with H > 0).
     #[serde(default)]
     pub reach_success: f64,
+    /// c of step 1b: the water current the AUVs' filters do not model, east and north, m/s, as
+    /// the CNA measures it (its ADCP); [0, 0] (the default) = none.
+    #[serde(default, skip_serializing_if = "is_still")]
+    pub unmodelled_current: [f64; 2],
+    /// m of step 1b: levels over which the current's drift is taken to build up unseen (≥ 0).
+    /// Invented; 4 (2 minutes at τ = 30 s) measured on `auv-cna-tdma.toml` (session 28).
+    #[serde(default = "drift_levels")]
+    pub drift_levels: f64,
     /// Some: score the AUVs' expected true error under their filters' gains instead of the
     /// filters' covariance (`true_error` module); the decision then needs a `TruthInput`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub truth: Option<TruthSpec>,
 }
 
+impl Default for EstimatorSpec {
+    fn default() -> Self {
+        EstimatorSpec {
+            aggregate: Aggregate::default(),
+            range_noise: RangeNoise::default(),
+            bias_per_km_m: 0.0,
+            terminal_levels: 0.0,
+            reach_success: 0.0,
+            unmodelled_current: [0.0, 0.0],
+            drift_levels: drift_levels(),
+            truth: None,
+        }
+    }
+}
+
+fn is_still(current: &[f64; 2]) -> bool {
+    *current == [0.0, 0.0]
+}
+
+fn drift_levels() -> f64 {
+    4.0
+}
+
 impl CheckFields for EstimatorSpec {
     fn check_fields(&self, prefix: &str, p: &mut Problems) {
+        p.finite(&format!("{prefix}unmodelled_current[0]"), self.unmodelled_current[0]);
+        p.finite(&format!("{prefix}unmodelled_current[1]"), self.unmodelled_current[1]);
+        p.non_negative(&format!("{prefix}drift_levels"), self.drift_levels);
         p.positive(&format!("{prefix}range_noise.sigma_m"), self.range_noise.sigma_m);
         p.non_negative(&format!("{prefix}range_noise.per_km_m"), self.range_noise.per_km_m);
         p.non_negative(&format!("{prefix}bias_per_km_m"), self.bias_per_km_m);
@@ -432,6 +473,8 @@ pub(crate) struct EkfCost {
     pub reach: Reach,
     /// Step 4's scale error from a known sound-speed profile, on top of `bias_per_km_m`.
     pub bias: Option<BiasTable>,
+    /// Step 1b's growth per level, m·(cτ)(cτ)ᵀ as [P_ee, P_en, P_nn], m².
+    pub drift: [f64; 3],
 }
 
 /// What step 7 needs of the CNA and its link.
@@ -460,7 +503,9 @@ impl EkfCost {
         }
         let reach = Reach { useful_range_m: link.useful_range(spec.reach_success), step_m: speed * tau };
         let q_tau = estimates.iter().map(|e| e.process_noise * tau).collect();
-        Ok(EkfCost { spec, q_tau, link, cna_variance, reach, bias: None })
+        let [ce, cn] = spec.unmodelled_current.map(|v| v * tau);
+        let drift = [ce * ce, ce * cn, cn * cn].map(|v| v * spec.drift_levels);
+        Ok(EkfCost { spec, q_tau, link, cna_variance, reach, bias: None, drift })
     }
 
     /// ḡ of step 7 for AUV `k` at slant range `range_m` from the leaf pose: the mean growth per
@@ -587,8 +632,9 @@ impl CostModel for EkfCost {
     #[inline(always)]
     fn update(&self, k: usize, parent: &[f64; 3], cna: [f64; 3], auv: [f64; 3]) -> ([f64; 3], f64) {
         let link = &self.link;
+        let drifted = [parent[0] + self.drift[0], parent[1] + self.drift[1], parent[2] + self.drift[2]];
         let [a, b, c] =
-            expected_posterior(parent, self.q_tau[k], cna, auv, &self.spec.range_noise, self.cna_variance, |r| {
+            expected_posterior(&drifted, self.q_tau[k], cna, auv, &self.spec.range_noise, self.cna_variance, |r| {
                 link.success(r)
             });
         ([a, b, c], self.moments_term(&[a, b, c], self.bias_variance(cna, auv)))
@@ -860,7 +906,7 @@ mod tests {
 
     /// A perfect link, an exactly known CNA and no bias table: `spec`'s terms alone.
     fn perfect(spec: EstimatorSpec, q_tau: Vec<f64>, reach: Reach) -> EkfCost {
-        EkfCost { spec, q_tau, link: LinkTable::perfect(), cna_variance: 0.0, reach, bias: None }
+        EkfCost { spec, q_tau, link: LinkTable::perfect(), cna_variance: 0.0, reach, bias: None, drift: [0.0; 3] }
     }
 
     fn biased(aggregate: Aggregate, q_tau: Vec<f64>, bias_per_km_m: f64) -> EkfCost {
@@ -869,7 +915,7 @@ mod tests {
 
     fn model(aggregate: Aggregate, q_tau: Vec<f64>, link: LinkTable) -> EkfCost {
         let spec = EstimatorSpec { aggregate, ..EstimatorSpec::default() };
-        EkfCost { spec, q_tau, link, cna_variance: 0.0, reach: NO_REACH, bias: None }
+        EkfCost { spec, q_tau, link, cna_variance: 0.0, reach: NO_REACH, bias: None, drift: [0.0; 3] }
     }
 
     #[test]
@@ -981,6 +1027,28 @@ mod tests {
         assert_eq!(constant.floor(25.0), 0.002);
         assert!(BiasTable::sample(f64::NAN, f).is_err());
         assert!(BiasTable::sample(10.0, |_, _| f64::INFINITY).unwrap_err().to_string().contains("not finite"));
+    }
+
+    #[test]
+    fn an_unmodelled_current_grows_the_error_along_it_and_pings_along_it_pay_most() {
+        // c = (0.05, 0) m/s, τ = 30 s, m = 4: m·(cτ)² = 9 m² per level on P_ee alone.
+        let spec = EstimatorSpec { unmodelled_current: [0.05, 0.0], ..EstimatorSpec::default() };
+        let estimates = [AuvEstimate { cov: [4.0, 0.0, 4.0], process_noise: 0.0 }];
+        let m = EkfCost::new(spec, &estimates, (30.0, 2.0, 0.0), LinkTable::perfect()).unwrap();
+        assert_eq!(m.drift, [9.0, 0.0, 0.0]);
+        let still = EkfCost::new(EstimatorSpec::default(), &estimates, (30.0, 2.0, 0.0), LinkTable::perfect()).unwrap();
+        let (east, north) = ([500.0, 0.0, 0.0], [0.0, 500.0, 0.0]);
+        let cost = |m: &EkfCost, auv| m.update(0, &estimates[0].cov, [0.0; 3], auv).1;
+        // Without the current the two lines of sight are alike; with it the ping along the
+        // current removes most of the growth (the east range sees P_ee = 13, the north one 4).
+        assert!((cost(&still, east) - cost(&still, north)).abs() < 1e-12);
+        assert!(cost(&m, east) < cost(&m, north) - 5.0, "{} vs {}", cost(&m, east), cost(&m, north));
+        let (p, _) = m.update(0, &estimates[0].cov, [0.0; 3], north);
+        assert!((p[0] - 13.0).abs() < 1e-12 && p[1].abs() < 1e-12, "{p:?}");
+        let bad = EstimatorSpec { unmodelled_current: [f64::NAN, 0.0], drift_levels: -1.0, ..EstimatorSpec::default() };
+        let e = bad.validate("planner.cost.").unwrap_err().to_string();
+        assert!(e.contains("planner.cost.unmodelled_current[0] = NaN"), "{e}");
+        assert!(e.contains("planner.cost.drift_levels = -1: allowed a finite number >= 0"), "{e}");
     }
 
     #[test]
@@ -1107,10 +1175,13 @@ mod tests {
             vel in (-3.0f64..3.0, -3.0f64..3.0), step in 1.0f64..60.0,
             moves in prop::collection::vec((-3.2f64..3.2, 0.0f64..1.0, -1.0f64..1.0), 1..8), circle in any::<bool>(),
             link in prop_oneof![Just(None), (0.0f64..1.0, 20.0f64..1500.0, 0.0f64..1.0).prop_map(Some)],
+            drift in prop_oneof![Just((0.0, 0.0, 0.0)), (-3.0f64..3.0, -3.0f64..3.0, 0.0f64..8.0)],
         ) {
             let aggregate = [Aggregate::TraceSum, Aggregate::WorstAuv, Aggregate::LogDet, Aggregate::SigmaSum][agg];
             let mut m = biased(aggregate, vec![q], bias);
             m.cna_variance = cna_variance;
+            let (de, dn, levels) = drift;
+            m.drift = [de * de * levels, de * dn * levels, dn * dn * levels];
             if let Some((plateau, mid, tail)) = link {
                 m.link = LinkTable::sample(&Dipping { plateau, mid, tail }).unwrap();
             }

@@ -137,7 +137,8 @@ prop_compose! {
                   link in (300.0f64..3000.0, prop_oneof![Just(1.0), 0.3f64..1.0]), cna_variance in prop_oneof![Just(0.0), 0.0f64..60.0],
                   pitch_levels in prop_oneof![Just(None), (1usize..4).prop_map(Some)], level_off in any::<bool>(),
                   bias in prop_oneof![Just(None), (-5e-5f64..5e-5, -5e-5f64..5e-5, -0.03f64..0.03).prop_map(Some)],
-                  truth in prop_oneof![Just(None), true_error_setting().prop_map(Some)]) -> Instance {
+                  truth in prop_oneof![Just(None), true_error_setting().prop_map(Some)],
+                  current in prop_oneof![Just([0.0, 0.0]), prop::array::uniform2(-0.3f64..0.3)]) -> Instance {
         let mut cna = if auv_cna { CnaKind::auv(b) } else { CnaKind::Asc {} };
         if let CnaKind::Auv { pitch_levels: levels, level_off: off, .. } = &mut cna { *levels = pitch_levels; *off = level_off; }
         let m = a * if auv_cna { b } else { 1 };
@@ -158,7 +159,7 @@ prop_compose! {
             let aggregate = [Aggregate::TraceSum, Aggregate::WorstAuv, Aggregate::LogDet, Aggregate::SigmaSum][aggregate];
             let range_noise = RangeNoise { sigma_m, per_km_m };
             let spec = truth.as_ref().map(|t: &(TruthSpec, Vec<TrueError>, f64)| t.0);
-            cfg.cost = CostSpec::Estimator(EstimatorSpec { aggregate, range_noise, bias_per_km_m, terminal_levels, reach_success, truth: spec });
+            cfg.cost = CostSpec::Estimator(EstimatorSpec { aggregate, range_noise, bias_per_km_m, terminal_levels, reach_success, unmodelled_current: current, truth: spec, ..EstimatorSpec::default() });
         }
         let truth = truth.map_or((vec![TrueError::default(); n], 0.0), |(_, errors, v)| (errors[..n].to_vec(), v));
         Instance { cfg, cna: CnaPose { pos: Vec3::new(0.0, 0.0, z), heading: Heading::from_radians(heading), pitch: 0.0 }, starts, vels, eps, estimates, link, cna_variance, truth, bias }

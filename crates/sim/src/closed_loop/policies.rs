@@ -156,6 +156,8 @@ fn build(name: &str, sc: &Scenario, planned: Option<&TimedWaypoints>) -> Result<
                     bias_per_km_m: p.estimator_bias_per_km,
                     terminal_levels: p.estimator_terminal_levels,
                     reach_success: p.estimator_reach_success,
+                    unmodelled_current: p.estimator_unmodelled_current,
+                    drift_levels: p.estimator_drift_levels,
                     truth: p.estimator_truth,
                 });
                 if let Some(case) = p.estimator_penalty_case.as_deref().and_then(PenaltyCase::from_id) {

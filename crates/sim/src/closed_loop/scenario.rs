@@ -407,6 +407,15 @@ pub struct Planner {
     /// default [`ESTIMATOR_TERMINAL_LEVELS`]).
     #[serde(default = "estimator_terminal_levels")]
     pub estimator_terminal_levels: f64,
+    /// The water current the survey AUVs' filters do not model, east and north (m/s), as the CNA
+    /// measures it (an ADCP): `planner-estimator` grows each AUV's modelled error along it
+    /// (coopnav_plan estimator step 1b; an invention of issue 10, session 28). Default [0, 0]: none.
+    /// Left to the user: the CNA's measurement is not the scenario's `fleet.current`.
+    #[serde(default, skip_serializing_if = "is_still")]
+    pub estimator_unmodelled_current: [f64; 2],
+    /// Levels over which that current's drift builds up unseen (estimator step 1b's m; default 4).
+    #[serde(default = "estimator_drift_levels")]
+    pub estimator_drift_levels: f64,
     /// Success probability that makes a ping useful for `planner-estimator`'s reach cost-to-go
     /// (coopnav_plan estimator step 7: each AUV's growth until the CNA is within the range where
     /// the link's success reaches it; 0 = none).
@@ -539,6 +548,14 @@ fn estimator_bias_per_km() -> f64 {
 
 fn estimator_terminal_levels() -> f64 {
     ESTIMATOR_TERMINAL_LEVELS
+}
+
+fn estimator_drift_levels() -> f64 {
+    coopnav_plan::EstimatorSpec::default().drift_levels
+}
+
+fn is_still(current: &[f64; 2]) -> bool {
+    *current == [0.0, 0.0]
 }
 
 fn default_case() -> String {
@@ -802,6 +819,9 @@ impl Scenario {
         p.non_negative("planner.estimator_terminal_levels", pl.estimator_terminal_levels);
         p.probability("planner.estimator_reach_success", pl.estimator_reach_success);
         p.non_negative("planner.estimator_bias_per_km", pl.estimator_bias_per_km);
+        p.finite("planner.estimator_unmodelled_current[0]", pl.estimator_unmodelled_current[0]);
+        p.finite("planner.estimator_unmodelled_current[1]", pl.estimator_unmodelled_current[1]);
+        p.non_negative("planner.estimator_drift_levels", pl.estimator_drift_levels);
         if let Some(look_ahead) = pl.estimator_look_ahead {
             // The planner's own look-ahead check; its other fields are reported once, below.
             if let Err(PlanError::Invalid(found)) = (PlannerConfig { look_ahead, ..self.planner_config() }).validate() {
