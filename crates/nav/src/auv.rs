@@ -742,9 +742,10 @@ impl<const M: usize> AuvEkf<M> {
         if !(w >= OUTLIER_ONLY) {
             return RangeUpdate { outcome: UpdateOutcome::Gated { nis: y * y / s }, innovation: y, variance: s };
         }
-        let shift = self.ekf.p() * h.transpose() * (y / s);
+        // The PDA's spread is K·y of the prior, so it is taken before the update moves P.
+        let shift = (outliers.update == OutlierUpdate::Pda).then(|| self.ekf.p() * h.transpose() * (y / s));
         let up = self.update_range_with(m, auv_depth, range_variance + (1.0 / w - 1.0) * s, transponder_sd, gate);
-        if outliers.update == OutlierUpdate::Pda && up.outcome.applied() && w < 1.0 {
+        if let Some(shift) = shift.filter(|_| up.outcome.applied() && w < 1.0) {
             let (t, x) = (self.ekf.t(), *self.ekf.x());
             let spread = shift * shift.transpose() * (w * (1.0 - w));
             self.ekf.predict(t, x, SMatrix::identity(), spread);

@@ -173,7 +173,8 @@ pub struct EstimatorSpec {
     #[serde(default)]
     pub reach_success: f64,
     /// c of step 1b: the water current the AUVs' filters do not model, east and north, m/s, as
-    /// the CNA measures it (its ADCP); [0, 0] (the default) = none.
+    /// the CNA measures it (its ADCP); [0, 0] (the default) = none. The true-error cost (`truth`)
+    /// leaves it out.
     #[serde(default, skip_serializing_if = "is_still")]
     pub unmodelled_current: [f64; 2],
     /// m of step 1b: levels over which the current's drift is taken to build up unseen (≥ 0).
