@@ -202,7 +202,8 @@ impl Default for EstimatorSpec {
     }
 }
 
-fn is_still(current: &[f64; 2]) -> bool {
+/// No current: `unmodelled_current`'s default, which a settings file leaves out.
+pub fn is_still(current: &[f64; 2]) -> bool {
     *current == [0.0, 0.0]
 }
 

@@ -411,7 +411,7 @@ pub struct Planner {
     /// measures it (an ADCP): `planner-estimator` grows each AUV's modelled error along it
     /// (coopnav_plan estimator step 1b; an invention of issue 10, session 28). Default [0, 0]: none.
     /// Left to the user: the CNA's measurement is not the scenario's `fleet.current`.
-    #[serde(default, skip_serializing_if = "is_still")]
+    #[serde(default, skip_serializing_if = "coopnav_plan::estimator::is_still")]
     pub estimator_unmodelled_current: [f64; 2],
     /// Levels over which that current's drift builds up unseen (estimator step 1b's m; default 4).
     #[serde(default = "estimator_drift_levels")]
@@ -552,10 +552,6 @@ fn estimator_terminal_levels() -> f64 {
 
 fn estimator_drift_levels() -> f64 {
     coopnav_plan::EstimatorSpec::default().drift_levels
-}
-
-fn is_still(current: &[f64; 2]) -> bool {
-    *current == [0.0, 0.0]
 }
 
 fn default_case() -> String {
@@ -1109,10 +1105,12 @@ mod tests {
         let text = EXAMPLE.replace(
             "[planner]\n",
             "[planner]\nestimator_penalty_case = \"99\"\nestimator_look_ahead = 70\nestimator_terminal_levels = -1.0\n\
-             estimator_bias_per_km = -2.0\nestimator_reach_success = 1.5\nestimator_pitch_levels = 0\n",
+             estimator_bias_per_km = -2.0\nestimator_reach_success = 1.5\nestimator_pitch_levels = 0\n\
+             estimator_unmodelled_current = [nan, 0.0]\nestimator_drift_levels = -1.0\n",
         );
         let e = err(&text);
-        for field in ["penalty_case", "look_ahead", "terminal_levels", "bias_per_km", "reach_success", "pitch_levels"] {
+        let fields = ["penalty_case", "look_ahead", "terminal_levels", "bias_per_km", "reach_success", "pitch_levels"];
+        for field in fields.into_iter().chain(["unmodelled_current[0]", "drift_levels"]) {
             assert!(e.contains(&format!("planner.estimator_{field}")), "{field}: {e}");
         }
         let ok =
