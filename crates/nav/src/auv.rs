@@ -744,7 +744,9 @@ impl<const M: usize> AuvEkf<M> {
         }
         // The PDA's spread is K·y of the prior, so it is taken before the update moves P.
         let shift = (outliers.update == OutlierUpdate::Pda).then(|| self.ekf.p() * h.transpose() * (y / s));
-        let up = self.update_range_with(m, auv_depth, range_variance + (1.0 / w - 1.0) * s, transponder_sd, gate);
+        let raised = range_variance + (1.0 / w - 1.0) * s;
+        let prior = self.prior_along(h, y, raised, transponder_sd);
+        let up = self.apply_range_prior(m, auv_depth, raised, transponder_sd, gate, prior);
         if let Some(shift) = shift.filter(|_| up.outcome.applied() && w < 1.0) {
             let (t, x) = (self.ekf.t(), *self.ekf.x());
             let spread = shift * shift.transpose() * (w * (1.0 - w));
@@ -785,9 +787,22 @@ impl<const M: usize> AuvEkf<M> {
         transponder_sd: f64,
         gate: &Gate,
     ) -> RangeUpdate {
-        let Some((h, r, prior)) = self.range_prior(m, auv_depth, range_variance, transponder_sd) else {
+        let Some(prior) = self.range_prior(m, auv_depth, range_variance, transponder_sd) else {
             return RangeUpdate::UNUSABLE;
         };
+        self.apply_range_prior(m, auv_depth, range_variance, transponder_sd, gate, prior)
+    }
+
+    /// [`Self::update_range_with`] from the range's prior ([`Self::range_prior`]) at that variance.
+    fn apply_range_prior(
+        &mut self,
+        m: &RangeMeasurement,
+        auv_depth: Option<f64>,
+        range_variance: f64,
+        transponder_sd: f64,
+        gate: &Gate,
+        (h, r, prior): (SMatrix<f64, 1, M>, f64, Innovation),
+    ) -> RangeUpdate {
         let Innovation { value: innovation, variance } = prior;
         let outcome = match self.params.range_update {
             RangeLinearisation::Ekf => self.ekf.update_scalar(innovation, h, r, gate),
@@ -808,9 +823,21 @@ impl<const M: usize> AuvEkf<M> {
         transponder_sd: f64,
     ) -> Option<(SMatrix<f64, 1, M>, f64, Innovation)> {
         let (predicted, h) = self.range_jacobian(&m.transponder, auv_depth)?;
+        Some(self.prior_along(h, m.range - predicted, range_variance, transponder_sd))
+    }
+
+    /// [`Self::range_prior`] for a line of sight `h` and `innovation` already found: the
+    /// expecting update raises only the variance, so it need not find the line of sight again.
+    fn prior_along(
+        &self,
+        h: SMatrix<f64, 1, M>,
+        innovation: f64,
+        range_variance: f64,
+        transponder_sd: f64,
+    ) -> (SMatrix<f64, 1, M>, f64, Innovation) {
         let r = with_transponder_variance(range_variance, transponder_sd, &h);
         let variance = (h * self.ekf.p() * h.transpose())[(0, 0)] + r;
-        Some((h, r, Innovation { value: m.range - predicted, variance }))
+        (h, r, Innovation { value: innovation, variance })
     }
 
     /// The iterated EKF range update ([`IteratedRange`]), gated on the `prior` innovation.
