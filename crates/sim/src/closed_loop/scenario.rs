@@ -219,6 +219,11 @@ pub struct AuvCna {
     /// When it climbs for a GPS fix (None: never; [`Surfacing`]).
     #[serde(default)]
     pub surfacing: Option<Surfacing>,
+    /// A counterfactual, not a vehicle (issue 10, `reproduce closed-loop-cna-navigation`): true =
+    /// the CNA broadcasts its TRUE position. Its navigation error is still drawn, its σ still grows
+    /// and it surfaces as configured; only no range or command carries the error. Default false.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub broadcasts_truth: bool,
 }
 
 /// An AUV CNA's cruise depth: metres, or `"cast"`, the fixed depth its CTD cast favours for the
@@ -1217,5 +1222,20 @@ mod tests {
             .replace("heading_options = 5", "heading_options = 1")
             .replace("look_ahead = 5", "look_ahead = 70"));
         assert!(e.contains("field planner.heading_options = 1") && e.contains("field planner.look_ahead = 70"), "{e}");
+    }
+
+    #[test]
+    fn an_auv_cna_broadcasts_its_estimate_unless_the_file_asks_for_the_counterfactual() {
+        let auv = |extra: &str| {
+            let cna = format!("gps_sd = 1.0\nauv = {{ pitch_options = 1, depth = 10.0, nav_diffusion = 0.01{extra} }}");
+            Scenario::parse(&EXAMPLE.replace("gps_sd = 1.0", &cna), Path::new("a.toml")).unwrap()
+        };
+        let plain = auv("");
+        assert!(!plain.cna.auv.as_ref().unwrap().broadcasts_truth);
+        assert!(!toml::to_string(&plain).unwrap().contains("broadcasts_truth"), "the default is not written");
+        let exact = auv(", broadcasts_truth = true");
+        assert!(exact.cna.auv.as_ref().unwrap().broadcasts_truth);
+        let again = Scenario::parse(&toml::to_string(&exact).unwrap(), Path::new("a.toml")).unwrap();
+        assert_eq!(again.cna.auv, exact.cna.auv);
     }
 }

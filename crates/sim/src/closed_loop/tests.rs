@@ -199,6 +199,7 @@ fn an_auv_cna_plans_with_pitch_and_broadcasts_its_own_estimate() {
         depth: scenario::CruiseDepth::Metres(10.0),
         nav_diffusion: 0.01,
         surfacing: None,
+        broadcasts_truth: false,
     });
     sc.validate(std::path::Path::new("t")).unwrap();
     let r = one_run(&sc, "planner", 6, true, &Faults::default());

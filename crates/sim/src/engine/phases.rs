@@ -130,8 +130,17 @@ impl Engine<'_> {
                 (cna.nav_error.0 + sd * normal(&mut cna.rng_nav), cna.nav_error.1 + sd * normal(&mut cna.rng_nav))
             }
         };
-        let p = cna.craft.pos;
-        Vec3::new(p.x + cna.nav_error.0, p.y + cna.nav_error.1, p.z)
+        let (p, (de, dn)) = (self.cna.craft.pos, self.broadcast_error());
+        Vec3::new(p.x + de, p.y + dn, p.z)
+    }
+
+    /// What the CNA's broadcast position adds to its true one: its navigation error, or nothing
+    /// for a CNA that broadcasts its truth (`cna.auv.broadcasts_truth`, a counterfactual).
+    fn broadcast_error(&self) -> (f64, f64) {
+        match &self.sc.cna.auv {
+            Some(a) if a.broadcasts_truth => (0.0, 0.0),
+            _ => self.cna.nav_error,
+        }
     }
 
     /// Truth to `t_next`: the CNA craft, the ships, then every survey AUV (after its finish
@@ -182,7 +191,8 @@ impl Engine<'_> {
         }
         let sc = self.sc;
         let from = lerp(self.cna.craft.prev, self.cna.craft.pos, frac);
-        let fix = Vec3::new(from.x + self.cna.nav_error.0, from.y + self.cna.nav_error.1, from.z);
+        let (de, dn) = self.broadcast_error();
+        let fix = Vec3::new(from.x + de, from.y + dn, from.z);
         let (id, rate) = match self.cna_choice(fix, t_tx, obs) {
             (id, Choice::Transmit(rate)) => (id, rate),
             (_, Choice::Silent) => return,

@@ -361,6 +361,7 @@ fn an_auv_cna_surfaces_for_a_fix_and_dives_back() {
         depth: CruiseDepth::Metres(10.0),
         nav_diffusion: 0.05,
         surfacing: Some(surfacing),
+        broadcasts_truth: false,
     });
     for policy in ["centroid", "planner"] {
         let (r, trace) = traced(&sc, policy, 4);
@@ -377,6 +378,24 @@ fn an_auv_cna_surfaces_for_a_fix_and_dives_back() {
         let deep_again = trace.decisions.iter().filter(|d| d.t > climbs[0] && d.from.z > 9.0).map(|d| d.t).next();
         assert!(deep_again.is_some_and(|t| t < climbs[1]), "{policy}: {deep_again:?} before {}", climbs[1]);
     }
+}
+
+/// The counterfactual CNA (`cna.auv.broadcasts_truth`) still draws its navigation error but no
+/// range carries it: the fleet navigates exactly as under a CNA whose error never grows, and
+/// differently from one that broadcasts its error.
+#[test]
+fn a_cna_broadcasting_its_truth_leaves_its_navigation_error_out_of_every_range() {
+    use crate::closed_loop::scenario::{AuvCna, CruiseDepth};
+    let with = |nav_diffusion: f64, broadcasts_truth: bool| {
+        let mut sc = short_survey(Finish::Loiter { radius_m: 50.0 }, 900.0);
+        let depth = CruiseDepth::Metres(10.0);
+        sc.cna.auv = Some(AuvCna { pitch_options: 1, depth, nav_diffusion, surfacing: None, broadcasts_truth });
+        let (r, _) = traced(&sc, "centroid", 5);
+        r.fleet.error.mean
+    };
+    let exact = with(0.0, false);
+    assert_eq!(with(0.05, true), exact, "the error drawn must not reach a range");
+    assert_ne!(with(0.05, false), exact, "the error broadcast must reach the ranges");
 }
 
 /// A filter run every 0.5 s (`[filter] rate` decimated) dead-reckons like one run every step:

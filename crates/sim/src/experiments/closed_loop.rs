@@ -54,7 +54,7 @@ pub fn experiments() -> Vec<Experiment> {
 
 /// One evaluation scenario: its name, its mission for N survey AUVs and the planners' look-ahead.
 pub struct Setting {
-    pub name: &'static str,
+    pub name: String,
     pub n: Vec<usize>,
     pub base: Scenario,
     /// L of `planner-estimator` for N AUVs (Hudson's `planner` keeps L = 5): 5 with the ASC (5
@@ -143,14 +143,21 @@ pub fn auv_cna_look_ahead(n: usize) -> usize {
 impl Setting {
     /// A scenario with an ASC CNA: L = 5, every option at every level.
     pub fn asc(name: &'static str, n: Vec<usize>, base: Scenario) -> Self {
-        Setting { name, n, base, estimator_look_ahead: |_| 5, estimator_pitch_levels: None, depth_aware: false }
+        Setting {
+            name: name.into(),
+            n,
+            base,
+            estimator_look_ahead: |_| 5,
+            estimator_pitch_levels: None,
+            depth_aware: false,
+        }
     }
 
     /// A scenario with an AUV CNA: [`auv_cna_look_ahead`], the pitch options at level 0 only, the
     /// depth chosen by the sound-speed profile.
     pub fn auv_cna(name: &'static str, n: Vec<usize>, base: Scenario) -> Self {
         Setting {
-            name,
+            name: name.into(),
             n,
             base,
             estimator_look_ahead: auv_cna_look_ahead,
@@ -280,14 +287,15 @@ pub fn evaluate(
     );
     let (mut checks, mut cells, mut data) = (Vec::new(), Vec::new(), Vec::new());
     // Every cell's runs go through one pool (no cell waits for the previous cell's slowest run).
-    let names: Vec<&str> = settings.iter().flat_map(|s| s.n.iter().map(move |_| s.name)).collect();
+    let names: Vec<&str> = settings.iter().flat_map(|s| s.n.iter().map(move |_| s.name.as_str())).collect();
     let scenarios: Vec<Scenario> =
         settings.iter().flat_map(|s| s.n.iter().map(move |&n| s.scenario(n, seed, duration))).collect();
     let comparisons = monte_carlo_grid(&scenarios, policies, runs, progress).map_err(|e| fail(e.to_string()))?;
     for ((name, sc), c) in names.iter().zip(&scenarios).zip(comparisons) {
         let _ = writeln!(table, "scenario {name}, tau = {} s", sc.comms.tau);
         table += &comparison_table(&c);
-        cell_checks(name, &c, &mut table, &mut checks, &mut cells)?;
+        let inherits_cna_error = sc.cna.auv.as_ref().is_some_and(|a| !a.broadcasts_truth);
+        cell_checks(name, &c, inherits_cna_error, &mut table, &mut checks, &mut cells)?;
         table.push('\n');
         data.push(serde_json::to_value(&c).map_err(|e| fail(e.to_string()))?);
     }
@@ -302,9 +310,11 @@ pub fn evaluate(
 }
 
 /// The checks of one comparison: one per baseline (won or not, with the cause), filter health.
+/// `inherits_cna_error`: the CNA is an AUV broadcasting its own navigation estimate.
 fn cell_checks(
     scenario: &str,
     c: &Comparison,
+    inherits_cna_error: bool,
     table: &mut String,
     checks: &mut Vec<Check>,
     cells: &mut Vec<Cell>,
@@ -338,7 +348,8 @@ fn cell_checks(
         });
     }
     if c.paired.iter().any(|p| !p.planner_better) {
-        let _ = writeln!(table, "  cell cause, {scenario} N={n}: {}", how_much_the_path_decides(c));
+        let cna_error = if inherits_cna_error { format!("; {CNA_ERROR_CAUSE}") } else { String::new() };
+        let _ = writeln!(table, "  cell cause, {scenario} N={n}: {}{cna_error}", how_much_the_path_decides(c));
     }
     checks.push(Check::new(
         format!("{scenario} N={n}: every filter healthy"),
@@ -370,6 +381,11 @@ fn summary_grid(cells: &[Cell]) -> String {
     }
     out
 }
+
+/// The second cause of an AUV-CNA cell not won, measured by `closed-loop-cna-navigation`.
+const CNA_ERROR_CAUSE: &str = "every AUV the CNA fixes inherits the AUV CNA's own navigation error (a random walk, \
+     1 to 3 m between GPS fixes), whatever the CNA's path; `coopnav reproduce closed-loop-cna-navigation` runs these \
+     cells again with the CNA broadcasting its true position, on the same seeds";
 
 /// The cell-wide measured argument for a cell not won: how far apart the policies that ping end
 /// (the best, the median), how far no CNA at all is, and how wide the paired intervals are at

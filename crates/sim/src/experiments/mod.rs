@@ -5,6 +5,7 @@
 //! `coopnav reproduce <id>` runs one; CI runs the reduced forms through the sim crate's tests.
 
 pub mod closed_loop;
+pub mod cna_navigation;
 pub mod gill;
 pub mod hudson;
 pub mod nams;
@@ -123,6 +124,7 @@ pub fn registry() -> Vec<Experiment> {
     all.extend(gill::experiments());
     all.extend(nams::experiments());
     all.extend(closed_loop::experiments());
+    all.extend(cna_navigation::experiments());
     all
 }
 
