@@ -10,7 +10,8 @@
 //!    deterministic, and removed only by pings whose line of sight has a component along c. Taken
 //!    as a random walk along c that reaches the deterministic m·cτ after m levels unobserved,
 //!    m = `drift_levels`: P̃ gains m·(cτ)(cτ)ᵀ per level. The growth is ⪰ 0 and the update is
-//!    monotone in P̃, so the bounds below, which leave it out, stay lower bounds.
+//!    monotone in P̃, so the bounds below, which leave it out, stay lower bounds. The true-error
+//!    cost (`true_error`, step 1) carries the same current exactly, as the error's mean.
 //! 2. Ping from the CNA at p to the AUV at x, slant range r = |x − p|. The range's Jacobian with
 //!    respect to the AUV's horizontal position is h = (x − p)_xy / r (|h| ≤ 1: a CNA right above
 //!    the AUV tells it nothing horizontally, which is the 3-D geometry). Range noise variance
@@ -174,7 +175,7 @@ pub struct EstimatorSpec {
     pub reach_success: f64,
     /// c of step 1b: the water current the AUVs' filters do not model, east and north, m/s, as
     /// the CNA measures it (its ADCP); [0, 0] (the default) = none. The true-error cost (`truth`)
-    /// leaves it out.
+    /// takes it as the AUVs' mean error instead (`true_error` step 1; session 29).
     #[serde(default, skip_serializing_if = "is_still")]
     pub unmodelled_current: [f64; 2],
     /// m of step 1b: levels over which the current's drift is taken to build up unseen (≥ 0).

@@ -119,7 +119,8 @@ fn true_error_setting() -> impl Strategy<Value = (TruthSpec, Vec<TrueError>, f64
             .into_iter()
             .map(|(se, sn, rho, c)| {
                 let (ce, cn) = ((se * v).sqrt(), (sn * v).sqrt());
-                TrueError { s: [se, rho * (se * sn).sqrt(), sn], c: [c[0] * ce, c[1] * ce, c[2] * cn, c[3] * cn] }
+                let c = [c[0] * ce, c[1] * ce, c[2] * cn, c[3] * cn];
+                TrueError { s: [se, rho * (se * sn).sqrt(), sn], c, m: [0.0; 2] }
             })
             .collect();
         (spec, errors, v)

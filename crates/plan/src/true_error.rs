@@ -13,6 +13,10 @@
 //!    per axis, [`TruthSpec::drift_m2_s`]), C unchanged (the AUV's drift is independent of the
 //!    CNA's), ṽ = v + D·τ (the CNA's own navigation diffusion, [`TruthSpec::cna_diffusion_m2_s`]):
 //!    the CNA's error is a shared, persistent random walk, not fresh noise per ping.
+//!    An unmodelled water current c (`EstimatorSpec::unmodelled_current`, as the CNA measures it;
+//!    issue 10, session 29) moves the AUV by cτ per level while its filter predicts no such
+//!    motion: ε gains the deterministic d = −cτ. With m = E[ε] carried beside S (which holds the
+//!    mean: S = Cov ε + m mᵀ), S̃ gains m dᵀ + d mᵀ + d dᵀ and m̃ = m + d (exact).
 //! 2. A ping from the CNA, h its horizontal range Jacobian (`estimator` step 2). The filter's gain
 //!    is K = P̃h/(hᵀP̃h + R_f(r) + σ_c²|h|²), its own model. The range is measured from the true
 //!    CNA and predicted from the broadcast one, so the innovation is −hᵀε + hᵀe_c + n with n the
@@ -25,7 +29,8 @@
 //!    against the filter's 0.15 m). The update is linear in the errors, so second moments carry
 //!    over exactly whatever their distribution.
 //! 3. The ping arrives with probability p_s(r): S_E = (1 − p_s)·S̃ + p_s·S⁺, C_E likewise (the
-//!    second moments of a mixture of zero-mean errors), P as `estimator` step 3.
+//!    second moments of the mixture), P as `estimator` step 3. The mean: ε⁺'s is A·m̃ (e_c and n
+//!    have none), so m_E = m̃ − p_s·K·(hᵀm̃).
 //! 4. The level's term is `estimator` steps 4 and 5 on S_E (the range bias β(r)²/2·I added, then
 //!    the aggregate); the cost-to-go is steps 6 and 7 with the true drift q_t for the growth.
 //!
@@ -64,12 +69,14 @@ impl CheckFields for TruthSpec {
     }
 }
 
-/// One AUV's true-error moments: S = E[εεᵀ] as [S_ee, S_en, S_nn] (m²) and C = E[ε e_cᵀ]
-/// row-major [C_ee, C_en, C_ne, C_nn] (m²).
+/// One AUV's true-error moments: S = E[εεᵀ] as [S_ee, S_en, S_nn] (m²), C = E[ε e_cᵀ]
+/// row-major [C_ee, C_en, C_ne, C_nn] (m²) and the mean m = E[ε] (east, north; m), non-zero only
+/// under an unmodelled current (step 1).
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct TrueError {
     pub s: [f64; 3],
     pub c: [f64; 4],
+    pub m: [f64; 2],
 }
 
 /// What the true-error cost starts from at a decision: each AUV's moments (the order of
@@ -88,12 +95,14 @@ pub struct TrueState {
     pub v: f64,
 }
 
-/// The growth of one level (step 1): q_f·τ, q_t·τ (m² per axis) and D·τ (m²).
+/// The growth of one level (step 1): q_f·τ, q_t·τ (m² per axis), D·τ (m²) and the error's
+/// deterministic shift d = −cτ under an unmodelled current (m; zero without one).
 #[derive(Debug, Clone, Copy)]
 pub struct Growth {
     pub filter: f64,
     pub truth: f64,
     pub cna: f64,
+    pub shift: [f64; 2],
 }
 
 /// The noise models of step 2: the filter's (its gain) and the truth's (the error it causes).
@@ -118,13 +127,20 @@ pub fn true_error_step(
 ) -> TrueState {
     let [pa, pb, pc] = state.p;
     let (pa, pc) = (pa + growth.filter, pc + growth.filter);
+    let [m0, m1] = state.truth.m;
+    let [d0, d1] = growth.shift;
     let [sa, sb, sc] = state.truth.s;
-    let (sa, sc) = (sa + growth.truth, sc + growth.truth);
+    let (sa, sb, sc) = (
+        sa + growth.truth + (2.0 * m0 + d0) * d0,
+        sb + m0 * d1 + d0 * m1 + d0 * d1,
+        sc + growth.truth + (2.0 * m1 + d1) * d1,
+    );
+    let (m0, m1) = (m0 + d0, m1 + d1);
     let c = state.truth.c;
     let v = state.v + growth.cna;
     let d = [auv[0] - cna[0], auv[1] - cna[1], auv[2] - cna[2]];
     let r2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
-    let predicted = TrueState { p: [pa, pb, pc], truth: TrueError { s: [sa, sb, sc], c }, v };
+    let predicted = TrueState { p: [pa, pb, pc], truth: TrueError { s: [sa, sb, sc], c, m: [m0, m1] }, v };
     if r2 <= 1e-12 {
         return predicted;
     }
@@ -150,7 +166,9 @@ pub fn true_error_step(
     let (u0, u1) = (v * h0 - cth0, v * h1 - cth1);
     let c = [c[0] + p_s * k0 * u0, c[1] + p_s * k0 * u1, c[2] + p_s * k1 * u0, c[3] + p_s * k1 * u1];
     let p = [pa - p_s * k0 * ph0, pb - p_s * k0 * ph1, pc - p_s * k1 * ph1];
-    TrueState { p, truth: TrueError { s, c }, v }
+    let hm = h0 * m0 + h1 * m1;
+    let m = [m0 - p_s * k0 * hm, m1 - p_s * k1 * hm];
+    TrueState { p, truth: TrueError { s, c, m }, v }
 }
 
 /// The true-error model of one decision: the estimator-aware model (its filter model, link,
@@ -158,14 +176,23 @@ pub fn true_error_step(
 pub(crate) struct TrueErrorCost {
     pub filter: EkfCost,
     pub truth: TruthSpec,
-    /// q_t·τ and D·τ of step 1, m².
+    /// q_t·τ and D·τ of step 1, m², and the error's shift d = −cτ per level, m.
     pub truth_tau: f64,
     pub cna_tau: f64,
+    pub shift: [f64; 2],
 }
 
 impl TrueErrorCost {
     pub fn new(filter: EkfCost, truth: TruthSpec, tau: f64) -> Self {
-        TrueErrorCost { truth_tau: truth.drift_m2_s * tau, cna_tau: truth.cna_diffusion_m2_s * tau, filter, truth }
+        let [ce, cn] = filter.spec.unmodelled_current;
+        let shift = [-ce * tau, -cn * tau];
+        TrueErrorCost {
+            truth_tau: truth.drift_m2_s * tau,
+            cna_tau: truth.cna_diffusion_m2_s * tau,
+            shift,
+            filter,
+            truth,
+        }
     }
 
     /// The root states from the filter covariances and the truth input (one each per AUV).
@@ -205,7 +232,8 @@ impl CostModel for TrueErrorCost {
     /// Steps 1–4 of the module's derivation.
     #[inline(always)]
     fn update(&self, k: usize, parent: &TrueState, cna: [f64; 3], auv: [f64; 3]) -> (TrueState, f64) {
-        let growth = Growth { filter: self.filter.q_tau[k], truth: self.truth_tau, cna: self.cna_tau };
+        let growth =
+            Growth { filter: self.filter.q_tau[k], truth: self.truth_tau, cna: self.cna_tau, shift: self.shift };
         let link = &self.filter.link;
         let next = true_error_step(parent, growth, cna, auv, &self.noise(), |r| link.success(r));
         let term = self.filter.moments_term(&next.truth.s, self.filter.bias_variance(cna, auv));
@@ -278,10 +306,10 @@ mod tests {
     fn a_ping_is_the_joseph_form_of_the_joint_error() {
         let state = TrueState {
             p: [40.0, 6.0, 25.0],
-            truth: TrueError { s: [3.0, 0.5, 2.0], c: [0.4, -0.1, 0.2, 0.3] },
+            truth: TrueError { s: [3.0, 0.5, 2.0], c: [0.4, -0.1, 0.2, 0.3], m: [0.0; 2] },
             v: 1.5,
         };
-        let growth = Growth { filter: 10.0, truth: 0.3, cna: 0.2 };
+        let growth = Growth { filter: 10.0, truth: 0.3, cna: 0.2, shift: [0.0; 2] };
         let (cna, auv) = ([0.0, 0.0, 10.0], [300.0, -400.0, 70.0]);
         let got = true_error_step(&state, growth, cna, auv, &noise(1.8), |_| 1.0);
         // By hand.
@@ -318,11 +346,15 @@ mod tests {
 
     #[test]
     fn a_lost_ping_is_growth_and_half_a_ping_is_half_way() {
-        let state = TrueState { p: [40.0, 6.0, 25.0], truth: TrueError { s: [3.0, 0.5, 2.0], c: [0.4; 4] }, v: 1.5 };
-        let growth = Growth { filter: 10.0, truth: 0.3, cna: 0.2 };
+        let state = TrueState {
+            p: [40.0, 6.0, 25.0],
+            truth: TrueError { s: [3.0, 0.5, 2.0], c: [0.4; 4], m: [0.0; 2] },
+            v: 1.5,
+        };
+        let growth = Growth { filter: 10.0, truth: 0.3, cna: 0.2, shift: [0.0; 2] };
         let (cna, auv) = ([0.0; 3], [500.0, 0.0, 0.0]);
         let lost = true_error_step(&state, growth, cna, auv, &noise(1.8), |_| 0.0);
-        assert_eq!(lost.truth, TrueError { s: [3.3, 0.5, 2.3], c: [0.4; 4] });
+        assert_eq!(lost.truth, TrueError { s: [3.3, 0.5, 2.3], c: [0.4; 4], m: [0.0; 2] });
         let full = true_error_step(&state, growth, cna, auv, &noise(1.8), |_| 1.0);
         let half = true_error_step(&state, growth, cna, auv, &noise(1.8), |_| 0.5);
         for i in 0..3 {
@@ -335,9 +367,12 @@ mod tests {
     /// side, the AUV's error follows e_c (C → v·I) and S → v·I, not 0.
     #[test]
     fn repeated_pings_hand_the_cnas_offset_to_the_auv() {
-        let mut state =
-            TrueState { p: [100.0, 0.0, 100.0], truth: TrueError { s: [4.0, 0.0, 4.0], c: [0.0; 4] }, v: 9.0 };
-        let growth = Growth { filter: 50.0, truth: 0.0, cna: 0.0 };
+        let mut state = TrueState {
+            p: [100.0, 0.0, 100.0],
+            truth: TrueError { s: [4.0, 0.0, 4.0], c: [0.0; 4], m: [0.0; 2] },
+            v: 9.0,
+        };
+        let growth = Growth { filter: 50.0, truth: 0.0, cna: 0.0, shift: [0.0; 2] };
         let quiet =
             PingNoise { filter: EXACT, filter_cna_variance: 0.0, truth: RangeNoise { sigma_m: 1e-6, per_km_m: 0.0 } };
         for i in 0..200 {
@@ -348,6 +383,35 @@ mod tests {
         let [sa, sb, sc] = state.truth.s;
         assert!((sa - 9.0).abs() < 0.5 && (sc - 9.0).abs() < 0.5 && sb.abs() < 0.5, "{:?}", state.truth);
         assert!((state.truth.c[0] - 9.0).abs() < 0.5 && (state.truth.c[3] - 9.0).abs() < 0.5, "{:?}", state.truth);
+    }
+
+    /// Under an unmodelled current (0.1 m/s east, τ = 30 s) a noiseless AUV's error is the
+    /// deterministic mean −cτ per level: S = m mᵀ exactly. A range along the current (from the
+    /// east) takes the mean off; one across it (from the north) leaves it whole.
+    #[test]
+    fn an_unmodelled_current_biases_the_error_and_only_pings_along_it_take_the_bias_off() {
+        let start = TrueState { p: [100.0, 0.0, 100.0], truth: TrueError::default(), v: 0.0 };
+        let growth = Growth { filter: 50.0, truth: 0.0, cna: 0.0, shift: [-3.0, 0.0] };
+        let quiet =
+            PingNoise { filter: EXACT, filter_cna_variance: 0.0, truth: RangeNoise { sigma_m: 1e-9, per_km_m: 0.0 } };
+        let step =
+            |state: &TrueState, cna: [f64; 3], p_s: f64| true_error_step(state, growth, cna, [0.0; 3], &quiet, |_| p_s);
+        let lost = step(&start, [500.0, 0.0, 0.0], 0.0);
+        assert_eq!((lost.truth.m, lost.truth.s), ([-3.0, 0.0], [9.0, 0.0, 0.0]));
+        let lost_twice = step(&lost, [500.0, 0.0, 0.0], 0.0);
+        assert_eq!((lost_twice.truth.m, lost_twice.truth.s), ([-6.0, 0.0], [36.0, 0.0, 0.0]));
+        let along = step(&lost, [500.0, 0.0, 0.0], 1.0);
+        let across = step(&lost, [0.0, 500.0, 0.0], 1.0);
+        assert!(along.truth.m[0].abs() < 0.1 && along.truth.s[0] < 0.01, "{:?}", along.truth);
+        assert_eq!(across.truth.m, [-6.0, 0.0], "a range across the current cannot see it");
+        for e in [along.truth, across.truth] {
+            let [m0, m1] = e.m;
+            let close = |x: f64, y: f64| (x - y).abs() < 1e-9 * (1.0 + y.abs());
+            assert!(close(e.s[0], m0 * m0) && close(e.s[1], m0 * m1) && close(e.s[2], m1 * m1), "{e:?}");
+        }
+        // Half a ping along: the mean is the mixture's, half way.
+        let half = step(&lost, [500.0, 0.0, 0.0], 0.5);
+        assert!((half.truth.m[0] - 0.5 * (along.truth.m[0] + lost_twice.truth.m[0])).abs() < 1e-12);
     }
 
     #[test]
@@ -361,7 +425,7 @@ mod tests {
         for field in ["drift_m2_s", "range_noise.sigma_m", "cna_diffusion_m2_s"] {
             assert!(e.contains(&format!("planner.cost.truth.{field}")), "{field}: {e}");
         }
-        let errors = [TrueError { s: [1.0, 3.0, 1.0], c: [0.0; 4] }];
+        let errors = [TrueError { s: [1.0, 3.0, 1.0], c: [0.0; 4], m: [0.0; 2] }];
         let e = TrueErrorCost::root([[1.0, 0.0, 1.0]].into_iter(), &TruthInput { errors: &errors, cna_variance: 0.0 });
         assert!(e.unwrap_err().to_string().contains("AUV 0: true-error moments"));
         let ok = [TrueError::default()];

@@ -91,32 +91,37 @@ pub struct CovarianceTracker {
 /// the tracked filter covariance. Reports cannot restart it (an AUV does not know its true error):
 /// an AUV starts, when first known at time t, at S = (σ₀² + q_t·t)·I (σ₀ its launch position
 /// error) and C = 0. When the CNA's own variance falls (a fix), its new error is independent of
-/// the old one, so every C restarts at 0. An invention (issue 10, session 23).
+/// the old one, so every C restarts at 0. An invention (issue 10, session 23). Under a current
+/// the filters do not model (`current`, m/s; session 29) each error also carries the mean −c·t
+/// since launch, less what the pings took off it (`true_error` step 1).
 #[derive(Debug, Clone)]
 struct TruthTracker {
     spec: TruthSpec,
     launch_variance: f64,
+    current: [f64; 2],
     errors: Vec<Option<(f64, TrueError)>>,
     cna_variance: f64,
 }
 
 impl TruthTracker {
-    /// AUV `k`'s moments at time `t` before this period's ping: grown by the true drift since
-    /// they were last stepped, or their start.
+    /// AUV `k`'s moments at time `t` before this period's ping: grown by the true drift (and
+    /// shifted by the unmodelled current) since they were last stepped, or their start.
     fn grown(&self, k: usize, t: f64) -> TrueError {
-        let q = self.spec.drift_m2_s;
-        match self.errors[k] {
-            Some((since, mut e)) => {
-                let grow = q * (t - since).max(0.0);
-                e.s[0] += grow;
-                e.s[2] += grow;
-                e
-            }
-            None => {
-                let axis = self.launch_variance + q * t.max(0.0);
-                TrueError { s: [axis, 0.0, axis], c: [0.0; 4] }
-            }
-        }
+        let (since, start) = match self.errors[k] {
+            Some((since, e)) => (since, e),
+            None => (0.0, TrueError { s: [self.launch_variance, 0.0, self.launch_variance], ..TrueError::default() }),
+        };
+        let dt = (t - since).max(0.0);
+        let growth =
+            Growth { filter: 0.0, truth: self.spec.drift_m2_s * dt, cna: 0.0, shift: self.current.map(|c| -c * dt) };
+        let state = TrueState { p: [0.0; 3], truth: start, v: 0.0 };
+        // No ping (success 0): the prediction alone.
+        true_error_step(&state, growth, [0.0; 3], [0.0; 3], &self.no_ping(), |_| 0.0).truth
+    }
+
+    /// The noise of a step without a range (unused by its prediction).
+    fn no_ping(&self) -> PingNoise {
+        PingNoise { filter: self.spec.range_noise, filter_cna_variance: 0.0, truth: self.spec.range_noise }
     }
 
     /// The CNA's own variance at this decision; a fall restarts every C.
@@ -134,7 +139,7 @@ impl TruthTracker {
     fn ping(&mut self, k: usize, t: f64, (prior, grow): ([f64; 3], f64), link: (&Vec3, &Vec3, f64), noise: RangeNoise) {
         let (cna, auv, p) = link;
         let state = TrueState { p: prior, truth: self.grown(k, t), v: self.cna_variance };
-        let growth = Growth { filter: grow, truth: 0.0, cna: 0.0 };
+        let growth = Growth { filter: grow, truth: 0.0, cna: 0.0, shift: [0.0; 2] };
         let ping_noise = PingNoise { filter: noise, filter_cna_variance: 0.0, truth: self.spec.range_noise };
         let next = true_error_step(&state, growth, [cna.x, cna.y, cna.z], [auv.x, auv.y, auv.z], &ping_noise, |_| p);
         self.errors[k] = Some((t, next.truth));
@@ -200,10 +205,11 @@ impl CovarianceTracker {
     }
 
     /// Tracks the AUVs' true-error moments too (`TruthTracker`), each starting from a launch
-    /// position variance `launch_variance` per axis, m².
-    pub fn with_truth(mut self, spec: TruthSpec, launch_variance: f64) -> Self {
+    /// position variance `launch_variance` per axis, m², under the water current `current` (m/s)
+    /// the filters do not model.
+    pub fn with_truth(mut self, spec: TruthSpec, launch_variance: f64, current: [f64; 2]) -> Self {
         let n = self.covs.len();
-        self.truth = Some(TruthTracker { spec, launch_variance, errors: vec![None; n], cna_variance: 0.0 });
+        self.truth = Some(TruthTracker { spec, launch_variance, current, errors: vec![None; n], cna_variance: 0.0 });
         self
     }
 
@@ -426,8 +432,8 @@ impl PlannerPolicy {
 
     /// The true-error cost's model of the AUVs' true errors (`CovarianceTracker::with_truth`);
     /// no effect under Hudson's cost.
-    pub fn with_truth(mut self, spec: TruthSpec, launch_variance: f64) -> Self {
-        self.covariances = self.covariances.map(|c| c.with_truth(spec, launch_variance));
+    pub fn with_truth(mut self, spec: TruthSpec, launch_variance: f64, current: [f64; 2]) -> Self {
+        self.covariances = self.covariances.map(|c| c.with_truth(spec, launch_variance, current));
         self
     }
 
@@ -630,6 +636,26 @@ mod tests {
         assert_eq!(t.estimate(0).unwrap().cov, [5.0, 0.0, 10.0]);
     }
 
+    /// Under a current the filters do not model (0.1 m/s east), an AUV first known at 600 s has
+    /// drifted 60 m west of its estimate on average; a sure range from the east takes that off.
+    #[test]
+    fn the_true_error_moments_carry_the_unmodelled_currents_mean() {
+        let start = AuvEstimate { cov: [16.0, 0.0, 16.0], process_noise: 0.1 };
+        let spec = TruthSpec {
+            drift_m2_s: 0.05,
+            range_noise: RangeNoise { sigma_m: 1.0, per_km_m: 0.0 },
+            cna_diffusion_m2_s: 0.0,
+        };
+        let mut t = CovarianceTracker::new(1, start, 30.0, RangeNoise::default()).with_truth(spec, 1.0, [0.1, 0.0]);
+        let (cna, auv) = (Vec3::new(300.0, 0.0, 0.0), Vec3::zeros());
+        t.ping(0, 600.0, None, (&cna, &auv, 0.0));
+        let e = t.true_error(0).unwrap();
+        assert_eq!((e.m, e.s), ([-60.0, 0.0], [31.0 + 3600.0, 0.0, 31.0]));
+        t.ping(0, 630.0, None, (&cna, &auv, 1.0));
+        let e = t.true_error(0).unwrap();
+        assert!(e.m[0].abs() < 1.0 && e.m[1] == 0.0 && e.s[0] < 10.0, "{e:?}");
+    }
+
     #[test]
     fn the_true_error_moments_start_at_launch_inherit_the_cnas_offset_and_forget_it_at_a_fix() {
         let start = AuvEstimate { cov: [16.0, 0.0, 16.0], process_noise: 2.0 };
@@ -638,12 +664,12 @@ mod tests {
             range_noise: RangeNoise { sigma_m: 1.0, per_km_m: 0.0 },
             cna_diffusion_m2_s: 0.01,
         };
-        let mut t = CovarianceTracker::new(1, start, 30.0, RangeNoise::default()).with_truth(spec, 1.0);
+        let mut t = CovarianceTracker::new(1, start, 30.0, RangeNoise::default()).with_truth(spec, 1.0, [0.0; 2]);
         let (cna, auv) = (Vec3::zeros(), Vec3::new(300.0, 0.0, 0.0));
         // First known at 600 s by a lost ping: σ₀² + q_t·t = 1 + 30 per axis, no correlation yet.
         t.set_cna_variance(4.0);
         t.ping(0, 600.0, None, (&cna, &auv, 0.0));
-        assert_eq!(t.true_error(0).unwrap(), TrueError { s: [31.0, 0.0, 31.0], c: [0.0; 4] });
+        assert_eq!(t.true_error(0).unwrap(), TrueError { s: [31.0, 0.0, 31.0], c: [0.0; 4], m: [0.0; 2] });
         // No ping for 30 s: the true drift only (0.05 · 30 = 1.5 m² per axis), not the filter's q.
         t.silent(0, 630.0, None);
         assert_eq!(t.true_error(0).unwrap().s, [32.5, 0.0, 32.5]);
@@ -673,7 +699,7 @@ mod tests {
         let fleet = FnForecast { n: 2, f: |k: usize, t: f64| Some(Vec3::new(300.0 + 200.0 * k as f64, 1.5 * t, 20.0)) };
         let cna = CnaPose { pos: Vec3::new(0.0, 0.0, 0.0), heading: Heading::from_radians(0.0), pitch: 0.0 };
         let filters = Some((start, RangeNoise::default()));
-        let mut with = PlannerPolicy::new(est, 2, 1.0, 1.0, None, filters).unwrap().with_truth(truth, 1.0);
+        let mut with = PlannerPolicy::new(est, 2, 1.0, 1.0, None, filters).unwrap().with_truth(truth, 1.0, [0.0; 2]);
         let mut without = PlannerPolicy::new(est, 2, 1.0, 1.0, None, filters).unwrap();
         for step in 0..3 {
             assert!(matches!(with.decide(&at_step(step, cna, &fleet)), CnaCommand::GoTo(_)));

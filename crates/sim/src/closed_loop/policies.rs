@@ -187,7 +187,7 @@ fn build(name: &str, sc: &Scenario, planned: Option<&TimedWaypoints>) -> Result<
                 policy = policy.with_bias(table);
             }
             if let Some(truth) = p.estimator_truth.filter(|_| estimator) {
-                policy = policy.with_truth(truth, sc.fleet.init_position_sd.powi(2));
+                policy = policy.with_truth(truth, sc.fleet.init_position_sd.powi(2), p.estimator_unmodelled_current);
             }
             if p.estimator_tracking == EstimatorTracking::ReportsOnly {
                 policy = policy.with_reports_only(unheard_growth(sc));
