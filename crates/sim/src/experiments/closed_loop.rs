@@ -21,7 +21,8 @@ use crate::closed_loop::scenario::{
 };
 use crate::closed_loop::{comparison_table, monte_carlo_grid, Scenario};
 use crate::plot::PlotError;
-use coopnav_plan::PenaltyCase;
+use coopnav_nav::AuvModel;
+use coopnav_plan::{PenaltyCase, RangeNoise, TruthSpec};
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 use serde::{Deserialize, Serialize};
@@ -57,8 +58,8 @@ pub struct Setting {
     pub name: String,
     pub n: Vec<usize>,
     pub base: Scenario,
-    /// L of `planner-estimator` for N AUVs (Hudson's `planner` keeps L = 5): 5 with the ASC (5
-    /// options per level); with the AUV CNA, whose pitch options are then offered at level 0 only
+    /// L of `planner-estimator` for N AUVs (Hudson's `planner` keeps L = 5): with the ASC (5
+    /// options per level) [`TRUE_ERROR_LOOK_AHEAD`]; with the AUV CNA, whose pitch options are then offered at level 0 only
     /// ([`Setting::estimator_pitch_levels`]), [`auv_cna_look_ahead`].
     pub estimator_look_ahead: fn(usize) -> usize,
     /// `planner.estimator_pitch_levels`: None with the ASC; 1 with the AUV CNA. All 15 options at
@@ -72,7 +73,30 @@ pub struct Setting {
     /// The AUV CNA chooses its depth by the sound-speed profile (`planner.estimator_bias_profile`,
     /// `estimator_level_off`, [`DEPTH_AWARE_BIAS_PER_KM`]).
     pub depth_aware: bool,
+    /// Some: `planner-estimator` scores the AUVs' expected true error with this model
+    /// (`planner.estimator_truth`), the water current its filters do not model as their mean
+    /// error ([`CURRENT_TRUTH`]).
+    pub true_error: Option<TruthSpec>,
 }
+
+/// The true-error model of `planner-estimator` on the mission with a water current (the ASC
+/// grid): the AUVs' true dead-reckoning drift 0.002 m²/s, the channel's ranges σ 1.8 m (Gill's
+/// outliers, E[n²] ≈ 3.2 m²), an ASC whose GPS error does not drift; the current (the CNA's ADCP)
+/// taken as each AUV's mean error (coopnav_plan `true_error`, step 1). Chosen on the tuning seed
+/// (session 29, 100 runs, planner-estimator's mean error, the covariance cost at L = 5 → this at
+/// L = 5): N = 1 6.43 → 4.50, N = 2 5.78 → 4.66, N = 3 5.84 → 5.40, N = 5 7.26 → 6.46, N = 8
+/// 13.95 → 13.63 m (its RMS 16.90 → 20.36: a few runs end worse); at L = 4 see
+/// [`TRUE_ERROR_LOOK_AHEAD`]. The values are those `scenarios/auv-cna-tdma.toml` chose on its
+/// own tuning runs, with no CNA drift.
+pub const CURRENT_TRUTH: TruthSpec =
+    TruthSpec { drift_m2_s: 0.002, range_noise: RangeNoise { sigma_m: 1.8, per_km_m: 0.0 }, cna_diffusion_m2_s: 0.0 };
+
+/// L of `planner-estimator` with the ASC and [`CURRENT_TRUTH`]. The true-error cost has no lower
+/// bound below a node (coopnav_plan `true_error`), so its search costs about brute force's: L = 5
+/// made the full comparison 5 min 32 s (659 s CPU, against 4 min 40 s and 557 s with the
+/// covariance cost). Tuning seed, 100 runs, L = 4 / 5: N = 2 4.54 / 4.66, N = 3 5.37 / 5.40,
+/// N = 5 6.65 / 6.46, N = 8 12.43 / 13.63 m (RMS 16.61 / 20.36), each at about a third of the time.
+pub const TRUE_ERROR_LOOK_AHEAD: usize = 4;
 
 /// From this many AUVs on (a fleet spread wider than the link's plateau), `planner-estimator`
 /// runs without the level-0 distance penalty (Table 5.2 case 3, look-ahead doubling only) and
@@ -147,9 +171,10 @@ impl Setting {
             name: name.into(),
             n,
             base,
-            estimator_look_ahead: |_| 5,
+            estimator_look_ahead: |_| TRUE_ERROR_LOOK_AHEAD,
             estimator_pitch_levels: None,
             depth_aware: false,
+            true_error: Some(CURRENT_TRUTH),
         }
     }
 
@@ -163,6 +188,7 @@ impl Setting {
             estimator_look_ahead: auv_cna_look_ahead,
             estimator_pitch_levels: Some(1),
             depth_aware: true,
+            true_error: None,
         }
     }
 
@@ -184,6 +210,11 @@ impl Setting {
         sc.planner.estimator_level_off = depth_aware;
         if depth_aware {
             sc.planner.estimator_bias_per_km = DEPTH_AWARE_BIAS_PER_KM;
+        }
+        // Only filters without a current state leave the current unmodelled.
+        if let Some(truth) = self.true_error.filter(|_| sc.filter.model == AuvModel::Thesis) {
+            sc.planner.estimator_truth = Some(truth);
+            sc.planner.estimator_unmodelled_current = [sc.fleet.current.0, sc.fleet.current.1];
         }
         if n >= SPREAD_FLEET_MIN_AUVS {
             sc.planner.estimator_penalty_case = Some(PenaltyCase::C3.id().to_string());
@@ -276,14 +307,18 @@ pub fn evaluate(
     }
     let mut table = format!(
         "True mean navigation error of the survey AUVs (m), {runs} runs per policy and cell, base seed {seed} \
-         (settings chosen on base seed {TUNING_SEED}); planners A=5, L=5; planner-estimator: L=5 (with the AUV \
+         (settings chosen on base seed {TUNING_SEED}); planners A=5, L=5; planner-estimator: L={TRUE_ERROR_LOOK_AHEAD} with the ASC (with the AUV \
          CNA: every policy cruising at the depth the sound-speed profile favours for the fleet, its pitch options at level 0 only, L=3 with one AUV and 4 from 6 on, from 2 AUVs on its depth chosen by the profile with the \
          range bias the profile gives plus {DEPTH_AWARE_BIAS_PER_KM} m/km, levelling off at each step's depth), \
          aggregate sigma_sum, range bias {ESTIMATOR_BIAS_PER_KM} m/km, {ESTIMATOR_TERMINAL_LEVELS} levels of cost-to-go; from \
          {SPREAD_FLEET_MIN_AUVS} AUVs on no level-0 distance penalty, the reach cost-to-go (p_u {REACH_SUCCESS}) and \
-         {SPREAD_TERMINAL_LEVELS} levels.\n\
+         {SPREAD_TERMINAL_LEVELS} levels. With the ASC in a current its filters do not model, planner-estimator \
+         scores the AUVs' expected true error, the current (its ADCP) as their mean error (drift {} m²/s, ranges \
+         σ {} m).\n\
          Every difference is planner-estimator minus the baseline, paired by run; a cell is won when its 95 % CI \
-         lies below zero.\n\n"
+         lies below zero.\n\n",
+        CURRENT_TRUTH.drift_m2_s,
+        CURRENT_TRUTH.range_noise.sigma_m
     );
     let (mut checks, mut cells, mut data) = (Vec::new(), Vec::new(), Vec::new());
     // Every cell's runs go through one pool (no cell waits for the previous cell's slowest run).
@@ -557,6 +592,22 @@ mod tests {
             assert_eq!(spread.estimator_penalty_case.as_deref(), Some(PenaltyCase::C3.id()));
             assert_eq!((spread.estimator_reach_success, spread.estimator_terminal_levels), (0.79, 20.0));
         }
+    }
+
+    #[test]
+    fn in_a_current_its_filters_ignore_the_estimator_scores_true_error_with_the_current_as_its_mean() {
+        let (settings, _, _) = setup(&ReproOptions { size: Size::Full, seed: 1 }).unwrap();
+        let cell = |name: &str| settings.iter().find(|s| s.name == name).unwrap().scenario(3, 1, None);
+        let (current, sloping) = (cell("current"), cell("sloping-auv-cna"));
+        assert_eq!(sloping.planner.estimator_truth, None);
+        assert_eq!(current.planner.estimator_truth, Some(CURRENT_TRUTH));
+        let water = [current.fleet.current.0, current.fleet.current.1];
+        assert!(water != [0.0, 0.0] && current.planner.estimator_unmodelled_current == water);
+        // A filter that estimates the current leaves none unmodelled: the covariance cost as before.
+        let mut modelled = settings.into_iter().find(|s| s.name == "current").unwrap();
+        modelled.base.filter.model = AuvModel::Current(Default::default());
+        let modelled = modelled.scenario(3, 1, None);
+        assert_eq!((modelled.planner.estimator_truth, modelled.planner.estimator_unmodelled_current), (None, [0.0; 2]));
     }
 
     #[test]
