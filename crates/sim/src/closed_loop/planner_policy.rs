@@ -636,17 +636,20 @@ mod tests {
         assert_eq!(t.estimate(0).unwrap().cov, [5.0, 0.0, 10.0]);
     }
 
+    /// One AUV's tracker with true-error moments: its filter's process noise, the truth's drift
+    /// 0.05 m²/s and ranges σ 1 m, the CNA's diffusion and the unmodelled current.
+    fn truth_tracker(process_noise: f64, cna_diffusion_m2_s: f64, current: [f64; 2]) -> CovarianceTracker {
+        let start = AuvEstimate { cov: [16.0, 0.0, 16.0], process_noise };
+        let range_noise = RangeNoise { sigma_m: 1.0, per_km_m: 0.0 };
+        let spec = TruthSpec { drift_m2_s: 0.05, range_noise, cna_diffusion_m2_s };
+        CovarianceTracker::new(1, start, 30.0, RangeNoise::default()).with_truth(spec, 1.0, current)
+    }
+
     /// Under a current the filters do not model (0.1 m/s east), an AUV first known at 600 s has
     /// drifted 60 m west of its estimate on average; a sure range from the east takes that off.
     #[test]
     fn the_true_error_moments_carry_the_unmodelled_currents_mean() {
-        let start = AuvEstimate { cov: [16.0, 0.0, 16.0], process_noise: 0.1 };
-        let spec = TruthSpec {
-            drift_m2_s: 0.05,
-            range_noise: RangeNoise { sigma_m: 1.0, per_km_m: 0.0 },
-            cna_diffusion_m2_s: 0.0,
-        };
-        let mut t = CovarianceTracker::new(1, start, 30.0, RangeNoise::default()).with_truth(spec, 1.0, [0.1, 0.0]);
+        let mut t = truth_tracker(0.1, 0.0, [0.1, 0.0]);
         let (cna, auv) = (Vec3::new(300.0, 0.0, 0.0), Vec3::zeros());
         t.ping(0, 600.0, None, (&cna, &auv, 0.0));
         let e = t.true_error(0).unwrap();
@@ -658,13 +661,7 @@ mod tests {
 
     #[test]
     fn the_true_error_moments_start_at_launch_inherit_the_cnas_offset_and_forget_it_at_a_fix() {
-        let start = AuvEstimate { cov: [16.0, 0.0, 16.0], process_noise: 2.0 };
-        let spec = TruthSpec {
-            drift_m2_s: 0.05,
-            range_noise: RangeNoise { sigma_m: 1.0, per_km_m: 0.0 },
-            cna_diffusion_m2_s: 0.01,
-        };
-        let mut t = CovarianceTracker::new(1, start, 30.0, RangeNoise::default()).with_truth(spec, 1.0, [0.0; 2]);
+        let mut t = truth_tracker(2.0, 0.01, [0.0; 2]);
         let (cna, auv) = (Vec3::zeros(), Vec3::new(300.0, 0.0, 0.0));
         // First known at 600 s by a lost ping: σ₀² + q_t·t = 1 + 30 per axis, no correlation yet.
         t.set_cna_variance(4.0);
