@@ -1104,10 +1104,16 @@ mod tests {
         assert!(e.contains("field fleet.vehicle = ") && e.contains("max_yaw_rate"), "{e}");
     }
 
+    /// The default mission without its `planner.estimator_*` lines (tests that write their own).
+    fn example_without_estimator_settings() -> String {
+        EXAMPLE.lines().filter(|l| !l.starts_with("estimator_")).map(|l| format!("{l}\n")).collect()
+    }
+
     /// Eight AUVs with τ = 30 s leave 3.3 s per slot, less than rate 0's 3.9 s of air time; τ = 44 s fits.
     #[test]
     fn the_estimator_planners_own_settings_are_checked() {
-        let text = EXAMPLE.replace(
+        let example = example_without_estimator_settings();
+        let text = example.replace(
             "[planner]\n",
             "[planner]\nestimator_penalty_case = \"99\"\nestimator_look_ahead = 70\nestimator_terminal_levels = -1.0\n\
              estimator_bias_per_km = -2.0\nestimator_reach_success = 1.5\nestimator_pitch_levels = 0\n\
@@ -1119,7 +1125,7 @@ mod tests {
             assert!(e.contains(&format!("planner.estimator_{field}")), "{field}: {e}");
         }
         let ok =
-            EXAMPLE.replace("[planner]\n", "[planner]\nestimator_penalty_case = \"3\"\nestimator_look_ahead = 3\n");
+            example.replace("[planner]\n", "[planner]\nestimator_penalty_case = \"3\"\nestimator_look_ahead = 3\n");
         let other_field_bad = err(&ok.replace("heading_options = 5", "heading_options = 1"));
         assert!(
             other_field_bad.contains("planner.heading_options") && !other_field_bad.contains("estimator_look_ahead"),
@@ -1163,10 +1169,13 @@ mod tests {
 
     #[test]
     fn the_estimator_scores_its_covariance_unless_the_file_gives_a_truth_model() {
-        let plain = Scenario::parse(EXAMPLE, Path::new("e.toml")).unwrap();
+        // The default mission gives one (its current is unmodelled); without that line, none.
+        assert!(Scenario::parse(EXAMPLE, Path::new("e.toml")).unwrap().planner.estimator_truth.is_some());
+        let without = example_without_estimator_settings();
+        let plain = Scenario::parse(&without, Path::new("e.toml")).unwrap();
         assert_eq!(plain.planner.estimator_truth, None);
         assert!(!toml::to_string(&plain).unwrap().contains("estimator_truth"), "the default is not written");
-        let with = |v: &str| EXAMPLE.replace("[planner]\n", &format!("[planner]\nestimator_truth = {v}\n"));
+        let with = |v: &str| without.replace("[planner]\n", &format!("[planner]\nestimator_truth = {v}\n"));
         let truth = "{ drift_m2_s = 0.03, range_noise = { sigma_m = 1.8, per_km_m = 0.0 }, cna_diffusion_m2_s = 0.01 }";
         let sc = Scenario::parse(&with(truth), Path::new("t.toml")).unwrap();
         let spec = sc.planner.estimator_truth.unwrap();

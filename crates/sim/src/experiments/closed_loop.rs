@@ -21,7 +21,6 @@ use crate::closed_loop::scenario::{
 };
 use crate::closed_loop::{comparison_table, monte_carlo_grid, Scenario};
 use crate::plot::PlotError;
-use coopnav_nav::AuvModel;
 use coopnav_plan::{PenaltyCase, RangeNoise, TruthSpec};
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
@@ -211,8 +210,7 @@ impl Setting {
         if depth_aware {
             sc.planner.estimator_bias_per_km = DEPTH_AWARE_BIAS_PER_KM;
         }
-        // Only filters without a current state leave the current unmodelled.
-        if let Some(truth) = self.true_error.filter(|_| sc.filter.model == AuvModel::Thesis) {
+        if let Some(truth) = self.true_error {
             sc.planner.estimator_truth = Some(truth);
             sc.planner.estimator_unmodelled_current = [sc.fleet.current.0, sc.fleet.current.1];
         }
@@ -595,7 +593,7 @@ mod tests {
     }
 
     #[test]
-    fn in_a_current_its_filters_ignore_the_estimator_scores_true_error_with_the_current_as_its_mean() {
+    fn in_the_current_the_estimator_scores_true_error_with_the_current_as_its_mean() {
         let (settings, _, _) = setup(&ReproOptions { size: Size::Full, seed: 1 }).unwrap();
         let cell = |name: &str| settings.iter().find(|s| s.name == name).unwrap().scenario(3, 1, None);
         let (current, sloping) = (cell("current"), cell("sloping-auv-cna"));
@@ -603,11 +601,11 @@ mod tests {
         assert_eq!(current.planner.estimator_truth, Some(CURRENT_TRUTH));
         let water = [current.fleet.current.0, current.fleet.current.1];
         assert!(water != [0.0, 0.0] && current.planner.estimator_unmodelled_current == water);
-        // A filter that estimates the current leaves none unmodelled: the covariance cost as before.
-        let mut modelled = settings.into_iter().find(|s| s.name == "current").unwrap();
-        modelled.base.filter.model = AuvModel::Current(Default::default());
-        let modelled = modelled.scenario(3, 1, None);
-        assert_eq!((modelled.planner.estimator_truth, modelled.planner.estimator_unmodelled_current), (None, [0.0; 2]));
+        // The default mission (`simulate`'s) flies the same planner.
+        let default = Scenario::example().planner;
+        assert_eq!(default.estimator_truth, Some(CURRENT_TRUTH));
+        assert_eq!(default.estimator_look_ahead, Some(TRUE_ERROR_LOOK_AHEAD));
+        assert_eq!(default.estimator_unmodelled_current, water);
     }
 
     #[test]
