@@ -32,7 +32,8 @@
 //!    second moments of the mixture), P as `estimator` step 3. The mean: ε⁺'s is A·m̃ (e_c and n
 //!    have none), so m_E = m̃ − p_s·K·(hᵀm̃).
 //! 4. The level's term is `estimator` steps 4 and 5 on S_E (the range bias β(r)²/2·I added, then
-//!    the aggregate); the cost-to-go is steps 6 and 7 with the true drift q_t for the growth.
+//!    the aggregate); the cost-to-go is steps 6 and 7 with the true drift q_t for the growth
+//!    (the current's mean is not grown beyond the horizon).
 //!
 //! No lower bound below a node: every term is ≥ 0, so 0 is a valid one, and branch-and-bound
 //! is exact by construction (it prunes on the penalties and the costs reached only). The search

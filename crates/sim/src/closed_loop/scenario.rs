@@ -1246,5 +1246,9 @@ mod tests {
         assert!(exact.cna.auv.as_ref().unwrap().broadcasts_truth);
         let again = Scenario::parse(&toml::to_string(&exact).unwrap(), Path::new("a.toml")).unwrap();
         assert_eq!(again.cna.auv, exact.cna.auv);
+        let cna =
+            "gps_sd = 1.0\nauv = { pitch_options = 1, depth = 10.0, nav_diffusion = 0.01, broadcasts_truth = \"yes\" }";
+        let e = err(&EXAMPLE.replace("gps_sd = 1.0", cna));
+        assert!(e.contains("broadcasts_truth") && e.contains("expected a boolean"), "{e}");
     }
 }

@@ -79,7 +79,7 @@ pub struct Setting {
 }
 
 /// The true-error model of `planner-estimator` on the mission with a water current (the ASC
-/// grid): the AUVs' true dead-reckoning drift 0.002 m²/s, the channel's ranges σ 1.8 m (Gill's
+/// grid; invented, issue 10 session 29, no thesis values): the AUVs' true dead-reckoning drift 0.002 m²/s, the channel's ranges σ 1.8 m (Gill's
 /// outliers, E[n²] ≈ 3.2 m²), an ASC whose GPS error does not drift; the current (the CNA's ADCP)
 /// taken as each AUV's mean error (coopnav_plan `true_error`, step 1). Chosen on the tuning seed
 /// (session 29, 100 runs, planner-estimator's mean error, the covariance cost at L = 5 → this at
@@ -90,7 +90,7 @@ pub struct Setting {
 pub const CURRENT_TRUTH: TruthSpec =
     TruthSpec { drift_m2_s: 0.002, range_noise: RangeNoise { sigma_m: 1.8, per_km_m: 0.0 }, cna_diffusion_m2_s: 0.0 };
 
-/// L of `planner-estimator` with the ASC and [`CURRENT_TRUTH`]. The true-error cost has no lower
+/// L of `planner-estimator` with the ASC and [`CURRENT_TRUTH`] (chosen on the tuning seed). The true-error cost has no lower
 /// bound below a node (coopnav_plan `true_error`), so its search costs about brute force's: L = 5
 /// made the full comparison 5 min 32 s (659 s CPU, against 4 min 40 s and 557 s with the
 /// covariance cost). Tuning seed, 100 runs, L = 4 / 5: N = 2 4.54 / 4.66, N = 3 5.37 / 5.40,
