@@ -11,8 +11,8 @@
 use crate::planner::Algorithm;
 use crate::{
     Aggregate, AuvError, AuvEstimate, CnaKind, CnaPose, CostSpec, Deadline, Decision, DistanceLimits, ErrorModel,
-    EstimatorSpec, FnForecast, LinkModel, LookAheadPlanner, MotionConfig, PenaltyCase, PlanError, PlanInput, Planner,
-    PlannerConfig, SearchConfig,
+    EstimatorSpec, FnForecast, LinkModel, LookAheadPlanner, MotionConfig, PenaltyCase, PlanError, PlanInput,
+    PlannerConfig, RangeNoise, SearchConfig, TrueError, TruthInput, TruthSpec,
 };
 use coopnav_core::{Heading, Vec3};
 use serde::Serialize;
@@ -47,8 +47,10 @@ impl Workload {
     /// The standard workloads: the issue-2 ones under Hudson's cost, then the issue-10 ones under
     /// the estimator-aware cost (N = 5, A = 7, L = 5 and L = 7, targets 5 ms and 100 ms), then
     /// with the range bias and cost-to-go the closed-loop evaluation plans with (6 m/km,
-    /// H = 10 levels), and last the evaluation's tree (N = 3, A = 5, L = 5, the sum of σ) over a
-    /// lossy link.
+    /// H = 10 levels), the evaluation's sloping tree (N = 3, A = 5, L = 5, the sum of σ) over a
+    /// lossy link, and last its current grid's: the true-error cost with a 0.05 m/s current the
+    /// filters do not model, L = 4 (the sim crate's `CURRENT_TRUTH`; no lower bound, so its
+    /// branch-and-bound prunes on the penalties alone).
     pub fn standard() -> Vec<Workload> {
         let hudson = |n, a, b, l, gap| Workload { n, a, b, l, gap, cost: CostSpec::Hudson, link_plateau: None };
         let cost = CostSpec::Estimator;
@@ -56,6 +58,12 @@ impl Workload {
         let estimator = |l| with(l, EstimatorSpec::default());
         let biased = EstimatorSpec { bias_per_km_m: 6.0, terminal_levels: 10.0, ..EstimatorSpec::default() };
         let evaluation = EstimatorSpec { aggregate: Aggregate::SigmaSum, ..biased };
+        let truth = TruthSpec {
+            drift_m2_s: 0.002,
+            range_noise: RangeNoise { sigma_m: 1.8, per_km_m: 0.0 },
+            cna_diffusion_m2_s: 0.0,
+        };
+        let true_error = EstimatorSpec { truth: Some(truth), unmodelled_current: [0.05, 0.0], ..evaluation };
         vec![
             hudson(2, 5, 1, 5, 500.0),
             hudson(2, 5, 1, 5, 100.0),
@@ -69,6 +77,7 @@ impl Workload {
             estimator(7),
             with(7, biased),
             Workload { n: 3, a: 5, l: 5, link_plateau: Some(0.8), ..with(5, evaluation) },
+            Workload { n: 3, a: 5, l: 4, link_plateau: Some(0.8), ..with(4, true_error) },
         ]
     }
 
@@ -77,6 +86,9 @@ impl Workload {
     pub fn name(&self) -> String {
         let kind = match self.cost {
             CostSpec::Hudson => "hudson".to_string(),
+            CostSpec::Estimator(e) if e.truth.is_some() => {
+                format!("true_error_bias{}_H{}_current{}", e.bias_per_km_m, e.terminal_levels, e.unmodelled_current[0])
+            }
             CostSpec::Estimator(e) if e.bias_per_km_m > 0.0 || e.terminal_levels > 0.0 => {
                 let sum = if e.aggregate == Aggregate::SigmaSum { "sigma_sum_" } else { "" };
                 format!("estimator_{sum}bias{}_H{}", e.bias_per_km_m, e.terminal_levels)
@@ -128,9 +140,13 @@ impl Workload {
         let forecast = FnForecast { n: self.n, f: move |k: usize, t: f64| Some(auv(k, t)) };
         let input =
             PlanInput { t: 0.0, cna, errors: &errors, estimates: &estimates, cna_variance: 1.0, forecast: &forecast };
+        // The true-error cost starts from each AUV's true moments: its filter's P, no mean yet.
+        let moments = vec![TrueError { s: estimate.cov, ..TrueError::default() }; self.n];
+        let truth = TruthInput { errors: &moments, cna_variance: 1.0 };
+        let truth = matches!(self.cost, CostSpec::Estimator(EstimatorSpec { truth: Some(_), .. })).then_some(&truth);
         match self.link_plateau {
-            Some(plateau) => LookAheadPlanner::with_link(cfg, &PlateauLink(plateau))?.decide(&input),
-            None => LookAheadPlanner::new(cfg)?.decide(&input),
+            Some(plateau) => LookAheadPlanner::with_link(cfg, &PlateauLink(plateau))?.decide_with_truth(&input, truth),
+            None => LookAheadPlanner::new(cfg)?.decide_with_truth(&input, truth),
         }
     }
 }
