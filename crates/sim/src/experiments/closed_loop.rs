@@ -58,7 +58,8 @@ pub struct Setting {
     pub n: Vec<usize>,
     pub base: Scenario,
     /// L of `planner-estimator` for N AUVs (Hudson's `planner` keeps L = 5): with the ASC (5
-    /// options per level) [`TRUE_ERROR_LOOK_AHEAD`]; with the AUV CNA, whose pitch options are then offered at level 0 only
+    /// options per level) [`TRUE_ERROR_LOOK_AHEAD`]; with the AUV CNA, whose pitch options are
+    /// then offered at level 0 only
     /// ([`Setting::estimator_pitch_levels`]), [`auv_cna_look_ahead`].
     pub estimator_look_ahead: fn(usize) -> usize,
     /// `planner.estimator_pitch_levels`: None with the ASC; 1 with the AUV CNA. All 15 options at
@@ -79,10 +80,10 @@ pub struct Setting {
 }
 
 /// The true-error model of `planner-estimator` on the mission with a water current (the ASC
-/// grid; invented, issue 10 session 29, no thesis values): the AUVs' true dead-reckoning drift 0.002 m²/s, the channel's ranges σ 1.8 m (Gill's
-/// outliers, E[n²] ≈ 3.2 m²), an ASC whose GPS error does not drift; the current (the CNA's ADCP)
-/// taken as each AUV's mean error (coopnav_plan `true_error`, step 1). Chosen on the tuning seed
-/// (session 29, 100 runs, planner-estimator's mean error, the covariance cost at L = 5 → this at
+/// grid; invented, issue 10 session 29, no thesis values): the AUVs' true dead-reckoning drift
+/// 0.002 m²/s, the channel's ranges σ 1.8 m (Gill's outliers, E[n²] ≈ 3.2 m²), an ASC whose GPS
+/// error does not drift; the current (the CNA's ADCP) taken as each AUV's mean error
+/// (coopnav_plan `true_error`, step 1). Chosen on the tuning seed (session 29, 100 runs, planner-estimator's mean error, the covariance cost at L = 5 → this at
 /// L = 5): N = 1 6.43 → 4.50, N = 2 5.78 → 4.66, N = 3 5.84 → 5.40, N = 5 7.26 → 6.46, N = 8
 /// 13.95 → 13.63 m (its RMS 16.90 → 20.36: a few runs end worse); at L = 4 see
 /// [`TRUE_ERROR_LOOK_AHEAD`]. The values are those `scenarios/auv-cna-tdma.toml` chose on its
@@ -90,8 +91,9 @@ pub struct Setting {
 pub const CURRENT_TRUTH: TruthSpec =
     TruthSpec { drift_m2_s: 0.002, range_noise: RangeNoise { sigma_m: 1.8, per_km_m: 0.0 }, cna_diffusion_m2_s: 0.0 };
 
-/// L of `planner-estimator` with the ASC and [`CURRENT_TRUTH`] (chosen on the tuning seed). The true-error cost has no lower
-/// bound below a node (coopnav_plan `true_error`), so its search costs about brute force's: L = 5
+/// L of `planner-estimator` with the ASC and [`CURRENT_TRUTH`] (chosen on the tuning seed). The
+/// true-error cost has no lower bound below a node (coopnav_plan `true_error`), so its search
+/// costs about brute force's: L = 5
 /// made the full comparison 5 min 32 s (659 s CPU, against 4 min 40 s and 557 s with the
 /// covariance cost). Tuning seed, 100 runs, L = 4 / 5: N = 2 4.54 / 4.66, N = 3 5.37 / 5.40,
 /// N = 5 6.65 / 6.46, N = 8 12.43 / 13.63 m (RMS 16.61 / 20.36), each at about a third of the time.
