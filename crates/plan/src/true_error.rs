@@ -126,25 +126,13 @@ pub fn true_error_step(
     noise: &PingNoise,
     success: impl Fn(f64) -> f64,
 ) -> TrueState {
-    let [pa, pb, pc] = state.p;
-    let (pa, pc) = (pa + growth.filter, pc + growth.filter);
-    let [m0, m1] = state.truth.m;
-    let [d0, d1] = growth.shift;
-    let [sa, sb, sc] = state.truth.s;
-    let (sa, sb, sc) = (
-        sa + growth.truth + (2.0 * m0 + d0) * d0,
-        sb + m0 * d1 + d0 * m1 + d0 * d1,
-        sc + growth.truth + (2.0 * m1 + d1) * d1,
-    );
-    let (m0, m1) = (m0 + d0, m1 + d1);
-    let c = state.truth.c;
-    let v = state.v + growth.cna;
+    let predicted = true_error_prediction(state, growth);
     let d = [auv[0] - cna[0], auv[1] - cna[1], auv[2] - cna[2]];
     let r2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
-    let predicted = TrueState { p: [pa, pb, pc], truth: TrueError { s: [sa, sb, sc], c, m: [m0, m1] }, v };
     if r2 <= 1e-12 {
         return predicted;
     }
+    let TrueState { p: [pa, pb, pc], truth: TrueError { s: [sa, sb, sc], c, m: [m0, m1] }, v } = predicted;
     let r = r2.sqrt();
     let (h0, h1) = (d[0] / r, d[1] / r);
     let hh = h0 * h0 + h1 * h1;
@@ -170,6 +158,22 @@ pub fn true_error_step(
     let hm = h0 * m0 + h1 * m1;
     let m = [m0 - p_s * k0 * hm, m1 - p_s * k1 * hm];
     TrueState { p, truth: TrueError { s, c, m }, v }
+}
+
+/// Step 1 alone: one level's (or any interval's) growth and shift, no ping.
+#[inline(always)]
+pub fn true_error_prediction(state: &TrueState, growth: Growth) -> TrueState {
+    let [pa, pb, pc] = state.p;
+    let [m0, m1] = state.truth.m;
+    let [d0, d1] = growth.shift;
+    let [sa, sb, sc] = state.truth.s;
+    let s = [
+        sa + growth.truth + (2.0 * m0 + d0) * d0,
+        sb + m0 * d1 + d0 * m1 + d0 * d1,
+        sc + growth.truth + (2.0 * m1 + d1) * d1,
+    ];
+    let truth = TrueError { s, c: state.truth.c, m: [m0 + d0, m1 + d1] };
+    TrueState { p: [pa + growth.filter, pb, pc + growth.filter], truth, v: state.v + growth.cna }
 }
 
 /// The true-error model of one decision: the estimator-aware model (its filter model, link,

@@ -7,7 +7,7 @@
 
 use crate::policy::{CnaCommand, CnaPolicy, PolicyContext, ReportedCov};
 use coopnav_core::Vec3;
-use coopnav_plan::true_error::{true_error_step, Growth, PingNoise, TrueState};
+use coopnav_plan::true_error::{true_error_prediction, true_error_step, Growth, PingNoise, TrueState};
 use coopnav_plan::{
     expected_posterior, AuvError, AuvEstimate, AuvForecast, CostSpec, ErrorModel, LinkModel, LookAheadPlanner,
     PlanError, PlanInput, PlannerConfig, RangeNoise, TrueError, TruthInput, TruthSpec,
@@ -114,14 +114,7 @@ impl TruthTracker {
         let dt = (t - since).max(0.0);
         let growth =
             Growth { filter: 0.0, truth: self.spec.drift_m2_s * dt, cna: 0.0, shift: self.current.map(|c| -c * dt) };
-        let state = TrueState { p: [0.0; 3], truth: start, v: 0.0 };
-        // No ping (success 0): the prediction alone.
-        true_error_step(&state, growth, [0.0; 3], [0.0; 3], &self.no_ping(), |_| 0.0).truth
-    }
-
-    /// The noise of a step without a range (unused by its prediction).
-    fn no_ping(&self) -> PingNoise {
-        PingNoise { filter: self.spec.range_noise, filter_cna_variance: 0.0, truth: self.spec.range_noise }
+        true_error_prediction(&TrueState { p: [0.0; 3], truth: start, v: 0.0 }, growth).truth
     }
 
     /// The CNA's own variance at this decision; a fall restarts every C.
