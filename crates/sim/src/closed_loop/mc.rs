@@ -48,6 +48,13 @@ pub struct PolicySummary {
     pub diverged: usize,
     /// Per-run fleet mean errors, in run order.
     pub runs: Vec<f64>,
+    /// Per AUV, its own mean true error in each run (run order): where in the fleet a difference
+    /// between two policies lies ([`paired_per_auv`]). Left out of the JSON (AUVs × runs numbers).
+    #[serde(skip)]
+    pub auv_runs: Vec<Vec<f64>>,
+    /// Per AUV, the runs in which at least one of its status messages reached the CNA (0: no
+    /// policy that plans on reports ever looked for it, by the thesis's start rule A14).
+    pub auv_heard_runs: Vec<usize>,
 }
 
 /// The reference policy (the first one compared, normally a planner) minus a baseline, paired
@@ -231,6 +238,9 @@ fn summarise(name: &str, rs: &[RunResult]) -> PolicySummary {
     };
     let modelled: Vec<f64> = rs.iter().filter_map(|r| r.fleet.modelled_mean).collect();
     let runs: Vec<f64> = rs.iter().map(|r| r.fleet.error.mean).collect();
+    let n_auvs = rs.first().map_or(0, |r| r.auvs.len());
+    let auv_runs = (0..n_auvs).map(|k| rs.iter().map(|r| r.auvs[k].error.mean).collect()).collect();
+    let auv_heard_runs = (0..n_auvs).map(|k| rs.iter().filter(|r| r.auvs[k].uplink.received > 0).count()).collect();
     PolicySummary {
         policy: name.to_string(),
         mean_error: Ci::of(&runs),
@@ -246,7 +256,19 @@ fn summarise(name: &str, rs: &[RunResult]) -> PolicySummary {
         nees_mean: avg(&|r| r.auvs.iter().map(|a| a.health.nees_mean).sum::<f64>() / r.auvs.len().max(1) as f64),
         diverged: rs.iter().map(|r| r.fleet.diverged).sum(),
         runs,
+        auv_runs,
+        auv_heard_runs,
     }
+}
+
+/// `reference` minus `baseline` per AUV, paired by run (negative: the reference is better there).
+pub fn paired_per_auv(reference: &PolicySummary, baseline: &PolicySummary) -> Vec<Ci> {
+    reference
+        .auv_runs
+        .iter()
+        .zip(&baseline.auv_runs)
+        .map(|(r, b)| Ci::of(&r.iter().zip(b).map(|(x, y)| x - y).collect::<Vec<f64>>()))
+        .collect()
 }
 
 /// A plain-text comparison table (policies by mean true error, with 95 % CIs and the paired

@@ -14,7 +14,7 @@
 //! baselines run exactly as configured elsewhere (nothing is tuned for or against them).
 
 use super::{Check, Experiment, ExperimentError, ReproOptions, ReproReport, Size};
-use crate::closed_loop::mc::{Comparison, PolicySummary};
+use crate::closed_loop::mc::{paired_per_auv, Ci, Comparison, PolicySummary};
 use crate::closed_loop::policies::POLICY_NAMES;
 use crate::closed_loop::scenario::{
     ESTIMATOR_AGGREGATE, ESTIMATOR_BIAS_PER_KM, ESTIMATOR_CNA_VARIANCE, ESTIMATOR_TERMINAL_LEVELS,
@@ -450,6 +450,44 @@ fn how_much_the_path_decides(c: &Comparison) -> String {
 }
 
 /// The measured differences that explain a cell not won, only those that apply.
+/// Where in the fleet the difference lies (two AUVs or more): the paired difference per AUV, the
+/// AUVs on which either policy is significantly better, and the AUVs whose status messages never
+/// reached the CNA under either policy (a policy steering by the reports never looks for those:
+/// the thesis's start rule A14).
+fn fleet_split(planner: &PolicySummary, b: &PolicySummary) -> Option<String> {
+    let per_auv = paired_per_auv(planner, b);
+    if per_auv.len() < 2 {
+        return None;
+    }
+    let auvs = |keep: &dyn Fn(usize, &Ci) -> bool| -> String {
+        let ks: Vec<String> =
+            per_auv.iter().enumerate().filter(|(k, d)| keep(*k, d)).map(|(k, _)| k.to_string()).collect();
+        match ks.len() {
+            0 => "no AUV".into(),
+            1 => format!("AUV {}", ks[0]),
+            _ => format!("AUVs {}", ks.join(", ")),
+        }
+    };
+    let values: Vec<String> = per_auv.iter().map(|d| format!("{:+.2}", d.mean)).collect();
+    let mut split = format!(
+        "per AUV (planner-estimator minus {}, paired, m: {}) it is better on {} and worse on {}",
+        b.policy,
+        values.join(" "),
+        auvs(&|_, d| d.high < 0.0),
+        auvs(&|_, d| d.low > 0.0)
+    );
+    let unheard = |k: usize| planner.auv_heard_runs.get(k) == Some(&0) && b.auv_heard_runs.get(k) == Some(&0);
+    if (0..per_auv.len()).any(unheard) {
+        let _ = write!(
+            split,
+            "; no status message from {} reached the CNA in any run under either policy: policies that steer by \
+             the reports never look for such an AUV",
+            auvs(&|k, _| unheard(k))
+        );
+    }
+    Some(split)
+}
+
 fn why(planner: &PolicySummary, b: &PolicySummary, tie: bool) -> String {
     let mut reasons = Vec::new();
     if tie {
@@ -479,6 +517,7 @@ fn why(planner: &PolicySummary, b: &PolicySummary, tie: bool) -> String {
             planner.nees_mean, b.nees_mean
         ));
     }
+    reasons.extend(fleet_split(planner, b));
     if reasons.is_empty() {
         reasons.push("no single measured factor stands out".into());
     }
@@ -608,6 +647,53 @@ mod tests {
         assert_eq!(default.estimator_truth, Some(CURRENT_TRUTH));
         assert_eq!(default.estimator_look_ahead, Some(TRUE_ERROR_LOOK_AHEAD));
         assert_eq!(default.estimator_unmodelled_current, water);
+    }
+
+    fn summary(policy: &str, auv_runs: Vec<Vec<f64>>, auv_heard_runs: Vec<usize>) -> PolicySummary {
+        let runs: Vec<f64> = (0..auv_runs[0].len())
+            .map(|i| auv_runs.iter().map(|a| a[i]).sum::<f64>() / auv_runs.len() as f64)
+            .collect();
+        PolicySummary {
+            policy: policy.into(),
+            mean_error: crate::closed_loop::mc::Ci::of(&runs),
+            rms_error: 0.0,
+            p95_error: 0.0,
+            max_error: 0.0,
+            modelled_mean: None,
+            downlink_success: 0.5,
+            uplink_success: 0.5,
+            limit_violation: 0.0,
+            deadline_misses: 0,
+            healthy: true,
+            nees_mean: 1.0,
+            diverged: 0,
+            runs,
+            auv_runs,
+            auv_heard_runs,
+        }
+    }
+
+    /// A tie made of a gain on one end of the fleet and a loss on the other, with an AUV never
+    /// heard from: the cell's explanation names both ends and the unheard AUV.
+    #[test]
+    fn a_cell_not_won_says_where_in_the_fleet_the_difference_lies() {
+        let planner = summary(
+            "planner-estimator",
+            vec![vec![2.0, 2.1, 1.9], vec![4.0, 5.0, 3.0], vec![6.0, 6.1, 5.9]],
+            vec![3, 3, 0],
+        );
+        let trail =
+            summary("trail", vec![vec![5.0, 5.1, 4.9], vec![4.0, 5.0, 3.0], vec![3.0, 3.1, 2.9]], vec![3, 2, 0]);
+        let text = why(&planner, &trail, true);
+        assert!(text.contains("(planner-estimator minus trail, paired, m: -3.00 +0.00 +3.00)"), "{text}");
+        assert!(text.contains("better on AUV 0 and worse on AUV 2"), "{text}");
+        assert!(text.contains("no status message from AUV 2 reached the CNA"), "{text}");
+        // Heard under one of the two: not named.
+        let heard = summary("trail", trail.auv_runs.clone(), vec![3, 2, 1]);
+        assert!(!why(&planner, &heard, true).contains("no status message"));
+        // One AUV: no split.
+        let one = |name: &str| summary(name, vec![vec![1.0, 2.0]], vec![2]);
+        assert!(!why(&one("planner-estimator"), &one("zigzag"), true).contains("per AUV"));
     }
 
     #[test]
