@@ -71,7 +71,7 @@ impl Engine<'_> {
         self.next_decision += 1;
         let surfacing = self.sc.cna.auv.as_ref().and_then(|a| a.surfacing.as_ref());
         let step = self.cna.own.step(surfacing, t_dec, self.cna.craft.pos.z);
-        let fix = self.cna_fix(t_dec, matches!(step, Step::Fix { .. }));
+        let fix = self.cna_fix(t_dec, matches!(step, Step::Fix { .. } | Step::WorkWithFix));
         let transmits = self.policy.as_policy().transmits();
         let cna = &mut self.cna;
         let fleet = FleetView { predictors: &cna.predictors, min_reports: self.sc.planner.start_after_reports };
@@ -111,8 +111,8 @@ impl Engine<'_> {
             (Step::Climb, _) => Some(Vec3::new(here.x, here.y, 0.0)),
             (Step::Fix { to }, CnaCommand::GoTo(p)) => steer(p, to),
             (Step::Fix { to }, CnaCommand::Hold) => Some(Vec3::new(here.x, here.y, to)),
-            (Step::Work, CnaCommand::GoTo(p)) => steer(p, p.z),
-            (Step::Work, CnaCommand::Hold) => None,
+            (Step::Work | Step::WorkWithFix, CnaCommand::GoTo(p)) => steer(p, p.z),
+            (Step::Work | Step::WorkWithFix, CnaCommand::Hold) => None,
         };
         obs.on_decision(&Decision { t: t_dec, from: here, to: cna.craft.target });
     }
