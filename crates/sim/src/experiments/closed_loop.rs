@@ -81,7 +81,8 @@ pub struct Setting {
 }
 
 /// The true-error model of `planner-estimator` on the mission with a water current (the ASC
-/// grid; invented, issue 10 session 29, no thesis values): the AUVs' true dead-reckoning drift
+/// grid; invented, issue 10 session 29, no thesis values; since session 30 also the AUV CNA's
+/// working at the surface, [`SURFACE_TRUE_ERROR_MAX_AUVS`]): the AUVs' true dead-reckoning drift
 /// 0.002 m²/s, the channel's ranges σ 1.8 m (Gill's outliers, E[n²] ≈ 3.2 m²), an ASC whose GPS
 /// error does not drift; the current (the CNA's ADCP) taken as each AUV's mean error
 /// (coopnav_plan `true_error`, step 1). Chosen on the tuning seed (session 29, 100 runs, planner-estimator's mean error, the covariance cost at L = 5 → this at
@@ -143,17 +144,14 @@ pub const DEPTH_AWARE_BIAS_PER_KM: f64 = 6.0;
 /// at every N gave 3.83 m at N = 1 against 3.79 m before, and lost its win over Hudson's planner).
 pub const DEPTH_AWARE_MIN_AUVS: usize = 2;
 
-/// L of `planner-estimator` with the AUV CNA for N AUVs: 3 for one AUV, 5 for two, 6 for three,
-/// 5 from four on.
+/// L of `planner-estimator` with the AUV CNA for N AUVs: 3 for one AUV, 5 from two on.
 ///
-/// Session 30: an AUV CNA working at the surface has GPS there (`models::surfacing`), and from
-/// three AUVs on the cast puts every policy's CNA at 0 m, so it plans headings only
-/// ([`Setting::scenario`]): a level-0 fan of 5 options, not 15, and one level more for the same
-/// search. Tuning seed, 100 runs, planner-estimator with headings only, m: N = 3 L = 5 3.06,
-/// L = 6 2.91 (racetrack −0.02 → −0.17, zigzag −0.04 → −0.19, both then won; 3 → 6 s of CPU per
-/// run against 0.36 s with 15 options at L = 5); N = 5 L = 5 3.78, L = 6 3.74 (centroid-standoff
-/// +0.05 → 0.00, a tie either way, at 2.8× the CPU: 5 stays); N = 8 L = 4 5.42, L = 5 5.32 (trail
-/// −0.03 → −0.13, a tie either way; centroid-standoff −0.15 → −0.25).
+/// Session 30: from three AUVs on the cast puts every policy's CNA at the surface, where it has
+/// GPS (`models::surfacing`), so it plans headings only ([`Setting::scenario`]), a level-0 fan
+/// of 5 options, not 15. Tuning seed, 100 runs, planner-estimator, m: N = 8 covariance cost L = 4
+/// 5.42, L = 5 5.32 (trail −0.03 → −0.13, a tie either way; centroid-standoff −0.15 → −0.25),
+/// about 0.45 s of CPU per run; N = 3 covariance cost L = 5 3.06, L = 6 2.91 (6 s of CPU per run;
+/// [`SURFACE_TRUE_ERROR_MAX_AUVS`] instead: 2.98 at L = 5).
 ///
 /// Before (the CNA submerged at every N, pitch options at level 0): tuning seed, sloping
 /// scenario, 20 runs, L = 3 / L = 5: N = 1 3.60 / 3.81 m, N = 2 3.80 / 3.77 m, N = 3 4.37 / 4.10
@@ -161,12 +159,21 @@ pub const DEPTH_AWARE_MIN_AUVS: usize = 2;
 /// depth, 100 runs: N = 2 L = 3 3.99 m, L = 4 3.95, L = 5 3.86, L = 6 3.81 (3× L = 5's time);
 /// N = 1 L = 3 3.70, L = 4 and 5 3.74.
 pub fn auv_cna_look_ahead(n: usize) -> usize {
-    match n {
-        0 | 1 => 3,
-        3 => 6,
-        _ => 5,
+    if n < 2 {
+        3
+    } else {
+        5
     }
 }
+
+/// Up to this many AUVs an AUV CNA working at the surface scores the AUVs' true error with
+/// [`CURRENT_TRUTH`], as the ASC does: at the surface its own error is its GPS's, as the ASC's is
+/// (session 30). Tuning seed, 100 runs, sloping scenario, planner-estimator, covariance cost →
+/// true-error cost, m: N = 3 (L = 5) 3.06 → 2.98 (racetrack −0.02 → −0.10, zigzag −0.04 → −0.12,
+/// both then won; drift 0.01 m²/s: 2.95); N = 5 3.78 → 3.62 (centroid-standoff +0.05 → −0.12,
+/// won; drift 0.01: 3.63), at 1.8× the search's CPU; N = 8 (τ = 44 s, the fleet 4.8 km wide)
+/// 5.32 → 5.55 at L = 5 and 5.50 at L = 4 (trail −0.13 → +0.10): it keeps the covariance cost.
+pub const SURFACE_TRUE_ERROR_MAX_AUVS: usize = 5;
 
 impl Setting {
     /// A scenario with an ASC CNA: L = 5, every option at every level.
@@ -231,10 +238,14 @@ impl Setting {
         if n > 5 {
             sc.comms.tau = 44.0;
         }
-        // At the surface the AUV CNA has its GPS: neither planner dives away from it.
+        // At the surface the AUV CNA has its GPS: neither planner dives away from it, and its
+        // own error is the ASC's.
         if self.estimator_pitch_levels.is_some() && at_surface(sc.cna_cruise_depth()) {
             if let Some(auv) = sc.cna.auv.as_mut() {
                 auv.pitch_options = 1;
+            }
+            if n <= SURFACE_TRUE_ERROR_MAX_AUVS {
+                sc.planner.estimator_truth = Some(CURRENT_TRUTH);
             }
         }
         if let Some(d) = duration {
@@ -318,7 +329,8 @@ pub fn evaluate(
     let mut table = format!(
         "True mean navigation error of the survey AUVs (m), {runs} runs per policy and cell, base seed {seed} \
          (settings chosen on base seed {TUNING_SEED}); planners A=5, L=5; planner-estimator: L={TRUE_ERROR_LOOK_AHEAD} with the ASC (with the AUV \
-         CNA: every policy cruising at the depth the sound-speed profile favours for the fleet, its pitch options at level 0 only (none where that depth is the surface, where it has GPS), L=3 with one AUV and 6 with three, from 2 AUVs on its depth chosen by the profile with the \
+         CNA: every policy cruising at the depth the sound-speed profile favours for the fleet, its pitch options at level 0 only (none where that depth is the surface, where it has GPS, and there up to {SURFACE_TRUE_ERROR_MAX_AUVS} AUVs the \
+         ASC's true-error cost), L=3 with one AUV, from 2 AUVs on its depth chosen by the profile with the \
          range bias the profile gives plus {DEPTH_AWARE_BIAS_PER_KM} m/km, levelling off at each step's depth), \
          aggregate sigma_sum, range bias {ESTIMATOR_BIAS_PER_KM} m/km, {ESTIMATOR_TERMINAL_LEVELS} levels of cost-to-go; from \
          {SPREAD_FLEET_MIN_AUVS} AUVs on no level-0 distance penalty, the reach cost-to-go (p_u {REACH_SUCCESS}) and \
