@@ -213,6 +213,12 @@ pub struct AuvCna {
     pub pitch_options: usize,
     /// Cruise depth: where it starts and what every fixed-path policy holds.
     pub depth: CruiseDepth,
+    /// The shallowest depth it works at, m: the planner's depth limit and the top of the cast's
+    /// range (climbing for a GPS fix is not work). 0, the default, lets it work at the surface,
+    /// where it has its GPS (`models::surfacing`) and is a surface craft in all but speed. Written
+    /// only when not 0.
+    #[serde(default, skip_serializing_if = "is_surface")]
+    pub min_depth_m: f64,
     /// Growth of the CNA's own horizontal position-error variance, m²/s per axis (a random walk:
     /// what it broadcasts is its truth plus this error). Invented: no thesis value.
     pub nav_diffusion: f64,
@@ -224,6 +230,10 @@ pub struct AuvCna {
     /// and it surfaces as configured; only no range or command carries the error. Default false.
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub broadcasts_truth: bool,
+}
+
+fn is_surface(depth: &f64) -> bool {
+    *depth == 0.0
 }
 
 /// An AUV CNA's cruise depth: metres, or `"cast"`, the fixed depth its CTD cast favours for the
@@ -704,6 +714,12 @@ impl Scenario {
                 );
             }
             p.non_negative("cna.auv.nav_diffusion", a.nav_diffusion);
+            p.check("cna.auv.min_depth_m", a.min_depth_m, |v| (0.0..100.0).contains(&v), "0 <= min_depth_m < 100 m");
+            if let CruiseDepth::Metres(z) = a.depth {
+                if z < a.min_depth_m {
+                    p.push("cna.auv.depth", z.to_string(), format!(">= cna.auv.min_depth_m ({} m)", a.min_depth_m));
+                }
+            }
             if let Some(s) = &a.surfacing {
                 s.validate("cna.auv.surfacing.", p);
             }
@@ -906,7 +922,13 @@ impl Scenario {
                 tau: self.comms.tau,
                 heading_options: p.heading_options,
                 max_turn_rate_deg_s: self.cna.max_turn_rate_deg_s,
-                cna: self.cna.auv.as_ref().map_or(CnaKind::Asc {}, |a| CnaKind::auv(a.pitch_options)),
+                cna: self.cna.auv.as_ref().map_or(CnaKind::Asc {}, |a| {
+                    let mut kind = CnaKind::auv(a.pitch_options);
+                    if let CnaKind::Auv { min_depth, .. } = &mut kind {
+                        *min_depth = a.min_depth_m;
+                    }
+                    kind
+                }),
             },
             error: p.error,
             cost: coopnav_plan::CostSpec::Hudson,

@@ -197,6 +197,7 @@ fn an_auv_cna_plans_with_pitch_and_broadcasts_its_own_estimate() {
     sc.cna.auv = Some(scenario::AuvCna {
         pitch_options: 3,
         depth: scenario::CruiseDepth::Metres(10.0),
+        min_depth_m: 0.0,
         nav_diffusion: 0.01,
         surfacing: None,
         broadcasts_truth: false,

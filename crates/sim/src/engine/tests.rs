@@ -359,6 +359,7 @@ fn an_auv_cna_surfaces_for_a_fix_and_dives_back() {
     sc.cna.auv = Some(AuvCna {
         pitch_options: 1,
         depth: CruiseDepth::Metres(10.0),
+        min_depth_m: 0.0,
         nav_diffusion: 0.05,
         surfacing: Some(surfacing),
         broadcasts_truth: false,
@@ -389,7 +390,14 @@ fn a_cna_broadcasting_its_truth_leaves_its_navigation_error_out_of_every_range()
     let with = |nav_diffusion: f64, broadcasts_truth: bool| {
         let mut sc = short_survey(Finish::Loiter { radius_m: 50.0 }, 900.0);
         let depth = CruiseDepth::Metres(10.0);
-        sc.cna.auv = Some(AuvCna { pitch_options: 1, depth, nav_diffusion, surfacing: None, broadcasts_truth });
+        sc.cna.auv = Some(AuvCna {
+            pitch_options: 1,
+            depth,
+            min_depth_m: 0.0,
+            nav_diffusion,
+            surfacing: None,
+            broadcasts_truth,
+        });
         let (r, _) = traced(&sc, "centroid", 5);
         r.fleet.error.mean
     };

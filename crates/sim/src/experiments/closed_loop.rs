@@ -20,7 +20,6 @@ use crate::closed_loop::scenario::{
     ESTIMATOR_AGGREGATE, ESTIMATOR_BIAS_PER_KM, ESTIMATOR_CNA_VARIANCE, ESTIMATOR_TERMINAL_LEVELS,
 };
 use crate::closed_loop::{comparison_table, monte_carlo_grid, Scenario};
-use crate::models::surfacing::at_surface;
 use crate::plot::PlotError;
 use coopnav_plan::{PenaltyCase, RangeNoise, TruthSpec};
 use plotters::prelude::*;
@@ -81,8 +80,7 @@ pub struct Setting {
 }
 
 /// The true-error model of `planner-estimator` on the mission with a water current (the ASC
-/// grid; invented, issue 10 session 29, no thesis values; since session 30 also the AUV CNA's
-/// working at the surface, [`SURFACE_TRUE_ERROR_MAX_AUVS`]): the AUVs' true dead-reckoning drift
+/// grid; invented, issue 10 session 29, no thesis values): the AUVs' true dead-reckoning drift
 /// 0.002 m²/s, the channel's ranges σ 1.8 m (Gill's outliers, E[n²] ≈ 3.2 m²), an ASC whose GPS
 /// error does not drift; the current (the CNA's ADCP) taken as each AUV's mean error
 /// (coopnav_plan `true_error`, step 1). Chosen on the tuning seed (session 29, 100 runs, planner-estimator's mean error, the covariance cost at L = 5 → this at
@@ -144,36 +142,28 @@ pub const DEPTH_AWARE_BIAS_PER_KM: f64 = 6.0;
 /// at every N gave 3.83 m at N = 1 against 3.79 m before, and lost its win over Hudson's planner).
 pub const DEPTH_AWARE_MIN_AUVS: usize = 2;
 
-/// L of `planner-estimator` with the AUV CNA for N AUVs: 3 for one AUV, 5 from two on.
-///
-/// Session 30: from three AUVs on the cast puts every policy's CNA at the surface, where it has
-/// GPS (`models::surfacing`), so it plans headings only ([`Setting::scenario`]), a level-0 fan
-/// of 5 options, not 15. Tuning seed, 100 runs, planner-estimator, m: N = 8 covariance cost L = 4
-/// 5.42, L = 5 5.32 (trail −0.03 → −0.13, a tie either way; centroid-standoff −0.15 → −0.25),
-/// about 0.45 s of CPU per run; N = 3 covariance cost L = 5 3.06, L = 6 2.91 (6 s of CPU per run;
-/// [`SURFACE_TRUE_ERROR_MAX_AUVS`] instead: 2.98 at L = 5).
-///
-/// Before (the CNA submerged at every N, pitch options at level 0): tuning seed, sloping
-/// scenario, 20 runs, L = 3 / L = 5: N = 1 3.60 / 3.81 m, N = 2 3.80 / 3.77 m, N = 3 4.37 / 4.10
-/// m, N = 5 5.28 / 4.98 m, N = 8 7.03 / 6.98 m. Session 26, every policy cruising at the cast's
-/// depth, 100 runs: N = 2 L = 3 3.99 m, L = 4 3.95, L = 5 3.86, L = 6 3.81 (3× L = 5's time);
-/// N = 1 L = 3 3.70, L = 4 and 5 3.74.
+/// L of `planner-estimator` with the AUV CNA (pitch options at level 0 only) for N AUVs: 3 for
+/// one AUV, 5 for 2 to 5, 4 from 6 on. Tuning seed, sloping scenario, 20 runs, L = 3 / L = 5: N = 1 3.60 / 3.81 m,
+/// N = 2 3.80 / 3.77 m, N = 3 4.37 / 4.10 m, N = 5 5.28 / 4.98 m, N = 8 7.03 / 6.98 m (L = 6:
+/// 6.91 m, twice the time). From [`SPREAD_FLEET_MIN_AUVS`] on, 4: once the CNA chooses its depth
+/// ([`DEPTH_AWARE_BIAS_PER_KM`]) every pitch option at level 0 keeps a full subtree, and L = 5
+/// made the sloping N = 5 and 8 cells' search 3× as costly (projected 23 → 81 s and 27 → 75 s of
+/// the evaluation's CPU); L = 4 costs about a fifth of that, for N = 5 4.62 → 4.72 m and N = 8
+/// 5.95 → 6.03 m on the tuning seed (N = 3 would lose 3.94 → 4.09 m, and keeps L = 5).
+/// Session 26, with every policy cruising at the cast's depth (`cna.auv.depth = "cast"`), 100
+/// runs: N = 2 L = 3 3.99 m, L = 4 3.95, L = 5 3.86, L = 6 3.81 (3× L = 5's time); N = 1 L = 3
+/// 3.70, L = 4 and 5 3.74. So 5 from 2 AUVs on. N = 5 L = 4 4.78 m (ties centroid-standoff −0.08
+/// and trail −0.08), L = 5 4.65 m (−0.21 and −0.21, both won): 5 at N = 5 too. N = 8 L = 4 6.12,
+/// L = 5 6.02 m (trail +0.07, −0.03: a tie either way, at twice the time): 4 from 6 AUVs on.
 pub fn auv_cna_look_ahead(n: usize) -> usize {
     if n < 2 {
         3
-    } else {
+    } else if n <= 5 {
         5
+    } else {
+        4
     }
 }
-
-/// Up to this many AUVs an AUV CNA working at the surface scores the AUVs' true error with
-/// [`CURRENT_TRUTH`], as the ASC does: at the surface its own error is its GPS's, as the ASC's is
-/// (session 30). Tuning seed, 100 runs, sloping scenario, planner-estimator, covariance cost →
-/// true-error cost, m: N = 3 (L = 5) 3.06 → 2.98 (racetrack −0.02 → −0.10, zigzag −0.04 → −0.12,
-/// both then won; drift 0.01 m²/s: 2.95); N = 5 3.78 → 3.62 (centroid-standoff +0.05 → −0.12,
-/// won; drift 0.01: 3.63), at 1.8× the search's CPU; N = 8 (τ = 44 s, the fleet 4.8 km wide)
-/// 5.32 → 5.55 at L = 5 and 5.50 at L = 4 (trail −0.13 → +0.10): it keeps the covariance cost.
-pub const SURFACE_TRUE_ERROR_MAX_AUVS: usize = 5;
 
 impl Setting {
     /// A scenario with an ASC CNA: L = 5, every option at every level.
@@ -189,9 +179,8 @@ impl Setting {
         }
     }
 
-    /// A scenario with an AUV CNA: [`auv_cna_look_ahead`], the pitch options at level 0 only (none
-    /// when the cruise depth is the surface: [`Setting::scenario`]), the depth chosen by the
-    /// sound-speed profile.
+    /// A scenario with an AUV CNA: [`auv_cna_look_ahead`], the pitch options at level 0 only, the
+    /// depth chosen by the sound-speed profile.
     pub fn auv_cna(name: &'static str, n: Vec<usize>, base: Scenario) -> Self {
         Setting {
             name: name.into(),
@@ -237,16 +226,6 @@ impl Setting {
         // turn limit would reach 180° per period).
         if n > 5 {
             sc.comms.tau = 44.0;
-        }
-        // At the surface the AUV CNA has its GPS: neither planner dives away from it, and its
-        // own error is the ASC's.
-        if self.estimator_pitch_levels.is_some() && at_surface(sc.cna_cruise_depth()) {
-            if let Some(auv) = sc.cna.auv.as_mut() {
-                auv.pitch_options = 1;
-            }
-            if n <= SURFACE_TRUE_ERROR_MAX_AUVS {
-                sc.planner.estimator_truth = Some(CURRENT_TRUTH);
-            }
         }
         if let Some(d) = duration {
             sc.duration_s = d;
@@ -329,8 +308,7 @@ pub fn evaluate(
     let mut table = format!(
         "True mean navigation error of the survey AUVs (m), {runs} runs per policy and cell, base seed {seed} \
          (settings chosen on base seed {TUNING_SEED}); planners A=5, L=5; planner-estimator: L={TRUE_ERROR_LOOK_AHEAD} with the ASC (with the AUV \
-         CNA: every policy cruising at the depth the sound-speed profile favours for the fleet, its pitch options at level 0 only (none where that depth is the surface, where it has GPS, and there up to {SURFACE_TRUE_ERROR_MAX_AUVS} AUVs the \
-         ASC's true-error cost), L=3 with one AUV, from 2 AUVs on its depth chosen by the profile with the \
+         CNA: every policy cruising at the depth the sound-speed profile favours for the fleet, its pitch options at level 0 only, L=3 with one AUV and 4 from 6 on, from 2 AUVs on its depth chosen by the profile with the \
          range bias the profile gives plus {DEPTH_AWARE_BIAS_PER_KM} m/km, levelling off at each step's depth), \
          aggregate sigma_sum, range bias {ESTIMATOR_BIAS_PER_KM} m/km, {ESTIMATOR_TERMINAL_LEVELS} levels of cost-to-go; from \
          {SPREAD_FLEET_MIN_AUVS} AUVs on no level-0 distance penalty, the reach cost-to-go (p_u {REACH_SUCCESS}) and \
@@ -351,8 +329,7 @@ pub fn evaluate(
     for ((name, sc), c) in names.iter().zip(&scenarios).zip(comparisons) {
         let _ = writeln!(table, "scenario {name}, tau = {} s", sc.comms.tau);
         table += &comparison_table(&c);
-        let inherits_cna_error =
-            sc.cna.auv.as_ref().is_some_and(|a| !a.broadcasts_truth) && !at_surface(sc.cna_cruise_depth());
+        let inherits_cna_error = sc.cna.auv.as_ref().is_some_and(|a| !a.broadcasts_truth);
         cell_checks(name, &c, inherits_cna_error, &mut table, &mut checks, &mut cells)?;
         table.push('\n');
         data.push(serde_json::to_value(&c).map_err(|e| fail(e.to_string()))?);
@@ -603,6 +580,8 @@ pub fn difference_svg(cells: &[Cell]) -> Result<String, PlotError> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::models::surfacing::at_surface;
+    use coopnav_plan::CnaKind;
 
     #[test]
     fn reduced_form_runs_every_cell_and_explains_each_cell_not_won() {
@@ -717,6 +696,23 @@ mod tests {
         // One AUV: no split.
         let one = |name: &str| summary(name, vec![vec![1.0, 2.0]], vec![2]);
         assert!(!why(&one("planner-estimator"), &one("zigzag"), true).contains("per AUV"));
+    }
+
+    /// The second scenario is an AUV-CNA one: at every N every policy's CNA works submerged (at the
+    /// surface it would have its GPS there and be a surface craft in all but speed).
+    #[test]
+    fn the_auv_cna_works_below_the_surface_at_every_fleet_size() {
+        let (settings, _, _) = setup(&ReproOptions { size: Size::Full, seed: 1 }).unwrap();
+        let sloping = settings.iter().find(|s| s.name == "sloping-auv-cna").unwrap();
+        for n in [1, 2, 3, 5, 8] {
+            let sc = sloping.scenario(n, 1, None);
+            let depth = sc.cna_cruise_depth();
+            assert!(!at_surface(depth), "N = {n}: cruise depth {depth} m");
+            match sc.planner_config().motion.cna {
+                CnaKind::Auv { min_depth, .. } => assert!(!at_surface(min_depth) && depth >= min_depth, "N = {n}"),
+                CnaKind::Asc {} => panic!("N = {n}: an ASC"),
+            }
+        }
     }
 
     #[test]
