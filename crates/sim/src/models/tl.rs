@@ -300,8 +300,10 @@ fn source_layers(g: &GridModel, sc: &Scenario, cna_depth: f64, (lo, hi): ((f64, 
     };
     if let CnaKind::Auv { min_depth, max_depth, .. } = sc.planner_config().motion.cna {
         // Without these layers a depth change of more than the tolerance would leave every
-        // later CNA packet without a transmission loss, i.e. lost.
-        depths.extend(span(min_depth.max(0.0), max_depth.min(water().1)));
+        // later CNA packet without a transmission loss, i.e. lost. From the surface even below a
+        // working `min_depth`: the CNA climbs there for its GPS fixes, and pings meanwhile.
+        let top = if sc.cna.auv.as_ref().is_some_and(|a| a.surfacing.is_some()) { 0.0 } else { min_depth.max(0.0) };
+        depths.extend(span(top, max_depth.min(water().1)));
     }
     match sc.fleet.depth {
         DepthTarget::Depth { depth } => depths.push(depth),
@@ -458,7 +460,7 @@ mod tests {
     #[test]
     fn an_auv_cna_has_layers_over_every_depth_it_can_reach() {
         let (_, layers) = library_layers("sloping-auv-cna.toml");
-        // From the surface (the planner's minimum depth) down to the shelf's deepest water, 90 m
+        // From the surface (where the CNA climbs for its fixes) down to the shelf's deepest water, 90 m
         // (the lattice reaches past x = 1700 m), never more than a step apart: a lookup anywhere
         // in between is blended, never refused.
         assert_eq!((layers[0], *layers.last().unwrap()), (0.0, 90.0), "{layers:?}");
