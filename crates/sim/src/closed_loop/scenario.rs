@@ -1247,6 +1247,16 @@ mod tests {
         let e = err(&EXAMPLE
             .replace("gps_sd = 1.0", "gps_sd = 1.0\nauv = { pitch_options = 0, depth = 10.0, nav_diffusion = 0.01 }"));
         assert!(e.contains("cna.auv.pitch_options"), "{e}");
+        let auv = |fields: &str| {
+            EXAMPLE.replace(
+                "gps_sd = 1.0",
+                &format!("gps_sd = 1.0\nauv = {{ pitch_options = 1, {fields}, nav_diffusion = 0.01 }}"),
+            )
+        };
+        let e = err(&auv("depth = 1.0, min_depth_m = 2.0"));
+        assert!(e.contains("cna.auv.depth = 1") && e.contains(">= cna.auv.min_depth_m (2 m)"), "{e}");
+        let e = err(&auv("depth = 10.0, min_depth_m = -1.0"));
+        assert!(e.contains("cna.auv.min_depth_m"), "{e}");
         let e = err(&EXAMPLE.replace("lane_length = 800.0", "lane_length = 20000.0"));
         assert!(e.contains("field fleet") && e.contains("15 000"), "{e}");
         let e = err(&EXAMPLE
