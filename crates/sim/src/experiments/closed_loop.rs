@@ -449,7 +449,6 @@ fn how_much_the_path_decides(c: &Comparison) -> String {
     )
 }
 
-/// The measured differences that explain a cell not won, only those that apply.
 /// Where in the fleet the difference lies (two AUVs or more): the paired difference per AUV, the
 /// AUVs on which either policy is significantly better, and the AUVs whose status messages never
 /// reached the CNA under either policy (a policy steering by the reports never looks for those:
@@ -488,6 +487,7 @@ fn fleet_split(planner: &PolicySummary, b: &PolicySummary) -> Option<String> {
     Some(split)
 }
 
+/// The measured differences that explain a cell not won, only those that apply.
 fn why(planner: &PolicySummary, b: &PolicySummary, tie: bool) -> String {
     let mut reasons = Vec::new();
     if tie {
@@ -657,7 +657,7 @@ mod tests {
             .collect();
         PolicySummary {
             policy: policy.into(),
-            mean_error: crate::closed_loop::mc::Ci::of(&runs),
+            mean_error: Ci::of(&runs),
             rms_error: 0.0,
             p95_error: 0.0,
             max_error: 0.0,

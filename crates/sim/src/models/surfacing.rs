@@ -4,9 +4,9 @@
 //! stays at the surface for the fix time, takes a fix of the configured σ and goes back to work,
 //! diving to the depth it left (policies that keep the current depth would otherwise stay up).
 //! The climb and the wait are what it costs: meanwhile the CNA follows no policy, whichever it
-//! is. A CNA that works at the surface ([`at_surface`]) has its
-//! GPS antenna out: it never climbs, and after the fix time at the surface it takes a fix at every
-//! decision while it stays there, as a surface craft does. Checked at each decision (every τ).
+//! is. A CNA that works at the surface ([`at_surface`]) has its GPS antenna out: it never
+//! climbs, and after the fix time there it takes a fix at every decision while it stays, as a
+//! surface craft does. Checked at each decision (every τ).
 //! Invented parameters (no thesis value): the period, threshold, fix time and fix σ.
 
 use coopnav_core::validation::Problems;
