@@ -272,6 +272,8 @@ pub struct LinkTable {
     p: Arc<[f64]>,
     /// `best[i]` = max of `p[i..]`: the bounds' p̄ ([`LinkTable::best_beyond`]).
     best: Arc<[f64]>,
+    /// `worst[i]` = min of `p[..=i]` ([`LinkTable::worst_up_to`]).
+    worst: Arc<[f64]>,
 }
 
 impl LinkTable {
@@ -299,7 +301,11 @@ impl LinkTable {
         for i in (0..best.len().saturating_sub(1)).rev() {
             best[i] = best[i].max(best[i + 1]);
         }
-        LinkTable { p: p.into(), best: best.into() }
+        let mut worst = p.clone();
+        for i in 1..worst.len() {
+            worst[i] = worst[i].min(worst[i - 1]);
+        }
+        LinkTable { p: p.into(), best: best.into(), worst: worst.into() }
     }
 
     /// A perfect link.
@@ -313,6 +319,14 @@ impl LinkTable {
     pub fn best_beyond(&self, r: f64) -> f64 {
         let i = ((r / Self::STEP_M) as usize).min(self.best.len() - 1);
         self.best[i]
+    }
+
+    /// A lower bound on [`LinkTable::success`] at every range ≤ `r` (the smallest sample up to
+    /// the one above `r`).
+    #[inline(always)]
+    pub fn worst_up_to(&self, r: f64) -> f64 {
+        let i = ((r / Self::STEP_M) as usize + 1).min(self.worst.len() - 1);
+        self.worst[i]
     }
 
     #[inline(always)]
@@ -520,7 +534,7 @@ impl EkfCost {
 
     /// ḡ of step 7 for an AUV whose covariance grows by `q_tau` per axis and level.
     #[inline(always)]
-    fn reach_growth_of(&self, q_tau: f64, range_m: f64) -> f64 {
+    pub(crate) fn reach_growth_of(&self, q_tau: f64, range_m: f64) -> f64 {
         let h = self.spec.terminal_levels;
         let beyond = range_m - self.reach.useful_range_m;
         if !(beyond > 0.0 && h > 0.0) {
@@ -534,7 +548,7 @@ impl EkfCost {
     /// can carry along its direction there, 1/(R(range) + σ_c²) in 1/m² (step 2: |h|²/(R + σ_c²·|h|²)
     /// is largest at |h| = 1, and R grows with range), and the most likely it arrives (step 3).
     #[inline(always)]
-    fn ping_floor(&self, range_m: f64) -> Ping {
+    pub(crate) fn ping_floor(&self, range_m: f64) -> Ping {
         let iota = 1.0 / (self.spec.range_noise.variance(range_m) + self.cna_variance);
         Ping { iota, success: self.link.best_beyond(range_m) }
     }
@@ -556,7 +570,7 @@ impl EkfCost {
     /// A lower bound on β² of step 4 at a squared range `range2` to an AUV at depth `z_auv`, from
     /// the CNA at any depth, m² (|h_xy| ≤ 1 only raises the profile's term).
     #[inline(always)]
-    fn bias_variance_floor(&self, z_auv: f64, range2: f64) -> f64 {
+    pub(crate) fn bias_variance_floor(&self, z_auv: f64, range2: f64) -> f64 {
         let k2 = self.spec.bias_per_km_m * self.spec.bias_per_km_m * 1e-6;
         let f2 = self.bias.as_ref().map_or(0.0, |t| t.floor(z_auv) * t.floor(z_auv));
         (k2 + f2) * range2
@@ -572,19 +586,33 @@ impl EkfCost {
         self.term(trace + 2.0 * h, det + h * trace + h * h)
     }
 
-    /// The larger of [`EkfCost::term_bound`] from two pairs of lower bounds (tr E, det E). The
-    /// trace-only aggregates take the larger trace first: the term is a non-decreasing function
+    /// The largest of [`EkfCost::term_bound`] over pairs of lower bounds (tr E, det E). The
+    /// trace-only aggregates take the largest trace first: the term is a non-decreasing function
     /// of the trace alone, and so is its floating-point evaluation (√ and max are correctly
-    /// rounded), so the result is the same number with one square root instead of two.
+    /// rounded), so the result is the same number with one square root instead of several.
     #[inline(always)]
-    fn larger_term_bound(&self, (t1, d1): (f64, f64), (t2, d2): (f64, f64), half_bias2: f64) -> f64 {
+    fn larger_term_bound<const K: usize>(&self, pairs: [(f64, f64); K], half_bias2: f64) -> f64 {
         match self.spec.aggregate {
-            Aggregate::LogDet => self.term_bound(t1, d1, half_bias2).max(self.term_bound(t2, d2, half_bias2)),
+            Aggregate::LogDet => pairs.iter().map(|&(t, d)| self.term_bound(t, d, half_bias2)).fold(0.0, f64::max),
             Aggregate::TraceSum | Aggregate::WorstAuv | Aggregate::SigmaSum => {
                 let h = half_bias2;
-                self.term((t1 + 2.0 * h).max(t2 + 2.0 * h), 0.0)
+                self.term(pairs.iter().map(|&(t, _)| t + 2.0 * h).fold(0.0, f64::max), 0.0)
             }
         }
+    }
+
+    /// A lower bound on one level's term from lower bounds (tr E, det E) on its covariance, the
+    /// half bias variance at the shortest range, and at the leaf step 7's growth ḡ there (0
+    /// elsewhere), scaled by 1/(1 + H) because the tree weights the leaf's bound by 1 + H
+    /// (`Tree::rest_bound`): (term + H·term(+ḡ))/(1 + H).
+    #[inline(always)]
+    pub(crate) fn level_bound<const K: usize>(&self, pairs: [(f64, f64); K], half_bias2: f64, growth: f64) -> f64 {
+        let term = self.larger_term_bound(pairs, half_bias2);
+        if growth <= 0.0 {
+            return term;
+        }
+        let h = self.spec.terminal_levels;
+        (term + h * self.larger_term_bound(pairs, half_bias2 + growth)) / (1.0 + h)
     }
 
     /// Step 4 and 5's term of a covariance `cov` with the range bias variance β² (m²):
@@ -618,7 +646,7 @@ impl EkfCost {
     }
 
     #[inline(always)]
-    fn term(&self, trace: f64, det: f64) -> f64 {
+    pub(crate) fn term(&self, trace: f64, det: f64) -> f64 {
         match self.spec.aggregate {
             Aggregate::TraceSum | Aggregate::WorstAuv => trace,
             Aggregate::LogDet => det.max(0.0).ln_1p(),
@@ -662,18 +690,11 @@ impl CostModel for EkfCost {
         }
     }
 
-    /// Two chains of lower bounds, level by level; each level takes the larger:
-    /// - [`TurnFloor`]: P ⪰ diag(radial, tangential) in the frame of the last ping's horizontal
-    ///   line of sight, starting from the node's (`diagonal_floor`), the line of sight turning per
-    ///   level by at most asin(turn / D_h) where D_h ≥ |(a − c)_h| − spread at the level above
-    ///   (the node's own distance for the first level below);
-    /// - [`EigenFloor`]: whatever the ping directions.
-    ///
-    /// Each level's ping is bounded by `ping_floor` at the shortest range max(0, |a − c| − spread)
-    /// the CNA can be at (R grows with range, p̄ only falls);
-    /// the bias term of step 4 at that shortest range is added to both (`term_bound`), and at
-    /// the leaf (the last slot of `out`) step 7's growth ḡ at that range, scaled by 1/(1 + H)
-    /// because the tree weights the leaf's bound by 1 + H (`Tree::rest_bound`).
+    /// Two chains of lower bounds on P, level by level ([`CovFloor`]); each level takes the
+    /// larger. Each level's ping is bounded by `ping_floor` at the shortest range
+    /// max(0, |a − c| − spread) the CNA can be at (R grows with range, p̄ only falls); the bias
+    /// term of step 4 at that shortest range is added (`term_bound`), and at the leaf step 7's
+    /// growth ḡ at that range ([`EkfCost::level_bound`]).
     fn bound_rest(
         &self,
         k: usize,
@@ -684,33 +705,13 @@ impl CostModel for EkfCost {
         out: &mut [f64],
     ) {
         let q = self.q_tau[k];
-        let (dx, dy) = (auv[0] - cna[0], auv[1] - cna[1]);
-        let horizontal = (dx * dx + dy * dy).sqrt();
-        let u = if horizontal > 1e-9 { [dx / horizontal, dy / horizontal] } else { [1.0, 0.0] };
-        let (radial, tangential) = diagonal_floor(state, u);
-        let mut turn = TurnFloor { radial, tangential };
-        let mut eigen = EigenFloor::of(state);
-        // The horizontal line of sight is at least `before` long before each level's move.
-        let mut before = horizontal;
+        let mut floor = CovFloor::of(state, cna, auv);
         let leaf = out.len().saturating_sub(1);
         for (j, (slot, b)) in out.iter_mut().zip(below).enumerate() {
-            let turn_max = if before > b.turn { (b.turn / before) * (b.turn / before) } else { 1.0 };
-            let los = [b.auv[0] - cna[0], b.auv[1] - cna[1], b.auv[2] - cna[2]];
-            let nearest = (norm(los) - b.spread).max(0.0);
-            let (ping, half_bias2) =
-                (self.ping_floor(nearest), 0.5 * self.bias_variance_floor(b.auv[2], nearest * nearest));
-            before = (los[0] * los[0] + los[1] * los[1]).sqrt() - b.spread;
-            let (trace, det) = turn.step(q, turn_max, ping);
-            let (eigen_trace, eigen_det) = eigen.step(q, ping);
-            let level_bound = |h: f64| self.larger_term_bound((trace, det), (eigen_trace, eigen_det), h);
-            let mut term = level_bound(half_bias2);
+            let (chains, nearest) = floor.step(q, cna, b, |r| self.ping_floor(r));
+            let half_bias2 = 0.5 * self.bias_variance_floor(b.auv[2], nearest * nearest);
             let growth = if j == leaf { self.reach_growth(k, nearest) } else { 0.0 };
-            if growth > 0.0 {
-                // Step 7 at the leaf: (term + H·term(+ḡ))/(1 + H), the tree weighting the leaf by 1 + H.
-                let h = self.spec.terminal_levels;
-                term = (term + h * level_bound(half_bias2 + growth)) / (1.0 + h);
-            }
-            *slot = self.combine(*slot, term);
+            *slot = self.combine(*slot, self.level_bound(chains, half_bias2, growth));
         }
     }
 
@@ -729,6 +730,51 @@ impl CostModel for EkfCost {
                 f
             })
             .collect()
+    }
+}
+
+/// The two chains of lower bounds on a covariance below a node, level by level, for any CNA path
+/// ([`EkfCost::bound_rest`]'s derivation; the true-error cost's bound runs them on its own
+/// covariance and pings):
+/// - [`TurnFloor`]: P ⪰ diag(radial, tangential) in the frame of the last ping's horizontal
+///   line of sight, starting from the node's (`diagonal_floor`), the line of sight turning per
+///   level by at most asin(turn / D_h) where D_h ≥ |(a − c)_h| − spread at the level above
+///   (the node's own distance for the first level below);
+/// - [`EigenFloor`]: whatever the ping directions.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct CovFloor {
+    turn: TurnFloor,
+    eigen: EigenFloor,
+    /// The horizontal line of sight is at least this long before the next level's move, m.
+    before: f64,
+}
+
+impl CovFloor {
+    /// The chains from the covariance `cov` at a node with the CNA at `cna` and the AUV at `auv`.
+    pub(crate) fn of(cov: &[f64; 3], cna: [f64; 3], auv: [f64; 3]) -> Self {
+        let (dx, dy) = (auv[0] - cna[0], auv[1] - cna[1]);
+        let horizontal = (dx * dx + dy * dy).sqrt();
+        let u = if horizontal > 1e-9 { [dx / horizontal, dy / horizontal] } else { [1.0, 0.0] };
+        let (radial, tangential) = diagonal_floor(cov, u);
+        CovFloor { turn: TurnFloor { radial, tangential }, eigen: EigenFloor::of(cov), before: horizontal }
+    }
+
+    /// One level below (growth `q_tau` per axis, the ping bounded by `ping` at the shortest slant
+    /// range the CNA can be at): each chain's (tr, det) bound, and that shortest range (m).
+    #[inline(always)]
+    pub(crate) fn step(
+        &mut self,
+        q_tau: f64,
+        cna: [f64; 3],
+        b: Below,
+        ping: impl Fn(f64) -> Ping,
+    ) -> ([(f64, f64); 2], f64) {
+        let turn_max = if self.before > b.turn { (b.turn / self.before) * (b.turn / self.before) } else { 1.0 };
+        let los = [b.auv[0] - cna[0], b.auv[1] - cna[1], b.auv[2] - cna[2]];
+        let nearest = (norm(los) - b.spread).max(0.0);
+        let ping = ping(nearest);
+        self.before = (los[0] * los[0] + los[1] * los[1]).sqrt() - b.spread;
+        ([self.turn.step(q_tau, turn_max, ping), self.eigen.step(q_tau, ping)], nearest)
     }
 }
 
@@ -758,9 +804,9 @@ fn diagonal_floor(p: &[f64; 3], u: [f64; 2]) -> (f64, f64) {
 /// What bounds one level's ping (`EkfCost::ping_floor`): ι ≥ the information along its direction
 /// if it arrives, 1/m², and p̄ ≥ the probability that it arrives.
 #[derive(Debug, Clone, Copy)]
-struct Ping {
-    iota: f64,
-    success: f64,
+pub(crate) struct Ping {
+    pub iota: f64,
+    pub success: f64,
 }
 
 /// Lower bounds m₁ (larger) and m₂ (smaller) on the eigenvalues λ₁ ≥ λ₂ of an AUV's covariance,
@@ -776,20 +822,25 @@ struct Ping {
 ///
 /// It is tight for the next level (one rank-one update), which is where most nodes are cut.
 #[derive(Debug, Clone, Copy)]
-struct EigenFloor {
+pub(crate) struct EigenFloor {
     m1: f64,
     m2: f64,
 }
 
 impl EigenFloor {
-    fn of(p: &[f64; 3]) -> Self {
+    pub(crate) fn of(p: &[f64; 3]) -> Self {
         let (m1, m2) = eigenvalues(p);
         EigenFloor { m1, m2 }
     }
 
+    /// The lower bound on the smaller eigenvalue.
+    pub(crate) fn smaller(&self) -> f64 {
+        self.m2
+    }
+
     /// Advances one level; returns the bounds on (tr E, det E).
     #[inline(always)]
-    fn step(&mut self, q_tau: f64, ping: Ping) -> (f64, f64) {
+    pub(crate) fn step(&mut self, q_tau: f64, ping: Ping) -> (f64, f64) {
         let (l1, l2) = (self.m1 + q_tau, self.m2 + q_tau);
         let (iota, lost) = (ping.iota, 1.0 - ping.success);
         // λR/(λ + R) with 1/R = ι, and what a lost ping keeps of the reduction λ − λR/(λ + R).
@@ -868,7 +919,7 @@ impl TurnFloor {
 }
 
 /// Eigenvalues of the symmetric 2×2 [[a, b], [b, c]], larger first, clamped at 0.
-fn eigenvalues(p: &[f64; 3]) -> (f64, f64) {
+pub(crate) fn eigenvalues(p: &[f64; 3]) -> (f64, f64) {
     let [a, b, c] = *p;
     let mean = 0.5 * (a + c);
     let radius = (0.25 * (a - c) * (a - c) + b * b).sqrt();

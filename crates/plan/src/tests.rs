@@ -103,8 +103,10 @@ fn unheard_cov() -> impl Strategy<Value = (f64, f64, f64, f64)> {
     (1.0e2f64..1.0e7, 1.0e2f64..1.0e7, -0.95f64..0.95, 0.5f64..3000.0)
 }
 
-/// The true-error cost's settings and inputs for up to 5 AUVs: S positive semi-definite, C any
-/// matrix with |C_ij|² ≤ S_ii·v (a valid joint covariance is not needed for exactness).
+/// The true-error cost's settings and inputs for up to 5 AUVs: mostly joint covariances of
+/// (ε, e_c) with a mean (C = √v·L·U, L the Cholesky factor of Cov ε and U a contraction, so
+/// Cov ε − CCᵀ/v ⪰ 0: what the bound needs), else any C with |C_ij|² ≤ S_ii·v (exactness must
+/// hold for those too).
 fn true_error_setting() -> impl Strategy<Value = (TruthSpec, Vec<TrueError>, f64)> {
     let spec = (0.0f64..0.5, 0.05f64..3.0, 0.0f64..5.0, prop_oneof![Just(0.0), 0.0f64..0.05]).prop_map(
         |(drift_m2_s, sigma_m, per_km_m, cna_diffusion_m2_s)| TruthSpec {
@@ -113,14 +115,34 @@ fn true_error_setting() -> impl Strategy<Value = (TruthSpec, Vec<TrueError>, f64
             cna_diffusion_m2_s,
         },
     );
-    let error = (0.01f64..30.0, 0.01f64..30.0, -0.95f64..0.95, prop::array::uniform4(-0.9f64..0.9));
+    let error = (
+        (0.01f64..30.0, 0.01f64..30.0, -0.95f64..0.95),
+        prop::array::uniform4(-0.9f64..0.9),
+        prop_oneof![Just([0.0; 2]), prop::array::uniform2(-5.0f64..5.0)],
+        any::<bool>(),
+    );
     (spec, prop::collection::vec(error, 5), 0.0f64..20.0).prop_map(|(spec, errors, v)| {
         let errors = errors
             .into_iter()
-            .map(|(se, sn, rho, c)| {
-                let (ce, cn) = ((se * v).sqrt(), (sn * v).sqrt());
-                let c = [c[0] * ce, c[1] * ce, c[2] * cn, c[3] * cn];
-                TrueError { s: [se, rho * (se * sn).sqrt(), sn], c, m: [0.0; 2] }
+            .map(|((se, sn, rho), u, m, joint)| {
+                let c = if joint {
+                    // L = [[√se, 0], [ρ√sn, √(1 − ρ²)·√sn]]; U = rotation(u₀·π) · diag(u₁, u₂).
+                    let l = [se.sqrt(), 0.0, rho * sn.sqrt(), (1.0 - rho * rho).sqrt() * sn.sqrt()];
+                    let (sin, cos) = (u[0] * std::f64::consts::PI).sin_cos();
+                    let uu = [cos * u[1], -sin * u[2], sin * u[1], cos * u[2]];
+                    let lu = [
+                        l[0] * uu[0] + l[1] * uu[2],
+                        l[0] * uu[1] + l[1] * uu[3],
+                        l[2] * uu[0] + l[3] * uu[2],
+                        l[2] * uu[1] + l[3] * uu[3],
+                    ];
+                    lu.map(|x| x * v.sqrt())
+                } else {
+                    let (ce, cn) = ((se * v).sqrt(), (sn * v).sqrt());
+                    [u[0] * ce, u[1] * ce, u[2] * cn, u[3] * cn]
+                };
+                let cov = [se, rho * (se * sn).sqrt(), sn];
+                TrueError { s: [cov[0] + m[0] * m[0], cov[1] + m[0] * m[1], cov[2] + m[1] * m[1]], c, m }
             })
             .collect();
         (spec, errors, v)

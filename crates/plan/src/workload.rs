@@ -49,8 +49,8 @@ impl Workload {
     /// with the range bias and cost-to-go the closed-loop evaluation plans with (6 m/km,
     /// H = 10 levels), the evaluation's sloping tree (N = 3, A = 5, L = 5, the sum of σ) over a
     /// lossy link, and last its current grid's: the true-error cost with a 0.05 m/s current the
-    /// filters do not model, L = 4 (the sim crate's `CURRENT_TRUTH`; no lower bound, so its
-    /// branch-and-bound prunes on the penalties alone).
+    /// filters do not model, L = 4 (the sim crate's `CURRENT_TRUTH`; its lower bound cuts nothing
+    /// here, so its branch-and-bound prunes on the penalties alone).
     pub fn standard() -> Vec<Workload> {
         let hudson = |n, a, b, l, gap| Workload { n, a, b, l, gap, cost: CostSpec::Hudson, link_plateau: None };
         let cost = CostSpec::Estimator;

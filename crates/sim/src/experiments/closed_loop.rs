@@ -92,8 +92,8 @@ pub const CURRENT_TRUTH: TruthSpec =
     TruthSpec { drift_m2_s: 0.002, range_noise: RangeNoise { sigma_m: 1.8, per_km_m: 0.0 }, cna_diffusion_m2_s: 0.0 };
 
 /// L of `planner-estimator` with the ASC and [`CURRENT_TRUTH`] (chosen on the tuning seed). The
-/// true-error cost has no lower bound below a node (coopnav_plan `true_error`), so its search
-/// costs about brute force's: L = 5
+/// true-error cost's lower bound below a node (coopnav_plan `true_error`) is loose, so its
+/// search costs about brute force's: L = 5
 /// made the full comparison 5 min 32 s (659 s CPU, against 4 min 40 s and 557 s with the
 /// covariance cost). Tuning seed, 100 runs, L = 4 / 5: N = 2 4.54 / 4.66, N = 3 5.37 / 5.40,
 /// N = 5 6.65 / 6.46, N = 8 12.43 / 13.63 m (RMS 16.61 / 20.36), each at about a third of the time.
@@ -176,7 +176,7 @@ pub const AUV_CNA_TRUTH: TruthSpec =
 /// to 5 AUVs (the evaluation's N = 5). Chosen on the tuning seed (session 30, sloping scenario
 /// with the CNA 2 m down at least, 100 runs, covariance cost → true-error cost, m): N = 5 4.49 →
 /// 4.32 (centroid-standoff +0.05 → −0.12, its one cell not won, then won; every cell won), at 1.9×
-/// the search's CPU (the cost has no lower bound); N = 8 6.18 m with it (trail +0.11, lost; the
+/// the search's CPU (the cost's lower bound, then none, cuts little); N = 8 6.18 m with it (trail +0.11, lost; the
 /// covariance cost ties trail); N = 2 3.51 → 3.60 (centroid-standoff −0.05 → +0.03); N = 3 3.79 →
 /// 3.74 with every cell won either way, not worth its CPU: with N = 3 too the full comparison took
 /// 5 min 8 s (614 s CPU, against 490 s without either). Session 29: at N = 1 it gained nothing
@@ -439,10 +439,13 @@ fn summary_grid(cells: &[Cell]) -> String {
     out
 }
 
-/// The second cause of an AUV-CNA cell not won, measured by `closed-loop-cna-navigation`.
-const CNA_ERROR_CAUSE: &str = "every AUV the CNA fixes inherits the AUV CNA's own navigation error (a random walk, \
-     1 to 3 m between GPS fixes), whatever the CNA's path; `coopnav reproduce closed-loop-cna-navigation` runs these \
-     cells again with the CNA broadcasting its true position, on the same seeds";
+/// A cause to check in an AUV-CNA cell not won; whether it decides the cell is measured
+/// elsewhere (`closed-loop-cna-navigation`: at N = 1 it does, at N = 8 it does not), so the
+/// report names it as a question with its measurement, not as the cell's cause.
+const CNA_ERROR_CAUSE: &str = "to check: every AUV the CNA pings inherits the AUV CNA's own navigation error (a \
+     random walk, 1 to 3 m between GPS fixes) whatever the CNA's path; whether that decides this cell, `coopnav \
+     reproduce closed-loop-cna-navigation` measures (the same cells with the CNA broadcasting its true position, on \
+     the same seeds)";
 
 /// The cell-wide measured argument for a cell not won: how far apart the policies that ping end
 /// (the best, the median), how far no CNA at all is, and how wide the paired intervals are at
