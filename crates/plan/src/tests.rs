@@ -522,3 +522,45 @@ fn the_reach_cost_to_go_pulls_the_cna_towards_an_auv_beyond_the_link() {
     assert!(with < without - 100.0, "with the reach term {with:.0} m from the far AUV, without {without:.0} m");
     assert!(with < 900.0, "with the reach term the CNA ends {with:.0} m from the far AUV");
 }
+
+/// The true-error cost's lower bound cuts: five AUVs 500 m apart whose errors have settled on the
+/// AUV CNA's (S = (v + 2)·I, C = v·I), no level-0 distance penalty, A = 5, L = 5: branch-and-bound
+/// takes the brute force's decision and cost and searches fewer nodes than the whole tree.
+#[test]
+fn the_true_error_bound_cuts_where_the_auvs_errors_follow_the_cnas() {
+    use crate::workload::{PlateauLink, Workload};
+    let truth = TruthSpec {
+        drift_m2_s: 0.01,
+        range_noise: RangeNoise { sigma_m: 1.8, per_km_m: 0.0 },
+        cna_diffusion_m2_s: 0.01,
+    };
+    let spec = EstimatorSpec {
+        aggregate: Aggregate::SigmaSum,
+        bias_per_km_m: 3.0,
+        terminal_levels: 20.0,
+        reach_success: 0.79,
+        truth: Some(truth),
+        ..EstimatorSpec::default()
+    };
+    let w = Workload { n: 5, a: 5, b: 1, l: 5, gap: 500.0, cost: CostSpec::Estimator(spec), link_plateau: Some(0.8) };
+    let auv = |k: usize, t: f64| Vec3::new(500.0 * k as f64 + 50.0, 1.5 * t, 90.0);
+    let cna = CnaPose { pos: Vec3::new(140.0, 0.0, 2.0), heading: Heading::from_radians(0.0), pitch: 0.0 };
+    let v = 4.0;
+    let decide = |algorithm| {
+        let mut cfg = w.config(Workload::search(algorithm, false));
+        cfg.motion.tau = 30.0;
+        cfg.penalties = PenaltyCase::C3.penalties();
+        let errors: Vec<AuvError> = (0..w.n).map(|k| cfg.error.initial(1.0, 1.0, &cna.pos, &auv(k, 0.0))).collect();
+        let estimates = vec![AuvEstimate { cov: [20.0, 0.0, 20.0], process_noise: 0.051 }; w.n];
+        let forecast = FnForecast { n: w.n, f: move |k: usize, t: f64| Some(auv(k, t)) };
+        let input =
+            PlanInput { t: 0.0, cna, errors: &errors, estimates: &estimates, cna_variance: v, forecast: &forecast };
+        let moments = vec![TrueError { s: [v + 2.0, 0.0, v + 2.0], c: [v, 0.0, 0.0, v], m: [0.0; 2] }; w.n];
+        let truth = TruthInput { errors: &moments, cna_variance: v };
+        LookAheadPlanner::with_link(cfg, &PlateauLink(0.8)).unwrap().decide_with_truth(&input, Some(&truth)).unwrap()
+    };
+    let (bnb, brute) = (decide(Algorithm::BranchAndBound), decide(Algorithm::BruteForce));
+    assert_eq!((bnb.option, bnb.value), (brute.option, brute.value));
+    let whole_tree: u64 = (1..=6).map(|l| 5u64.pow(l)).sum();
+    assert!(bnb.nodes < whole_tree * 9 / 10, "{} of {whole_tree} nodes", bnb.nodes);
+}
