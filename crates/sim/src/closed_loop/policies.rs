@@ -164,6 +164,7 @@ fn build(name: &str, sc: &Scenario, planned: Option<&TimedWaypoints>) -> Result<
                     cfg.penalties = case.penalties();
                 }
                 cfg.look_ahead = p.estimator_look_ahead.unwrap_or(cfg.look_ahead);
+                cfg.motion.heading_options = p.estimator_heading_options.unwrap_or(cfg.motion.heading_options);
                 if let CnaKind::Auv { pitch_levels, level_off, .. } = &mut cfg.motion.cna {
                     *pitch_levels = p.estimator_pitch_levels;
                     *level_off = p.estimator_level_off;

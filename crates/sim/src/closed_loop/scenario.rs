@@ -444,6 +444,9 @@ pub struct Planner {
     /// L of `planner-estimator` (default: `look_ahead`).
     #[serde(default)]
     pub estimator_look_ahead: Option<usize>,
+    /// A of `planner-estimator`, its heading options per level (≥ 2; default: `heading_options`).
+    #[serde(default)]
+    pub estimator_heading_options: Option<usize>,
     /// With an AUV CNA, how many levels of `planner-estimator`'s tree offer the pitch options, from
     /// level 0 (≥ 1; deeper levels hold the pitch; default: every level). Fewer pitch levels make
     /// a deeper look-ahead affordable (coopnav_plan `CnaKind::Auv::pitch_levels`).
@@ -829,6 +832,28 @@ impl Scenario {
         p.check("sensors.yaw_rate_white_deg_s", s.yaw_rate_white_deg_s, |v| (0.0..=10.0).contains(&v), "0..=10 deg/s");
     }
 
+    /// The planner's own checks of `planner-estimator`'s A and L; its other fields are reported
+    /// once, by `planner_config`'s. A tree too large is blamed on the estimator's L if set, else A.
+    fn validate_estimator_tree(&self, p: &mut Problems) {
+        let pl = &self.planner;
+        if pl.estimator_look_ahead.is_none() && pl.estimator_heading_options.is_none() {
+            return;
+        }
+        let mut cfg = self.planner_config();
+        cfg.look_ahead = pl.estimator_look_ahead.unwrap_or(cfg.look_ahead);
+        cfg.motion.heading_options = pl.estimator_heading_options.unwrap_or(cfg.motion.heading_options);
+        let Err(PlanError::Invalid(found)) = cfg.validate() else { return };
+        let size = if pl.estimator_look_ahead.is_some() { "look_ahead" } else { "heading_options" };
+        for bad in found.0 {
+            let own = match bad.field.as_str() {
+                "look_ahead" => size,
+                "motion.heading_options" if pl.estimator_heading_options.is_some() => "heading_options",
+                _ => continue,
+            };
+            p.push(format!("planner.estimator_{own}"), bad.value, bad.allowed);
+        }
+    }
+
     fn validate_planner(&self, p: &mut Problems) {
         let pl = &self.planner;
         p.positive("planner.sigma0", pl.sigma0);
@@ -839,13 +864,7 @@ impl Scenario {
         p.finite("planner.estimator_unmodelled_current[0]", pl.estimator_unmodelled_current[0]);
         p.finite("planner.estimator_unmodelled_current[1]", pl.estimator_unmodelled_current[1]);
         p.non_negative("planner.estimator_drift_levels", pl.estimator_drift_levels);
-        if let Some(look_ahead) = pl.estimator_look_ahead {
-            // The planner's own look-ahead check; its other fields are reported once, below.
-            if let Err(PlanError::Invalid(found)) = (PlannerConfig { look_ahead, ..self.planner_config() }).validate() {
-                let own = found.0.into_iter().filter(|bad| bad.field == "look_ahead");
-                own.for_each(|bad| p.push("planner.estimator_look_ahead", bad.value, bad.allowed));
-            }
-        }
+        self.validate_estimator_tree(p);
         if let Some(truth) = &pl.estimator_truth {
             truth.check_fields("planner.estimator_truth.", p);
         }
@@ -1139,15 +1158,18 @@ mod tests {
             "[planner]\n",
             "[planner]\nestimator_penalty_case = \"99\"\nestimator_look_ahead = 70\nestimator_terminal_levels = -1.0\n\
              estimator_bias_per_km = -2.0\nestimator_reach_success = 1.5\nestimator_pitch_levels = 0\n\
-             estimator_unmodelled_current = [nan, 0.0]\nestimator_drift_levels = -1.0\n",
+             estimator_unmodelled_current = [nan, 0.0]\nestimator_drift_levels = -1.0\nestimator_heading_options = 1\n",
         );
         let e = err(&text);
         let fields = ["penalty_case", "look_ahead", "terminal_levels", "bias_per_km", "reach_success", "pitch_levels"];
+        assert!(e.contains("planner.estimator_heading_options = 1"), "{e}");
         for field in fields.into_iter().chain(["unmodelled_current[0]", "drift_levels"]) {
             assert!(e.contains(&format!("planner.estimator_{field}")), "{field}: {e}");
         }
-        let ok =
-            example.replace("[planner]\n", "[planner]\nestimator_penalty_case = \"3\"\nestimator_look_ahead = 3\n");
+        let ok = example.replace(
+            "[planner]\n",
+            "[planner]\nestimator_penalty_case = \"3\"\nestimator_look_ahead = 3\nestimator_heading_options = 7\n",
+        );
         let other_field_bad = err(&ok.replace("heading_options = 5", "heading_options = 1"));
         assert!(
             other_field_bad.contains("planner.heading_options") && !other_field_bad.contains("estimator_look_ahead"),
@@ -1158,6 +1180,9 @@ mod tests {
             (sc.planner.estimator_penalty_case.as_deref(), sc.planner.estimator_look_ahead),
             (Some("3"), Some(3))
         );
+        assert_eq!(sc.planner.estimator_heading_options, Some(7));
+        let too_large = err(&ok.replace("estimator_heading_options = 7", "estimator_heading_options = 2000"));
+        assert!(too_large.contains("planner.estimator_look_ahead = 3 with 2000 options"), "{too_large}");
     }
 
     #[test]

@@ -77,7 +77,26 @@ pub struct Setting {
     /// (`planner.estimator_truth`), the water current its filters do not model as their mean
     /// error ([`CURRENT_TRUTH`], [`auv_cna_true_error`]).
     pub true_error: fn(usize) -> Option<TruthSpec>,
+    /// `planner-estimator`'s A and H with one AUV ([`SINGLE_AUV_CNA`]); None: as for any N.
+    pub single_auv: Option<SingleAuv>,
 }
+
+/// `planner-estimator`'s heading options and levels of cost-to-go for a one-AUV cell.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SingleAuv {
+    pub heading_options: usize,
+    pub terminal_levels: f64,
+}
+
+/// With the AUV CNA and one AUV, `planner-estimator` takes A = 7 headings and H = 40 levels of
+/// cost-to-go (elsewhere A = 5 and [`ESTIMATOR_TERMINAL_LEVELS`] or [`SPREAD_TERMINAL_LEVELS`]).
+/// Tuning seed, sloping scenario, N = 1 (session 31), planner-estimator minus zigzag, m; 600
+/// runs: A = 5, H = 10 +0.03 [−0.00, 0.06]; A = 7 with H = 20 −0.03 [−0.07, 0.00], H = 40 −0.06
+/// [−0.10, −0.02], H = 60 −0.06 [−0.10, −0.03]. 200 runs: A = 7 alone −0.01, A = 9 −0.02, A = 11
+/// −0.03; H = 40 alone +0.02; H = 100 or 200 with A = 7 −0.02; A = 7 with L = 4 −0.04; distance
+/// limits from 200–400 m +0.12 to +0.24. With A = 7 and H = 40 (200 runs) every other baseline
+/// is beaten, zigzag −0.07 [−0.13, 0.00]. Hudson's `planner` keeps A = 5.
+pub const SINGLE_AUV_CNA: SingleAuv = SingleAuv { heading_options: 7, terminal_levels: 40.0 };
 
 /// The true-error model of `planner-estimator` on the mission with a water current (the ASC
 /// grid; invented, issue 10 session 29, no thesis values): the AUVs' true dead-reckoning drift
@@ -196,6 +215,7 @@ impl Setting {
             estimator_pitch_levels: None,
             depth_aware: false,
             true_error: |_| Some(CURRENT_TRUTH),
+            single_auv: None,
         }
     }
 
@@ -210,6 +230,7 @@ impl Setting {
             estimator_pitch_levels: Some(1),
             depth_aware: true,
             true_error: auv_cna_true_error,
+            single_auv: Some(SINGLE_AUV_CNA),
         }
     }
 
@@ -235,6 +256,10 @@ impl Setting {
         if let Some(truth) = (self.true_error)(n) {
             sc.planner.estimator_truth = Some(truth);
             sc.planner.estimator_unmodelled_current = [sc.fleet.current.0, sc.fleet.current.1];
+        }
+        if let (1, Some(single)) = (n, self.single_auv) {
+            sc.planner.estimator_heading_options = Some(single.heading_options);
+            sc.planner.estimator_terminal_levels = single.terminal_levels;
         }
         if n >= SPREAD_FLEET_MIN_AUVS {
             sc.planner.estimator_penalty_case = Some(PenaltyCase::C3.id().to_string());
@@ -328,7 +353,7 @@ pub fn evaluate(
     let mut table = format!(
         "True mean navigation error of the survey AUVs (m), {runs} runs per policy and cell, base seed {seed} \
          (settings chosen on base seed {TUNING_SEED}); planners A=5, L=5; planner-estimator: L={TRUE_ERROR_LOOK_AHEAD} with the ASC (with the AUV \
-         CNA: every policy cruising at the depth the sound-speed profile favours for the fleet, its pitch options at level 0 only, L=3 with one AUV and 4 from 6 on, from 2 AUVs on its depth chosen by the profile with the \
+         CNA: every policy cruising at the depth the sound-speed profile favours for the fleet, its pitch options at level 0 only, L=3 with one AUV (A={}, {} levels of cost-to-go) and 4 from 6 on, from 2 AUVs on its depth chosen by the profile with the \
          range bias the profile gives plus {DEPTH_AWARE_BIAS_PER_KM} m/km, levelling off at each step's depth), \
          aggregate sigma_sum, range bias {ESTIMATOR_BIAS_PER_KM} m/km, {ESTIMATOR_TERMINAL_LEVELS} levels of cost-to-go; from \
          {SPREAD_FLEET_MIN_AUVS} AUVs on no level-0 distance penalty, the reach cost-to-go (p_u {REACH_SUCCESS}) and \
@@ -337,6 +362,8 @@ pub fn evaluate(
          σ {} m); so does it with the AUV CNA and 5 AUVs (drift {} m²/s, the CNA's own diffusion {} m²/s).\n\
          Every difference is planner-estimator minus the baseline, paired by run; a cell is won when its 95 % CI \
          lies below zero.\n\n",
+        SINGLE_AUV_CNA.heading_options,
+        SINGLE_AUV_CNA.terminal_levels,
         CURRENT_TRUTH.drift_m2_s,
         CURRENT_TRUTH.range_noise.sigma_m,
         AUV_CNA_TRUTH.drift_m2_s,
@@ -742,6 +769,24 @@ mod tests {
             assert_eq!(truth, (n == 5).then_some(AUV_CNA_TRUTH), "N = {n}");
             let diffusion = sc.cna.auv.as_ref().unwrap().nav_diffusion;
             assert_eq!(AUV_CNA_TRUTH.cna_diffusion_m2_s, diffusion, "the scenario's own diffusion");
+        }
+    }
+
+    /// A = 7 and H = 40 for planner-estimator with the AUV CNA and one AUV only: Hudson's planner,
+    /// the ASC's cells and the larger fleets keep A = 5 and their H.
+    #[test]
+    fn only_the_single_auv_cna_cell_plans_with_seven_headings_and_forty_levels() {
+        let (settings, _, _) = setup(&ReproOptions { size: Size::Full, seed: 1 }).unwrap();
+        for setting in &settings {
+            for &n in &setting.n {
+                let sc = setting.scenario(n, 1, None);
+                let single = setting.name == "sloping-auv-cna" && n == 1;
+                let want = single.then_some(SINGLE_AUV_CNA.heading_options);
+                assert_eq!(sc.planner.estimator_heading_options, want, "{} N = {n}", setting.name);
+                assert_eq!(sc.planner.heading_options, 5, "Hudson's planner, {} N = {n}", setting.name);
+                let h = sc.planner.estimator_terminal_levels;
+                assert_eq!(h == SINGLE_AUV_CNA.terminal_levels, single, "{} N = {n}: H {h}", setting.name);
+            }
         }
     }
 
