@@ -88,8 +88,17 @@ pub fn closed_loop(sc: &closed_loop::Scenario, runs: usize, policies: usize) -> 
     let f = &sc.fleet;
     let vehicles = (f.n_auvs + 1) as f64;
     let runs_total = runs as f64 * policies as f64;
-    let pitch = sc.cna.auv.as_ref().map_or(1, |a| a.pitch_options);
-    let options = sc.planner.heading_options as f64 * pitch as f64;
+    let pitch = sc.cna.auv.as_ref().map_or(1, |a| a.pitch_options) as f64;
+    let p = &sc.planner;
+    // The larger of the two planners' trees: Hudson's and `planner-estimator`'s own A and L.
+    let hudson = ("planner.", p.heading_options, p.look_ahead);
+    let estimator = (
+        "planner.estimator_",
+        p.estimator_heading_options.unwrap_or(p.heading_options),
+        p.estimator_look_ahead.unwrap_or(p.look_ahead),
+    );
+    let leaves = |(_, a, l): (&str, usize, usize)| (a as f64 * pitch).powf(l as f64);
+    let (prefix, heading_options, look_ahead) = if leaves(estimator) > leaves(hudson) { estimator } else { hudson };
     let decisions = sc.duration_s / sc.comms.tau;
     let mut out = vec![
         Estimate::new(
@@ -111,7 +120,8 @@ pub fn closed_loop(sc: &closed_loop::Scenario, runs: usize, policies: usize) -> 
             MAX_BYTES,
         ),
     ];
-    out.extend(planner("planner.", options, sc.planner.look_ahead, decisions * runs_total, f.n_auvs));
+    let options = heading_options as f64 * pitch;
+    out.extend(planner(prefix, options, look_ahead, decisions * runs_total, f.n_auvs));
     out
 }
 
@@ -235,6 +245,10 @@ mod tests {
 
         let sim = closed_loop::Scenario::parse(closed_loop::EXAMPLE, Path::new("default")).unwrap();
         assert!(check(closed_loop(&sim, 100, 3), false).is_ok());
+        let mut wide_estimator = sim.clone();
+        wide_estimator.planner.estimator_heading_options = Some(1_000_000);
+        let e = check(closed_loop(&wide_estimator, 1, 1), false).unwrap_err().to_string();
+        assert!(e.contains("planner.estimator_heading_options") && e.contains("--allow-large"), "{e}");
         let long = closed_loop::Scenario { duration_s: 1e9, ..sim };
         assert!(check(closed_loop(&long, 1, 1), false).unwrap_err().to_string().contains("duration_s / dt"));
 
