@@ -335,14 +335,14 @@ impl CostModel for TrueErrorCost {
         let Some(node) = NodeFloor::of(state) else { return };
         let mut known_cna = CovFloor::of(&node.known_cna, cna, auv);
         let mut filter = EigenFloor::of(&state.p);
-        let q_filter = self.filter.q_tau[k];
+        let (q_filter, w) = (self.filter.q_tau[k], self.relative_growth());
         let leaf = out.len().saturating_sub(1);
         for (j, (slot, b)) in out.iter_mut().zip(below).enumerate() {
             // The filter's P̃ before this level's ping, then its own chain past it.
             let smallest_p = filter.smaller() + q_filter;
             let ([turn, eigen], nearest) = known_cna.step(self.truth_tau, cna, b, |r| self.ping_floor(r));
             filter.step(q_filter, self.filter.ping_floor(nearest));
-            let (trace, det) = node.relative_at(j + 1, self.relative_growth());
+            let (trace, det) = node.relative_at(j + 1, w);
             let noise = self.newest_noise(smallest_p, nearest, b, cna);
             let half_bias2 = 0.5 * self.filter.bias_variance_floor(b.auv[2], nearest * nearest);
             let growth = if j == leaf { self.filter.reach_growth_of(self.truth_tau, nearest) } else { 0.0 };
@@ -353,7 +353,7 @@ impl CostModel for TrueErrorCost {
 
     /// F1's eigenvalue chain with pings at range 0 and F2, from each root.
     fn level_floors(&self, root: &[TrueState], depth: usize) -> Vec<f64> {
-        let ping = self.ping_floor(0.0);
+        let (ping, w) = (self.ping_floor(0.0), self.relative_growth());
         let mut nodes: Vec<Option<(NodeFloor, EigenFloor)>> =
             root.iter().map(|s| NodeFloor::of(s).map(|n| (n, EigenFloor::of(&n.known_cna)))).collect();
         (1..=depth)
@@ -361,7 +361,7 @@ impl CostModel for TrueErrorCost {
                 let mut f = 0.0;
                 for (node, chain) in nodes.iter_mut().flatten() {
                     let known_cna = chain.step(self.truth_tau, ping);
-                    let relative = node.relative_at(level, self.relative_growth());
+                    let relative = node.relative_at(level, w);
                     f = self.filter.combine(f, self.filter.level_bound([known_cna, relative], 0.0, 0.0));
                 }
                 f

@@ -192,12 +192,12 @@ pub fn auv_cna_look_ahead(n: usize) -> usize {
 /// The true-error model of `planner-estimator` with the AUV CNA (invented, issue 10 session 30,
 /// no thesis values): the AUVs' true drift 0.01 m²/s, the channel's ranges σ 1.8 m (Gill's
 /// outliers), and the CNA's own navigation diffusion, 0.01 m²/s per axis (the scenario's
-/// `cna.auv.nav_diffusion`). Used for 5 AUVs ([`auv_cna_true_error`]).
+/// `cna.auv.nav_diffusion`). Used for 1 and 5 AUVs ([`auv_cna_true_error`]).
 pub const AUV_CNA_TRUTH: TruthSpec =
     TruthSpec { drift_m2_s: 0.01, range_noise: RangeNoise { sigma_m: 1.8, per_km_m: 0.0 }, cna_diffusion_m2_s: 0.01 };
 
-/// The AUV CNA's `planner-estimator` scores true error ([`AUV_CNA_TRUTH`]) for spread fleets up
-/// to 5 AUVs (the evaluation's N = 5). Chosen on the tuning seed (session 30, sloping scenario
+/// The AUV CNA's `planner-estimator` scores true error ([`AUV_CNA_TRUTH`]) for one AUV and for
+/// spread fleets up to 5 AUVs (the evaluation's N = 1 and 5). Chosen on the tuning seed (session 30, sloping scenario
 /// with the CNA 2 m down at least, 100 runs, covariance cost → true-error cost, m): N = 5 4.49 →
 /// 4.32 (centroid-standoff +0.05 → −0.12, its one cell not won, then won; every cell won), at 1.9×
 /// the search's CPU (the cost's lower bound, then none, cuts little); N = 8 6.18 m with it (trail +0.11, lost; the
