@@ -36,6 +36,16 @@ pub(crate) trait CostModel: Sync {
         term * (1.0 + self.terminal_levels())
     }
 
+    /// AUV `k`'s term on the last level when its state is not kept: `leaf_term` of what
+    /// `update` gives, bit for bit (the searches' leaves use this, the brute force the pair, and
+    /// the branch-and-bound proptest compares them). A model overrides it to share the work of
+    /// the two.
+    #[inline(always)]
+    fn leaf_cost(&self, k: usize, parent: &Self::State, cna: [f64; 3], auv: [f64; 3]) -> f64 {
+        let (state, term) = self.update(k, parent, cna, auv);
+        self.leaf_term(k, &state, cna, auv, term)
+    }
+
     /// Joins one AUV's term into a level's raw cost (sum, or max for worst-AUV).
     fn combine(&self, acc: f64, term: f64) -> f64;
 

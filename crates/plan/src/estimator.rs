@@ -525,6 +525,16 @@ impl EkfCost {
         Ok(EkfCost { spec, q_tau, link, cna_variance, reach, bias: None, drift })
     }
 
+    /// Steps 1–3 for AUV `k`: its expected covariance after one level and a ping from `cna`.
+    #[inline(always)]
+    fn posterior(&self, k: usize, parent: &[f64; 3], cna: [f64; 3], auv: [f64; 3]) -> [f64; 3] {
+        let link = &self.link;
+        let drifted = [parent[0] + self.drift[0], parent[1] + self.drift[1], parent[2] + self.drift[2]];
+        expected_posterior(&drifted, self.q_tau[k], cna, auv, &self.spec.range_noise, self.cna_variance, |r| {
+            link.success(r)
+        })
+    }
+
     /// ḡ of step 7 for AUV `k` at slant range `range_m` from the leaf pose: the mean growth per
     /// axis over the H levels beyond the horizon before the CNA is within the useful range, m².
     #[inline(always)]
@@ -629,6 +639,19 @@ impl EkfCost {
     /// leaf's term plus H levels at M + ḡ·I (ḡ = 0: (1 + H)·term exactly).
     #[inline(always)]
     pub(crate) fn leaf_term_with(&self, q_tau: f64, cov: &[f64; 3], cna: [f64; 3], auv: [f64; 3], term: f64) -> f64 {
+        self.leaf_term_biased(q_tau, cov, (cna, auv), term, || self.bias_variance(cna, auv))
+    }
+
+    /// [`EkfCost::leaf_term_with`] given `bias2`, β² of that ping (step 4), when it is needed.
+    #[inline(always)]
+    pub(crate) fn leaf_term_biased(
+        &self,
+        q_tau: f64,
+        cov: &[f64; 3],
+        (cna, auv): ([f64; 3], [f64; 3]),
+        term: f64,
+        bias2: impl FnOnce() -> f64,
+    ) -> f64 {
         let h = self.spec.terminal_levels;
         if self.reach.useful_range_m == f64::INFINITY {
             return term * (1.0 + h); // no reach cost-to-go: ḡ = 0 at every range
@@ -640,7 +663,7 @@ impl EkfCost {
             return term * (1.0 + h);
         }
         let [a, b, c] = *cov;
-        let half_bias2 = 0.5 * self.bias_variance(cna, auv);
+        let half_bias2 = 0.5 * bias2();
         let (ma, mc) = (a + half_bias2, c + half_bias2);
         term + h * self.term_bound(ma + mc, ma * mc - b * b, growth)
     }
@@ -662,13 +685,16 @@ impl CostModel for EkfCost {
     /// Steps 1–5 of the module's derivation.
     #[inline(always)]
     fn update(&self, k: usize, parent: &[f64; 3], cna: [f64; 3], auv: [f64; 3]) -> ([f64; 3], f64) {
-        let link = &self.link;
-        let drifted = [parent[0] + self.drift[0], parent[1] + self.drift[1], parent[2] + self.drift[2]];
-        let [a, b, c] =
-            expected_posterior(&drifted, self.q_tau[k], cna, auv, &self.spec.range_noise, self.cna_variance, |r| {
-                link.success(r)
-            });
-        ([a, b, c], self.moments_term(&[a, b, c], self.bias_variance(cna, auv)))
+        let posterior = self.posterior(k, parent, cna, auv);
+        (posterior, self.moments_term(&posterior, self.bias_variance(cna, auv)))
+    }
+
+    /// β² computed once for the term and the cost-to-go.
+    #[inline(always)]
+    fn leaf_cost(&self, k: usize, parent: &[f64; 3], cna: [f64; 3], auv: [f64; 3]) -> f64 {
+        let (posterior, bias2) = (self.posterior(k, parent, cna, auv), self.bias_variance(cna, auv));
+        let term = self.moments_term(&posterior, bias2);
+        self.leaf_term_biased(self.q_tau[k], &posterior, (cna, auv), term, || bias2)
     }
 
     /// Step 6: H levels at the leaf's term.

@@ -340,7 +340,7 @@ fn dfs<M: CostModel>(
     }
     let (lv, deeper) = levels.split_first_mut().expect("one buffer per level");
     if level + 1 == tree.depth && ctx.leaves_unrecorded(level) {
-        leaves(tree, level, parent, acc, lv, ctx);
+        leaves(tree, level, parent, acc, ctx);
         return;
     }
     let cut = Cut { acc, floor: tree.rest_floor[level], bound: ctx.bound() };
@@ -369,19 +369,12 @@ fn dfs<M: CostModel>(
 /// best path; here the cheapest sibling is never cut (its partial sums are at most its cost,
 /// which is at most the best path whenever the sorted visit records it) and every leaf that is
 /// recorded is at least it. The last level has no level below (`rest_floor` 0).
-fn leaves<M: CostModel>(
-    tree: &Tree<M>,
-    level: usize,
-    parent: &NodeRef<M::State>,
-    acc: f64,
-    lv: &mut Level<M::State>,
-    ctx: &mut Ctx,
-) {
-    let (n, floor) = (tree.n, tree.rest_floor[level]);
+fn leaves<M: CostModel>(tree: &Tree<M>, level: usize, parent: &NodeRef<M::State>, acc: f64, ctx: &mut Ctx) {
+    let floor = tree.rest_floor[level];
     let options = tree.level_options(level);
     for &o in options {
         let cut = Cut { acc, floor, bound: ctx.bound() };
-        if let Some((_, c)) = tree.expand_within(level, parent, o, &mut lv.state[o * n..(o + 1) * n], &cut) {
+        if let Some(c) = tree.leaf_within(level, parent, o, &cut) {
             let v = acc + c;
             if v + floor <= ctx.bound() {
                 ctx.leaf(v);

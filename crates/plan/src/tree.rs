@@ -206,6 +206,27 @@ impl<M: CostModel> Tree<M> {
         out: &mut [M::State],
         cut: &Cut,
     ) -> Option<(FastPose, f64)> {
+        self.expand_into(level, parent, opt, Some(out), cut)
+    }
+
+    /// The cost of the leaf `parent` → `opt` on the last level as [`Tree::expand_within`] gives
+    /// it, bit for bit; the leaf's states are not kept (no level reads them), which spares the
+    /// search most of the last level's work.
+    #[inline(always)]
+    pub fn leaf_within(&self, level: usize, parent: &NodeRef<M::State>, opt: usize, cut: &Cut) -> Option<f64> {
+        debug_assert_eq!(level + 1, self.depth, "only the last level's states are never read");
+        self.expand_into(level, parent, opt, None, cut).map(|(_, c)| c)
+    }
+
+    #[inline(always)]
+    fn expand_into(
+        &self,
+        level: usize,
+        parent: &NodeRef<M::State>,
+        opt: usize,
+        mut out: Option<&mut [M::State]>,
+        cut: &Cut,
+    ) -> Option<(FastPose, f64)> {
         let pose = self.motion.step(&parent.pose, &self.options[opt]);
         let auv = &self.auv[level * self.n..(level + 1) * self.n];
         let (mut raw, mut dmin2, mut dmax2) = (0.0, f64::INFINITY, 0.0f64);
@@ -216,9 +237,18 @@ impl<M: CostModel> Tree<M> {
             let d2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
             dmin2 = dmin2.min(d2);
             dmax2 = dmax2.max(d2);
-            let (state, term) = self.model.update(k, &parent.state[k], pose.p, a);
-            let term = if leaf { self.model.leaf_term(k, &state, pose.p, a, term) } else { term };
-            out[k] = state;
+            let term = match out.as_deref_mut() {
+                Some(out) => {
+                    let (state, term) = self.model.update(k, &parent.state[k], pose.p, a);
+                    out[k] = state;
+                    if leaf {
+                        self.model.leaf_term(k, &state, pose.p, a, term)
+                    } else {
+                        term
+                    }
+                }
+                None => self.model.leaf_cost(k, &parent.state[k], pose.p, a),
+            };
             raw = self.model.combine(raw, term);
             if cut.cuts(raw) {
                 return None;

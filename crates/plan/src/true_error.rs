@@ -283,6 +283,15 @@ impl TrueErrorCost {
         }
     }
 
+    /// Steps 1–3 for AUV `k`.
+    #[inline(always)]
+    fn step(&self, k: usize, parent: &TrueState, cna: [f64; 3], auv: [f64; 3]) -> TrueState {
+        let growth =
+            Growth { filter: self.filter.q_tau[k], truth: self.truth_tau, cna: self.cna_tau, shift: self.shift };
+        let link = &self.filter.link;
+        true_error_step(parent, growth, cna, auv, &self.noise(), |r| link.success(r))
+    }
+
     fn noise(&self) -> PingNoise {
         PingNoise {
             filter: self.filter.spec.range_noise,
@@ -298,12 +307,17 @@ impl CostModel for TrueErrorCost {
     /// Steps 1–4 of the module's derivation.
     #[inline(always)]
     fn update(&self, k: usize, parent: &TrueState, cna: [f64; 3], auv: [f64; 3]) -> (TrueState, f64) {
-        let growth =
-            Growth { filter: self.filter.q_tau[k], truth: self.truth_tau, cna: self.cna_tau, shift: self.shift };
-        let link = &self.filter.link;
-        let next = true_error_step(parent, growth, cna, auv, &self.noise(), |r| link.success(r));
+        let next = self.step(k, parent, cna, auv);
         let term = self.filter.moments_term(&next.truth.s, self.filter.bias_variance(cna, auv));
         (next, term)
+    }
+
+    /// β² computed once for the term and the cost-to-go.
+    #[inline(always)]
+    fn leaf_cost(&self, k: usize, parent: &TrueState, cna: [f64; 3], auv: [f64; 3]) -> f64 {
+        let (next, bias2) = (self.step(k, parent, cna, auv), self.filter.bias_variance(cna, auv));
+        let term = self.filter.moments_term(&next.truth.s, bias2);
+        self.filter.leaf_term_biased(self.truth_tau, &next.truth.s, (cna, auv), term, || bias2)
     }
 
     fn terminal_levels(&self) -> f64 {
