@@ -57,11 +57,9 @@ pub struct Setting {
     pub name: String,
     pub n: Vec<usize>,
     pub base: Scenario,
-    /// L of `planner-estimator` for N AUVs (Hudson's `planner` keeps L = 5): with the ASC (5
-    /// options per level) [`TRUE_ERROR_LOOK_AHEAD`]; with the AUV CNA, whose pitch options are
-    /// then offered at level 0 only
-    /// ([`Setting::estimator_pitch_levels`]), [`auv_cna_look_ahead`].
-    pub estimator_look_ahead: fn(usize) -> usize,
+    /// `planner-estimator`'s tree and cost for N AUVs (Hudson's `planner` keeps A = 5, L = 5):
+    /// with the ASC [`asc_estimator`], with the AUV CNA [`auv_cna_estimator`].
+    pub estimator: fn(usize) -> EstimatorCell,
     /// `planner.estimator_pitch_levels`: None with the ASC; 1 with the AUV CNA. All 15 options at
     /// every level made L = 5 about 20× slower than L = 3 (two 900 s missions: 0.6 s without the
     /// terminal cost, 13.4 s with it), so the previous evaluation ran L = 3. The pitch options do
@@ -73,35 +71,44 @@ pub struct Setting {
     /// The AUV CNA chooses its depth by the sound-speed profile (`planner.estimator_bias_profile`,
     /// `estimator_level_off`, [`DEPTH_AWARE_BIAS_PER_KM`]).
     pub depth_aware: bool,
-    /// Some for N AUVs: `planner-estimator` scores the AUVs' expected true error with this model
-    /// (`planner.estimator_truth`), the water current its filters do not model as their mean
-    /// error ([`CURRENT_TRUTH`], [`auv_cna_true_error`]).
-    pub true_error: fn(usize) -> Option<TruthSpec>,
-    /// `planner-estimator`'s A and H with one AUV ([`SINGLE_AUV_CNA`]); None: as for any N.
-    pub single_auv: Option<SingleAuv>,
 }
 
-/// `planner-estimator`'s heading options and levels of cost-to-go for a one-AUV cell.
+/// `planner-estimator`'s tree and cost in one cell: A heading options, L levels, H levels of
+/// cost-to-go (None: [`ESTIMATOR_TERMINAL_LEVELS`], or [`SPREAD_TERMINAL_LEVELS`] from
+/// [`SPREAD_FLEET_MIN_AUVS`] AUVs on) and the true-error model it scores (None: the filters'
+/// covariances).
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct SingleAuv {
+pub struct EstimatorCell {
     pub heading_options: usize,
-    pub terminal_levels: f64,
+    pub look_ahead: usize,
+    pub terminal_levels: Option<f64>,
+    pub truth: Option<TruthSpec>,
 }
 
-/// With the AUV CNA and one AUV, `planner-estimator` takes A = 9 headings and H = 40 levels of
-/// cost-to-go (elsewhere A = 5 and [`ESTIMATOR_TERMINAL_LEVELS`] or [`SPREAD_TERMINAL_LEVELS`]),
-/// and scores true error ([`auv_cna_true_error`]). Tuning seed, sloping scenario, N = 1 (session
-/// 31), planner-estimator minus zigzag, m; 600 runs, the covariance cost: A = 5, H = 10 +0.03
-/// [−0.00, 0.06]; A = 7 with H = 20 −0.03 [−0.07, 0.00], H = 40 −0.06 [−0.10, −0.02], H = 60
-/// −0.06; with it trace sum −0.05, L = 4 −0.06, the CNA's variance per ping −0.04, reach p_u 0.79
-/// −0.06, no level-0 penalty −0.07. The true-error cost: A = 5, H = 10 +0.04 (session 29's "no
-/// gain"); A = 7, H = 40 −0.08 [−0.12, −0.05], with H = 20 −0.09, H = 60 −0.07; A = 9, H = 40
-/// −0.12 [−0.15, −0.08] (with no level-0 penalty −0.13, with H = 20 −0.11); A = 11 −0.11. 200
-/// runs, the covariance cost: A = 7 alone −0.01, A = 9 −0.02, A = 11 −0.03; H = 40 alone +0.02;
-/// distance limits from 200–400 m +0.12 to +0.24. Held out (runs 600–1199 of the tuning seed,
-/// from the 1200-run and 600-run means): A = 9, H = 40 with the true-error cost −0.10, against
-/// +0.07 for A = 5, H = 10 with the covariance cost. Hudson's `planner` keeps A = 5.
-pub const SINGLE_AUV_CNA: SingleAuv = SingleAuv { heading_options: 9, terminal_levels: 40.0 };
+/// The AUV CNA's fine tree: A = 9 headings, L = 3, H = 40 levels of cost-to-go (from
+/// [`SPREAD_FLEET_MIN_AUVS`] AUVs on the spread fleets' [`SPREAD_TERMINAL_LEVELS`]), scoring true
+/// error ([`AUV_CNA_TRUTH`]); [`auv_cna_estimator`] says for which N.
+///
+/// Session 31, N = 1 (tuning seed, sloping scenario, planner-estimator minus zigzag, m; 600 runs,
+/// the covariance cost): A = 5, H = 10 +0.03 [−0.00, 0.06]; A = 7 with H = 20 −0.03 [−0.07,
+/// 0.00], H = 40 −0.06 [−0.10, −0.02], H = 60 −0.06; with it trace sum −0.05, L = 4 −0.06, the
+/// CNA's variance per ping −0.04, reach p_u 0.79 −0.06, no level-0 penalty −0.07. The true-error
+/// cost: A = 5, H = 10 +0.04 (session 29's "no gain"); A = 7, H = 40 −0.08 [−0.12, −0.05], with
+/// H = 20 −0.09, H = 60 −0.07; A = 9, H = 40 −0.12 [−0.15, −0.08] (with no level-0 penalty −0.13,
+/// with H = 20 −0.11); A = 11 −0.11. 200 runs, the covariance cost: A = 7 alone −0.01, A = 9
+/// −0.02, A = 11 −0.03; H = 40 alone +0.02; distance limits from 200–400 m +0.12 to +0.24. Held
+/// out (runs 600–1199 of the tuning seed, from the 1200-run and 600-run means): A = 9, H = 40
+/// with the true-error cost −0.10, against +0.07 for A = 5, H = 10 with the covariance cost.
+///
+/// Session 32, the same tree at larger N (300 runs, planner-estimator minus centroid-standoff,
+/// the tree before → this one): N = 3 (A = 5, L = 5, covariance cost) −0.10 [−0.15, −0.05] →
+/// −0.14 [−0.17, −0.10] (H = 10 −0.15), zigzag −0.12 → −0.16, at three quarters of the time;
+/// N = 5 (A = 5, L = 5, true error) −0.10 [−0.14, −0.07] → −0.14 [−0.17, −0.11], trail −0.23 →
+/// −0.26, at 0.43× the time. Not at N = 2: −0.10 [−0.15, −0.04] → −0.05 [−0.08, −0.01] (100
+/// runs: H = 10 −0.00, A = 7 −0.04, A = 9 with the covariance cost +0.14, L = 4 at 7× the time
+/// −0.05 over 300); not at N = 8: trail −0.02 → +0.10 (covariance cost) or +0.16 (true error).
+pub const FINE_AUV_CNA: EstimatorCell =
+    EstimatorCell { heading_options: 9, look_ahead: 3, terminal_levels: Some(40.0), truth: Some(AUV_CNA_TRUTH) };
 
 /// The true-error model of `planner-estimator` on the mission with a water current (the ASC
 /// grid; invented, issue 10 session 29, no thesis values): the AUVs' true dead-reckoning drift
@@ -148,7 +155,7 @@ pub const SPREAD_TERMINAL_LEVELS: f64 = 20.0;
 /// k_b of `planner-estimator` with the AUV CNA, on top of the profile's own scale error
 /// (`planner.estimator_bias_profile`), which the CNA levels off at the depth it picks
 /// (`estimator_level_off`). Chosen on the tuning seed (sloping scenario, 20 runs, planner-estimator
-/// in m; L as [`auv_cna_look_ahead`]): k_b 6 without the profile and with the thesis's pitch
+/// in m; L as [`auv_cna_estimator`] then gave): k_b 6 without the profile and with the thesis's pitch
 /// (today's) N = 1 / 2 / 3 / 5 / 8: 3.60 / 3.80 / 4.10 / 4.98 / 6.98; the profile alone (its
 /// ±45° pitch steps still break the 30° limit, so the CNA never leaves 10 m): N = 3 4.16, N = 5
 /// 4.90; levelling off with k_b 6 and no profile (the CNA dives towards deep AUVs, into slower
@@ -166,8 +173,28 @@ pub const DEPTH_AWARE_BIAS_PER_KM: f64 = 6.0;
 /// at every N gave 3.83 m at N = 1 against 3.79 m before, and lost its win over Hudson's planner).
 pub const DEPTH_AWARE_MIN_AUVS: usize = 2;
 
-/// L of `planner-estimator` with the AUV CNA (pitch options at level 0 only) for N AUVs: 3 for
-/// one AUV, 5 for 2 to 5, 4 from 6 on. Tuning seed, sloping scenario, 20 runs, L = 3 / L = 5: N = 1 3.60 / 3.81 m,
+/// The true-error model of `planner-estimator` with the AUV CNA (invented, issue 10 session 30,
+/// no thesis values): the AUVs' true drift 0.01 m²/s, the channel's ranges σ 1.8 m (Gill's
+/// outliers), and the CNA's own navigation diffusion, 0.01 m²/s per axis (the scenario's
+/// `cna.auv.nav_diffusion`). Scored from 1 to 5 AUVs but 2 ([`auv_cna_estimator`]).
+pub const AUV_CNA_TRUTH: TruthSpec =
+    TruthSpec { drift_m2_s: 0.01, range_noise: RangeNoise { sigma_m: 1.8, per_km_m: 0.0 }, cna_diffusion_m2_s: 0.01 };
+
+/// `planner-estimator` with the ASC: A = 5, [`TRUE_ERROR_LOOK_AHEAD`], [`CURRENT_TRUTH`].
+pub fn asc_estimator(_n: usize) -> EstimatorCell {
+    EstimatorCell {
+        heading_options: 5,
+        look_ahead: TRUE_ERROR_LOOK_AHEAD,
+        terminal_levels: None,
+        truth: Some(CURRENT_TRUTH),
+    }
+}
+
+/// `planner-estimator` with the AUV CNA (pitch options at level 0 only) for N AUVs: the fine
+/// tree [`FINE_AUV_CNA`] from 1 to 5 AUVs but 2 (N = 4 not measured); A = 5 and the filters'
+/// covariances at N = 2 (L = 5) and from 6 AUVs on (L = 4).
+///
+/// L before session 32 (A = 5): 3 for one AUV, 5 for 2 to 5, 4 from 6 on. Tuning seed, sloping scenario, 20 runs, L = 3 / L = 5: N = 1 3.60 / 3.81 m,
 /// N = 2 3.80 / 3.77 m, N = 3 4.37 / 4.10 m, N = 5 5.28 / 4.98 m, N = 8 7.03 / 6.98 m (L = 6:
 /// 6.91 m, twice the time). From [`SPREAD_FLEET_MIN_AUVS`] on, 4: once the CNA chooses its depth
 /// ([`DEPTH_AWARE_BIAS_PER_KM`]) every pitch option at level 0 keeps a full subtree, and L = 5
@@ -179,64 +206,49 @@ pub const DEPTH_AWARE_MIN_AUVS: usize = 2;
 /// 3.70, L = 4 and 5 3.74. So 5 from 2 AUVs on. N = 5 L = 4 4.78 m (ties centroid-standoff −0.08
 /// and trail −0.08), L = 5 4.65 m (−0.21 and −0.21, both won): 5 at N = 5 too. N = 8 L = 4 6.12,
 /// L = 5 6.02 m (trail +0.07, −0.03: a tie either way, at twice the time): 4 from 6 AUVs on.
-pub fn auv_cna_look_ahead(n: usize) -> usize {
-    if n < 2 {
-        3
-    } else if n <= 5 {
-        5
-    } else {
-        4
-    }
-}
-
-/// The true-error model of `planner-estimator` with the AUV CNA (invented, issue 10 session 30,
-/// no thesis values): the AUVs' true drift 0.01 m²/s, the channel's ranges σ 1.8 m (Gill's
-/// outliers), and the CNA's own navigation diffusion, 0.01 m²/s per axis (the scenario's
-/// `cna.auv.nav_diffusion`). Used for 1 and 5 AUVs ([`auv_cna_true_error`]).
-pub const AUV_CNA_TRUTH: TruthSpec =
-    TruthSpec { drift_m2_s: 0.01, range_noise: RangeNoise { sigma_m: 1.8, per_km_m: 0.0 }, cna_diffusion_m2_s: 0.01 };
-
-/// The AUV CNA's `planner-estimator` scores true error ([`AUV_CNA_TRUTH`]) for one AUV and for
-/// spread fleets up to 5 AUVs (the evaluation's N = 1 and 5). Chosen on the tuning seed (session 30, sloping scenario
-/// with the CNA 2 m down at least, 100 runs, covariance cost → true-error cost, m): N = 5 4.49 →
+/// True error before session 32, chosen on the tuning seed (session 30, sloping scenario with the CNA 2 m down at least, 100 runs, covariance cost → true-error cost, m): N = 5 4.49 →
 /// 4.32 (centroid-standoff +0.05 → −0.12, its one cell not won, then won; every cell won), at 1.9×
 /// the search's CPU (the cost's lower bound, then none, cuts little); N = 8 6.18 m with it (trail +0.11, lost; the
 /// covariance cost ties trail); N = 2 3.51 → 3.60 (centroid-standoff −0.05 → +0.03); N = 3 3.79 →
 /// 3.74 with every cell won either way, not worth its CPU: with N = 3 too the full comparison took
 /// 5 min 8 s (614 s CPU, against 490 s without either). Session 29: at N = 1 it gained nothing
 /// (−0.03 to +0.12 over drift, range σ and CNA diffusion) with A = 5 and H = 10; session 31: with
-/// A = 9 and H = 40 it does ([`SINGLE_AUV_CNA`]), so it scores true error with one AUV too.
-pub fn auv_cna_true_error(n: usize) -> Option<TruthSpec> {
-    (n == 1 || (SPREAD_FLEET_MIN_AUVS..=5).contains(&n)).then_some(AUV_CNA_TRUTH)
+/// A = 9 and H = 40 it does ([`FINE_AUV_CNA`]), so it scores true error with one AUV too.
+pub fn auv_cna_estimator(n: usize) -> EstimatorCell {
+    let coarse = |look_ahead| EstimatorCell { heading_options: 5, look_ahead, terminal_levels: None, truth: None };
+    match n {
+        2 => coarse(5),
+        _ if n <= 5 => EstimatorCell {
+            terminal_levels: FINE_AUV_CNA.terminal_levels.filter(|_| n < SPREAD_FLEET_MIN_AUVS),
+            ..FINE_AUV_CNA
+        },
+        _ => coarse(4),
+    }
 }
 
 impl Setting {
-    /// A scenario with an ASC CNA: L = 5, every option at every level.
+    /// A scenario with an ASC CNA: [`asc_estimator`], every option at every level.
     pub fn asc(name: &'static str, n: Vec<usize>, base: Scenario) -> Self {
         Setting {
             name: name.into(),
             n,
             base,
-            estimator_look_ahead: |_| TRUE_ERROR_LOOK_AHEAD,
+            estimator: asc_estimator,
             estimator_pitch_levels: None,
             depth_aware: false,
-            true_error: |_| Some(CURRENT_TRUTH),
-            single_auv: None,
         }
     }
 
-    /// A scenario with an AUV CNA: [`auv_cna_look_ahead`], the pitch options at level 0 only, the
+    /// A scenario with an AUV CNA: [`auv_cna_estimator`], the pitch options at level 0 only, the
     /// depth chosen by the sound-speed profile.
     pub fn auv_cna(name: &'static str, n: Vec<usize>, base: Scenario) -> Self {
         Setting {
             name: name.into(),
             n,
             base,
-            estimator_look_ahead: auv_cna_look_ahead,
+            estimator: auv_cna_estimator,
             estimator_pitch_levels: Some(1),
             depth_aware: true,
-            true_error: auv_cna_true_error,
-            single_auv: Some(SINGLE_AUV_CNA),
         }
     }
 
@@ -246,7 +258,9 @@ impl Setting {
         sc.seed = seed;
         sc.planner.heading_options = 5;
         sc.planner.look_ahead = 5;
-        sc.planner.estimator_look_ahead = Some((self.estimator_look_ahead)(n));
+        let estimator = (self.estimator)(n);
+        sc.planner.estimator_heading_options = Some(estimator.heading_options);
+        sc.planner.estimator_look_ahead = Some(estimator.look_ahead);
         sc.planner.estimator_pitch_levels = self.estimator_pitch_levels;
         sc.planner.estimator_aggregate = ESTIMATOR_AGGREGATE;
         sc.planner.estimator_bias_per_km = ESTIMATOR_BIAS_PER_KM;
@@ -259,18 +273,17 @@ impl Setting {
         if depth_aware {
             sc.planner.estimator_bias_per_km = DEPTH_AWARE_BIAS_PER_KM;
         }
-        if let Some(truth) = (self.true_error)(n) {
+        if let Some(truth) = estimator.truth {
             sc.planner.estimator_truth = Some(truth);
             sc.planner.estimator_unmodelled_current = [sc.fleet.current.0, sc.fleet.current.1];
-        }
-        if let (1, Some(single)) = (n, self.single_auv) {
-            sc.planner.estimator_heading_options = Some(single.heading_options);
-            sc.planner.estimator_terminal_levels = single.terminal_levels;
         }
         if n >= SPREAD_FLEET_MIN_AUVS {
             sc.planner.estimator_penalty_case = Some(PenaltyCase::C3.id().to_string());
             sc.planner.estimator_reach_success = REACH_SUCCESS;
             sc.planner.estimator_terminal_levels = SPREAD_TERMINAL_LEVELS;
+        }
+        if let Some(h) = estimator.terminal_levels {
+            sc.planner.estimator_terminal_levels = h;
         }
         // Hudson's schedule needs a slot of air time + travel + guard (4.67 s at rate 0) per
         // vehicle: 30 s holds up to 5 AUVs, 8 AUVs need 9 slots, 44 s (below 45 s, where the 4°/s
@@ -358,23 +371,24 @@ pub fn evaluate(
     }
     let mut table = format!(
         "True mean navigation error of the survey AUVs (m), {runs} runs per policy and cell, base seed {seed} \
-         (settings chosen on base seed {TUNING_SEED}); planners A=5, L=5; planner-estimator: L={TRUE_ERROR_LOOK_AHEAD} with the ASC (with the AUV \
-         CNA: every policy cruising at the depth the sound-speed profile favours for the fleet, its pitch options at level 0 only, L=3 with one AUV (A={}, {} levels of cost-to-go) and 4 from 6 on, from 2 AUVs on its depth chosen by the profile with the \
+         (settings chosen on base seed {TUNING_SEED}); planners A=5, L=5; planner-estimator: its tree and cost per \
+         cell below (with the AUV CNA: every policy cruising at the depth the sound-speed profile favours for the \
+         fleet, its pitch options at level 0 only, from 2 AUVs on its depth chosen by the profile with the \
          range bias the profile gives plus {DEPTH_AWARE_BIAS_PER_KM} m/km, levelling off at each step's depth), \
-         aggregate sigma_sum, range bias {ESTIMATOR_BIAS_PER_KM} m/km, {ESTIMATOR_TERMINAL_LEVELS} levels of cost-to-go; from \
-         {SPREAD_FLEET_MIN_AUVS} AUVs on no level-0 distance penalty, the reach cost-to-go (p_u {REACH_SUCCESS}) and \
-         {SPREAD_TERMINAL_LEVELS} levels. With the ASC in a current its filters do not model, planner-estimator \
-         scores the AUVs' expected true error, the current (its ADCP) as their mean error (drift {} m²/s, ranges \
-         σ {} m); so does it with the AUV CNA and 1 or 5 AUVs (drift {} m²/s, the CNA's own diffusion {} m²/s).\n\
+         aggregate sigma_sum, range bias {ESTIMATOR_BIAS_PER_KM} m/km; from \
+         {SPREAD_FLEET_MIN_AUVS} AUVs on no level-0 distance penalty and the reach cost-to-go (p_u {REACH_SUCCESS}). \
+         The true-error cost scores the AUVs' expected true error: with the ASC in a current its filters do not \
+         model, the current (its ADCP) as their mean error (drift {} m²/s, ranges σ {} m); with the AUV CNA drift \
+         {} m²/s and the CNA's own diffusion {} m²/s.\n\
          Every difference is planner-estimator minus the baseline, paired by run; a cell is won when its 95 % CI \
-         lies below zero.\n\n",
-        SINGLE_AUV_CNA.heading_options,
-        SINGLE_AUV_CNA.terminal_levels,
+         lies below zero.\n",
         CURRENT_TRUTH.drift_m2_s,
         CURRENT_TRUTH.range_noise.sigma_m,
         AUV_CNA_TRUTH.drift_m2_s,
         AUV_CNA_TRUTH.cna_diffusion_m2_s
     );
+    table += &estimator_trees(settings, seed, duration);
+    table.push('\n');
     let (mut checks, mut cells, mut data) = (Vec::new(), Vec::new(), Vec::new());
     // Every cell's runs go through one pool (no cell waits for the previous cell's slowest run).
     let names: Vec<&str> = settings.iter().flat_map(|s| s.n.iter().map(move |_| s.name.as_str())).collect();
@@ -397,6 +411,27 @@ pub fn evaluate(
     }
     let data = serde_json::json!({ "comparisons": data, "cells": cells });
     Ok(ReproReport { plots, ..ReproReport::new(ID.into(), table, checks, data) })
+}
+
+/// planner-estimator's tree and cost in every cell, as its scenario sets them: A headings, L
+/// levels, H levels of cost-to-go, and whether it scores true error or the filters' covariances.
+fn estimator_trees(settings: &[Setting], seed: u64, duration: Option<f64>) -> String {
+    let mut out =
+        String::from("planner-estimator's tree per cell (A headings, L levels, H levels of cost-to-go, cost):\n");
+    for s in settings {
+        let cells: Vec<String> =
+            s.n.iter()
+                .map(|&n| {
+                    let p = s.scenario(n, seed, duration).planner;
+                    let a = p.estimator_heading_options.unwrap_or(p.heading_options);
+                    let l = p.estimator_look_ahead.unwrap_or(p.look_ahead);
+                    let cost = if p.estimator_truth.is_some() { "true error" } else { "covariance" };
+                    format!("N={n}: A={a} L={l} H={} {cost}", p.estimator_terminal_levels)
+                })
+                .collect();
+        let _ = writeln!(out, "  {}: {}", s.name, cells.join(" | "));
+    }
+    out
 }
 
 /// The checks of one comparison: one per baseline (won or not, with the cause), filter health.
@@ -685,7 +720,7 @@ mod tests {
     fn spread_fleets_trade_the_level_0_penalty_for_the_reach_cost_to_go() {
         let (settings, _, _) = setup(&ReproOptions { size: Size::Full, seed: 1 }).unwrap();
         for setting in &settings {
-            let (small, spread) = (setting.scenario(3, 1, None).planner, setting.scenario(5, 1, None).planner);
+            let (small, spread) = (setting.scenario(2, 1, None).planner, setting.scenario(5, 1, None).planner);
             assert_eq!((small.estimator_penalty_case, small.estimator_reach_success), (None, 0.0));
             assert_eq!(small.estimator_terminal_levels, ESTIMATOR_TERMINAL_LEVELS);
             assert_eq!(spread.estimator_penalty_case.as_deref(), Some(PenaltyCase::C3.id()));
@@ -757,8 +792,8 @@ mod tests {
     }
 
     /// The second scenario is an AUV-CNA one: at every N every policy's CNA works submerged (at the
-    /// surface it would have its GPS there and be a surface craft in all but speed). At N = 1 and 5
-    /// planner-estimator scores true error with the CNA's own diffusion.
+    /// surface it would have its GPS there and be a surface craft in all but speed). At N = 1, 3 and
+    /// 5 planner-estimator scores true error with the CNA's own diffusion.
     #[test]
     fn the_auv_cna_works_below_the_surface_at_every_fleet_size() {
         let (settings, _, _) = setup(&ReproOptions { size: Size::Full, seed: 1 }).unwrap();
@@ -772,28 +807,42 @@ mod tests {
                 CnaKind::Asc {} => panic!("N = {n}: an ASC"),
             }
             let truth = sc.planner.estimator_truth;
-            assert_eq!(truth, (n == 1 || n == 5).then_some(AUV_CNA_TRUTH), "N = {n}");
+            assert_eq!(truth, [1, 3, 5].contains(&n).then_some(AUV_CNA_TRUTH), "N = {n}");
             let diffusion = sc.cna.auv.as_ref().unwrap().nav_diffusion;
             assert_eq!(AUV_CNA_TRUTH.cna_diffusion_m2_s, diffusion, "the scenario's own diffusion");
         }
     }
 
-    /// A = 9 and H = 40 for planner-estimator with the AUV CNA and one AUV only: Hudson's planner,
-    /// the ASC's cells and the larger fleets keep A = 5 and their H.
+    /// The fine tree (A = 9, L = 3, H = 40 below the spread fleets' H) for planner-estimator with
+    /// the AUV CNA and 1, 3 or 5 AUVs only: Hudson's planner, the ASC's cells and the AUV CNA's
+    /// N = 2 and 8 keep A = 5, their L and H; the report's header says which cell has which.
     #[test]
-    fn only_the_single_auv_cna_cell_plans_with_nine_headings_and_forty_levels() {
+    fn the_auv_cna_plans_one_three_and_five_auvs_with_the_fine_tree() {
         let (settings, _, _) = setup(&ReproOptions { size: Size::Full, seed: 1 }).unwrap();
         for setting in &settings {
             for &n in &setting.n {
-                let sc = setting.scenario(n, 1, None);
-                let single = setting.name == "sloping-auv-cna" && n == 1;
-                let want = single.then_some(SINGLE_AUV_CNA.heading_options);
-                assert_eq!(sc.planner.estimator_heading_options, want, "{} N = {n}", setting.name);
-                assert_eq!(sc.planner.heading_options, 5, "Hudson's planner, {} N = {n}", setting.name);
-                let h = sc.planner.estimator_terminal_levels;
-                assert_eq!(h == SINGLE_AUV_CNA.terminal_levels, single, "{} N = {n}: H {h}", setting.name);
+                let p = setting.scenario(n, 1, None).planner;
+                let fine = setting.name == "sloping-auv-cna" && [1, 3, 5].contains(&n);
+                let a = if fine { FINE_AUV_CNA.heading_options } else { 5 };
+                assert_eq!(p.estimator_heading_options, Some(a), "{} N = {n}", setting.name);
+                assert_eq!(p.heading_options, 5, "Hudson's planner, {} N = {n}", setting.name);
+                assert_eq!(p.look_ahead, 5, "Hudson's planner, {} N = {n}", setting.name);
+                assert_eq!(p.estimator_look_ahead == Some(FINE_AUV_CNA.look_ahead), fine, "{} N = {n}", setting.name);
+                let h = p.estimator_terminal_levels;
+                let want_h = match (fine, n >= SPREAD_FLEET_MIN_AUVS) {
+                    (_, true) => SPREAD_TERMINAL_LEVELS,
+                    (true, false) => FINE_AUV_CNA.terminal_levels.unwrap(),
+                    (false, false) => ESTIMATOR_TERMINAL_LEVELS,
+                };
+                assert_eq!(h, want_h, "{} N = {n}", setting.name);
             }
         }
+        let header = estimator_trees(&settings, 1, None);
+        assert!(
+            header.contains("sloping-auv-cna: N=1: A=9 L=3 H=40 true error | N=2: A=5 L=5 H=10 covariance"),
+            "{header}"
+        );
+        assert!(header.contains("N=5: A=9 L=3 H=20 true error | N=8: A=5 L=4 H=20 covariance"), "{header}");
     }
 
     #[test]
