@@ -14,7 +14,7 @@ use coopnav_core::limits::{
 };
 use coopnav_nav::fieldlog::LogRow;
 use coopnav_nav::post::{AuvModel, CompactHistory, PostConfig};
-use coopnav_plan::{CnaKind, MotionConfig};
+use coopnav_plan::CnaKind;
 
 /// Bytes of one stored track sample (t, x, y, z).
 const TRACK_SAMPLE_BYTES: f64 = 32.0;
@@ -27,30 +27,51 @@ fn lawnmower_duration(lanes: usize, lane_length: f64, spacing: f64, speed: f64) 
 }
 
 /// The planner's tree per decision and its work over `decisions` with `n_auvs` survey AUVs.
-fn planner(prefix: &str, options: f64, look_ahead: usize, decisions: f64, n_auvs: usize) -> [Estimate; 2] {
-    let leaves = options.powf(look_ahead as f64);
-    [
-        Estimate::new(
-            "planner leaves per decision",
-            format!("{prefix}heading_options (x pitch_options) ^ {prefix}look_ahead"),
-            leaves,
-            MAX_PLANNER_LEAVES,
-        ),
-        Estimate::new(
-            "planner AUV-node updates",
-            format!("decisions x leaves x survey AUVs ({prefix}look_ahead, tau, mission length, AUVs)"),
-            decisions * leaves * n_auvs as f64,
-            MAX_PLANNER_UPDATES,
-        ),
-    ]
+/// One planner's tree: its field prefix, A heading options, B pitch options, L and the levels
+/// that offer the pitch options (None: every level; deeper ones hold the pitch, A options).
+struct TreeSize<'a> {
+    prefix: &'a str,
+    headings: usize,
+    pitches: usize,
+    look_ahead: usize,
+    pitch_levels: Option<usize>,
 }
 
-fn motion_options(m: &MotionConfig) -> f64 {
-    let pitch = match m.cna {
-        CnaKind::Auv { pitch_options, .. } => pitch_options,
+impl TreeSize<'_> {
+    fn leaves(&self) -> f64 {
+        let pitched = self.pitch_levels.map_or(self.look_ahead, |p| p.min(self.look_ahead));
+        let (a, b) = (self.headings as f64, self.pitches as f64);
+        (a * b).powf(pitched as f64) * a.powf((self.look_ahead - pitched) as f64)
+    }
+
+    fn estimates(&self, decisions: f64, n_auvs: usize) -> [Estimate; 2] {
+        let (prefix, leaves) = (self.prefix, self.leaves());
+        let pitch = match self.pitch_levels {
+            Some(_) => format!(" (x pitch_options for {prefix}pitch_levels levels)"),
+            None => " (x pitch_options)".to_string(),
+        };
+        [
+            Estimate::new(
+                "planner leaves per decision",
+                format!("{prefix}heading_options{pitch} ^ {prefix}look_ahead"),
+                leaves,
+                MAX_PLANNER_LEAVES,
+            ),
+            Estimate::new(
+                "planner AUV-node updates",
+                format!("decisions x leaves x survey AUVs ({prefix}look_ahead, tau, mission length, AUVs)"),
+                decisions * leaves * n_auvs as f64,
+                MAX_PLANNER_UPDATES,
+            ),
+        ]
+    }
+}
+
+fn pitch_options(cna: &CnaKind) -> usize {
+    match cna {
+        CnaKind::Auv { pitch_options, .. } => *pitch_options,
         CnaKind::Asc {} => 1,
-    };
-    m.heading_options as f64 * pitch as f64
+    }
 }
 
 /// A pre-deployment plan: track samples per lawnmower, decisions, tree size, memory.
@@ -77,7 +98,14 @@ pub fn predeploy(sc: &predeploy::Scenario) -> Vec<Estimate> {
     let motion = &sc.planner.motion;
     let decisions = span / motion.tau;
     out.push(Estimate::new("planner decisions", "mission length / planner.motion.tau", decisions, MAX_POINTS));
-    out.extend(planner("planner.", motion_options(motion), sc.planner.look_ahead, decisions, sc.auv.len()));
+    let tree = TreeSize {
+        prefix: "planner.",
+        headings: motion.heading_options,
+        pitches: pitch_options(&motion.cna),
+        look_ahead: sc.planner.look_ahead,
+        pitch_levels: None,
+    };
+    out.extend(tree.estimates(decisions, sc.auv.len()));
     let bytes = samples * TRACK_SAMPLE_BYTES + decisions * sc.auv.len() as f64 * RECORD_ROW_BYTES;
     out.push(Estimate::new("memory (bytes)", "number of [[auv]], track lengths, planner.motion.tau", bytes, MAX_BYTES));
     out
@@ -88,17 +116,25 @@ pub fn closed_loop(sc: &closed_loop::Scenario, runs: usize, policies: usize) -> 
     let f = &sc.fleet;
     let vehicles = (f.n_auvs + 1) as f64;
     let runs_total = runs as f64 * policies as f64;
-    let pitch = sc.cna.auv.as_ref().map_or(1, |a| a.pitch_options) as f64;
+    let pitches = sc.cna.auv.as_ref().map_or(1, |a| a.pitch_options);
     let p = &sc.planner;
-    // The larger of the two planners' trees: Hudson's and `planner-estimator`'s own A and L.
-    let hudson = ("planner.", p.heading_options, p.look_ahead);
-    let estimator = (
-        "planner.estimator_",
-        p.estimator_heading_options.unwrap_or(p.heading_options),
-        p.estimator_look_ahead.unwrap_or(p.look_ahead),
-    );
-    let leaves = |(_, a, l): (&str, usize, usize)| (a as f64 * pitch).powf(l as f64);
-    let (prefix, heading_options, look_ahead) = if leaves(estimator) > leaves(hudson) { estimator } else { hudson };
+    // The larger of the two planners' trees: Hudson's and `planner-estimator`'s own A, L and
+    // pitch levels.
+    let hudson = TreeSize {
+        prefix: "planner.",
+        headings: p.heading_options,
+        pitches,
+        look_ahead: p.look_ahead,
+        pitch_levels: None,
+    };
+    let estimator = TreeSize {
+        prefix: "planner.estimator_",
+        headings: p.estimator_heading_options.unwrap_or(p.heading_options),
+        pitches,
+        look_ahead: p.estimator_look_ahead.unwrap_or(p.look_ahead),
+        pitch_levels: p.estimator_pitch_levels,
+    };
+    let tree = if estimator.leaves() > hudson.leaves() { estimator } else { hudson };
     let decisions = sc.duration_s / sc.comms.tau;
     let mut out = vec![
         Estimate::new(
@@ -120,8 +156,7 @@ pub fn closed_loop(sc: &closed_loop::Scenario, runs: usize, policies: usize) -> 
             MAX_BYTES,
         ),
     ];
-    let options = heading_options as f64 * pitch;
-    out.extend(planner(prefix, options, look_ahead, decisions * runs_total, f.n_auvs));
+    out.extend(tree.estimates(decisions * runs_total, f.n_auvs));
     out
 }
 
@@ -232,6 +267,28 @@ mod tests {
         assert_eq!((steps, postprocess(&ten_hz, &cfg)[0].value), (2001, 2001.0));
         let e = check([postprocess_log("log.csv", 1_000_000_000)], false).unwrap_err().to_string();
         assert!(e.contains("the size of log.csv"), "{e}");
+    }
+
+    /// An AUV CNA whose planner-estimator offers its pitch options at the first level only: the
+    /// leaves counted are that tree's, A·B at level 1 and A below, not (A·B)^L.
+    #[test]
+    fn the_estimators_pitch_levels_shrink_its_tree() {
+        let file = include_str!("../../../scenarios/sloping-auv-cna.toml");
+        let mut sc = closed_loop::Scenario::parse(file, Path::new("sloping-auv-cna.toml")).unwrap();
+        sc.planner.estimator_heading_options = Some(9);
+        sc.planner.estimator_look_ahead = Some(6);
+        sc.planner.estimator_pitch_levels = Some(1);
+        let leaves = |sc: &closed_loop::Scenario| {
+            closed_loop(sc, 1, 1).into_iter().find(|e| e.what == "planner leaves per decision").unwrap()
+        };
+        // (9·3)·9⁵ against Hudson's 15⁵ (A = 5, L = 5, three pitch options).
+        let e = leaves(&sc);
+        assert_eq!(e.value, 27.0 * 9f64.powi(5), "{}", e.fields);
+        assert!(e.fields.contains("planner.estimator_pitch_levels"), "{}", e.fields);
+        sc.planner.estimator_pitch_levels = None;
+        assert_eq!(leaves(&sc).value, 27f64.powi(6));
+        sc.planner.estimator_heading_options = Some(3);
+        assert_eq!((leaves(&sc).value, leaves(&sc).fields.starts_with("planner.heading")), (15f64.powi(5), true));
     }
 
     #[test]
