@@ -3,6 +3,7 @@
 //! channel draws), so the planner's advantage over a baseline is judged run by run (paired 95 %
 //! CI). Runs go through rayon and are merged in index order: bit-identical on any thread count.
 
+use super::metrics::LinkStats;
 use super::policies::{PolicyError, PolicySpec};
 use super::scenario::Scenario;
 use crate::engine::{run, Faults, Observer, RunResult};
@@ -55,6 +56,10 @@ pub struct PolicySummary {
     /// Per AUV, the runs in which at least one of its status messages reached the CNA (0: no
     /// policy that plans on reports ever looked for it, by the thesis's start rule A14).
     pub auv_heard_runs: Vec<usize>,
+    /// Per AUV, over all runs: its status messages sent, and those the channel decoded but a
+    /// collision or half-duplex lost (why an AUV is never heard, when it is that).
+    pub auv_status_sent: Vec<u64>,
+    pub auv_status_lost_in_air: Vec<u64>,
 }
 
 /// The reference policy (the first one compared, normally a planner) minus a baseline, paired
@@ -241,6 +246,9 @@ fn summarise(name: &str, rs: &[RunResult]) -> PolicySummary {
     let n_auvs = rs.first().map_or(0, |r| r.auvs.len());
     let auv_runs = (0..n_auvs).map(|k| rs.iter().map(|r| r.auvs[k].error.mean).collect()).collect();
     let auv_heard_runs = (0..n_auvs).map(|k| rs.iter().filter(|r| r.auvs[k].uplink.received > 0).count()).collect();
+    let per_auv_total = |f: &dyn Fn(&LinkStats) -> u64| -> Vec<u64> {
+        (0..n_auvs).map(|k| rs.iter().map(|r| f(&r.auvs[k].uplink)).sum()).collect()
+    };
     PolicySummary {
         policy: name.to_string(),
         mean_error: Ci::of(&runs),
@@ -258,6 +266,8 @@ fn summarise(name: &str, rs: &[RunResult]) -> PolicySummary {
         runs,
         auv_runs,
         auv_heard_runs,
+        auv_status_sent: per_auv_total(&|l| l.sent),
+        auv_status_lost_in_air: per_auv_total(&|l| l.lost_in_air),
     }
 }
 

@@ -49,6 +49,10 @@ pub struct LinkStats {
     pub received: u64,
     pub sent_by_rate: [u64; 6],
     pub received_by_rate: [u64; 6],
+    /// Packets the channel decoded that were lost to a collision or half-duplex (the receiver
+    /// transmitting during the arrival).
+    #[serde(default)]
+    pub lost_in_air: u64,
 }
 
 impl LinkStats {
@@ -60,6 +64,15 @@ impl LinkStats {
         if received {
             self.received += 1;
             self.received_by_rate[r] += 1;
+        }
+    }
+
+    /// Counts one packet sent at `rate` that the channel `decoded` and that `survived` the air
+    /// (no collision, no half-duplex); `received`: it was also read.
+    pub fn record_arrival(&mut self, rate: u8, (decoded, survived): (bool, bool), received: bool) {
+        self.record(rate, received);
+        if decoded && !survived {
+            self.lost_in_air += 1;
         }
     }
 

@@ -355,7 +355,7 @@ impl Engine<'_> {
             match (payload, meta.to) {
                 (Payload::Broadcast { id, rate, fix, travel_time, acked, decoded }, Owner::Auv(k)) => {
                     let received = decoded && survived;
-                    self.tallies[k].down.record(rate.index(), received);
+                    self.tallies[k].down.record_arrival(rate.index(), (decoded, survived), received);
                     obs.on_packet(&event(&meta, "down", k, decoded, survived));
                     if received {
                         if self.cna.rate.is_some() {
@@ -368,7 +368,7 @@ impl Engine<'_> {
                 (Payload::Status { rate, slot_id, bytes, decoded, heard_broadcasts, .. }, Owner::Cna) => {
                     let Owner::Auv(j) = meta.from else { continue };
                     let message = (decoded && survived).then(|| self.read_at_cna(j, &bytes, meta.t_tx)).flatten();
-                    self.tallies[j].up.record(rate.index(), message.is_some());
+                    self.tallies[j].up.record_arrival(rate.index(), (decoded, survived), message.is_some());
                     obs.on_packet(&event(&meta, "up", j, decoded, survived));
                     if let Some((report, cov)) = message {
                         if let Some(policy) = self.cna.rate.as_mut() {

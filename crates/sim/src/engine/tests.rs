@@ -77,6 +77,9 @@ fn two_statuses_in_one_slot_collide_at_the_cna() {
     for a in &r.auvs {
         assert!(a.uplink.sent >= 18 && a.uplink.received == 0, "{:?}", a.uplink);
         assert!(a.downlink.received > a.downlink.sent / 2, "{:?}", a.downlink);
+        // The channel decodes most of them; the collision loses each one it decoded.
+        assert!(a.uplink.lost_in_air > a.uplink.sent / 2, "{:?}", a.uplink);
+        assert_eq!(a.downlink.lost_in_air, 0, "{:?}", a.downlink);
     }
     assert!(trace.comms.iter().any(|e| e.direction == "up" && e.lost_to == "collision or half-duplex"));
 }
@@ -92,6 +95,7 @@ fn a_modem_transmitting_hears_no_broadcast() {
     sc.comms.schedule = Schedule::Tdma { slots: vec![slot("cna", 0.0), slot("auv0", 0.0), slot("auv1", 10.0)] };
     let (r, _) = traced(&sc, "centroid", 2);
     assert!(r.auvs[0].downlink.sent >= 19 && r.auvs[0].downlink.received == 0, "{:?}", r.auvs[0].downlink);
+    assert!(r.auvs[0].downlink.lost_in_air > 0, "half-duplex, not the channel: {:?}", r.auvs[0].downlink);
     assert!(r.auvs[1].downlink.received > 0, "{:?}", r.auvs[1].downlink);
     assert_eq!(r.auvs[0].ranges_applied, 0);
 }

@@ -576,8 +576,29 @@ fn fleet_split(planner: &PolicySummary, b: &PolicySummary) -> Option<String> {
              the reports never look for such an AUV",
             auvs(&|k, _| unheard(k))
         );
+        for k in (0..per_auv.len()).filter(|&k| unheard(k)) {
+            split += &lost_in_air(k, [planner, b]);
+        }
     }
     Some(split)
+}
+
+/// Of unheard AUV `k`'s statuses under both policies, how many the channel decoded and a
+/// collision or half-duplex lost: the schedule's slots hold the travel time of
+/// `comms.max_range_m` only, so a status sent from farther arrives while another modem sends
+/// (the CNA's own broadcast, for the slot before it).
+fn lost_in_air(k: usize, policies: [&PolicySummary; 2]) -> String {
+    let total = |f: &dyn Fn(&PolicySummary) -> Option<u64>| policies.iter().filter_map(|p| f(p)).sum::<u64>();
+    let sent = total(&|p| p.auv_status_sent.get(k).copied());
+    let lost = total(&|p| p.auv_status_lost_in_air.get(k).copied());
+    if lost == 0 {
+        return String::new();
+    }
+    format!(
+        "; of AUV {k}'s {sent} statuses, {lost} that the channel decoded were lost to a collision or half-duplex (a \
+         slot holds the travel time of comms.max_range_m only, and from farther a status arrives while another \
+         modem sends)"
+    )
 }
 
 /// The measured differences that explain a cell not won, only those that apply.
@@ -762,6 +783,8 @@ mod tests {
             healthy: true,
             nees_mean: 1.0,
             diverged: 0,
+            auv_status_sent: vec![10; auv_runs.len()],
+            auv_status_lost_in_air: vec![0; auv_runs.len()],
             runs,
             auv_runs,
             auv_heard_runs,
@@ -783,6 +806,14 @@ mod tests {
         assert!(text.contains("(planner-estimator minus trail, paired, m: -3.00 +0.00 +3.00)"), "{text}");
         assert!(text.contains("better on AUV 0 and worse on AUV 2"), "{text}");
         assert!(text.contains("no status message from AUV 2 reached the CNA"), "{text}");
+        assert!(!text.contains("lost to a collision"), "none was lost in the air: {text}");
+        // Lost in the air: the count over both policies, for the unheard AUV only.
+        let (mut p_air, mut t_air) = (planner.clone(), trail.clone());
+        p_air.auv_status_lost_in_air = vec![1, 0, 4];
+        t_air.auv_status_lost_in_air = vec![0, 0, 3];
+        let text = why(&p_air, &t_air, true);
+        assert!(text.contains("of AUV 2's 20 statuses, 7 that the channel decoded were lost to a collision"), "{text}");
+        assert!(!text.contains("AUV 0's"), "{text}");
         // Heard under one of the two: not named.
         let heard = summary("trail", trail.auv_runs.clone(), vec![3, 2, 1]);
         assert!(!why(&planner, &heard, true).contains("no status message"));
