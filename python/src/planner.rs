@@ -166,8 +166,15 @@ impl Planner {
         let inner = &mut self.inner;
         let d = py
             .detach(|| {
-                let input =
-                    PlanInput { t, cna, errors: &errors, estimates: &estimates, cna_variance, forecast: &forecast };
+                let input = PlanInput {
+                    t,
+                    cna,
+                    errors: &errors,
+                    estimates: &estimates,
+                    cna_variance,
+                    forecast: &forecast,
+                    slot_reach_m: &[],
+                };
                 inner.decide(&input)
             })
             .map_err(value_error)?;

@@ -492,6 +492,9 @@ pub(crate) struct EkfCost {
     pub bias: Option<BiasTable>,
     /// Step 1b's growth per level, m·(cτ)(cτ)ᵀ as [P_ee, P_en, P_nn], m².
     pub drift: [f64; 3],
+    /// Per AUV, the slant range beyond which no ping reaches it whatever the link (its own
+    /// transmission slot starts before the broadcast has arrived: half-duplex), m; empty: none.
+    pub slot_reach: Vec<f64>,
 }
 
 /// What step 7 needs of the CNA and its link.
@@ -522,16 +525,42 @@ impl EkfCost {
         let q_tau = estimates.iter().map(|e| e.process_noise * tau).collect();
         let [ce, cn] = spec.unmodelled_current.map(|v| v * tau);
         let drift = [ce * ce, ce * cn, cn * cn].map(|v| v * spec.drift_levels);
-        Ok(EkfCost { spec, q_tau, link, cna_variance, reach, bias: None, drift })
+        Ok(EkfCost { spec, q_tau, link, cna_variance, reach, bias: None, drift, slot_reach: Vec::new() })
+    }
+
+    /// Step 3's success for AUV `k` at slant range `r`: the link's, and none beyond the AUV's slot
+    /// reach.
+    #[inline(always)]
+    pub(crate) fn success(&self, k: usize, r: f64) -> f64 {
+        if self.slot_reach.get(k).is_some_and(|&reach| r >= reach) {
+            0.0
+        } else {
+            self.link.success(r)
+        }
+    }
+
+    /// A lower bound on [`EkfCost::success`] for AUV `k` at every range ≤ `r`.
+    #[inline(always)]
+    pub(crate) fn worst_success_up_to(&self, k: usize, r: f64) -> f64 {
+        if self.slot_reach.get(k).is_some_and(|&reach| r >= reach) {
+            0.0
+        } else {
+            self.link.worst_up_to(r)
+        }
+    }
+
+    /// r_u of step 7 for AUV `k`: the link's useful range, and at most the AUV's slot reach.
+    #[inline(always)]
+    fn useful_range(&self, k: usize) -> f64 {
+        self.slot_reach.get(k).map_or(self.reach.useful_range_m, |&reach| reach.min(self.reach.useful_range_m))
     }
 
     /// Steps 1–3 for AUV `k`: its expected covariance after one level and a ping from `cna`.
     #[inline(always)]
     fn posterior(&self, k: usize, parent: &[f64; 3], cna: [f64; 3], auv: [f64; 3]) -> [f64; 3] {
-        let link = &self.link;
         let drifted = [parent[0] + self.drift[0], parent[1] + self.drift[1], parent[2] + self.drift[2]];
         expected_posterior(&drifted, self.q_tau[k], cna, auv, &self.spec.range_noise, self.cna_variance, |r| {
-            link.success(r)
+            self.success(k, r)
         })
     }
 
@@ -539,14 +568,14 @@ impl EkfCost {
     /// axis over the H levels beyond the horizon before the CNA is within the useful range, m².
     #[inline(always)]
     fn reach_growth(&self, k: usize, range_m: f64) -> f64 {
-        self.reach_growth_of(self.q_tau[k], range_m)
+        self.reach_growth_of(k, self.q_tau[k], range_m)
     }
 
-    /// ḡ of step 7 for an AUV whose covariance grows by `q_tau` per axis and level.
+    /// ḡ of step 7 for AUV `k` when its covariance grows by `q_tau` per axis and level.
     #[inline(always)]
-    pub(crate) fn reach_growth_of(&self, q_tau: f64, range_m: f64) -> f64 {
+    pub(crate) fn reach_growth_of(&self, k: usize, q_tau: f64, range_m: f64) -> f64 {
         let h = self.spec.terminal_levels;
-        let beyond = range_m - self.reach.useful_range_m;
+        let beyond = range_m - self.useful_range(k);
         if !(beyond > 0.0 && h > 0.0) {
             return 0.0;
         }
@@ -638,27 +667,34 @@ impl EkfCost {
     /// Steps 6 and 7 for a leaf covariance `cov` growing by `q_tau` per axis and level: the
     /// leaf's term plus H levels at M + ḡ·I (ḡ = 0: (1 + H)·term exactly).
     #[inline(always)]
-    pub(crate) fn leaf_term_with(&self, q_tau: f64, cov: &[f64; 3], cna: [f64; 3], auv: [f64; 3], term: f64) -> f64 {
-        self.leaf_term_biased(q_tau, cov, (cna, auv), term, || self.bias_variance(cna, auv))
+    pub(crate) fn leaf_term_with(
+        &self,
+        (k, q_tau): (usize, f64),
+        cov: &[f64; 3],
+        cna: [f64; 3],
+        auv: [f64; 3],
+        term: f64,
+    ) -> f64 {
+        self.leaf_term_biased((k, q_tau), cov, (cna, auv), term, || self.bias_variance(cna, auv))
     }
 
     /// [`EkfCost::leaf_term_with`] given `bias2`, β² of that ping (step 4), when it is needed.
     #[inline(always)]
     pub(crate) fn leaf_term_biased(
         &self,
-        q_tau: f64,
+        (k, q_tau): (usize, f64),
         cov: &[f64; 3],
         (cna, auv): ([f64; 3], [f64; 3]),
         term: f64,
         bias2: impl FnOnce() -> f64,
     ) -> f64 {
         let h = self.spec.terminal_levels;
-        if self.reach.useful_range_m == f64::INFINITY {
+        if self.useful_range(k) == f64::INFINITY {
             return term * (1.0 + h); // no reach cost-to-go: ḡ = 0 at every range
         }
         let d = [auv[0] - cna[0], auv[1] - cna[1], auv[2] - cna[2]];
         let range2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
-        let growth = self.reach_growth_of(q_tau, range2.sqrt());
+        let growth = self.reach_growth_of(k, q_tau, range2.sqrt());
         if growth <= 0.0 {
             return term * (1.0 + h);
         }
@@ -694,7 +730,7 @@ impl CostModel for EkfCost {
     fn leaf_cost(&self, k: usize, parent: &[f64; 3], cna: [f64; 3], auv: [f64; 3]) -> f64 {
         let (posterior, bias2) = (self.posterior(k, parent, cna, auv), self.bias_variance(cna, auv));
         let term = self.moments_term(&posterior, bias2);
-        self.leaf_term_biased(self.q_tau[k], &posterior, (cna, auv), term, || bias2)
+        self.leaf_term_biased((k, self.q_tau[k]), &posterior, (cna, auv), term, || bias2)
     }
 
     /// Step 6: H levels at the leaf's term.
@@ -705,7 +741,7 @@ impl CostModel for EkfCost {
     /// Steps 6 and 7: the leaf's term plus H levels at M + ḡ·I (ḡ = 0: (1 + H)·term exactly).
     #[inline(always)]
     fn leaf_term(&self, k: usize, state: &[f64; 3], cna: [f64; 3], auv: [f64; 3], term: f64) -> f64 {
-        self.leaf_term_with(self.q_tau[k], state, cna, auv, term)
+        self.leaf_term_with((k, self.q_tau[k]), state, cna, auv, term)
     }
 
     #[inline(always)]
@@ -986,7 +1022,16 @@ mod tests {
 
     /// A perfect link, an exactly known CNA and no bias table: `spec`'s terms alone.
     fn perfect(spec: EstimatorSpec, q_tau: Vec<f64>, reach: Reach) -> EkfCost {
-        EkfCost { spec, q_tau, link: LinkTable::perfect(), cna_variance: 0.0, reach, bias: None, drift: [0.0; 3] }
+        EkfCost {
+            spec,
+            q_tau,
+            link: LinkTable::perfect(),
+            cna_variance: 0.0,
+            reach,
+            bias: None,
+            drift: [0.0; 3],
+            slot_reach: Vec::new(),
+        }
     }
 
     fn biased(aggregate: Aggregate, q_tau: Vec<f64>, bias_per_km_m: f64) -> EkfCost {
@@ -995,7 +1040,16 @@ mod tests {
 
     fn model(aggregate: Aggregate, q_tau: Vec<f64>, link: LinkTable) -> EkfCost {
         let spec = EstimatorSpec { aggregate, ..EstimatorSpec::default() };
-        EkfCost { spec, q_tau, link, cna_variance: 0.0, reach: NO_REACH, bias: None, drift: [0.0; 3] }
+        EkfCost {
+            spec,
+            q_tau,
+            link,
+            cna_variance: 0.0,
+            reach: NO_REACH,
+            bias: None,
+            drift: [0.0; 3],
+            slot_reach: Vec::new(),
+        }
     }
 
     #[test]

@@ -251,6 +251,10 @@ pub struct PlanInput<'a> {
     /// navigation variance); the estimator-aware cost adds it to each ping's range variance.
     pub cna_variance: f64,
     pub forecast: &'a dyn AuvForecast,
+    /// Per AUV (same order), the slant range beyond which no ping reaches it whatever the link,
+    /// m (its own slot starts before the broadcast has arrived); the estimator-aware cost only.
+    /// Empty: no such range.
+    pub slot_reach_m: &'a [f64],
 }
 
 /// One decision.
@@ -399,6 +403,18 @@ impl LookAheadPlanner {
         let motion = (self.cfg.motion.tau, self.cfg.motion.speed, input.cna_variance);
         let mut model = EkfCost::new(spec, input.estimates, motion, self.link.clone())?;
         model.bias = self.bias.clone();
+        let reach = input.slot_reach_m;
+        if !(reach.is_empty() || reach.len() == input.estimates.len()) {
+            return Err(PlanError::Input(format!(
+                "{} slot reaches for {} AUVs: give one per AUV, or none",
+                reach.len(),
+                input.estimates.len()
+            )));
+        }
+        if let Some((k, r)) = reach.iter().enumerate().find(|(_, r)| r.is_nan() || **r < 0.0) {
+            return Err(PlanError::Input(format!("AUV {k}: slot reach {r} m is not a range >= 0 (or infinite)")));
+        }
+        model.slot_reach = reach.to_vec();
         Ok(model)
     }
 

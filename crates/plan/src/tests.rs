@@ -27,6 +27,8 @@ struct Instance {
     /// A depth-dependent range scale error (the bias table's slope per metre of each depth and
     /// its offset), for the estimator-aware cost.
     bias: Option<(f64, f64, f64)>,
+    /// Per AUV, the slant range beyond which no ping reaches it (empty: none).
+    slot_reach: Vec<f64>,
 }
 
 /// A link whose success falls smoothly with range from a plateau: plateau / (1 + (r / mid)^4).
@@ -60,6 +62,7 @@ impl Instance {
             estimates: &self.estimates,
             cna_variance: self.cna_variance,
             forecast: &f,
+            slot_reach_m: &self.slot_reach,
         };
         p.decide_with_truth(&input, Some(&TruthInput { errors: &self.truth.0, cna_variance: self.truth.1 })).unwrap()
     }
@@ -161,7 +164,8 @@ prop_compose! {
                   pitch_levels in prop_oneof![Just(None), (1usize..4).prop_map(Some)], level_off in any::<bool>(),
                   bias in prop_oneof![Just(None), (-5e-5f64..5e-5, -5e-5f64..5e-5, -0.03f64..0.03).prop_map(Some)],
                   truth in prop_oneof![Just(None), true_error_setting().prop_map(Some)],
-                  current in prop_oneof![Just([0.0, 0.0]), prop::array::uniform2(-0.3f64..0.3)]) -> Instance {
+                  current in prop_oneof![Just([0.0, 0.0]), prop::array::uniform2(-0.3f64..0.3)],
+                  slot_reach in prop_oneof![Just(None), prop::collection::vec(prop_oneof![Just(f64::INFINITY), 0.0f64..3000.0], 5).prop_map(Some)]) -> Instance {
         let mut cna = if auv_cna { CnaKind::auv(b) } else { CnaKind::Asc {} };
         if let CnaKind::Auv { pitch_levels: levels, level_off: off, .. } = &mut cna { *levels = pitch_levels; *off = level_off; }
         let m = a * if auv_cna { b } else { 1 };
@@ -185,7 +189,8 @@ prop_compose! {
             cfg.cost = CostSpec::Estimator(EstimatorSpec { aggregate, range_noise, bias_per_km_m, terminal_levels, reach_success, unmodelled_current: current, truth: spec, ..EstimatorSpec::default() });
         }
         let truth = truth.map_or((vec![TrueError::default(); n], 0.0), |(_, errors, v)| (errors[..n].to_vec(), v));
-        Instance { cfg, cna: CnaPose { pos: Vec3::new(0.0, 0.0, z), heading: Heading::from_radians(heading), pitch: 0.0 }, starts, vels, eps, estimates, link, cna_variance, truth, bias }
+        let slot_reach = slot_reach.map_or(Vec::new(), |r| r[..n].to_vec());
+        Instance { cfg, cna: CnaPose { pos: Vec3::new(0.0, 0.0, z), heading: Heading::from_radians(heading), pitch: 0.0 }, starts, vels, eps, estimates, link, cna_variance, truth, bias, slot_reach }
     }
 }
 
@@ -267,6 +272,7 @@ fn instance_fixed(cfg: PlannerConfig) -> Instance {
         cna_variance: 1.0,
         truth: (vec![TrueError::default(); 2], 0.0),
         bias: None,
+        slot_reach: Vec::new(),
     }
 }
 
@@ -361,6 +367,7 @@ fn deadline_returns_the_deepest_completed_level() {
             estimates: &[],
             cna_variance: 1.0,
             forecast: &f,
+            slot_reach_m: &[],
         }) {
             Ok(d) => assert!(d.levels_searched >= 1 && d.levels_searched < 13, "A={a}: {}", d.levels_searched),
             Err(e) => assert_eq!(e, PlanError::Deadline),
@@ -375,11 +382,27 @@ fn horizon_is_truncated_at_the_end_of_data() {
     let mut p = LookAheadPlanner::new(inst.cfg).unwrap();
     let e = inst.errors();
     let d = p
-        .decide(&PlanInput { t: 0.0, cna: inst.cna, errors: &e, estimates: &[], cna_variance: 1.0, forecast: &f })
+        .decide(&PlanInput {
+            t: 0.0,
+            cna: inst.cna,
+            errors: &e,
+            estimates: &[],
+            cna_variance: 1.0,
+            forecast: &f,
+            slot_reach_m: &[],
+        })
         .unwrap();
     assert_eq!((d.levels_requested, d.levels_searched), (6, 2));
     let err = p
-        .decide(&PlanInput { t: 20.0, cna: inst.cna, errors: &e, estimates: &[], cna_variance: 1.0, forecast: &f })
+        .decide(&PlanInput {
+            t: 20.0,
+            cna: inst.cna,
+            errors: &e,
+            estimates: &[],
+            cna_variance: 1.0,
+            forecast: &f,
+            slot_reach_m: &[],
+        })
         .unwrap_err();
     assert!(matches!(err, PlanError::NoForecast { .. }));
 }
@@ -400,8 +423,17 @@ fn fly(case: PenaltyCase, gap: f64, steps: usize) -> Vec<f64> {
     let mut dist = Vec::new();
     for s in 0..steps {
         let t = s as f64 * cfg.motion.tau;
-        let d =
-            p.decide(&PlanInput { t, cna, errors: &errs, estimates: &[], cna_variance: 1.0, forecast: &f }).unwrap();
+        let d = p
+            .decide(&PlanInput {
+                t,
+                cna,
+                errors: &errs,
+                estimates: &[],
+                cna_variance: 1.0,
+                forecast: &f,
+                slot_reach_m: &[],
+            })
+            .unwrap();
         cna = d.next;
         let a = auv(t + cfg.motion.tau);
         errs[0] =
@@ -471,7 +503,15 @@ fn a_deadline_stops_the_brute_force_too() {
     let mut p = LookAheadPlanner::new(PlannerConfig { search, ..inst.cfg }).unwrap();
     let (e, f) = (inst.errors(), inst.forecast());
     let t0 = std::time::Instant::now();
-    match p.decide(&PlanInput { t: 0.0, cna: inst.cna, errors: &e, estimates: &[], cna_variance: 1.0, forecast: &f }) {
+    match p.decide(&PlanInput {
+        t: 0.0,
+        cna: inst.cna,
+        errors: &e,
+        estimates: &[],
+        cna_variance: 1.0,
+        forecast: &f,
+        slot_reach_m: &[],
+    }) {
         Ok(d) => assert!(d.levels_searched >= 1 && d.levels_searched < 13, "{}", d.levels_searched),
         Err(e) => assert_eq!(e, PlanError::Deadline),
     }
@@ -508,6 +548,7 @@ fn distance_to_far_auv(reach_success: f64) -> f64 {
             estimates: &estimates,
             cna_variance: 0.0,
             forecast: &f,
+            slot_reach_m: &[],
         };
         cna = p.decide(&input).unwrap().next;
     }
@@ -553,8 +594,15 @@ fn the_true_error_bound_cuts_where_the_auvs_errors_follow_the_cnas() {
         let errors: Vec<AuvError> = (0..w.n).map(|k| cfg.error.initial(1.0, 1.0, &cna.pos, &auv(k, 0.0))).collect();
         let estimates = vec![AuvEstimate { cov: [20.0, 0.0, 20.0], process_noise: 0.051 }; w.n];
         let forecast = FnForecast { n: w.n, f: move |k: usize, t: f64| Some(auv(k, t)) };
-        let input =
-            PlanInput { t: 0.0, cna, errors: &errors, estimates: &estimates, cna_variance: v, forecast: &forecast };
+        let input = PlanInput {
+            t: 0.0,
+            cna,
+            errors: &errors,
+            estimates: &estimates,
+            cna_variance: v,
+            forecast: &forecast,
+            slot_reach_m: &[],
+        };
         let moments = vec![TrueError { s: [v + 2.0, 0.0, v + 2.0], c: [v, 0.0, 0.0, v], m: [0.0; 2] }; w.n];
         let truth = TruthInput { errors: &moments, cna_variance: v };
         LookAheadPlanner::with_link(cfg, &PlateauLink(0.8)).unwrap().decide_with_truth(&input, Some(&truth)).unwrap()

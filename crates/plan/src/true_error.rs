@@ -261,7 +261,7 @@ impl TrueErrorCost {
     /// λ/(λ + σ_c² + R_f/|h|²) and |K|² ≥ (hᵀK)² (|h| ≤ 1); the CNA is at `nearest` to
     /// `nearest` + 2·spread from the AUV and at most |Δz| + spread above or below it, so
     /// |h|² ≥ 1 − (Δz_max/nearest)², R_f and p_s are taken at the far end and R_t at the near.
-    fn newest_noise(&self, smallest_p: f64, nearest: f64, b: Below, cna: [f64; 3]) -> f64 {
+    fn newest_noise(&self, k: usize, smallest_p: f64, nearest: f64, b: Below, cna: [f64; 3]) -> f64 {
         let dz = (b.auv[2] - cna[2]).abs() + b.spread;
         if !(nearest > dz) {
             return 0.0;
@@ -270,7 +270,7 @@ impl TrueErrorCost {
         let far = nearest + 2.0 * b.spread;
         let filter_noise = self.filter.spec.range_noise.variance(far) / horizontal2 + self.filter.cna_variance;
         let gain = smallest_p / (smallest_p + filter_noise);
-        self.filter.link.worst_up_to(far) * self.truth.range_noise.variance(nearest) * gain * gain
+        self.filter.worst_success_up_to(k, far) * self.truth.range_noise.variance(nearest) * gain * gain
     }
 
     /// F2's growth per axis and level, w = q_tτ·Dτ/(q_tτ + Dτ), m² (0 if either is 0).
@@ -288,8 +288,7 @@ impl TrueErrorCost {
     fn step(&self, k: usize, parent: &TrueState, cna: [f64; 3], auv: [f64; 3]) -> TrueState {
         let growth =
             Growth { filter: self.filter.q_tau[k], truth: self.truth_tau, cna: self.cna_tau, shift: self.shift };
-        let link = &self.filter.link;
-        true_error_step(parent, growth, cna, auv, &self.noise(), |r| link.success(r))
+        true_error_step(parent, growth, cna, auv, &self.noise(), |r| self.filter.success(k, r))
     }
 
     fn noise(&self) -> PingNoise {
@@ -317,7 +316,7 @@ impl CostModel for TrueErrorCost {
     fn leaf_cost(&self, k: usize, parent: &TrueState, cna: [f64; 3], auv: [f64; 3]) -> f64 {
         let (next, bias2) = (self.step(k, parent, cna, auv), self.filter.bias_variance(cna, auv));
         let term = self.filter.moments_term(&next.truth.s, bias2);
-        self.filter.leaf_term_biased(self.truth_tau, &next.truth.s, (cna, auv), term, || bias2)
+        self.filter.leaf_term_biased((k, self.truth_tau), &next.truth.s, (cna, auv), term, || bias2)
     }
 
     fn terminal_levels(&self) -> f64 {
@@ -326,8 +325,8 @@ impl CostModel for TrueErrorCost {
 
     /// Steps 6 and 7 of `estimator` with the true drift.
     #[inline(always)]
-    fn leaf_term(&self, _k: usize, state: &TrueState, cna: [f64; 3], auv: [f64; 3], term: f64) -> f64 {
-        self.filter.leaf_term_with(self.truth_tau, &state.truth.s, cna, auv, term)
+    fn leaf_term(&self, k: usize, state: &TrueState, cna: [f64; 3], auv: [f64; 3], term: f64) -> f64 {
+        self.filter.leaf_term_with((k, self.truth_tau), &state.truth.s, cna, auv, term)
     }
 
     #[inline(always)]
@@ -357,9 +356,9 @@ impl CostModel for TrueErrorCost {
             let ([turn, eigen], nearest) = known_cna.step(self.truth_tau, cna, b, |r| self.ping_floor(r));
             filter.step(q_filter, self.filter.ping_floor(nearest));
             let (trace, det) = node.relative_at(j + 1, w);
-            let noise = self.newest_noise(smallest_p, nearest, b, cna);
+            let noise = self.newest_noise(k, smallest_p, nearest, b, cna);
             let half_bias2 = 0.5 * self.filter.bias_variance_floor(b.auv[2], nearest * nearest);
-            let growth = if j == leaf { self.filter.reach_growth_of(self.truth_tau, nearest) } else { 0.0 };
+            let growth = if j == leaf { self.filter.reach_growth_of(k, self.truth_tau, nearest) } else { 0.0 };
             let pairs = [turn, eigen, (trace + noise, det)];
             *slot = self.filter.combine(*slot, self.filter.level_bound(pairs, half_bias2, growth));
         }
@@ -649,10 +648,12 @@ mod tests {
             start in (-1500.0f64..1500.0, -1500.0f64..1500.0),
             (v, relative) in (0.0f64..12.0, 0.5f64..6.0),
             aggregate in 0usize..4, bias_per_km_m in 0.0f64..8.0, terminal_levels in 0.0f64..25.0,
+            slot_reach in proptest::option::of(0.0f64..3000.0),
         ) {
             let aggregate = [crate::Aggregate::TraceSum, crate::Aggregate::WorstAuv, crate::Aggregate::LogDet, crate::Aggregate::SigmaSum][aggregate];
             let spec = crate::EstimatorSpec { aggregate, bias_per_km_m, terminal_levels, reach_success: 0.7, ..crate::EstimatorSpec::default() };
-            let cost = bound_model(spec);
+            let mut cost = bound_model(spec);
+            cost.filter.slot_reach = slot_reach.into_iter().collect();
             let root = settled(v, relative);
             let (mut cna, step) = ([start.0, start.1, 10.0], 45.0);
             let auv_at = |j: usize| [0.0, 1.5 * 30.0 * j as f64, 90.0];

@@ -138,8 +138,15 @@ impl Workload {
         let estimate = AuvEstimate { cov: [1.0, 0.0, 1.0], process_noise: 0.5 * cfg.error.alpha };
         let estimates = vec![estimate; self.n];
         let forecast = FnForecast { n: self.n, f: move |k: usize, t: f64| Some(auv(k, t)) };
-        let input =
-            PlanInput { t: 0.0, cna, errors: &errors, estimates: &estimates, cna_variance: 1.0, forecast: &forecast };
+        let input = PlanInput {
+            t: 0.0,
+            cna,
+            errors: &errors,
+            estimates: &estimates,
+            cna_variance: 1.0,
+            forecast: &forecast,
+            slot_reach_m: &[],
+        };
         // The true-error cost starts from each AUV's true moments: its filter's P, no mean yet.
         let moments = vec![TrueError { s: estimate.cov, ..TrueError::default() }; self.n];
         let truth = TruthInput { errors: &moments, cna_variance: 1.0 };

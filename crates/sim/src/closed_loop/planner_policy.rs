@@ -357,6 +357,9 @@ pub struct PlannerPolicy {
     lost_pings: Option<PingLikelihood>,
     /// Whether the planner is given the CNA's own variance (else 0: broadcasts taken as exact).
     cna_variance: bool,
+    /// Per AUV (fleet order), the slant range beyond which no broadcast reaches it (its own slot
+    /// starts first: `Scenario::slot_reach_m`); empty: the link alone decides.
+    slot_reach: Vec<f64>,
     stats: PlannerStats,
     levels_total: u64,
 }
@@ -408,12 +411,30 @@ impl PlannerPolicy {
             (Some(f), CostSpec::Estimator(_)) => LookAheadPlanner::with_link(cfg, &LikelihoodLink(f))?,
             _ => LookAheadPlanner::new(cfg)?,
         };
-        Ok(PlannerPolicy { planner, tracker, covariances, lost_pings, cna_variance: true, stats, levels_total: 0 })
+        Ok(PlannerPolicy {
+            planner,
+            tracker,
+            covariances,
+            lost_pings,
+            cna_variance: true,
+            slot_reach: Vec::new(),
+            stats,
+            levels_total: 0,
+        })
     }
 
     /// The estimator-aware cost's range bias from a known sound-speed profile (`BiasTable`).
     pub fn with_bias(mut self, table: coopnav_plan::BiasTable) -> Self {
         self.planner = self.planner.with_bias(table);
+        self
+    }
+
+    /// The estimator-aware cost and its covariance model credit no ping beyond AUV k's
+    /// `reach[k]` (fleet order); no effect under Hudson's cost.
+    pub fn with_slot_reach(mut self, reach: Vec<f64>) -> Self {
+        if self.covariances.is_some() {
+            self.slot_reach = reach;
+        }
         self
     }
 
@@ -473,10 +494,13 @@ impl CnaPolicy for PlannerPolicy {
         for k in 0..n {
             match ctx.fleet.position(k, ctx.t) {
                 Some(p) => {
-                    let likelihood = self.lost_pings.as_ref().map_or(1.0, |f| f((p - ctx.cna.pos).norm()));
+                    let range = (p - ctx.cna.pos).norm();
+                    let likelihood = self.lost_pings.as_ref().map_or(1.0, |f| f(range));
                     self.tracker.ping(k, &ctx.cna.pos, &p, likelihood);
+                    let beyond = self.slot_reach.get(k).is_some_and(|&reach| range >= reach);
                     if let Some(c) = self.covariances.as_mut() {
-                        c.ping(k, ctx.t, ctx.reported(k), (&ctx.cna.pos, &p, likelihood));
+                        let arrives = if beyond { 0.0 } else { likelihood };
+                        c.ping(k, ctx.t, ctx.reported(k), (&ctx.cna.pos, &p, arrives));
                     }
                     known.push(k);
                 }
@@ -504,6 +528,7 @@ impl CnaPolicy for PlannerPolicy {
             .filter(|_| !true_errors.is_empty())
             .map(|c| TruthInput { errors: &true_errors, cna_variance: c.cna_variance() });
         let forecast = Known { inner: ctx.fleet, index: &known };
+        let slot_reach: Vec<f64> = known.iter().filter_map(|&k| self.slot_reach.get(k).copied()).collect();
         let input = PlanInput {
             t: ctx.t,
             cna: ctx.cna,
@@ -511,6 +536,7 @@ impl CnaPolicy for PlannerPolicy {
             estimates: &estimates,
             cna_variance: if self.cna_variance { ctx.cna_variance } else { 0.0 },
             forecast: &forecast,
+            slot_reach_m: &slot_reach,
         };
         match self.planner.decide_with_truth(&input, truth.as_ref()) {
             Ok(d) => {

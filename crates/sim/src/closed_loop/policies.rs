@@ -190,6 +190,9 @@ fn build(name: &str, sc: &Scenario, planned: Option<&TimedWaypoints>) -> Result<
             if let Some(truth) = p.estimator_truth.filter(|_| estimator) {
                 policy = policy.with_truth(truth, sc.fleet.init_position_sd.powi(2), p.estimator_unmodelled_current);
             }
+            if estimator && p.estimator_slot_reach {
+                policy = policy.with_slot_reach(sc.slot_reach_m());
+            }
             if p.estimator_tracking == EstimatorTracking::ReportsOnly {
                 policy = policy.with_reports_only(unheard_growth(sc));
             }

@@ -10,7 +10,7 @@ use crate::models::finish::Finish;
 use crate::models::minipacket;
 use crate::models::mower::MowerSpec;
 use crate::models::peer::{mask_width, StatusFormat, StatusTo};
-use crate::models::schedule::{longest_air, payload_problem, Fit, Schedule};
+use crate::models::schedule::{longest_air, payload_problem, Fit, Owner, Schedule};
 use crate::models::ship::{ShipSpec, MAX_SHIPS};
 use crate::models::surfacing::Surfacing;
 use crate::models::tl::TlModel;
@@ -418,6 +418,12 @@ pub struct Planner {
     /// 30° limit and so the CNA never changes depth.
     #[serde(default)]
     pub estimator_level_off: bool,
+    /// `planner-estimator` knows its schedule: a broadcast still arriving when an AUV's own slot
+    /// starts is lost (half-duplex), so beyond a slant range set by the slot's timing
+    /// ([`Scenario::slot_reach_m`]) no ping reaches that AUV, whatever the link. An invention
+    /// (issue 10): the thesis's link model depends on range only.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub estimator_slot_reach: bool,
     /// Levels of cost-to-go `planner-estimator` counts at each leaf (estimator step 6; 0 = none;
     /// default [`ESTIMATOR_TERMINAL_LEVELS`]).
     #[serde(default = "estimator_terminal_levels")]
@@ -911,6 +917,29 @@ impl Scenario {
     /// filters convert at (`filter.sound_speed`).
     ///
     /// [`SoundSpeed::least_biased_depth`]: crate::models::channel::SoundSpeed::least_biased_depth
+    /// Per survey AUV, the slant range beyond which the CNA's broadcast is still arriving when
+    /// the AUV's own next slot starts (half-duplex: it hears nothing while it sends), m: the
+    /// slowest sound speed of the water times the time from the broadcast's end to that slot;
+    /// infinite for an AUV with no slot of its own (the thesis's schedule gives each one).
+    pub fn slot_reach_m(&self) -> Vec<f64> {
+        let c = &self.comms;
+        let slots = c.schedule.slots(c.tau, self.fleet.n_auvs, self.buoys.len());
+        let Some(cna) = slots.iter().find(|s| s.owner == Owner::Cna) else {
+            return vec![f64::INFINITY; self.fleet.n_auvs];
+        };
+        let (air, speed) = (longest_air([c.cna_rate]), self.channel.sound_speed.slowest());
+        (0..self.fleet.n_auvs)
+            .map(|k| {
+                let own = slots.iter().filter(|s| s.owner == Owner::Auv(k));
+                // Time from the broadcast's start to the AUV's next own slot, in [0, τ) (0: it
+                // sends with the broadcast and hears none).
+                let gap = own.map(|s| (s.start_s - cna.start_s).rem_euclid(c.tau));
+                gap.fold(None, |m: Option<f64>, g| Some(m.map_or(g, |m| m.min(g))))
+                    .map_or(f64::INFINITY, |g| ((g - air) * speed).max(0.0))
+            })
+            .collect()
+    }
+
     pub fn cna_cruise_depth(&self) -> f64 {
         match self.cna.auv.as_ref().map(|a| a.depth) {
             None => 0.0,
@@ -1039,6 +1068,7 @@ fn planner_field(field: &str) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::models::schedule::SlotSpec;
 
     fn err(text: &str) -> String {
         Scenario::parse(text, Path::new("s.toml")).unwrap_err().to_string()
@@ -1183,6 +1213,35 @@ mod tests {
         assert_eq!(sc.planner.estimator_heading_options, Some(7));
         let too_large = err(&ok.replace("estimator_heading_options = 7", "estimator_heading_options = 2000"));
         assert!(too_large.contains("planner.estimator_look_ahead = 3 with 2000 options"), "{too_large}");
+    }
+
+    /// Hudson's schedule: AUV k sends (k + 1)·τ/(N + 1) after the broadcast starts, so its reach
+    /// is that gap less the broadcast's air time, at the water's slowest sound speed; an AUV whose
+    /// slot starts with the broadcast hears none at any range.
+    #[test]
+    fn a_slot_reach_is_the_time_from_the_broadcasts_end_to_the_auvs_own_slot() {
+        let mut sc = Scenario::example().with_auvs(8);
+        sc.comms.tau = 44.0;
+        let (air, speed) = (longest_air([sc.comms.cna_rate]), sc.channel.sound_speed.slowest());
+        let reach = sc.slot_reach_m();
+        for (k, r) in reach.iter().enumerate() {
+            let want = ((k + 1) as f64 * 44.0 / 9.0 - air) * speed;
+            assert!((r - want).abs() < 1e-9, "AUV {k}: {r} m, want {want} m");
+        }
+        assert!(reach[0] > 1000.0 && reach[0] < 3000.0, "the first slot's AUV: {} m", reach[0]);
+        let slot = |who: &str, start_s| SlotSpec {
+            who: who.into(),
+            start_s,
+            length_s: 10.0,
+            message: None,
+            rate_policy: None,
+        };
+        sc.comms.schedule = Schedule::Tdma { slots: vec![slot("cna", 10.0), slot("auv0", 10.0), slot("auv1", 0.0)] };
+        sc.comms.tau = 30.0;
+        let reach = sc.slot_reach_m();
+        assert_eq!(reach[0], 0.0, "sends with the broadcast");
+        assert!((reach[1] - (20.0 - air) * speed).abs() < 1e-9, "the next cycle's slot: {}", reach[1]);
+        assert!(reach[2..].iter().all(|r| r.is_infinite()), "no slot of their own: {reach:?}");
     }
 
     #[test]

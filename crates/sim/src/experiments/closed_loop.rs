@@ -85,6 +85,17 @@ pub struct EstimatorCell {
     pub truth: Option<TruthSpec>,
 }
 
+/// `planner-estimator` knows its schedule's half-duplex reach (`planner.estimator_slot_reach`,
+/// `Scenario::slot_reach_m`): with Hudson's schedule at τ = 44 s and 8 AUVs, the first slot's AUV
+/// hears no broadcast sent from beyond about 2 km (its own status starts first), which the
+/// link's range-only model missed. Chosen on the tuning seed (session 32, planner-estimator's
+/// mean error, off → on): sloping N = 8, 300 runs, 6.08 → 5.99 m, trail −0.05 [−0.13, 0.03] →
+/// −0.13 [−0.24, −0.03] (runs 100–299 alone −0.065 → −0.155); 100 runs, racetrack −0.11 → −0.17,
+/// centroid-standoff −0.21 → −0.27; current N = 8 12.43 → 11.63 m (RMS 16.61 → 13.97); current
+/// N = 5 6.65 → 6.66, sloping N = 5 identical; up to 3 AUVs every reach exceeds 6 km and nothing
+/// changes.
+pub const SLOT_REACH: bool = true;
+
 /// The AUV CNA's fine tree: A = 9 headings, L = 3, H = 40 levels of cost-to-go (from
 /// [`SPREAD_FLEET_MIN_AUVS`] AUVs on the spread fleets' [`SPREAD_TERMINAL_LEVELS`]), scoring true
 /// error ([`AUV_CNA_TRUTH`]); [`auv_cna_estimator`] says for which N.
@@ -266,6 +277,7 @@ impl Setting {
         sc.planner.estimator_bias_per_km = ESTIMATOR_BIAS_PER_KM;
         sc.planner.estimator_terminal_levels = ESTIMATOR_TERMINAL_LEVELS;
         sc.planner.estimator_cna_variance = ESTIMATOR_CNA_VARIANCE;
+        sc.planner.estimator_slot_reach = SLOT_REACH;
         // Set either way: the library file asks for them (it flies 3 AUVs).
         let depth_aware = self.depth_aware && n >= DEPTH_AWARE_MIN_AUVS;
         sc.planner.estimator_bias_profile = depth_aware;

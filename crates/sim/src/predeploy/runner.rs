@@ -60,7 +60,15 @@ pub fn run(
     let n_steps = ((mission.end_time - mission.start_time) / tau + 1e-9).floor() as usize;
     for step in 1..=n_steps {
         let d = planner
-            .decide(&PlanInput { t, cna, errors: &errors, estimates: &[], cna_variance: 0.0, forecast: &forecast })
+            .decide(&PlanInput {
+                t,
+                cna,
+                errors: &errors,
+                estimates: &[],
+                cna_variance: 0.0,
+                forecast: &forecast,
+                slot_reach_m: &[],
+            })
             .map_err(|source| RunError::Plan { step, t, source })?;
         t = mission.start_time + step as f64 * tau;
         cna = d.next;
