@@ -655,6 +655,33 @@ mod tests {
         assert_eq!(t.estimate(0).unwrap().cov, [5.0, 0.0, 10.0]);
     }
 
+    /// An AUV beyond its slot reach is pinged in vain: its modelled covariance only grows (q·τ
+    /// per axis and decision), where an AUV as far with no reach limit gets the pings' updates;
+    /// the reach is the estimator's only (Hudson's planner ignores it).
+    #[test]
+    fn no_ping_is_credited_beyond_an_auvs_slot_reach() {
+        let est = PlannerConfig { cost: CostSpec::Estimator(coopnav_plan::EstimatorSpec::default()), ..cfg() };
+        let start = AuvEstimate { cov: [16.0, 0.0, 16.0], process_noise: 0.1 };
+        let filters = Some((start, RangeNoise::default()));
+        let policy =
+            |reach: Vec<f64>| PlannerPolicy::new(est, 2, 1.0, 1.0, None, filters).unwrap().with_slot_reach(reach);
+        let (mut reached, mut cut) = (policy(vec![f64::INFINITY; 2]), policy(vec![f64::INFINITY, 250.0]));
+        let fleet = FnForecast { n: 2, f: |k: usize, t: f64| Some(Vec3::new(300.0 * (k + 1) as f64, 1.5 * t, 20.0)) };
+        let cna = CnaPose { pos: Vec3::new(0.0, 0.0, 0.0), heading: Heading::from_radians(0.0), pitch: 0.0 };
+        for step in 0..4 {
+            reached.decide(&at_step(step, cna, &fleet));
+            cut.decide(&at_step(step, cna, &fleet));
+        }
+        let cov = |p: &PlannerPolicy, k: usize| p.covariances.as_ref().unwrap().estimate(k).unwrap().cov;
+        // AUV 1, 600 m away, beyond 250 m: three decisions of growth after the start.
+        assert_eq!(cov(&cut, 1), [25.0, 0.0, 25.0]);
+        assert!(cov(&reached, 1)[0] + cov(&reached, 1)[2] < 32.0, "{:?}", cov(&reached, 1));
+        // AUV 0 has no reach limit in either.
+        assert_eq!(cov(&cut, 0), cov(&reached, 0));
+        let hudson = PlannerPolicy::new(cfg(), 2, 1.0, 1.0, None, None).unwrap().with_slot_reach(vec![0.0; 2]);
+        assert!(hudson.slot_reach.is_empty());
+    }
+
     /// One AUV's tracker with true-error moments: its filter's process noise, the truth's drift
     /// 0.05 m²/s and ranges σ 1 m, the CNA's diffusion and the unmodelled current.
     fn truth_tracker(process_noise: f64, cna_diffusion_m2_s: f64, current: [f64; 2]) -> CovarianceTracker {
