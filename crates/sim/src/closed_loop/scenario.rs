@@ -1229,13 +1229,7 @@ mod tests {
             assert!((r - want).abs() < 1e-9, "AUV {k}: {r} m, want {want} m");
         }
         assert!(reach[0] > 1000.0 && reach[0] < 3000.0, "the first slot's AUV: {} m", reach[0]);
-        let slot = |who: &str, start_s| SlotSpec {
-            who: who.into(),
-            start_s,
-            length_s: 10.0,
-            message: None,
-            rate_policy: None,
-        };
+        let slot = |who: &str, start_s| SlotSpec::packet(who, start_s, 10.0);
         sc.comms.schedule = Schedule::Tdma { slots: vec![slot("cna", 10.0), slot("auv0", 10.0), slot("auv1", 0.0)] };
         sc.comms.tau = 30.0;
         let reach = sc.slot_reach_m();

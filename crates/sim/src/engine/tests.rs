@@ -70,8 +70,7 @@ fn two_statuses_in_one_slot_collide_at_the_cna() {
     let mut sc = Scenario::example().with_auvs(2);
     sc.duration_s = 600.0;
     sc.channel.collisions.capture_margin_db = None;
-    let slot =
-        |who: &str, start_s| SlotSpec { who: who.into(), start_s, length_s: 10.0, message: None, rate_policy: None };
+    let slot = |who: &str, start_s| SlotSpec::packet(who, start_s, 10.0);
     sc.comms.schedule = Schedule::Tdma { slots: vec![slot("cna", 0.0), slot("auv0", 10.0), slot("auv1", 10.0)] };
     let (r, trace) = traced(&sc, "centroid", 2);
     for a in &r.auvs {
@@ -90,8 +89,7 @@ fn two_statuses_in_one_slot_collide_at_the_cna() {
 fn a_modem_transmitting_hears_no_broadcast() {
     let mut sc = Scenario::example().with_auvs(2);
     sc.duration_s = 600.0;
-    let slot =
-        |who: &str, start_s| SlotSpec { who: who.into(), start_s, length_s: 10.0, message: None, rate_policy: None };
+    let slot = |who: &str, start_s| SlotSpec::packet(who, start_s, 10.0);
     sc.comms.schedule = Schedule::Tdma { slots: vec![slot("cna", 0.0), slot("auv0", 0.0), slot("auv1", 10.0)] };
     let (r, _) = traced(&sc, "centroid", 2);
     assert!(r.auvs[0].downlink.sent >= 19 && r.auvs[0].downlink.received == 0, "{:?}", r.auvs[0].downlink);
@@ -257,8 +255,7 @@ fn a_buoy_sharing_the_cnas_slot_collides_with_it() {
     let mut sc = with_buoy(Scenario::example().with_auvs(1), 900.0, 300.0);
     sc.duration_s = 600.0;
     sc.channel.collisions.capture_margin_db = None;
-    let slot =
-        |who: &str, start_s| SlotSpec { who: who.into(), start_s, length_s: 10.0, message: None, rate_policy: None };
+    let slot = |who: &str, start_s| SlotSpec::packet(who, start_s, 10.0);
     sc.comms.schedule = Schedule::Tdma { slots: vec![slot("cna", 0.0), slot("buoy0", 0.0), slot("auv0", 10.0)] };
     let (r, trace) = traced(&sc, "centroid", 2);
     let a = &r.auvs[0];

@@ -63,6 +63,13 @@ pub struct SlotSpec {
     pub rate_policy: Option<RatePolicySpec>,
 }
 
+impl SlotSpec {
+    /// `who`'s own packet at the comms default rate, `length_s` long from `start_s`.
+    pub fn packet(who: &str, start_s: f64, length_s: f64) -> Self {
+        SlotSpec { who: who.into(), start_s, length_s, message: None, rate_policy: None }
+    }
+}
+
 /// Gill's cycle presets (Table 1).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
@@ -429,13 +436,7 @@ mod tests {
                 (Owner::Auv(1), 32.0)
             ]
         );
-        let slot = |who: &str, start_s| SlotSpec {
-            who: who.into(),
-            start_s,
-            length_s: 10.0,
-            message: None,
-            rate_policy: None,
-        };
+        let slot = |who: &str, start_s| SlotSpec::packet(who, start_s, 10.0);
         let tdma = Schedule::Tdma { slots: vec![slot("cna", 0.0), slot("buoy0", 10.0), slot("buoy2", 20.0)] };
         let p = tdma.problems("s.", &Fit { n_buoys: 2, ..fit(30.0, 1) });
         assert_eq!(p.len(), 1, "{p:?}");
@@ -451,9 +452,9 @@ mod tests {
         assert!(p[3].2.contains("air time 3.90 s") && p[3].2.contains("travel 0.70 s"), "{p:?}");
         let tdma = Schedule::Tdma {
             slots: vec![
-                SlotSpec { who: "cna".into(), start_s: 0.0, length_s: 6.0, message: None, rate_policy: None },
-                SlotSpec { who: "auv0".into(), start_s: 6.0, length_s: 4.0, message: None, rate_policy: None },
-                SlotSpec { who: "auv7".into(), start_s: 10.0, length_s: 25.0, message: None, rate_policy: None },
+                SlotSpec::packet("cna", 0.0, 6.0),
+                SlotSpec::packet("auv0", 6.0, 4.0),
+                SlotSpec::packet("auv7", 10.0, 25.0),
             ],
         };
         let p = tdma.problems("s.", &fit(30.0, 1));
