@@ -29,7 +29,9 @@
 //!    fewer nodes (N = 5, A = 7, L = 7 at σ_c² = 1 m²: 507k nodes against 63k).
 //! 3. The packet arrives with probability p_s(r) (the acoustic link's model, passed in as a
 //!    [`LinkModel`]); the expected posterior is E = (1 − p_s)·P̃ + p_s·P⁺
-//!    = P̃ − p_s·P̃hhᵀP̃ / (hᵀP̃h + R).
+//!    = P̃ − p_s·P̃hhᵀP̃ / (hᵀP̃h + R). Beyond an AUV's slot reach (`PlanInput::slot_reach_m`: its
+//!    own slot starts before a broadcast from that far has arrived, and a modem hears nothing
+//!    while it sends; issue 10, session 32) p_s = 0, and step 7's useful range stops there.
 //! 4. Range bias the covariance does not see (issue 10 item 3): a sound-speed error δc, the same
 //!    for every ping, makes a range over r off by b = r·δc/c. The filter takes it for noise; after
 //!    a ping its estimate moves along h until the range fits, so its radial error becomes
