@@ -276,6 +276,34 @@ fn instance_fixed(cfg: PlannerConfig) -> Instance {
     }
 }
 
+/// Slot reaches are one per AUV (or none), each a range >= 0 or infinite; the error names the
+/// count or the AUV.
+#[test]
+fn bad_slot_reaches_are_named() {
+    let mut cfg = asc(5, 2, PenaltyCase::C1);
+    cfg.cost = CostSpec::Estimator(EstimatorSpec::default());
+    let inst = instance_fixed(cfg);
+    let (e, f) = (inst.errors(), inst.forecast());
+    let decide = |reach: &[f64]| {
+        let input = PlanInput {
+            t: 0.0,
+            cna: inst.cna,
+            errors: &e,
+            estimates: &inst.estimates,
+            cna_variance: 1.0,
+            forecast: &f,
+            slot_reach_m: reach,
+        };
+        LookAheadPlanner::new(inst.cfg).unwrap().decide(&input).map_err(|e| e.to_string())
+    };
+    assert!(decide(&[]).is_ok() && decide(&[f64::INFINITY, 0.0]).is_ok());
+    let e = decide(&[1000.0]).unwrap_err();
+    assert!(e.contains("1 slot reaches for 2 AUVs"), "{e}");
+    let e = decide(&[1000.0, -1.0]).unwrap_err();
+    assert!(e.contains("AUV 1: slot reach -1 m"), "{e}");
+    assert!(decide(&[f64::NAN, 1.0]).unwrap_err().contains("AUV 0: slot reach NaN m"));
+}
+
 #[test]
 fn look_ahead_zero_is_greedy() {
     for case in [PenaltyCase::C2, PenaltyCase::C1, PenaltyCase::C9] {
