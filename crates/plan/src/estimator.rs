@@ -534,7 +534,7 @@ impl EkfCost {
     /// reach.
     #[inline(always)]
     pub(crate) fn success(&self, k: usize, r: f64) -> f64 {
-        if self.slot_reach.get(k).is_some_and(|&reach| r >= reach) {
+        if self.beyond_slot_reach(k, r) {
             0.0
         } else {
             self.link.success(r)
@@ -544,11 +544,16 @@ impl EkfCost {
     /// A lower bound on [`EkfCost::success`] for AUV `k` at every range ≤ `r`.
     #[inline(always)]
     pub(crate) fn worst_success_up_to(&self, k: usize, r: f64) -> f64 {
-        if self.slot_reach.get(k).is_some_and(|&reach| r >= reach) {
+        if self.beyond_slot_reach(k, r) {
             0.0
         } else {
             self.link.worst_up_to(r)
         }
+    }
+
+    #[inline(always)]
+    fn beyond_slot_reach(&self, k: usize, r: f64) -> bool {
+        self.slot_reach.get(k).is_some_and(|&reach| r >= reach)
     }
 
     /// r_u of step 7 for AUV `k`: the link's useful range, and at most the AUV's slot reach.

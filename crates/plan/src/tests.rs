@@ -55,16 +55,21 @@ impl Instance {
             p = p.with_bias(crate::BiasTable::sample(150.0, |zc, za| a * zc + b * za + c).unwrap());
         }
         let (e, f) = (self.errors(), self.forecast());
-        let input = PlanInput {
+        let truth = TruthInput { errors: &self.truth.0, cna_variance: self.truth.1 };
+        p.decide_with_truth(&self.input(&e, &f), Some(&truth)).unwrap()
+    }
+    /// The decision's input at t = 0 with `errors` and `forecast` (those of [`Instance::errors`]
+    /// and [`Instance::forecast`]).
+    fn input<'a>(&'a self, errors: &'a [AuvError], forecast: &'a dyn AuvForecast) -> PlanInput<'a> {
+        PlanInput {
             t: 0.0,
             cna: self.cna,
-            errors: &e,
+            errors,
             estimates: &self.estimates,
             cna_variance: self.cna_variance,
-            forecast: &f,
+            forecast,
             slot_reach_m: &self.slot_reach,
-        };
-        p.decide_with_truth(&input, Some(&TruthInput { errors: &self.truth.0, cna_variance: self.truth.1 })).unwrap()
+        }
     }
 }
 
@@ -285,15 +290,7 @@ fn bad_slot_reaches_are_named() {
     let inst = instance_fixed(cfg);
     let (e, f) = (inst.errors(), inst.forecast());
     let decide = |reach: &[f64]| {
-        let input = PlanInput {
-            t: 0.0,
-            cna: inst.cna,
-            errors: &e,
-            estimates: &inst.estimates,
-            cna_variance: 1.0,
-            forecast: &f,
-            slot_reach_m: reach,
-        };
+        let input = PlanInput { slot_reach_m: reach, ..inst.input(&e, &f) };
         LookAheadPlanner::new(inst.cfg).unwrap().decide(&input).map_err(|e| e.to_string())
     };
     assert!(decide(&[]).is_ok() && decide(&[f64::INFINITY, 0.0]).is_ok());
@@ -388,15 +385,7 @@ fn deadline_returns_the_deepest_completed_level() {
         };
         let mut p = LookAheadPlanner::new(PlannerConfig { search, ..inst.cfg }).unwrap();
         let (e, f) = (inst.errors(), inst.forecast());
-        match p.decide(&PlanInput {
-            t: 0.0,
-            cna: inst.cna,
-            errors: &e,
-            estimates: &[],
-            cna_variance: 1.0,
-            forecast: &f,
-            slot_reach_m: &[],
-        }) {
+        match p.decide(&PlanInput { estimates: &[], ..inst.input(&e, &f) }) {
             Ok(d) => assert!(d.levels_searched >= 1 && d.levels_searched < 13, "A={a}: {}", d.levels_searched),
             Err(e) => assert_eq!(e, PlanError::Deadline),
         }
@@ -409,29 +398,9 @@ fn horizon_is_truncated_at_the_end_of_data() {
     let f = FnForecast { n: 2, f: |k: usize, t: f64| (t <= 20.0).then(|| inst.starts[k] + inst.vels[k] * t) };
     let mut p = LookAheadPlanner::new(inst.cfg).unwrap();
     let e = inst.errors();
-    let d = p
-        .decide(&PlanInput {
-            t: 0.0,
-            cna: inst.cna,
-            errors: &e,
-            estimates: &[],
-            cna_variance: 1.0,
-            forecast: &f,
-            slot_reach_m: &[],
-        })
-        .unwrap();
+    let d = p.decide(&PlanInput { estimates: &[], ..inst.input(&e, &f) }).unwrap();
     assert_eq!((d.levels_requested, d.levels_searched), (6, 2));
-    let err = p
-        .decide(&PlanInput {
-            t: 20.0,
-            cna: inst.cna,
-            errors: &e,
-            estimates: &[],
-            cna_variance: 1.0,
-            forecast: &f,
-            slot_reach_m: &[],
-        })
-        .unwrap_err();
+    let err = p.decide(&PlanInput { t: 20.0, estimates: &[], ..inst.input(&e, &f) }).unwrap_err();
     assert!(matches!(err, PlanError::NoForecast { .. }));
 }
 
@@ -531,15 +500,7 @@ fn a_deadline_stops_the_brute_force_too() {
     let mut p = LookAheadPlanner::new(PlannerConfig { search, ..inst.cfg }).unwrap();
     let (e, f) = (inst.errors(), inst.forecast());
     let t0 = std::time::Instant::now();
-    match p.decide(&PlanInput {
-        t: 0.0,
-        cna: inst.cna,
-        errors: &e,
-        estimates: &[],
-        cna_variance: 1.0,
-        forecast: &f,
-        slot_reach_m: &[],
-    }) {
+    match p.decide(&PlanInput { estimates: &[], ..inst.input(&e, &f) }) {
         Ok(d) => assert!(d.levels_searched >= 1 && d.levels_searched < 13, "{}", d.levels_searched),
         Err(e) => assert_eq!(e, PlanError::Deadline),
     }

@@ -933,9 +933,8 @@ impl Scenario {
                 let own = slots.iter().filter(|s| s.owner == Owner::Auv(k));
                 // Time from the broadcast's start to the AUV's next own slot, in [0, τ) (0: it
                 // sends with the broadcast and hears none).
-                let gap = own.map(|s| (s.start_s - cna.start_s).rem_euclid(c.tau));
-                gap.fold(None, |m: Option<f64>, g| Some(m.map_or(g, |m| m.min(g))))
-                    .map_or(f64::INFINITY, |g| ((g - air) * speed).max(0.0))
+                let gap = own.map(|s| (s.start_s - cna.start_s).rem_euclid(c.tau)).min_by(f64::total_cmp);
+                gap.map_or(f64::INFINITY, |g| ((g - air) * speed).max(0.0))
             })
             .collect()
     }
