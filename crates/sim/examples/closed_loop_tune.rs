@@ -4,7 +4,8 @@
 //! POLICY,POLICY,... [DURATION_S|-] [section.key=TOML_VALUE ...]`
 //! e.g. `... -- 6 current 3 planner-estimator,centroid,trail - planner.look_ahead=6`.
 
-use coopnav_sim::closed_loop::{comparison_table, monte_carlo, Scenario};
+use coopnav_sim::closed_loop::mc::paired_per_auv;
+use coopnav_sim::closed_loop::{comparison_table, monte_carlo, PolicySummary, Scenario};
 use coopnav_sim::experiments::closed_loop::{setup, TUNING_SEED};
 use coopnav_sim::experiments::{ReproOptions, Size};
 use std::time::Instant;
@@ -35,8 +36,35 @@ fn main() -> Result<(), Error> {
     // Filter consistency (2 = consistent; above: the filters' covariances understate the error).
     let nees: Vec<String> = c.policies.iter().map(|s| format!("{} {:.2}", s.policy, s.nees_mean)).collect();
     println!("mean NEES: {}", nees.join(", "));
+    per_auv(&c.policies);
     println!("wall time {:.1} s", start.elapsed().as_secs_f64());
     Ok(())
+}
+
+/// Per AUV: the first policy's mean error, it minus each other policy (paired by run), and per
+/// policy the runs in which the CNA heard it: where in the fleet a difference lies.
+fn per_auv(policies: &[PolicySummary]) {
+    let Some((reference, baselines)) = policies.split_first() else { return };
+    for (k, runs) in reference.auv_runs.iter().enumerate() {
+        let mean = runs.iter().sum::<f64>() / runs.len() as f64;
+        let minus: Vec<String> = baselines
+            .iter()
+            .map(|b| {
+                let d = &paired_per_auv(reference, b)[k];
+                format!("{} {:+.2}", b.policy, d.mean)
+            })
+            .collect();
+        let heard: Vec<String> = policies
+            .iter()
+            .map(|p| {
+                format!(
+                    "{} ({} lost in air of {})",
+                    p.auv_heard_runs[k], p.auv_status_lost_in_air[k], p.auv_status_sent[k]
+                )
+            })
+            .collect();
+        println!("AUV {k}: {mean:.2} m; minus {}; runs heard {}", minus.join(", "), heard.join(" "));
+    }
 }
 
 /// `sc` with `section.key = value` (a TOML value) set.

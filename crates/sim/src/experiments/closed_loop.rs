@@ -21,7 +21,8 @@ use crate::closed_loop::scenario::{
 };
 use crate::closed_loop::{comparison_table, monte_carlo_grid, Scenario};
 use crate::plot::PlotError;
-use coopnav_plan::{PenaltyCase, RangeNoise, TruthSpec};
+use coopnav_acomms::Rate;
+use coopnav_plan::{Aggregate, PenaltyCase, RangeNoise, TruthSpec};
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 use serde::{Deserialize, Serialize};
@@ -75,14 +76,15 @@ pub struct Setting {
 
 /// `planner-estimator`'s tree and cost in one cell: A heading options, L levels, H levels of
 /// cost-to-go (None: [`ESTIMATOR_TERMINAL_LEVELS`], or [`SPREAD_TERMINAL_LEVELS`] from
-/// [`SPREAD_FLEET_MIN_AUVS`] AUVs on) and the true-error model it scores (None: the filters'
-/// covariances).
+/// [`SPREAD_FLEET_MIN_AUVS`] AUVs on), the true-error model it scores (None: the filters'
+/// covariances) and how it joins the AUVs' terms.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct EstimatorCell {
     pub heading_options: usize,
     pub look_ahead: usize,
     pub terminal_levels: Option<f64>,
     pub truth: Option<TruthSpec>,
+    pub aggregate: Aggregate,
 }
 
 /// `planner-estimator` knows its schedule's half-duplex reach (`planner.estimator_slot_reach`,
@@ -118,8 +120,13 @@ pub const SLOT_REACH: bool = true;
 /// −0.26, at 0.43× the time. Not at N = 2: −0.10 [−0.15, −0.04] → −0.05 [−0.08, −0.01] (100
 /// runs: H = 10 −0.00, A = 7 −0.04, A = 9 with the covariance cost +0.14, L = 4 at 7× the time
 /// −0.05 over 300); not at N = 8: trail −0.02 → +0.10 (covariance cost) or +0.16 (true error).
-pub const FINE_AUV_CNA: EstimatorCell =
-    EstimatorCell { heading_options: 9, look_ahead: 3, terminal_levels: Some(40.0), truth: Some(AUV_CNA_TRUTH) };
+pub const FINE_AUV_CNA: EstimatorCell = EstimatorCell {
+    heading_options: 9,
+    look_ahead: 3,
+    terminal_levels: Some(40.0),
+    truth: Some(AUV_CNA_TRUTH),
+    aggregate: ESTIMATOR_AGGREGATE,
+};
 
 /// The true-error model of `planner-estimator` on the mission with a water current (the ASC
 /// grid; invented, issue 10 session 29, no thesis values): the AUVs' true dead-reckoning drift
@@ -191,19 +198,57 @@ pub const DEPTH_AWARE_MIN_AUVS: usize = 2;
 pub const AUV_CNA_TRUTH: TruthSpec =
     TruthSpec { drift_m2_s: 0.01, range_noise: RangeNoise { sigma_m: 1.8, per_km_m: 0.0 }, cna_diffusion_m2_s: 0.01 };
 
-/// `planner-estimator` with the ASC: A = 5, [`TRUE_ERROR_LOOK_AHEAD`], [`CURRENT_TRUTH`].
-pub fn asc_estimator(_n: usize) -> EstimatorCell {
+/// `planner-estimator` with the ASC: A = 5, [`TRUE_ERROR_LOOK_AHEAD`], [`CURRENT_TRUTH`]; on
+/// [`sized_schedule`]'s fleets [`sized_fleet`].
+pub fn asc_estimator(n: usize) -> EstimatorCell {
+    if n >= SIZED_SCHEDULE_MIN_AUVS {
+        return sized_fleet(CURRENT_TRUTH);
+    }
     EstimatorCell {
         heading_options: 5,
         look_ahead: TRUE_ERROR_LOOK_AHEAD,
         terminal_levels: None,
         truth: Some(CURRENT_TRUTH),
+        aggregate: ESTIMATOR_AGGREGATE,
+    }
+}
+
+/// `planner-estimator` on [`sized_schedule`]'s fleets, with either CNA: fine headings (A = 21,
+/// about 17° apart within the turn limit's ±176°, against A = 5's 88°), L = 2, H = 40, the true
+/// error (`truth`) joined by the trace sum.
+///
+/// Chosen on the tuning seed (session 33, N = 8 with the sized schedule, minus centroid-standoff
+/// / centroid, m). With the current: A = 5, L = 4, the sum of 1-σ, H = 20 +0.62 [0.52, 0.72] /
+/// (10.19 m, 200 runs); the trace sum −0.13, with H = 40 −0.16 [−0.26, −0.06] / +0.66 [0.52,
+/// 0.79]: centroid won. Finer headings (60 runs, trace sum, H = 40): A = 7 −0.78 / −0.04, A = 9
+/// with L = 3 −1.08 / −0.33, L = 4 −1.11 / −0.36, A = 11 with L = 3 −1.33 / −0.58, A = 13 with
+/// L = 3 −1.23 / −0.49, A = 17 with L = 2 −1.39 / −0.64, A = 21 with L = 2 −1.46 / −0.71 (with
+/// L = 1 −1.27 / −0.53, with the sum of 1-σ −1.27 / −0.53, with H = 20 −1.38 / −0.63), A = 31
+/// −1.39 / −0.64; then A = 21, L = 2 over 200 runs −1.40 [−1.48, −1.32] / −0.68 [−0.76,
+/// −0.60] (8.17 m; trail −1.87). On the slope (the AUV CNA, [`AUV_CNA_TRUTH`]) A = 5, L = 4 with
+/// the filters' covariances +0.30 [0.22, 0.38] (5.61 m, 100 runs), with the true error +0.11
+/// (60 runs); A = 21, L = 2 with the trace sum and H = 40 −0.03 [−0.06, 0.00] over 200 runs
+/// (5.30 m; trail −0.11, centroid −0.22); 100 runs: the same −0.03, with H = 20 −0.02, A = 31
+/// −0.01; 60 runs: A = 11 with L = 3 0.00, the sum of 1-σ −0.02.
+pub fn sized_fleet(truth: TruthSpec) -> EstimatorCell {
+    EstimatorCell {
+        heading_options: 21,
+        look_ahead: 2,
+        terminal_levels: Some(40.0),
+        truth: Some(truth),
+        aggregate: Aggregate::TraceSum,
     }
 }
 
 /// `planner-estimator` with the AUV CNA (pitch options at level 0 only) for N AUVs: the fine
 /// tree [`FINE_AUV_CNA`] from 1 to 5 AUVs but 2 (N = 4 not measured); A = 5 and the filters'
-/// covariances at N = 2 (L = 5) and from 6 AUVs on (L = 4).
+/// covariances at N = 2 (L = 5); on [`sized_schedule`]'s fleets [`sized_fleet`].
+///
+/// Session 33, N = 8 with the sized schedule, A = 5 (tuning seed, minus centroid-standoff): the
+/// filters' covariances +0.30 [0.22, 0.38] m (5.61 m, 100 runs); the true error +0.14 [0.10,
+/// 0.18] over 200 runs (5.47 m), with H = 40 +0.16, with A = 7 and H = 40 +0.08 [0.05, 0.11];
+/// 100 runs: trace sum +0.16, k_b 3 or 9 +0.13 / +0.16, drift 0.03 or 0.003 m²/s +0.16 /
+/// +0.13; 60 runs: L = 5 +0.15. Finer headings did better ([`sized_fleet`]).
 ///
 /// L before session 32 (A = 5): 3 for one AUV, 5 for 2 to 5, 4 from 6 on. Tuning seed, sloping scenario, 20 runs, L = 3 / L = 5: N = 1 3.60 / 3.81 m,
 /// N = 2 3.80 / 3.77 m, N = 3 4.37 / 4.10 m, N = 5 5.28 / 4.98 m, N = 8 7.03 / 6.98 m (L = 6:
@@ -226,14 +271,19 @@ pub fn asc_estimator(_n: usize) -> EstimatorCell {
 /// (−0.03 to +0.12 over drift, range σ and CNA diffusion) with A = 5 and H = 10; session 31: with
 /// A = 9 and H = 40 it does ([`FINE_AUV_CNA`]), so it scores true error with one AUV too.
 pub fn auv_cna_estimator(n: usize) -> EstimatorCell {
-    let coarse = |look_ahead| EstimatorCell { heading_options: 5, look_ahead, terminal_levels: None, truth: None };
     match n {
-        2 => coarse(5),
-        _ if n <= 5 => EstimatorCell {
+        2 => EstimatorCell {
+            heading_options: 5,
+            look_ahead: 5,
+            terminal_levels: None,
+            truth: None,
+            aggregate: ESTIMATOR_AGGREGATE,
+        },
+        _ if n < SIZED_SCHEDULE_MIN_AUVS => EstimatorCell {
             terminal_levels: FINE_AUV_CNA.terminal_levels.filter(|_| n < SPREAD_FLEET_MIN_AUVS),
             ..FINE_AUV_CNA
         },
-        _ => coarse(4),
+        _ => sized_fleet(AUV_CNA_TRUTH),
     }
 }
 
@@ -273,7 +323,7 @@ impl Setting {
         sc.planner.estimator_heading_options = Some(estimator.heading_options);
         sc.planner.estimator_look_ahead = Some(estimator.look_ahead);
         sc.planner.estimator_pitch_levels = self.estimator_pitch_levels;
-        sc.planner.estimator_aggregate = ESTIMATOR_AGGREGATE;
+        sc.planner.estimator_aggregate = estimator.aggregate;
         sc.planner.estimator_bias_per_km = ESTIMATOR_BIAS_PER_KM;
         sc.planner.estimator_terminal_levels = ESTIMATOR_TERMINAL_LEVELS;
         sc.planner.estimator_cna_variance = ESTIMATOR_CNA_VARIANCE;
@@ -297,11 +347,8 @@ impl Setting {
         if let Some(h) = estimator.terminal_levels {
             sc.planner.estimator_terminal_levels = h;
         }
-        // Hudson's schedule needs a slot of air time + travel + guard (4.67 s at rate 0) per
-        // vehicle: 30 s holds up to 5 AUVs, 8 AUVs need 9 slots, 44 s (below 45 s, where the 4°/s
-        // turn limit would reach 180° per period).
-        if n > 5 {
-            sc.comms.tau = 44.0;
+        if n >= SIZED_SCHEDULE_MIN_AUVS {
+            sized_schedule(&mut sc);
         }
         if let Some(d) = duration {
             sc.duration_s = d;
@@ -309,6 +356,33 @@ impl Setting {
         sc
     }
 }
+
+/// Hudson's schedule for more than 5 AUVs, sized for the fleet as a field team would size it.
+/// Each of the N + 1 vehicles needs a slot of air time + travel + guard: 8 AUVs need 9 slots in
+/// 44 s (below 45 s, where the 4°/s turn limit would reach 180° per period), 4.89 s each. At
+/// rate 0 (3.9 s of air time) such a slot holds 1 km of travel, but the fleet spans 4.7 km: for
+/// every policy the last slot's AUV was never heard (its statuses arrive while the CNA sends its
+/// next broadcast) and the first slot's heard few broadcasts (session 32). Rate 1 (3.08 s, and a
+/// success curve no worse than rate 0's in `success`) holds [`SIZED_RANGE_M`] in the same slot.
+///
+/// Measured on the tuning seed (session 33, 100 runs, N = 8, rate 0 with 1 km slots → this):
+/// centroid-standoff 17.8 → 9.6 m with the current and 6.2 → 5.3 m on the slope, trail 18.2 →
+/// 10.0 and 6.1 → 5.4 m: the old schedule weakened the baselines more than the planner, which
+/// alone knew its reach (`planner.estimator_slot_reach`). Up to 5 AUVs (τ = 30 s, 6 slots of
+/// 5 s) no status was lost in the air and rate 1 changed no cell's outcome, so those keep rate 0.
+fn sized_schedule(sc: &mut Scenario) {
+    sc.comms.tau = 44.0;
+    sc.comms.cna_rate = Rate::R1;
+    sc.comms.status_rate = Rate::R1;
+    sc.comms.max_range_m = SIZED_RANGE_M;
+}
+
+/// From this many AUVs on the evaluation flies [`sized_schedule`].
+pub const SIZED_SCHEDULE_MIN_AUVS: usize = 6;
+
+/// The longest range [`sized_schedule`]'s slots hold: the 8-AUV fleet's half-span and more
+/// (rate 1: 3.08 s of air time + 2.5 km at the slowest 1488 m/s + 0.1 s guard = 4.86 s).
+pub const SIZED_RANGE_M: f64 = 2500.0;
 
 /// Runs per policy and cell of the reduced form (15-minute missions). 8 since session 27: with
 /// the iterated range update centroid no longer diverges, and 4 runs left its current N = 3 cell
@@ -408,7 +482,12 @@ pub fn evaluate(
         settings.iter().flat_map(|s| s.n.iter().map(move |&n| s.scenario(n, seed, duration))).collect();
     let comparisons = monte_carlo_grid(&scenarios, policies, runs, progress).map_err(|e| fail(e.to_string()))?;
     for ((name, sc), c) in names.iter().zip(&scenarios).zip(comparisons) {
-        let _ = writeln!(table, "scenario {name}, tau = {} s", sc.comms.tau);
+        let comms = &sc.comms;
+        let _ = writeln!(
+            table,
+            "scenario {name}, tau = {} s, CNA rate {}, status rate {}, slots for {} m",
+            comms.tau, comms.cna_rate, comms.status_rate, comms.max_range_m
+        );
         table += &comparison_table(&c);
         let inherits_cna_error = sc.cna.auv.as_ref().is_some_and(|a| !a.broadcasts_truth);
         cell_checks(name, &c, inherits_cna_error, &mut table, &mut checks, &mut cells)?;
@@ -428,8 +507,9 @@ pub fn evaluate(
 /// planner-estimator's tree and cost in every cell, as its scenario sets them: A headings, L
 /// levels, H levels of cost-to-go, and whether it scores true error or the filters' covariances.
 fn estimator_trees(settings: &[Setting], seed: u64, duration: Option<f64>) -> String {
-    let mut out =
-        String::from("planner-estimator's tree per cell (A headings, L levels, H levels of cost-to-go, cost):\n");
+    let mut out = String::from(
+        "planner-estimator's tree per cell (A headings, L levels, H levels of cost-to-go, cost, aggregate):\n",
+    );
     for s in settings {
         let cells: Vec<String> =
             s.n.iter()
@@ -438,7 +518,9 @@ fn estimator_trees(settings: &[Setting], seed: u64, duration: Option<f64>) -> St
                     let a = p.estimator_heading_options.unwrap_or(p.heading_options);
                     let l = p.estimator_look_ahead.unwrap_or(p.look_ahead);
                     let cost = if p.estimator_truth.is_some() { "true error" } else { "covariance" };
-                    format!("N={n}: A={a} L={l} H={} {cost}", p.estimator_terminal_levels)
+                    let aggregate = serde_json::to_value(p.estimator_aggregate).unwrap_or_default();
+                    let aggregate = aggregate.as_str().unwrap_or("?");
+                    format!("N={n}: A={a} L={l} H={} {cost} {aggregate}", p.estimator_terminal_levels)
                 })
                 .collect();
         let _ = writeln!(out, "  {}: {}", s.name, cells.join(" | "));
@@ -706,6 +788,7 @@ pub fn difference_svg(cells: &[Cell]) -> Result<String, PlotError> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::closed_loop::monte_carlo;
     use crate::models::surfacing::at_surface;
     use coopnav_plan::CnaKind;
 
@@ -835,8 +918,8 @@ mod tests {
     }
 
     /// The second scenario is an AUV-CNA one: at every N every policy's CNA works submerged (at the
-    /// surface it would have its GPS there and be a surface craft in all but speed). At N = 1, 3 and
-    /// 5 planner-estimator scores true error with the CNA's own diffusion.
+    /// surface it would have its GPS there and be a surface craft in all but speed). At N = 1, 3, 5
+    /// and 8 planner-estimator scores true error with the CNA's own diffusion.
     #[test]
     fn the_auv_cna_works_below_the_surface_at_every_fleet_size() {
         let (settings, _, _) = setup(&ReproOptions { size: Size::Full, seed: 1 }).unwrap();
@@ -850,42 +933,69 @@ mod tests {
                 CnaKind::Asc {} => panic!("N = {n}: an ASC"),
             }
             let truth = sc.planner.estimator_truth;
-            assert_eq!(truth, [1, 3, 5].contains(&n).then_some(AUV_CNA_TRUTH), "N = {n}");
+            assert_eq!(truth, [1, 3, 5, 8].contains(&n).then_some(AUV_CNA_TRUTH), "N = {n}");
             let diffusion = sc.cna.auv.as_ref().unwrap().nav_diffusion;
             assert_eq!(AUV_CNA_TRUTH.cna_diffusion_m2_s, diffusion, "the scenario's own diffusion");
         }
     }
 
     /// The fine tree (A = 9, L = 3, H = 40 below the spread fleets' H) for planner-estimator with
-    /// the AUV CNA and 1, 3 or 5 AUVs only: Hudson's planner, the ASC's cells and the AUV CNA's
-    /// N = 2 and 8 keep A = 5, their L and H; the report's header says which cell has which.
+    /// the AUV CNA and 1, 3 or 5 AUVs; the fine headings of `sized_fleet` (A = 21, L = 2, H = 40,
+    /// the trace sum) with either CNA from 6 AUVs on; Hudson's planner, the ASC's cells up to 5
+    /// AUVs and the AUV CNA's N = 2 keep A = 5, their L and H. The report's header says which
+    /// cell has which.
     #[test]
-    fn the_auv_cna_plans_one_three_and_five_auvs_with_the_fine_tree() {
+    fn each_cell_plans_with_its_tree() {
         let (settings, _, _) = setup(&ReproOptions { size: Size::Full, seed: 1 }).unwrap();
         for setting in &settings {
             for &n in &setting.n {
                 let p = setting.scenario(n, 1, None).planner;
                 let fine = setting.name == "sloping-auv-cna" && [1, 3, 5].contains(&n);
-                let a = if fine { FINE_AUV_CNA.heading_options } else { 5 };
-                assert_eq!(p.estimator_heading_options, Some(a), "{} N = {n}", setting.name);
-                assert_eq!(p.heading_options, 5, "Hudson's planner, {} N = {n}", setting.name);
-                assert_eq!(p.look_ahead, 5, "Hudson's planner, {} N = {n}", setting.name);
-                assert_eq!(p.estimator_look_ahead == Some(FINE_AUV_CNA.look_ahead), fine, "{} N = {n}", setting.name);
-                let h = p.estimator_terminal_levels;
-                let want_h = match (fine, n >= SPREAD_FLEET_MIN_AUVS) {
-                    (_, true) => SPREAD_TERMINAL_LEVELS,
-                    (true, false) => FINE_AUV_CNA.terminal_levels.unwrap(),
-                    (false, false) => ESTIMATOR_TERMINAL_LEVELS,
+                let sized = n >= SIZED_SCHEDULE_MIN_AUVS;
+                let (a, l, h) = match (fine, sized) {
+                    (_, true) => (21, 2, 40.0),
+                    (true, false) => (9, 3, if n >= SPREAD_FLEET_MIN_AUVS { SPREAD_TERMINAL_LEVELS } else { 40.0 }),
+                    (false, false) => {
+                        let h =
+                            if n >= SPREAD_FLEET_MIN_AUVS { SPREAD_TERMINAL_LEVELS } else { ESTIMATOR_TERMINAL_LEVELS };
+                        (5, if setting.name == "current" { TRUE_ERROR_LOOK_AHEAD } else { 5 }, h)
+                    }
                 };
-                assert_eq!(h, want_h, "{} N = {n}", setting.name);
+                let cell = format!("{} N = {n}", setting.name);
+                assert_eq!(p.estimator_heading_options, Some(a), "{cell}");
+                assert_eq!(p.estimator_look_ahead, Some(l), "{cell}");
+                assert_eq!(p.estimator_terminal_levels, h, "{cell}");
+                let aggregate = if sized { Aggregate::TraceSum } else { ESTIMATOR_AGGREGATE };
+                assert_eq!(p.estimator_aggregate, aggregate, "{cell}");
+                assert_eq!((p.heading_options, p.look_ahead), (5, 5), "Hudson's planner, {cell}");
             }
         }
         let header = estimator_trees(&settings, 1, None);
-        assert!(
-            header.contains("sloping-auv-cna: N=1: A=9 L=3 H=40 true error | N=2: A=5 L=5 H=10 covariance"),
-            "{header}"
-        );
-        assert!(header.contains("N=5: A=9 L=3 H=20 true error | N=8: A=5 L=4 H=20 covariance"), "{header}");
+        let sloping =
+            "sloping-auv-cna: N=1: A=9 L=3 H=40 true error sigma_sum | N=2: A=5 L=5 H=10 covariance sigma_sum";
+        assert!(header.contains(sloping), "{header}");
+        assert!(header.contains("N=5: A=9 L=3 H=20 true error sigma_sum | N=8: A=21 L=2 H=40 true error trace_sum"));
+        assert!(header.contains("N=5: A=5 L=4 H=20 true error sigma_sum | N=8: A=21 L=2 H=40 true error trace_sum"));
+    }
+
+    #[test]
+    fn eight_auvs_fly_a_schedule_sized_for_the_fleet() {
+        let (settings, _, _) = setup(&ReproOptions { size: Size::Full, seed: 1 }).unwrap();
+        let heard = |sc: &Scenario| {
+            let c = monte_carlo(sc, &["centroid-standoff".to_string()], 1, &|_| {}).unwrap();
+            c.policies[0].auv_heard_runs.clone()
+        };
+        for setting in &settings {
+            let small = setting.scenario(5, 1, None).comms;
+            assert_eq!((small.cna_rate, small.status_rate, small.tau), (Rate::R0, Rate::R0, 30.0), "{}", setting.name);
+            let sized = setting.scenario(8, 1, Some(900.0));
+            let c = &sized.comms;
+            assert_eq!((c.cna_rate, c.status_rate, c.tau, c.max_range_m), (Rate::R1, Rate::R1, 44.0, SIZED_RANGE_M));
+            assert_eq!(heard(&sized), vec![1; 8], "{}: every AUV heard", setting.name);
+            let mut rate0 = sized.clone();
+            (rate0.comms.cna_rate, rate0.comms.status_rate, rate0.comms.max_range_m) = (Rate::R0, Rate::R0, 1000.0);
+            assert_eq!(heard(&rate0)[7], 0, "{}: the last slot's AUV, rate 0", setting.name);
+        }
     }
 
     #[test]
