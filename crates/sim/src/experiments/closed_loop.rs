@@ -11,7 +11,9 @@
 //! levels with the AUV CNA) were picked on base seed [`TUNING_SEED`] (runs `run_seed(1000, 0..R)`, R = 6 to 40); the
 //! evaluation uses the base seed of `--seed` (default 1, runs `run_seed(1, 0..runs)`) and refuses
 //! the tuning seed. The
-//! baselines run exactly as configured elsewhere (nothing is tuned for or against them).
+//! baselines run exactly as configured elsewhere (nothing is tuned for or against them). From 6
+//! AUVs on every policy flies a schedule sized for the fleet ([`sized_schedule`]): rate 0's 1 km
+//! slots, which the planner alone modelled, lost the last slot's AUV for every policy.
 
 use super::{Check, Experiment, ExperimentError, ReproOptions, ReproReport, Size};
 use crate::closed_loop::mc::{paired_per_auv, Ci, Comparison, PolicySummary};
@@ -95,7 +97,8 @@ pub struct EstimatorCell {
 /// −0.13 [−0.24, −0.03] (runs 100–299 alone −0.065 → −0.155); 100 runs, racetrack −0.11 → −0.17,
 /// centroid-standoff −0.21 → −0.27; current N = 8 12.43 → 11.63 m (RMS 16.61 → 13.97); current
 /// N = 5 6.65 → 6.66, sloping N = 5 identical; up to 3 AUVs every reach exceeds 6 km and nothing
-/// changes.
+/// changes. (Those 8-AUV figures are of rate 0's 1 km slots; [`sized_schedule`]'s rate 1 puts the
+/// first slot's reach at 2.7 km.)
 pub const SLOT_REACH: bool = true;
 
 /// The AUV CNA's fine tree: A = 9 headings, L = 3, H = 40 levels of cost-to-go (from
@@ -366,7 +369,7 @@ impl Setting {
 /// success curve no worse than rate 0's in `success`) holds [`SIZED_RANGE_M`] in the same slot.
 ///
 /// Measured on the tuning seed (session 33, 100 runs, N = 8, rate 0 with 1 km slots → this):
-/// centroid-standoff 17.8 → 9.6 m with the current and 6.2 → 5.3 m on the slope, trail 18.2 →
+/// centroid-standoff 17.8 → 9.6 m with the current and 6.3 → 5.3 m on the slope, trail 18.2 →
 /// 10.0 and 6.1 → 5.4 m: the old schedule weakened the baselines more than the planner, which
 /// alone knew its reach (`planner.estimator_slot_reach`). Up to 5 AUVs (τ = 30 s, 6 slots of
 /// 5 s) no status was lost in the air and rate 1 changed no cell's outcome, so those keep rate 0.
