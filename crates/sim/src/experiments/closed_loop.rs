@@ -221,8 +221,8 @@ pub fn asc_estimator(n: usize) -> EstimatorCell {
 /// error (`truth`) joined by the trace sum.
 ///
 /// Chosen on the tuning seed (session 33, N = 8 with the sized schedule, minus centroid-standoff
-/// / centroid, m). With the current: A = 5, L = 4, the sum of 1-σ, H = 20 +0.62 [0.52, 0.72] /
-/// (10.19 m, 200 runs); the trace sum −0.13, with H = 40 −0.16 [−0.26, −0.06] / +0.66 [0.52,
+/// / centroid, m). With the current: A = 5, L = 4, the sum of 1-σ, H = 20 +0.62 [0.52, 0.72] (10.19 m,
+/// 200 runs; centroid not run); the trace sum −0.13, with H = 40 −0.16 [−0.26, −0.06] / +0.66 [0.52,
 /// 0.79]: centroid won. Finer headings (60 runs, trace sum, H = 40): A = 7 −0.78 / −0.04, A = 9
 /// with L = 3 −1.08 / −0.33, L = 4 −1.11 / −0.36, A = 11 with L = 3 −1.33 / −0.58, A = 13 with
 /// L = 3 −1.23 / −0.49, A = 17 with L = 2 −1.39 / −0.64, A = 21 with L = 2 −1.46 / −0.71 (with
@@ -508,7 +508,8 @@ pub fn evaluate(
 }
 
 /// planner-estimator's tree and cost in every cell, as its scenario sets them: A headings, L
-/// levels, H levels of cost-to-go, and whether it scores true error or the filters' covariances.
+/// levels, H levels of cost-to-go, whether it scores true error or the filters' covariances, and
+/// how it joins the AUVs' terms.
 fn estimator_trees(settings: &[Setting], seed: u64, duration: Option<f64>) -> String {
     let mut out = String::from(
         "planner-estimator's tree per cell (A headings, L levels, H levels of cost-to-go, cost, aggregate):\n",
@@ -981,6 +982,10 @@ mod tests {
         assert!(header.contains("N=5: A=5 L=4 H=20 true error sigma_sum | N=8: A=21 L=2 H=40 true error trace_sum"));
     }
 
+    /// From 6 AUVs on the schedule is sized for the fleet: rate 1 in 44 s slots holding 2.5 km,
+    /// where rate 0's 1 km slots lost the last slot's AUV for every policy. A 15-minute mission
+    /// of centroid-standoff with 8 AUVs hears every AUV under the sized schedule, and never the
+    /// last one under rate 0's (the measured reason for the change); smaller fleets keep rate 0.
     #[test]
     fn eight_auvs_fly_a_schedule_sized_for_the_fleet() {
         let (settings, _, _) = setup(&ReproOptions { size: Size::Full, seed: 1 }).unwrap();
