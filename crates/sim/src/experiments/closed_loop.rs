@@ -79,7 +79,8 @@ pub struct Setting {
 /// `planner-estimator`'s tree and cost in one cell: A heading options, L levels, H levels of
 /// cost-to-go (None: [`ESTIMATOR_TERMINAL_LEVELS`], or [`SPREAD_TERMINAL_LEVELS`] from
 /// [`SPREAD_FLEET_MIN_AUVS`] AUVs on), the true-error model it scores (None: the filters'
-/// covariances) and how it joins the AUVs' terms.
+/// covariances), how it joins the AUVs' terms, and k_b (None: [`ESTIMATOR_BIAS_PER_KM`], or
+/// [`DEPTH_AWARE_BIAS_PER_KM`] where the AUV CNA chooses its depth).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct EstimatorCell {
     pub heading_options: usize,
@@ -87,6 +88,7 @@ pub struct EstimatorCell {
     pub terminal_levels: Option<f64>,
     pub truth: Option<TruthSpec>,
     pub aggregate: Aggregate,
+    pub bias_per_km: Option<f64>,
 }
 
 /// `planner-estimator` knows its schedule's half-duplex reach (`planner.estimator_slot_reach`,
@@ -129,6 +131,7 @@ pub const FINE_AUV_CNA: EstimatorCell = EstimatorCell {
     terminal_levels: Some(40.0),
     truth: Some(AUV_CNA_TRUTH),
     aggregate: ESTIMATOR_AGGREGATE,
+    bias_per_km: None,
 };
 
 /// The true-error model of `planner-estimator` on the mission with a water current (the ASC
@@ -213,6 +216,7 @@ pub fn asc_estimator(n: usize) -> EstimatorCell {
         terminal_levels: None,
         truth: Some(CURRENT_TRUTH),
         aggregate: ESTIMATOR_AGGREGATE,
+        bias_per_km: None,
     }
 }
 
@@ -240,6 +244,7 @@ pub fn sized_fleet(truth: TruthSpec) -> EstimatorCell {
         terminal_levels: Some(40.0),
         truth: Some(truth),
         aggregate: Aggregate::TraceSum,
+        bias_per_km: None,
     }
 }
 
@@ -251,7 +256,8 @@ pub fn sized_fleet(truth: TruthSpec) -> EstimatorCell {
 /// filters' covariances +0.30 [0.22, 0.38] m (5.61 m, 100 runs); the true error +0.14 [0.10,
 /// 0.18] over 200 runs (5.47 m), with H = 40 +0.16, with A = 7 and H = 40 +0.08 [0.05, 0.11];
 /// 100 runs: trace sum +0.16, k_b 3 or 9 +0.13 / +0.16, drift 0.03 or 0.003 m²/s +0.16 /
-/// +0.13; 60 runs: L = 5 +0.15. Finer headings did better ([`sized_fleet`]).
+/// +0.13; 60 runs: L = 5 +0.15. Finer headings did better ([`sized_fleet`]), and with them a
+/// smaller k_b ([`SIZED_AUV_CNA_BIAS_PER_KM`]).
 ///
 /// L before session 32 (A = 5): 3 for one AUV, 5 for 2 to 5, 4 from 6 on. Tuning seed, sloping scenario, 20 runs, L = 3 / L = 5: N = 1 3.60 / 3.81 m,
 /// N = 2 3.80 / 3.77 m, N = 3 4.37 / 4.10 m, N = 5 5.28 / 4.98 m, N = 8 7.03 / 6.98 m (L = 6:
@@ -281,12 +287,13 @@ pub fn auv_cna_estimator(n: usize) -> EstimatorCell {
             terminal_levels: None,
             truth: None,
             aggregate: ESTIMATOR_AGGREGATE,
+            bias_per_km: None,
         },
         _ if n < SIZED_SCHEDULE_MIN_AUVS => EstimatorCell {
             terminal_levels: FINE_AUV_CNA.terminal_levels.filter(|_| n < SPREAD_FLEET_MIN_AUVS),
             ..FINE_AUV_CNA
         },
-        _ => sized_fleet(AUV_CNA_TRUTH),
+        _ => EstimatorCell { bias_per_km: Some(SIZED_AUV_CNA_BIAS_PER_KM), ..sized_fleet(AUV_CNA_TRUTH) },
     }
 }
 
@@ -338,6 +345,9 @@ impl Setting {
         if depth_aware {
             sc.planner.estimator_bias_per_km = DEPTH_AWARE_BIAS_PER_KM;
         }
+        if let Some(k_b) = estimator.bias_per_km {
+            sc.planner.estimator_bias_per_km = k_b;
+        }
         if let Some(truth) = estimator.truth {
             sc.planner.estimator_truth = Some(truth);
             sc.planner.estimator_unmodelled_current = [sc.fleet.current.0, sc.fleet.current.1];
@@ -379,6 +389,13 @@ fn sized_schedule(sc: &mut Scenario) {
     sc.comms.status_rate = Rate::R1;
     sc.comms.max_range_m = SIZED_RANGE_M;
 }
+
+/// k_b of `planner-estimator` with the AUV CNA and [`sized_fleet`]'s fine headings (on top of
+/// the profile's own scale error, as [`DEPTH_AWARE_BIAS_PER_KM`]). Chosen on the tuning seed
+/// (session 33, sloping N = 8, minus centroid-standoff, m): 100 runs, k_b 0 −0.10, 1.5 −0.10, 3
+/// −0.09, 6 −0.03, 9 +0.03; 300 runs, k_b 1.5 −0.11 (trail −0.17, centroid −0.29), k_b 3 −0.09
+/// (runs 100–299 alone −0.115 and −0.09); k_b 6 over 200 runs −0.03 [−0.06, 0.00].
+pub const SIZED_AUV_CNA_BIAS_PER_KM: f64 = 1.5;
 
 /// From this many AUVs on the evaluation flies [`sized_schedule`].
 pub const SIZED_SCHEDULE_MIN_AUVS: usize = 6;
@@ -946,8 +963,9 @@ mod tests {
     /// The fine tree (A = 9, L = 3, H = 40 below the spread fleets' H) for planner-estimator with
     /// the AUV CNA and 1, 3 or 5 AUVs; the fine headings of `sized_fleet` (A = 21, L = 2, H = 40,
     /// the trace sum) with either CNA from 6 AUVs on; Hudson's planner, the ASC's cells up to 5
-    /// AUVs and the AUV CNA's N = 2 keep A = 5, their L and H. The report's header says which
-    /// cell has which.
+    /// AUVs and the AUV CNA's N = 2 keep A = 5, their L and H. k_b is the AUV CNA's own where it
+    /// chooses its depth, smaller with the fine headings. The report's header says which cell
+    /// has which.
     #[test]
     fn each_cell_plans_with_its_tree() {
         let (settings, _, _) = setup(&ReproOptions { size: Size::Full, seed: 1 }).unwrap();
@@ -971,6 +989,12 @@ mod tests {
                 assert_eq!(p.estimator_terminal_levels, h, "{cell}");
                 let aggregate = if sized { Aggregate::TraceSum } else { ESTIMATOR_AGGREGATE };
                 assert_eq!(p.estimator_aggregate, aggregate, "{cell}");
+                let k_b = match (setting.name == "sloping-auv-cna", sized) {
+                    (true, true) => SIZED_AUV_CNA_BIAS_PER_KM,
+                    (true, false) if n >= DEPTH_AWARE_MIN_AUVS => DEPTH_AWARE_BIAS_PER_KM,
+                    _ => ESTIMATOR_BIAS_PER_KM,
+                };
+                assert_eq!(p.estimator_bias_per_km, k_b, "{cell}");
                 assert_eq!((p.heading_options, p.look_ahead), (5, 5), "Hudson's planner, {cell}");
             }
         }
