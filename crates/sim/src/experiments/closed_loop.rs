@@ -378,6 +378,10 @@ impl Setting {
 /// next broadcast) and the first slot's heard few broadcasts (session 32). Rate 1 (3.08 s, and a
 /// success curve no worse than rate 0's in `success`) holds [`SIZED_RANGE_M`] in the same slot.
 ///
+/// Invented (issue 10, session 33): the thesis flies 15 s slots for 1–2 AUVs (digest hudson §4.3,
+/// §7.2); the air times are the Micro-Modem's (digest nams §1.4). Every field is the scenario's
+/// own (`comms.tau`, `comms.cna_rate`, `comms.status_rate`, `comms.max_range_m`).
+///
 /// Measured on the tuning seed (session 33, 100 runs, N = 8, rate 0 with 1 km slots → this):
 /// centroid-standoff 17.8 → 9.6 m with the current and 6.3 → 5.3 m on the slope, trail 18.2 →
 /// 10.0 and 6.1 → 5.4 m: the old schedule weakened the baselines more than the planner, which
@@ -391,7 +395,8 @@ fn sized_schedule(sc: &mut Scenario) {
 }
 
 /// k_b of `planner-estimator` with the AUV CNA and [`sized_fleet`]'s fine headings (on top of
-/// the profile's own scale error, as [`DEPTH_AWARE_BIAS_PER_KM`]). Chosen on the tuning seed
+/// the profile's own scale error, as [`DEPTH_AWARE_BIAS_PER_KM`]; invented, no thesis value,
+/// `planner.estimator_bias_per_km`). Chosen on the tuning seed
 /// (session 33, sloping N = 8, minus centroid-standoff, m): 100 runs, k_b 0 −0.10, 1.5 −0.10, 3
 /// −0.09, 6 −0.03, 9 +0.03; 300 runs, k_b 1.5 −0.11 (trail −0.17, centroid −0.29), k_b 3 −0.09
 /// (runs 100–299 alone −0.115 and −0.09); k_b 6 over 200 runs −0.03 [−0.06, 0.00].
@@ -400,7 +405,8 @@ pub const SIZED_AUV_CNA_BIAS_PER_KM: f64 = 1.5;
 /// From this many AUVs on the evaluation flies [`sized_schedule`].
 pub const SIZED_SCHEDULE_MIN_AUVS: usize = 6;
 
-/// The longest range [`sized_schedule`]'s slots hold: the 8-AUV fleet's half-span and more
+/// The longest range [`sized_schedule`]'s slots hold (invented, no thesis value): the 8-AUV
+/// fleet's half-span and more
 /// (rate 1: 3.08 s of air time + 2.5 km at the slowest 1488 m/s + 0.1 s guard = 4.86 s).
 pub const SIZED_RANGE_M: f64 = 2500.0;
 
