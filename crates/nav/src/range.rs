@@ -28,7 +28,7 @@ impl RangeMeasurement {
 /// Range noise model. Reconstructed: gill digest §10 A2/A3 (the thesis keeps R^A at unpublished
 /// MSBL values). Defaults: σ_c = 3 m/s, c = 1500 m/s, and σ_τ = 1.2 ms, so that c·σ_τ = 1.80 m is
 /// the RMS error of a received range under the thesis's acoustic mixture (§5.4: 85 % within
-/// 0.2 m, 5 % 5–10 m long; `coopnav_sim::hbl::noise::Acoustic::received_error_mean_square`,
+/// 0.2 m, 5 % 5–10 m long; `coopnav_sim::models::noise::Acoustic::received_error_mean_square`,
 /// whose test pins this value). The digest's placeholder 0.1 ms (0.15 m) ignored the outliers.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]

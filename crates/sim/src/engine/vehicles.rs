@@ -4,11 +4,11 @@
 //! broadcast sensors and clock).
 
 use crate::closed_loop::scenario::Scenario;
-use crate::hbl::noise::{normal, BuoyMotion, CompassBias};
 use crate::models::buoy::BuoySpec;
 use crate::models::channel::Clock;
 use crate::models::finish::Action;
 use crate::models::minipacket;
+use crate::models::noise::{normal, BuoyMotion, CompassBias};
 use crate::models::ship::ShipSpec;
 use coopnav_acomms::node_report::{NodeReport, VehicleType};
 use coopnav_acomms::selector::{RatePolicy, RatePolicySpec};

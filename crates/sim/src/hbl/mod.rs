@@ -7,7 +7,6 @@
 
 pub mod grid;
 pub mod log_format;
-pub mod noise;
 pub mod plot;
 pub mod profile;
 pub mod record;

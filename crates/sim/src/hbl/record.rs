@@ -11,7 +11,7 @@ use crate::closed_loop::{PolicyError, PolicySpec, RunResult, Scenario};
 use crate::engine::{
     BuoyFix, BuoySample, DeadReckoning, FilterStart, Observer, RangeHeard, ShipPose, ShipSample, TraceRow,
 };
-use crate::hbl::noise::normal;
+use crate::models::noise::normal;
 use crate::models::schedule::Owner;
 use coopnav_core::{CompassDeg, Heading, SeedStream, Vec3};
 use coopnav_nav::cycle::Transmitter;

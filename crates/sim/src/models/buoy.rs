@@ -5,7 +5,7 @@
 //! buoy vehicle is in `engine/vehicles.rs`.
 
 use super::minipacket::zone_problems;
-use crate::hbl::noise::{BuoyMotion, LakeDrift};
+use crate::models::noise::{BuoyMotion, LakeDrift};
 use coopnav_acomms::Rate;
 use coopnav_nav::codec::Zone;
 use coopnav_nav::SurfaceParams;

@@ -4,7 +4,7 @@
 //! Defaults make the truth differ from the filter's model as the sea does: Gill's error mixture
 //! with outliers instead of the filter's Gaussian, and a layered profile instead of 1500 m/s.
 
-use crate::hbl::noise::{draw_reception, normal, Acoustic, Reception};
+use crate::models::noise::{draw_reception, normal, Acoustic, Reception};
 use coopnav_acomms::Rate;
 use coopnav_core::Vec3;
 use rand_chacha::ChaCha8Rng;

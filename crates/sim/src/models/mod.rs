@@ -12,6 +12,7 @@ pub mod filter;
 pub mod finish;
 pub mod minipacket;
 pub mod mower;
+pub mod noise;
 pub mod peer;
 pub mod schedule;
 pub mod ship;
