@@ -15,7 +15,7 @@ use coopnav_core::{Bathymetry, CompassDeg, Heading, Vec3};
 use coopnav_nav::codec::{Direction, MiniPacket, Sentence};
 use coopnav_nav::cycle::{Configuration, Cycle};
 use coopnav_nav::post::{self, PostConfig};
-use coopnav_sim::{closed_loop, hbl, predeploy};
+use coopnav_sim::{closed_loop, hbl, predeploy, scenario};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use std::panic::{catch_unwind, AssertUnwindSafe};
@@ -99,7 +99,7 @@ fn hbl_seed() -> Vec<u8> {
     hbl::zone::table5_file(Configuration::HblTwo).1.into()
 }
 fn hbl_parse(b: &[u8]) -> bool {
-    hbl::scenario::parse(&text(b), Path::new("fuzz.toml")).is_ok()
+    scenario::hbl::parse(&text(b), Path::new("fuzz.toml")).is_ok()
 }
 
 fn cycle_seed() -> Vec<u8> {
@@ -127,7 +127,7 @@ fn track_seed() -> Vec<u8> {
     b"t,x,y,z\n0,0,0,5\n1,1.5,2,5\n2,3,4.25,5.5\n3,4.5,6.5,6\n".to_vec()
 }
 fn track_parse(b: &[u8]) -> bool {
-    predeploy::tracks::parse_track_csv(&text(b), Path::new("fuzz.csv")).is_ok()
+    scenario::tracks::parse_track_csv(&text(b), Path::new("fuzz.csv")).is_ok()
 }
 
 fn ascii_grid_seed() -> Vec<u8> {

@@ -11,13 +11,14 @@ use coopnav_nav::post_tune::{self, Scored, TuneOptions, TuneReport};
 use coopnav_sim::closed_loop::Scenario;
 use coopnav_sim::hbl::grid::{self, GridSpec};
 use coopnav_sim::hbl::log_format::LogFormat;
+use coopnav_sim::hbl::plot;
 use coopnav_sim::hbl::record::record_pass;
 use coopnav_sim::hbl::tune::{tune, Coefficient, Objective, TuneSpec};
 use coopnav_sim::hbl::zone::{
     table5_file, table5_scenario, zone_monte_carlo_with_progress, RunCounts, ZoneMetrics, ZoneSpec,
 };
-use coopnav_sim::hbl::{plot, scenario as hbl_scenario};
 use coopnav_sim::output::{Manifest, RunDir};
+use coopnav_sim::scenario::hbl as hbl_scenario;
 use coopnav_sim::work;
 
 /// x_rel bin of the Monte Carlo error profile (m).

@@ -11,7 +11,7 @@ use coopnav_moos::mission::EXAMPLE_ORIGIN_DEG;
 use coopnav_plan::LookAheadPlanner;
 use coopnav_sim::moos_export;
 use coopnav_sim::predeploy::{self, output::write_run, Scenario, EXAMPLE};
-use coopnav_sim::scenario_file::Validate;
+use coopnav_sim::scenario::file::Validate;
 use coopnav_sim::work;
 use indicatif::{ProgressBar, ProgressStyle};
 use std::io::IsTerminal;

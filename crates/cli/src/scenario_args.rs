@@ -9,7 +9,7 @@ use crate::input;
 use anyhow::Result;
 use coopnav_core::limits::{self, Estimate};
 use coopnav_sim::output::RunDir;
-use coopnav_sim::scenario_file::{self, Validate};
+use coopnav_sim::scenario::file::{self as scenario_file, Validate};
 use serde::de::DeserializeOwned;
 use std::marker::PhantomData;
 use std::path::{Path, PathBuf};

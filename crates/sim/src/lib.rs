@@ -16,6 +16,6 @@ pub mod plot;
 pub mod policy;
 pub mod predeploy;
 pub mod report;
-pub mod scenario_file;
+pub mod scenario;
 pub mod stats;
 pub mod work;

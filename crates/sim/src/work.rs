@@ -82,7 +82,7 @@ pub fn predeploy(sc: &predeploy::Scenario) -> Vec<Estimate> {
     for (i, a) in sc.auv.iter().enumerate() {
         if let Some(m) = &a.lawnmower {
             let duration = lawnmower_duration(m.lanes, m.lane_length, m.spacing, m.speed);
-            let n = duration / predeploy::scenario::LAWNMOWER_DT;
+            let n = duration / crate::scenario::plan::LAWNMOWER_DT;
             out.push(Estimate::new(
                 "track samples",
                 format!("auv[{i}].lawnmower lanes, lane_length, spacing, speed"),

@@ -5,8 +5,8 @@
 
 use super::metrics::LinkStats;
 use super::policies::{PolicyError, PolicySpec};
-use super::scenario::Scenario;
 use crate::engine::{run, Faults, Observer, RunResult};
+use crate::scenario::world::Scenario;
 use crate::stats::{t_975, Stats};
 use coopnav_core::run_seed;
 use rayon::prelude::*;

@@ -10,13 +10,12 @@ pub mod metrics;
 pub mod output;
 pub mod planner_policy;
 pub mod policies;
-pub mod scenario;
 
 pub use crate::engine::{run, run_traced, Faults, PhaseClock, RunResult, Timing};
+pub use crate::scenario::world::{BeforeFirstReport, Scenario, ScenarioError, EXAMPLE};
 pub use mc::{compare, comparison_table, monte_carlo, monte_carlo_grid, monte_carlo_until, Comparison, PolicySummary};
 pub use planner_policy::{ErrorTracker, PlannerPolicy, PlannerStats};
 pub use policies::{Policy, PolicyError, PolicySpec, POLICY_NAMES};
-pub use scenario::{BeforeFirstReport, Scenario, ScenarioError, EXAMPLE};
 
 #[cfg(test)]
 mod tests;

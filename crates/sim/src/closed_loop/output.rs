@@ -2,11 +2,11 @@
 //! manifest.json, SVG plots (tracks true/estimated/CNA, error vs time per AUV, comms timeline)
 //! and a self-contained report.html that shows every plot inline.
 
-use super::scenario::Scenario;
 use crate::engine::{RunResult, Trace, TraceRow};
 use crate::output::{Manifest, RunDir, WriteError};
 use crate::plot::{line_svg, track_svg, Labels, PlotError, Series};
 use crate::report::HtmlReport;
+use crate::scenario::world::Scenario;
 use std::path::PathBuf;
 
 /// The plots every run directory holds: (file, caption).

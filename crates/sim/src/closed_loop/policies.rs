@@ -2,13 +2,13 @@
 //! baselines of [`crate::policy`], configured from the scenario (survey area, fleet, CNA start).
 
 use super::planner_policy::{LikelihoodLink, PingLikelihood, PlannerPolicy, PlannerStats, UnheardGrowth};
-use super::scenario::{EstimatorTracking, PlannerLink, Scenario};
 use crate::policy::{
     Centroid, CentroidStandoff, CnaPolicy, FixedPattern, GreedyFisher, MidpointRelay, NoCna, Rect, TimedWaypoints,
     Trail,
 };
 use crate::predeploy::runner;
-use crate::predeploy::scenario::Mission;
+use crate::scenario::plan::Mission;
+use crate::scenario::world::{EstimatorTracking, PlannerLink, Scenario};
 use coopnav_acomms::selector::{FixedRate, RatePolicy};
 use coopnav_acomms::tl::{TlError, TransmissionLoss, TL_CEILING};
 use coopnav_acomms::Receiver;
@@ -359,7 +359,7 @@ pub fn receiver(to_cna: bool) -> Receiver {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::closed_loop::scenario::PlannerLink;
+    use crate::scenario::world::PlannerLink;
 
     /// The planners' success likelihood at each distance, under `link`.
     fn likelihood_at(sc: &Scenario, link: PlannerLink, distances: &[f64]) -> Vec<f64> {

@@ -4,6 +4,7 @@
 use super::output::{write_run, PLOTS};
 use super::*;
 use crate::output::RunDir;
+use crate::scenario::world as scenario;
 
 /// A short mission for tests.
 fn short(n: usize, duration: f64) -> Scenario {

@@ -352,8 +352,8 @@ fn a_ship_on_a_fixed_track_converges_onto_it_and_keeps_its_speed() {
 /// dives back to its working depth, and does it again as its σ regrows; every policy alike.
 #[test]
 fn an_auv_cna_surfaces_for_a_fix_and_dives_back() {
-    use crate::closed_loop::scenario::{AuvCna, CruiseDepth};
     use crate::models::surfacing::{SurfaceWhen, Surfacing};
+    use crate::scenario::world::{AuvCna, CruiseDepth};
     let mut sc = short_survey(Finish::Loiter { radius_m: 50.0 }, 900.0);
     // σ² grows 0.05 m²/s: σ = 2 m after 80 s, then 1 + 0.05·t reaches 4 m² 60 s after each fix.
     let surfacing = Surfacing { when: SurfaceWhen::Sigma { sigma_m: 2.0 }, fix_time_s: 30.0, gps_sd_m: 1.0 };
@@ -387,7 +387,7 @@ fn an_auv_cna_surfaces_for_a_fix_and_dives_back() {
 /// differently from one that broadcasts its error.
 #[test]
 fn a_cna_broadcasting_its_truth_leaves_its_navigation_error_out_of_every_range() {
-    use crate::closed_loop::scenario::{AuvCna, CruiseDepth};
+    use crate::scenario::world::{AuvCna, CruiseDepth};
     let with = |nav_diffusion: f64, broadcasts_truth: bool| {
         let mut sc = short_survey(Finish::Loiter { radius_m: 50.0 }, 900.0);
         let depth = CruiseDepth::Metres(10.0);

@@ -3,13 +3,13 @@
 //! transponder buoys (their drift, GPS and clock) and the ships on a fixed track (their pilot,
 //! broadcast sensors and clock).
 
-use crate::closed_loop::scenario::Scenario;
 use crate::models::buoy::BuoySpec;
 use crate::models::channel::Clock;
 use crate::models::finish::Action;
 use crate::models::minipacket;
 use crate::models::noise::{normal, BuoyMotion, CompassBias};
 use crate::models::ship::ShipSpec;
+use crate::scenario::world::Scenario;
 use coopnav_acomms::node_report::{NodeReport, VehicleType};
 use coopnav_acomms::selector::{RatePolicy, RatePolicySpec};
 use coopnav_acomms::Rate;

@@ -18,11 +18,11 @@
 use super::{Check, Experiment, ExperimentError, ReproOptions, ReproReport, Size};
 use crate::closed_loop::mc::{paired_per_auv, Ci, Comparison, PolicySummary};
 use crate::closed_loop::policies::POLICY_NAMES;
-use crate::closed_loop::scenario::{
-    ESTIMATOR_AGGREGATE, ESTIMATOR_BIAS_PER_KM, ESTIMATOR_CNA_VARIANCE, ESTIMATOR_TERMINAL_LEVELS,
-};
 use crate::closed_loop::{comparison_table, monte_carlo_grid, Scenario};
 use crate::plot::PlotError;
+use crate::scenario::world::{
+    ESTIMATOR_AGGREGATE, ESTIMATOR_BIAS_PER_KM, ESTIMATOR_CNA_VARIANCE, ESTIMATOR_TERMINAL_LEVELS,
+};
 use coopnav_acomms::Rate;
 use coopnav_plan::{Aggregate, PenaltyCase, RangeNoise, TruthSpec};
 use plotters::prelude::*;

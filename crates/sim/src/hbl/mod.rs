@@ -10,7 +10,6 @@ pub mod log_format;
 pub mod plot;
 pub mod profile;
 pub mod record;
-pub mod scenario;
 pub mod tune;
 pub mod zone;
 

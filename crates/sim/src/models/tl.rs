@@ -10,8 +10,8 @@
 //! provider).
 
 use crate::closed_loop::policies::cna_start;
-use crate::closed_loop::scenario::Scenario;
 use crate::models::channel::SoundSpeed;
+use crate::scenario::world::Scenario;
 use coopnav_acomms::tl::analytic::Thorp;
 use coopnav_acomms::tl::bellhop::{AcousticEnv, Bellhop};
 use coopnav_acomms::tl::cached::{AnchorLattice, CachedGrid, GridSpec, LatticeSpec};

@@ -4,12 +4,12 @@
 //! scenario s uses seed run_seed(run_seed(base, s), i) for every behaviour (common random numbers).
 
 use super::metrics::{LinkTally, RunMetrics};
-use super::scenario::ExperimentConfig;
 use super::setup::{engine_scenario, slot_length};
-use crate::closed_loop::scenario::{Scenario as EngineScenario, ScenarioError};
 use crate::closed_loop::PolicySpec;
 use crate::engine::{run, run_with_tl, Faults};
 use crate::models::tl::TlModel;
+use crate::scenario::nams::ExperimentConfig;
+use crate::scenario::world::{Scenario as EngineScenario, ScenarioError};
 use coopnav_acomms::TransmissionLoss;
 use coopnav_core::run_seed;
 use rayon::prelude::*;
@@ -123,8 +123,8 @@ pub fn run_experiment(
 
 #[cfg(test)]
 mod tests {
-    use super::super::scenario::{Behaviour, EstimatorMode, Scenario};
     use super::*;
+    use crate::scenario::nams::{Behaviour, EstimatorMode, Scenario};
     use coopnav_acomms::{Rate, TlError};
     use coopnav_core::Vec3;
 
@@ -179,7 +179,7 @@ mod tests {
         };
         let noisy = run_once(&sc);
         sc.fleet.init_position_sd = 0.0;
-        sc.sensors = crate::closed_loop::scenario::AuvSensors {
+        sc.sensors = crate::scenario::world::AuvSensors {
             speed_sd: 0.0,
             compass_bias_step_deg: 0.0,
             compass_bias_iid: false,

@@ -8,9 +8,8 @@
 
 pub mod batch;
 pub mod metrics;
-pub mod scenario;
 pub mod setup;
 
+pub use crate::scenario::nams::{Behaviour, ExperimentConfig, Scenario};
 pub use batch::{run_experiment, Cell, ExperimentResult, ExperimentTl};
 pub use metrics::{LinkTally, RunMetrics};
-pub use scenario::{Behaviour, ExperimentConfig, Scenario};

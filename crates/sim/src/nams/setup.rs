@@ -6,11 +6,11 @@
 //! A mission lasts until both vehicles have flown their lawnmowers (the controller alone on its
 //! plan, at the slot's resolution, as Nams's prepared mission), or `max_time`.
 
-use super::scenario::{Behaviour, ExperimentConfig, Scenario};
-use crate::closed_loop::scenario::{Scenario as EngineScenario, ScenarioError};
 use crate::models::peer::StatusFormat;
 use crate::models::schedule::{Schedule, SlotSpec};
 use crate::models::tl::TlModel;
+use crate::scenario::nams::{Behaviour, ExperimentConfig, Scenario};
+use crate::scenario::world::{Scenario as EngineScenario, ScenarioError};
 use coopnav_acomms::SuccessModel;
 use coopnav_core::{Bathymetry, DepthTarget, Heading, Iver2, Iver2State, Vec3, Waypoint};
 use std::path::Path;

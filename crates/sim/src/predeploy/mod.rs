@@ -5,9 +5,7 @@
 pub mod metrics;
 pub mod output;
 pub mod runner;
-pub mod scenario;
-pub mod tracks;
 
+pub use crate::scenario::plan::{Mission, Scenario, ScenarioError, EXAMPLE};
 pub use metrics::{StepRecord, Summary};
 pub use runner::{run, step_count, RunError, RunResult, TrackForecast};
-pub use scenario::{Mission, Scenario, ScenarioError, EXAMPLE};

@@ -3,9 +3,9 @@
 //! plots (tracks; error and distance against time).
 
 use super::runner::RunResult;
-use super::scenario::Mission;
 use crate::output::{Manifest, RunDir, WriteError};
 use crate::plot::{line_svg, track_svg, Labels, Series};
+use crate::scenario::plan::Mission;
 use coopnav_core::CompassDeg;
 use serde::Serialize;
 use std::fmt::Write;

@@ -3,7 +3,7 @@
 //! updated from its a-priori position (Hudson §4.1, digest §2.10, §3.2).
 
 use super::metrics::{StepRecord, Summary};
-use super::scenario::Mission;
+use crate::scenario::plan::Mission;
 use coopnav_core::{Track, Vec3};
 use coopnav_plan::{AuvError, AuvForecast, CnaPose, Decision, Penalty, PlanError, PlanInput, Planner, Violation};
 use thiserror::Error;

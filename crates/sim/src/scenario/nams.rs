@@ -2,7 +2,7 @@
 //! [`RatePolicySpec`]) and the experiment configuration, validated before anything runs.
 
 pub use crate::models::peer::EstimatorMode;
-use crate::scenario_file::{Problems, ScenarioError};
+use crate::scenario::file::{Problems, ScenarioError};
 use coopnav_acomms::selector::RatePolicySpec;
 use coopnav_acomms::{Receiver, SuccessModel, Tdma};
 use coopnav_core::{Iver2Params, Shelf};

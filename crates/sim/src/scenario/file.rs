@@ -3,7 +3,7 @@
 //! closed-loop simulator. Every error names the file, and a bad value names its field, the value
 //! found and what is allowed.
 
-use crate::predeploy::tracks::TrackLoadError;
+use crate::scenario::tracks::TrackLoadError;
 use serde::de::DeserializeOwned;
 use serde::Serialize;
 use std::path::{Path, PathBuf};

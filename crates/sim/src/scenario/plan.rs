@@ -3,8 +3,8 @@
 //! `deny_unknown_fields` and validated before anything runs; errors name the file and the field.
 
 use super::tracks::{load_track_csv, TrackLoadError};
-pub use crate::scenario_file::ScenarioError;
-use crate::scenario_file::{self, Problem, Problems};
+pub use crate::scenario::file::ScenarioError;
+use crate::scenario::file::{self as scenario_file, Problem, Problems};
 use coopnav_core::validation::{CheckFields, InvalidFields};
 use coopnav_core::{CompassDeg, DepthProfile, Heading, Lawnmower, Track, Vec3};
 use coopnav_plan::{

@@ -2,7 +2,7 @@
 //! it (by default Gill's Table 5 HBL Two set-up, `scenarios/gill-table5-hbl-two.toml`). A file in
 //! the former HBL-world format is refused with a message naming the file and the new format.
 
-use crate::closed_loop::{Scenario, ScenarioError};
+use crate::scenario::world::{Scenario, ScenarioError};
 use std::path::{Path, PathBuf};
 use thiserror::Error;
 

@@ -14,8 +14,8 @@ use crate::models::schedule::{longest_air, payload_problem, Fit, Owner, Schedule
 use crate::models::ship::{ShipSpec, MAX_SHIPS};
 use crate::models::surfacing::Surfacing;
 use crate::models::tl::TlModel;
-pub use crate::scenario_file::ScenarioError;
-use crate::scenario_file::{self, overlay, Problems};
+pub use crate::scenario::file::ScenarioError;
+use crate::scenario::file::{self as scenario_file, overlay, Problems};
 use coopnav_acomms::node_report::{BODY_BITS, HEADER_BITS};
 use coopnav_acomms::selector::AdaptiveConfig;
 use coopnav_acomms::status::CovTrailer;

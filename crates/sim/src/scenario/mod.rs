@@ -1,0 +1,14 @@
+//! Scenarios: the types, validation and loading of every input file. The engine's scenario
+//! ([`world`]) with its file loader ([`file`]), the pre-deployment planner's ([`plan`]) and its
+//! survey-track CSVs ([`tracks`]), the `coopnav hbl` tools' file ([`hbl`]) and Nams's experiment
+//! configuration ([`nams`]).
+
+pub mod file;
+pub mod hbl;
+pub mod nams;
+pub mod plan;
+pub mod tracks;
+pub mod world;
+
+pub use file::ScenarioError;
+pub use world::{BeforeFirstReport, Scenario, EXAMPLE};
