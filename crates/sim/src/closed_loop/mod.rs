@@ -6,7 +6,6 @@
 //! over seeded Monte Carlo runs, and [`output`] writes a run directory with plots and a report.
 
 pub mod mc;
-pub mod metrics;
 pub mod output;
 pub mod planner_policy;
 pub mod policies;

@@ -8,15 +8,15 @@ use crate::policy::{
 };
 use crate::predeploy::runner;
 use crate::scenario::plan::Mission;
+use crate::scenario::start::cna_start;
 use crate::scenario::world::{EstimatorTracking, PlannerLink, Scenario};
 use coopnav_acomms::selector::{FixedRate, RatePolicy};
 use coopnav_acomms::tl::{TlError, TransmissionLoss, TL_CEILING};
-use coopnav_acomms::Receiver;
-use coopnav_core::{Bathymetry, CompassDeg, DepthTarget, Heading, Vec3};
+use coopnav_core::{Bathymetry, DepthTarget, Vec3};
 use coopnav_nav::AuvModel;
 use coopnav_plan::{
-    AuvEstimate, CnaKind, CnaPose, CostSpec, Deadline, EstimatorSpec, LinkTable, LookAheadPlanner, PenaltyCase,
-    PlanError, RangeNoise,
+    AuvEstimate, CnaKind, CostSpec, Deadline, EstimatorSpec, LinkTable, LookAheadPlanner, PenaltyCase, PlanError,
+    RangeNoise,
 };
 use std::sync::Arc;
 use thiserror::Error;
@@ -92,16 +92,6 @@ pub fn survey_area(sc: &Scenario) -> Rect {
     Rect {
         min: (fold(f64::min, f64::INFINITY, |p| p.0), fold(f64::min, f64::INFINITY, |p| p.1)),
         max: (fold(f64::max, f64::NEG_INFINITY, |p| p.0), fold(f64::max, f64::NEG_INFINITY, |p| p.1)),
-    }
-}
-
-/// The CNA's start pose.
-pub fn cna_start(sc: &Scenario) -> CnaPose {
-    let z = sc.cna_cruise_depth();
-    CnaPose {
-        pos: Vec3::new(sc.cna.x, sc.cna.y, z),
-        heading: Heading::from(CompassDeg(sc.cna.heading_compass_deg)),
-        pitch: 0.0,
     }
 }
 
@@ -345,15 +335,6 @@ fn open_loop(sc: &Scenario) -> Result<TimedWaypoints, PlanError> {
     Ok(TimedWaypoints {
         waypoints: run.decisions.iter().enumerate().map(|(i, d)| ((i + 1) as f64 * tau, d.next.pos)).collect(),
     })
-}
-
-/// Receiver type of a link's far end.
-pub fn receiver(to_cna: bool) -> Receiver {
-    if to_cna {
-        Receiver::Barge
-    } else {
-        Receiver::Iver2
-    }
 }
 
 #[cfg(test)]

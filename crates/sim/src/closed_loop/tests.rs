@@ -248,7 +248,7 @@ fn a_cast_cruise_depth_follows_the_fleets_depths_and_reads_back() {
     // eight, most of them at 80 m in the slow deep water, want it in the fastest water on top.
     let (one, eight) = (sc.with_auvs(1).cna_cruise_depth(), sc.with_auvs(8).cna_cruise_depth());
     assert!((5.0..=25.0).contains(&one) && eight < one, "1 AUV: {one} m, 8 AUVs: {eight} m");
-    assert_eq!(policies::cna_start(&sc.with_auvs(1)).pos.z, one);
+    assert_eq!(crate::scenario::start::cna_start(&sc.with_auvs(1)).pos.z, one);
     let again: Scenario = toml::from_str(&toml::to_string(&sc).unwrap()).unwrap();
     assert_eq!(again, sc);
     let mut fixed = sc.clone();

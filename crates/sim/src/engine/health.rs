@@ -2,7 +2,7 @@
 //! healthy: NEES of the horizontal position every second, NIS of every range update, and a
 //! divergence flag when the NEES stays above its 99.9 % chi-square bound for a sustained window.
 
-use super::super::closed_loop::metrics::FilterHealth;
+use super::metrics::FilterHealth;
 use serde::{Deserialize, Serialize};
 
 /// χ²(2) quantile: −2 ln(1 − p) (closed form for two degrees of freedom).

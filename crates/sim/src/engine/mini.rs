@@ -10,7 +10,7 @@ use super::observe::{BuoyFix, BuoySample, Observer, ShipSample};
 use super::phases::{arrival, measured_travel, Payload};
 use super::vehicles::lerp;
 use super::Engine;
-use crate::closed_loop::policies::receiver;
+use crate::models::channel::receiver;
 use crate::models::channel::Clock;
 use crate::models::minipacket::{quantised, SUCCESS_RATE};
 use crate::models::schedule::Owner;

@@ -15,27 +15,29 @@
 mod cna_rate;
 pub mod health;
 mod inflight;
+pub mod metrics;
 mod mini;
 pub mod observe;
 mod peer;
 mod phases;
 mod vehicles;
 
-use crate::closed_loop::metrics::{AuvMetrics, ErrorStats, FleetMetrics, LinkStats};
 use crate::closed_loop::planner_policy::{ErrorTracker, PlannerStats};
-use crate::closed_loop::policies::{cna_start, Policy};
+use crate::closed_loop::policies::Policy;
 use crate::models::channel::Clock;
 use crate::models::filter::RangeSpeed;
 use crate::models::peer::StatusFormat;
 use crate::models::schedule::Slot;
 use crate::models::surfacing::OwnNav;
 use crate::policy::ReportedCov;
+use crate::scenario::start::cna_start;
 use crate::scenario::world::{BeforeFirstReport, Scenario};
 use coopnav_acomms::tl::{TlError, TransmissionLoss, TL_CEILING};
 use coopnav_core::{Bathymetry, Iver2State, SeedStream, Vec3};
 use coopnav_plan::predict::{StatusReport, UnderwayPredictor};
 use coopnav_plan::AuvForecast;
 use inflight::InFlight;
+use metrics::{AuvMetrics, ErrorStats, FleetMetrics, LinkStats};
 use mini::SurfaceFilters;
 pub use observe::{
     BuoyFix, BuoySample, CnaChoice, CommsEvent, DeadReckoning, Decision, FilterStart, Observer, Phase, PhaseClock,

@@ -15,7 +15,7 @@ use super::peer::PeerLink;
 use super::vehicles::lerp;
 use super::vehicles::SurveyAuv;
 use super::{Engine, FleetView};
-use crate::closed_loop::policies::receiver;
+use crate::models::channel::receiver;
 use crate::models::channel::{air_time, Clock};
 use crate::models::finish::Finish;
 use crate::models::minipacket::SUCCESS_RATE;

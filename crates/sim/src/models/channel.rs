@@ -5,7 +5,7 @@
 //! with outliers instead of the filter's Gaussian, and a layered profile instead of 1500 m/s.
 
 use crate::models::noise::{draw_reception, normal, Acoustic, Reception};
-use coopnav_acomms::Rate;
+use coopnav_acomms::{Rate, Receiver};
 use coopnav_core::Vec3;
 use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
@@ -367,6 +367,15 @@ impl Collisions {
             }
             _ => Vec::new(),
         }
+    }
+}
+
+/// Receiver type of a link's far end.
+pub fn receiver(to_cna: bool) -> Receiver {
+    if to_cna {
+        Receiver::Barge
+    } else {
+        Receiver::Iver2
     }
 }
 

@@ -9,8 +9,8 @@
 //! CNA believes, apart from the truth (unless `planner.link = "scenario_channel"` gives it this
 //! provider).
 
-use crate::closed_loop::policies::cna_start;
 use crate::models::channel::SoundSpeed;
+use crate::scenario::start::cna_start;
 use crate::scenario::world::Scenario;
 use coopnav_acomms::tl::analytic::Thorp;
 use coopnav_acomms::tl::bellhop::{AcousticEnv, Bellhop};

@@ -7,6 +7,7 @@ pub mod file;
 pub mod hbl;
 pub mod nams;
 pub mod plan;
+pub mod start;
 pub mod tracks;
 pub mod world;
 
