@@ -3,9 +3,9 @@
 //! channel draws), so the planner's advantage over a baseline is judged run by run (paired 95 %
 //! CI). Runs go through rayon and are merged in index order: bit-identical on any thread count.
 
-use super::policies::{PolicyError, PolicySpec};
 use crate::engine::metrics::LinkStats;
 use crate::engine::{run, Faults, Observer, RunResult};
+use crate::policy::registry::{PolicyError, PolicySpec};
 use crate::scenario::world::Scenario;
 use crate::stats::{t_975, Stats};
 use coopnav_core::run_seed;

@@ -7,14 +7,12 @@
 
 pub mod mc;
 pub mod output;
-pub mod planner_policy;
-pub mod policies;
 
 pub use crate::engine::{run, run_traced, Faults, PhaseClock, RunResult, Timing};
+pub use crate::policy::planner::{ErrorTracker, PlannerPolicy, PlannerStats};
+pub use crate::policy::registry::{Policy, PolicyError, PolicySpec, POLICY_NAMES};
 pub use crate::scenario::world::{BeforeFirstReport, Scenario, ScenarioError, EXAMPLE};
 pub use mc::{compare, comparison_table, monte_carlo, monte_carlo_grid, monte_carlo_until, Comparison, PolicySummary};
-pub use planner_policy::{ErrorTracker, PlannerPolicy, PlannerStats};
-pub use policies::{Policy, PolicyError, PolicySpec, POLICY_NAMES};
 
 #[cfg(test)]
 mod tests;

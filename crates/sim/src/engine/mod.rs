@@ -22,13 +22,13 @@ mod peer;
 mod phases;
 mod vehicles;
 
-use crate::closed_loop::planner_policy::{ErrorTracker, PlannerStats};
-use crate::closed_loop::policies::Policy;
 use crate::models::channel::Clock;
 use crate::models::filter::RangeSpeed;
 use crate::models::peer::StatusFormat;
 use crate::models::schedule::Slot;
 use crate::models::surfacing::OwnNav;
+use crate::policy::planner::{ErrorTracker, PlannerStats};
+use crate::policy::registry::Policy;
 use crate::policy::ReportedCov;
 use crate::scenario::start::cna_start;
 use crate::scenario::world::{BeforeFirstReport, Scenario};

@@ -4,12 +4,19 @@
 //! behind [`CnaPolicy`], so the closed-loop world runs any of them without knowing which.
 //! A policy sees only what the CNA itself knows: its own pose and the survey AUVs' predicted
 //! positions (from their status messages), never the AUVs' true positions.
+//!
+//! [`registry`] builds any of them by name from the scenario; [`planner`] is the look-ahead planner
+//! as a policy.
 
 mod baselines;
 mod greedy;
+pub mod planner;
+pub mod registry;
 
 pub use baselines::{Centroid, CentroidStandoff, FixedPattern, MidpointRelay, NoCna, Rect, TimedWaypoints, Trail};
 pub use greedy::GreedyFisher;
+pub use planner::{ErrorTracker, PlannerPolicy, PlannerStats};
+pub use registry::{Policy, PolicyError, PolicySpec, POLICY_NAMES};
 
 use coopnav_core::Vec3;
 use coopnav_plan::{AuvForecast, CnaPose};

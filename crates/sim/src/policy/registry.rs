@@ -1,7 +1,7 @@
 //! Which CNA policy a closed-loop run uses, by name: the underway planner or one of the
 //! baselines of [`crate::policy`], configured from the scenario (survey area, fleet, CNA start).
 
-use super::planner_policy::{LikelihoodLink, PingLikelihood, PlannerPolicy, PlannerStats, UnheardGrowth};
+use super::planner::{LikelihoodLink, PingLikelihood, PlannerPolicy, PlannerStats, UnheardGrowth};
 use crate::policy::{
     Centroid, CentroidStandoff, CnaPolicy, FixedPattern, GreedyFisher, MidpointRelay, NoCna, Rect, TimedWaypoints,
     Trail,
