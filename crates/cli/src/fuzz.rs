@@ -15,7 +15,7 @@ use coopnav_core::{Bathymetry, CompassDeg, Heading, Vec3};
 use coopnav_nav::codec::{Direction, MiniPacket, Sentence};
 use coopnav_nav::cycle::{Configuration, Cycle};
 use coopnav_nav::post::{self, PostConfig};
-use coopnav_sim::{closed_loop, hbl, predeploy, scenario};
+use coopnav_sim::{closed_loop, predeploy, scenario};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use std::panic::{catch_unwind, AssertUnwindSafe};
@@ -96,7 +96,7 @@ fn plan_parse(b: &[u8]) -> bool {
 }
 
 fn hbl_seed() -> Vec<u8> {
-    hbl::zone::table5_file(Configuration::HblTwo).1.into()
+    scenario::hbl::table5_file(Configuration::HblTwo).1.into()
 }
 fn hbl_parse(b: &[u8]) -> bool {
     scenario::hbl::parse(&text(b), Path::new("fuzz.toml")).is_ok()

@@ -309,7 +309,7 @@ mod tests {
         let long = closed_loop::Scenario { duration_s: 1e9, ..sim };
         assert!(check(closed_loop(&long, 1, 1), false).unwrap_err().to_string().contains("duration_s / dt"));
 
-        let hbl = crate::hbl::zone::table5_scenario(coopnav_nav::cycle::Configuration::HblTwo).unwrap();
+        let hbl = crate::scenario::hbl::table5_scenario(coopnav_nav::cycle::Configuration::HblTwo).unwrap();
         assert!(check(hbl_runs(&hbl, 250.0, "--runs", false), false).is_ok());
         assert!(check(hbl_grid(&hbl, &GridSpec::default()), false).is_ok());
         let fine = closed_loop::Scenario { dt: 1e-9, ..hbl.clone() };

@@ -156,7 +156,8 @@ mod tests {
     use super::*;
     use crate::hbl::log_format::LogFormat;
     use crate::hbl::record::record_pass;
-    use crate::hbl::zone::{table5_scenario, ZoneSpec};
+    use crate::hbl::zone::ZoneSpec;
+    use crate::scenario::hbl::table5_scenario;
     use coopnav_nav::cycle::Configuration;
 
     fn rows(c: Configuration) -> Vec<PassRow> {

@@ -204,7 +204,7 @@ impl Observer for PassRecorder {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::hbl::zone::table5_scenario;
+    use crate::scenario::hbl::table5_scenario;
     use coopnav_nav::cycle::Configuration;
 
     #[test]

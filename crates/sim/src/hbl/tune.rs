@@ -293,7 +293,7 @@ pub fn tune(base: &Scenario, zone: ZoneSpec, spec: &TuneSpec) -> Result<TuneResu
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::hbl::zone::table5_scenario;
+    use crate::scenario::hbl::table5_scenario;
     use coopnav_nav::cycle::Configuration;
     use std::path::Path;
 

@@ -8,16 +8,14 @@
 //! buoy's slots only.
 
 use super::profile::{add_to_bin, merge_bins, BinSums, ProfileBin};
-use crate::closed_loop::{run, Faults, PolicyError, PolicySpec, RunResult, Scenario, ScenarioError};
+use crate::closed_loop::{run, Faults, PolicyError, PolicySpec, RunResult, Scenario};
 use crate::engine::{BuoySample, Observer, TraceRow};
 use crate::models::schedule::Owner;
 use crate::stats::Stats;
 use coopnav_core::{run_seed, CompassDeg, Heading, Vec3};
 use coopnav_nav::codec::Zone;
-use coopnav_nav::cycle::Configuration;
 use rayon::prelude::*;
 use serde::Serialize;
-use std::path::Path;
 use std::sync::atomic::{AtomicU64, Ordering};
 use thiserror::Error;
 
@@ -27,27 +25,6 @@ pub enum ZoneError {
     Policy(#[from] PolicyError),
     #[error("run {index} (seed {seed}): the AUV never entered the measurement zone within duration_s")]
     NoZone { index: usize, seed: u64 },
-}
-
-/// Gill's Table 5 set-up as scenario files of the one engine (ship, buoy and AUV vehicles, Gill's
-/// cycles as `gill_cycle` schedules, mini-packets through the engine's channel): configuration
-/// `c`'s file name under `scenarios/` and its text.
-pub fn table5_file(c: Configuration) -> (&'static str, &'static str) {
-    match c {
-        Configuration::Msbl => ("gill-table5-msbl.toml", include_str!("../../../../scenarios/gill-table5-msbl.toml")),
-        Configuration::HblOne => {
-            ("gill-table5-hbl-one.toml", include_str!("../../../../scenarios/gill-table5-hbl-one.toml"))
-        }
-        Configuration::HblTwo => {
-            ("gill-table5-hbl-two.toml", include_str!("../../../../scenarios/gill-table5-hbl-two.toml"))
-        }
-    }
-}
-
-/// Configuration `c`'s Table 5 file, parsed.
-pub fn table5_scenario(c: Configuration) -> Result<Scenario, ScenarioError> {
-    let (file, text) = table5_file(c);
-    Scenario::parse(text, Path::new(file))
 }
 
 /// Where the zone is: the AUV's path direction, the x_rel limits, the approach window and the
@@ -346,6 +323,8 @@ pub fn zone_run<O: Observer>(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::scenario::hbl::table5_scenario;
+    use coopnav_nav::cycle::Configuration;
 
     fn row(true_x: f64, est_x: f64, est_y: f64) -> TraceRow {
         let (dx, dy) = (est_x - true_x, est_y);

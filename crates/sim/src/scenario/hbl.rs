@@ -3,6 +3,7 @@
 //! the former HBL-world format is refused with a message naming the file and the new format.
 
 use crate::scenario::world::{Scenario, ScenarioError};
+use coopnav_nav::cycle::Configuration;
 use std::path::{Path, PathBuf};
 use thiserror::Error;
 
@@ -50,10 +51,30 @@ fn former_key(text: &str) -> Option<String> {
     FORMER_KEYS.iter().find(|k| table.contains_key(**k)).map(|k| k.to_string())
 }
 
+/// Gill's Table 5 set-up as scenario files of the one engine (ship, buoy and AUV vehicles, Gill's
+/// cycles as `gill_cycle` schedules, mini-packets through the engine's channel): configuration
+/// `c`'s file name under `scenarios/` and its text.
+pub fn table5_file(c: Configuration) -> (&'static str, &'static str) {
+    match c {
+        Configuration::Msbl => ("gill-table5-msbl.toml", include_str!("../../../../scenarios/gill-table5-msbl.toml")),
+        Configuration::HblOne => {
+            ("gill-table5-hbl-one.toml", include_str!("../../../../scenarios/gill-table5-hbl-one.toml"))
+        }
+        Configuration::HblTwo => {
+            ("gill-table5-hbl-two.toml", include_str!("../../../../scenarios/gill-table5-hbl-two.toml"))
+        }
+    }
+}
+
+/// Configuration `c`'s Table 5 file, parsed.
+pub fn table5_scenario(c: Configuration) -> Result<Scenario, ScenarioError> {
+    let (file, text) = table5_file(c);
+    Scenario::parse(text, Path::new(file))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::hbl::zone::table5_file;
     use coopnav_nav::cycle::Configuration;
 
     #[test]
