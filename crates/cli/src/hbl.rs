@@ -14,7 +14,7 @@ use coopnav_sim::hbl::log_format::LogFormat;
 use coopnav_sim::hbl::plot;
 use coopnav_sim::hbl::record::record_pass;
 use coopnav_sim::hbl::tune::{tune, Coefficient, Objective, TuneSpec};
-use coopnav_sim::hbl::zone::{zone_monte_carlo_with_progress, RunCounts, ZoneMetrics, ZoneSpec};
+use coopnav_sim::observe::zone::{zone_monte_carlo_with_progress, RunCounts, ZoneMetrics, ZoneSpec};
 use coopnav_sim::output::{Manifest, RunDir};
 use coopnav_sim::scenario::hbl as hbl_scenario;
 use coopnav_sim::scenario::hbl::{table5_file, table5_scenario};

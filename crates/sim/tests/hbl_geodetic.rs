@@ -7,7 +7,7 @@ use coopnav_nav::cycle::Configuration;
 use coopnav_nav::post::{postprocess, read_log, write_log, Entry, PostConfig, PostResult, Record};
 use coopnav_sim::hbl::log_format::LogFormat;
 use coopnav_sim::hbl::record::record_pass;
-use coopnav_sim::hbl::zone::ZoneSpec;
+use coopnav_sim::observe::zone::ZoneSpec;
 use coopnav_sim::scenario::hbl::table5_scenario;
 
 fn pend_oreille() -> Geodetic {

@@ -2,9 +2,9 @@
 //! validates and runs, reduced to a short mission with a shallow planner.
 
 use coopnav_sim::closed_loop::{run, Faults, PolicySpec, Scenario};
-use coopnav_sim::hbl::zone::{zone_monte_carlo, ZoneSpec};
 use coopnav_sim::models::peer::StatusTo;
 use coopnav_sim::models::schedule::Owner;
+use coopnav_sim::observe::zone::{zone_monte_carlo, ZoneSpec};
 use std::path::{Path, PathBuf};
 
 fn library() -> Vec<PathBuf> {

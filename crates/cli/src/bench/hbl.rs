@@ -4,7 +4,7 @@
 
 use anyhow::Result;
 use coopnav_nav::cycle::Configuration;
-use coopnav_sim::hbl::zone::{zone_monte_carlo, ZoneSpec};
+use coopnav_sim::observe::zone::{zone_monte_carlo, ZoneSpec};
 use coopnav_sim::scenario::hbl::table5_scenario;
 use serde_json::json;
 use std::time::Instant;

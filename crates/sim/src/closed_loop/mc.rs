@@ -5,9 +5,9 @@
 
 use crate::engine::metrics::LinkStats;
 use crate::engine::{run, Faults, Observer, RunResult};
+use crate::observe::stats::{t_975, Stats};
 use crate::policy::registry::{PolicyError, PolicySpec};
 use crate::scenario::world::Scenario;
-use crate::stats::{t_975, Stats};
 use coopnav_core::run_seed;
 use rayon::prelude::*;
 use serde::Serialize;

@@ -8,10 +8,8 @@
 pub mod grid;
 pub mod log_format;
 pub mod plot;
-pub mod profile;
 pub mod record;
 pub mod tune;
-pub mod zone;
 
-pub use profile::ProfileBin;
+pub use crate::observe::profile::ProfileBin;
 pub use record::{PassRecorder, PassRow};

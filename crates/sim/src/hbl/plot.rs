@@ -3,8 +3,8 @@
 //! with the shared [`crate::plot`] line and track plots).
 
 use super::grid::GridCell;
-use super::profile::ProfileBin;
 use super::record::PassRow;
+use crate::observe::profile::ProfileBin;
 use crate::plot::{line_svg, track_svg, Labels, Series};
 use plotters::prelude::*;
 
@@ -156,7 +156,7 @@ mod tests {
     use super::*;
     use crate::hbl::log_format::LogFormat;
     use crate::hbl::record::record_pass;
-    use crate::hbl::zone::ZoneSpec;
+    use crate::observe::zone::ZoneSpec;
     use crate::scenario::hbl::table5_scenario;
     use coopnav_nav::cycle::Configuration;
 
@@ -183,7 +183,7 @@ mod tests {
     }
 
     fn cell(x: f64, mean: f64) -> GridCell {
-        GridCell { x, y: 0.0, zone_error: crate::stats::Stats { n: 1, mean, sd: 0.0, se: 0.0 } }
+        GridCell { x, y: 0.0, zone_error: crate::observe::stats::Stats { n: 1, mean, sd: 0.0, se: 0.0 } }
     }
 
     /// Distinct fill colours of the map's cells (the colour bar's rectangles come after them).

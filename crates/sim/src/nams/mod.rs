@@ -7,9 +7,8 @@
 //! [`setup`]); metrics are those of the thesis's Table 7 ([`metrics`]).
 
 pub mod batch;
-pub mod metrics;
 pub mod setup;
 
+pub use crate::observe::link_tally::{LinkTally, RunMetrics};
 pub use crate::scenario::nams::{Behaviour, ExperimentConfig, Scenario};
 pub use batch::{run_experiment, Cell, ExperimentResult, ExperimentTl};
-pub use metrics::{LinkTally, RunMetrics};

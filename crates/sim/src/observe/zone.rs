@@ -11,7 +11,7 @@ use super::profile::{add_to_bin, merge_bins, BinSums, ProfileBin};
 use crate::closed_loop::{run, Faults, PolicyError, PolicySpec, RunResult, Scenario};
 use crate::engine::{BuoySample, Observer, TraceRow};
 use crate::models::schedule::Owner;
-use crate::stats::Stats;
+use crate::observe::stats::Stats;
 use coopnav_core::{run_seed, CompassDeg, Heading, Vec3};
 use coopnav_nav::codec::Zone;
 use rayon::prelude::*;
