@@ -5,7 +5,7 @@
 use crate::convert::{to_py, toml_text};
 use crate::value_error;
 use coopnav_core::limits::{self, Estimate};
-use coopnav_sim::{closed_loop, predeploy, scenario::file as scenario_file, work};
+use coopnav_sim::{batch::work, closed_loop, predeploy, scenario::file as scenario_file};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use serde::de::DeserializeOwned;

@@ -8,17 +8,17 @@ use coopnav_nav::cycle::Configuration;
 use coopnav_nav::fieldlog::{BeaconId, FieldLog, TimeBase};
 use coopnav_nav::post::{self, PostConfig, PostSample, RangeResidual};
 use coopnav_nav::post_tune::{self, Scored, TuneOptions, TuneReport};
+use coopnav_sim::batch::grid::{self, GridSpec};
+use coopnav_sim::batch::tune::{tune, Coefficient, Objective, TuneSpec};
+use coopnav_sim::batch::work;
 use coopnav_sim::closed_loop::Scenario;
-use coopnav_sim::hbl::grid::{self, GridSpec};
 use coopnav_sim::hbl::log_format::LogFormat;
 use coopnav_sim::hbl::plot;
 use coopnav_sim::hbl::record::record_pass;
-use coopnav_sim::hbl::tune::{tune, Coefficient, Objective, TuneSpec};
 use coopnav_sim::observe::zone::{zone_monte_carlo_with_progress, RunCounts, ZoneMetrics, ZoneSpec};
 use coopnav_sim::output::{Manifest, RunDir};
 use coopnav_sim::scenario::hbl as hbl_scenario;
 use coopnav_sim::scenario::hbl::{table5_file, table5_scenario};
-use coopnav_sim::work;
 
 /// x_rel bin of the Monte Carlo error profile (m).
 const PROFILE_BIN_M: f64 = 5.0;

@@ -9,10 +9,10 @@ use coopnav_core::limits::Estimate;
 use coopnav_core::LatLon;
 use coopnav_moos::mission::EXAMPLE_ORIGIN_DEG;
 use coopnav_plan::LookAheadPlanner;
+use coopnav_sim::batch::work;
 use coopnav_sim::moos_export;
 use coopnav_sim::predeploy::{self, output::write_run, Scenario, EXAMPLE};
 use coopnav_sim::scenario::file::Validate;
-use coopnav_sim::work;
 use indicatif::{ProgressBar, ProgressStyle};
 use std::io::IsTerminal;
 

@@ -6,9 +6,9 @@
 use crate::scenario_args::{Loaded, ScenarioArgs, ScenarioCommand};
 use anyhow::{bail, Context, Result};
 use coopnav_core::limits::{self, Estimate};
+use coopnav_sim::batch::work;
 use coopnav_sim::closed_loop::{self, comparison_table, output::write_run, Faults, PolicySpec, Scenario, EXAMPLE};
 use coopnav_sim::scenario::file::Validate;
-use coopnav_sim::work;
 use indicatif::{ProgressBar, ProgressStyle};
 use std::io::IsTerminal;
 use std::path::PathBuf;

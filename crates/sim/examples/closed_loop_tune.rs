@@ -4,7 +4,7 @@
 //! POLICY,POLICY,... [DURATION_S|-] [section.key=TOML_VALUE ...]`
 //! e.g. `... -- 6 current 3 planner-estimator,centroid,trail - planner.look_ahead=6`.
 
-use coopnav_sim::closed_loop::mc::paired_per_auv;
+use coopnav_sim::batch::mc::paired_per_auv;
 use coopnav_sim::closed_loop::{comparison_table, monte_carlo, PolicySummary, Scenario};
 use coopnav_sim::experiments::closed_loop::{setup, TUNING_SEED};
 use coopnav_sim::experiments::{ReproOptions, Size};

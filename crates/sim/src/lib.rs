@@ -4,6 +4,7 @@
 //! It owns scenario files, the mission [`engine`] and the [`models`] it plugs in, metrics, Monte
 //! Carlo and the experiments that reproduce the theses' tables (see [`experiments`]).
 
+pub mod batch;
 pub mod closed_loop;
 pub mod engine;
 pub mod experiments;
@@ -18,4 +19,3 @@ pub mod policy;
 pub mod predeploy;
 pub mod report;
 pub mod scenario;
-pub mod work;

@@ -5,14 +5,15 @@
 //! [`scenario`] reads the TOML file, [`crate::engine::run`] runs one mission, [`mc`] compares policies
 //! over seeded Monte Carlo runs, and [`output`] writes a run directory with plots and a report.
 
-pub mod mc;
 pub mod output;
 
+pub use crate::batch::mc::{
+    compare, comparison_table, monte_carlo, monte_carlo_grid, monte_carlo_until, Comparison, PolicySummary,
+};
 pub use crate::engine::{run, run_traced, Faults, PhaseClock, RunResult, Timing};
 pub use crate::policy::planner::{ErrorTracker, PlannerPolicy, PlannerStats};
 pub use crate::policy::registry::{Policy, PolicyError, PolicySpec, POLICY_NAMES};
 pub use crate::scenario::world::{BeforeFirstReport, Scenario, ScenarioError, EXAMPLE};
-pub use mc::{compare, comparison_table, monte_carlo, monte_carlo_grid, monte_carlo_until, Comparison, PolicySummary};
 
 #[cfg(test)]
 mod tests;

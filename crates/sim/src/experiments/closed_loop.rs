@@ -16,7 +16,7 @@
 //! slots, which the planner alone modelled, lost the last slot's AUV for every policy.
 
 use super::{Check, Experiment, ExperimentError, ReproOptions, ReproReport, Size};
-use crate::closed_loop::mc::{paired_per_auv, Ci, Comparison, PolicySummary};
+use crate::batch::mc::{paired_per_auv, Ci, Comparison, PolicySummary};
 use crate::closed_loop::{comparison_table, monte_carlo_grid, Scenario};
 use crate::plot::PlotError;
 use crate::policy::registry::POLICY_NAMES;

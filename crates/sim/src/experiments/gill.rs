@@ -6,8 +6,8 @@
 //! errors computed from the runs.
 
 use super::{Check, Experiment, ExperimentError, ReproOptions, ReproReport, Size};
+use crate::batch::grid::{buoy_grid, engine_cell, lengthen_for_grid, optimal_region, GridSpec};
 use crate::closed_loop::Scenario;
-use crate::hbl::grid::{buoy_grid, engine_cell, lengthen_for_grid, optimal_region, GridSpec};
 use crate::models::schedule::{GillCycle, Schedule};
 use crate::observe::profile::ProfileBin;
 use crate::observe::stats::{welch_95, Stats};

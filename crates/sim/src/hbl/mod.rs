@@ -5,11 +5,9 @@
 //! simulate`), and the noise models the engine draws from ([`noise`]). The filters themselves
 //! live in `coopnav_nav`.
 
-pub mod grid;
 pub mod log_format;
 pub mod plot;
 pub mod record;
-pub mod tune;
 
 pub use crate::observe::profile::ProfileBin;
 pub use record::{PassRecorder, PassRow};

@@ -2,8 +2,8 @@
 //! colour maps), and true vs estimated tracks and error against along-path position x_rel (drawn
 //! with the shared [`crate::plot`] line and track plots).
 
-use super::grid::GridCell;
 use super::record::PassRow;
+use crate::batch::grid::GridCell;
 use crate::observe::profile::ProfileBin;
 use crate::plot::{line_svg, track_svg, Labels, Series};
 use plotters::prelude::*;

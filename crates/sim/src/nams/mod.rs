@@ -6,9 +6,6 @@
 //! behaviours × seeded repetitions run in parallel ([`batch`], each cell an engine scenario from
 //! [`setup`]); metrics are those of the thesis's Table 7 ([`metrics`]).
 
-pub mod batch;
-pub mod setup;
-
+pub use crate::batch::nams::{run_experiment, Cell, ExperimentResult, ExperimentTl};
 pub use crate::observe::link_tally::{LinkTally, RunMetrics};
 pub use crate::scenario::nams::{Behaviour, ExperimentConfig, Scenario};
-pub use batch::{run_experiment, Cell, ExperimentResult, ExperimentTl};

@@ -1,9 +1,9 @@
 //! The batch runner: builds every (scenario, behaviour) cell's engine scenario once
-//! ([`super::setup`]), then runs cells × repetitions on the engine in parallel (rayon), merging
+//! ([`super::nams_setup`]), then runs cells × repetitions on the engine in parallel (rayon), merging
 //! results in index order so the output is bit-identical on any thread count. Repetition i of
 //! scenario s uses seed run_seed(run_seed(base, s), i) for every behaviour (common random numbers).
 
-use super::setup::{engine_scenario, slot_length};
+use super::nams_setup::{engine_scenario, slot_length};
 use crate::closed_loop::PolicySpec;
 use crate::engine::{run, run_with_tl, Faults};
 use crate::models::tl::TlModel;

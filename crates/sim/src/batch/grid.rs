@@ -43,7 +43,7 @@ pub enum GridError {
 
 impl GridSpec {
     /// Checks each field; the grid's size is checked against the work limits by
-    /// `coopnav_sim::work::hbl_grid`.
+    /// `coopnav_sim::batch::work::hbl_grid`.
     pub fn validate(&self) -> Result<(), GridError> {
         let mut p = Problems::new();
         p.positive("spacing", self.spacing);

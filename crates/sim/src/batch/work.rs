@@ -6,8 +6,8 @@
 //! The byte figures are rough upper bounds of what each command holds at once (per-row sizes
 //! below), enough to tell a mission from a typo that asks for gigabytes.
 
-use crate::hbl::grid::GridSpec;
-use crate::hbl::tune::TuneSpec;
+use crate::batch::grid::GridSpec;
+use crate::batch::tune::TuneSpec;
 use crate::{closed_loop, predeploy};
 use coopnav_core::limits::{
     Estimate, MAX_BYTES, MAX_PLANNER_LEAVES, MAX_PLANNER_UPDATES, MAX_POINTS, MAX_VEHICLE_STEPS,
@@ -273,7 +273,7 @@ mod tests {
     /// leaves counted are that tree's, A·B at level 1 and A below, not (A·B)^L.
     #[test]
     fn the_estimators_pitch_levels_shrink_its_tree() {
-        let file = include_str!("../../../scenarios/sloping-auv-cna.toml");
+        let file = include_str!("../../../../scenarios/sloping-auv-cna.toml");
         let mut sc = closed_loop::Scenario::parse(file, Path::new("sloping-auv-cna.toml")).unwrap();
         sc.planner.estimator_heading_options = Some(9);
         sc.planner.estimator_look_ahead = Some(6);
