@@ -12,10 +12,10 @@ use coopnav_sim::batch::grid::{self, GridSpec};
 use coopnav_sim::batch::tune::{tune, Coefficient, Objective, TuneSpec};
 use coopnav_sim::batch::work;
 use coopnav_sim::closed_loop::Scenario;
-use coopnav_sim::hbl::log_format::LogFormat;
-use coopnav_sim::hbl::plot;
-use coopnav_sim::hbl::record::record_pass;
 use coopnav_sim::observe::zone::{zone_monte_carlo_with_progress, RunCounts, ZoneMetrics, ZoneSpec};
+use coopnav_sim::output::hbl_plot as plot;
+use coopnav_sim::output::log_format::LogFormat;
+use coopnav_sim::output::record::record_pass;
 use coopnav_sim::output::{Manifest, RunDir};
 use coopnav_sim::scenario::hbl as hbl_scenario;
 use coopnav_sim::scenario::hbl::{table5_file, table5_scenario};
@@ -345,7 +345,10 @@ fn simulate(c: &Common, index: u64, log_path: Option<&Path>) -> Result<()> {
     dir.write_bytes("tracks.svg", plot::tracks(&pass.rows)?)?;
     dir.write_bytes("error_vs_xrel.svg", plot::error_vs_xrel(&pass.rows, (zone.zone_min, zone.zone_max))?)?;
     dir.write_json("summary.json", &summary)?;
-    coopnav_sim::moos_export::write_moos_files(&dir, &coopnav_sim::moos_export::hbl_run(&pass.rows, format.frame()))?;
+    coopnav_sim::output::moos_export::write_moos_files(
+        &dir,
+        &coopnav_sim::output::moos_export::hbl_run(&pass.rows, format.frame()),
+    )?;
     let out = dir.finish()?;
     println!("zone error {:.3} m; wrote {}", summary.zone.zone_error.unwrap_or(f64::NAN), out.display());
     Ok(())

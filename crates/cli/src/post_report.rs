@@ -6,8 +6,8 @@
 use anyhow::Result;
 use coopnav_nav::fieldlog::{LogRow, Observation};
 use coopnav_nav::post::PostResult;
-use coopnav_sim::plot::{line_svg, track_svg, Labels, Series};
-use coopnav_sim::report::HtmlReport;
+use coopnav_sim::output::plot::{line_svg, track_svg, Labels, Series};
+use coopnav_sim::output::report::HtmlReport;
 use std::collections::BTreeMap;
 
 /// Points drawn per series at most: a day at 10 Hz would make a plot of megabytes.

@@ -4,7 +4,7 @@
 
 use anyhow::{bail, Context, Result};
 use coopnav_moos::{read_alog_file, replay};
-use coopnav_sim::moos_export::ALOG_FILE;
+use coopnav_sim::output::moos_export::ALOG_FILE;
 use std::path::PathBuf;
 
 #[derive(clap::Args)]

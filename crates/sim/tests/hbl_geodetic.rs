@@ -5,9 +5,9 @@
 use coopnav_core::{run_seed, Geodetic, LatLon, LatLonStorage};
 use coopnav_nav::cycle::Configuration;
 use coopnav_nav::post::{postprocess, read_log, write_log, Entry, PostConfig, PostResult, Record};
-use coopnav_sim::hbl::log_format::LogFormat;
-use coopnav_sim::hbl::record::record_pass;
 use coopnav_sim::observe::zone::ZoneSpec;
+use coopnav_sim::output::log_format::LogFormat;
+use coopnav_sim::output::record::record_pass;
 use coopnav_sim::scenario::hbl::table5_scenario;
 
 fn pend_oreille() -> Geodetic {

@@ -2,8 +2,9 @@
 //! field or line), determinism across thread counts, and the run directory.
 
 use coopnav_plan::LookAheadPlanner;
+use coopnav_sim::output::plan::write_run;
 use coopnav_sim::output::RunDir;
-use coopnav_sim::predeploy::{self, output::write_run, Scenario, ScenarioError, EXAMPLE};
+use coopnav_sim::predeploy::{self, Scenario, ScenarioError, EXAMPLE};
 use std::path::Path;
 
 fn example() -> Scenario {

@@ -1,6 +1,6 @@
 //! The buoy-location grid (digest §5.7 item 1, §10 A14): a zero-drift Monte Carlo per candidate
 //! buoy position north of the path, the region within a tolerance of the best cell, and CSV
-//! output (the SVG heat map is in [`super::plot`]). The caller says how one cell runs (on the
+//! output (the SVG heat map is in [`crate::output::hbl_plot`]). The caller says how one cell runs (on the
 //! engine: [`engine_cell`]).
 
 use crate::closed_loop::Scenario as EngineScenario;

@@ -5,8 +5,6 @@
 //! [`scenario`] reads the TOML file, [`crate::engine::run`] runs one mission, [`mc`] compares policies
 //! over seeded Monte Carlo runs, and [`output`] writes a run directory with plots and a report.
 
-pub mod output;
-
 pub use crate::batch::mc::{
     compare, comparison_table, monte_carlo, monte_carlo_grid, monte_carlo_until, Comparison, PolicySummary,
 };

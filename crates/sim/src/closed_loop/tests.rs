@@ -1,8 +1,8 @@
 //! Behaviour of the closed loop: determinism over thread counts, dead reckoning against a CNA,
 //! graceful degradation when packets are lost, and the run directory.
 
-use super::output::{write_run, PLOTS};
 use super::*;
+use crate::output::run::{write_run, PLOTS};
 use crate::output::RunDir;
 use crate::scenario::world as scenario;
 

@@ -18,7 +18,7 @@
 use super::{Check, Experiment, ExperimentError, ReproOptions, ReproReport, Size};
 use crate::batch::mc::{paired_per_auv, Ci, Comparison, PolicySummary};
 use crate::closed_loop::{comparison_table, monte_carlo_grid, Scenario};
-use crate::plot::PlotError;
+use crate::output::plot::PlotError;
 use crate::policy::registry::POLICY_NAMES;
 use crate::scenario::world::{
     ESTIMATOR_AGGREGATE, ESTIMATOR_BIAS_PER_KM, ESTIMATOR_CNA_VARIANCE, ESTIMATOR_TERMINAL_LEVELS,

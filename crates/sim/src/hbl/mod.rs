@@ -5,9 +5,5 @@
 //! simulate`), and the noise models the engine draws from ([`noise`]). The filters themselves
 //! live in `coopnav_nav`.
 
-pub mod log_format;
-pub mod plot;
-pub mod record;
-
 pub use crate::observe::profile::ProfileBin;
-pub use record::{PassRecorder, PassRow};
+pub use crate::output::record::{PassRecorder, PassRow};

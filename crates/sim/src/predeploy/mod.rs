@@ -3,7 +3,6 @@
 //! and the metrics. Scenario files, track CSVs, the runner, metrics and the run directory.
 
 pub mod metrics;
-pub mod output;
 pub mod runner;
 
 pub use crate::scenario::plan::{Mission, Scenario, ScenarioError, EXAMPLE};

@@ -4,7 +4,7 @@
 //! `run.alog` (mapping: `coopnav_moos::export`) with its interactive `replay.html`.
 
 use crate::closed_loop::{self, RunResult as ClosedLoopResult};
-use crate::hbl::PassRow;
+use crate::output::record::PassRow;
 use crate::output::{RunDir, WriteError};
 use crate::predeploy::{Mission, RunResult as PlanResult};
 use coopnav_core::{CompassDeg, LatLon, LocalFrame, Vec3};

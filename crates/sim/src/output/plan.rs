@@ -2,9 +2,10 @@
 //! compass headings at that boundary), time series (CSV), summary.json, manifest.json and SVG
 //! plots (tracks; error and distance against time).
 
-use super::runner::RunResult;
+use crate::output::plot::{line_svg, track_svg, Labels, Series};
 use crate::output::{Manifest, RunDir, WriteError};
-use crate::plot::{line_svg, track_svg, Labels, Series};
+use crate::predeploy::metrics::StepRecord;
+use crate::predeploy::runner::RunResult;
 use crate::scenario::plan::Mission;
 use coopnav_core::CompassDeg;
 use serde::Serialize;
@@ -107,7 +108,7 @@ pub fn write_run(
     dir.write_json("summary.json", &result.summary)?;
     dir.write_json("manifest.json", &Manifest::new("plan", None, inputs))?;
     write_plots(&dir, mission, result)?;
-    crate::moos_export::write_moos_files(&dir, &crate::moos_export::plan_run(mission, result))?;
+    crate::output::moos_export::write_moos_files(&dir, &crate::output::moos_export::plan_run(mission, result))?;
     Ok(dir.finish()?)
 }
 
@@ -133,7 +134,7 @@ fn write_plots(dir: &RunDir, mission: &Mission, result: &RunResult) -> Result<()
     let steps = &result.steps;
     let n = mission.names.len();
     let mut tracks = vec![Series::new("CNA", steps.iter().map(|s| (s.cna.pos.x, s.cna.pos.y)).collect())];
-    let per_auv = |f: &dyn Fn(usize, &super::StepRecord) -> (f64, f64)| -> Vec<Series> {
+    let per_auv = |f: &dyn Fn(usize, &StepRecord) -> (f64, f64)| -> Vec<Series> {
         (0..n).map(|k| Series::new(mission.names[k].clone(), steps.iter().map(|s| f(k, s)).collect())).collect()
     };
     tracks.extend(per_auv(&|k, s| (s.auv[k].x, s.auv[k].y)));

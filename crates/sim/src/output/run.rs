@@ -3,9 +3,9 @@
 //! and a self-contained report.html that shows every plot inline.
 
 use crate::engine::{RunResult, Trace, TraceRow};
+use crate::output::plot::{line_svg, track_svg, Labels, PlotError, Series};
+use crate::output::report::HtmlReport;
 use crate::output::{Manifest, RunDir, WriteError};
-use crate::plot::{line_svg, track_svg, Labels, PlotError, Series};
-use crate::report::HtmlReport;
 use crate::scenario::world::Scenario;
 use std::path::PathBuf;
 
@@ -28,7 +28,7 @@ pub fn write_run(dir: RunDir, sc: &Scenario, result: &RunResult, command: &str) 
     for ((file, _), svg) in PLOTS.iter().zip(&svgs) {
         dir.write_text(file, svg)?;
     }
-    crate::moos_export::write_moos_files(&dir, &crate::moos_export::closed_loop_run(sc, result)?)?;
+    crate::output::moos_export::write_moos_files(&dir, &crate::output::moos_export::closed_loop_run(sc, result)?)?;
     dir.write_text("report.html", &report(sc, result, &svgs, command))?;
     Ok(dir.finish()?)
 }

@@ -117,7 +117,7 @@ pub fn escape(text: &str) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::plot::{line_svg, Labels, Series};
+    use crate::output::plot::{line_svg, Labels, Series};
 
     #[test]
     fn report_inlines_figures_and_escapes_text() {

@@ -1,14 +1,14 @@
 //! SVG figures of the HBL tools: the buoy-grid heat map (drawn here: the shared plots have no
 //! colour maps), and true vs estimated tracks and error against along-path position x_rel (drawn
-//! with the shared [`crate::plot`] line and track plots).
+//! with the shared [`super::plot`] line and track plots).
 
 use super::record::PassRow;
 use crate::batch::grid::GridCell;
 use crate::observe::profile::ProfileBin;
-use crate::plot::{line_svg, track_svg, Labels, Series};
+use crate::output::plot::{line_svg, track_svg, Labels, Series};
 use plotters::prelude::*;
 
-pub use crate::plot::PlotError;
+pub use crate::output::plot::PlotError;
 
 /// Colour of `v` on a blue (low) → red (high) ramp over [lo, hi].
 fn ramp(v: f64, lo: f64, hi: f64) -> RGBColor {
@@ -154,9 +154,9 @@ pub fn profile(bins: &[ProfileBin], zone: (f64, f64)) -> Result<String, PlotErro
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::hbl::log_format::LogFormat;
-    use crate::hbl::record::record_pass;
     use crate::observe::zone::ZoneSpec;
+    use crate::output::log_format::LogFormat;
+    use crate::output::record::record_pass;
     use crate::scenario::hbl::table5_scenario;
     use coopnav_nav::cycle::Configuration;
 

@@ -10,8 +10,22 @@
 //! `manifest.json`) or an empty one may be replaced, and never the filesystem root, the home
 //! directory, the working directory or any directory that contains it. The old directory is
 //! moved aside and deleted only after the new run is in place.
+//!
+//! What goes in them: one closed-loop run's ([`run`]), a pre-deployment plan's ([`plan`]), the
+//! `coopnav hbl` tools' recorded pass and field log ([`record`], [`log_format`]) and plots
+//! ([`hbl_plot`]), the shared SVG plots ([`plot`]), HTML reports ([`report`]) and the MOOS-IvP
+//! alog export ([`moos_export`]).
 
-use crate::plot::PlotError;
+pub mod hbl_plot;
+pub mod log_format;
+pub mod moos_export;
+pub mod plan;
+pub mod plot;
+pub mod record;
+pub mod report;
+pub mod run;
+
+use plot::PlotError;
 use serde::Serialize;
 use std::fs;
 use std::path::{Path, PathBuf};
