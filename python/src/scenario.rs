@@ -5,7 +5,8 @@
 use crate::convert::{to_py, toml_text};
 use crate::value_error;
 use coopnav_core::limits::{self, Estimate};
-use coopnav_sim::{batch::work, closed_loop, predeploy, scenario::file as scenario_file};
+use coopnav_sim::scenario;
+use coopnav_sim::{batch::work, predeploy, scenario::file as scenario_file};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use serde::de::DeserializeOwned;
@@ -17,7 +18,7 @@ pub const KINDS: [&str; 2] = ["simulate", "plan"];
 /// One scenario of either kind.
 #[derive(Clone)]
 pub enum Kind {
-    Simulate(closed_loop::Scenario),
+    Simulate(scenario::Scenario),
     Plan(predeploy::Scenario),
 }
 
@@ -46,14 +47,14 @@ fn checked<T: DeserializeOwned>(
     Ok(scenario)
 }
 
-fn one_run(sc: &closed_loop::Scenario) -> Vec<Estimate> {
+fn one_run(sc: &scenario::Scenario) -> Vec<Estimate> {
     work::closed_loop(sc, 1, 1)
 }
 
 impl Scenario {
     fn parse(text: &str, kind: &str, file: PathBuf, base: PathBuf, allow_large: bool) -> PyResult<Self> {
         let kind = match kind {
-            "simulate" => Kind::Simulate(checked(text, &file, one_run, closed_loop::Scenario::validate, allow_large)?),
+            "simulate" => Kind::Simulate(checked(text, &file, one_run, scenario::Scenario::validate, allow_large)?),
             "plan" => Kind::Plan(checked(text, &file, work::predeploy, predeploy::Scenario::validate, allow_large)?),
             other => return Err(unknown_kind(other)),
         };
@@ -61,7 +62,7 @@ impl Scenario {
     }
 
     /// The closed-loop scenario, or a `ValueError` naming what `what` needs.
-    pub fn closed_loop(&self, what: &str) -> PyResult<&closed_loop::Scenario> {
+    pub fn closed_loop(&self, what: &str) -> PyResult<&scenario::Scenario> {
         match &self.kind {
             Kind::Simulate(sc) => Ok(sc),
             Kind::Plan(_) => Err(PyValueError::new_err(format!("{what} needs a \"simulate\" scenario, not \"plan\""))),
@@ -81,7 +82,7 @@ impl Scenario {
     #[pyo3(signature = (kind = "simulate"))]
     fn example(kind: &str) -> PyResult<Self> {
         let (text, name) = match kind {
-            "simulate" => (closed_loop::EXAMPLE, "default"),
+            "simulate" => (scenario::EXAMPLE, "default"),
             "plan" => (predeploy::EXAMPLE, "example"),
             other => return Err(unknown_kind(other)),
         };
@@ -93,7 +94,7 @@ impl Scenario {
     #[pyo3(signature = (kind = "simulate"))]
     fn example_toml(kind: &str) -> PyResult<&'static str> {
         match kind {
-            "simulate" => Ok(closed_loop::EXAMPLE),
+            "simulate" => Ok(scenario::EXAMPLE),
             "plan" => Ok(predeploy::EXAMPLE),
             other => Err(unknown_kind(other)),
         }

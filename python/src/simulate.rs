@@ -8,9 +8,13 @@ use crate::scenario::Scenario;
 use crate::{interruptible, value_error};
 use coopnav_core::limits;
 use coopnav_core::Vec3;
+use coopnav_sim::batch::mc;
+use coopnav_sim::batch::mc::comparison_table;
 use coopnav_sim::batch::work;
-use coopnav_sim::closed_loop::{self, comparison_table, Faults, PolicySpec};
+use coopnav_sim::engine;
+use coopnav_sim::engine::Faults;
 use coopnav_sim::engine::{CommsEvent, Decision, Observer, Trace, TraceRow};
+use coopnav_sim::policy::PolicySpec;
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
@@ -99,7 +103,7 @@ fn simulate<'py>(
     let mut built = PolicySpec::new(policy, &sc).and_then(|spec| spec.build(&sc)).map_err(value_error)?;
     let result = interruptible(py, |stop| {
         let mut recorder = Recorder { trace: Trace::default(), stop };
-        let mut r = closed_loop::run(&sc, &mut built, sc.seed, &Faults::default(), &mut recorder);
+        let mut r = engine::run(&sc, &mut built, sc.seed, &Faults::default(), &mut recorder);
         r.trace = Some(recorder.trace);
         r
     })?;
@@ -146,7 +150,7 @@ fn monte_carlo<'py>(
     }
     limits::check(work::closed_loop(&sc, runs, policies.len()), allow_large).map_err(value_error)?;
     let comparison = interruptible(py, |stop| {
-        closed_loop::monte_carlo_until(&sc, &policies, runs, &|_| {}, &|| stop.load(Ordering::Relaxed))
+        mc::monte_carlo_until(&sc, &policies, runs, &|_| {}, &|| stop.load(Ordering::Relaxed))
     })?
     .map_err(value_error)?;
     let out = to_py(py, &comparison)?;

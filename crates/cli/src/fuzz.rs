@@ -15,7 +15,7 @@ use coopnav_core::{Bathymetry, CompassDeg, Heading, Vec3};
 use coopnav_nav::codec::{Direction, MiniPacket, Sentence};
 use coopnav_nav::cycle::{Configuration, Cycle};
 use coopnav_nav::post::{self, PostConfig};
-use coopnav_sim::{closed_loop, predeploy, scenario};
+use coopnav_sim::{predeploy, scenario};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use std::panic::{catch_unwind, AssertUnwindSafe};
@@ -82,10 +82,10 @@ fn text(bytes: &[u8]) -> String {
 }
 
 fn closed_loop_seed() -> Vec<u8> {
-    closed_loop::EXAMPLE.into()
+    scenario::EXAMPLE.into()
 }
 fn closed_loop_parse(b: &[u8]) -> bool {
-    closed_loop::Scenario::parse(&text(b), Path::new("fuzz.toml")).is_ok()
+    scenario::Scenario::parse(&text(b), Path::new("fuzz.toml")).is_ok()
 }
 
 fn plan_seed() -> Vec<u8> {

@@ -11,7 +11,6 @@ use coopnav_nav::post_tune::{self, Scored, TuneOptions, TuneReport};
 use coopnav_sim::batch::grid::{self, GridSpec};
 use coopnav_sim::batch::tune::{tune, Coefficient, Objective, TuneSpec};
 use coopnav_sim::batch::work;
-use coopnav_sim::closed_loop::Scenario;
 use coopnav_sim::observe::zone::{zone_monte_carlo_with_progress, RunCounts, ZoneMetrics, ZoneSpec};
 use coopnav_sim::output::hbl_plot as plot;
 use coopnav_sim::output::log_format::LogFormat;
@@ -19,6 +18,7 @@ use coopnav_sim::output::record::record_pass;
 use coopnav_sim::output::{Manifest, RunDir};
 use coopnav_sim::scenario::hbl as hbl_scenario;
 use coopnav_sim::scenario::hbl::{table5_file, table5_scenario};
+use coopnav_sim::scenario::Scenario;
 
 /// x_rel bin of the Monte Carlo error profile (m).
 const PROFILE_BIN_M: f64 = 5.0;

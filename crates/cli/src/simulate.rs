@@ -6,10 +6,15 @@
 use crate::scenario_args::{Loaded, ScenarioArgs, ScenarioCommand};
 use anyhow::{bail, Context, Result};
 use coopnav_core::limits::{self, Estimate};
+use coopnav_sim::batch::mc;
+use coopnav_sim::batch::mc::comparison_table;
 use coopnav_sim::batch::work;
-use coopnav_sim::closed_loop::{self, comparison_table, Faults, PolicySpec, Scenario, EXAMPLE};
+use coopnav_sim::engine;
+use coopnav_sim::engine::Faults;
 use coopnav_sim::output::run::write_run;
+use coopnav_sim::policy::PolicySpec;
 use coopnav_sim::scenario::file::Validate;
+use coopnav_sim::scenario::{Scenario, EXAMPLE};
 use indicatif::{ProgressBar, ProgressStyle};
 use std::io::IsTerminal;
 use std::path::PathBuf;
@@ -74,7 +79,7 @@ pub fn run(args: Args) -> Result<()> {
 fn single(sc: &Scenario, spec: &PolicySpec, stem: &str, args: &Args) -> Result<()> {
     let dir = args.scenario.run_dir(stem)?;
     let mut policy = spec.build(sc)?;
-    let result = closed_loop::run_traced(sc, &mut policy, sc.seed, &Faults::default());
+    let result = engine::run_traced(sc, &mut policy, sc.seed, &Faults::default());
     let out = write_run(dir, sc, &result, &std::env::args().collect::<Vec<_>>().join(" "))
         .context("writing the run directory")?;
     println!(
@@ -117,7 +122,7 @@ fn compare(sc: &Scenario, policies: &[String], runs: usize, json: Option<&PathBu
     let total = (runs * policies.len()) as u64;
     let bar = if std::io::stderr().is_terminal() { ProgressBar::new(total) } else { ProgressBar::hidden() };
     bar.set_style(ProgressStyle::with_template("{bar:40} {pos}/{len} runs [{elapsed_precise} < {eta_precise}]")?);
-    let c = closed_loop::monte_carlo(sc, policies, runs, &|done| bar.set_position(done))?;
+    let c = mc::monte_carlo(sc, policies, runs, &|done| bar.set_position(done))?;
     bar.finish_and_clear();
     print!("{}", comparison_table(&c));
     if let Some(path) = json {

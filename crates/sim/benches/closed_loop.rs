@@ -1,7 +1,9 @@
 //! Criterion bench: one closed-loop hour (3 survey AUVs, planner A = 5, L = 5, 10 Hz EKFs) and a
 //! baseline hour (centroid), so the planner's share of a run shows as the difference.
 
-use coopnav_sim::closed_loop::{run, Faults, PolicySpec, Scenario};
+use coopnav_sim::engine::{run, Faults};
+use coopnav_sim::policy::PolicySpec;
+use coopnav_sim::scenario::Scenario;
 use criterion::{criterion_group, criterion_main, Criterion};
 
 fn benches(c: &mut Criterion) {

@@ -2,8 +2,8 @@
 //! zone Monte Carlo.
 
 use coopnav_nav::cycle::Configuration;
-use coopnav_sim::closed_loop::PolicySpec;
 use coopnav_sim::observe::zone::{zone_monte_carlo, zone_run, GillZone, ZoneSpec};
+use coopnav_sim::policy::PolicySpec;
 use coopnav_sim::scenario::hbl::table5_scenario;
 use criterion::{criterion_group, criterion_main, Criterion};
 

@@ -7,10 +7,11 @@
 //! `cargo run --release -p coopnav-sim --example closed_loop_cost -- RUNS [--phases] [SCENARIO N POLICY]`
 
 use coopnav_core::run_seed;
-use coopnav_sim::closed_loop::{run, Faults, PhaseClock, PolicySpec, Timing};
 use coopnav_sim::engine::Observer;
+use coopnav_sim::engine::{run, Faults, PhaseClock, Timing};
 use coopnav_sim::experiments::closed_loop::{policies, setup};
 use coopnav_sim::experiments::{ReproOptions, Size};
+use coopnav_sim::policy::PolicySpec;
 use std::error::Error;
 
 /// Nanoseconds this thread has run on a CPU.

@@ -5,9 +5,10 @@
 //! e.g. `... -- 6 current 3 planner-estimator,centroid,trail - planner.look_ahead=6`.
 
 use coopnav_sim::batch::mc::paired_per_auv;
-use coopnav_sim::closed_loop::{comparison_table, monte_carlo, PolicySummary, Scenario};
+use coopnav_sim::batch::mc::{comparison_table, monte_carlo, PolicySummary};
 use coopnav_sim::experiments::closed_loop::{setup, TUNING_SEED};
 use coopnav_sim::experiments::{ReproOptions, Size};
+use coopnav_sim::scenario::Scenario;
 use std::time::Instant;
 
 type Error = Box<dyn std::error::Error>;

@@ -5,7 +5,6 @@
 //! Carlo and the experiments that reproduce the theses' tables (see [`experiments`]).
 
 pub mod batch;
-pub mod closed_loop;
 pub mod engine;
 pub mod experiments;
 pub mod hbl;

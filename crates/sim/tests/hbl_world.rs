@@ -6,11 +6,11 @@ use coopnav_core::run_seed;
 use coopnav_nav::cycle::Configuration;
 use coopnav_nav::post::{postprocess, read_log, write_log, Entry, PostConfig, Record};
 use coopnav_nav::smoother::SmootherKind;
-use coopnav_sim::closed_loop::Scenario;
 use coopnav_sim::observe::zone::{zone_monte_carlo, ZoneSpec};
 use coopnav_sim::output::log_format::LogFormat;
 use coopnav_sim::output::record::record_pass;
 use coopnav_sim::scenario::hbl::{table5_file, table5_scenario};
+use coopnav_sim::scenario::Scenario;
 use std::path::Path;
 
 #[test]

@@ -3,10 +3,10 @@
 //! output (the SVG heat map is in [`crate::output::hbl_plot`]). The caller says how one cell runs (on the
 //! engine: [`engine_cell`]).
 
-use crate::closed_loop::Scenario as EngineScenario;
 use crate::models::buoy::Drift as EngineDrift;
 use crate::observe::stats::Stats;
 use crate::observe::zone::{zone_monte_carlo, ZoneError, ZoneSpec};
+use crate::scenario::Scenario as EngineScenario;
 use coopnav_core::validation::{InvalidFields, Problems};
 use serde::{Deserialize, Serialize};
 use thiserror::Error;

@@ -9,3 +9,6 @@ pub mod nams;
 pub mod nams_setup;
 pub mod tune;
 pub mod work;
+
+#[cfg(test)]
+mod tests;

@@ -4,10 +4,10 @@
 //! scenario s uses seed run_seed(run_seed(base, s), i) for every behaviour (common random numbers).
 
 use super::nams_setup::{engine_scenario, slot_length};
-use crate::closed_loop::PolicySpec;
 use crate::engine::{run, run_with_tl, Faults};
 use crate::models::tl::TlModel;
 use crate::observe::link_tally::{LinkTally, RunMetrics};
+use crate::policy::PolicySpec;
 use crate::scenario::nams::ExperimentConfig;
 use crate::scenario::world::{Scenario as EngineScenario, ScenarioError};
 use coopnav_acomms::TransmissionLoss;

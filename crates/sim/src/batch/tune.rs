@@ -3,8 +3,9 @@
 //! filters of ship 0 and buoy 0), on the zone Monte Carlo's cost with fixed seeds (common random
 //! numbers make the cost a deterministic function of the coefficients).
 
-use crate::closed_loop::{PolicyError, Scenario};
 use crate::observe::zone::{zone_monte_carlo, ZoneError, ZoneSpec};
+use crate::policy::PolicyError;
+use crate::scenario::Scenario;
 use argmin::core::{CostFunction, Executor, State};
 use argmin::solver::neldermead::NelderMead;
 use coopnav_core::validation::{InvalidFields, Problems};

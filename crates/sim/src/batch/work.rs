@@ -8,7 +8,8 @@
 
 use crate::batch::grid::GridSpec;
 use crate::batch::tune::TuneSpec;
-use crate::{closed_loop, predeploy};
+use crate::predeploy;
+use crate::scenario;
 use coopnav_core::limits::{
     Estimate, MAX_BYTES, MAX_PLANNER_LEAVES, MAX_PLANNER_UPDATES, MAX_POINTS, MAX_VEHICLE_STEPS,
 };
@@ -112,7 +113,7 @@ pub fn predeploy(sc: &predeploy::Scenario) -> Vec<Estimate> {
 }
 
 /// A closed-loop set-up run `runs` times for each of `policies` policies (1 and 1: one run).
-pub fn closed_loop(sc: &closed_loop::Scenario, runs: usize, policies: usize) -> Vec<Estimate> {
+pub fn closed_loop(sc: &scenario::Scenario, runs: usize, policies: usize) -> Vec<Estimate> {
     let f = &sc.fleet;
     let vehicles = (f.n_auvs + 1) as f64;
     let runs_total = runs as f64 * policies as f64;
@@ -162,7 +163,7 @@ pub fn closed_loop(sc: &closed_loop::Scenario, runs: usize, policies: usize) -> 
 
 /// `runs` runs of a Gill pass in engine scenario `sc` (`runs_fields` says where the count comes
 /// from); `recorded`: one run keeps its post-processing log (a few rows per truth step).
-pub fn hbl_runs(sc: &closed_loop::Scenario, runs: f64, runs_fields: &str, recorded: bool) -> Vec<Estimate> {
+pub fn hbl_runs(sc: &scenario::Scenario, runs: f64, runs_fields: &str, recorded: bool) -> Vec<Estimate> {
     let steps = sc.duration_s / sc.dt;
     let vehicles = (sc.fleet.n_auvs + 1 + sc.ships.len() + sc.buoys.len()) as f64;
     let mut out = vec![Estimate::new(
@@ -178,7 +179,7 @@ pub fn hbl_runs(sc: &closed_loop::Scenario, runs: f64, runs_fields: &str, record
 }
 
 /// The buoy-location grid: its cells, and every cell's Monte Carlo.
-pub fn hbl_grid(sc: &closed_loop::Scenario, spec: &GridSpec) -> Vec<Estimate> {
+pub fn hbl_grid(sc: &scenario::Scenario, spec: &GridSpec) -> Vec<Estimate> {
     let cells = spec.cell_count();
     let mut out = vec![Estimate::new("grid cells", "grid x, y, spacing", cells, MAX_POINTS)];
     out.extend(hbl_runs(sc, cells * spec.runs_per_cell as f64, "grid cells x runs_per_cell", false));
@@ -187,7 +188,7 @@ pub fn hbl_grid(sc: &closed_loop::Scenario, spec: &GridSpec) -> Vec<Estimate> {
 
 /// Nelder–Mead tuning: at most `max_iters` iterations of up to n + 1 evaluations (a shrink), each a
 /// Monte Carlo of `runs` runs.
-pub fn hbl_tune(sc: &closed_loop::Scenario, spec: &TuneSpec) -> Vec<Estimate> {
+pub fn hbl_tune(sc: &scenario::Scenario, spec: &TuneSpec) -> Vec<Estimate> {
     let evaluations = (spec.max_iters as f64 + 1.0) * (spec.coefficients.len() as f64 + 1.0);
     hbl_runs(sc, evaluations * spec.runs as f64, "tune runs x (max_iters + 1) x (coefficients + 1)", false)
 }
@@ -274,11 +275,11 @@ mod tests {
     #[test]
     fn the_estimators_pitch_levels_shrink_its_tree() {
         let file = include_str!("../../../../scenarios/sloping-auv-cna.toml");
-        let mut sc = closed_loop::Scenario::parse(file, Path::new("sloping-auv-cna.toml")).unwrap();
+        let mut sc = scenario::Scenario::parse(file, Path::new("sloping-auv-cna.toml")).unwrap();
         sc.planner.estimator_heading_options = Some(9);
         sc.planner.estimator_look_ahead = Some(6);
         sc.planner.estimator_pitch_levels = Some(1);
-        let leaves = |sc: &closed_loop::Scenario| {
+        let leaves = |sc: &scenario::Scenario| {
             closed_loop(sc, 1, 1).into_iter().find(|e| e.what == "planner leaves per decision").unwrap()
         };
         // (9·3)·9⁵ against Hudson's 15⁵ (A = 5, L = 5, three pitch options).
@@ -300,19 +301,19 @@ mod tests {
         let e = check(predeploy(&wide), false).unwrap_err().to_string();
         assert!(e.contains("planner.heading_options") && e.contains("--allow-large"), "{e}");
 
-        let sim = closed_loop::Scenario::parse(closed_loop::EXAMPLE, Path::new("default")).unwrap();
+        let sim = scenario::Scenario::parse(scenario::EXAMPLE, Path::new("default")).unwrap();
         assert!(check(closed_loop(&sim, 100, 3), false).is_ok());
         let mut wide_estimator = sim.clone();
         wide_estimator.planner.estimator_heading_options = Some(1_000_000);
         let e = check(closed_loop(&wide_estimator, 1, 1), false).unwrap_err().to_string();
         assert!(e.contains("planner.estimator_heading_options") && e.contains("--allow-large"), "{e}");
-        let long = closed_loop::Scenario { duration_s: 1e9, ..sim };
+        let long = scenario::Scenario { duration_s: 1e9, ..sim };
         assert!(check(closed_loop(&long, 1, 1), false).unwrap_err().to_string().contains("duration_s / dt"));
 
         let hbl = crate::scenario::hbl::table5_scenario(coopnav_nav::cycle::Configuration::HblTwo).unwrap();
         assert!(check(hbl_runs(&hbl, 250.0, "--runs", false), false).is_ok());
         assert!(check(hbl_grid(&hbl, &GridSpec::default()), false).is_ok());
-        let fine = closed_loop::Scenario { dt: 1e-9, ..hbl.clone() };
+        let fine = scenario::Scenario { dt: 1e-9, ..hbl.clone() };
         assert!(check(hbl_runs(&fine, 1.0, "1 run", true), false).unwrap_err().to_string().contains("duration_s / dt"));
     }
 }

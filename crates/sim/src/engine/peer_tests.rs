@@ -3,8 +3,8 @@
 //! shadow estimates, and the per-AUV lawnmowers.
 
 use super::*;
-use crate::closed_loop::PolicySpec;
 use crate::models::peer::{EstimatorMode, StatusFormat, StatusTo};
+use crate::policy::PolicySpec;
 use coopnav_acomms::selector::Choice;
 use coopnav_acomms::Rate;
 use std::path::Path;

@@ -2,9 +2,9 @@
 //! schedule, and the NEES check against a filter given the wrong noise model.
 
 use super::*;
-use crate::closed_loop::PolicySpec;
 use crate::models::finish::Finish;
 use crate::models::schedule::{Schedule, SlotSpec};
+use crate::policy::PolicySpec;
 use coopnav_nav::StateKind;
 
 /// One AUV on a short lawnmower (two 300 m lanes, done after about 480 s), then `duration` s.
@@ -281,7 +281,7 @@ fn a_drifting_buoys_batch_is_identical_on_one_and_two_threads() {
     let go = |sc: &Scenario, threads| {
         let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
         pool.install(|| {
-            serde_json::to_string(&crate::closed_loop::monte_carlo(sc, &policies, 3, &|_| {}).unwrap()).unwrap()
+            serde_json::to_string(&crate::batch::mc::monte_carlo(sc, &policies, 3, &|_| {}).unwrap()).unwrap()
         })
     };
     let (a, b) = (go(&sc, 1), go(&sc, 2));

@@ -16,13 +16,14 @@
 //! slots, which the planner alone modelled, lost the last slot's AUV for every policy.
 
 use super::{Check, Experiment, ExperimentError, ReproOptions, ReproReport, Size};
+use crate::batch::mc::{comparison_table, monte_carlo_grid};
 use crate::batch::mc::{paired_per_auv, Ci, Comparison, PolicySummary};
-use crate::closed_loop::{comparison_table, monte_carlo_grid, Scenario};
 use crate::output::plot::PlotError;
 use crate::policy::registry::POLICY_NAMES;
 use crate::scenario::world::{
     ESTIMATOR_AGGREGATE, ESTIMATOR_BIAS_PER_KM, ESTIMATOR_CNA_VARIANCE, ESTIMATOR_TERMINAL_LEVELS,
 };
+use crate::scenario::Scenario;
 use coopnav_acomms::Rate;
 use coopnav_plan::{Aggregate, PenaltyCase, RangeNoise, TruthSpec};
 use plotters::prelude::*;
@@ -815,7 +816,7 @@ pub fn difference_svg(cells: &[Cell]) -> Result<String, PlotError> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::closed_loop::monte_carlo;
+    use crate::batch::mc::monte_carlo;
     use crate::models::surfacing::at_surface;
     use coopnav_plan::CnaKind;
 

@@ -7,12 +7,12 @@
 
 use super::{Check, Experiment, ExperimentError, ReproOptions, ReproReport, Size};
 use crate::batch::grid::{buoy_grid, engine_cell, lengthen_for_grid, optimal_region, GridSpec};
-use crate::closed_loop::Scenario;
 use crate::models::schedule::{GillCycle, Schedule};
 use crate::observe::profile::ProfileBin;
 use crate::observe::stats::{welch_95, Stats};
 use crate::observe::zone::{zone_monte_carlo, ZoneError, ZoneSpec, ZoneSummary};
 use crate::scenario::hbl::{table5_file, table5_scenario};
+use crate::scenario::Scenario;
 use coopnav_nav::codec::Zone;
 use coopnav_nav::cycle::Configuration;
 use serde_json::json;

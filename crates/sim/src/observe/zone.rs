@@ -8,10 +8,12 @@
 //! buoy's slots only.
 
 use super::profile::{add_to_bin, merge_bins, BinSums, ProfileBin};
-use crate::closed_loop::{run, Faults, PolicyError, PolicySpec, RunResult, Scenario};
+use crate::engine::{run, Faults, RunResult};
 use crate::engine::{BuoySample, Observer, TraceRow};
 use crate::models::schedule::Owner;
 use crate::observe::stats::Stats;
+use crate::policy::{PolicyError, PolicySpec};
+use crate::scenario::Scenario;
 use coopnav_core::{run_seed, CompassDeg, Heading, Vec3};
 use coopnav_nav::codec::Zone;
 use rayon::prelude::*;

@@ -3,10 +3,11 @@
 //! `cna`, ranges and packets as pulses, planned legs), written into the run directory as
 //! `run.alog` (mapping: `coopnav_moos::export`) with its interactive `replay.html`.
 
-use crate::closed_loop::{self, RunResult as ClosedLoopResult};
+use crate::engine::RunResult as ClosedLoopResult;
 use crate::output::record::PassRow;
 use crate::output::{RunDir, WriteError};
 use crate::predeploy::{Mission, RunResult as PlanResult};
+use crate::scenario;
 use coopnav_core::{CompassDeg, LatLon, LocalFrame, Vec3};
 use coopnav_moos::{
     mission_files, replay, write_run_alog, Leg, MissionFiles, MissionSpec, Pulse, PulseKind, Role, RunLog, Sample,
@@ -51,7 +52,7 @@ fn auv_name(k: usize) -> String {
 /// A closed-loop mission (`simulate`): every AUV's truth and estimate (with the filter's 1σ)
 /// every second, the CNA, CNA broadcasts as range pulses and AUV status packets as comms pulses.
 /// Every CNA decision that steers for a point is a leg (VIEW_SEGLIST).
-pub fn closed_loop_run(sc: &closed_loop::Scenario, result: &ClosedLoopResult) -> Result<RunLog, WriteError> {
+pub fn closed_loop_run(sc: &scenario::Scenario, result: &ClosedLoopResult) -> Result<RunLog, WriteError> {
     let trace = result.trace.as_ref().ok_or(WriteError::NotRecorded)?;
     let mut vehicles = Vec::new();
     for k in 0..sc.fleet.n_auvs {

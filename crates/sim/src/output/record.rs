@@ -6,13 +6,15 @@
 //! and each decoded range from the ship's modems and the buoy.
 
 use super::log_format::LogFormat;
-use crate::closed_loop::{PolicyError, PolicySpec, RunResult, Scenario};
+use crate::engine::RunResult;
 use crate::engine::{
     BuoyFix, BuoySample, DeadReckoning, FilterStart, Observer, RangeHeard, ShipPose, ShipSample, TraceRow,
 };
 use crate::models::noise::normal;
 use crate::models::schedule::Owner;
 use crate::observe::zone::{zone_run, GillZone, ZoneSpec};
+use crate::policy::{PolicyError, PolicySpec};
+use crate::scenario::Scenario;
 use coopnav_core::{CompassDeg, Heading, SeedStream, Vec3};
 use coopnav_nav::cycle::Transmitter;
 use coopnav_nav::post::{Entry, Record};

@@ -1,10 +1,13 @@
 //! Behaviour of the closed loop: determinism over thread counts, dead reckoning against a CNA,
 //! graceful degradation when packets are lost, and the run directory.
 
-use super::*;
+use crate::batch::mc::{monte_carlo, monte_carlo_grid, Comparison};
+use crate::engine::{run, run_traced, Faults, RunResult};
 use crate::output::run::{write_run, PLOTS};
 use crate::output::RunDir;
+use crate::policy::{PolicySpec, POLICY_NAMES};
 use crate::scenario::world as scenario;
+use crate::scenario::Scenario;
 
 /// A short mission for tests.
 fn short(n: usize, duration: f64) -> Scenario {
