@@ -7,9 +7,7 @@
 pub mod batch;
 pub mod engine;
 pub mod experiments;
-pub mod hbl;
 pub mod models;
-pub mod nams;
 pub mod observe;
 pub mod output;
 pub mod policy;

@@ -187,7 +187,7 @@ fn a_gill_file_that_cannot_run_is_refused_naming_every_field() {
 /// the selector stays silent while the other vehicle is beyond its status bins.
 #[test]
 fn nams_scenarios_run_on_the_engine_with_nams_metrics() {
-    use coopnav_sim::nams::{LinkTally, RunMetrics};
+    use coopnav_sim::observe::link_tally::{LinkTally, RunMetrics};
     let metrics = |n: usize| -> RunMetrics {
         let file = Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("../../scenarios/nams-{n}.toml"));
         let sc = Scenario::load(&file).unwrap_or_else(|e| panic!("{e}"));

@@ -9,8 +9,9 @@
 //! bandwidth in both environments — is what is checked.
 
 use super::{Check, Experiment, ExperimentError, ReproOptions, ReproReport, Size};
+use crate::batch::nams::{run_experiment, Cell, ExperimentResult, ExperimentTl};
 use crate::models::tl::{GridModel, TlModel};
-use crate::nams::{run_experiment, Behaviour, Cell, ExperimentConfig, ExperimentResult, ExperimentTl, Scenario};
+use crate::scenario::nams::{Behaviour, ExperimentConfig, Scenario};
 use coopnav_acomms::tl::analytic::Thorp;
 use std::fmt::Write as _;
 use std::sync::Arc;
@@ -215,7 +216,8 @@ fn direction_check(scenario: &str, metric: &str, ours: (f64, f64), thesis: (f64,
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::nams::{run_experiment, ExperimentConfig};
+    use crate::batch::nams::run_experiment;
+    use crate::scenario::nams::ExperimentConfig;
 
     #[test]
     fn reduced_reproduction_keeps_the_ordering() {
