@@ -6,7 +6,7 @@ use crate::convert::{to_py, toml_text};
 use crate::value_error;
 use coopnav_core::limits::{self, Estimate};
 use coopnav_sim::scenario;
-use coopnav_sim::{batch::work, predeploy, scenario::file as scenario_file};
+use coopnav_sim::{batch::work, scenario::file as scenario_file};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use serde::de::DeserializeOwned;
@@ -19,7 +19,7 @@ pub const KINDS: [&str; 2] = ["simulate", "plan"];
 #[derive(Clone)]
 pub enum Kind {
     Simulate(scenario::Scenario),
-    Plan(predeploy::Scenario),
+    Plan(scenario::plan::Scenario),
 }
 
 #[pyclass(module = "coopnav", frozen, name = "Scenario")]
@@ -55,7 +55,9 @@ impl Scenario {
     fn parse(text: &str, kind: &str, file: PathBuf, base: PathBuf, allow_large: bool) -> PyResult<Self> {
         let kind = match kind {
             "simulate" => Kind::Simulate(checked(text, &file, one_run, scenario::Scenario::validate, allow_large)?),
-            "plan" => Kind::Plan(checked(text, &file, work::predeploy, predeploy::Scenario::validate, allow_large)?),
+            "plan" => {
+                Kind::Plan(checked(text, &file, work::predeploy, scenario::plan::Scenario::validate, allow_large)?)
+            }
             other => return Err(unknown_kind(other)),
         };
         Ok(Scenario { kind, file, base })
@@ -83,7 +85,7 @@ impl Scenario {
     fn example(kind: &str) -> PyResult<Self> {
         let (text, name) = match kind {
             "simulate" => (scenario::EXAMPLE, "default"),
-            "plan" => (predeploy::EXAMPLE, "example"),
+            "plan" => (scenario::plan::EXAMPLE, "example"),
             other => return Err(unknown_kind(other)),
         };
         Scenario::parse(text, kind, PathBuf::from(format!("<embedded {name}>")), PathBuf::from("."), false)
@@ -95,7 +97,7 @@ impl Scenario {
     fn example_toml(kind: &str) -> PyResult<&'static str> {
         match kind {
             "simulate" => Ok(scenario::EXAMPLE),
-            "plan" => Ok(predeploy::EXAMPLE),
+            "plan" => Ok(scenario::plan::EXAMPLE),
             other => Err(unknown_kind(other)),
         }
     }

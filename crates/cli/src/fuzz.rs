@@ -15,7 +15,7 @@ use coopnav_core::{Bathymetry, CompassDeg, Heading, Vec3};
 use coopnav_nav::codec::{Direction, MiniPacket, Sentence};
 use coopnav_nav::cycle::{Configuration, Cycle};
 use coopnav_nav::post::{self, PostConfig};
-use coopnav_sim::{predeploy, scenario};
+use coopnav_sim::scenario;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use std::panic::{catch_unwind, AssertUnwindSafe};
@@ -89,10 +89,10 @@ fn closed_loop_parse(b: &[u8]) -> bool {
 }
 
 fn plan_seed() -> Vec<u8> {
-    predeploy::EXAMPLE.into()
+    scenario::plan::EXAMPLE.into()
 }
 fn plan_parse(b: &[u8]) -> bool {
-    predeploy::Scenario::parse(&text(b), Path::new("fuzz.toml")).is_ok()
+    scenario::plan::Scenario::parse(&text(b), Path::new("fuzz.toml")).is_ok()
 }
 
 fn hbl_seed() -> Vec<u8> {

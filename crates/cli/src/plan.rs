@@ -8,12 +8,13 @@ use anyhow::{anyhow, Context, Result};
 use coopnav_core::limits::Estimate;
 use coopnav_core::LatLon;
 use coopnav_moos::mission::EXAMPLE_ORIGIN_DEG;
+use coopnav_plan::predeploy;
 use coopnav_plan::LookAheadPlanner;
 use coopnav_sim::batch::work;
 use coopnav_sim::output::moos_export;
 use coopnav_sim::output::plan::write_run;
-use coopnav_sim::predeploy::{self, Scenario, EXAMPLE};
 use coopnav_sim::scenario::file::Validate;
+use coopnav_sim::scenario::plan::{Scenario, EXAMPLE};
 use indicatif::{ProgressBar, ProgressStyle};
 use std::io::IsTerminal;
 

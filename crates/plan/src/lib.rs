@@ -7,6 +7,8 @@
 //!
 //! Entry points: [`LookAheadPlanner`] (a [`Planner`]) configured by [`PlannerConfig`], fed each
 //! τ with the CNA pose, the AUVs' modelled errors ([`AuvError`]) and an [`AuvForecast`].
+//! [`predeploy`] steps it over a whole pre-deployment mission whose survey tracks are known a
+//! priori.
 
 mod brute;
 mod cost_model;
@@ -15,6 +17,7 @@ pub mod estimator;
 pub mod motion;
 pub mod penalty;
 pub mod planner;
+pub mod predeploy;
 pub mod predict;
 mod search;
 #[cfg(test)]

@@ -11,5 +11,4 @@ pub mod models;
 pub mod observe;
 pub mod output;
 pub mod policy;
-pub mod predeploy;
 pub mod scenario;

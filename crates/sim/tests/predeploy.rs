@@ -1,10 +1,11 @@
 //! Pre-deployment runs: the embedded example, scenario validation (each bad input names its
 //! field or line), determinism across thread counts, and the run directory.
 
+use coopnav_plan::predeploy;
 use coopnav_plan::LookAheadPlanner;
 use coopnav_sim::output::plan::write_run;
 use coopnav_sim::output::RunDir;
-use coopnav_sim::predeploy::{self, Scenario, ScenarioError, EXAMPLE};
+use coopnav_sim::scenario::plan::{Scenario, ScenarioError, EXAMPLE};
 use std::path::Path;
 
 fn example() -> Scenario {

@@ -3,9 +3,10 @@
 //! brute force), and the nodes expanded over the embedded example mission.
 
 use anyhow::{ensure, Result};
+use coopnav_plan::predeploy;
 use coopnav_plan::workload::Workload;
 use coopnav_plan::{Algorithm, LookAheadPlanner};
-use coopnav_sim::predeploy::{self, EXAMPLE};
+use coopnav_sim::scenario::plan::{self as plan_scenario, EXAMPLE};
 use serde_json::json;
 use std::time::Instant;
 
@@ -112,7 +113,7 @@ pub fn run(args: Args) -> Result<()> {
 /// brute force's path recomputations.
 fn mission_nodes(l: usize) -> Result<serde_json::Value> {
     let file = std::path::Path::new("<embedded example>");
-    let mut mission = predeploy::Scenario::parse(EXAMPLE, file)?.build(file, std::path::Path::new("."))?;
+    let mut mission = plan_scenario::Scenario::parse(EXAMPLE, file)?.build(file, std::path::Path::new("."))?;
     mission.planner.look_ahead = l;
     mission.planner.search.parallel = false;
     let m = mission.planner.motion.options().len() as u64;

@@ -8,8 +8,8 @@
 
 use crate::batch::grid::GridSpec;
 use crate::batch::tune::TuneSpec;
-use crate::predeploy;
 use crate::scenario;
+use crate::scenario::plan;
 use coopnav_core::limits::{
     Estimate, MAX_BYTES, MAX_PLANNER_LEAVES, MAX_PLANNER_UPDATES, MAX_POINTS, MAX_VEHICLE_STEPS,
 };
@@ -76,14 +76,14 @@ fn pitch_options(cna: &CnaKind) -> usize {
 }
 
 /// A pre-deployment plan: track samples per lawnmower, decisions, tree size, memory.
-pub fn predeploy(sc: &predeploy::Scenario) -> Vec<Estimate> {
+pub fn predeploy(sc: &plan::Scenario) -> Vec<Estimate> {
     let mut out = Vec::new();
     let mut shortest = f64::INFINITY;
     let mut samples = 0.0;
     for (i, a) in sc.auv.iter().enumerate() {
         if let Some(m) = &a.lawnmower {
             let duration = lawnmower_duration(m.lanes, m.lane_length, m.spacing, m.speed);
-            let n = duration / crate::scenario::plan::LAWNMOWER_DT;
+            let n = duration / plan::LAWNMOWER_DT;
             out.push(Estimate::new(
                 "track samples",
                 format!("auv[{i}].lawnmower lanes, lane_length, spacing, speed"),
@@ -294,7 +294,7 @@ mod tests {
 
     #[test]
     fn embedded_scenarios_pass_and_typos_are_refused() {
-        let plan = predeploy::Scenario::parse(predeploy::EXAMPLE, Path::new("example")).unwrap();
+        let plan = plan::Scenario::parse(plan::EXAMPLE, Path::new("example")).unwrap();
         assert!(check(predeploy(&plan), false).is_ok());
         let mut wide = plan.clone();
         wide.planner.motion.heading_options = 1_000_000_000;

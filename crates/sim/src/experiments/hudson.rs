@@ -22,8 +22,8 @@
 //! with the 3-D one.
 
 use super::{Check, ExperimentError, ReproOptions, ReproReport, Size};
-use crate::predeploy::{self, Mission, Summary};
 use coopnav_core::{DepthProfile, Heading, Lawnmower, Track, Vec3};
+use coopnav_plan::predeploy::{self, Mission, Summary};
 use coopnav_plan::{
     BearingMode, CnaKind, CnaPose, Deadline, DistanceLimits, ErrorModel, LookAheadPlanner, MotionConfig, PenaltyCase,
     PlannerConfig, SearchConfig,

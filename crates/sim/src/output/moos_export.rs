@@ -6,13 +6,13 @@
 use crate::engine::RunResult as ClosedLoopResult;
 use crate::output::record::PassRow;
 use crate::output::{RunDir, WriteError};
-use crate::predeploy::{Mission, RunResult as PlanResult};
 use crate::scenario;
 use coopnav_core::{CompassDeg, LatLon, LocalFrame, Vec3};
 use coopnav_moos::{
     mission_files, replay, write_run_alog, Leg, MissionFiles, MissionSpec, Pulse, PulseKind, Role, RunLog, Sample,
     Vehicle, Waypoint, SIMULATED_LOG_START,
 };
+use coopnav_plan::predeploy::{Mission, RunResult as PlanResult};
 use coopnav_plan::{CnaKind, CnaPose};
 
 /// The alog every run directory with a time axis holds.
@@ -121,7 +121,7 @@ pub fn plan_run(mission: &Mission, result: &PlanResult) -> RunLog {
     let legs = steps
         .windows(2)
         .map(|w| {
-            let point = |s: &crate::predeploy::StepRecord| [s.cna.pos.x, s.cna.pos.y, s.cna.pos.z];
+            let point = |s: &coopnav_plan::predeploy::StepRecord| [s.cna.pos.x, s.cna.pos.y, s.cna.pos.z];
             Leg { t: w[0].t, points: vec![point(&w[0]), point(&w[1])] }
         })
         .collect();

@@ -4,10 +4,10 @@
 
 use crate::output::plot::{line_svg, track_svg, Labels, Series};
 use crate::output::{Manifest, RunDir, WriteError};
-use crate::predeploy::metrics::StepRecord;
-use crate::predeploy::runner::RunResult;
-use crate::scenario::plan::Mission;
 use coopnav_core::CompassDeg;
+use coopnav_plan::predeploy::metrics::StepRecord;
+use coopnav_plan::predeploy::runner::RunResult;
+use coopnav_plan::predeploy::Mission;
 use serde::Serialize;
 use std::fmt::Write;
 

@@ -6,14 +6,14 @@ use crate::policy::{
     Centroid, CentroidStandoff, CnaPolicy, FixedPattern, GreedyFisher, MidpointRelay, NoCna, Rect, TimedWaypoints,
     Trail,
 };
-use crate::predeploy::runner;
-use crate::scenario::plan::Mission;
 use crate::scenario::start::cna_start;
 use crate::scenario::world::{EstimatorTracking, PlannerLink, Scenario};
 use coopnav_acomms::selector::{FixedRate, RatePolicy};
 use coopnav_acomms::tl::{TlError, TransmissionLoss, TL_CEILING};
 use coopnav_core::{Bathymetry, DepthTarget, Vec3};
 use coopnav_nav::AuvModel;
+use coopnav_plan::predeploy::runner;
+use coopnav_plan::predeploy::Mission;
 use coopnav_plan::{
     AuvEstimate, CnaKind, CostSpec, Deadline, EstimatorSpec, LinkTable, LookAheadPlanner, PenaltyCase, PlanError,
     RangeNoise,

@@ -7,6 +7,7 @@ pub use crate::scenario::file::ScenarioError;
 use crate::scenario::file::{self as scenario_file, Problem, Problems};
 use coopnav_core::validation::{CheckFields, InvalidFields};
 use coopnav_core::{CompassDeg, DepthProfile, Heading, Lawnmower, Track, Vec3};
+use coopnav_plan::predeploy::Mission;
 use coopnav_plan::{
     CnaPose, DistanceLimits, ErrorModel, MotionConfig, PenaltyCase, PenaltyFn, PenaltyPair, PlanError, PlannerConfig,
     SearchConfig,
@@ -144,19 +145,6 @@ impl LawnmowerSpec {
             depth: self.depth,
         }
     }
-}
-
-/// A validated, ready-to-run pre-deployment mission.
-#[derive(Debug, Clone)]
-pub struct Mission {
-    pub planner: PlannerConfig,
-    pub cna: CnaPose,
-    pub names: Vec<String>,
-    pub tracks: Vec<Track>,
-    pub sigma0: Vec<f64>,
-    pub eps0: Vec<f64>,
-    pub start_time: f64,
-    pub end_time: f64,
 }
 
 /// Sampling interval of generated lawnmower tracks, s (linear between samples, exact on lanes).

@@ -3,9 +3,9 @@
 //! updated from its a-priori position (Hudson §4.1, digest §2.10, §3.2).
 
 use super::metrics::{StepRecord, Summary};
-use crate::scenario::plan::Mission;
+use super::Mission;
+use crate::{AuvError, AuvForecast, CnaPose, Decision, Penalty, PlanError, PlanInput, Planner, Violation};
 use coopnav_core::{Track, Vec3};
-use coopnav_plan::{AuvError, AuvForecast, CnaPose, Decision, Penalty, PlanError, PlanInput, Planner, Violation};
 use thiserror::Error;
 
 #[derive(Debug, Error)]

@@ -2,8 +2,8 @@
 //! it, average and total cost, max and RMS error (the worst AUV), CNA–AUV distances at decision
 //! times, distance-limit violations, and how often the search was cut short.
 
+use crate::{AuvError, CnaPose, Decision, DistanceLimits};
 use coopnav_core::Vec3;
-use coopnav_plan::{AuvError, CnaPose, Decision, DistanceLimits};
 use serde::Serialize;
 
 /// The state after one executed step (step 0 = the start).
