@@ -3,8 +3,8 @@
 //! channel draws), so the planner's advantage over a baseline is judged run by run (paired 95 %
 //! CI). Runs go through rayon and are merged in index order: bit-identical on any thread count.
 
-use crate::engine::metrics::LinkStats;
 use crate::engine::{run, Faults, Observer, RunResult};
+use crate::models::metrics::LinkStats;
 use crate::observe::stats::{t_975, Stats};
 use crate::policy::registry::{PolicyError, PolicySpec};
 use crate::scenario::world::Scenario;

@@ -13,9 +13,7 @@
 //! packet-success tracker, shadow estimates and rate feedback of `peer`.
 
 mod cna_rate;
-pub mod health;
 mod inflight;
-pub mod metrics;
 mod mini;
 pub mod observe;
 mod peer;
@@ -24,6 +22,8 @@ mod vehicles;
 
 use crate::models::channel::Clock;
 use crate::models::filter::RangeSpeed;
+use crate::models::health;
+use crate::models::metrics::{AuvMetrics, ErrorStats, FleetMetrics, LinkStats};
 use crate::models::peer::StatusFormat;
 use crate::models::schedule::Slot;
 use crate::models::surfacing::OwnNav;
@@ -37,7 +37,6 @@ use coopnav_core::{Bathymetry, Iver2State, SeedStream, Vec3};
 use coopnav_plan::predict::{StatusReport, UnderwayPredictor};
 use coopnav_plan::AuvForecast;
 use inflight::InFlight;
-use metrics::{AuvMetrics, ErrorStats, FleetMetrics, LinkStats};
 use mini::SurfaceFilters;
 pub use observe::{
     BuoyFix, BuoySample, CnaChoice, CommsEvent, DeadReckoning, Decision, FilterStart, Observer, Phase, PhaseClock,

@@ -5,7 +5,6 @@
 //! time order, with their fate), sense (filter prediction and dead-reckoning sensors) and observe
 //! (metrics and the observer, once per second).
 
-use super::health::nees_2d;
 use super::inflight::Arrival;
 use super::observe::{
     BuoyFix, CnaChoice, CommsEvent, DeadReckoning, Decision, Observer, RangeHeard, ShadowSample, ShipPose,
@@ -18,6 +17,7 @@ use super::{Engine, FleetView};
 use crate::models::channel::receiver;
 use crate::models::channel::{air_time, Clock};
 use crate::models::finish::Finish;
+use crate::models::health::nees_2d;
 use crate::models::minipacket::SUCCESS_RATE;
 use crate::models::noise::normal;
 use crate::models::peer::{StatusFormat, StatusTo};

@@ -4,12 +4,15 @@
 //! ([`minipacket`]), the comms schedule ([`schedule`]), what a vehicle does after its mission ([`finish`]) and what the
 //! survey AUVs' filters assume ([`filter`]), the transmission loss ([`tl`]) and when an AUV CNA
 //! surfaces for a GPS fix ([`surfacing`]), a survey AUV's own lawnmower ([`mower`]) and what its
-//! status carries to whom ([`peer`]).
+//! status carries to whom ([`peer`]), the noise every vehicle draws ([`noise`]), filter health
+//! judged against the truth ([`health`]) and the per-run metrics a run reports ([`metrics`]).
 
 pub mod buoy;
 pub mod channel;
 pub mod filter;
 pub mod finish;
+pub mod health;
+pub mod metrics;
 pub mod minipacket;
 pub mod mower;
 pub mod noise;

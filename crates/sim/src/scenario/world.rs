@@ -2,11 +2,11 @@
 //! lawnmowers, the CNA, the acoustic link, sensors and filters, and the planner. Validated
 //! before anything runs; every error names the file, the field and what is allowed.
 
-pub use crate::engine::health::Health;
 use crate::models::buoy::{BuoySpec, MAX_BUOYS};
 use crate::models::channel::Channel;
 use crate::models::filter::{FilterRate, FilterSoundSpeed, FilterSpec};
 use crate::models::finish::Finish;
+pub use crate::models::health::Health;
 use crate::models::minipacket;
 use crate::models::mower::MowerSpec;
 use crate::models::peer::{mask_width, StatusFormat, StatusTo};
