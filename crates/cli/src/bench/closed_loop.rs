@@ -11,7 +11,7 @@ use coopnav_nav::{AuvModel, CurrentParams};
 use coopnav_sim::engine;
 use coopnav_sim::engine::{Faults, PhaseClock};
 use coopnav_sim::models::filter::FilterRate;
-use coopnav_sim::models::tl::{GridModel, TlModel};
+use coopnav_sim::models::tl_spec::{GridModel, TlModel};
 use coopnav_sim::policy::PolicySpec;
 use coopnav_sim::scenario::{BeforeFirstReport, Scenario};
 use serde_json::json;

@@ -5,7 +5,7 @@
 
 use super::nams_setup::{engine_scenario, slot_length};
 use crate::engine::{run, run_with_tl, Faults};
-use crate::models::tl::TlModel;
+use crate::models::tl_spec::TlModel;
 use crate::observe::link_tally::{LinkTally, RunMetrics};
 use crate::policy::PolicySpec;
 use crate::scenario::nams::ExperimentConfig;

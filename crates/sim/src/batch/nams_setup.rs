@@ -8,7 +8,7 @@
 
 use crate::models::peer::StatusFormat;
 use crate::models::schedule::{Schedule, SlotSpec};
-use crate::models::tl::TlModel;
+use crate::models::tl_spec::TlModel;
 use crate::scenario::nams::{Behaviour, ExperimentConfig, Scenario};
 use crate::scenario::world::{Scenario as EngineScenario, ScenarioError};
 use coopnav_acomms::SuccessModel;

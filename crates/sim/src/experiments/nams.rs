@@ -10,7 +10,7 @@
 
 use super::{Check, Experiment, ExperimentError, ReproOptions, ReproReport, Size};
 use crate::batch::nams::{run_experiment, Cell, ExperimentResult, ExperimentTl};
-use crate::models::tl::{GridModel, TlModel};
+use crate::models::tl_spec::{GridModel, TlModel};
 use crate::scenario::nams::{Behaviour, ExperimentConfig, Scenario};
 use coopnav_acomms::tl::analytic::Thorp;
 use std::fmt::Write as _;

@@ -9,114 +9,21 @@
 //! CNA believes, apart from the truth (unless `planner.link = "scenario_channel"` gives it this
 //! provider).
 
+use super::tl_spec::{GridModel, TlModel, MAX_GRID_FIELDS};
 use crate::models::channel::SoundSpeed;
 use crate::scenario::start::cna_start;
 use crate::scenario::world::Scenario;
-use coopnav_acomms::tl::analytic::Thorp;
 use coopnav_acomms::tl::bellhop::{AcousticEnv, Bellhop};
 use coopnav_acomms::tl::cached::{AnchorLattice, CachedGrid, GridSpec, LatticeSpec};
 use coopnav_acomms::tl::{TlError, TransmissionLoss};
 use coopnav_core::DepthTarget;
 use coopnav_plan::CnaKind;
-use serde::{Deserialize, Serialize};
+use serde::Serialize;
 use std::collections::HashMap;
 use std::hash::{Hash, Hasher};
-use std::path::PathBuf;
 use std::sync::{Arc, Mutex, OnceLock};
 
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
-pub enum TlModel {
-    /// k·10·log10(d) + Thorp absorption (`k`, `freq_hz`).
-    Analytic(Thorp),
-    /// A BELLHOP run for every arrival, at the true geometry.
-    Bellhop,
-    /// Cached BELLHOP fields on a lattice of source positions.
-    BellhopGrid(GridModel),
-}
-
-impl Default for TlModel {
-    fn default() -> Self {
-        TlModel::Analytic(Thorp::default())
-    }
-}
-
-/// The `bellhop_grid` layout. Invented defaults, measured against direct runs (acomms
-/// `tl::cached` tests): they keep the grid within 1 dB of a direct run.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields, default)]
-pub struct GridModel {
-    /// Bearings per anchor, evenly spaced.
-    pub bearings: usize,
-    pub range_step_m: f64,
-    pub depth_step_m: f64,
-    /// Distance between neighbouring source anchors.
-    pub anchor_spacing_m: f64,
-    /// The lattice covers the survey blocks and the CNA's start, widened by this much.
-    pub margin_m: f64,
-    /// Spacing of the source layers over a depth span a transmitter moves through (an
-    /// altitude-keeping survey AUV, an AUV CNA). Invented; measured (acomms `tl::cached` tests):
-    /// a source 4 m from the layers either side of it, 8 m apart, read 0.6–2.0 dB off a direct
-    /// run.
-    pub source_depth_step_m: f64,
-    /// Directory of the disk cache (default: `coopnav-tl` in the system temporary directory).
-    pub cache_dir: Option<PathBuf>,
-}
-
-impl Default for GridModel {
-    fn default() -> Self {
-        GridModel {
-            bearings: 16,
-            range_step_m: 10.0,
-            depth_step_m: 2.0,
-            anchor_spacing_m: 500.0,
-            margin_m: 500.0,
-            source_depth_step_m: 10.0,
-            cache_dir: None,
-        }
-    }
-}
-
-/// Largest number of BELLHOP fields a grid may ask for (anchors × bearings): about an hour of
-/// one core at a kilometre's range.
-pub const MAX_GRID_FIELDS: usize = 20_000;
-
 impl TlModel {
-    /// What the CNA's planner assumes: the analytic model itself, or the default analytic model
-    /// for the BELLHOP kinds.
-    pub fn assumed(&self) -> Thorp {
-        match self {
-            TlModel::Analytic(t) => *t,
-            TlModel::Bellhop | TlModel::BellhopGrid(_) => Thorp::default(),
-        }
-    }
-
-    /// Every bad field, as (field under `prefix`, value, allowed).
-    pub fn problems(&self, prefix: &str) -> Vec<(String, String, String)> {
-        let mut out = Vec::new();
-        let mut need = |field: &str, v: f64, ok: bool, allowed: &str| {
-            if !(v.is_finite() && ok) {
-                out.push((format!("{prefix}{field}"), v.to_string(), allowed.to_string()));
-            }
-        };
-        match self {
-            TlModel::Analytic(t) => {
-                need("k", t.k, t.k > 0.0, "a finite number > 0");
-                need("freq_hz", t.freq_hz, t.freq_hz > 0.0, "a finite number > 0");
-            }
-            TlModel::Bellhop => {}
-            TlModel::BellhopGrid(g) => {
-                need("bearings", g.bearings as f64, (1..=360).contains(&g.bearings), "1..=360");
-                need("range_step_m", g.range_step_m, g.range_step_m >= 1.0, ">= 1 m");
-                need("depth_step_m", g.depth_step_m, g.depth_step_m >= 0.5, ">= 0.5 m");
-                need("anchor_spacing_m", g.anchor_spacing_m, g.anchor_spacing_m >= 50.0, ">= 50 m");
-                need("margin_m", g.margin_m, g.margin_m >= 0.0, ">= 0 m");
-                need("source_depth_step_m", g.source_depth_step_m, g.source_depth_step_m >= 0.5, ">= 0.5 m");
-            }
-        }
-        out
-    }
-
     /// The provider a run uses. BELLHOP kinds need the program; a grid is computed at most once
     /// per process and once per machine (disk cache), whichever run asks first.
     pub fn provider(&self, sc: &Scenario) -> Result<Arc<dyn TransmissionLoss>, TlError> {
@@ -126,16 +33,6 @@ impl TlModel {
             TlModel::BellhopGrid(g) => grid(g, sc).map(|l| l as Arc<dyn TransmissionLoss>),
         }
     }
-}
-
-/// A `tl` table without `kind` is the analytic model.
-pub fn kind_defaults_to_analytic<'de, D: serde::Deserializer<'de>>(d: D) -> Result<TlModel, D::Error> {
-    use serde::de::Error;
-    let mut value = toml::Value::deserialize(d)?;
-    if let Some(t) = value.as_table_mut().filter(|t| !t.contains_key("kind")) {
-        t.insert("kind".into(), toml::Value::String("analytic".into()));
-    }
-    value.try_into().map_err(D::Error::custom)
 }
 
 /// The thesis's acoustic environment (nams digest §4.5: mud half-space, 25 kHz, BT-1 pattern) over
@@ -384,6 +281,9 @@ mod disk {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::models::tl_spec::kind_defaults_to_analytic;
+    use coopnav_acomms::tl::analytic::Thorp;
+    use serde::Deserialize;
 
     #[derive(Debug, Deserialize)]
     struct Holder {

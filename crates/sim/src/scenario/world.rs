@@ -13,7 +13,7 @@ use crate::models::peer::{mask_width, StatusFormat, StatusTo};
 use crate::models::schedule::{longest_air, payload_problem, Fit, Owner, Schedule};
 use crate::models::ship::{ShipSpec, MAX_SHIPS};
 use crate::models::surfacing::Surfacing;
-use crate::models::tl::TlModel;
+use crate::models::tl_spec::TlModel;
 pub use crate::scenario::file::ScenarioError;
 use crate::scenario::file::{self as scenario_file, overlay, Problems};
 use coopnav_acomms::node_report::{BODY_BITS, HEADER_BITS};
@@ -308,7 +308,7 @@ pub struct Comms {
     /// AUV) the statuses it received since its last one.
     pub status_adaptive: Option<AdaptiveConfig>,
     /// Transmission loss as the sea plays it (a named model; without `kind`, analytic).
-    #[serde(deserialize_with = "crate::models::tl::kind_defaults_to_analytic")]
+    #[serde(deserialize_with = "crate::models::tl_spec::kind_defaults_to_analytic")]
     pub tl: TlModel,
     pub success: SuccessModel,
     /// Who transmits when within each cycle of τ.
