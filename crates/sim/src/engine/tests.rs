@@ -264,31 +264,6 @@ fn a_buoy_sharing_the_cnas_slot_collides_with_it() {
     assert!(trace.comms.iter().any(|e| e.direction == "buoy" && e.lost_to == "collision or half-duplex"));
 }
 
-/// A drifting buoy draws its drift from its own stream: a Monte Carlo batch is bit-identical on
-/// one and two threads, and differs from the batch without the buoy (its ranges are in it).
-#[test]
-fn a_drifting_buoys_batch_is_identical_on_one_and_two_threads() {
-    let mut alone = Scenario::example().with_auvs(2);
-    (alone.duration_s, alone.planner.look_ahead, alone.planner.deadline) = (600.0, 3, coopnav_plan::Deadline::None);
-    let mut sc = alone.clone();
-    sc.buoys = vec![toml::from_str(
-        "x = 900.0\ny = 300.0\ndrift = { kind = \"lake\", mean_m_s = 0.056, sd_m_s = 0.039, circular_fraction = 0.5, \
-         circular_radius_m = 200.0 }",
-    )
-    .unwrap()];
-    sc.validate(std::path::Path::new("t")).unwrap();
-    let policies = vec!["planner".to_string()];
-    let go = |sc: &Scenario, threads| {
-        let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
-        pool.install(|| {
-            serde_json::to_string(&crate::batch::mc::monte_carlo(sc, &policies, 3, &|_| {}).unwrap()).unwrap()
-        })
-    };
-    let (a, b) = (go(&sc, 1), go(&sc, 2));
-    assert_eq!(a, b);
-    assert_ne!(a, go(&alone, 2));
-}
-
 /// Gill's HBL Two file with its cycle replaced by two mini-packet slots, ship then buoy,
 /// `gap_s` apart.
 fn ship_and_buoy_minis(gap_s: f64) -> Scenario {
