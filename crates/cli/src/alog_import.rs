@@ -166,8 +166,14 @@ impl Paired {
                 let (e, n) = frame.to_plane(ll);
                 Observation::Gps { e, n }
             }
-            Paired::DvlBody => Observation::Velocity { frame: VelocityFrame::Body, v: [a, b] },
-            Paired::DvlEarth => Observation::Velocity { frame: VelocityFrame::Earth, v: [a, b] },
+            Paired::DvlBody | Paired::DvlEarth => {
+                let v = [
+                    within(e, "a DVL velocity", a, SPEED_RANGE, "m/s")?,
+                    within(e, "a DVL velocity", b, SPEED_RANGE, "m/s")?,
+                ];
+                let frame = if matches!(self, Paired::DvlBody) { VelocityFrame::Body } else { VelocityFrame::Earth };
+                Observation::Velocity { frame, v }
+            }
             Paired::Truth => Observation::Truth { e: a, n: b },
         })
     }
@@ -185,15 +191,17 @@ pub fn rows(alog: &Alog, map: &AlogMapping, buoy_depth: f64, frame: Option<&Loca
     let Some(t0) = first_pair_time(alog, &map.nav_x, &map.nav_y) else {
         bail!("the alog has no time at which both {} and {} are posted (the filter's start)", map.nav_x, map.nav_y);
     };
-    let value_at_start = |var: &str| -> Result<f64> {
+    let value_at_start = |var: &str, check: Option<(&str, (f64, f64), &str)>| -> Result<f64> {
         let posted = alog.entries.iter().find(|e| e.variable == var && e.time == t0);
-        posted.map(number).unwrap_or_else(|| bail!("no {var} posted at the start time {t0} s (with {})", map.nav_x))
+        let Some(e) = posted else { bail!("no {var} posted at the start time {t0} s (with {})", map.nav_x) };
+        let v = number(e)?;
+        check.map_or(Ok(v), |(key, range, unit)| within(e, key, v, range, unit))
     };
     let init = Observation::Init {
-        e: value_at_start(&map.nav_x)?,
-        n: value_at_start(&map.nav_y)?,
-        speed: value_at_start(&map.speed)?,
-        compass_deg: value_at_start(&map.heading)?,
+        e: value_at_start(&map.nav_x, None)?,
+        n: value_at_start(&map.nav_y, None)?,
+        speed: value_at_start(&map.speed, Some(("speed", SPEED_RANGE, "m/s")))?,
+        compass_deg: value_at_start(&map.heading, Some(("heading", HEADING_RANGE, "deg")))?,
     };
     let mut out = vec![LogRow { t: t0, obs: init, sigma: None }];
     let mut pairs: [Pair; 5] = Default::default();
@@ -209,10 +217,15 @@ pub fn rows(alog: &Alog, map: &AlogMapping, buoy_depth: f64, frame: Option<&Loca
             continue;
         }
         let (obs, sigma) = match v {
-            _ if v == map.speed => (Observation::Speed(number(e)?), None),
-            _ if v == map.heading => (Observation::Heading { compass_deg: number(e)? }, None),
-            _ if v == map.depth => (Observation::Depth(number(e)?), None),
-            _ if v == map.yaw_rate => (Observation::YawRate { compass_deg_s: number(e)? }, None),
+            _ if v == map.speed => (Observation::Speed(within(e, "speed", number(e)?, SPEED_RANGE, "m/s")?), None),
+            _ if v == map.heading => {
+                (Observation::Heading { compass_deg: within(e, "heading", number(e)?, HEADING_RANGE, "deg")? }, None)
+            }
+            _ if v == map.depth => (Observation::Depth(within(e, "depth", number(e)?, DEPTH_RANGE, "m")?), None),
+            _ if v == map.yaw_rate => {
+                let rate = within(e, "yaw_rate", number(e)?, YAW_RATE_RANGE, "deg/s")?;
+                (Observation::YawRate { compass_deg_s: rate }, None)
+            }
             _ if v == map.range => {
                 let travel_time = field(e, "travel_time")?;
                 if !(travel_time > 0.0 && travel_time <= MAX_TRAVEL_TIME_S) {
@@ -272,8 +285,70 @@ fn first_pair_time(alog: &Alog, x: &str, y: &str) -> Option<f64> {
 pub fn mapping(path: Option<&std::path::Path>) -> Result<AlogMapping> {
     let Some(p) = path else { return Ok(AlogMapping::default()) };
     let text = std::fs::read_to_string(p).with_context(|| format!("reading {}", p.display()))?;
-    toml::from_str(&text).with_context(|| format!("in {}", p.display()))
+    let map: AlogMapping = toml::from_str(&text).with_context(|| format!("in {}", p.display()))?;
+    map.check().with_context(|| format!("in {}", p.display()))?;
+    Ok(map)
 }
+
+impl AlogMapping {
+    /// Every key with its variable, in the file's order.
+    fn keys(&self) -> [(&'static str, &str); 20] {
+        [
+            ("nav_x", &self.nav_x),
+            ("nav_y", &self.nav_y),
+            ("speed", &self.speed),
+            ("heading", &self.heading),
+            ("depth", &self.depth),
+            ("yaw_rate", &self.yaw_rate),
+            ("gps_x", &self.gps_x),
+            ("gps_y", &self.gps_y),
+            ("gps_lat", &self.gps_lat),
+            ("gps_lon", &self.gps_lon),
+            ("dvl_body_forward", &self.dvl_body_forward),
+            ("dvl_body_starboard", &self.dvl_body_starboard),
+            ("dvl_earth_east", &self.dvl_earth_east),
+            ("dvl_earth_north", &self.dvl_earth_north),
+            ("truth_x", &self.truth_x),
+            ("truth_y", &self.truth_y),
+            ("range", &self.range),
+            ("beacon_fix", &self.beacon_fix),
+            ("buoy_fix", &self.buoy_fix),
+            ("ship_fix", &self.ship_fix),
+        ]
+    }
+
+    /// Each variable feeds one kind of row: one named under two keys (a speed variable mapped
+    /// to a position as well, say) is refused, naming both keys.
+    pub fn check(&self) -> Result<()> {
+        let keys = self.keys();
+        for (i, (key, var)) in keys.iter().enumerate() {
+            if var.trim().is_empty() {
+                bail!("{key} = \"\": name the alog variable it reads");
+            }
+            if let Some((other, _)) = keys[..i].iter().find(|(_, v)| v == var) {
+                bail!("{other} and {key} both read {var:?}: each alog variable can feed one kind of row");
+            }
+        }
+        Ok(())
+    }
+}
+
+/// `v`, read from `e` as the mapping's `key`, when inside what that quantity can physically be.
+fn within(e: &AlogEntry, key: &str, v: f64, (lo, hi): (f64, f64), unit: &str) -> Result<f64> {
+    if (lo..=hi).contains(&v) {
+        Ok(v)
+    } else {
+        bail!("{}: {v} read as {key} is outside [{lo}, {hi}] {unit}: is --alog-map's {key} the right variable?", at(e))
+    }
+}
+
+/// What a mapped quantity can physically be: a vehicle's speed through the water or over the
+/// ground, a compass heading (one wrap either way), a depth in the ocean, a yaw rate. Invented
+/// generous bounds: they catch a variable of another kind, not a noisy reading.
+const SPEED_RANGE: (f64, f64) = (-10.0, 20.0);
+const HEADING_RANGE: (f64, f64) = (-360.0, 720.0);
+const DEPTH_RANGE: (f64, f64) = (-20.0, 11_000.0);
+const YAW_RATE_RANGE: (f64, f64) = (-360.0, 360.0);
 
 #[cfg(test)]
 mod tests {
@@ -343,5 +418,28 @@ mod tests {
         let latlon = format!("{START}2.000 GPS_LATITUDE iGPS 47.9\n2.000 GPS_LONGITUDE iGPS -116.5\n");
         let e = format!("{:#}", alog_rows(&latlon, None).unwrap_err());
         assert!(e.contains("alog line 7") && e.contains("origin = {"), "{e}");
+    }
+
+    /// A variable mapped under two keys is refused naming both; a mapped value outside what its
+    /// quantity can be (a position read as a speed or a heading) names the line, key and bounds.
+    #[test]
+    fn a_variable_of_the_wrong_kind_is_caught() {
+        let twice = AlogMapping { nav_x: "NAV_SPEED".into(), ..AlogMapping::default() };
+        let e = twice.check().unwrap_err().to_string();
+        assert!(e.contains("nav_x and speed both read \"NAV_SPEED\""), "{e}");
+        assert!(AlogMapping::default().check().is_ok());
+
+        let alog = coopnav_moos::read_alog(format!("{START}1.000 NAV_X pNav 1543.0\n").as_bytes()).unwrap();
+        let as_speed = AlogMapping { speed: "NAV_X".into(), nav_x: "NAV_EAST".into(), ..AlogMapping::default() };
+        let start = START.replace("NAV_X", "NAV_EAST");
+        let alog2 =
+            coopnav_moos::read_alog(format!("{start}0.000 NAV_X pNav 1.4\n1.000 NAV_X pNav 1543.0\n").as_bytes())
+                .unwrap();
+        let e = rows(&alog2, &as_speed, 1.5, None).unwrap_err().to_string();
+        assert!(e.contains("alog line 7") && e.contains("read as speed") && e.contains("[-10, 20] m/s"), "{e}");
+        assert!(rows(&alog, &AlogMapping::default(), 1.5, None).is_ok(), "a position read as a position is fine");
+        let heading = coopnav_moos::read_alog(format!("{START}2.000 NAV_HEADING pNav 4200\n").as_bytes()).unwrap();
+        let e = rows(&heading, &AlogMapping::default(), 1.5, None).unwrap_err().to_string();
+        assert!(e.contains("read as heading"), "{e}");
     }
 }

@@ -100,7 +100,7 @@ pub fn run(args: Args) -> Result<()> {
         None => Bathymetry::shelf(&Shelf::default())?,
     };
     let run = match &args.out {
-        Some(p) => RunDir::create(p, args.force)?,
+        Some(p) => RunDir::create_for(p, args.force, &args.bathymetry.as_deref().into_iter().collect::<Vec<_>>())?,
         None => RunDir::create_fresh("runs", "channel")?,
     };
     let tl: Box<dyn TransmissionLoss> = match args.model {

@@ -162,6 +162,13 @@ pub struct Common {
     allow_large: bool,
 }
 
+impl Common {
+    /// The files the command reads: the scenario, when given, and `more`.
+    fn inputs<'a>(&'a self, more: &[Option<&'a Path>]) -> Vec<&'a Path> {
+        self.config.as_deref().into_iter().chain(more.iter().flatten().copied()).collect()
+    }
+}
+
 fn scenario(c: &Common) -> Result<Scenario> {
     match &c.config {
         Some(p) => Ok(hbl_scenario::parse(&input::read(p, c.allow_large)?, p)?),
@@ -312,7 +319,7 @@ fn simulate(c: &Common, index: u64, log_path: Option<&Path>) -> Result<()> {
     let zone = zone_spec(&sc, c)?;
     let (pass, result) = record_pass(&sc, zone, format.clone(), coopnav_core::run_seed(c.seed, index))?;
     let summary = PassSummary { zone: pass.zone.metrics(), counts: RunCounts::of(&result, 0) };
-    let dir = RunDir::create(&c.out, c.force)?;
+    let dir = RunDir::create_for(&c.out, c.force, &c.inputs(&[log_path]))?;
     manifest(&dir, "hbl simulate", c.seed, c.with_zone(json!({ "scenario": sc, "run": index, "log_format": format })))?;
     let mut csv = String::from("t,x_rel,auv_e,auv_n,est_e,est_n,sd_e,sd_n,ship_e,ship_n,ship_est_e,ship_est_n,buoy_e,buoy_n,buoy_est_e,buoy_est_n,error\n");
     for r in &pass.rows {
@@ -365,7 +372,7 @@ fn montecarlo(c: &Common, runs: usize) -> Result<()> {
     let r = zone_monte_carlo_with_progress(&sc, zone, runs, c.seed, &|n| pb.set_position(n))?;
     pb.finish_and_clear();
     let summary = r.summary(c.seed)?;
-    let dir = RunDir::create(&c.out, c.force)?;
+    let dir = RunDir::create_for(&c.out, c.force, &c.inputs(&[]))?;
     manifest(&dir, "hbl montecarlo", c.seed, c.with_zone(json!({ "scenario": sc, "runs": runs })))?;
     let mut csv = String::from("run,zone_error,zone_parallel,zone_perpendicular,approach_perpendicular,buoy_error,saturation_error,ranges_received,ranges_applied,healthy\n");
     for (i, (m, n)) in r.runs.iter().zip(&r.counts).enumerate() {
@@ -421,7 +428,7 @@ fn grid_cmd(c: &Common, grid_path: Option<&Path>) -> Result<()> {
     let cell = grid::engine_cell(&sc, zone, spec.runs_per_cell, c.seed)?;
     let cells = grid::buoy_grid(&spec, &|n| pb.set_position(n), &cell)?;
     pb.finish_and_clear();
-    let dir = RunDir::create(&c.out, c.force)?;
+    let dir = RunDir::create_for(&c.out, c.force, &c.inputs(&[grid_path]))?;
     manifest(&dir, "hbl grid", c.seed, c.with_zone(json!({ "scenario": sc, "grid": spec })))?;
     let mut buf = Vec::new();
     grid::write_csv(&mut buf, &cells)?;
@@ -441,7 +448,7 @@ fn tune_cmd(c: &Common, spec_path: &Path) -> Result<()> {
     spec.validate().with_context(|| format!("in {}", spec_path.display()))?;
     limits::check(work::hbl_tune(&sc, &spec), c.allow_large)?;
     let r = tune(&sc, zone_spec(&sc, c)?, &spec)?;
-    let dir = RunDir::create(&c.out, c.force)?;
+    let dir = RunDir::create_for(&c.out, c.force, &c.inputs(&[Some(spec_path)]))?;
     manifest(&dir, "hbl tune", spec.seed, c.with_zone(json!({ "scenario": sc, "spec": spec })))?;
     dir.write_json("summary.json", &r)?;
     let out = dir.finish()?;
@@ -510,7 +517,8 @@ fn postprocess(
     for w in result.summary.warnings() {
         eprintln!("warning: {}: {w}", log.display());
     }
-    let dir = RunDir::create(out, force)?;
+    let inputs: Vec<&Path> = [Some(log), alog_map, config].into_iter().flatten().collect();
+    let dir = RunDir::create_for(out, force, &inputs)?;
     let time_origin_unix = match field_log.time {
         TimeBase::Unix { origin } => Some(origin),
         TimeBase::Relative => None,

@@ -111,7 +111,7 @@ pub fn run(args: Args) -> Result<()> {
     let file = parse_file(&text, config)?;
     let tl = provider(&file.tl, &file.experiment)?;
     let run = match &args.out {
-        Some(p) => RunDir::create(p, args.force)?,
+        Some(p) => RunDir::create_for(p, args.force, &[config.as_path()])?,
         None => RunDir::create_fresh("runs", "nams")?,
     };
     let cfg = &file.experiment;

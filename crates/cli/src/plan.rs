@@ -17,6 +17,7 @@ use coopnav_sim::scenario::file::Validate;
 use coopnav_sim::scenario::plan::{Scenario, EXAMPLE};
 use indicatif::{ProgressBar, ProgressStyle};
 use std::io::IsTerminal;
+use std::path::{Path, PathBuf};
 
 #[derive(clap::Args)]
 pub struct Args {
@@ -66,7 +67,9 @@ pub fn run(args: Args) -> Result<()> {
     // Everything is validated before any output is created.
     let mission = scenario.build(&file, &base)?;
     let origin = args.moos.then(|| moos_origin(args.moos_origin.as_deref())).transpose()?;
-    let dir = args.scenario.run_dir(&stem)?;
+    let tracks: Vec<PathBuf> = scenario.auv.iter().filter_map(|a| a.track_csv.as_ref().map(|t| base.join(t))).collect();
+    let inputs: Vec<&Path> = std::iter::once(file.as_path()).chain(tracks.iter().map(PathBuf::as_path)).collect();
+    let dir = args.scenario.run_dir(&stem, &inputs)?;
     let mut planner = LookAheadPlanner::new(mission.planner)?;
     let bar = if std::io::stderr().is_terminal() {
         ProgressBar::new(predeploy::step_count(&mission))

@@ -69,6 +69,16 @@ impl<C: ScenarioCommand> ScenarioArgs<C> {
         self.example
     }
 
+    /// `-o/--output`, when given.
+    pub fn output(&self) -> Option<&Path> {
+        self.output.as_deref()
+    }
+
+    /// `--force`: an existing output that coopnav wrote is replaced.
+    pub fn force(&self) -> bool {
+        self.force
+    }
+
     /// `--allow-large`: the work limits are lifted.
     pub fn allow_large(&self) -> bool {
         self.allow_large
@@ -105,9 +115,10 @@ impl<C: ScenarioCommand> ScenarioArgs<C> {
 
     /// Opens the run directory: `-o` (replaced only with `--force`), or a fresh
     /// `runs/<RUN_PREFIX>-<stem>`.
-    pub fn run_dir(&self, stem: &str) -> Result<RunDir> {
+    /// `inputs` are the files the command reads: a directory holding one is never replaced.
+    pub fn run_dir(&self, stem: &str, inputs: &[&Path]) -> Result<RunDir> {
         Ok(match &self.output {
-            Some(o) => RunDir::create(o, self.force)?,
+            Some(o) => RunDir::create_for(o, self.force, inputs)?,
             None => RunDir::create_fresh("runs", &format!("{}-{stem}", C::RUN_PREFIX))?,
         })
     }

@@ -11,13 +11,14 @@ use coopnav_sim::batch::mc::comparison_table;
 use coopnav_sim::batch::work;
 use coopnav_sim::engine;
 use coopnav_sim::engine::Faults;
-use coopnav_sim::output::run::write_run;
+use coopnav_sim::output::run::{write_comparison, write_run};
+use coopnav_sim::output::{is_coopnav_json, tagged_json, write_file, OWNERSHIP_PREFIX};
 use coopnav_sim::policy::PolicySpec;
 use coopnav_sim::scenario::file::Validate;
 use coopnav_sim::scenario::{Scenario, EXAMPLE};
 use indicatif::{ProgressBar, ProgressStyle};
 use std::io::IsTerminal;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 #[derive(clap::Args)]
 pub struct Args {
@@ -60,7 +61,7 @@ pub fn run(args: Args) -> Result<()> {
     if args.scenario.print_example() {
         return Ok(());
     }
-    let Loaded { mut scenario, stem, .. } = args.scenario.load()?;
+    let Loaded { mut scenario, stem, file, .. } = args.scenario.load()?;
     if let Some(seed) = args.seed {
         scenario.seed = seed;
     }
@@ -71,13 +72,16 @@ pub fn run(args: Args) -> Result<()> {
     }
     match args.runs {
         Some(0) => bail!("--runs must be at least 1"),
-        Some(runs) => compare(&scenario, &args.policy, runs, args.json.as_ref()),
-        None => single(&scenario, &specs[0], &stem, &args),
+        Some(runs) => compare(&scenario, runs, &stem, &file, &args),
+        None if args.json.is_some() => {
+            bail!("--json writes a Monte Carlo comparison: give --runs N too (one run writes its summary.json into -o)")
+        }
+        None => single(&scenario, &specs[0], &stem, &file, &args),
     }
 }
 
-fn single(sc: &Scenario, spec: &PolicySpec, stem: &str, args: &Args) -> Result<()> {
-    let dir = args.scenario.run_dir(stem)?;
+fn single(sc: &Scenario, spec: &PolicySpec, stem: &str, file: &Path, args: &Args) -> Result<()> {
+    let dir = args.scenario.run_dir(stem, &[file])?;
     let mut policy = spec.build(sc)?;
     let result = engine::run_traced(sc, &mut policy, sc.seed, &Faults::default());
     let out = write_run(dir, sc, &result, &std::env::args().collect::<Vec<_>>().join(" "))
@@ -118,16 +122,53 @@ fn single(sc: &Scenario, spec: &PolicySpec, stem: &str, args: &Args) -> Result<(
     Ok(())
 }
 
-fn compare(sc: &Scenario, policies: &[String], runs: usize, json: Option<&PathBuf>) -> Result<()> {
+fn compare(sc: &Scenario, runs: usize, stem: &str, file: &Path, args: &Args) -> Result<()> {
+    let policies = &args.policy;
+    // Both outputs are opened (and refused) before any work.
+    let dir = args.scenario.output().map(|_| args.scenario.run_dir(stem, &[file])).transpose()?;
+    if let Some(path) = &args.json {
+        check_json_target(path, args.scenario.force(), file)?;
+    }
     let total = (runs * policies.len()) as u64;
     let bar = if std::io::stderr().is_terminal() { ProgressBar::new(total) } else { ProgressBar::hidden() };
     bar.set_style(ProgressStyle::with_template("{bar:40} {pos}/{len} runs [{elapsed_precise} < {eta_precise}]")?);
     let c = mc::monte_carlo(sc, policies, runs, &|done| bar.set_position(done))?;
     bar.finish_and_clear();
     print!("{}", comparison_table(&c));
-    if let Some(path) = json {
-        std::fs::write(path, serde_json::to_string_pretty(&c)?)
+    if let Some(path) = &args.json {
+        let text = tagged_json(&c)?;
+        write_file(path, text.as_bytes(), args.scenario.force(), is_coopnav_json, &[file])
             .with_context(|| format!("writing {}", path.display()))?;
+    }
+    if let Some(dir) = dir {
+        let out = write_comparison(dir, sc, &c, stem, &std::env::args().collect::<Vec<_>>().join(" "))
+            .context("writing the comparison's run directory")?;
+        println!("wrote {}", out.display());
+    }
+    Ok(())
+}
+
+/// Refuses a `--json` target that `write_file` would refuse, before the Monte Carlo runs.
+fn check_json_target(path: &Path, force: bool, input: &Path) -> Result<()> {
+    if std::fs::symlink_metadata(path).is_err() {
+        return Ok(());
+    }
+    let same = |a: &Path, b: &Path| {
+        std::fs::canonicalize(a).ok().zip(std::fs::canonicalize(b).ok()).is_some_and(|(a, b)| a == b)
+    };
+    if same(path, input) {
+        bail!("refusing to write --json {}: it is the scenario this command reads", path.display());
+    }
+    if !force {
+        bail!("output file {} already exists; choose another name or pass --force to replace it", path.display());
+    }
+    let head =
+        std::fs::read(path).map(|b| b.into_iter().take(OWNERSHIP_PREFIX).collect::<Vec<u8>>()).unwrap_or_default();
+    if !is_coopnav_json(&head) {
+        bail!(
+            "refusing to replace {} (--force replaces only a file coopnav wrote): coopnav did not write it",
+            path.display()
+        );
     }
     Ok(())
 }

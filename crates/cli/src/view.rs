@@ -5,6 +5,7 @@
 use anyhow::{bail, Context, Result};
 use coopnav_moos::{read_alog_file, replay};
 use coopnav_sim::output::moos_export::ALOG_FILE;
+use coopnav_sim::output::write_file;
 use std::path::PathBuf;
 
 #[derive(clap::Args)]
@@ -28,7 +29,15 @@ pub fn run(args: Args) -> Result<()> {
     let log = read_alog_file(&alog)?;
     let html = replay::from_alog(&log).with_context(|| format!("building the replay of {}", alog.display()))?;
     let out = dir.join(replay::FILE);
-    std::fs::write(&out, html).with_context(|| format!("cannot write {}", out.display()))?;
+    // Rewriting the page is what `view` is for: a replay coopnav wrote is replaced (through a
+    // staged file renamed into place), any other file of that name is refused.
+    write_file(&out, html.as_bytes(), true, is_coopnav_replay, &[alog.as_path()])
+        .with_context(|| format!("cannot write {}", out.display()))?;
     println!("wrote {}", out.display());
     Ok(())
+}
+
+/// A replay page coopnav wrote: its title starts "coopnav replay".
+fn is_coopnav_replay(head: &[u8]) -> bool {
+    String::from_utf8_lossy(head).contains("<title>coopnav replay")
 }

@@ -1,13 +1,12 @@
 //! Work and memory are bounded before they are spent (issue 11 item 2): each input that asks for
 //! hours of work or gigabytes of memory is refused at once, exit 1, with a message naming the
 //! fields, the estimate and `--allow-large`. Each probe's CPU time and peak memory are measured
-//! with /usr/bin/time when it is installed (otherwise only its wall time and message are checked).
+//! from the kernel's accounting of the child (wait4).
 
 mod common;
 
-use common::{coopnav, edited_example};
+use common::{coopnav, edited_example, measured};
 use std::path::Path;
-use std::process::Command;
 use std::time::{Duration, Instant};
 
 /// CPU seconds and peak resident memory one refused probe may use.
@@ -16,25 +15,11 @@ const MAX_PEAK_KB: u64 = 100_000;
 /// Wall time, generous for a loaded machine: the CPU bound above is the real check.
 const MAX_WALL: Duration = Duration::from_secs(5);
 
-/// Runs `coopnav ARGS` in `dir` and checks it is refused quickly and cheaply, naming `fields`.
+/// Runs `coopnav ARGS` in `dir` and checks it is refused quickly and cheaply, naming `fields`:
+/// its CPU time and peak memory as the kernel accounted them (wait4).
 fn refused(dir: &Path, args: &[&str], fields: &[&str]) {
-    let time = Path::new("/usr/bin/time");
-    let usage = dir.join("usage.txt");
     let start = Instant::now();
-    let out = if time.is_file() {
-        Command::new(time)
-            .args(["-f", "%U %S %M", "-o"])
-            .arg(&usage)
-            .arg(env!("CARGO_BIN_EXE_coopnav"))
-            .args(args)
-            .current_dir(dir)
-            .env("RUST_BACKTRACE", "0")
-            .output()
-            .unwrap()
-    } else {
-        eprintln!("note: /usr/bin/time is absent: CPU time and peak memory not measured");
-        coopnav(dir, args)
-    };
+    let (out, usage) = measured(dir, args);
     let wall = start.elapsed();
     let err = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(1), "{args:?}: {err}");
@@ -43,14 +28,8 @@ fn refused(dir: &Path, args: &[&str], fields: &[&str]) {
         assert!(err.contains(field), "{args:?} does not name {field}: {err}");
     }
     assert!(wall < MAX_WALL, "{args:?} took {wall:?}");
-    if time.is_file() {
-        let text = std::fs::read_to_string(&usage).unwrap();
-        let v: Vec<&str> = text.split_whitespace().rev().take(3).collect();
-        let (peak_kb, sys, user): (u64, f64, f64) =
-            (v[0].parse().unwrap(), v[1].parse().unwrap(), v[2].parse().unwrap());
-        assert!(user + sys < MAX_CPU_S, "{args:?} used {} s CPU", user + sys);
-        assert!(peak_kb < MAX_PEAK_KB, "{args:?} peaked at {peak_kb} kB");
-    }
+    assert!(usage.cpu_s < MAX_CPU_S, "{args:?} used {} s CPU", usage.cpu_s);
+    assert!(usage.peak_kb < MAX_PEAK_KB, "{args:?} peaked at {} kB", usage.peak_kb);
     assert!(!dir.join("out").exists(), "{args:?} wrote its output directory");
 }
 

@@ -121,3 +121,110 @@ fn an_interrupted_run_leaves_no_directory_behind() {
 fn has_staging(dir: &Path) -> bool {
     std::fs::read_dir(dir).unwrap().any(|e| e.unwrap().file_name().to_string_lossy().contains(".partial-"))
 }
+
+/// A short mission file in `dir`: the example at 2 AUVs and 5 minutes.
+fn short_scenario(dir: &Path, home: &Path) -> std::path::PathBuf {
+    let out = coopnav(dir, home, &["simulate", "--example"]);
+    let text = String::from_utf8(out.stdout).unwrap().replace("duration_s = 3600.0", "duration_s = 300.0");
+    assert!(text.contains("duration_s = 300.0"), "the example's duration line moved");
+    let path = dir.join("s.toml");
+    std::fs::write(&path, text).unwrap();
+    path
+}
+
+/// `simulate --runs --json` writes like a run directory: an existing file only with `--force`
+/// and only when coopnav wrote it, never the scenario it reads; `--json` without `--runs` is an
+/// error; `-o` with `--runs` writes the comparison's table, JSON and plot.
+#[test]
+fn the_comparison_json_and_directory_follow_the_run_directory_rules() {
+    let tmp = tempfile::tempdir().unwrap();
+    let (dir, home) = (tmp.path(), tmp.path().join("home"));
+    let scenario = short_scenario(dir, &home);
+    let original = std::fs::read_to_string(&scenario).unwrap();
+    let runs = |extra: &[&str]| {
+        let mut args = vec!["simulate", "s.toml", "--runs", "2", "--policy", "centroid,zigzag"];
+        args.extend_from_slice(extra);
+        coopnav(dir, &home, &args)
+    };
+    for force in [&[][..], &["--force"][..]] {
+        let out = runs(&[&["--json", "s.toml"][..], force].concat());
+        assert!(!out.status.success(), "--json onto the scenario must fail");
+        assert!(String::from_utf8_lossy(&out.stderr).contains("s.toml"), "{}", String::from_utf8_lossy(&out.stderr));
+        assert_eq!(std::fs::read_to_string(&scenario).unwrap(), original, "the scenario was overwritten");
+    }
+    let notes = dir.join("notes.json");
+    std::fs::write(&notes, "{\"mine\": 1}").unwrap();
+    for force in [&[][..], &["--force"][..]] {
+        let out = runs(&[&["--json", "notes.json"][..], force].concat());
+        assert!(!out.status.success(), "a file coopnav did not write must survive");
+        assert_eq!(std::fs::read_to_string(&notes).unwrap(), "{\"mine\": 1}");
+    }
+    assert!(runs(&["--json", "c.json"]).status.success());
+    let first = std::fs::read_to_string(dir.join("c.json")).unwrap();
+    let value: serde_json::Value = serde_json::from_str(&first).unwrap();
+    assert_eq!((value["tool"].as_str(), value["runs"].as_u64()), (Some("coopnav"), Some(2)));
+    let again = runs(&["--json", "c.json"]);
+    assert!(!again.status.success() && String::from_utf8_lossy(&again.stderr).contains("--force"));
+    assert!(runs(&["--json", "c.json", "--force"]).status.success(), "coopnav's own file is replaced with --force");
+    assert_eq!(std::fs::read_to_string(dir.join("c.json")).unwrap(), first, "same seed, same bytes");
+
+    let single = coopnav(dir, &home, &["simulate", "s.toml", "--json", "x.json", "-o", "one"]);
+    assert!(!single.status.success() && String::from_utf8_lossy(&single.stderr).contains("--runs"));
+    assert!(!dir.join("x.json").exists() && !dir.join("one").exists());
+
+    let out = runs(&["-o", "cmp"]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let table = std::fs::read_to_string(dir.join("cmp/comparison.txt")).unwrap();
+    assert_eq!(
+        table,
+        String::from_utf8_lossy(&out.stdout)
+            .lines()
+            .take_while(|l| !l.starts_with("wrote"))
+            .map(|l| format!("{l}\n"))
+            .collect::<String>()
+    );
+    let json: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(dir.join("cmp/comparison.json")).unwrap()).unwrap();
+    assert_eq!(json["paired"][0]["baseline"].as_str(), Some("zigzag"));
+    let svg = std::fs::read_to_string(dir.join("cmp/differences.svg")).unwrap();
+    assert!(svg.contains("vs zigzag") && svg.contains("centroid minus"), "the plot labels its interval");
+    let manifest: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(dir.join("cmp/manifest.json")).unwrap()).unwrap();
+    assert_eq!(manifest["tool"].as_str(), Some("coopnav"));
+    let hidden: Vec<_> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .filter(|n| n.starts_with('.'))
+        .collect();
+    assert!(hidden.is_empty(), "staging left behind: {hidden:?}");
+}
+
+/// `--force` never deletes the command's own input: a scenario or a log inside the directory it
+/// would replace is named and nothing is touched.
+#[test]
+fn force_refuses_a_target_that_holds_the_commands_input() {
+    let tmp = tempfile::tempdir().unwrap();
+    let (dir, home) = (tmp.path(), tmp.path().join("home"));
+    short_scenario(dir, &home);
+    assert!(coopnav(dir, &home, &["simulate", "s.toml", "-o", "r"]).status.success());
+    std::fs::copy(dir.join("s.toml"), dir.join("r/s.toml")).unwrap();
+    let out = coopnav(dir, &home, &["simulate", "r/s.toml", "-o", "r", "--force"]);
+    assert_refused(&out, "r/s.toml");
+    assert!(dir.join("r/s.toml").is_file(), "the scenario was deleted");
+    let out = coopnav(dir, &home, &["simulate", "./r/../r/s.toml", "-o", "r/", "--force"]);
+    assert_refused(&out, "an input of this command");
+    assert!(dir.join("r/s.toml").is_file());
+
+    assert!(coopnav(dir, &home, &["hbl", "simulate", "-o", "h"]).status.success());
+    let log = dir.join("h/log.csv");
+    assert!(log.is_file(), "hbl simulate writes log.csv");
+    let out = coopnav(dir, &home, &["hbl", "postprocess", "--log", "h/log.csv", "-o", "h", "--force"]);
+    assert_refused(&out, "h/log.csv");
+    assert!(log.is_file(), "the log was deleted");
+    let hidden: Vec<_> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .filter(|n| n.starts_with('.'))
+        .collect();
+    assert!(hidden.is_empty(), "staging left behind: {hidden:?}");
+}

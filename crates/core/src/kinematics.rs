@@ -278,6 +278,23 @@ mod tests {
         assert!((v.state.pos.z - 25.0).abs() < 0.5, "altitude keeping at 5 m over 30 m");
     }
 
+    /// At cruise, level and on course, one step of any length moves the vehicle speed × dt along
+    /// its heading, and its clock by dt.
+    #[test]
+    fn one_step_moves_speed_times_dt() {
+        let b = flat(30.0);
+        for dt in [0.01, 0.05, 0.1, 0.2, 0.5, 1.0] {
+            let mut state = Iver2State::at_rest(Vec3::new(0.0, 0.0, 25.0), Heading::from_radians(0.0));
+            state.speed = 1.543;
+            let params = Iver2Params { timestep: dt, ..Iver2Params::default() };
+            let mut v = Iver2::new(params, state, vec![wp(5000.0, 0.0)]);
+            v.step(&b);
+            let moved = v.state.pos.x;
+            assert!((moved - 1.543 * dt).abs() < 1e-12, "dt = {dt}: moved {moved} m");
+            assert!(v.state.pos.y.abs() < 1e-12 && (v.state.t - dt).abs() < 1e-15, "dt = {dt}");
+        }
+    }
+
     #[test]
     fn yaw_rate_is_clamped_and_turns_toward_waypoint() {
         let b = flat(30.0);

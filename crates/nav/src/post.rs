@@ -424,6 +424,15 @@ pub struct PostSummary {
     pub extra_inits: usize,
     /// Silences longer than `max_gap_s` between rows, each dead-reckoned in one step.
     pub gaps: usize,
+    /// Rows logged earlier than the row before them in the file (a clock that jumped back): the
+    /// log is processed in time order, which interleaves the stretches before and after a jump.
+    pub time_reversals: usize,
+    /// The first such row, counted from 1 among the log's data rows.
+    pub first_time_reversal: Option<usize>,
+    /// Rows identical to an earlier row of the same time (a row logged twice): applied once.
+    pub duplicate_rows: usize,
+    /// The first duplicate, counted from 1 among the log's data rows.
+    pub first_duplicate: Option<usize>,
     /// RMS range residual of the applied ranges before their update (innovations) and against
     /// the smoothed track (m).
     pub residual_rms_filter_m: Option<f64>,
@@ -459,7 +468,23 @@ impl PostSummary {
     /// One sentence per kind of row the log itself left unusable as logged (what
     /// `hbl postprocess --strict` refuses).
     pub fn log_faults(&self) -> Vec<String> {
-        sentences(&[
+        let at = |row: Option<usize>| row.map_or(String::new(), |k| format!(", the first at data row {k}"));
+        let mut faults = Vec::new();
+        if self.time_reversals > 0 {
+            faults.push(format!(
+                "{} row(s) were timed earlier than the row before them (the clock jumped back{}); the log was processed in time order, interleaving the stretches",
+                self.time_reversals,
+                at(self.first_time_reversal)
+            ));
+        }
+        if self.duplicate_rows > 0 {
+            faults.push(format!(
+                "{} row(s) repeated an earlier row of the same time exactly{}; each was applied once",
+                self.duplicate_rows,
+                at(self.first_duplicate)
+            ));
+        }
+        faults.extend(sentences(&[
             (self.rows_before_init, "row(s) timed before the first 'init' row were not processed"),
             (self.extra_inits, "'init' row(s) after the first were ignored (the filter starts once)"),
             (
@@ -468,7 +493,8 @@ impl PostSummary {
             ),
             (self.gaps, "silence(s) longer than max_gap_s between rows were dead-reckoned in one step (a time typo?)"),
             (self.ranges_unusable, "range(s) had no usable geometry (transponder overhead) and were not applied"),
-        ])
+        ]));
+        faults
     }
 
     /// One sentence per kind of range the filter set aside on the evidence of the data: a gated
@@ -660,7 +686,14 @@ pub(crate) fn run(rows: &[LogRow], cfg: &PostConfig, pass: Pass) -> Result<PostR
         })
         .ok_or(PostError::NoInit)?;
     let beacons = Beacons::from_rows(rows, &order);
+    let reversals: Vec<usize> = (1..rows.len()).filter(|&i| rows[i].t < rows[i - 1].t).collect();
+    let duplicate = duplicates(rows, &order, &time);
+    let first_duplicate = duplicate.iter().position(|&d| d).map(|i| i + 1);
     let summary = PostSummary {
+        time_reversals: reversals.len(),
+        first_time_reversal: reversals.first().map(|i| i + 1),
+        duplicate_rows: duplicate.iter().filter(|&&d| d).count(),
+        first_duplicate,
         rows_before_init: order.iter().filter(|&&i| time(&rows[i]) < t0).count(),
         extra_inits: order
             .iter()
@@ -671,12 +704,30 @@ pub(crate) fn run(rows: &[LogRow], cfg: &PostConfig, pass: Pass) -> Result<PostR
     };
     let params = AuvParams { range_gate: cfg.range_gate, ..cfg.auv.clone() };
     let (e0, n0, speed0, psi0) = (init.0, init.1, init.2, math_heading(init.3));
-    let events = order.iter().map(|&i| (time(&rows[i]), &rows[i])).filter(|(t, _)| *t >= t0);
+    let events =
+        order.iter().filter(|&&i| !duplicate[i]).map(|&i| (time(&rows[i]), &rows[i])).filter(|(t, _)| *t >= t0);
     let run = Run { beacons: &beacons, cfg, pass };
     match cfg.model {
         AuvModel::Thesis => run.filter(AuvEkf::new(t0, e0, n0, speed0, psi0, params), events, summary),
         AuvModel::Current(c) => run.filter(AuvEkf::with_current(t0, e0, n0, speed0, psi0, params, c), events, summary),
     }
+}
+
+/// Which rows repeat an earlier row exactly (same time, observation and σ), by file index. Rows of
+/// one time are adjacent in `order`; each is compared with at most the `DUPLICATE_WINDOW` rows of
+/// its time before it, so a log of one repeated time stays linear.
+fn duplicates(rows: &[LogRow], order: &[usize], time: &dyn Fn(&LogRow) -> f64) -> Vec<bool> {
+    const DUPLICATE_WINDOW: usize = 64;
+    let mut duplicate = vec![false; rows.len()];
+    let mut group_start = 0;
+    for (k, &i) in order.iter().enumerate() {
+        if time(&rows[order[group_start]]) != time(&rows[i]) {
+            group_start = k;
+        }
+        let from = group_start.max(k.saturating_sub(DUPLICATE_WINDOW));
+        duplicate[i] = order[from..k].iter().any(|&j| rows[j] == rows[i]);
+    }
+    duplicate
 }
 
 /// The filtered states of every step, packed: per step t, the heading rate of the prediction

@@ -48,6 +48,8 @@ pub fn engine_scenario(
     if let Some(far) = f.lawnmowers.get_mut(1) {
         far.origin = (square, square);
     }
+    // The experiment's vehicle step is the world's: truth, filters and link step together.
+    sc.dt = cfg.vehicle.timestep;
     sc.cna.x = square / 2.0;
     let c = &mut sc.comms;
     c.tau = 2.0 * slot_s;

@@ -112,6 +112,17 @@ pub fn predeploy(sc: &plan::Scenario) -> Vec<Estimate> {
     out
 }
 
+/// What a recorded closed-loop run holds at its peak, while its run directory is written: per
+/// second and survey AUV the trace row, its CSV and alog lines and its share of the plots and the
+/// replay page; per second the CNA's track; and the program itself. Sized from measured peaks
+/// (docs/evaluation.md), checked within 2x by `crates/cli/tests/bounded_work.rs`.
+pub fn recorded_run_bytes(duration_s: f64, n_auvs: usize) -> f64 {
+    const PER_AUV_SECOND: f64 = 1600.0;
+    const PER_SECOND: f64 = 600.0;
+    const PROGRAM: f64 = 16e6;
+    PROGRAM + duration_s * (n_auvs as f64 * PER_AUV_SECOND + PER_SECOND)
+}
+
 /// A closed-loop set-up run `runs` times for each of `policies` policies (1 and 1: one run).
 pub fn closed_loop(sc: &scenario::Scenario, runs: usize, policies: usize) -> Vec<Estimate> {
     let f = &sc.fleet;
@@ -152,8 +163,8 @@ pub fn closed_loop(sc: &scenario::Scenario, runs: usize, policies: usize) -> Vec
         ),
         Estimate::new(
             "memory of one recorded run (bytes)",
-            "duration_s x fleet.n_auvs (one row per second and AUV)",
-            sc.duration_s * f.n_auvs as f64 * RECORD_ROW_BYTES,
+            "duration_s x (fleet.n_auvs + 1) (the time series, its CSV, plots, alog and replay)",
+            recorded_run_bytes(sc.duration_s, f.n_auvs),
             MAX_BYTES,
         ),
     ];

@@ -468,7 +468,7 @@ fn peer_links(sc: &Scenario, auvs: &[SurveyAuv]) -> Vec<PeerLink> {
         starts: auvs.iter().map(|a| Iver2State::at_rest(a.truth, a.ctrl.state.heading)).collect(),
         target: sc.fleet.depth,
         speed: sc.fleet.speed,
-        vehicle: sc.fleet.vehicle,
+        vehicle: sc.survey_dynamics(),
     };
     (0..auvs.len())
         .map(|k| {

@@ -107,7 +107,7 @@ impl SurveyAuv {
         state.altitude = bottom - z0;
         let s = &sc.sensors;
         SurveyAuv {
-            ctrl: Iver2::new(sc.fleet.vehicle, state, waypoints),
+            ctrl: Iver2::new(sc.survey_dynamics(), state, waypoints),
             truth,
             prev: truth,
             ekf: AuvFilter::new(&sc.filter.model, 0.0, ex, ey, 0.0, heading, sc.filter.params.clone()),
@@ -410,5 +410,43 @@ impl Ship {
         let speed = self.speed + s.speed_sd * noise[2];
         let psi = self.psi + s.heading_sd_deg.to_radians() * noise[3];
         minipacket::quantised(kind, measured, speed, psi, &spec.zone)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// On course and far from its goal, the CNA craft moves speed × dt per step of any length.
+    #[test]
+    fn the_cna_moves_speed_times_dt() {
+        for dt in [0.01, 0.1, 0.2, 0.5, 1.0] {
+            let start = Vec3::new(10.0, -20.0, 0.0);
+            let mut c = Craft { pos: start, prev: start, heading: 0.3, target: None };
+            c.target = Some(Vec3::new(10.0 + 5000.0 * 0.3f64.cos(), -20.0 + 5000.0 * 0.3f64.sin(), 0.0));
+            c.step(2.5, 4f64.to_radians(), dt);
+            let moved = (c.pos - start).norm();
+            assert!((moved - 2.5 * dt).abs() < 1e-9, "dt = {dt}: moved {moved} m");
+            assert_eq!(c.prev, start);
+        }
+    }
+
+    /// A ship on its track at its speed moves speed × dt along the track per step of any length.
+    #[test]
+    fn a_ship_moves_speed_times_dt() {
+        let text =
+            std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../../scenarios/gill-table5-msbl.toml"))
+                .expect("the library's Gill scenario");
+        let sc = Scenario::parse(&text, std::path::Path::new("gill-table5-msbl.toml")).expect("it parses");
+        let streams = SeedStream::new(1);
+        for dt in [0.01, 0.1, 0.2, 0.5, 1.0] {
+            let mut ship = Ship::new(&sc, 0, &streams);
+            let spec = &sc.ships[0];
+            (ship.pos, ship.psi, ship.speed) = (Vec3::new(spec.x, spec.y, 0.0), spec.track(), spec.speed);
+            let start = ship.pos;
+            ship.step(spec, dt);
+            let moved = (ship.pos - start).norm();
+            assert!((moved - spec.speed * dt).abs() < 1e-9, "dt = {dt}: moved {moved} m");
+        }
     }
 }

@@ -19,6 +19,7 @@ use super::{Check, Experiment, ExperimentError, ReproOptions, ReproReport, Size}
 use crate::batch::mc::{comparison_table, monte_carlo_grid};
 use crate::batch::mc::{paired_per_auv, Ci, Comparison, PolicySummary};
 use crate::output::plot::PlotError;
+use crate::output::plot::{intervals_svg, Interval};
 use crate::policy::registry::POLICY_NAMES;
 use crate::scenario::world::{
     ESTIMATOR_AGGREGATE, ESTIMATOR_BIAS_PER_KM, ESTIMATOR_CNA_VARIANCE, ESTIMATOR_TERMINAL_LEVELS,
@@ -26,8 +27,6 @@ use crate::scenario::world::{
 use crate::scenario::Scenario;
 use coopnav_acomms::Rate;
 use coopnav_plan::{Aggregate, PenaltyCase, RangeNoise, TruthSpec};
-use plotters::prelude::*;
-use plotters::style::text_anchor::{HPos, Pos, VPos};
 use serde::{Deserialize, Serialize};
 use std::fmt::Write as _;
 
@@ -770,47 +769,17 @@ fn why(planner: &PolicySummary, b: &PolicySummary, tie: bool) -> String {
 /// baseline; zero marked): the plot the issue asks for beside the table.
 pub fn difference_svg(cells: &[Cell]) -> Result<String, PlotError> {
     let title = "planner-estimator minus baseline, true mean error (m), paired 95 % CI";
-    let mut svg = String::new();
-    {
-        let rows = cells.len().max(1);
-        let height = (60 + 14 * rows) as u32;
-        let root = SVGBackend::with_string(&mut svg, (900, height)).into_drawing_area();
-        let e = |e: &dyn std::fmt::Display| PlotError::new(title, e);
-        root.fill(&WHITE).map_err(|x| e(&x))?;
-        let lo = cells.iter().map(|c| c.low).fold(0.0, f64::min).max(-200.0);
-        let hi = cells.iter().map(|c| c.high).fold(0.0, f64::max).min(200.0);
-        let pad = 0.05 * (hi - lo).max(1.0);
-        let mut chart = ChartBuilder::on(&root)
-            .caption(title, ("sans-serif", 16))
-            .margin(10)
-            .x_label_area_size(30)
-            .y_label_area_size(260)
-            .build_cartesian_2d((lo - pad)..(hi + pad), 0.0..rows as f64)
-            .map_err(|x| e(&x))?;
-        chart
-            .configure_mesh()
-            .y_labels(0)
-            .x_desc("difference, m (negative = planner better)")
-            .draw()
-            .map_err(|x| e(&x))?;
-        chart.draw_series(LineSeries::new([(0.0, 0.0), (0.0, rows as f64)], BLACK)).map_err(|x| e(&x))?;
-        // One label per interval, beside it (the mesh's own labels thin out to "nice" ticks).
-        let label_style = TextStyle::from(("sans-serif", 11).into_font()).pos(Pos::new(HPos::Right, VPos::Center));
-        for (i, c) in cells.iter().enumerate() {
-            let y = (rows - 1 - i) as f64 + 0.5;
-            let (px, py) = chart.backend_coord(&(lo - pad, y));
-            let text = format!("{} N={} vs {}", c.scenario, c.n, c.baseline);
-            root.draw(&Text::new(text, (px - 8, py), label_style.clone())).map_err(|x| e(&x))?;
-            let colour = if c.won { GREEN } else { RED };
-            let clip = |v: f64| v.clamp(lo - pad, hi + pad);
-            chart
-                .draw_series(LineSeries::new([(clip(c.low), y), (clip(c.high), y)], colour.stroke_width(2)))
-                .map_err(|x| e(&x))?;
-            chart.draw_series([Circle::new((clip(c.mean), y), 3, colour.filled())]).map_err(|x| e(&x))?;
-        }
-        root.present().map_err(|x| e(&x))?;
-    }
-    Ok(svg)
+    let rows: Vec<Interval> = cells
+        .iter()
+        .map(|c| Interval {
+            label: format!("{} N={} vs {}", c.scenario, c.n, c.baseline),
+            mean: c.mean,
+            low: c.low,
+            high: c.high,
+            good: c.won,
+        })
+        .collect();
+    intervals_svg(title, "difference, m (negative = planner better)", &rows)
 }
 
 #[cfg(test)]

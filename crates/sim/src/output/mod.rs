@@ -43,6 +43,12 @@ pub enum OutputError {
     Unsafe { path: PathBuf, reason: UnsafeTarget },
     #[error("output path {0} has no final directory name; name the directory to write")]
     Unnamed(PathBuf),
+    #[error("refusing to replace {target}: it holds {input}, an input of this command; write the output elsewhere")]
+    InputInside { target: PathBuf, input: PathBuf },
+    #[error("output file {0} already exists; choose another name or pass --force to replace it")]
+    FileExists(PathBuf),
+    #[error("refusing to replace {path} (--force replaces only a file coopnav wrote): {reason}")]
+    UnsafeFile { path: PathBuf, reason: &'static str },
     #[error("cannot write {path}: {source}")]
     Io { path: PathBuf, source: std::io::Error },
     #[error("cannot write CSV {path}: {source}")]
@@ -165,7 +171,8 @@ fn unfinished() -> std::sync::MutexGuard<'static, Vec<PathBuf>> {
 /// directory.
 pub fn remove_unfinished_runs() {
     for staging in unfinished().drain(..) {
-        let _ = fs::remove_dir_all(staging);
+        // A run directory's staging, or a single file's (`write_file`).
+        let _ = fs::remove_dir_all(&staging).or_else(|_| fs::remove_file(&staging));
     }
 }
 
@@ -204,8 +211,15 @@ impl RunDir {
     /// `target` exists and is not an empty directory, unless `force` is set and
     /// [`check_replaceable`] allows replacing it.
     pub fn create(target: impl Into<PathBuf>, force: bool) -> Result<Self, OutputError> {
+        Self::create_for(target, force, &[])
+    }
+
+    /// [`RunDir::create`] for a command that reads `inputs`: an existing `target` that holds any
+    /// of them is never replaced (replacing it would delete the command's own input).
+    pub fn create_for(target: impl Into<PathBuf>, force: bool, inputs: &[&Path]) -> Result<Self, OutputError> {
         let target = target.into();
         check_target(&target, force)?;
+        check_inputs_outside(&target, inputs)?;
         let name = target
             .file_name()
             .filter(|n| !matches!(Path::new(n).components().next(), Some(std::path::Component::ParentDir)))
@@ -321,6 +335,95 @@ fn check_target(target: &Path, force: bool) -> Result<(), OutputError> {
     } else {
         Err(OutputError::Exists(target.to_path_buf()))
     }
+}
+
+/// Refuses an existing `target` that contains one of `inputs` (compared as canonical paths, so
+/// `run/./s.toml`, `../x/run/s.toml` and links into the directory are caught).
+fn check_inputs_outside(target: &Path, inputs: &[&Path]) -> Result<(), OutputError> {
+    let Ok(dir) = fs::canonicalize(target) else { return Ok(()) };
+    for input in inputs {
+        if fs::canonicalize(input).is_ok_and(|p| p.starts_with(&dir)) {
+            return Err(OutputError::InputInside { target: target.to_path_buf(), input: input.to_path_buf() });
+        }
+    }
+    Ok(())
+}
+
+/// Writes one output file the way a run directory lands: the bytes go to a hidden
+/// `.NAME.partial-PID` beside `target` and are renamed over it only once whole (a full disk or an
+/// interrupt leaves the old file, or nothing). An existing `target` is replaced only with `force`
+/// and only when `ours(existing bytes)` says coopnav wrote it; a symbolic link, a directory or an
+/// input of the command (`inputs`) never is.
+pub fn write_file(
+    target: &Path,
+    bytes: &[u8],
+    force: bool,
+    ours: fn(&[u8]) -> bool,
+    inputs: &[&Path],
+) -> Result<(), OutputError> {
+    let unsafe_file = |reason| OutputError::UnsafeFile { path: target.to_path_buf(), reason };
+    if let Ok(meta) = fs::symlink_metadata(target) {
+        if meta.file_type().is_symlink() {
+            return Err(unsafe_file("it is a symbolic link"));
+        }
+        if !meta.is_file() {
+            return Err(unsafe_file("it is not a regular file"));
+        }
+        let canonical = fs::canonicalize(target).map_err(io_err(target))?;
+        if inputs.iter().any(|i| fs::canonicalize(i).is_ok_and(|p| p == canonical)) {
+            return Err(unsafe_file("it is an input of this command"));
+        }
+        if !force {
+            return Err(OutputError::FileExists(target.to_path_buf()));
+        }
+        let mut head = Vec::with_capacity(OWNERSHIP_PREFIX);
+        use std::io::Read;
+        fs::File::open(target)
+            .and_then(|f| f.take(OWNERSHIP_PREFIX as u64).read_to_end(&mut head))
+            .map_err(io_err(target))?;
+        if !ours(&head) {
+            return Err(unsafe_file("coopnav did not write it"));
+        }
+    }
+    let name = target.file_name().ok_or_else(|| OutputError::Unnamed(target.to_path_buf()))?.to_string_lossy();
+    let parent = target.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
+    let staging = parent.join(format!(".{name}.partial-{}", std::process::id()));
+    unfinished().push(staging.clone());
+    let written = (|| {
+        use std::io::Write;
+        let mut f = fs::File::create(&staging)?;
+        f.write_all(bytes)?;
+        f.sync_all()?;
+        fs::rename(&staging, target)
+    })();
+    let mut live = unfinished();
+    live.retain(|p| *p != staging);
+    if let Err(e) = written {
+        let _ = fs::remove_file(&staging);
+        return Err(io_err(target)(e));
+    }
+    Ok(())
+}
+
+/// How many leading bytes of an existing output file [`write_file`]'s `ours` sees.
+pub const OWNERSHIP_PREFIX: usize = 4096;
+
+/// A JSON output of coopnav's: its first key is `"tool": "coopnav"` (see [`tagged_json`]).
+pub fn is_coopnav_json(head: &[u8]) -> bool {
+    let text = String::from_utf8_lossy(head);
+    let body = text.trim_start().strip_prefix('{').unwrap_or("");
+    body.trim_start().starts_with(&format!("\"tool\": \"{TOOL}\""))
+}
+
+/// `value` (a JSON object) as pretty JSON whose first key is `"tool": "coopnav"`, so that
+/// [`write_file`] later recognises the file as coopnav's.
+pub fn tagged_json<T: Serialize + ?Sized>(value: &T) -> Result<String, serde_json::Error> {
+    let body = serde_json::to_string_pretty(value)?;
+    let inner = body.trim_start().strip_prefix('{').unwrap_or(&body);
+    if inner.trim_start().starts_with('}') {
+        return Ok(format!("{{\n  \"tool\": \"{TOOL}\"\n}}\n"));
+    }
+    Ok(format!("{{\n  \"tool\": \"{TOOL}\",{inner}\n"))
 }
 
 impl Drop for RunDir {

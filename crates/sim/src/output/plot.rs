@@ -159,6 +159,59 @@ fn draw(labels: Labels, series: &[Series], x: (f64, f64), y: (f64, f64)) -> Resu
     Ok(svg)
 }
 
+/// One row of an interval plot: a label, a mean and its interval, and whether it is good news
+/// (green) or not (red).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Interval {
+    pub label: String,
+    pub mean: f64,
+    pub low: f64,
+    pub high: f64,
+    pub good: bool,
+}
+
+/// One horizontal interval per row against a zero line, labelled beside it: how paired
+/// differences and their confidence intervals are shown. The axis spans at most ±200 (a wider
+/// interval is clipped at the edge).
+pub fn intervals_svg(title: &str, x_desc: &str, intervals: &[Interval]) -> Result<String, PlotError> {
+    use plotters::style::text_anchor::{HPos, Pos, VPos};
+    let mut svg = String::new();
+    {
+        let rows = intervals.len().max(1);
+        let height = (60 + 14 * rows) as u32;
+        let root = SVGBackend::with_string(&mut svg, (900, height)).into_drawing_area();
+        let e = |e: &dyn std::fmt::Display| PlotError::new(title, e);
+        root.fill(&WHITE).map_err(|x| e(&x))?;
+        let lo = intervals.iter().map(|c| c.low).fold(0.0, f64::min).max(-200.0);
+        let hi = intervals.iter().map(|c| c.high).fold(0.0, f64::max).min(200.0);
+        let pad = 0.05 * (hi - lo).max(1.0);
+        let mut chart = ChartBuilder::on(&root)
+            .caption(title, ("sans-serif", 16))
+            .margin(10)
+            .x_label_area_size(30)
+            .y_label_area_size(260)
+            .build_cartesian_2d((lo - pad)..(hi + pad), 0.0..rows as f64)
+            .map_err(|x| e(&x))?;
+        chart.configure_mesh().y_labels(0).x_desc(x_desc).draw().map_err(|x| e(&x))?;
+        chart.draw_series(LineSeries::new([(0.0, 0.0), (0.0, rows as f64)], BLACK)).map_err(|x| e(&x))?;
+        // One label per interval, beside it (the mesh's own labels thin out to "nice" ticks).
+        let label_style = TextStyle::from(("sans-serif", 11).into_font()).pos(Pos::new(HPos::Right, VPos::Center));
+        for (i, c) in intervals.iter().enumerate() {
+            let y = (rows - 1 - i) as f64 + 0.5;
+            let (px, py) = chart.backend_coord(&(lo - pad, y));
+            root.draw(&Text::new(c.label.clone(), (px - 8, py), label_style.clone())).map_err(|x| e(&x))?;
+            let colour = if c.good { GREEN } else { RED };
+            let clip = |v: f64| v.clamp(lo - pad, hi + pad);
+            chart
+                .draw_series(LineSeries::new([(clip(c.low), y), (clip(c.high), y)], colour.stroke_width(2)))
+                .map_err(|x| e(&x))?;
+            chart.draw_series([Circle::new((clip(c.mean), y), 3, colour.filled())]).map_err(|x| e(&x))?;
+        }
+        root.present().map_err(|x| e(&x))?;
+    }
+    Ok(svg)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

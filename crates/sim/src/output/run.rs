@@ -2,7 +2,9 @@
 //! manifest.json, SVG plots (tracks true/estimated/CNA, error vs time per AUV, comms timeline)
 //! and a self-contained report.html that shows every plot inline.
 
+use crate::batch::mc::{comparison_table, Comparison};
 use crate::engine::{RunResult, Trace, TraceRow};
+use crate::output::plot::{intervals_svg, Interval};
 use crate::output::plot::{line_svg, track_svg, Labels, PlotError, Series};
 use crate::output::report::HtmlReport;
 use crate::output::{Manifest, RunDir, WriteError};
@@ -31,6 +33,50 @@ pub fn write_run(dir: RunDir, sc: &Scenario, result: &RunResult, command: &str) 
     crate::output::moos_export::write_moos_files(&dir, &crate::output::moos_export::closed_loop_run(sc, result)?)?;
     dir.write_text("report.html", &report(sc, result, &svgs, command))?;
     Ok(dir.finish()?)
+}
+
+/// The files of a Monte Carlo comparison's run directory: (file, what it holds).
+pub const COMPARISON_FILES: [(&str, &str); 4] = [
+    ("manifest.json", "the command, the seed and the scenario after defaults"),
+    ("comparison.txt", "the table `simulate --runs` prints"),
+    ("comparison.json", "every policy's statistics and every paired difference"),
+    ("differences.svg", "each policy's paired difference from the first, with its 95 % CI"),
+];
+
+/// Writes the Monte Carlo comparison `c` of scenario `sc` (named `name` in the plot) into `dir`
+/// and finishes it.
+pub fn write_comparison(
+    dir: RunDir,
+    sc: &Scenario,
+    c: &Comparison,
+    name: &str,
+    command: &str,
+) -> Result<PathBuf, WriteError> {
+    let policies: Vec<&str> = c.policies.iter().map(|p| p.policy.as_str()).collect();
+    let inputs = serde_json::json!({ "scenario": sc, "policies": policies, "runs": c.runs });
+    dir.write_json(COMPARISON_FILES[0].0, &Manifest::new(command, Some(c.seed), inputs))?;
+    dir.write_text(COMPARISON_FILES[1].0, &comparison_table(c))?;
+    dir.write_json(COMPARISON_FILES[2].0, c)?;
+    dir.write_text(COMPARISON_FILES[3].0, &difference_svg(c, name)?)?;
+    Ok(dir.finish()?)
+}
+
+/// The paired differences of a comparison: the first policy minus each other one.
+fn difference_svg(c: &Comparison, name: &str) -> Result<String, PlotError> {
+    let reference = c.policies.first().map_or("the first policy", |p| p.policy.as_str());
+    let title = format!("{reference} minus each policy, fleet mean true error (m), paired 95 % CI");
+    let rows: Vec<Interval> = c
+        .paired
+        .iter()
+        .map(|p| Interval {
+            label: format!("{name} N={} vs {}", c.n_auvs, p.baseline),
+            mean: p.difference.mean,
+            low: p.difference.low,
+            high: p.difference.high,
+            good: p.planner_better,
+        })
+        .collect();
+    intervals_svg(&title, &format!("difference, m (negative = {reference} better)"), &rows)
 }
 
 fn plots(n: usize, tr: &Trace) -> Result<Vec<String>, PlotError> {

@@ -164,7 +164,8 @@ pub struct Fleet {
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub lawnmowers: Vec<MowerSpec>,
     /// The survey AUVs' IVER2 dynamics (nams digest §4.2; default `vehicle.m`'s constants), which
-    /// the other vehicles' shadow estimates also fly.
+    /// the other vehicles' shadow estimates also fly. The model steps at the scenario's `dt`
+    /// ([`Scenario::survey_dynamics`]): `timestep` here may restate it, never differ.
     #[serde(default)]
     pub vehicle: Iver2Params,
 }
@@ -599,11 +600,25 @@ impl Scenario {
         scenario_file::load(file, Self::validate)
     }
 
+    /// The survey AUVs' IVER2 constants with the model stepping at the engine's `dt`: the truth
+    /// moves one `dt` per engine step whatever `fleet.vehicle.timestep` held, so that every step
+    /// the validator accepts gives the same physics.
+    pub fn survey_dynamics(&self) -> Iver2Params {
+        Iver2Params { timestep: self.dt, ..self.fleet.vehicle }
+    }
+
     /// Checks every field against its allowed range and reports every bad one at once.
     pub fn validate(&self, file: &Path) -> Result<(), ScenarioError> {
         let mut p = Problems::new(file);
         p.positive("duration_s", self.duration_s);
         p.check("dt", self.dt, |v| v > 0.0 && v <= 1.0, "0 < dt <= 1 s");
+        // The survey AUVs' IVER2 model steps at dt (`survey_dynamics`); its own step key may
+        // restate dt or keep its default, never name another step.
+        let vehicle_step = self.fleet.vehicle.timestep;
+        if vehicle_step != self.dt && vehicle_step != Iver2Params::default().timestep {
+            let allowed = format!("the scenario's dt ({} s), or leave it out: the survey AUVs step at dt", self.dt);
+            p.push("fleet.vehicle.timestep", vehicle_step.to_string(), allowed);
+        }
         self.validate_fleet(&mut p);
         self.validate_cna(&mut p);
         self.validate_buoys(&mut p);
