@@ -284,7 +284,7 @@ fn first_pair_time(alog: &Alog, x: &str, y: &str) -> Option<f64> {
 /// Reads the mapping file, or the defaults.
 pub fn mapping(path: Option<&std::path::Path>) -> Result<AlogMapping> {
     let Some(p) = path else { return Ok(AlogMapping::default()) };
-    let text = std::fs::read_to_string(p).with_context(|| format!("reading {}", p.display()))?;
+    let text = crate::input::read(p, false)?;
     let map: AlogMapping = toml::from_str(&text).with_context(|| format!("in {}", p.display()))?;
     map.check().with_context(|| format!("in {}", p.display()))?;
     Ok(map)
