@@ -30,6 +30,7 @@
 pub mod codec;
 pub mod error;
 pub mod schema;
+pub mod udpm;
 pub mod value;
 
 pub use codec::{decode, encode};
