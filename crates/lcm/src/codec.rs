@@ -293,3 +293,164 @@ impl<'a> Decoder<'a> {
         })
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sample::{self, Rng};
+
+    fn estimate(auv: i16) -> Record {
+        Record::new("coopnav.auv_estimate_t")
+            .with("utime", Value::Int64(1_700_000_000_000_000))
+            .with("auv", Value::Int16(auv))
+            .with("x", Value::Double(12.5))
+            .with("y", Value::Double(-3.25))
+            .with(
+                "cov",
+                Value::Array(vec![
+                    Value::Array(vec![Value::Double(4.0), Value::Double(0.5)]),
+                    Value::Array(vec![Value::Double(0.5), Value::Double(9.0)]),
+                ]),
+            )
+            .with("valid", Value::Boolean(true))
+    }
+
+    fn team() -> Record {
+        Record::new("coopnav.team_estimate_t")
+            .with("utime", Value::Int64(-1))
+            .with("n", Value::Int8(2))
+            .with("auvs", Value::Array(vec![Value::Struct(estimate(1)), Value::Struct(estimate(2))]))
+            .with("names", Value::Array(vec![Value::String("a".into()), Value::String("Ωb".into())]))
+            .with("flags", Value::Array(vec![Value::Bytes(vec![1, 2]), Value::Bytes(vec![3, 4])]))
+    }
+
+    #[test]
+    fn layout_of_a_nested_message() {
+        let schema = Schema::coopnav();
+        let bytes = encode(&schema, &team()).unwrap();
+        let fp = schema.get("coopnav.team_estimate_t").unwrap().fingerprint;
+        assert_eq!(bytes[..8], fp.to_be_bytes());
+        assert_eq!(bytes[8..16], (-1i64).to_be_bytes());
+        assert_eq!(bytes[16], 2);
+        // The nested estimates follow without a fingerprint: utime first.
+        assert_eq!(bytes[17..25], 1_700_000_000_000_000i64.to_be_bytes());
+        let estimate_len = 8 + 2 + 8 + 8 + 4 * 8 + 1;
+        let names = 17 + 2 * estimate_len;
+        assert_eq!(bytes[names..names + 6], [0, 0, 0, 2, b'a', 0]);
+        assert_eq!(bytes[names + 6..names + 10], [0, 0, 0, 4]);
+        assert_eq!(bytes[bytes.len() - 4..], [1, 2, 3, 4]);
+        assert_eq!(decode(&schema, "coopnav.team_estimate_t", &bytes).unwrap(), team());
+    }
+
+    #[test]
+    fn mismatched_values_are_refused_on_encode() {
+        let schema = Schema::coopnav();
+        let mut short = team();
+        short.fields[4].1 = Value::Array(vec![Value::Bytes(vec![1, 2]), Value::Bytes(vec![3])]);
+        assert!(matches!(encode(&schema, &short), Err(CodecError::Mismatch { .. })));
+        let mut wrong = team();
+        wrong.fields[0].1 = Value::Int32(0);
+        assert!(matches!(encode(&schema, &wrong), Err(CodecError::Mismatch { .. })));
+        let mut missing = team();
+        missing.fields.pop();
+        assert!(matches!(encode(&schema, &missing), Err(CodecError::Mismatch { .. })));
+        assert!(matches!(encode(&schema, &Record::new("coopnav.nope")), Err(CodecError::Schema(_))));
+    }
+
+    #[test]
+    fn malformed_messages_are_refused() {
+        let schema = Schema::coopnav();
+        let t = "coopnav.team_estimate_t";
+        let good = encode(&schema, &team()).unwrap();
+        let mut bad = good.clone();
+        bad[0] ^= 1;
+        assert!(matches!(decode(&schema, t, &bad), Err(CodecError::Fingerprint { .. })));
+        for cut in 0..good.len() {
+            assert!(decode(&schema, t, &good[..cut]).is_err(), "a prefix of {cut} bytes decoded");
+        }
+        let mut long = good.clone();
+        long.push(0);
+        assert_eq!(decode(&schema, t, &long), Err(CodecError::TrailingBytes(1)));
+        let mut negative = good.clone();
+        negative[16] = 0xff;
+        assert!(matches!(decode(&schema, t, &negative), Err(CodecError::NegativeLength { length: -1, .. })));
+        let mut oversized = good.clone();
+        oversized[16] = 127;
+        assert!(matches!(decode(&schema, t, &oversized), Err(CodecError::OversizedLength { length: 127, .. })));
+        let names = 17 + 2 * 59;
+        let mut no_nul = good.clone();
+        no_nul[names + 5] = b'x';
+        assert!(matches!(decode(&schema, t, &no_nul), Err(CodecError::StringWithoutNul { .. })));
+        let mut not_utf8 = good.clone();
+        not_utf8[names + 4] = 0xff;
+        assert!(matches!(decode(&schema, t, &not_utf8), Err(CodecError::InvalidUtf8 { .. })));
+        let mut zero_len = good.clone();
+        zero_len[names + 3] = 0;
+        assert!(matches!(decode(&schema, t, &zero_len), Err(CodecError::BadStringLength { length: 0, .. })));
+        let mut huge_len = good.clone();
+        huge_len[names..names + 4].copy_from_slice(&i32::MAX.to_be_bytes());
+        assert!(matches!(decode(&schema, t, &huge_len), Err(CodecError::Truncated { .. })));
+        let mut bad_bool = good.clone();
+        bad_bool[17 + 58] = 2;
+        assert!(matches!(decode(&schema, t, &bad_bool), Err(CodecError::InvalidBoolean { byte: 2, .. })));
+    }
+
+    #[test]
+    fn a_lying_length_allocates_nothing_big() {
+        // status_frame_t: utime, src, receive_time, n, data[n]; n = i32::MAX with no data behind.
+        let schema = Schema::coopnav();
+        let t = "coopnav.status_frame_t";
+        let mut bytes = schema.get(t).unwrap().fingerprint.to_be_bytes().to_vec();
+        bytes.extend_from_slice(&[0; 8 + 2 + 8]);
+        bytes.extend_from_slice(&i32::MAX.to_be_bytes());
+        assert!(matches!(decode(&schema, t, &bytes), Err(CodecError::OversizedLength { .. })));
+    }
+
+    #[test]
+    fn recursive_types_fingerprint_and_decode_within_bounds() {
+        // lcm-type-ref's example of mutually recursive types; without the rotation B() == C().
+        let src = "struct A { int8_t nb; B b[nb]; int8_t nc; C c[nc]; } \
+                   struct B { int8_t na; A a[na]; } struct C { int8_t nb; B b[nb]; }";
+        let schema = Schema::from_sources([("abc.lcm", src)]).unwrap();
+        let fp = |n| schema.get(n).unwrap().fingerprint;
+        assert_ne!(fp("B"), fp("C"));
+        // A chain of B -> A -> B ... deeper than MAX_DEPTH is refused, not a stack overflow.
+        let mut bytes = fp("B").to_be_bytes().to_vec();
+        bytes.extend(std::iter::repeat([1u8, 1]).take(200).flatten());
+        assert!(decode(&schema, "B", &bytes).is_err());
+    }
+
+    proptest::proptest! {
+        #[test]
+        fn random_values_round_trip(seed in proptest::prelude::any::<u64>(), max_len in 0u64..6) {
+            let schema = Schema::coopnav();
+            let mut rng = Rng::new(seed);
+            for i in 0..schema.structs().len() {
+                let v = sample::record(&schema, i, &mut rng, max_len);
+                let bytes = encode(&schema, &v).unwrap();
+                proptest::prop_assert_eq!(decode(&schema, &v.type_name, &bytes).unwrap(), v);
+            }
+        }
+
+        #[test]
+        fn damaged_bytes_never_panic_and_accepted_bytes_are_canonical(
+            seed in proptest::prelude::any::<u64>(),
+            flips in proptest::collection::vec((proptest::prelude::any::<usize>(), proptest::prelude::any::<u8>()), 1..4),
+        ) {
+            let schema = Schema::coopnav();
+            let mut rng = Rng::new(seed);
+            let index = rng.upto(schema.structs().len() as u64 - 1) as usize;
+            let v = sample::record(&schema, index, &mut rng, 4);
+            let mut bytes = encode(&schema, &v).unwrap();
+            for (at, byte) in flips {
+                let at = 8 + at % (bytes.len() - 8).max(1);
+                if at < bytes.len() {
+                    bytes[at] = byte;
+                }
+            }
+            if let Ok(decoded) = decode(&schema, &v.type_name, &bytes) {
+                proptest::prop_assert_eq!(encode(&schema, &decoded).unwrap(), bytes);
+            }
+        }
+    }
+}

@@ -29,11 +29,15 @@
 
 pub mod codec;
 pub mod error;
+pub mod logfile;
+pub mod sample;
 pub mod schema;
 pub mod udpm;
 pub mod value;
 
 pub use codec::{decode, encode};
-pub use error::{CodecError, SchemaError};
+pub use error::{CodecError, LogError, SchemaError, TransportError};
+pub use logfile::{Event, LogReader, LogWriter};
 pub use schema::Schema;
+pub use udpm::Udpm;
 pub use value::{Record, Value};
