@@ -4,7 +4,8 @@
 //!   with its `lcm-gen` beside it or on PATH: `$COOPNAV_LCM_PYTHON`, else tools/lcm/bin/python
 //!   at the repository root, else `python3` on PATH. Handed to the tests as
 //!   `COOPNAV_LCM_PYTHON_FOUND` and `COOPNAV_LCM_GEN_FOUND`;
-//! - cfg `lcm_logger`: that package's `lcm-logger` too (`COOPNAV_LCM_LOGGER_FOUND`);
+//! - cfg `lcm_logger`: that package's `lcm-logger` too, the native program the wheel ships rather
+//!   than its Python wrapper (`COOPNAV_LCM_LOGGER_FOUND`);
 //! - cfg `private_netns`: `unshare -n` works and `ip` can bring up the new namespace's loopback
 //!   (the transport tests run only inside such a namespace).
 //!
@@ -34,6 +35,9 @@ struct PythonProbe {
     executable: PathBuf,
     scripts: PathBuf,
     lcm_init: Option<PathBuf>,
+    /// Where the wheel keeps its native programs (its `lcm-logger` on PATH is a Python wrapper
+    /// that SIGKILLs the real one on SIGINT, losing the unflushed end of the log).
+    native_bin: Option<PathBuf>,
 }
 
 fn probe_python(python: &Path) -> Option<PythonProbe> {
@@ -41,6 +45,7 @@ fn probe_python(python: &Path) -> Option<PythonProbe> {
                   print(sys.executable)\n\
                   print(sysconfig.get_paths()['scripts'])\n\
                   try:\n    import lcm\n    print(lcm.__file__)\n\
+                  \x20   print(getattr(lcm, 'LCM_BIN_DIR', ''))\n\
                   except Exception:\n    print('')\n";
     let out = Command::new(python).args(["-c", script]).output().ok()?;
     if !out.status.success() {
@@ -51,7 +56,8 @@ fn probe_python(python: &Path) -> Option<PythonProbe> {
     let executable = PathBuf::from(lines.next()?);
     let scripts = PathBuf::from(lines.next()?);
     let lcm_init = lines.next().filter(|l| !l.is_empty()).map(PathBuf::from);
-    Some(PythonProbe { executable, scripts, lcm_init })
+    let native_bin = lines.next().filter(|l| !l.is_empty()).map(PathBuf::from);
+    Some(PythonProbe { executable, scripts, lcm_init, native_bin })
 }
 
 fn main() {
@@ -86,7 +92,8 @@ fn main() {
         println!("cargo:rustc-env=COOPNAV_LCM_PYTHON_FOUND={}", probe.executable.display());
         println!("cargo:rustc-env=COOPNAV_LCM_GEN_FOUND={}", gen.display());
         found_python = true;
-        if let Some(logger) = tool("lcm-logger") {
+        let native_logger = probe.native_bin.as_ref().map(|d| d.join("lcm-logger")).filter(|p| p.is_file());
+        if let Some(logger) = native_logger.or_else(|| tool("lcm-logger")) {
             watch(&logger);
             println!("cargo:rustc-cfg=lcm_logger");
             println!("cargo:rustc-env=COOPNAV_LCM_LOGGER_FOUND={}", logger.display());
