@@ -128,7 +128,8 @@ impl<R: Read> LogReader<R> {
 
     /// Reads `n` bytes without allocating them up front.
     fn bytes(&mut self, n: usize) -> io::Result<Vec<u8>> {
-        let mut out = Vec::new();
+        // Room for what a lying length could claim is reserved only up to 64 KiB.
+        let mut out = Vec::with_capacity(n.min(1 << 16));
         while out.len() < n && !self.pushback.is_empty() {
             out.push(self.byte()?.expect("pushback is not empty"));
         }
