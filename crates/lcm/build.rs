@@ -6,8 +6,9 @@
 //!   `COOPNAV_LCM_PYTHON_FOUND` and `COOPNAV_LCM_GEN_FOUND`;
 //! - cfg `lcm_logger`: that package's `lcm-logger` too, the native program the wheel ships rather
 //!   than its Python wrapper (`COOPNAV_LCM_LOGGER_FOUND`);
-//! - cfg `private_netns`: `unshare -n` works and `ip` can bring up the new namespace's loopback
-//!   (the transport tests run only inside such a namespace).
+//! - cfg `private_netns`: `unshare -n` (else `unshare -rn`, unprivileged) works and `ip` can bring
+//!   up the new namespace's loopback (the transport tests run only inside such a namespace);
+//!   handed over as `COOPNAV_UNSHARE_FOUND` and `COOPNAV_UNSHARE_FLAGS`.
 //!
 //! What it watches, so installing a tool later re-runs it: when a tool is found, the files found;
 //! when not, `PATH` and every directory on it, the Python's scripts directory (where pip puts
@@ -102,25 +103,37 @@ fn main() {
         break;
     }
 
+    // `unshare -n` as root; `unshare -rn` (a user namespace too) where unprivileged ones are allowed.
     let unshare = which("unshare");
     let ip = which("ip");
-    let netns = match (&unshare, &ip) {
-        (Some(unshare), Some(ip)) => Command::new(unshare)
-            .args(["-n", &ip.display().to_string(), "link", "set", "lo", "up"])
-            .output()
-            .is_ok_and(|o| o.status.success()),
-        _ => false,
-    };
-    if netns {
-        watch(unshare.as_ref().expect("found"));
-        watch(ip.as_ref().expect("found"));
-        println!("cargo:rustc-cfg=private_netns");
+    let mut netns = false;
+    if let (Some(unshare), Some(ip)) = (&unshare, &ip) {
+        for flags in ["-n", "-rn"] {
+            let works = Command::new(unshare)
+                .args([flags, &ip.display().to_string(), "link", "set", "lo", "up"])
+                .output()
+                .is_ok_and(|o| o.status.success());
+            if works {
+                watch(unshare);
+                watch(ip);
+                println!("cargo:rustc-cfg=private_netns");
+                println!("cargo:rustc-env=COOPNAV_UNSHARE_FOUND={}", unshare.display());
+                println!("cargo:rustc-env=COOPNAV_UNSHARE_FLAGS={flags}");
+                netns = true;
+                break;
+            }
+        }
     }
 
     if !(found_python && found_logger && netns) {
         // Something is missing: watch where installing it would show.
-        for dir in path_dirs().iter().chain(&scripts_dirs).filter(|d| d.is_dir()) {
-            watch(dir);
+        let mut dirs: Vec<&PathBuf> = Vec::new();
+        let path = path_dirs();
+        for dir in path.iter().chain(&scripts_dirs).filter(|d| d.is_dir()) {
+            if !dirs.contains(&dir) {
+                dirs.push(dir);
+                watch(dir);
+            }
         }
         let tools = root.join("tools");
         if tools.join("lcm").is_dir() {

@@ -611,6 +611,20 @@ mod tests {
     }
 
     #[test]
+    fn every_lcm_file_in_the_repository_is_embedded() {
+        let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("lcm");
+        let mut on_disk: Vec<String> = std::fs::read_dir(dir)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().into_string().unwrap())
+            .filter(|n| n.ends_with(".lcm"))
+            .collect();
+        let mut embedded: Vec<String> = COOPNAV_LCM_FILES.iter().map(|(n, _)| n.to_string()).collect();
+        on_disk.sort();
+        embedded.sort();
+        assert_eq!(on_disk, embedded);
+    }
+
+    #[test]
     fn dimensions_resolve_to_their_modes() {
         let schema = Schema::coopnav();
         let t = schema.get("coopnav.team_estimate_t").unwrap();

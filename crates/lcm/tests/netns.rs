@@ -26,8 +26,8 @@ const URL: &str = "udpm://239.255.76.67:7667?ttl=0";
 fn in_private_netns(name: &str, body: impl FnOnce()) {
     if std::env::var_os(IN_NETNS).is_none() {
         let exe = std::env::current_exe().expect("test binary");
-        let child = Command::new("unshare")
-            .arg("-n")
+        let child = Command::new(unshare().0)
+            .arg(unshare().1)
             .arg(exe)
             .args([name, "--exact", "--nocapture", "--test-threads=1"])
             .env(IN_NETNS, "1")
@@ -52,6 +52,16 @@ fn in_private_netns(name: &str, body: impl FnOnce()) {
     run(Command::new("ip").args(["link", "set", "lo", "up"]), Duration::from_secs(10), "ip link set lo up");
     run(Command::new("ip").args(["route", "add", "224.0.0.0/4", "dev", "lo"]), Duration::from_secs(10), "ip route add");
     body();
+}
+
+/// The `unshare` program and its flags the build script found to work.
+#[cfg(private_netns)]
+fn unshare() -> (&'static str, &'static str) {
+    (env!("COOPNAV_UNSHARE_FOUND"), env!("COOPNAV_UNSHARE_FLAGS"))
+}
+#[cfg(not(private_netns))]
+fn unshare() -> (&'static str, &'static str) {
+    unreachable!("the tests needing a private namespace are ignored without one")
 }
 
 #[cfg(lcm_python)]
