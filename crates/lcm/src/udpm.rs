@@ -281,14 +281,23 @@ pub struct Assembled {
     pub seq: u32,
 }
 
-/// Puts fragmented messages back together, within [`Limits`].
+/// Puts fragmented messages back together, within [`Limits`]: keyed by sender and sequence number
+/// (as lcm keys them), a duplicate fragment counted once, a fragment naming another size or count
+/// restarting its message, the oldest partial evicted when the count or bytes would be exceeded,
+/// and late duplicates of the last 64 completed messages ignored.
 #[derive(Debug, Default)]
 pub struct Reassembler {
     limits: Limits,
     partials: HashMap<(SocketAddr, u32), Partial>,
+    /// The last [`RECENT`] messages completed, whose late duplicate fragments are ignored rather
+    /// than starting a message that can never complete.
+    recent: std::collections::VecDeque<(SocketAddr, u32)>,
     bytes: usize,
     dropped: u64,
 }
+
+/// How many completed messages a [`Reassembler`] remembers.
+const RECENT: usize = 64;
 
 impl Reassembler {
     /// A reassembler with these bounds.
@@ -331,6 +340,9 @@ impl Reassembler {
         }
         let size = f.payload_size as usize;
         let key = (from, f.seq);
+        if self.recent.contains(&key) {
+            return None;
+        }
         if self.partials.get(&key).is_some_and(|p| p.data.len() != size || p.count != f.count) {
             self.remove(&key);
         }
@@ -376,6 +388,10 @@ impl Reassembler {
         }
         let p = self.partials.remove(&key).expect("present");
         self.bytes -= p.data.len();
+        if self.recent.len() == RECENT {
+            self.recent.pop_front();
+        }
+        self.recent.push_back(key);
         Some(Assembled { channel: p.channel.expect("fragment 0 was received"), data: p.data, seq: f.seq })
     }
 }
@@ -667,5 +683,74 @@ mod tests {
         assert_eq!(parse_datagram(&f), Err(BadPacket::Fragment));
         assert!(encode_datagrams(1, &"a".repeat(64), b"").is_err());
         assert!(encode_datagrams(1, "a\0b", b"").is_err());
+    }
+
+    proptest::proptest! {
+        #[test]
+        fn any_order_with_duplicates_reassembles_exactly(
+            len in 0usize..300_000,
+            channel in "[A-Za-z0-9_]{0,63}",
+            order in proptest::collection::vec(proptest::prelude::any::<u16>(), 0..12),
+            seq in proptest::prelude::any::<u32>(),
+        ) {
+            let payload: Vec<u8> = (0..len).map(|i| (i as u32).wrapping_mul(2_654_435_761).to_be_bytes()[0]).collect();
+            let datagrams = encode_datagrams(seq, &channel, &payload).unwrap();
+            let from: SocketAddr = "127.0.0.1:5000".parse().unwrap();
+            if datagrams.len() == 1 {
+                match parse_datagram(&datagrams[0]).unwrap() {
+                    Packet::Short { seq: s, channel: c, payload: p } => {
+                        proptest::prop_assert_eq!((s, c, p), (seq, channel.as_str(), payload.as_slice()));
+                    }
+                    Packet::Fragment(_) => proptest::prop_assert!(false, "a short message was fragmented"),
+                }
+            } else {
+                // Some datagrams again first (duplicates), then all of them in reverse, then the
+                // duplicates once more (late, after the message is complete).
+                let dups: Vec<&Vec<u8>> = order.iter().map(|&k| &datagrams[usize::from(k) % datagrams.len()]).collect();
+                let mut feed = dups.clone();
+                feed.extend(datagrams.iter().rev());
+                feed.extend(dups);
+                let mut r = Reassembler::new(Limits::default());
+                let now = Instant::now();
+                let mut done = Vec::new();
+                for d in feed {
+                    let Packet::Fragment(f) = parse_datagram(d).unwrap() else { panic!("a fragment") };
+                    done.extend(r.push(from, &f, now));
+                }
+                proptest::prop_assert_eq!(done, vec![Assembled { channel: channel.clone(), data: payload, seq }]);
+                proptest::prop_assert_eq!(r.bytes_held(), 0);
+            }
+        }
+
+        #[test]
+        fn damaged_datagrams_never_panic_and_stay_in_bounds(
+            len in 60_000usize..200_000,
+            flips in proptest::collection::vec((proptest::prelude::any::<usize>(), proptest::prelude::any::<u8>()), 1..6),
+            cut in proptest::prelude::any::<usize>(),
+        ) {
+            let payload = vec![9u8; len];
+            let mut datagrams = encode_datagrams(4, "CH", &payload).unwrap();
+            for (k, (at, byte)) in flips.into_iter().enumerate() {
+                let n = datagrams.len();
+                let d = &mut datagrams[k % 2 % n];
+                let at = at % d.len();
+                d[at] = byte;
+            }
+            let last = datagrams.len() - 1;
+            let keep = cut % (datagrams[last].len() + 1);
+            datagrams[last].truncate(keep);
+            let limits = Limits { max_message_size: 150_000, max_partials: 3, max_partial_bytes: 300_000, stale_after: Duration::from_secs(1) };
+            let mut r = Reassembler::new(limits);
+            let from: SocketAddr = "127.0.0.1:5000".parse().unwrap();
+            for d in &datagrams {
+                if let Ok(Packet::Fragment(f)) = parse_datagram(d) {
+                    if let Some(a) = r.push(from, &f, Instant::now()) {
+                        proptest::prop_assert!(a.data.len() <= limits.max_message_size);
+                    }
+                }
+                proptest::prop_assert!(r.partials() <= limits.max_partials);
+                proptest::prop_assert!(r.bytes_held() <= limits.max_partial_bytes);
+            }
+        }
     }
 }
