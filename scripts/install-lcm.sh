@@ -30,7 +30,11 @@ if python3 -m pip install --quiet --disable-pip-version-check --root-user-action
   exit 0
 fi
 venv="$root/tools/lcm"
+# A half-made virtual environment would look installed to the next run's probe: remove it unless
+# the install completes.
+trap 'rm -rf "$venv"' EXIT
 python3 -m venv "$venv"
 "$venv/bin/python" -m pip install --quiet --disable-pip-version-check "lcm==$version"
 usable "$venv/bin/python"
+trap - EXIT
 echo "lcm $version installed in $venv"

@@ -11,7 +11,7 @@ use std::process::{Command, Stdio};
 use std::sync::mpsc;
 use std::time::{Duration, Instant};
 
-use common::{hex, interop_py, run, unhex, wait_with_deadline};
+use common::{hex, interop_py, run, unhex, wait_with_deadline, Reaped};
 use coopnav_lcm::sample::{self, Rng};
 use coopnav_lcm::{decode, encode, LogReader, Record, Schema, Udpm, Value};
 use serde_json::json;
@@ -107,14 +107,16 @@ fn python_publishes_and_rust_receives_identical_bytes() {
         let input = dir.path().join("pub.json");
         let items: Vec<_> = sent.iter().map(|(c, d)| json!({"channel": c, "data": hex(d)})).collect();
         std::fs::write(&input, serde_json::to_string(&items).unwrap()).unwrap();
-        let mut publisher = Command::new(python())
-            .arg(interop_py())
-            .args(["publish", URL])
-            .arg(&input)
-            .arg("20")
-            .stdin(Stdio::null())
-            .spawn()
-            .expect("python publisher");
+        let mut publisher = Reaped(
+            Command::new(python())
+                .arg(interop_py())
+                .args(["publish", URL])
+                .arg(&input)
+                .arg("20")
+                .stdin(Stdio::null())
+                .spawn()
+                .expect("python publisher"),
+        );
         let deadline = Instant::now() + Duration::from_secs(20);
         let mut got: Vec<Option<Vec<u8>>> = vec![None; sent.len()];
         while got.iter().any(Option::is_none) && Instant::now() < deadline {
@@ -148,16 +150,18 @@ fn rust_publishes_and_python_receives_identical_bytes() {
         let out = dir.path().join("got.json");
         let names: Vec<&String> = sent.iter().map(|(c, _)| c).collect();
         std::fs::write(&channels, serde_json::to_string(&names).unwrap()).unwrap();
-        let mut subscriber = Command::new(python())
-            .arg(interop_py())
-            .args(["subscribe", URL])
-            .arg(&channels)
-            .arg(&out)
-            .arg("20")
-            .stdin(Stdio::null())
-            .stdout(Stdio::piped())
-            .spawn()
-            .expect("python subscriber");
+        let mut subscriber = Reaped(
+            Command::new(python())
+                .arg(interop_py())
+                .args(["subscribe", URL])
+                .arg(&channels)
+                .arg(&out)
+                .arg("20")
+                .stdin(Stdio::null())
+                .stdout(Stdio::piped())
+                .spawn()
+                .expect("python subscriber"),
+        );
         let stdout = subscriber.stdout.take().unwrap();
         let (tx, rx) = mpsc::channel();
         std::thread::spawn(move || {
@@ -247,15 +251,17 @@ fn lcm_logger_records_what_rust_publishes() {
     in_private_netns("lcm_logger_records_what_rust_publishes", || {
         let dir = tempfile::tempdir().unwrap();
         let path = dir.path().join("logger.lcmlog");
-        let mut child = Command::new(logger)
-            .arg(format!("--lcm-url={URL}"))
-            .arg("-f")
-            .arg(&path)
-            .stdin(Stdio::null())
-            .stdout(Stdio::null())
-            .stderr(Stdio::piped())
-            .spawn()
-            .expect("lcm-logger");
+        let mut child = Reaped(
+            Command::new(logger)
+                .arg(format!("--lcm-url={URL}"))
+                .arg("-f")
+                .arg(&path)
+                .stdin(Stdio::null())
+                .stdout(Stdio::null())
+                .stderr(Stdio::null())
+                .spawn()
+                .expect("lcm-logger"),
+        );
         let big: Vec<u8> = (0..100_000u32).map(|i| (i % 253) as u8).collect();
         let payload = |i: usize| {
             let mut p = format!("message {i}").into_bytes();

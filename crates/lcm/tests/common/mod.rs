@@ -110,3 +110,29 @@ pub fn interop(python: &str, args: &[&dyn AsRef<std::ffi::OsStr>], timeout: Dura
     }
     run(&mut cmd, timeout, "tests/py/interop.py")
 }
+
+/// A child process killed (by its pid) and reaped when dropped, should a test panic before it
+/// stops the child itself.
+pub struct Reaped(pub Child);
+
+impl std::ops::Deref for Reaped {
+    type Target = Child;
+    fn deref(&self) -> &Child {
+        &self.0
+    }
+}
+
+impl std::ops::DerefMut for Reaped {
+    fn deref_mut(&mut self) -> &mut Child {
+        &mut self.0
+    }
+}
+
+impl Drop for Reaped {
+    fn drop(&mut self) {
+        if matches!(self.0.try_wait(), Ok(None)) {
+            let _ = self.0.kill();
+        }
+        let _ = self.0.wait();
+    }
+}
