@@ -73,6 +73,9 @@ pub enum TransportError {
     /// A channel name longer than LCM's limit or containing a NUL.
     #[error("bad channel name {0:?}")]
     BadChannel(String),
+    /// A subscription pattern that is not a regular expression.
+    #[error("bad channel pattern {pattern:?}: {reason}")]
+    BadPattern { pattern: String, reason: String },
     /// A message too large to publish (more than 65535 fragments or over the size limit).
     #[error("message of {0} bytes is too large")]
     TooLarge(usize),

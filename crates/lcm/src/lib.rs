@@ -35,13 +35,14 @@
 //!   over and nesting deeper than [`codec::MAX_DEPTH`] are refused;
 //! - the transport's packets cut exactly as lcm (Linux) cuts them; reassembly bounded in message
 //!   size, number and bytes of partial messages, with stale ones dropped;
-//!   exact-name subscriptions (and "every channel");
+//!   subscriptions by exact name, by regular expression (matching the whole name, as lcm's), or to
+//!   every channel;
 //! - log files: writer, and a reader that resynchronises on the sync word and bounds lengths.
 //!
 //! # Not implemented
 //! - LCM `enum` types (deprecated in LCM) and inline nested declarations: refused by the parser;
 //!   comments are not kept;
-//! - regular-expression subscriptions; the `mpudpm`, `tcpq`, `file` and `memq` providers; the
+//! - the `mpudpm`, `tcpq`, `file` and `memq` providers; the
 //!   `LCM_DEFAULT_URL` environment variable; macOS's smaller fragment size;
 //! - generated Rust code: the typed views in [`messages`] are written by hand and tested against
 //!   the schema;

@@ -19,6 +19,9 @@
 //!   bytes (`LCM_MAX_MESSAGE_SIZE`); lcm keys partial messages by sender and sequence number,
 //!   drops a partial when a fragment of the same key names another size, and bounds the partials
 //!   to 1000 and 16 MiB in all, evicting the oldest;
+//! - a subscription's channel is a regular expression matched against the whole name
+//!   (`lcm/lcm.c` compiles `^CHANNEL$`); [`Udpm::subscribe`] takes exact names, and
+//!   [`Udpm::subscribe_regex`] patterns;
 //! - a receiver binds the group's port with `SO_REUSEADDR` and joins the group; a sender sets the
 //!   multicast TTL and multicast loopback on.
 
@@ -408,9 +411,10 @@ pub struct Message {
 }
 
 /// What a [`Udpm`] delivers.
-#[derive(Debug, Clone, PartialEq, Eq)]
+#[derive(Debug, Clone)]
 enum Subscription {
     Exact(String),
+    Pattern(regex::Regex),
     All,
 }
 
@@ -494,6 +498,17 @@ impl Udpm {
         Ok(())
     }
 
+    /// Receives messages on every channel the regular expression matches as a whole, from now on.
+    /// lcm subscribes with `^PATTERN$` (GLib's PCRE); this anchors `^(?:PATTERN)$` (the `regex`
+    /// crate's syntax), so an alternation `A|B` means either name whole.
+    pub fn subscribe_regex(&mut self, pattern: &str) -> Result<(), TransportError> {
+        let re = regex::Regex::new(&format!("^(?:{pattern})$"))
+            .map_err(|e| TransportError::BadPattern { pattern: pattern.to_string(), reason: e.to_string() })?;
+        self.ensure_receiver()?;
+        self.subscriptions.push(Subscription::Pattern(re));
+        Ok(())
+    }
+
     /// Receives messages on every channel from now on.
     pub fn subscribe_all(&mut self) -> Result<(), TransportError> {
         self.ensure_receiver()?;
@@ -505,6 +520,7 @@ impl Udpm {
         self.subscriptions.iter().any(|s| match s {
             Subscription::All => true,
             Subscription::Exact(c) => c == channel,
+            Subscription::Pattern(re) => re.is_match(channel),
         })
     }
 
