@@ -428,6 +428,9 @@ pub struct Udpm {
     subscriptions: Vec<Subscription>,
     reassembler: Reassembler,
     buf: Vec<u8>,
+    bad_datagrams: u64,
+    /// Whether the receiving socket is in non-blocking mode now.
+    nonblocking: bool,
 }
 
 fn now_utime() -> i64 {
@@ -450,6 +453,8 @@ impl Udpm {
             subscriptions: Vec::new(),
             reassembler: Reassembler::new(Limits::default()),
             buf: vec![0; 65536],
+            bad_datagrams: 0,
+            nonblocking: false,
         })
     }
 
@@ -525,17 +530,30 @@ impl Udpm {
     }
 
     /// The next message on a subscribed channel, or `None` once `timeout` has passed without one.
-    /// Malformed datagrams are dropped. Without a subscription it returns `None` at once.
+    /// Malformed datagrams are dropped (and counted). Without a subscription it returns `None` at
+    /// once.
     pub fn recv_timeout(&mut self, timeout: Duration) -> Result<Option<Message>, TransportError> {
         let deadline = Instant::now() + timeout;
+        // Past the deadline (at once for a zero timeout) the datagrams already queued are still
+        // read, without waiting, up to this many.
+        const DRAIN: usize = 4096;
+        let mut drained = 0;
         loop {
             let Some(sock) = self.recv.as_ref() else { return Ok(None) };
-            let now = Instant::now();
-            let left = deadline.saturating_duration_since(now);
-            if left.is_zero() {
-                return Ok(None);
+            let left = deadline.saturating_duration_since(Instant::now());
+            let past = left.is_zero();
+            if past {
+                drained += 1;
+                if drained > DRAIN {
+                    return Ok(None);
+                }
+            } else {
+                sock.set_read_timeout(Some(left))?;
             }
-            sock.set_read_timeout(Some(left.max(Duration::from_micros(1))))?;
+            if past != self.nonblocking {
+                sock.set_nonblocking(past)?;
+                self.nonblocking = past;
+            }
             let (n, from) = match sock.recv_from(&mut self.buf) {
                 Ok(r) => r,
                 Err(e) if matches!(e.kind(), std::io::ErrorKind::WouldBlock | std::io::ErrorKind::TimedOut) => {
@@ -566,9 +584,19 @@ impl Udpm {
                         }
                     }
                 }
-                Err(_) => {}
+                Err(_) => self.bad_datagrams += 1,
             }
         }
+    }
+
+    /// Datagrams dropped as malformed so far.
+    pub fn bad_datagrams(&self) -> u64 {
+        self.bad_datagrams
+    }
+
+    /// Messages given up in reassembly so far (see [`Reassembler::dropped`]).
+    pub fn dropped_messages(&self) -> u64 {
+        self.reassembler.dropped()
     }
 }
 

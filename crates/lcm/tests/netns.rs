@@ -236,6 +236,17 @@ fn rust_to_rust_over_loopback_with_many_fragments() {
         assert_eq!(m.channel, "BIG");
         assert!(m.data == payload);
         assert_eq!(m.seq % 3, 2, "the BIG messages have the sequence numbers 2, 5, 8, ...");
+        // A datagram already queued is read even with a zero timeout; garbage is counted, dropped.
+        let mut rx = Udpm::new(URL).unwrap();
+        rx.subscribe("SMALL").unwrap();
+        let raw = std::net::UdpSocket::bind("0.0.0.0:0").unwrap();
+        raw.set_multicast_ttl_v4(0).unwrap();
+        raw.send_to(b"LC02\0\0\0\0no NUL in reach", "239.255.76.67:7667").unwrap();
+        tx.publish("SMALL", b"queued").unwrap();
+        std::thread::sleep(Duration::from_millis(50));
+        let m = rx.recv_timeout(Duration::ZERO).unwrap().expect("the queued message");
+        assert_eq!(m.data, b"queued");
+        assert_eq!(rx.bad_datagrams(), 1);
     });
 }
 
