@@ -395,7 +395,12 @@ impl Reassembler {
             self.recent.pop_front();
         }
         self.recent.push_back(key);
-        Some(Assembled { channel: p.channel.expect("fragment 0 was received"), data: p.data, seq: f.seq })
+        // Fragment 0 carries the channel; one built without it (by hand) cannot be delivered.
+        let Some(channel) = p.channel else {
+            self.dropped += 1;
+            return None;
+        };
+        Some(Assembled { channel, data: p.data, seq: f.seq })
     }
 }
 
