@@ -1,7 +1,7 @@
 //! The CNA's end of the rate adaptation (a `rate_policy` on the CNA's slot; without one its
 //! broadcast stays at `comms.cna_rate`). The same rate-policy plug-ins the survey AUVs' ends use
 //! (`coopnav_acomms::selector`), with two choices the Nams thesis leaves open, both invented
-//! (Nams 2014, §5.3 and §6: the thesis says a mixer for several recipients is needed and does not
+//! (Nams 2014, §5.3.2: the thesis says a mixer for several recipients is needed and does not
 //! design one; docs/models.md#nams-selector):
 //! - the distance it decides on is the one to the **farthest** survey AUV it has a forecast of
 //!   (the CNA's broadcast is every AUV's range; the farthest is the one it must still reach);
