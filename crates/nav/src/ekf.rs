@@ -496,8 +496,6 @@ fn columns_in_order<const N: usize, const K: usize>(columns: &[usize; K]) -> boo
 /// Each entry is pᵢⱼ + (kᵢ wⱼ + wᵢ kⱼ): its mirror adds the same two products in the other order,
 /// and a floating-point sum does not depend on the order of two terms, so the entries on and above
 /// the diagonal are computed and copied below it, and P⁺ is exactly symmetric with no averaging.
-/// (Session 24: this replaced the form B = P − k p̄ᵀ, B + (r k − B hᵀ) kᵀ, pairs averaged, which
-/// rounded differently: every figure moved by ≈ 1e-13 relative, listed in the branch's report.)
 #[inline(always)]
 fn joseph_update<const N: usize>(
     x: &mut SVector<f64, N>,

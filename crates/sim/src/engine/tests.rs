@@ -202,10 +202,10 @@ fn the_iterated_range_update_keeps_an_overhead_ranged_filter_from_running_away()
     assert!(iterated.auvs[0].error.max < 100.0, "{:?}", iterated.auvs[0].error);
 }
 
-/// Issue 9: on the bench's spread fleet (analytic TL) with the 7-state filter, the CNA loiters
-/// at a nearly constant bearing from auv2, the range never observes the current across it, and
-/// the random-walk current walks off with the estimate (base seed 1's run 1: 1.04 km, flagged at
-/// 7,864 s). A Gauss–Markov current with T = 600 s holds it to 33 m, unflagged (measured).
+/// On the bench's spread fleet (analytic TL) with the 7-state filter, the CNA loiters at a nearly
+/// constant bearing from auv2, the range never observes the current across it, and the
+/// random-walk current walks off with the estimate (base seed 1's run 1 goes about a kilometre
+/// off). A Gauss–Markov current with T = 600 s holds it close, unflagged.
 #[test]
 fn a_gauss_markov_current_keeps_a_spread_fleet_filter_from_running_away() {
     use coopnav_nav::{AuvModel, CurrentParams};
@@ -640,8 +640,8 @@ fn a_filter_converting_with_the_cast_loses_the_profiles_range_bias() {
     sc.channel.sound_speed = crate::models::channel::SoundSpeed::Constant { c: 1500.0 };
     let (matched, _) = traced(&sc, "centroid-standoff", 3);
     let [constant, cast, matched] = [constant, cast, matched].map(|r| r.auvs[0].error.mean);
-    // Measured: 1.473, 0.4728 and 0.4728 m (the cast's and the matched run's differ in the 5th
-    // digit: their travel times, so their arrival times, differ).
+    // The cast's and the matched run's errors differ only in the 5th digit: their travel times,
+    // so their arrival times, differ.
     assert!(constant > 2.0 * matched, "{constant} against {matched}");
     assert!((cast - matched).abs() < 0.01 * matched, "{cast} against {matched}");
 }

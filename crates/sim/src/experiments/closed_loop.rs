@@ -64,12 +64,10 @@ pub struct Setting {
     /// with the ASC [`asc_estimator`], with the AUV CNA [`auv_cna_estimator`].
     pub estimator: fn(usize) -> EstimatorCell,
     /// `planner.estimator_pitch_levels`: None with the ASC; 1 with the AUV CNA. All 15 options at
-    /// every level made L = 5 about 20× slower than L = 3 (two 900 s missions: 0.6 s without the
-    /// terminal cost, 13.4 s with it), so the previous evaluation ran L = 3. The pitch options do
-    /// not pay in the sloping scenario: a ±45° pitch step (1.5°/s over τ) breaks the 30° limit, so
-    /// level 0 drops them and deeper levels double their cost. Tuning seed, N = 5, 20 runs: L = 3
-    /// 5.28 m with 15 options per level and with pitch options at level 0 only (identical runs);
-    /// L = 5 with them at level 0 only 4.98 m (centroid-standoff 4.90 m), L = 7 4.98 m.
+    /// every level make L = 5 about 20× slower than L = 3. The deeper pitch options do not pay in
+    /// the sloping scenario: a ±45° pitch step (1.5°/s over τ) breaks the 30° limit, so level 0
+    /// drops them and deeper levels double their cost; with pitch options at level 0 only the same
+    /// runs give the same error at a fraction of the time, and allow a deeper look-ahead.
     pub estimator_pitch_levels: Option<usize>,
     /// The AUV CNA chooses its depth by the sound-speed profile (`planner.estimator_bias_profile`,
     /// `estimator_level_off`, [`DEPTH_AWARE_BIAS_PER_KM`]).

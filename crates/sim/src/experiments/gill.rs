@@ -309,20 +309,18 @@ const TABLE_4: [([f64; 2], f64, f64, f64); 6] = [
 /// (its buoy deployed at the centre of Gill's start box and drifting with the Lake statistics),
 /// the buoy's quantisation zone centred on that deployment point at each row's resolution, and
 /// the mission running on past the measurement zone, over which the buoy's saturation and
-/// buoy-filter errors are averaged; the AUV's error is still the zone mean. The old HBL loop ran
-/// to x_rel = zone_max + 305 m; the AUV and ship close at 0.85 + 1.30 m/s from x_rel = −200 m,
-/// so 270 s reaches the same point, and the AUV's lane is lengthened to 240 m so it does not
-/// finish its line before the run ends. Measured on the old loop (250 runs, seed 1) against the
-/// thesis's saturation 0.09 / 1.11 / 2.96 m at the 0.2 / 0.1 / 0.05 m grids: 0.07 / 1.12 / 3.14.
-/// An earlier set-up (a 44 m square of random starts, the run ending at the zone exit) gave
-/// 0.08 / 4.06 / 9.79 and buoy and AUV errors 2–6× the thesis's at the two finest grids: most
-/// buoys started outside a 25.6 m or 12.8 m zone.
+/// buoy-filter errors are averaged; the AUV's error is still the zone mean. The run goes on to
+/// x_rel = zone_max + 305 m: the AUV and ship close at 0.85 + 1.30 m/s from x_rel = −200 m, so
+/// 270 s, and the AUV's lane is lengthened to 240 m so it does not finish its line before the run
+/// ends. This gives the thesis's saturation errors at the 0.2 / 0.1 / 0.05 m grids (Table 4:
+/// 0.09 / 1.11 / 2.96 m); random starts over a wider square, with the run ending at the zone exit,
+/// put most buoys outside the finest zones and the errors far above the thesis's.
 const TABLE_4_DURATION_S: f64 = 270.0;
 const TABLE_4_LANE_M: f64 = 240.0;
 
 /// Runs per grid of the reduced form. The 2× check on the finest grids is not widened by the
-/// Monte Carlo SE, so its estimate needs the runs: at 30 (the old loop's reduced size) the
-/// engine's buoy error at 0.05 m read 4.93 ± 0.76 (SE) against 3.26 ± 0.22 at 250 runs.
+/// Monte Carlo SE, so its estimate needs the runs: at 30 the buoy error at 0.05 m is too noisy
+/// for it.
 const TABLE_4_REDUCED_RUNS: usize = 100;
 
 /// Table 4's base scenario: the HBL Two file run for [`TABLE_4_DURATION_S`].
