@@ -1,4 +1,5 @@
-//! WGS-84 geodesy for field logs (Gill 2013, §2.4.2 and §3.3; docs/models.md#gill-geodesy): geodetic latitude/longitude/height
+//! WGS-84 geodesy for field logs (Gill 2013, §2.4.2 and §3.3; docs/models.md#gill-geodesy):
+//! geodetic latitude/longitude/height
 //! ↔ Earth-centred Earth-fixed (ECEF) ↔ a local east/north/up tangent plane about a configured
 //! origin, all in f64, plus an emulation of the UI AUV's float32 lat/lon storage.
 //!

@@ -32,7 +32,8 @@ pub const CURRENT_E: usize = 5;
 pub const CURRENT_N: usize = 6;
 
 /// The current states of the 7-state filter: a random walk (constant when `q` = 0), or a
-/// first-order Gauss–Markov process with `correlation_time_s`. Invented parameters (the thesis has no current state, Gill 2013, §2.2.1; for field logs).
+/// first-order Gauss–Markov process with `correlation_time_s`. Invented parameters (the thesis has
+/// no current state, Gill 2013, §2.2.1; for field logs).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct CurrentParams {
@@ -681,7 +682,8 @@ impl<const M: usize> AuvEkf<M> {
     }
 
     /// OWTT range update (eq. 9). `auv_depth` = Some(z) uses the 3-D slant range to the
-    /// transponder's depth (field mode); None the horizontal range (simulation mode, Gill 2013, §2.4.1: depth treated as constant).
+    /// transponder's depth (field mode); None the horizontal range (simulation mode, Gill 2013,
+    /// §2.4.1: depth treated as constant).
     pub fn update_range(&mut self, m: &RangeMeasurement, auv_depth: Option<f64>) -> UpdateOutcome {
         self.update_range_from_uncertain(m, auv_depth, 0.0)
     }

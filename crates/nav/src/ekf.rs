@@ -6,7 +6,8 @@
 //! The filter-rate path (sparse prediction, unit-row updates, what they call, and the AUV
 //! filter's methods over them) is `#[inline(always)]`: a step is a few hundred operations on
 //! small arrays that separate functions pass through memory (`cargo bench -p coopnav-nav` shows
-//! the difference); inlining never changes a floating-point result. The AUV filter's step (prediction, speed, compass) runs as one
+//! the difference); inlining never changes a floating-point result. The AUV filter's step
+//! (prediction, speed, compass) runs as one
 //! ([`Ekf::predict_and_read`]), bit for bit its three calls.
 
 use coopnav_core::validation::{CheckFields, Problems};

@@ -1,4 +1,5 @@
-//! Rauch–Tung–Striebel smoothers (Gill 2013, §2.4.3, after its reference 25; docs/models.md#gill-post-processing): backward passes over the forward filter's
+//! Rauch–Tung–Striebel smoothers (Gill 2013, §2.4.3, after its reference 25;
+//! docs/models.md#gill-post-processing): backward passes over the forward filter's
 //! history. The EKF-RTS pass (default) uses the recorded linearisation,
 //!   C_k = P⁺_k F_{k+1}ᵀ (P⁻_{k+1})⁻¹,
 //!   x^s_k = x⁺_k + C_k (x^s_{k+1} ⊖ x⁻_{k+1}),

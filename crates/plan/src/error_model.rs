@@ -91,7 +91,8 @@ impl ErrorModel {
         [auv[0] - cna[0], auv[1] - cna[1], dz]
     }
 
-    /// Error state at planning start: σ₀, ε₀ (Table 5.1: 1 m each) and the initial bearing (docs/models.md#hudson-start).
+    /// Error state at planning start: σ₀, ε₀ (Table 5.1: 1 m each) and the initial bearing
+    /// (docs/models.md#hudson-start).
     pub fn initial(&self, sigma0: f64, eps0: f64, cna: &Vec3, auv: &Vec3) -> AuvError {
         AuvError { sigma2: sigma0 * sigma0, eps2: eps0 * eps0, los: self.los(to_arr(cna), to_arr(auv)) }
     }

@@ -1,4 +1,5 @@
-//! The estimator-aware cost (invented, docs/models.md#estimator-cost): the planner scores a CNA path by the horizontal position
+//! The estimator-aware cost (invented, docs/models.md#estimator-cost): the planner scores a CNA
+//! path by the horizontal position
 //! covariances the survey AUVs' own EKFs would hold, instead of Hudson's isotropic model.
 //!
 //! Derivation, per AUV and look-ahead level of τ seconds (P = [[a, b], [b, c]] east/north, m²):
@@ -43,7 +44,8 @@
 //!    uncertainty, never the true sound speed), the expected squared true error is about
 //!    M = E + β(r)²/2·I, β(r) = k_b·r/1000 (isotropic: the bias's direction turns with the line of
 //!    sight). k_b = 0 is the covariance alone.
-//!    With a known sound-speed profile (a CTD cast the CNA holds; [`BiasTable`]) the scale error is no longer a belief but f(z_c, z_a) = c_f/c̄ − 1 between the
+//!    With a known sound-speed profile (a CTD cast the CNA holds; [`BiasTable`]) the scale error
+//!    is no longer a belief but f(z_c, z_a) = c_f/c̄ − 1 between the
 //!    CNA's depth and the AUV's (c_f the speed the AUVs' filters assume, c̄ the harmonic mean of the
 //!    water between): a range over r is measured r·(1 + f), and the filter, which knows both
 //!    depths, moves its horizontal estimate along the line of sight by f·r/|h_xy| until the range

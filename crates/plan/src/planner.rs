@@ -353,7 +353,8 @@ impl LookAheadPlanner {
         }
         let options = cfg.motion.fast_options();
         let root_pose = FastPose::from_pose(&input.cna);
-        // Level 0 keeps only the options that break the AUV-CNA limits least (none, normally): docs/models.md#hudson-motion.
+        // Level 0 keeps only the options that break the AUV-CNA limits least (none, normally):
+        // docs/models.md#hudson-motion.
         let violation: Vec<f64> =
             options.iter().map(|o| cfg.motion.limit_violation(&cfg.motion.step(&root_pose, o))).collect();
         let least = violation.iter().cloned().fold(f64::INFINITY, f64::min);

@@ -26,7 +26,8 @@
 //!    C⁺ = A C + ṽ·Khᵀ = C + K·(ṽh − Cᵀh)ᵀ.
 //!    R_t(r) = σ_t² + (k_t·r/1000)² ([`TruthSpec::range_noise`]): the true range error's second
 //!    moment (Gill's outlier mixture, Gill 2013, §2.4.1: 5 % of ranges 5–10 m long, 10 % dropped,
-//!    so 5.6 % of those received; E[n²] ≈ 3.2 m², against the filter's 0.15 m). The update is linear in the errors, so second moments carry
+//!    so 5.6 % of those received; E[n²] ≈ 3.2 m², against the filter's 0.15 m). The update is
+//!    linear in the errors, so second moments carry
 //!    over exactly whatever their distribution.
 //! 3. The ping arrives with probability p_s(r): S_E = (1 − p_s)·S̃ + p_s·S⁺, C_E likewise (the
 //!    second moments of the mixture), P as `estimator` step 3. The mean: ε⁺'s is A·m̃ (e_c and n

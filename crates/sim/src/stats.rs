@@ -1,5 +1,6 @@
 //! Across-run statistics shared by the Monte Carlo tools: mean, SD and standard error of a set
-//! of runs, and the Welch 95 % confidence interval of a difference of two means (as Gill 2013, §3.1.2 compares the cycles).
+//! of runs, and the Welch 95 % confidence interval of a difference of two means (as Gill 2013,
+//! §3.1.2 compares the cycles).
 
 use serde::Serialize;
 

@@ -3,7 +3,8 @@
 //! (range, depth) and linearly between the two nearest bearings.
 //!
 //! Approximation (the thesis's "preparation mode" cached per transmission instead, Nams 2014,
-//! §4.4.4; docs/models.md#nams-transmission-loss): a lookup for a source elsewhere uses the field of the anchor with the same relative
+//! §4.4.4; docs/models.md#nams-transmission-loss): a lookup for a source elsewhere uses the field
+//! of the anchor with the same relative
 //! geometry (horizontal range and bearing from source to receiver, receiver depth), i.e. it
 //! assumes the environment varies slowly across the mission area. Ranges beyond the grid hold the
 //! last column.

@@ -2,7 +2,8 @@
 //! HBL One vs HBL Two), the HBL Short vs Long cycle comparison, Table 4 (buoy quantisation
 //! resolution) and the buoy-location grid, all on the one engine from the scenario files
 //! `scenarios/gill-table5-*.toml` (with per-experiment overrides written here). Bands are ours,
-//! around the thesis's values (docs/evaluation.md, study 3); the reduced (CI) forms widen each band by two Monte Carlo standard
+//! around the thesis's values (docs/evaluation.md, study 3); the reduced (CI) forms widen each
+//! band by two Monte Carlo standard
 //! errors computed from the runs.
 
 use super::{Check, Experiment, ExperimentError, ReproOptions, ReproReport, Size};

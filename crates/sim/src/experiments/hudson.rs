@@ -7,7 +7,8 @@
 //!   lanes northward, 25 m apart, at 1.5 m/s; depth z̄_k + 10·sin(2πt/T_k) with
 //!   z̄ = 70, 60, 50, 45, 40 m and T = 600, 500, 700, 450, 550 s; CNA from (140, 0, 0) heading
 //!   east; τ = 10 s; penalty case 1 (the trials' Orig. + doubling).
-//! - Table 6.1 (invented; the thesis's survey path is lost): one AUV on a 200 m × 100 m lawnmower (five lanes 25 m apart) at
+//! - Table 6.1 (invented; the thesis's survey path is lost): one AUV on a 200 m × 100 m lawnmower
+//!   (five lanes 25 m apart) at
 //!   1 m/s and 90 m, CNA from (140, 0, 0); τ = 30 s; penalty case 1.
 //! - Sec. 5.2: 500 m × 1500 m areas side by side (five lanes 100 m apart, spacing invented),
 //!   constant 90 m depth, CNA speed 1.5 m/s, A = 5 (τ and A invented).

@@ -128,7 +128,8 @@ pub enum BuoyMotion {
     Circular { centre: [f64; 2], radius: f64, phase0: f64, omega: f64 },
 }
 
-/// Gill's Lake Pend Oreille drift statistics (Gill 2013, §2.4.1; docs/models.md#gill-buoy-drift): speed ~ N(mean, sd) clipped at zero,
+/// Gill's Lake Pend Oreille drift statistics (Gill 2013, §2.4.1; docs/models.md#gill-buoy-drift):
+/// speed ~ N(mean, sd) clipped at zero,
 /// a uniform direction, and a circle of `circular_radius` with odds `circular_fraction`.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]

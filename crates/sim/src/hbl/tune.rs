@@ -1,4 +1,5 @@
-//! Coefficient tuning (Gill 2013, §2.3.3; docs/models.md#gill-tuning): a bounded Nelder–Mead search (argmin) over a chosen
+//! Coefficient tuning (Gill 2013, §2.3.3; docs/models.md#gill-tuning): a bounded Nelder–Mead
+//! search (argmin) over a chosen
 //! subset of the Table 2/3 coefficients of an engine scenario (survey AUV 0's filter, and its
 //! filters of ship 0 and buoy 0), on the zone Monte Carlo's cost with fixed seeds (common random
 //! numbers make the cost a deterministic function of the coefficients).

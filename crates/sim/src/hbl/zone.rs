@@ -75,7 +75,8 @@ impl ZoneSpec {
         -dx * uy + dy * ux
     }
 
-    /// Gill's Table 5 zone (Gill 2013, §2.4.1; docs/models.md#gill-scenario) for an AUV running east: −30…75 m, 50 m approach,
+    /// Gill's Table 5 zone (Gill 2013, §2.4.1; docs/models.md#gill-scenario) for an AUV running
+    /// east: −30…75 m, 50 m approach,
     /// the profile in 25 m bins.
     pub fn table5() -> Self {
         ZoneSpec {
