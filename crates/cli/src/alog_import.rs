@@ -1,4 +1,4 @@
-//! MOOS `.alog` logs as post-processing input (issue 12 item 2): a TOML mapping from MOOS variable
+//! MOOS `.alog` logs as post-processing input: a TOML mapping from MOOS variable
 //! names to rows of the general log (`coopnav_nav::fieldlog`, docs/log-format.md), read on top of `coopnav_moos::alog` (which owns the text format and reports
 //! malformed lines by number). Times are seconds since the alog's LOGSTART.
 //!

@@ -1,4 +1,4 @@
-//! Work and memory are bounded before they are spent (issue 11 item 2): each input that asks for
+//! Work and memory are bounded before they are spent: each input that asks for
 //! hours of work or gigabytes of memory is refused at once, exit 1, with a message naming the
 //! fields, the estimate and `--allow-large`. Each probe's CPU time and peak memory are measured
 //! from the kernel's accounting of the child (wait4).

@@ -1,4 +1,4 @@
-//! Output directories never cost the user a file (issue 11 item 1): `--force` replaces only a
+//! Output directories never cost the user a file: `--force` replaces only a
 //! run directory coopnav wrote, refuses the working directory, its ancestors and home, and an
 //! interrupted run leaves no directory behind. Every case runs inside a temporary directory.
 

@@ -2,7 +2,7 @@
 //! bilinear interpolation (held at the edge value outside the grid).
 //!
 //! Sources: a synthetic shelf (the default, since the Nams thesis's Bedford Basin survey is not
-//! available; nams digest §6.7 item 1 and §8 item 26), an ESRI ASCII raster (`.asc`), or a CSV of
+//! available; docs/models.md#nams-environment), an ESRI ASCII raster (`.asc`), or a CSV of
 //! `x,y,depth` rows covering a complete regular grid. Parse errors carry the line number.
 
 use serde::{Deserialize, Serialize};
@@ -35,8 +35,9 @@ pub struct Bathymetry {
 }
 
 /// Parameters of the synthetic shelf: depth grows linearly from `shallow` at x = `x_shallow` to
-/// `deep` at x = `x_deep` (held beyond), uniform in y. Reconstructed: nams digest §6.7 item 1
-/// ("a synthetic shelf sloping from ~20 m to ~60 m").
+/// `deep` at x = `x_deep` (held beyond), uniform in y. Invented in place of the Bedford Basin
+/// survey (Nams 2014, §4.2; 30–40 m deep, 80 m at most): a shelf from 20 m to 60 m
+/// (docs/models.md#nams-environment).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct Shelf {

@@ -138,7 +138,7 @@ pub fn kind_defaults_to_analytic<'de, D: serde::Deserializer<'de>>(d: D) -> Resu
     value.try_into().map_err(D::Error::custom)
 }
 
-/// The thesis's acoustic environment (nams digest §4.5: mud half-space, 25 kHz, BT-1 pattern) over
+/// The thesis's acoustic environment (Nams 2014, §4.2 and App. A: mud half-space, 25 kHz, BT-1 pattern) over
 /// the scenario's bathymetry, with the scenario's true sound-speed profile.
 fn environment(sc: &Scenario) -> AcousticEnv {
     let mut env = AcousticEnv::nams(Arc::new(sc.bathymetry()));
