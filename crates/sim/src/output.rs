@@ -422,6 +422,10 @@ fn recover_abandoned(parent: &Path, name: &str) {
         let Ok(meta) = fs::symlink_metadata(&path) else { continue };
         if meta.is_dir() {
             let owner = fs::read_to_string(path.join(STAGING_MARKER)).ok().and_then(|t| Owner::parse(&t));
+            if owner.is_none() && start_time(pid).is_none() && fs::remove_dir(&path).is_ok() {
+                // An empty staging directory (killed before its marker was written).
+                continue;
+            }
             let abandoned = match owner {
                 Some(o) => o.pid == pid && !o.alive(),
                 // An exchanged-out old run keeps no marker: its manifest says coopnav wrote it,

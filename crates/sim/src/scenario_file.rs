@@ -13,7 +13,7 @@ use thiserror::Error;
 /// printed cause chain shows them once.
 #[derive(Debug, Error)]
 pub enum ScenarioError {
-    #[error("scenario {file}: {cause}")]
+    #[error("cannot read scenario {file}: {}", read_cause(cause))]
     Read { file: PathBuf, cause: coopnav_core::limits::InputError },
     #[error("scenario {file}: {message}")]
     Parse { file: PathBuf, message: String },
@@ -23,6 +23,14 @@ pub enum ScenarioError {
     Several { file: PathBuf, problems: Vec<Problem> },
     #[error("scenario {file}: auv[{index}] track: {cause}")]
     Track { file: PathBuf, index: usize, cause: TrackLoadError },
+}
+
+/// Why a scenario could not be read, without the path its message names already.
+fn read_cause(cause: &coopnav_core::limits::InputError) -> String {
+    match cause {
+        coopnav_core::limits::InputError::Io { source, .. } => source.to_string(),
+        other => other.to_string(),
+    }
 }
 
 impl ScenarioError {
