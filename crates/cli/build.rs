@@ -1,5 +1,5 @@
 //! Tells the tests which optional external programs are installed, so a test that needs an absent
-//! one is reported as ignored, with its reason, instead of passing (issue 11 item 6):
+//! one is reported as ignored, with its reason, instead of passing:
 //! - cfg `chromium_installed`: `$COOPNAV_CHROMIUM`, else /usr/bin/chromium, runs `--version`
 //!   (scripts/install-chromium.sh);
 //! - cfg `pymoos_installed`: `$COOPNAV_PYMOOS_PYTHON`, else tools/pymoos/bin/python, imports

@@ -165,8 +165,13 @@ filter_methods!(SurfaceEkf {
 /// in the log format (NaN and None become empty fields), so both are read by the same reader.
 fn log_text(log: &Bound<'_, PyAny>) -> PyResult<(String, String)> {
     if let Ok(path) = log.extract::<PathBuf>() {
-        let text = std::fs::read_to_string(&path)
-            .map_err(|e| PyValueError::new_err(format!("cannot read {}: {e}", path.display())))?;
+        let text = coopnav_core::limits::read_text(
+            &path,
+            "post-processing log (bytes)",
+            coopnav_sim::batch::work::max_postprocess_log_bytes(),
+            false,
+        )
+        .map_err(|e| PyValueError::new_err(e.to_string()))?;
         return Ok((text, path.display().to_string()));
     }
     let cols: Vec<Vec<Option<String>>> = LOG_HEADER

@@ -106,8 +106,7 @@ impl Scenario {
     #[staticmethod]
     #[pyo3(signature = (path, kind = "simulate", allow_large = false))]
     fn load(path: PathBuf, kind: &str, allow_large: bool) -> PyResult<Self> {
-        let text = std::fs::read_to_string(&path)
-            .map_err(|e| PyValueError::new_err(format!("cannot read {}: {e}", path.display())))?;
+        let text = coopnav_sim::scenario::file::read_scenario_text(&path, allow_large).map_err(value_error)?;
         let base = path.parent().map(Path::to_path_buf).unwrap_or_default();
         Scenario::parse(&text, kind, path, base, allow_large)
     }

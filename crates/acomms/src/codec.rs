@@ -1,6 +1,6 @@
 //! DCCL-style bit-exact primitives: a bounded integer in [min, max] is sent in
 //! ceil(log2(max − min + 2)) bits as value − min + 1, code 0 meaning "not set" (DCCL v2
-//! convention; nams digest §2.2). Bits are packed least-significant first into bytes.
+//! convention; Nams 2014, §5.2). Bits are packed least-significant first into bytes.
 
 use thiserror::Error;
 

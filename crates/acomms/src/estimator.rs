@@ -1,4 +1,4 @@
-//! Position estimator (Nams §5.1, nams digest §3.2): a "shadow simulation" of each collaborator
+//! Position estimator (Nams 2014, §5.1): a "shadow simulation" of each collaborator
 //! with the same IVER2 kinematics. Each received status resets the shadow to the report; between
 //! reports the shadow keeps flying — through the collaborator's known mission plan (pre-planned
 //! mode), or only to the last reported next waypoint, where it stops (dynamic mode: straight-line

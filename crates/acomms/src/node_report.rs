@@ -1,9 +1,10 @@
 //! The survey AUV's status message of Hudson (2012) Appendix C, "SURVEY_STATUS": a NODE_REPORT
 //! (position, speed, heading, depth, altitude), the next three waypoints and health data, packed
-//! bit-exactly with the DCCL-style bounded fields of [`crate::codec`] (hudson digest §3.7, A23).
+//! bit-exactly with the DCCL-style bounded fields of [`crate::codec`]
+//! (docs/models.md#hudson-status-message).
 //!
-//! Body: 176 bits = 22 bytes, field by field as the digest's table. Header (ours; DCCL1 header
-//! byte-compatibility is optional per A23): message id (61), source modem id and the time of day
+//! Body: 176 bits = 22 bytes, field by field as the thesis's listing. Header (ours; DCCL1 header
+//! byte-compatibility is not kept): message id (61), source modem id and the time of day
 //! in whole seconds, 31 bits. Total 207 bits = 26 bytes, within the 32-byte rate-0 frame (the
 //! thesis reports 27 of 32 bytes with the DCCL1 header).
 //!
@@ -255,7 +256,7 @@ mod tests {
     }
 
     #[test]
-    fn layout_is_the_digest_table() {
+    fn layout_is_the_thesis_listing() {
         assert_eq!(BODY_BITS, 176, "Appendix C body: 22 bytes");
         assert_eq!(HEADER_BITS, 7 + 6 + 17);
         let bytes = sample().encode().unwrap();

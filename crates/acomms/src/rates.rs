@@ -1,5 +1,5 @@
-//! The WHOI Micro-Modem rate table (Nams Table 2 plus the deprecated rates 2 and 3, nams digest
-//! §1.4) and the TDMA slot-length rule: 10 s slots, 15 s whenever any vehicle may use rate 5,
+//! The WHOI Micro-Modem rate table (Nams 2014, Table 2, plus the deprecated rates 2 and 3) and the
+//! TDMA slot-length rule: 10 s slots, 15 s whenever any vehicle may use rate 5,
 //! plus 2 s when the hardware ACK is requested.
 
 use serde::{Deserialize, Serialize};

@@ -1,4 +1,5 @@
-//! Rate-selection policies (Nams §5.3–5.4, nams digest §3.3–3.5): at each own TDMA slot a policy
+//! Rate-selection policies (Nams 2014, §5.3–5.4; the adaptation rule reconstructed,
+//! docs/models.md#nams-selector): at each own TDMA slot a policy
 //! decides whether to transmit and at which WHOI rate. Each policy is one type behind
 //! [`RatePolicy`]: [`FixedRate`] (controls 1 and 2: rate 0, rate 1), [`Alternating`] (control 3:
 //! rates 0 and 5 in turn) and [`AdaptiveBins`] (the thesis's adaptive distance-bin selector).
@@ -167,7 +168,7 @@ impl RatePolicy for Alternating {
 }
 
 /// Parameters of the adaptive selector (thesis Table 8 tuned values as defaults; the initial
-/// thresholds, D_max and the status-mode exit rule are reconstructed: nams digest §8 items 2–10).
+/// thresholds, D_max and the status-mode exit rule are reconstructed: docs/models.md#nams-selector).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct AdaptiveConfig {
@@ -188,8 +189,8 @@ pub struct AdaptiveConfig {
     pub d_max: f64,
     /// Leave status mode when any packet from the peer is heard (not only on a confirmed success).
     pub exit_status_on_heard: bool,
-    /// Exploration of collapsed bins (invented; the thesis has none, nams digest §3.5 and §8 item
-    /// 10): after this many own slots without a sample at a rate whose bin lies wholly nearer
+    /// Exploration of collapsed bins (invented; the thesis has none, docs/models.md#nams-selector):
+    /// after this many own slots without a sample at a rate whose bin lies wholly nearer
     /// than the recipient, that bin's threshold drifts out by Δ, so a rate learnt away far out
     /// can be tried again once the vehicles close in. 0: never (the thesis's selector).
     #[serde(skip_serializing_if = "is_zero")]
@@ -441,7 +442,7 @@ impl RatePolicy for AdaptiveBins {
     fn choose(&mut self, slot: u64, distance: Option<f64>) -> Choice {
         let mode = self.mode();
         // Unknown position: treat the peer as in range so a wrong or missing estimate cannot
-        // lock the vehicle out (the thesis's field-trial bug, nams digest §5.3).
+        // lock the vehicle out (the thesis's field-trial bug, Nams 2014, §6.2).
         let d = distance.unwrap_or(0.0);
         let (drift_after, step, d_max) = (self.cfg.drift_after_slots, self.cfg.step, self.cfg.d_max);
         let a = self.array(mode);
@@ -455,7 +456,7 @@ impl RatePolicy for AdaptiveBins {
             None => Choice::Silent,
         }
     }
-    /// Invented (nams digest §3.5; the thesis never asks what its selector converges to): each
+    /// Invented (docs/models.md#nams-selector; the thesis never asks what its selector converges to): each
     /// bin's threshold moves until its rate's success there meets the rate's target, so with
     /// success falling with distance the settled selector sends at the fastest data rate whose
     /// success reaches its target; where none does, at the fastest such status rate (status

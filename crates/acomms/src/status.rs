@@ -1,9 +1,10 @@
 //! The status message (position, depth, heading, speed, next waypoint as a 1-byte id or full
-//! lat/lon; nams digest §3.2 and §8 item 27) and frame 0, which carries the tracking header and
-//! the status message together (digest §8 item 17: the header lives in frame 0).
+//! lat/lon; Nams 2014, §5.1; docs/models.md#nams-status-message) and frame 0, which carries the
+//! tracking header and the status message together (docs/models.md#nams-tracker: the header lives
+//! in frame 0).
 //!
 //! Two variants: the thesis-exact [`StatusMessage`] (Appendix C), and the versioned
-//! [`CovStatus`] (issue 10), which starts with a 3-bit version (1) and adds the sender's
+//! [`CovStatus`] (ours, docs/models.md#estimator-cost), which starts with a 3-bit version (1) and adds the sender's
 //! horizontal position covariance as an error ellipse ([`CovarianceReport`], 3 bytes), so a CNA
 //! can plan on the survey AUVs' own estimators. Both travel in a frame 0 through the same
 //! [`StatusCodec`] trait. [`CovTrailer`] carries the same version and ellipse in 4 bytes after
@@ -191,7 +192,7 @@ const VERSION: Bounded = Bounded::new("status.version", 0, 6);
 /// The version [`CovStatus`] writes (the thesis message has no version field).
 const COV_VERSION: i64 = 1;
 /// σ codes: σ = SIGMA_FLOOR·exp(code / SIGMA_PER_E), 255 codes from 1 cm to 10 km, 5.6 % apart
-/// (so ±2.8 % after rounding). Invented (issue 10): a ratio scale keeps small and large errors
+/// (so ±2.8 % after rounding). Invented: a ratio scale keeps small and large errors
 /// equally precise in one byte.
 const SIGMA_MAJOR: Bounded = Bounded::new("status.sigma_major_code", 0, 254);
 const SIGMA_MINOR: Bounded = Bounded::new("status.sigma_minor_code", 0, 254);

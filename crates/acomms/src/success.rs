@@ -1,7 +1,7 @@
 //! Packet success: the Nams Table 4 piecewise-linear curves of success likelihood against
-//! transmission loss, an ambient-noise offset, and Table 5's partial-frame drops (nams digest §4.7).
+//! transmission loss, an ambient-noise offset, and Table 5's partial-frame drops (Nams 2014, §4.3).
 //!
-//! Engine (digest §4.7, recommended): the packet succeeds (≥ 1 frame) with probability
+//! Engine (reconstructed, docs/models.md#nams-success-model): the packet succeeds (≥ 1 frame) with probability
 //! p_r(TL + N); a successful multi-frame packet is partial with the receiver type's Table 5
 //! probability, losing a uniformly drawn number 1..n−1 of uniformly chosen frames.
 
@@ -66,7 +66,7 @@ pub struct SuccessModel {
     pub curves: [SuccessCurve; 4],
     /// Table 5 partial-drop probability for rates 1, 4, 5: [iver2, barge].
     pub partial: [[f64; 2]; 3],
-    /// Extra ambient noise, dB, added to TL (reconstructed: nams digest §8 item 14).
+    /// Extra ambient noise, dB, added to TL (reconstructed: docs/models.md#nams-success-model).
     pub noise_db: f64,
 }
 

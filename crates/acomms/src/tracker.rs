@@ -1,4 +1,5 @@
-//! The packet-success tracker (Nams §5.2, nams digest §2.2–2.3): a database of this vehicle's
+//! The packet-success tracker (Nams 2014, §5.2; the algorithm reconstructed from its design,
+//! docs/models.md#nams-tracker): a database of this vehicle's
 //! transmissions with a status per collaborator (unknown / received / failed), and the tracking
 //! header every packet carries, which reports which collaborator packets this vehicle received.
 //!
@@ -9,7 +10,7 @@
 //!
 //! Wire format (bit-exact, DCCL bounded integers): count ∈ [0, 63] (7 bits), truncated flag
 //! (1 bit), then per entry cycles_ago ∈ [0, 63] (7 bits) and the frame mask ∈ [0, 7] (4 bits) or
-//! [0, 255] (9 bits, when rate 5 is enabled network-wide; digest §8 item 16): 11 or 16 bits per
+//! [0, 255] (9 bits, when rate 5 is enabled network-wide; docs/models.md#nams-tracker): 11 or 16 bits per
 //! entry. (The thesis also quotes 13 bits for the narrow entry, which its own field widths do
 //! not add up to; we follow the field widths.) Entries newest
 //! first. The truncated flag (our addition) marks a header cut to fit its frame: the implicit

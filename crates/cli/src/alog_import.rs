@@ -1,4 +1,4 @@
-//! MOOS `.alog` logs as post-processing input (issue 12 item 2): a TOML mapping from MOOS variable
+//! MOOS `.alog` logs as post-processing input: a TOML mapping from MOOS variable
 //! names to rows of the general log (`coopnav_nav::fieldlog`, docs/log-format.md), read on top of `coopnav_moos::alog` (which owns the text format and reports
 //! malformed lines by number). Times are seconds since the alog's LOGSTART.
 //!
@@ -284,7 +284,7 @@ fn first_pair_time(alog: &Alog, x: &str, y: &str) -> Option<f64> {
 /// Reads the mapping file, or the defaults.
 pub fn mapping(path: Option<&std::path::Path>) -> Result<AlogMapping> {
     let Some(p) = path else { return Ok(AlogMapping::default()) };
-    let text = std::fs::read_to_string(p).with_context(|| format!("reading {}", p.display()))?;
+    let text = crate::input::read(p, false)?;
     let map: AlogMapping = toml::from_str(&text).with_context(|| format!("in {}", p.display()))?;
     map.check().with_context(|| format!("in {}", p.display()))?;
     Ok(map)

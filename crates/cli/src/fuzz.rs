@@ -1,4 +1,4 @@
-//! Fuzzing of every parser and codec coopnav reads input with (issue 11 item 8): each target feeds
+//! Fuzzing of every parser and codec coopnav reads input with: each target feeds
 //! bytes to one parser and must get `Ok` or a typed error back, never a panic. Inputs come from a
 //! seeded ChaCha generator: arbitrary bytes, and mutations of a valid seed input (bit flips,
 //! truncations, splices, numbers replaced by extremes). It lives in the binary crate because the

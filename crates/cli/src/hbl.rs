@@ -484,10 +484,11 @@ fn postprocess(
         }
         None => PostConfig::default(),
     };
-    let log_bytes = std::fs::metadata(log).with_context(|| format!("cannot read {}", log.display()))?.len();
-    limits::check([work::postprocess_log(&log.display().to_string(), log_bytes)], allow_large)?;
+    let bytes =
+        limits::read_bounded(log, "post-processing log (bytes)", work::max_postprocess_log_bytes(), allow_large)?;
+    limits::check([work::postprocess_log(&log.display().to_string(), bytes.len() as u64)], allow_large)?;
     let field_log = if log.extension().is_some_and(|e| e == "alog") {
-        let alog = coopnav_moos::read_alog_file(log)?;
+        let alog = coopnav_moos::read_alog(&bytes[..]).with_context(|| format!("in {}", log.display()))?;
         let rows = alog_import::rows(&alog, &alog_import::mapping(alog_map)?, cfg.buoy_depth, cfg.frame().as_ref())
             .with_context(|| format!("in {}", log.display()))?;
         FieldLog { time: TimeBase::Relative, rows }
@@ -495,8 +496,7 @@ fn postprocess(
         if let Some(m) = alog_map {
             anyhow::bail!("--alog-map {} is for an .alog log; {} is not one", m.display(), log.display());
         }
-        let file = std::fs::File::open(log).with_context(|| format!("opening {}", log.display()))?;
-        post::read_any_log(file, &cfg).with_context(|| format!("in {}", log.display()))?
+        post::read_any_log(&bytes[..], &cfg).with_context(|| format!("in {}", log.display()))?
     };
     let rows = &field_log.rows;
     limits::check(work::postprocess(rows, &cfg), allow_large)?;

@@ -1,15 +1,13 @@
-//! Reading an input file (scenario, config, spec) whose size is checked first: a file above
-//! [`MAX_INPUT_FILE_BYTES`] is read only with `--allow-large`, so a mistaken multi-gigabyte
-//! file is refused before it fills memory.
+//! Reading an input file (scenario, config, spec, mapping) through the libraries' one bounded
+//! reader ([`coopnav_core::limits::read_text`]): at most [`MAX_INPUT_FILE_BYTES`] are read
+//! without `--allow-large`, whatever the input is (a file, a pipe, a device), so a mistaken
+//! multi-gigabyte input is refused before it fills memory.
 
-use anyhow::{Context, Result};
-use coopnav_core::limits::{self, Estimate, MAX_INPUT_FILE_BYTES};
+use anyhow::Result;
+use coopnav_core::limits::{self, MAX_INPUT_FILE_BYTES};
 use std::path::Path;
 
-/// The text of `path`, after its size is checked.
+/// The text of `path`, read at most to the input limit.
 pub fn read(path: &Path, allow_large: bool) -> Result<String> {
-    let bytes = std::fs::metadata(path).with_context(|| format!("cannot read {}", path.display()))?.len();
-    let size = Estimate::new("input file (bytes)", path.display().to_string(), bytes as f64, MAX_INPUT_FILE_BYTES);
-    limits::check([size], allow_large)?;
-    std::fs::read_to_string(path).with_context(|| format!("cannot read {}", path.display()))
+    Ok(limits::read_text(path, "input file (bytes)", MAX_INPUT_FILE_BYTES, allow_large)?)
 }

@@ -1,4 +1,4 @@
-//! The `hbl postprocess` run's self-contained report.html (issue 12 item 5): the counts and error
+//! The `hbl postprocess` run's self-contained report.html: the counts and error
 //! figures of the summary, the track on the local plane with the transponder fixes, range
 //! residuals before and after smoothing against time, the NIS with its χ² bounds, and the smoothed
 //! error inside its ±2σ band when the log has truth rows.

@@ -1,4 +1,4 @@
-//! Work and memory are bounded before they are spent (issue 11 item 2): each input that asks for
+//! Work and memory are bounded before they are spent: each input that asks for
 //! hours of work or gigabytes of memory is refused at once, exit 1, with a message naming the
 //! fields, the estimate and `--allow-large`. Each probe's CPU time and peak memory are measured
 //! from the kernel's accounting of the child (wait4).
@@ -154,4 +154,39 @@ fn allow_large_lifts_the_limit() {
     refused(tmp.path(), &["plan", "s.toml", "-o", "out"], &["input file (bytes)"]);
     let out = coopnav(tmp.path(), &["plan", "s.toml", "-o", "out", "--allow-large"]);
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+}
+
+/// Devices and pipes are bounded as files are: every input goes through one bounded reader, so
+/// an endless `/dev/zero` or a pipe larger than the limit is refused after the limit is read.
+#[test]
+fn endless_devices_and_large_pipes_are_refused() {
+    let tmp = tempfile::tempdir().unwrap();
+    refused(tmp.path(), &["simulate", "/dev/zero", "-o", "out"], &["input file (bytes)", "/dev/zero"]);
+    refused(tmp.path(), &["plan", "/dev/zero", "-o", "out"], &["input file (bytes)", "/dev/zero"]);
+    // A log may be as large as its parsed rows fit the memory limit: that much is read, no more.
+    let (out, usage) = measured(tmp.path(), &["hbl", "postprocess", "--log", "/dev/zero", "-o", "out"]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("post-processing log (bytes)") && err.contains("--allow-large"), "{err}");
+    let limit_kb = (coopnav_sim::batch::work::max_postprocess_log_bytes() / 1024.0) as u64;
+    assert!(
+        usage.peak_kb < limit_kb + MAX_PEAK_KB,
+        "read {} kB of an endless log (limit {limit_kb} kB)",
+        usage.peak_kb
+    );
+    let fifo = tmp.path().join("big.toml");
+    let path = std::ffi::CString::new(fifo.to_str().unwrap()).unwrap();
+    // SAFETY: a valid NUL-terminated path; mkfifo touches nothing else.
+    assert_eq!(unsafe { libc::mkfifo(path.as_ptr(), 0o600) }, 0, "mkfifo: {}", std::io::Error::last_os_error());
+    let writer = {
+        let fifo = fifo.clone();
+        std::thread::spawn(move || {
+            use std::io::Write;
+            let mut pipe = std::fs::OpenOptions::new().write(true).open(&fifo).unwrap();
+            let block = vec![b'#'; 1 << 16];
+            // 3 MB, three times the limit; the reader closes the pipe once past the limit.
+            (0..48).try_for_each(|_| pipe.write_all(&block)).is_err()
+        })
+    };
+    refused(tmp.path(), &["simulate", "big.toml", "-o", "out"], &["input file (bytes)", "big.toml"]);
+    assert!(writer.join().unwrap(), "the reader stopped before the whole 3 MB was written");
 }

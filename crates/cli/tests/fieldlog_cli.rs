@@ -1,4 +1,4 @@
-//! The general log format through `coopnav hbl postprocess` (issue 12): a three-beacon mission
+//! The general log format through `coopnav hbl postprocess`: a three-beacon mission
 //! with a current written as a version-2 log and as a MOOS .alog post-processes to the same
 //! estimates both ways, better than the forward filter; `--tune` reports before/after with the
 //! held-out residuals.

@@ -1,4 +1,4 @@
-//! Output directories never cost the user a file (issue 11 item 1): `--force` replaces only a
+//! Output directories never cost the user a file: `--force` replaces only a
 //! run directory coopnav wrote, refuses the working directory, its ancestors and home, and an
 //! interrupted run leaves no directory behind. Every case runs inside a temporary directory.
 
@@ -92,8 +92,9 @@ fn force_replaces_a_run_coopnav_wrote() {
 fn an_interrupted_run_leaves_no_directory_behind() {
     let tmp = tempfile::tempdir().unwrap();
     let example = coopnav(tmp.path(), tmp.path(), &["simulate", "--example"]);
-    // A long mission, so the run is still being computed when the signal arrives.
-    let long = String::from_utf8(example.stdout).unwrap().replace("duration_s = 3600.0", "duration_s = 500000.0");
+    // A long mission (within the memory limit), so the run is still being computed when the
+    // signal arrives.
+    let long = String::from_utf8(example.stdout).unwrap().replace("duration_s = 3600.0", "duration_s = 150000.0");
     std::fs::write(tmp.path().join("long.toml"), long).unwrap();
     for signal in ["-TERM", "-INT"] {
         let mut child = Command::new(env!("CARGO_BIN_EXE_coopnav"))
@@ -227,4 +228,76 @@ fn force_refuses_a_target_that_holds_the_commands_input() {
         .filter(|n| n.starts_with('.'))
         .collect();
     assert!(hidden.is_empty(), "staging left behind: {hidden:?}");
+}
+
+/// Every file of run directory `dir`, by name.
+fn snapshot(dir: &Path) -> std::collections::BTreeMap<String, Vec<u8>> {
+    std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| {
+            let e = e.unwrap();
+            (e.file_name().to_string_lossy().into_owned(), std::fs::read(e.path()).unwrap())
+        })
+        .collect()
+}
+
+fn hidden(dir: &Path) -> Vec<String> {
+    std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .filter(|n| n.starts_with('.'))
+        .collect()
+}
+
+/// A `--force` replacement killed with SIGKILL anywhere, 50 times at seeded random points of its
+/// run (the later ones inside the window where the new run lands): afterwards the target is the
+/// old run or the new one, whole, and the next run removes whatever the killed ones left.
+#[test]
+fn a_replacement_killed_anywhere_leaves_the_old_run_or_the_new_one() {
+    use rand::{Rng, SeedableRng};
+    let tmp = tempfile::tempdir().unwrap();
+    let (dir, home) = (tmp.path(), tmp.path().join("home"));
+    short_scenario(dir, &home);
+    let args = |seed: &'static str| ["simulate", "s.toml", "-o", "r", "--force", "--seed", seed];
+    let run = |seed| {
+        let start = Instant::now();
+        let out = coopnav(dir, &home, &args(seed));
+        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        (snapshot(&dir.join("r")), start.elapsed())
+    };
+    let (new, _) = run("2");
+    let (old, full) = run("1");
+    assert_ne!(old, new, "the two seeds give different runs");
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(7);
+    let mut current = "1";
+    let mut outcomes = [0usize; 2];
+    for round in 0..50 {
+        let seed = if current == "1" { "2" } else { "1" };
+        // Most kills fall in the last fifth of the run, where the run directory is written and
+        // swapped into place.
+        let fraction = if round % 2 == 0 { rng.gen_range(0.0..1.0) } else { rng.gen_range(0.8..1.1) };
+        let mut child = Command::new(env!("CARGO_BIN_EXE_coopnav"))
+            .args(args(seed))
+            .current_dir(dir)
+            .env("HOME", &home)
+            .stdout(Stdio::null())
+            .stderr(Stdio::null())
+            .spawn()
+            .unwrap();
+        std::thread::sleep(full.mul_f64(fraction));
+        let _ = child.kill();
+        let status = child.wait().unwrap();
+        let state = snapshot(&dir.join("r"));
+        current = if state == old {
+            "1"
+        } else if state == new {
+            "2"
+        } else {
+            panic!("round {round} (killed at {fraction:.2} of a run, {status}): the target is neither run whole");
+        };
+        outcomes[usize::from(current == seed)] += 1;
+    }
+    let (_, _) = run(current);
+    assert!(hidden(dir).is_empty(), "left behind after the next run: {:?}", hidden(dir));
+    assert!(outcomes[0] > 0 && outcomes[1] > 0, "kills before and after landing both occurred: {outcomes:?}");
 }

@@ -146,7 +146,7 @@ fn bad_alog_entries_are_named() {
     let head = "%% LOGSTART 0\n0.000 NAV_X a 1\n0.000 NAV_Y a 2\n0.000 NAV_SPEED a 1\n0.000 NAV_HEADING a 90\n";
     for (bad, said) in [
         ("1.000 NAV_SPEED a fast\n", "NAV_SPEED at t = 1 s: value \"fast\" is not a finite number"),
-        // Any beacon id is allowed since the general log format (issue 12 item 1); not 2.5.
+        // Any beacon id is allowed since the general log format; not 2.5.
         ("1.000 OWTT_RANGE a id=2.5,travel_time=0.2\n", "id 2.5 is not a beacon id"),
         ("1.000 OWTT_RANGE a id=99,travel_time=75\n", "travel_time 75 s must be in (0, 60]"),
         ("1.000 BEACON_FIX a id=4,x=1,y=2,depth=deep\n", "field 'depth' = \"deep\""),

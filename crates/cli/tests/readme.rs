@@ -86,13 +86,13 @@ const REDUCED: &[Reduced] = &[
 const CHECKS_FAILING: &[(&str, &str)] = &[
     (
         "reproduce closed-loop-vs-baselines --reduced -o closed-loop",
-        "the estimator-aware planner does not win every cell of the reduced evaluation (issue 10 report, 2026-11-26: \
-         4 runs of 15 minutes; sloping N = 2 ties, current N = 3 ties centroid-standoff)",
+        "the estimator-aware planner does not win every cell of the reduced evaluation (8 runs of 15 minutes per cell \
+         do not resolve every cell; see docs/evaluation.md)",
     ),
     (
         "reproduce closed-loop-cna-navigation --reduced -o cna-nav",
         "its checks are those of closed-loop-vs-baselines on the AUV-CNA cells, as evaluated and with the CNA exact \
-         (issue 10, session 29: 8 runs of 15 minutes do not resolve the sloping N = 2 cells either way)",
+         (8 runs of 15 minutes do not resolve the sloping N = 2 cells either way; see docs/evaluation.md)",
     ),
 ];
 
@@ -190,7 +190,7 @@ fn ci_runs_the_readme_test_command() {
 /// Every crate the README's main job builds (`cargo run --release`, the `coopnav` binary's normal
 /// dependencies) has the same features in the test command's build (the whole workspace with its
 /// dev-dependencies), so the test step on a fresh clone reuses those units instead of rebuilding
-/// them (issue 11 item 7; the unifying entries are in `crates/cli/Cargo.toml`).
+/// them (the unifying entries are in `crates/cli/Cargo.toml`).
 #[test]
 fn the_test_build_reuses_every_crate_of_the_main_job() {
     let run = crate_features(&["-p", "coopnav-cli", "-e", "normal,build"]);

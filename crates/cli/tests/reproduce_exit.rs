@@ -21,9 +21,9 @@ fn expected_status(stdout: &str) -> i32 {
 fn the_exit_status_matches_the_printed_checks() {
     let tmp = tempfile::tempdir().unwrap();
     // hudson-table-5.8 passes every check; gill-table-5's reduced run on the engine passes too
-    // (issue 9: one diverging MSBL run widens the reduced MSBL band; its full run misses the band,
-    // a documented known deviation), and hudson-table-5.9's CNA-kind ordering fails as a known
-    // deviation (issue 10).
+    // (one diverging MSBL run widens the reduced MSBL band; its full run misses the band, a
+    // documented known deviation), and hudson-table-5.9's CNA-kind ordering fails as a known
+    // deviation (docs/evaluation.md).
     for (id, today) in [("hudson-table-5.8", 0), ("gill-table-5", 0), ("hudson-table-5.9", 3)] {
         let out = coopnav(tmp.path(), &["reproduce", id, "--reduced"]);
         let stdout = String::from_utf8_lossy(&out.stdout);

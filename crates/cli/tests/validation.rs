@@ -1,4 +1,4 @@
-//! Every field validated (issue 11 item 3): for each input kind, one file (or argument list) with
+//! Every field validated: for each input kind, one file (or argument list) with
 //! NaN, negative and out-of-range values. coopnav refuses it, writes nothing, and its one message
 //! names the file and every bad field. (The closed-loop scenario and the Nams experiment have
 //! theirs in crates/sim.)

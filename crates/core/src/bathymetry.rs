@@ -2,7 +2,7 @@
 //! bilinear interpolation (held at the edge value outside the grid).
 //!
 //! Sources: a synthetic shelf (the default, since the Nams thesis's Bedford Basin survey is not
-//! available; nams digest §6.7 item 1 and §8 item 26), an ESRI ASCII raster (`.asc`), or a CSV of
+//! available; docs/models.md#nams-environment), an ESRI ASCII raster (`.asc`), or a CSV of
 //! `x,y,depth` rows covering a complete regular grid. Parse errors carry the line number.
 
 use serde::{Deserialize, Serialize};
@@ -35,8 +35,9 @@ pub struct Bathymetry {
 }
 
 /// Parameters of the synthetic shelf: depth grows linearly from `shallow` at x = `x_shallow` to
-/// `deep` at x = `x_deep` (held beyond), uniform in y. Reconstructed: nams digest §6.7 item 1
-/// ("a synthetic shelf sloping from ~20 m to ~60 m").
+/// `deep` at x = `x_deep` (held beyond), uniform in y. Invented in place of the Bedford Basin
+/// survey (Nams 2014, §4.2; 30–40 m deep, 80 m at most): a shelf from 20 m to 60 m
+/// (docs/models.md#nams-environment).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct Shelf {
@@ -67,6 +68,19 @@ impl Default for Shelf {
         }
     }
 }
+
+impl Shelf {
+    /// Its grid's nodes, computed in floating point before anything is allocated (an absurd
+    /// spacing gives an absurd count, not an overflow).
+    pub fn nodes(&self) -> f64 {
+        let axis = |lo: f64, hi: f64| ((hi - lo) / self.spacing).ceil() + 1.0;
+        axis(self.x_min, self.x_max) * axis(self.y_min, self.y_max)
+    }
+}
+
+/// The most nodes a grid built from input may have whatever the work limits allow (800 MB of
+/// depths): above it the input is refused, so a typo is an error message, never an abort.
+pub const MAX_GRID_NODES: f64 = 1e8;
 
 impl Bathymetry {
     /// Builds a grid, checking the shape and that every depth is finite and positive.
@@ -102,9 +116,19 @@ impl Bathymetry {
         if !(s.spacing > 0.0 && s.x_max > s.x_min && s.y_max > s.y_min && s.x_deep != s.x_shallow) {
             return Err(BathymetryError::Invalid(format!("shelf: bad extent or spacing {s:?}")));
         }
+        if !(s.nodes() <= MAX_GRID_NODES) {
+            return Err(BathymetryError::Invalid(format!(
+                "shelf: spacing {} m over the extent gives {:.3e} nodes (at most {MAX_GRID_NODES:e})",
+                s.spacing,
+                s.nodes()
+            )));
+        }
         let nx = ((s.x_max - s.x_min) / s.spacing).ceil() as usize + 1;
         let ny = ((s.y_max - s.y_min) / s.spacing).ceil() as usize + 1;
-        let mut depth = Vec::with_capacity(nx * ny);
+        let mut depth = Vec::new();
+        depth
+            .try_reserve_exact(nx * ny)
+            .map_err(|e| BathymetryError::Invalid(format!("shelf: {nx} × {ny} nodes: {e}")))?;
         for _ in 0..ny {
             for i in 0..nx {
                 let x = s.x_min + i as f64 * s.spacing;
@@ -118,8 +142,9 @@ impl Bathymetry {
     /// Loads `.asc` (ESRI ASCII raster) or anything else as CSV `x,y,depth`.
     pub fn load(path: &Path) -> Result<Self, BathymetryError> {
         let file = path.display().to_string();
-        let text = std::fs::read_to_string(path)
-            .map_err(|e| BathymetryError::Io { file: file.clone(), message: e.to_string() })?;
+        let text =
+            crate::limits::read_text(path, "bathymetry file (bytes)", crate::limits::MAX_TABLE_FILE_BYTES, false)
+                .map_err(|e| BathymetryError::Io { file: file.clone(), message: e.to_string() })?;
         if path.extension().is_some_and(|e| e.eq_ignore_ascii_case("asc")) {
             Self::parse_ascii_grid(&text, &file)
         } else {
@@ -250,6 +275,15 @@ impl Bathymetry {
             return Err(shape("x and y values must be evenly spaced (a regular grid)".into()));
         }
         let (nx, ny) = (xs.len(), ys.len());
+        // Each point is one node and duplicates are refused, so a grid with more nodes than
+        // points misses some: refused before the nodes are allocated (a diagonal of n points
+        // would ask for n² of them).
+        if nx.checked_mul(ny).is_none_or(|nodes| nodes > pts.len()) {
+            return Err(shape(format!(
+                "{} points cannot fill the {nx} × {ny} grid their x and y values span (every grid node needs a depth)",
+                pts.len()
+            )));
+        }
         let mut depth = vec![f64::NAN; nx * ny];
         for (p, line) in &pts {
             let i = ((p[0] - xs[0]) / dx).round() as usize;
@@ -342,6 +376,21 @@ mod tests {
         assert!(matches!(Bathymetry::parse_ascii_grid(nodata, "t.asc"), Err(BathymetryError::Parse { line: 7, .. })));
         let missing = "ncols 2\nnrows 2\nxllcorner 0\ncellsize 10\n1 2\n3 4\n";
         assert!(matches!(Bathymetry::parse_ascii_grid(missing, "t.asc"), Err(BathymetryError::Shape { .. })));
+    }
+
+    /// Inputs that would ask for absurd grids are refused before anything is allocated: a
+    /// diagonal of points (n² nodes for n points) and a shelf spacing of a millimetre.
+    #[test]
+    fn absurd_grids_are_refused_before_allocation() {
+        let diagonal: String = (0..20_000).map(|i| format!("{i},{i},30\n")).collect();
+        let e = Bathymetry::parse_csv(&diagonal, "diag.csv").unwrap_err().to_string();
+        assert!(e.contains("20000 points cannot fill the 20000 × 20000 grid"), "{e}");
+        for spacing in [1e-3, 1e-9] {
+            let e = Bathymetry::shelf(&Shelf { spacing, ..Shelf::default() }).unwrap_err().to_string();
+            assert!(e.contains("nodes (at most 1e8)"), "{spacing}: {e}");
+        }
+        assert!((Shelf::default().nodes() - 81.0 * 81.0).abs() < 1e-9);
+        assert!(Bathymetry::shelf(&Shelf::default()).is_ok());
     }
 
     #[test]

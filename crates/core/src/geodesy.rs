@@ -1,4 +1,5 @@
-//! WGS-84 geodesy for field logs (gill digest §10 A28, §6.4): geodetic latitude/longitude/height
+//! WGS-84 geodesy for field logs (Gill 2013, §2.4.2 and §3.3; docs/models.md#gill-geodesy):
+//! geodetic latitude/longitude/height
 //! ↔ Earth-centred Earth-fixed (ECEF) ↔ a local east/north/up tangent plane about a configured
 //! origin, all in f64, plus an emulation of the UI AUV's float32 lat/lon storage.
 //!
@@ -257,7 +258,7 @@ impl LocalFrame {
     }
 }
 
-/// How a device stored latitude and longitude (gill digest §6.4).
+/// How a device stored latitude and longitude (Gill 2013, §3.3; docs/models.md#gill-geodesy).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum LatLonStorage {

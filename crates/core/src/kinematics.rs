@@ -1,5 +1,6 @@
 //! IVER2 vehicle kinematics and waypoint following, ported from the Nams thesis's `vehicle.m`
-//! (nams digest §4.2–4.3): a 0.1 s kinematic step, P/PD loops on yaw, pitch (through depth) and
+//! (Nams 2014, Ch. 4 and App. B; eqs. 3–7 rebuilt from that code, see
+//! docs/models.md#nams-kinematics): a 0.1 s kinematic step, P/PD loops on yaw, pitch (through depth) and
 //! speed, with yaw-rate, pitch-rate, pitch and forward-acceleration limits. Zero roll.
 //!
 //! Conventions: the thesis works in compass degrees; here heading is the internal math heading
@@ -41,7 +42,7 @@ pub struct Waypoint {
     pub speed: f64,
 }
 
-/// Constants of the IVER2 model. Defaults are `vehicle.m`'s values (nams digest §4.2 table).
+/// Constants of the IVER2 model. Defaults are `vehicle.m`'s values (Nams 2014, App. B).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct Iver2Params {
@@ -53,9 +54,10 @@ pub struct Iver2Params {
     /// Yaw-rate clamp, rad/s (thesis: 13 deg/s).
     pub max_yaw_rate: f64,
     /// Yaw acceleration limit, rad/s². Declared but unused in `vehicle.m` (12.9 deg/s²); `None`
-    /// keeps the faithful behaviour (nams digest §8 item 24).
+    /// keeps the faithful behaviour (docs/models.md#nams-kinematics).
     pub max_yaw_accel: Option<f64>,
-    /// Pitch limit, rad. Reconstructed: nams digest §8 item 23 (VectorMap default lost; 20°).
+    /// Pitch limit, rad. Invented: the thesis uses VectorMap's default, which is lost; 20°
+    /// (docs/models.md#nams-kinematics).
     pub max_pitch: f64,
     pub kp_speed: f64,
     pub kd_speed: f64,

@@ -49,7 +49,7 @@ impl Estimate {
 
 impl std::fmt::Display for Estimate {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(f, "{} ≈ {:.3e} from {} (limit {:.0e})", self.what, self.value, self.fields, self.limit)
+        write!(f, "{} ≈ {:.3e} from {} (limit {:e})", self.what, self.value, self.fields, self.limit)
     }
 }
 
@@ -72,9 +72,79 @@ pub fn check(estimates: impl IntoIterator<Item = Estimate>, allow_large: bool) -
     }
 }
 
+/// An input file (bytes) that holds a table: a track, a bathymetry grid, a field log (100 MB).
+pub const MAX_TABLE_FILE_BYTES: f64 = 1e8;
+
+/// Why an input could not be read.
+#[derive(Debug, Error)]
+pub enum InputError {
+    #[error("cannot read {path}: {source}")]
+    Io { path: std::path::PathBuf, source: std::io::Error },
+    #[error("{path} is not UTF-8 text: {source}")]
+    NotText { path: std::path::PathBuf, source: std::string::FromUtf8Error },
+    #[error(transparent)]
+    TooLarge(#[from] TooLarge),
+}
+
+/// The bytes of `path`, read through one bounded reader: at most `limit` bytes (one more tells a
+/// larger input), so a pipe, a device or a file that grows is bounded as a regular file is, and
+/// nothing is sized from metadata. A larger input is refused as [`TooLarge`] naming `what` and
+/// the path, unless `allow_large` (then it is read whole).
+pub fn read_bounded(
+    path: &std::path::Path,
+    what: &'static str,
+    limit: f64,
+    allow_large: bool,
+) -> Result<Vec<u8>, InputError> {
+    use std::io::Read;
+    let io = |source| InputError::Io { path: path.to_path_buf(), source };
+    let mut file = std::fs::File::open(path).map_err(io)?;
+    let mut bytes = Vec::new();
+    if allow_large {
+        file.read_to_end(&mut bytes).map_err(io)?;
+        return Ok(bytes);
+    }
+    let cap = limit.max(0.0).min(u64::MAX as f64 / 2.0) as u64;
+    file.by_ref().take(cap + 1).read_to_end(&mut bytes).map_err(io)?;
+    if bytes.len() as u64 > cap {
+        let over =
+            Estimate::new(what, format!("{} (more than the limit read)", path.display()), bytes.len() as f64, limit);
+        return Err(TooLarge(vec![over]).into());
+    }
+    Ok(bytes)
+}
+
+/// [`read_bounded`] as UTF-8 text.
+pub fn read_text(
+    path: &std::path::Path,
+    what: &'static str,
+    limit: f64,
+    allow_large: bool,
+) -> Result<String, InputError> {
+    let bytes = read_bounded(path, what, limit, allow_large)?;
+    String::from_utf8(bytes).map_err(|source| InputError::NotText { path: path.to_path_buf(), source })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A regular file, a pipe-like endless device and a file at the limit: only what fits is read.
+    #[test]
+    fn inputs_are_read_through_one_bounded_reader() {
+        let tmp = std::env::temp_dir().join(format!("coopnav-limits-{}", std::process::id()));
+        std::fs::write(&tmp, b"0123456789").unwrap();
+        assert_eq!(read_bounded(&tmp, "input file (bytes)", 10.0, false).unwrap(), b"0123456789");
+        let e = read_bounded(&tmp, "input file (bytes)", 9.0, false).unwrap_err().to_string();
+        assert!(e.contains("input file (bytes)") && e.contains("--allow-large"), "{e}");
+        assert_eq!(read_bounded(&tmp, "input file (bytes)", 9.0, true).unwrap().len(), 10);
+        std::fs::write(&tmp, [0xff, 0xfe]).unwrap();
+        assert!(matches!(read_text(&tmp, "input", 10.0, false), Err(InputError::NotText { .. })));
+        std::fs::remove_file(&tmp).unwrap();
+        // An endless input stops at the limit instead of filling memory.
+        let e = read_bounded(std::path::Path::new("/dev/zero"), "input file (bytes)", 1e6, false).unwrap_err();
+        assert!(matches!(e, InputError::TooLarge(_)), "{e}");
+    }
 
     #[test]
     fn only_sizes_above_their_limit_are_refused_and_all_are_named() {

@@ -1,5 +1,5 @@
 //! Validation of input files: a collector of bad fields, so one pass over a scenario or config
-//! reports every bad field at once (issue 11 item 3), each with its name, the value found and
+//! reports every bad field at once, each with its name, the value found and
 //! what is allowed. Every crate's loaders use it; the crate's own error type adds the file.
 
 use thiserror::Error;

@@ -1,5 +1,5 @@
 //! Post-processing (EKF + RTS) of synthetic field logs with 5 beacons, a range every 15 s and
-//! sensor rows at 10 Hz (issue 12 speed target: 24 h ≤ 10 s; `coopnav bench post` runs the full
+//! sensor rows at 10 Hz (target: 24 h ≤ 10 s; `coopnav bench post` runs the full
 //! day and prints JSON). Criterion times one simulated hour, which scales linearly.
 
 use coopnav_nav::post::{postprocess_rows, PostConfig};

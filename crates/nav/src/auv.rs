@@ -1,11 +1,11 @@
-//! The survey AUV's EKF (digest §3.2): the thesis's 5 states [E, N, S, ψ, b] (`AuvEkf`, the
+//! The survey AUV's EKF (Gill 2013, §2.2.1): the thesis's 5 states [E, N, S, ψ, b] (`AuvEkf`, the
 //! default), or 7 with a water current [.., c_E, c_N] (`AuvEkf<7>`, field logs); heading-rate
 //! input, speed and compass updates, and OWTT range updates from *any* transponder whose position
 //! at transmit time the caller supplies (ship outrigger, buoy, or a CNA that carries its position
 //! in its message), optionally with that position's own uncertainty.
 //!
-//! Three opt-in options against a filter that runs away under range-only geometry (issue 9; each
-//! off by default, the thesis's filter unchanged): a Gauss–Markov current
+//! Three opt-in options against a filter that runs away under range-only geometry (each off by
+//! default, the thesis's filter unchanged; docs/models.md#gill-filter-extensions): a Gauss–Markov current
 //! ([`CurrentParams::decay`]), the iterated range update ([`IteratedRange`]) and a recovery from
 //! a gate lock-out ([`GateRecovery`]).
 //!
@@ -32,7 +32,8 @@ pub const CURRENT_E: usize = 5;
 pub const CURRENT_N: usize = 6;
 
 /// The current states of the 7-state filter: a random walk (constant when `q` = 0), or a
-/// first-order Gauss–Markov process with `correlation_time_s`. Invented parameters (the thesis has no current state, digest §3.2; issue 12 field logs).
+/// first-order Gauss–Markov process with `correlation_time_s`. Invented parameters (the thesis has
+/// no current state, Gill 2013, §2.2.1; for field logs).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct CurrentParams {
@@ -56,17 +57,16 @@ impl CurrentParams {
     /// The factor φ = e^(−h/T) by which a Gauss–Markov current's mean decays over an `h`-second
     /// step (None for the random walk).
     ///
-    /// Why (an extension of digest §3.2, which has no current state): a random walk's variance
+    /// Why (an extension of Gill 2013, §2.2.1, which has no current state): a random walk's variance
     /// grows without bound while nothing observes the current, and a range-only fix from a CNA
     /// that stays at one bearing observes it only along that bearing; a filter linearised about
-    /// a wrong position then walks the unobserved component anywhere (measured: 2.6 m/s, faster
-    /// than the vehicle, issue 9). The Gauss–Markov process c_{k+1} = φ c_k + w_k, Var w_k =
+    /// a wrong position then walks the unobserved component anywhere, faster than the vehicle
+    /// moves. The Gauss–Markov process c_{k+1} = φ c_k + w_k, Var w_k =
     /// q·h/step_s (the random walk's noise), pulls an unsupported estimate back to zero with time
     /// constant T and holds the variance at q·T/(2·step_s)·(1 + O(h/T)) (from σ² = φ²σ² + q·h/step_s,
     /// 1 − φ² ≈ 2h/T): with the default q, (0.3 m/s per hour)², T = 1 h holds σ near 0.21 m/s
-    /// and T = 600 s near 0.087 m/s. T is invented (marked so). Measured on issue 9's spread
-    /// fleet over the BELLHOP grid (centroid-standoff, 20 runs): heard filters flagged 7 → 5
-    /// (T = 1 h) → 3 (30 min) → 0 (600 s); worst heard error 16.2 km → 8.2 km → 131 m → 103 m.
+    /// and T = 600 s near 0.087 m/s. T is invented (docs/models.md#gill-filter-extensions): the
+    /// shorter it is, the fewer filters of a spread fleet run away.
     pub fn decay(&self, h: f64) -> Option<f64> {
         self.correlation_time_s.map(|t| (-h / t).exp())
     }
@@ -87,10 +87,10 @@ impl CheckFields for CurrentParams {
 #[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
 #[serde(tag = "kind", rename_all = "snake_case")]
 pub enum AuvModel {
-    /// [E, N, S, ψ, b]: the thesis's filter (digest §3.2).
+    /// [E, N, S, ψ, b]: the thesis's filter (Gill 2013, §2.2.1).
     #[default]
     Thesis,
-    /// [E, N, S, ψ, b, c_E, c_N]: with a water current (issue 12, field logs).
+    /// [E, N, S, ψ, b, c_E, c_N]: with a water current (field logs).
     Current(CurrentParams),
 }
 
@@ -102,20 +102,21 @@ impl CheckFields for AuvModel {
     }
 }
 
-/// Coefficients of the AUV filter. Variances are per *nominal step* `step_s` (digest §3.1: Q is
-/// added once per predict); a prediction over h seconds adds Q·h/step_s.
+/// Coefficients of the AUV filter. Variances are per *nominal step* `step_s` (Gill 2013, App. A:
+/// Q is added once per predict); a prediction over h seconds adds Q·h/step_s.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct AuvParams {
-    /// Nominal filter step Δt (s) the Q values refer to. Reconstructed: digest §10 A1 (0.1 s).
+    /// Nominal filter step Δt (s) the Q values refer to. Invented: 0.1 s (docs/models.md#gill-coefficients).
     pub step_s: f64,
-    /// Initial variances [E m², N m², S (m/s)², ψ rad², b rad²]. Reconstructed: digest §10 A2.
+    /// Initial variances [E m², N m², S (m/s)², ψ rad², b rad²]. Invented: docs/models.md#gill-coefficients.
     pub p0: [f64; 5],
-    /// Per-step process noise. Q_E = Q_N = 0.255448 is Table 3; S, ψ, b: digest §10 A2.
+    /// Per-step process noise. Q_E = Q_N = 0.255448 is Gill 2013, Table 3; S, ψ, b invented
+    /// (docs/models.md#gill-coefficients).
     pub q: [f64; 5],
-    /// Speed-measurement SD (m/s). Digest §10 A2.
+    /// Speed-measurement SD (m/s). Invented: docs/models.md#gill-coefficients.
     pub sigma_speed: f64,
-    /// Compass SD (rad). Digest §10 A2 (0.5°).
+    /// Compass SD (rad). Invented: 0.5° (docs/models.md#gill-coefficients).
     pub sigma_heading: f64,
     pub range_noise: RangeNoise,
     pub range_gate: Gate,
@@ -133,9 +134,10 @@ pub struct AuvParams {
     pub range_outliers: Option<RangeOutliers>,
 }
 
-/// Long ranges the filter expects besides its Gaussian noise, an extension of digest §3.2
-/// ("outlier rejection": the thesis's filter has none, while its simulation makes 5 % of ranges
-/// 5–10 m too long, thesis §5.4; the closed loop's `gill_mixture` channel draws 5.55 %).
+/// Long ranges the filter expects besides its Gaussian noise, an extension of Gill 2013, §2.2.1
+/// (the thesis's filter has no outlier rejection, while its simulation makes 5 % of ranges 5–10 m
+/// too long and drops 10 %, Gill 2013, §2.4.1; the closed loop's `gill_mixture` channel draws
+/// 5.55 % of the ranges received).
 ///
 /// A range is an inlier, innovation y ~ N(0, S), with probability 1 − p, or an outlier, y = e + v
 /// with e ~ U(min_m, max_m) and v ~ N(0, S), with probability p. Its inlier probability is
@@ -143,9 +145,8 @@ pub struct AuvParams {
 /// and an outlier is taken to carry no information (its 5 m spread is wider than the position σ it
 /// would inform). How w enters the update is [`OutlierUpdate`]. Why: a filter that takes a 5–10 m
 /// outlier as Gaussian moves its estimate most of the way to it, and from a steady line of sight
-/// the next pings do not undo it (measured in issue 10, session 27: with Gaussian ranges
-/// planner-estimator's N = 1 error is 0.5 m lower, zigzag's 0.3 m). The class figures are the
-/// thesis's; using them in the filter is invented (marked so).
+/// the next pings do not undo it. The class figures are the thesis's; using them in the filter is
+/// invented (docs/models.md#gill-filter-extensions).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct RangeOutliers {
@@ -165,14 +166,13 @@ pub struct RangeOutliers {
 pub enum OutlierUpdate {
     /// The Kalman update with the range variance R raised to R + (1/w − 1)·S: x⁺ = x⁻ + w·K·y,
     /// P⁺ = P⁻ − w·K·S·Kᵀ, the robust Kalman filters' reweighting with the mixture's weight. The
-    /// default: measured best in issue 10, session 28 (below).
+    /// default: it did better than [`OutlierUpdate::Pda`] in the closed loop (below).
     #[default]
     Weighted,
     /// The probabilistic-data-association update: the weighted one plus the hypotheses' spread
-    /// w(1 − w)·(K·y)(K·y)ᵀ as process noise, which moment-matches the two posteriors. Measured
-    /// (issue 10, session 28, tuning seed): a CNA parked over an AUV's estimate, whose ranges
-    /// are all long as an outlier is, sees the spread inflate P along a move the linearisation
-    /// gets wrong there; centroid's N = 1 error with a water current went 16 → 69 m (weighted: 23).
+    /// w(1 − w)·(K·y)(K·y)ᵀ as process noise, which moment-matches the two posteriors. A CNA
+    /// parked over an AUV's estimate, whose ranges are all long as an outlier is, sees the spread
+    /// inflate P along a move the linearisation gets wrong there, and the error grows.
     Pda,
 }
 
@@ -214,21 +214,19 @@ impl CheckFields for RangeOutliers {
 /// raised variance would be S/w, beyond any use (and past f64 as w → 0).
 const OUTLIER_ONLY: f64 = 1e-9;
 
-/// Recovery from a gate lock-out, an extension of digest §10 A5 (the thesis has no gate).
+/// Recovery from a gate lock-out (invented; the thesis has no gate, docs/models.md#gill-filter-extensions).
 ///
 /// A gate protects a consistent filter from outliers, but a filter that has become
 /// over-confident (linearised about a wrong estimate, its σ well under its true error) rejects
-/// every good range that follows and dead-reckons on: measured on issue 9's spread fleet with a
-/// χ²₁ 99.9 % gate, 1.9 km at the end of a run. After `after` consecutive rejections the next
+/// every good range that follows and dead-reckons on. After `after` consecutive rejections the next
 /// rejected range is taken as evidence that the filter, not the range, is wrong: the horizontal
 /// position covariance is inflated isotropically by a = (y²/ν − S)/‖h_EN‖², the smallest addition
 /// that makes that range's NIS y²/(S + a‖h_EN‖²) equal `target_nis` ν, and the range is then
 /// applied. With independent outliers at rate p (Gill's mixture: 5.6 %), `after` = 3 mistakes
 /// an outlier run for a lock-out with probability about p³ = 1.7·10⁻⁴ per range. Invented
-/// parameters (marked so). Measured (20 runs each, χ²₁ 99.9 % gate): on the spread fleet it ends
-/// the lock-out (worst heard error 1.9 km → 238 m), but with a CNA parked over one AUV (tuning
-/// seed 1000, centroid, N = 1) it lets two runs run away that the gate alone held (221 m → 3.0
-/// km): the inflated covariance accepts a range linearised about a wrong bearing.
+/// parameters. It ends the lock-outs of a spread fleet, but with a CNA parked over one AUV it can
+/// let a filter run away that the gate alone held: the inflated covariance accepts a range
+/// linearised about a wrong bearing.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct GateRecovery {
@@ -257,7 +255,7 @@ impl CheckFields for GateRecovery {
 #[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
 #[serde(tag = "kind", rename_all = "snake_case")]
 pub enum RangeLinearisation {
-    /// One linearisation about the prior: the thesis's EKF (digest §3.2).
+    /// One linearisation about the prior: the thesis's EKF (Gill 2013, §2.2.1).
     #[default]
     Ekf,
     /// The iterated EKF: relinearised about the updated estimate ([`IteratedRange`]).
@@ -270,21 +268,21 @@ impl RangeLinearisation {
     }
 }
 
-/// The iterated EKF range update (Gauss–Newton on the update's cost), an extension of digest
-/// §3.2 (the thesis linearises once).
+/// The iterated EKF range update (Gauss–Newton on the update's cost), an extension of Gill 2013,
+/// §2.2.1 (the thesis linearises once).
 ///
 /// The EKF linearises r = ‖p − p_T‖ about the prior p⁻; when p⁻ is tens of metres off at a
 /// range of a few hundred, the gradient (the unit vector to the transponder) points along a
 /// wrong bearing, and the update moves the estimate along that bearing and shrinks P across the
-/// true one: measured on issue 9's spread fleet, errors of 50–250 m with σ 9–50 m. The update
+/// true one, so the filter ends far off and over-confident. The update
 /// is the minimiser of J(x) = ‖x − x⁻‖²_{P⁻¹} + (z − h(x))²/R; Gauss–Newton from x₀ = x⁻ gives
 /// x_{i+1} = x⁻ + K_i (z − h(x_i) − H_i (x⁻ − x_i)), K_i = P⁻H_iᵀ (H_i P⁻ H_iᵀ + R_i)⁻¹, with
 /// H_i (and R_i, whose transponder term depends on the line of sight) evaluated at x_i; the
 /// covariance is the Joseph update of P⁻ with the last K_i and H_i (Bell & Cathey 1993). One
 /// iteration is the EKF exactly. The gate tests the prior's innovation, as the EKF's does.
-/// Invented parameters (marked so): `iterations` and `tolerance_m`. Measured (issue 9, tuning
-/// seed 1000, 20 runs, centroid parked over one AUV): runs whose AUV ran beyond 500 m 7 → 0, worst
-/// 9.3 km → 96 m; it does not make the filter consistent (NEES flags 18 → 17).
+/// Invented parameters (docs/models.md#gill-filter-extensions): `iterations` and `tolerance_m`.
+/// It keeps a filter from running away under a parked CNA; it does not make the filter
+/// consistent.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct IteratedRange {
@@ -378,7 +376,7 @@ fn transition_at<const M: usize>(x: &SVector<f64, M>, h: f64, turn: f64, (sin, c
     next
 }
 
-/// ∂transition/∂x at `x` (digest §3.2, F^A).
+/// ∂transition/∂x at `x` (Gill 2013, §2.2.1, F^A).
 pub fn transition_jacobian<const M: usize>(x: &SVector<f64, M>, h: f64) -> SMatrix<f64, M, M> {
     let mut f = SMatrix::<f64, M, M>::identity();
     for (i, entries) in transition_jacobian_entries(x, h, x[PSI].sin_cos()) {
@@ -684,7 +682,8 @@ impl<const M: usize> AuvEkf<M> {
     }
 
     /// OWTT range update (eq. 9). `auv_depth` = Some(z) uses the 3-D slant range to the
-    /// transponder's depth (field mode); None the horizontal range (simulation mode, digest A4).
+    /// transponder's depth (field mode); None the horizontal range (simulation mode, Gill 2013,
+    /// §2.4.1: depth treated as constant).
     pub fn update_range(&mut self, m: &RangeMeasurement, auv_depth: Option<f64>) -> UpdateOutcome {
         self.update_range_from_uncertain(m, auv_depth, 0.0)
     }

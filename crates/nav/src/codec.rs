@@ -1,4 +1,4 @@
-//! The 13-bit WHOI mini-packet of the HBL cycle (digest §2.2–§2.3, Appendix B): a 5-bit header
+//! The 13-bit WHOI mini-packet of the HBL cycle (Gill 2013, §2.1.2 and Appendix B): a 5-bit header
 //! and an 8-bit quantisation-box index, word = (header << 8) | index; the quantisation of East,
 //! North, speed and heading with saturation at the zone edge and decoding to the box centre; and
 //! the NMEA `$CAMUC` (sent) / `$CAMUA` (received) sentences `SRC,DEST,HHHH*CS` with an 8-bit XOR
@@ -8,7 +8,7 @@ use serde::{Deserialize, Serialize};
 use std::fmt;
 use thiserror::Error;
 
-/// Modem IDs of the HBL missions (digest §2.3).
+/// Modem IDs of the HBL missions (Gill 2013, Appendix B).
 pub const MODEM_BUOY: u8 = 13;
 pub const MODEM_SHIP_PORT: u8 = 14;
 pub const MODEM_SHIP_STARBOARD: u8 = 15;
@@ -22,7 +22,7 @@ pub enum Header {
     East = 0x1B,
     Speed = 0x1C,
     Heading = 0x1D,
-    /// Not given in the thesis; 0x1E is the unused value of the range (digest §10 A23).
+    /// Not given in the thesis; 0x1E is the unused value of the range (invented).
     FleetLeader = 0x1E,
     Abort = 0x1F,
 }
@@ -115,7 +115,7 @@ impl Axis {
         }
         Quantised { index: raw as u8, saturated: false }
     }
-    /// Centre of box `index` (digest §10 A9).
+    /// Centre of box `index` (an interpretation: docs/models.md#gill-quantisation).
     pub fn decode(&self, index: u8) -> f64 {
         self.origin + (index as f64 + 0.5) * self.resolution
     }
@@ -135,7 +135,7 @@ pub struct Zone {
 
 impl Zone {
     /// The field zone: 1.6 m E × 0.6 m N boxes, E centred on `centre_e`, N from `north_min`
-    /// (digest §10 A9: [−53.6, +100] about the path).
+    /// (docs/models.md#gill-quantisation: [−53.6, +100] about the path).
     pub fn standard(centre_e: f64, north_min: f64) -> Self {
         Zone::with_resolution(centre_e, north_min, 1.6, 0.6)
     }
@@ -149,13 +149,13 @@ impl Zone {
     pub fn centred(e: f64, n: f64, res_e: f64, res_n: f64) -> Self {
         Zone::with_resolution(e, n - 128.0 * res_n, res_e, res_n)
     }
-    /// Distance from a point to its clamp into the zone (the saturation error, digest §5.6).
+    /// Distance from a point to its clamp into the zone (the saturation error of Gill 2013, Table 4).
     pub fn saturation_error(&self, e: f64, n: f64) -> f64 {
         (e - self.east.clamp(e)).hypot(n - self.north.clamp(n))
     }
 }
 
-/// Speed: 0.015625 m/s boxes from 0 to 4 m/s (digest §10 A24).
+/// Speed: 0.015625 m/s boxes from 0 to 4 m/s (Gill 2013, §2.1.2; docs/models.md#gill-quantisation).
 pub const SPEED_AXIS: Axis = Axis { origin: 0.0, resolution: 4.0 / 256.0 };
 /// Compass heading in degrees: 1.40625° boxes over [0, 360).
 pub const HEADING_RESOLUTION_DEG: f64 = 360.0 / 256.0;

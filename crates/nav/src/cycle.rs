@@ -1,7 +1,7 @@
-//! Ranging cycles as data (digest §4): a table of 2 s slots, each naming what is broadcast
+//! Ranging cycles as data (Gill 2013, §2.3.2): a table of 2 s slots, each naming what is broadcast
 //! (a ship or buoy state, the fleet-leader message, or silence); presets MSBL, HBL Short and
 //! HBL Long exactly as Table 1; user cycles from TOML; and the assignment of ship slots to the
-//! port/starboard modems for each navigation configuration (digest §10 A7–A8).
+//! port/starboard modems for each navigation configuration (invented: docs/models.md#gill-cycles).
 
 use crate::codec::{Header, MODEM_BUOY, MODEM_SHIP_PORT, MODEM_SHIP_STARBOARD};
 use crate::surface::{Side, StateKind};
@@ -18,7 +18,7 @@ pub enum SlotContent {
     ShipHeading,
     BuoyEast,
     BuoyNorth,
-    /// The fleet leader's progress broadcast: not a range for a single AUV (digest §4.2).
+    /// The fleet leader's progress broadcast: not a range for a single AUV (Gill 2013, Table 1).
     FleetLeader,
     Silent,
 }
@@ -117,7 +117,7 @@ impl Cycle {
             ],
         }
     }
-    /// MSBL: HBL Long with the buoy slots silent (digest §10 A8).
+    /// MSBL: HBL Long with the buoy slots silent (invented: docs/models.md#gill-cycles).
     pub fn msbl() -> Self {
         let mut c = Cycle::hbl_long();
         c.name = "msbl".into();
@@ -189,7 +189,7 @@ impl Transmitter {
     }
 }
 
-/// Navigation configuration: which transponders exist (digest §1.2, §4.2).
+/// Navigation configuration: which transponders exist (Gill 2013, §1.3–1.4 and Table 1).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Configuration {

@@ -1,13 +1,13 @@
-//! Generic fixed-size extended Kalman filter (digest §3.1): the caller supplies the propagated
+//! Generic fixed-size extended Kalman filter (Gill 2013, App. A, after Simon 2006): the caller supplies the propagated
 //! state, the Jacobians and the noise; this module owns the covariance algebra (Joseph-form
 //! update, symmetrisation), angle-wrapped state components, innovation gating, and the optional
 //! history of x⁻, P⁻, x⁺, P⁺, F that the RTS smoother needs.
 //!
 //! The filter-rate path (sparse prediction, unit-row updates, what they call, and the AUV
 //! filter's methods over them) is `#[inline(always)]`: a step is a few hundred operations on
-//! small arrays that separate functions pass through memory. Inlined, a 7-state step (predict,
-//! speed, compass) ran ≈ 15 % faster in a 3 M-step probe (session 23); inlining never changes a
-//! floating-point result. The AUV filter's step (prediction, speed, compass) runs as one
+//! small arrays that separate functions pass through memory (`cargo bench -p coopnav-nav` shows
+//! the difference); inlining never changes a floating-point result. The AUV filter's step
+//! (prediction, speed, compass) runs as one
 //! ([`Ekf::predict_and_read`]), bit for bit its three calls.
 
 use coopnav_core::validation::{CheckFields, Problems};
@@ -16,7 +16,7 @@ use nalgebra::{SMatrix, SVector};
 use serde::{Deserialize, Serialize};
 
 /// Innovation gate. Both tests are optional; a measurement failing either is rejected.
-/// Default: off (faithful to the thesis, which describes no outlier rejection — digest §10 A5).
+/// Default: off (faithful to the thesis, which describes no outlier rejection: Gill 2013, §2.2.1).
 #[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Gate {
@@ -493,13 +493,10 @@ fn columns_in_order<const N: usize, const K: usize>(columns: &[usize; K]) -> boo
 /// With P hᵀ = p̄ and k = p̄/s, the Joseph form expands for any gain k to P − k p̄ᵀ − p̄ kᵀ + s k kᵀ
 /// = P + k wᵀ + w kᵀ with w = s k/2 − p̄: s k − p̄ is the gain's rounding residual, kept, so P⁺ is
 /// insensitive to first order to k's rounding as the Joseph form is (the plain P − k p̄ᵀ is not),
-/// and k is p̄ times one reciprocal of s (a division per entry: a 7-state step took 200 ns against
-/// 140–147 ns in a 3 M-step probe, session 24).
+/// and k is p̄ times one reciprocal of s (a division per entry is measurably slower).
 /// Each entry is pᵢⱼ + (kᵢ wⱼ + wᵢ kⱼ): its mirror adds the same two products in the other order,
 /// and a floating-point sum does not depend on the order of two terms, so the entries on and above
 /// the diagonal are computed and copied below it, and P⁺ is exactly symmetric with no averaging.
-/// (Session 24: this replaced the form B = P − k p̄ᵀ, B + (r k − B hᵀ) kᵀ, pairs averaged, which
-/// rounded differently: every figure moved by ≈ 1e-13 relative, listed in the branch's report.)
 #[inline(always)]
 fn joseph_update<const N: usize>(
     x: &mut SVector<f64, N>,

@@ -1,4 +1,4 @@
-//! The general field-log format, version 2 (issue 12 item 1; documented for users in
+//! The general field-log format, version 2 (documented for users in
 //! `docs/log-format.md`): any number of beacons with their own tracks, GPS, DVL velocity,
 //! per-row σ, and absolute (Unix) or relative time declared in the header line. This module owns
 //! the row types the post-processor runs on, reading and writing version 2, and the mapping of

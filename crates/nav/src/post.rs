@@ -1,4 +1,4 @@
-//! Post-processing of a logged run (digest §3.6): the AUV EKF re-run over a CSV log with
+//! Post-processing of a logged run (Gill 2013, §2.4.3 and §3.4): the AUV EKF re-run over a CSV log with
 //! transponder positions from the logged ship DGPS and buoy topside fixes (not the onboard
 //! ship/buoy filters), a per-run acoustic time offset, then the EKF-RTS backward pass.
 //!
@@ -7,8 +7,8 @@
 //! seconds on the AUV clock; headings are compass degrees (0 = north, clockwise), rates deg/s
 //! clockwise-positive, positions metres in the local east/north frame — or, in the `_ll` kinds,
 //! WGS-84 latitude/longitude in degrees, converted on reading to that frame's east/north about the
-//! config's geodetic `origin` (the local tangent plane at the origin's height, gill digest §10
-//! A28), so the filter only ever sees metres.
+//! config's geodetic `origin` (the local tangent plane at the origin's height,
+//! docs/models.md#gill-geodesy), so the filter only ever sees metres.
 //!
 //! | kind       | src      | v1                 | v2     | v3          | v4              |
 //! |------------|----------|--------------------|--------|-------------|-----------------|
@@ -244,7 +244,7 @@ pub fn read_any_log<R: Read>(input: R, cfg: &PostConfig) -> Result<FieldLog, Pos
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum FixUse {
-    /// Most recent fix (zero-order hold, the thesis's buoy treatment, digest §3.6).
+    /// Most recent fix (zero-order hold, the thesis's buoy treatment, Gill 2013, §2.4.3).
     Hold,
     /// Linear interpolation between the fixes either side (default: a timestamp rounded to the
     /// millisecond then costs a millisecond of transponder motion, not a whole fix interval).
@@ -253,7 +253,7 @@ pub enum FixUse {
 }
 
 /// How logged fixes are matched to a range's transmit time t_rx − τ. Invented parameters (the
-/// thesis does not say how its post-processing matched fixes, digest §3.6): rounded log times put
+/// thesis does not say how its post-processing matched fixes, Gill 2013, §2.4.3): rounded log times put
 /// a transmission's own fix a little after the recovered transmit time, so a fix this close counts
 /// as that transmission's fix; a fix older (or newer) than `max_age_s` is stale, and a range with
 /// no fresh fix is counted as without a fix, never applied with a stale position.
@@ -296,11 +296,11 @@ pub struct PostConfig {
     /// so an acoustic outlier is counted in `ranges_gated` instead of pulling the track.
     pub range_gate: Gate,
     /// A silence between rows longer than this (s) is predicted in one step, not in `auv.step_s`
-    /// pieces, and counted as a gap. Invented bound (issue 11 item 2): no logged sensor is silent
+    /// pieces, and counted as a gap. Invented bound: no logged sensor is silent
     /// this long in a working mission.
     pub max_gap_s: f64,
     /// Horizontal SD (m, each axis) of the logged transponder fixes, added to the range noise
-    /// along the line of sight. Default 0: the thesis's fixes are DGPS (digest §3.6).
+    /// along the line of sight. Default 0: the thesis's fixes are DGPS (Gill 2013, §2.4.3).
     pub transponder_sd_m: f64,
     /// Added to every range row's time before processing (e.g. −2 removes a 2 s modem delay).
     pub acoustic_time_offset_s: f64,
@@ -313,16 +313,16 @@ pub struct PostConfig {
     pub buoy_depth: f64,
     /// Backward pass: `ekf` (EKF-RTS, default) or `unscented` (URTS, the thesis's reference 25).
     pub smoother: SmootherKind,
-    /// SD (m, each axis) of a `gps` row without its own σ. Invented default (issue 12): a
+    /// SD (m, each axis) of a `gps` row without its own σ. Invented default: a
     /// consumer GPS at the surface.
     pub gps_sd_m: f64,
-    /// SD (m/s, each component) of a `dvl_*` row without its own σ. Invented default (issue 12).
+    /// SD (m/s, each component) of a `dvl_*` row without its own σ. Invented default.
     pub velocity_sd_m_s: f64,
     /// Multiplies every `speed` row (a speed log's scale error; `--tune` estimates it).
     pub speed_scale: f64,
     /// Subtracted from every `heading` row (deg; a compass offset; `--tune` estimates it).
     pub heading_bias_deg: f64,
-    /// Geodetic origin of the local east/north frame, needed by `_ll` log rows (digest §10 A28).
+    /// Geodetic origin of the local east/north frame, needed by `_ll` log rows (docs/models.md#gill-geodesy).
     /// `_ll` positions are taken at its height above the ellipsoid (the site's water surface).
     pub origin: Option<Geodetic>,
 }
@@ -499,7 +499,7 @@ impl PostSummary {
 
     /// One sentence per kind of range the filter set aside on the evidence of the data: a gated
     /// range is an acoustic outlier the gate caught (Gill's field ranges hold about 5 % of them,
-    /// gill digest §5.4), not a fault of the log.
+    /// Gill 2013, §2.4.1), not a fault of the log.
     pub fn rejections(&self) -> Vec<String> {
         sentences(&[(self.ranges_gated, "range(s) were rejected by the innovation gate (range_gate)")])
     }
@@ -830,7 +830,7 @@ impl Run<'_> {
         let piece_s = self.pass.prediction_step_s.unwrap_or(cfg.auv.step_s);
         for (t, row) in events {
             // Across a silence longer than max_gap_s one prediction spans it: the history (and
-            // memory) grows with the rows, never with the log's time span (issue 11 item 2).
+            // memory) grows with the rows, never with the log's time span.
             if t - f.ekf().t() > cfg.max_gap_s {
                 summary.gaps += 1;
                 if f.predict_to(t, yaw_rate) {

@@ -1,4 +1,4 @@
-//! Tuning the post-processing filter from the log itself (issue 12 item 4): the range σ, the
+//! Tuning the post-processing filter from the log itself: the range σ, the
 //! E/N process noise, the speed log's scale and the compass bias that maximise the innovation
 //! log-likelihood of the ranges (`PostSummary::range_log_likelihood`), by a Nelder–Mead search
 //! (argmin) in log/linear coordinates, with cross-validation: every k-th range is left out of the
@@ -28,8 +28,8 @@ pub struct TuneOptions {
     pub max_iters: u64,
     /// During the search, the yaw-rate, speed, heading, DVL and depth rows are averaged over blocks
     /// of this many seconds and the filter predicts in steps of this length (0: every row at full
-    /// rate). Invented default (issue 12 tuning speed): 1 s keeps the tuned values within the
-    /// bands measured in `tests/post_tune.rs` of the full-rate ones, about 5× faster at 10 Hz.
+    /// rate). Invented default: 1 s keeps the tuned values within the bands `tests/post_tune.rs`
+    /// states of the full-rate ones, at a fraction of the time.
     pub dead_reckoning_block_s: f64,
 }
 
@@ -50,7 +50,7 @@ pub struct Tuned {
     pub heading_bias_deg: f64,
 }
 
-/// Bounds of the search (invented, issue 12): wide enough for any working sensor.
+/// Bounds of the search (invented): wide enough for any working sensor.
 const RANGE_SD_M: (f64, f64) = (0.05, 50.0);
 const Q_EN: (f64, f64) = (1e-8, 3.0);
 const SPEED_SCALE: (f64, f64) = (0.7, 1.4);

@@ -1,6 +1,7 @@
 //! The OWTT range measurement: r = c·τ from top-of-second timing (eq. 3), the transponder's
-//! position at transmit time, and the range-dependent noise σ²_r = τ²σ_c² + c²σ_τ² (digest §3.2
-//! and §10 A3: the thesis's labels are swapped; this is the dimensionally consistent form).
+//! position at transmit time, and the range-dependent noise σ²_r = τ²σ_c² + c²σ_τ² (Gill 2013,
+//! §2.2.1, whose labels are swapped; this is the dimensionally consistent form:
+//! docs/models.md#gill-range-noise).
 
 use coopnav_core::validation::{CheckFields, Problems};
 use coopnav_core::Vec3;
@@ -25,11 +26,11 @@ impl RangeMeasurement {
     }
 }
 
-/// Range noise model. Reconstructed: gill digest §10 A2/A3 (the thesis keeps R^A at unpublished
+/// Range noise model. Reconstructed: docs/models.md#gill-range-noise (the thesis keeps R^A at unpublished
 /// MSBL values). Defaults: σ_c = 3 m/s, c = 1500 m/s, and σ_τ = 1.2 ms, so that c·σ_τ = 1.80 m is
-/// the RMS error of a received range under the thesis's acoustic mixture (§5.4: 85 % within
+/// the RMS error of a received range under the thesis's acoustic mixture (Gill 2013, §2.4.1: 85 % within
 /// 0.2 m, 5 % 5–10 m long; `coopnav_sim::models::noise::Acoustic::received_error_mean_square`,
-/// whose test pins this value). The digest's placeholder 0.1 ms (0.15 m) ignored the outliers.
+/// whose test pins this value). A σ_τ of 0.1 ms (0.15 m) would ignore the outliers.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct RangeNoise {

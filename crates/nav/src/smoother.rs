@@ -1,4 +1,5 @@
-//! Rauch–Tung–Striebel smoothers (digest §3.6, A22): backward passes over the forward filter's
+//! Rauch–Tung–Striebel smoothers (Gill 2013, §2.4.3, after its reference 25;
+//! docs/models.md#gill-post-processing): backward passes over the forward filter's
 //! history. The EKF-RTS pass (default) uses the recorded linearisation,
 //!   C_k = P⁺_k F_{k+1}ᵀ (P⁻_{k+1})⁻¹,
 //!   x^s_k = x⁺_k + C_k (x^s_{k+1} ⊖ x⁻_{k+1}),
@@ -17,10 +18,10 @@ use thiserror::Error;
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum SmootherKind {
-    /// EKF-RTS on the recorded Jacobians (digest §3.6).
+    /// EKF-RTS on the recorded Jacobians (Gill 2013, §2.4.3).
     #[default]
     Ekf,
-    /// Unscented RTS (digest A22) with 2N equally weighted sigma points at ±√N σ
+    /// Unscented RTS (the variant of Gill 2013's reference 25) with 2N equally weighted sigma points at ±√N σ
     /// (α = 1, β = 0, κ = 0: no negative weights, so every covariance stays positive).
     Unscented,
 }

@@ -1,7 +1,8 @@
-//! Ship and buoy 4-state EKFs [E, N, S, ψ] (digest §3.3): constant speed and heading, no input,
+//! Ship and buoy 4-state EKFs [E, N, S, ψ] (Gill 2013, §2.2.2): constant speed and heading, no input,
 //! scalar state updates from the quantised 13-bit broadcasts. The same type serves both; the
 //! buoy differs only by its coefficients (Table 3) and by never hearing speed or heading. Speed
-//! is signed and never clamped: the buoy filter uses it as a 1-D north/south drift (digest A18).
+//! is signed and never clamped: the buoy filter uses it as a 1-D north/south drift (an
+//! interpretation: docs/models.md#gill-buoy-drift).
 //! Also the ship's port/starboard outrigger transponder geometry.
 
 use crate::ekf::{Ekf, Gate, UpdateOutcome};
@@ -47,7 +48,7 @@ pub struct SurfaceParams {
 }
 
 impl SurfaceParams {
-    /// Ship filter. Reconstructed: digest §10 A2 (the thesis gives no ship numbers).
+    /// Ship filter. Invented: docs/models.md#gill-coefficients (the thesis gives no ship numbers).
     pub fn ship() -> Self {
         let deg = std::f64::consts::PI / 180.0;
         SurfaceParams {
@@ -58,7 +59,7 @@ impl SurfaceParams {
         }
     }
 
-    /// Buoy filter: P^B and Q^B of Table 3 (digest §3.3), R^B = R^S for E and N.
+    /// Buoy filter: P^B and Q^B of Gill 2013, Table 3, R^B = R^S for E and N.
     pub fn buoy() -> Self {
         SurfaceParams {
             step_s: 0.1,
@@ -68,7 +69,7 @@ impl SurfaceParams {
         }
     }
 
-    /// Quantisation (box²/12) plus DGPS or sensor noise. Reconstructed: digest §10 A2.
+    /// Quantisation (box²/12) plus DGPS or sensor noise. Reconstructed: docs/models.md#gill-coefficients.
     fn quantised_r() -> [f64; 4] {
         let deg = std::f64::consts::PI / 180.0;
         [
@@ -179,7 +180,7 @@ pub enum Side {
 }
 
 /// Outrigger geometry: transponders `separation` m apart across the ship, `along_offset` m ahead
-/// of the position reference, at `depth` m. Defaults: 9.3 m, 0, 1.5 m (digest §6.2).
+/// of the position reference, at `depth` m. Defaults: 9.3 m, 0, 1.5 m (Gill 2013, §2.4.2).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct Outriggers {

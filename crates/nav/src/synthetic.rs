@@ -1,4 +1,4 @@
-//! A synthetic field log with known truth and known noise (issue 12: the tuning and three-beacon
+//! A synthetic field log with known truth and known noise (for the tuning and three-beacon
 //! tests and the 24-hour benchmark): one AUV and any number of moving beacons, written as general
 //! log rows. Every number here is invented for testing, not taken from a thesis.
 //!

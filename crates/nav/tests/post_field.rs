@@ -1,6 +1,6 @@
-//! Post-processing field logs: no stale transponder fixes (issue 11 item 4: a log whose times are
+//! Post-processing field logs: no stale transponder fixes (a log whose times are
 //! rounded to the millisecond, as field loggers write them, gives the estimates of the exact log),
-//! the current states and the default NIS gate (issue 12 item 3).
+//! the current states and the default NIS gate.
 
 use coopnav_core::{CompassDeg, Heading, SeedStream};
 use coopnav_nav::cycle::Transmitter;

@@ -1,4 +1,4 @@
-//! Tuning from the log (issue 12 item 4) and the general log format end to end: a synthetic
+//! Tuning from the log and the general log format end to end: a synthetic
 //! mission written with known noise is tuned back to it; a three-beacon mission with a current
 //! post-processes from the version-2 file to a smoothed track better than the filter's.
 

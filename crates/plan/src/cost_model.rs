@@ -109,7 +109,7 @@ impl CostModel for HudsonCost {
     type State = Tangential;
 
     /// Always computed: a few operations per AUV and level, and skipping it where it seldom cut
-    /// made Hudson's trees slower (`coopnav bench planner`: 0.095 → 0.109 ms and 1.5 → 1.8 ms).
+    /// made Hudson's trees slower (`coopnav bench planner`).
     const BOUND_COST: f64 = 0.0;
 
     #[inline(always)]

@@ -1,4 +1,5 @@
-//! The survey-AUV position-error model of Hudson eq. (1) (reconstructed: hudson digest §2.2, A1–A3).
+//! The survey-AUV position-error model of Hudson 2012, Ch. 3, eq. (1) (reconstructed after Chitre et
+//! al. 2010, whom the thesis follows: docs/models.md#hudson-error-model).
 //!
 //! Each survey AUV's horizontal error is split along the CNA–AUV line of sight into a radial part
 //! σ (reset by every range) and a tangential part ε that grows by α·τ per step and is partly
@@ -10,13 +11,13 @@
 use coopnav_core::Vec3;
 use serde::{Deserialize, Serialize};
 
-/// Which angle the bearing change Δθ is measured in (digest A3).
+/// Which angle the bearing change Δθ is measured in (docs/models.md#hudson-error-model).
 ///
 /// Choose `slant3d` for an AUV CNA: under the horizontal bearing its pitch options only shorten
 /// its step, so it scores exactly like an ASC, while the thesis's Sec. 5.3 tables put AUV CNAs on
-/// top (that ordering returns with the 3-D bearing; measured in `coopnav_sim`'s Hudson
-/// reproductions, which use `slant3d` for Sec. 5.3). The default stays horizontal because Table
-/// 6.1's 2.22 m floor needs it (best RMS 2.256 m horizontal, 2.434 m 3-D).
+/// top (that ordering returns with the 3-D bearing, which `coopnav_sim`'s Hudson reproductions
+/// use for Sec. 5.3). The default stays horizontal because Table 6.1's 2.22 m floor needs it
+/// (docs/models.md#hudson-error-model).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
 #[serde(rename_all = "snake_case")]
 pub enum BearingMode {
@@ -27,7 +28,7 @@ pub enum BearingMode {
     Slant3d,
 }
 
-/// What the per-AUV cost term is (digest A2).
+/// What the per-AUV cost term is (docs/models.md#hudson-error-model).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
 #[serde(rename_all = "snake_case")]
 pub enum CostMode {
@@ -64,7 +65,7 @@ impl Default for ErrorModel {
 /// One survey AUV's modelled error after a range: variances and the line of sight it was taken on.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct AuvError {
-    /// Radial variance σ², m² (constant per AUV unless an external update overwrites it, A1).
+    /// Radial variance σ², m² (constant per AUV unless an external update overwrites it).
     pub sigma2: f64,
     /// Tangential variance ε², m².
     pub eps2: f64,
@@ -73,7 +74,7 @@ pub struct AuvError {
 }
 
 impl AuvError {
-    /// Total error e = √(σ² + ε²), metres (digest §6).
+    /// Total error e = √(σ² + ε²), metres (docs/models.md#hudson-metrics).
     pub fn total(&self) -> f64 {
         (self.sigma2 + self.eps2).sqrt()
     }
@@ -90,7 +91,8 @@ impl ErrorModel {
         [auv[0] - cna[0], auv[1] - cna[1], dz]
     }
 
-    /// Error state at planning start: σ₀, ε₀ (Table 5.1: 1 m each) and the initial bearing (A12).
+    /// Error state at planning start: σ₀, ε₀ (Table 5.1: 1 m each) and the initial bearing
+    /// (docs/models.md#hudson-start).
     pub fn initial(&self, sigma0: f64, eps0: f64, cna: &Vec3, auv: &Vec3) -> AuvError {
         AuvError { sigma2: sigma0 * sigma0, eps2: eps0 * eps0, los: self.los(to_arr(cna), to_arr(auv)) }
     }
@@ -143,7 +145,7 @@ mod tests {
 
     #[test]
     fn perfect_geometry_reaches_the_floor() {
-        // A 90° bearing change every step: ε² → σ² + ατ, total error → √(2σ² + ατ) (digest §9 i).
+        // A 90° bearing change every step: ε² → σ² + ατ, total error → √(2σ² + ατ) (docs/models.md#hudson-error-model).
         let m = ErrorModel::default();
         let tau = 30.0;
         let mut e = m.initial(1.0, 1.0, &Vec3::zeros(), &Vec3::new(100.0, 0.0, 0.0));
@@ -156,7 +158,7 @@ mod tests {
 
     #[test]
     fn constant_bearing_grows_unaided() {
-        // ε² = ε₀² + n·α·τ when the bearing never changes (digest §9 ii).
+        // ε² = ε₀² + n·α·τ when the bearing never changes (docs/models.md#hudson-error-model).
         let m = ErrorModel::default();
         let mut e = m.initial(1.0, 1.5, &Vec3::zeros(), &Vec3::new(0.0, 300.0, 50.0));
         for n in 1..=50 {

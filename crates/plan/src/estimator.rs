@@ -1,10 +1,11 @@
-//! The estimator-aware cost (issue 10): the planner scores a CNA path by the horizontal position
+//! The estimator-aware cost (invented, docs/models.md#estimator-cost): the planner scores a CNA
+//! path by the horizontal position
 //! covariances the survey AUVs' own EKFs would hold, instead of Hudson's isotropic model.
 //!
 //! Derivation, per AUV and look-ahead level of τ seconds (P = [[a, b], [b, c]] east/north, m²):
 //! 1. Prediction: P̃ = P + q·τ·I, with q (m²/s) the horizontal process noise the AUV's filter
 //!    adds per second and axis (reported with P, [`AuvEstimate`]).
-//!    Step 1b (issue 10, session 28; invented): a water current c (m/s) the AUVs' filters do not
+//!    Step 1b (invented): a water current c (m/s) the AUVs' filters do not
 //!    model, as the CNA measures it (`unmodelled_current`), moves each AUV's true position by cτ
 //!    per level while its filter's covariance does not see it. The error it leaves is along c,
 //!    deterministic, and removed only by pings whose line of sight has a component along c. Taken
@@ -17,7 +18,7 @@
 //!    the AUV tells it nothing horizontally, which is the 3-D geometry). Range noise variance
 //!    R(r) = σ₀² + (k·r/1000)² ([`RangeNoise`]). The EKF update is
 //!    P⁺ = P̃ − P̃hhᵀP̃ / (hᵀP̃h + R).
-//!    The CNA's own horizontal position error (issue 10, AUV CNA): the AUV's filter takes the
+//!    The CNA's own horizontal position error (an AUV CNA, or a GPS-fixed one): the AUV's filter takes the
 //!    CNA's broadcast position as exact, but it is off by e ~ N(0, σ_c²·I₂) per axis (its GPS σ,
 //!    or an AUV CNA's dead-reckoning σ grown since its last fix: `PlanInput::cna_variance`). The
 //!    range is measured from the true CNA and predicted from the broadcast one, so the innovation
@@ -25,14 +26,14 @@
 //!    per ping; the CNA's error is a random walk, so this under-states its correlation.) The
 //!    ping's information along its direction û = h/|h| is then |h|²/(R(r) + σ_c²·|h|²), which
 //!    grows with |h|² ≤ 1: at most 1/(R(r) + σ_c²). The bounds below therefore take that
-//!    (`EkfCost::ping_floor`) with |h| = 1; with 1/R(r_min) alone they stayed valid but cut far
-//!    fewer nodes (N = 5, A = 7, L = 7 at σ_c² = 1 m²: 507k nodes against 63k).
+//!    (`EkfCost::ping_floor`) with |h| = 1; with 1/R(r_min) alone they stay valid but cut far
+//!    fewer nodes.
 //! 3. The packet arrives with probability p_s(r) (the acoustic link's model, passed in as a
 //!    [`LinkModel`]); the expected posterior is E = (1 − p_s)·P̃ + p_s·P⁺
 //!    = P̃ − p_s·P̃hhᵀP̃ / (hᵀP̃h + R). Beyond an AUV's slot reach (`PlanInput::slot_reach_m`: its
 //!    own slot starts before a broadcast from that far has arrived, and a modem hears nothing
-//!    while it sends; issue 10, session 32) p_s = 0, and step 7's useful range stops there.
-//! 4. Range bias the covariance does not see (issue 10 item 3): a sound-speed error δc, the same
+//!    while it sends) p_s = 0, and step 7's useful range stops there.
+//! 4. Range bias the covariance does not see: a sound-speed error δc, the same
 //!    for every ping, makes a range over r off by b = r·δc/c. The filter takes it for noise; after
 //!    a ping its estimate moves along h until the range fits, so its radial error becomes
 //!    g·b + (1 − g)·(the previous radial error), g = hᵀP̃h/(hᵀP̃h + R) close to 1 whenever the
@@ -43,8 +44,8 @@
 //!    uncertainty, never the true sound speed), the expected squared true error is about
 //!    M = E + β(r)²/2·I, β(r) = k_b·r/1000 (isotropic: the bias's direction turns with the line of
 //!    sight). k_b = 0 is the covariance alone.
-//!    With a known sound-speed profile (a CTD cast the CNA holds; [`BiasTable`], issue 10,
-//!    session 25) the scale error is no longer a belief but f(z_c, z_a) = c_f/c̄ − 1 between the
+//!    With a known sound-speed profile (a CTD cast the CNA holds; [`BiasTable`]) the scale error
+//!    is no longer a belief but f(z_c, z_a) = c_f/c̄ − 1 between the
 //!    CNA's depth and the AUV's (c_f the speed the AUVs' filters assume, c̄ the harmonic mean of the
 //!    water between): a range over r is measured r·(1 + f), and the filter, which knows both
 //!    depths, moves its horizontal estimate along the line of sight by f·r/|h_xy| until the range
@@ -66,7 +67,7 @@
 //!    bounds (a fixed factor ≥ 1 commutes with sum and max); the bias term of step 4 is ≥ 0 and
 //!    only increases every term, so the covariance bounds below stay valid lower bounds for M;
 //!    they add it at the shortest range the CNA can be at (`EkfCost::term_bound`).
-//! 7. Reach-time cost-to-go (`reach_success` p_u; issue 10's unwon N = 5 cell): step 6 holds the
+//! 7. Reach-time cost-to-go (`reach_success` p_u; for AUVs spread beyond the link's reach): step 6 holds the
 //!    leaf's term for H levels, which is right for an AUV the CNA can ping from the leaf and wrong
 //!    for one beyond the link's reach: its pings are lost (p_s ≈ 0) and its filter's covariance
 //!    grows by qτ per axis and level until the CNA gets close enough. The useful range r_u is the
@@ -89,13 +90,12 @@
 //! ι = 1/(R(r_min) + σ_c²) bounds the information of a ping that arrives and p̄ = p̄(r_min) its
 //! arrival (p̄(r) = the link's best success at ranges ≥ r, [`LinkTable::best_beyond`]; E falls
 //! with p_s because P⁺ ⪯ P̃). A lost ping keeps the prior, so a lossy link's (1 − p̄)·P̃ is what
-//! keeps the bound close to the cost (N = 3, A = 5, L = 5, link plateau 0.8: nearly the whole
-//! tree was searched with p̄ = 1). The
+//! keeps the bound close to the cost (with p̄ = 1 a lossy link's tree is searched almost whole). The
 //! information Y = G⁻¹ is bounded above by a diagonal matrix in the frame of the last ping's
 //! line of sight, propagated level by level; each level's ping direction turns from the last by
 //! at most asin(reach / distance) (AUV motion plus CNA step against how close the CNA can be).
-//! Invented parameters (R's defaults) are marked; digest: hudson §2.2 (the model it replaces),
-//! gill §3 (the filter it models).
+//! Invented parameters (R's defaults) are marked. The model it replaces is Hudson 2012, Ch. 3,
+//! eq. (1); the filter it models is Gill 2013, §2.2.1.
 
 use crate::cost_model::{norm, Below, CostModel};
 use crate::true_error::TruthSpec;
@@ -121,7 +121,7 @@ pub enum Aggregate {
 }
 
 /// Range noise the planner assumes, as a standard deviation growing with distance:
-/// σ(r)² = σ₀² + (k·r/1000)². Invented defaults (issue 10): σ₀ = 0.15 m (the closed loop's range
+/// σ(r)² = σ₀² + (k·r/1000)². Invented defaults (docs/models.md#estimator-cost): σ₀ = 0.15 m (the closed loop's range
 /// channel), k = 1 m per km (a 0.07 % sound-speed error).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -177,11 +177,11 @@ pub struct EstimatorSpec {
     pub reach_success: f64,
     /// c of step 1b: the water current the AUVs' filters do not model, east and north, m/s, as
     /// the CNA measures it (its ADCP); [0, 0] (the default) = none. The true-error cost (`truth`)
-    /// takes it as the AUVs' mean error instead (`true_error` step 1; session 29).
+    /// takes it as the AUVs' mean error instead (`true_error` step 1).
     #[serde(default, skip_serializing_if = "is_still")]
     pub unmodelled_current: [f64; 2],
     /// m of step 1b: levels over which the current's drift is taken to build up unseen (≥ 0).
-    /// Invented; 4 (2 minutes at τ = 30 s) measured on `auv-cna-tdma.toml` (session 28).
+    /// Invented (docs/models.md#estimator-cost); 4 (2 minutes at τ = 30 s) by default.
     #[serde(default = "drift_levels")]
     pub drift_levels: f64,
     /// Some: score the AUVs' expected true error under their filters' gains instead of the
@@ -374,7 +374,7 @@ pub struct BiasTable {
 
 /// Where a known-sign scale error enters the horizontal estimate: 1/|h_xy|² is floored here, so a
 /// ping from almost overhead (which the distance limits forbid anyway) costs a large finite bias.
-/// Invented (issue 10, session 25; the filter it models is digest gill §3): a numerical guard, not
+/// Invented (the filter it models is Gill 2013, §2.2.1): a numerical guard, not
 /// a model of the sea, so it is not a scenario key.
 const BIAS_H2_FLOOR: f64 = 0.05;
 
@@ -476,8 +476,7 @@ pub fn expected_posterior(
 
 /// How much the tangential information is inflated to make the information diagonal in the
 /// line-of-sight frame (any value > 0 keeps the bound valid; small keeps the tangential part,
-/// which dominates, tight). Measured on the N = 5, A = 7 workloads: 0.005 expands fewer nodes
-/// than 0.001 or 0.02.
+/// which dominates, tight). Chosen with `coopnav bench planner` (docs/evaluation.md).
 const TANGENTIAL_SLACK: f64 = 0.005;
 
 /// The estimator-aware model of one decision.

@@ -1,9 +1,9 @@
-//! CNA motion (Hudson eq. 2, reconstructed: digest §2.3–2.4, A4–A6): the discrete heading (and,
+//! CNA motion (Hudson 2012, Ch. 3, eq. 2; reconstructed, docs/models.md#hudson-motion): the discrete heading (and,
 //! for an AUV CNA, pitch) options, and one constant-speed straight step of τ seconds.
 //!
 //! Headings are math convention (0 = east, counter-clockwise). Depth z is positive down and a
 //! positive pitch is nose up, so z' = z − s·τ·sin φ'. The new heading and pitch hold for the
-//! whole step (instantaneous turn, A6).
+//! whole step (instantaneous turn; docs/models.md#hudson-motion).
 
 use coopnav_core::validation::{CheckFields, Problems};
 use coopnav_core::{Heading, Vec3};
@@ -15,29 +15,30 @@ use serde::{Deserialize, Serialize};
 pub enum CnaKind {
     /// A surface craft: heading options only, depth fixed.
     Asc {},
-    /// An AUV CNA: B pitch options too, with pitch and depth limits (A5 defaults, invented).
+    /// An AUV CNA: B pitch options too, with pitch and depth limits (invented defaults, docs/models.md#hudson-motion).
     Auv {
         /// Number of pitch options B (≥ 1).
         pitch_options: usize,
         /// Maximum pitch rate φ̇max, degrees per second (Table 5.1: 1.5).
         #[serde(default = "default_pitch_rate")]
         max_pitch_rate_deg_s: f64,
-        /// Maximum |pitch| φmax, degrees. Reconstructed: digest A5 (30°).
+        /// Maximum |pitch| φmax, degrees. Invented: 30°, the thesis's dive-angle example
+        /// (docs/models.md#hudson-motion).
         #[serde(default = "default_max_pitch")]
         max_pitch_deg: f64,
-        /// Shallowest allowed depth, m. Reconstructed: digest A5 (0 m).
+        /// Shallowest allowed depth, m. Invented: 0 m (docs/models.md#hudson-motion).
         #[serde(default)]
         min_depth: f64,
-        /// Deepest allowed depth, m. Reconstructed: digest A5 (100 m).
+        /// Deepest allowed depth, m. Invented: 100 m (docs/models.md#hudson-motion).
         #[serde(default = "default_max_depth")]
         max_depth: f64,
         /// How many tree levels offer the pitch options, from level 0 (≥ 1); deeper levels hold
-        /// the pitch (Δφ = 0, heading options only). None: every level. Issue 10's sloping
-        /// scenario: the A·B options per level force a short look-ahead, and deeper pitch options
-        /// seldom pay (measured, `experiments::closed_loop::PITCH_LEVELS`).
+        /// the pitch (Δφ = 0, heading options only). None: every level. With an AUV CNA the A·B
+        /// options per level force a short look-ahead, and deeper pitch options seldom pay
+        /// (docs/evaluation.md).
         #[serde(default)]
         pitch_levels: Option<usize>,
-        /// The CNA as the closed loop's engine flies it (issue 10, session 25): every step starts
+        /// The CNA as the closed loop's engine flies it: every step starts
         /// level and pitches by its option alone, cut at `max_pitch_deg`, and its depth stops at
         /// `min_depth`/`max_depth` (the craft reaches the commanded depth and holds it). False: the
         /// thesis's model, the pitch carried from level to level and any excess penalised, under
@@ -61,7 +62,7 @@ fn default_turn_rate() -> f64 {
 }
 
 impl CnaKind {
-    /// An AUV CNA with B pitch options and the digest's default limits.
+    /// An AUV CNA with B pitch options and the default (invented) limits.
     pub fn auv(pitch_options: usize) -> Self {
         CnaKind::Auv {
             pitch_options,
@@ -190,7 +191,7 @@ impl CheckFields for MotionConfig {
 }
 
 impl MotionConfig {
-    /// The A·B options in ascending (Δψ, Δφ) order: the order that breaks ties (A10).
+    /// The A·B options in ascending (Δψ, Δφ) order: the order that breaks ties (docs/models.md#hudson-search).
     pub fn options(&self) -> Vec<MotionOption> {
         let psi = linspace((self.max_turn_rate_deg_s * self.tau).to_radians(), self.heading_options);
         let phi = match self.cna {

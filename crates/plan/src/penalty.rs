@@ -1,4 +1,5 @@
-//! Distance penalties (Hudson eqs. 4–12; formulas lost, reconstructed: digest §2.6–2.7, A7–A8).
+//! Distance penalties (Hudson 2012, Sec. 3.2, eqs. 4–12; formulas lost, reconstructed:
+//! docs/models.md#hudson-penalties).
 //!
 //! A violation is measured on the worst AUV: too close v_TC = d_min − min_k d_k, too far
 //! v_TF = max_k d_k − d_max (3-D distances). "Too close" wins when both apply. Each penalty is one
@@ -142,7 +143,7 @@ impl CheckFields for PenaltyPair {
     }
 }
 
-/// The penalty at level 0 (primary) and at levels ≥ 1 (look-ahead), digest A8.
+/// The penalty at level 0 (primary) and at levels ≥ 1 (look-ahead), docs/models.md#hudson-penalties.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct PenaltyPair {
@@ -150,7 +151,7 @@ pub struct PenaltyPair {
     pub look_ahead: PenaltyFn,
 }
 
-/// Table 5.2's cases. Every preset is a reconstruction (digest §2.7, A7): only the failure-point
+/// Table 5.2's cases. Every preset is a reconstruction (docs/models.md#hudson-penalties): only the failure-point
 /// ratios survive — Orig. 2:1 (eq. 13), Orig.² √2:1, Orig.³ ∛2:1, 5×Cost 12.5:1 at zero cost,
 /// 5×Cost² 3.5:1, 5×Cost³ 2.3:1. The "New" look-ahead penalty (12) is invented: 2·C + v_TC³ or
 /// 2·C + v_TF² (different powers per side, as the thesis says).

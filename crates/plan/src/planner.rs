@@ -44,7 +44,7 @@ pub enum Algorithm {
     BruteForce,
 }
 
-/// The time budget of one decision (digest §7.2, A16).
+/// The time budget of one decision (docs/models.md#hudson-time-budget).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
 pub enum Deadline {
@@ -75,24 +75,21 @@ pub struct SearchConfig {
     /// The parallel mode searches on the calling thread first and shares the rest of the tree
     /// among rayon's threads only once it has expanded this many nodes; subtrees it finished are
     /// not searched again. Small trees thus never pay for the threads (0 = share at once).
-    /// Invented (issue 10), measured with `coopnav bench planner`.
+    /// Invented; chosen with `coopnav bench planner`.
     #[serde(default = "default_parallel_after_nodes")]
     pub parallel_after_nodes: u64,
     /// ... and once this many microseconds have passed since the search began: waking the
     /// threads and enumerating the tasks costs about 0.1 ms, so a tree whose whole search is
-    /// shorter than a few of those only loses by sharing (a 2,245-node Hudson tree of 0.2 ms ran
-    /// at 0.62× one thread when handed over at 2,000 nodes). 0 = the node count alone decides.
-    /// Invented (issue 10), measured with `coopnav bench planner` (session 23, quiet, 3 alternations:
-    /// that tree 0.65–0.68× → 0.99×; the 0.5–2 ms trees' speed-ups vary 0.6–1.6× from run to run
-    /// either way). Only the node count depends on it (and so on timing), never the decision or
-    /// its cost.
+    /// shorter than a few of those only loses by sharing. 0 = the node count alone decides.
+    /// Invented; chosen with `coopnav bench planner`. Only the node count depends on it (and so on
+    /// timing), never the decision or its cost.
     #[serde(default = "default_parallel_after_us")]
     pub parallel_after_us: u64,
     #[serde(default)]
     pub deadline: Deadline,
     /// Relative tolerance of the tie-break: every level-0 option whose minimum path cost is within
     /// `tie_tolerance` × the overall minimum of it ties, and the lowest option index wins (so
-    /// mirror-symmetric set-ups are not decided by rounding). Invented (issue 10): 1e-9.
+    /// mirror-symmetric set-ups are not decided by rounding). Invented: 1e-9.
     #[serde(default = "default_tie_tolerance")]
     pub tie_tolerance: f64,
 }
@@ -126,7 +123,7 @@ impl Default for SearchConfig {
     }
 }
 
-/// What the planner minimises (digest §2.2 for Hudson's; `estimator` module for the other).
+/// What the planner minimises (Hudson 2012, Ch. 3, eqs. 1 and 3 for Hudson's; `estimator` module for the other).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, Default)]
 #[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
 pub enum CostSpec {
@@ -216,7 +213,7 @@ impl CheckFields for PlannerConfig {
 }
 
 /// Where the survey AUVs will be: position of AUV `k` at time `t`, or `None` past the end of
-/// what is known (the horizon is then truncated, A11).
+/// what is known (the horizon is then truncated, docs/models.md#hudson-search).
 pub trait AuvForecast {
     fn n_auvs(&self) -> usize;
     fn position(&self, k: usize, t: f64) -> Option<Vec3>;
@@ -356,7 +353,8 @@ impl LookAheadPlanner {
         }
         let options = cfg.motion.fast_options();
         let root_pose = FastPose::from_pose(&input.cna);
-        // Level 0 keeps only the options that break the AUV-CNA limits least (none, normally): A5.
+        // Level 0 keeps only the options that break the AUV-CNA limits least (none, normally):
+        // docs/models.md#hudson-motion.
         let violation: Vec<f64> =
             options.iter().map(|o| cfg.motion.limit_violation(&cfg.motion.step(&root_pose, o))).collect();
         let least = violation.iter().cloned().fold(f64::INFINITY, f64::min);

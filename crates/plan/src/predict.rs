@@ -1,4 +1,4 @@
-//! Underway-mode survey-track prediction (Hudson digest §2.10, §3.3, A13–A14).
+//! Underway-mode survey-track prediction (Hudson 2012, Sec. 4.2; docs/models.md#hudson-prediction).
 //!
 //! In underway mode the CNA knows nothing a priori about the survey AUVs' paths; it learns them
 //! from acoustic status messages (position, depth, speed, heading and the next few waypoints).
@@ -31,10 +31,10 @@ pub struct StatusReport {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum WaypointUse {
-    /// Every received waypoint (Hudson's future-work item 2; the default).
+    /// Every received waypoint (the default; recommended for future work in Hudson 2012, Ch. 7).
     All,
-    /// At most this many. The thesis used min(L, 3), and one waypoint when L = 0 (digest §2.10,
-    /// limitation 1); use [`WaypointUse::thesis`] for that.
+    /// At most this many. The thesis used min(L, 3), and one waypoint when L = 0 (Hudson 2012,
+    /// Sec. 4.2); use [`WaypointUse::thesis`] for that.
     AtMost(usize),
 }
 
@@ -57,27 +57,27 @@ impl WaypointUse {
 pub enum BeyondWaypoints {
     /// Stop at the last reported waypoint (the default). Past it the CNA knows nothing of the
     /// AUV's plan, and a straight-line guess grows without bound while the AUV stays unheard:
-    /// on the mission engine a silenced AUV's extrapolation drew the CNA hundreds of metres off
-    /// (issue 10). Holding the last known point bounds the prediction by the plan the AUV sent.
+    /// on the mission engine a silenced AUV's extrapolation drew the CNA hundreds of metres off.
+    /// Holding the last known point bounds the prediction by the plan the AUV sent.
     /// With no waypoint reported, the AUV is held at its reported position.
     Stop,
-    /// Keep going along the last leg into the last waypoint (\[I\]: an AUV that reached a waypoint
+    /// Keep going along the last leg into the last waypoint (an interpretation: an AUV that reached a waypoint
     /// rarely keeps the heading it reported on the way to the first one).
     LastLeg,
-    /// The last reported heading, as the thesis's text reads (digest A13).
+    /// The last reported heading, as the thesis's text reads (Hudson 2012, Sec. 4.2).
     ReportedHeading,
 }
 
-/// Settings of the predictor. Defaults follow the digest's recommendations (A13, A14).
+/// Settings of the predictor. Defaults: docs/models.md#hudson-prediction.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct PredictorConfig {
     pub waypoints: WaypointUse,
     pub beyond: BeyondWaypoints,
-    /// Reported speeds at or below this (m/s) mean the AUV has stopped (digest §2.10, limitation 2).
+    /// Reported speeds at or below this (m/s) mean the AUV has stopped (Hudson 2012, Sec. 4.2).
     pub stopped_speed: f64,
     /// Reports older than the newest by more than this (s) are dropped from the history; the thesis
-    /// capped its report vector without giving the size (digest §3.3).
+    /// capped its report vector without giving the size (Hudson 2012, Sec. 4.2).
     pub max_report_age: f64,
 }
 
@@ -132,7 +132,7 @@ impl UnderwayPredictor {
         }
     }
 
-    /// Number of reports received so far (the planning start rule, digest A14, counts these).
+    /// Number of reports received so far (the planning start rule of Hudson 2012, Sec. 4.2, counts these).
     pub fn reports_received(&self) -> usize {
         self.received
     }
@@ -153,7 +153,7 @@ impl UnderwayPredictor {
     }
 
     /// The position the CNA plans with at `t`: from the reports once `min_reports` of them
-    /// arrived (the planning start rule, digest A14); before that from the mission plan if one is
+    /// arrived (the planning start rule, Hudson 2012, Sec. 4.2); before that from the mission plan if one is
     /// known, else none.
     pub fn planning_position(&self, t: f64, min_reports: usize) -> Option<Vec3> {
         if self.received >= min_reports {

@@ -308,7 +308,7 @@ fn visit<M: CostModel>(
         return;
     }
     // A bound that costs nothing (Hudson's, `BOUND_COST` 0) is always worth trying: its level's
-    // statistics would never be read, and keeping them cost its search 1–4 % (session 25).
+    // statistics would never be read, and keeping them costs its search time.
     let adaptive = M::BOUND_COST > 0.0;
     if !adaptive || ctx.bounds[level].worth_trying(M::BOUND_COST * (tree.depth - 1 - level) as f64) {
         let cut = v + tree.rest_bound(level, node, ctx.bound() - v) > ctx.bound();

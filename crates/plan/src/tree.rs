@@ -22,7 +22,7 @@ pub(crate) struct Tree<M: CostModel> {
     pub limits: DistanceLimits,
     pub penalties: PenaltyPair,
     pub options: Vec<FastOption>,
-    /// Level-0 options left after removing those that break AUV-CNA limits (A5).
+    /// Level-0 options left after removing those that break AUV-CNA limits (docs/models.md#hudson-motion).
     pub root_options: Vec<usize>,
     /// Every option index, 0..A·B (the options of levels ≥ 1 that offer the pitch options).
     pub all_options: Vec<usize>,
@@ -32,7 +32,7 @@ pub(crate) struct Tree<M: CostModel> {
     /// Levels below this one offer every option, deeper ones `held_pitch_options` only
     /// (`CnaKind::Auv::pitch_levels`; ≥ depth: every level).
     pub pitch_levels: usize,
-    /// Number of levels (L + 1, or fewer when the forecast ends: A11).
+    /// Number of levels (L + 1, or fewer when the forecast ends: docs/models.md#hudson-search).
     pub depth: usize,
     pub n: usize,
     /// Predicted AUV positions, `auv[level * n + k]`, at t + (level + 1)·τ.
@@ -268,7 +268,7 @@ impl<M: CostModel> Tree<M> {
             return self.penalties.primary.apply(raw, &v);
         }
         let c = if v.any() { self.penalties.look_ahead.apply(raw, &v) } else { raw };
-        // Look-ahead AUV-CNA pitch/depth violations double the cost (Sec. 5.2, A5).
+        // Look-ahead AUV-CNA pitch/depth violations double the cost (Hudson 2012, Sec. 5.2).
         if self.motion.limit_violation(pose) > 0.0 {
             2.0 * c
         } else {

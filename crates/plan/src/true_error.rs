@@ -1,11 +1,11 @@
-//! The true-error cost (issue 10, session 23): the planner scores the survey AUVs' expected TRUE
+//! The true-error cost (invented, docs/models.md#true-error-cost): the planner scores the survey AUVs' expected TRUE
 //! horizontal navigation error under their own filters' gains, not the filters' covariance. The
 //! filters' process noise far exceeds the true dead-reckoning drift and their range noise leaves
 //! out the truth's outliers and the CNA's own navigation error, so the covariance the estimator-aware
-//! cost minimises is not the error it stands for (NEES 2.7 against 1.6–1.9 for the baselines).
+//! cost minimises is not the error it stands for (the filters' NEES is well above 1).
 //!
 //! Derivation, per AUV and look-ahead level of τ seconds: a suboptimal-filter error recursion
-//! (the filter's gain applied to the true error; digest gill §3 for the filter, the rest an
+//! (the filter's gain applied to the true error; Gill 2013, §2.2.1 for the filter, the rest an
 //! invention). Horizontal errors only; ε = x̂ − x the AUV's estimate error, e_c = the CNA's
 //! broadcast position minus its true one. The state is P (the filter's covariance, as
 //! `estimator` steps 1–3 model it), S = E[εεᵀ], C = E[ε e_cᵀ] and E[e_c e_cᵀ] = v·I.
@@ -13,8 +13,8 @@
 //!    per axis, [`TruthSpec::drift_m2_s`]), C unchanged (the AUV's drift is independent of the
 //!    CNA's), ṽ = v + D·τ (the CNA's own navigation diffusion, [`TruthSpec::cna_diffusion_m2_s`]):
 //!    the CNA's error is a shared, persistent random walk, not fresh noise per ping.
-//!    An unmodelled water current c (`EstimatorSpec::unmodelled_current`, as the CNA measures it;
-//!    issue 10, session 29) moves the AUV by cτ per level while its filter predicts no such
+//!    An unmodelled water current c (`EstimatorSpec::unmodelled_current`, as the CNA measures it)
+//!    moves the AUV by cτ per level while its filter predicts no such
 //!    motion: ε gains the deterministic d = −cτ. With m = E[ε] carried beside S (which holds the
 //!    mean: S = Cov ε + m mᵀ), S̃ gains m dᵀ + d mᵀ + d dᵀ and m̃ = m + d (exact).
 //! 2. A ping from the CNA, h its horizontal range Jacobian (`estimator` step 2). The filter's gain
@@ -25,8 +25,9 @@
 //!       = S̃ + K(g − S̃h)ᵀ + (g − S̃h)Kᵀ + (hᵀS̃h + ṽ|h|² + R_t(r))·KKᵀ, g = Ch − K·(hᵀCh);
 //!    C⁺ = A C + ṽ·Khᵀ = C + K·(ṽh − Cᵀh)ᵀ.
 //!    R_t(r) = σ_t² + (k_t·r/1000)² ([`TruthSpec::range_noise`]): the true range error's second
-//!    moment (Gill's outlier mixture, digest gill §4: 5.6 % of ranges 5–10 m long, E[n²] ≈ 3.2 m²,
-//!    against the filter's 0.15 m). The update is linear in the errors, so second moments carry
+//!    moment (Gill's outlier mixture, Gill 2013, §2.4.1: 5 % of ranges 5–10 m long, 10 % dropped,
+//!    so 5.6 % of those received; E[n²] ≈ 3.2 m², against the filter's 0.15 m). The update is
+//!    linear in the errors, so second moments carry
 //!    over exactly whatever their distribution.
 //! 3. The ping arrives with probability p_s(r): S_E = (1 − p_s)·S̃ + p_s·S⁺, C_E likewise (the
 //!    second moments of the mixture), P as `estimator` step 3. The mean: ε⁺'s is A·m̃ (e_c and n
@@ -36,7 +37,7 @@
 //!    (the current's mean is not grown beyond the horizon).
 //!
 //!
-//! Lower bound below a node (issue 10 item 3, session 31). The recursion is the exact second
+//! Lower bound below a node. The recursion is the exact second
 //! moment of a linear estimator with deterministic gains (K follows the filter's expected P, not
 //! the pings that arrived) whose pings arrive independently: S = E over the arrivals of
 //! E[εεᵀ | arrivals], and given the arrivals ε is the error of a linear unbiased estimator of the
@@ -63,9 +64,8 @@
 //! 0, and F2 is left out where C_z is near singular (its inverse would be rounding).
 //! It is loose where the filter's own gain is far from the best one: the filter trusts its ranges
 //! (R_f ≪ R_t), so each ping hands over nearly the whole range error, and only the newest ping's
-//! share of that is counted. Measured (session 31): N = 5, A = 5, L = 5, the AUV CNA's settled
-//! moments, 16–33 % of the nodes cut (13 100–16 395 of 19 530 searched, none without it); the
-//! bench's current workload (an ASC, C = 0), none; the full comparison's time unchanged.
+//! share of that is counted. It cuts nodes when the CNA's own error is correlated with the AUVs'
+//! (an AUV CNA's settled moments) and hardly any for an ASC (C = 0).
 
 use crate::cost_model::{Below, CostModel};
 use crate::estimator::{eigenvalues, CovFloor, EigenFloor, EkfCost, Ping, RangeNoise};
@@ -74,7 +74,8 @@ use coopnav_core::validation::{CheckFields, Problems};
 use serde::{Deserialize, Serialize};
 
 /// What the truth model needs beyond the filter's own settings (`[planner.cost] truth = {...}`).
-/// Every value is an invention of issue 10 (session 23), chosen on the tuning seed.
+/// Every default is invented (docs/models.md#true-error-cost), chosen on tuning runs apart from
+/// the evaluation's seeds.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct TruthSpec {

@@ -1,8 +1,9 @@
 //! Standard planning workloads for benchmarks (criterion and `coopnav bench planner`): one
-//! decision of the planner on the digest §5.2 geometry — N survey AUVs on adjacent lanes `gap`
+//! decision of the planner on the geometry of Hudson 2012, Sec. 5.2 — N survey AUVs on adjacent lanes `gap`
 //! metres apart (500 m in Sec. 5.2; 100 m for the Sec. 5.3 canonical geometry) heading north at
 //! 1.5 m/s at 90 m depth, the CNA starting at (140, 0, 0) heading east,
-//! τ = 10 s, s = 1.5 m/s, penalty case 1. Invented where the thesis is silent (digest A17, A18).
+//! τ = 10 s, s = 1.5 m/s, penalty case 1. Invented where the thesis is silent
+//! (docs/models.md#hudson-geometry).
 //! Under the estimator-aware cost every AUV starts with P = 1 m²·I and q = α/2 per axis (the
 //! same trace growth as Hudson's α), over a perfect link or a lossy one ([`PlateauLink`]).
 //!
@@ -33,7 +34,7 @@ pub struct Workload {
 
 /// A lossy link for the workloads: success = plateau / (1 + (r / 1500 m)⁴). The closed loop's
 /// rate-0 curve has a plateau of about 0.8 (`REACH_SUCCESS` in the sim crate's closed-loop
-/// experiment); invented shape (issue 10).
+/// experiment); invented shape.
 #[derive(Debug, Clone, Copy)]
 pub struct PlateauLink(pub f64);
 
@@ -44,8 +45,8 @@ impl LinkModel for PlateauLink {
 }
 
 impl Workload {
-    /// The standard workloads: the issue-2 ones under Hudson's cost, then the issue-10 ones under
-    /// the estimator-aware cost (N = 5, A = 7, L = 5 and L = 7, targets 5 ms and 100 ms), then
+    /// The standard workloads: Hudson's cost on the thesis's geometries, then the
+    /// estimator-aware cost (N = 5, A = 7, L = 5 and L = 7, targets 5 ms and 100 ms), then
     /// with the range bias and cost-to-go the closed-loop evaluation plans with (6 m/km,
     /// H = 10 levels), the evaluation's sloping tree (N = 3, A = 5, L = 5, the sum of σ) over a
     /// lossy link, and last its current grid's: the true-error cost with a 0.05 m/s current the

@@ -1,4 +1,4 @@
-//! Headroom of the CNA's path (issue 10's tied cells): a clairvoyant rollout policy, a measuring
+//! Headroom of the CNA's path (for the evaluation's tied cells): a clairvoyant rollout policy, a measuring
 //! tool, not a planner. At every CNA decision it forks the TRUE mission once per motion option of
 //! the planner's level 0 (headings, and pitch for an AUV CNA, those within the pitch and depth
 //! limits), commits that option for one period, then lets the base policy steer for HORIZON_S

@@ -1,4 +1,4 @@
-//! Tuning runs of `closed-loop-vs-baselines` on the TUNING seed only (the evaluation refuses it):
+//! Tuning runs of `closed-loop-vs-baselines` on base seed `TUNING_SEED` only (the evaluation refuses it):
 //! one cell, chosen policies, optional scenario overrides, the comparison table printed.
 //! `cargo run --release -p coopnav-sim --example closed_loop_tune -- RUNS current|sloping-auv-cna N
 //! POLICY,POLICY,... [DURATION_S|-] [section.key=TOML_VALUE ...]`

@@ -1,4 +1,4 @@
-//! Geodetic field logs end to end (gill digest §6.4, §10 A28): a simulated log written in
+//! Geodetic field logs end to end (Gill 2013, §3.3; docs/models.md#gill-geodesy): a simulated log written in
 //! latitude/longitude post-processes like the same log in metres, and buoy fixes carrying the
 //! UI AUV's float32 storage artefact cost a measurable (small) amount of accuracy.
 

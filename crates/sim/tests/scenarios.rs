@@ -90,7 +90,7 @@ fn every_bellhop_scenario_in_the_library_loads_and_runs_reduced() {
     }
 }
 
-/// The library file whose CNA starts out of its end AUVs' reach on purpose (issue 10's spread
+/// The library file whose CNA starts out of its end AUVs' reach on purpose (the spread
 /// fleet): in the reduced 600 s no CNA can serve the whole fleet.
 const SPREAD_FLEET: &str = "spread-fleet.toml";
 
@@ -105,7 +105,7 @@ fn assert_the_end_auvs_start_out_of_reach(file: &Path, r: &coopnav_sim::engine::
 /// The spread fleet's whole mission with `planner-estimator`: with the file's settings every AUV's
 /// statuses reach the CNA; with the estimator's defaults (level-0 distance penalty, the assumed
 /// link, pings counted as expected, no reach cost-to-go) an end AUV is never heard, as on the
-/// benchmark before issue 10's spread-fleet change.
+/// benchmark without the file's settings.
 #[test]
 #[cfg_attr(not(bellhop_installed), ignore = "BELLHOP is not installed: run scripts/install-bellhop.sh")]
 fn on_the_spread_fleet_the_tuned_estimator_planner_hears_every_auv_and_its_defaults_do_not() {

@@ -1,6 +1,7 @@
 //! Analytic transmission loss: TL = k·10·log10(d) + α(f)·d, with Thorp's absorption α
-//! (nams digest §6.7 item 2 and §8 item 1, eq. 11 reconstructed; k = 1.5 is the value of the
-//! thesis's reference 5, 2 is spherical spreading). The thesis calls it "overly generic".
+//! (Nams 2014, eq. 11, whose body is lost: reconstructed, docs/models.md#nams-transmission-loss;
+//! k = 1.5 is the value of the thesis's reference 5, 2 is spherical spreading). The thesis calls it
+//! "overly generic".
 
 use super::{TlError, TransmissionLoss};
 use coopnav_core::Vec3;
@@ -49,7 +50,7 @@ mod tests {
     use super::*;
 
     #[test]
-    fn matches_digest_values() {
+    fn matches_thorp_reference_values() {
         let t = Thorp::default();
         assert!((Thorp::alpha_db_per_km(25_000.0) - 6.105).abs() < 0.01);
         for (d, tl) in [(100.0, 30.6), (500.0, 43.5), (1000.0, 51.1), (2000.0, 61.7), (2800.0, 68.8)] {

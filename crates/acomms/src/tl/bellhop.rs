@@ -1,7 +1,7 @@
 //! The real BELLHOP program (Acoustic Toolbox) as a transmission-loss provider: writes the
 //! `.env`, `.bty` and `.sbp` files for the 2-D slice between source and receiver (October SSP,
-//! mud half-space 1490 m/s, 1.6 g/cm³, 1.0 dB/λ, 25 kHz, BT-1 source pattern; nams digest
-//! §4.5–4.6), runs the binary in a fresh temporary directory, and reads the incoherent TL from the
+//! mud half-space 1490 m/s, 1.6 g/cm³, 1.0 dB/λ, 25 kHz, BT-1 source pattern; Nams 2014, §4.2
+//! and App. A), runs the binary in a fresh temporary directory, and reads the incoherent TL from the
 //! binary `.shd` file: TL = −20·log10|p| at the receiver node.
 //!
 //! The binary is found through `$COOPNAV_BELLHOP`, else `tools/bellhop/bellhop.exe` at the
@@ -62,17 +62,16 @@ pub struct AcousticEnv {
     pub beam: Vec<(f64, f64)>,
     /// Bathymetry samples along the slice (the thesis uses 10).
     pub slice_points: usize,
-    /// Source pitch, deg nose-up: rotates the beam pattern by −pitch (nams digest §4.2).
+    /// Source pitch, deg nose-up: rotates the beam pattern by −pitch (Nams 2014, §4.2.2).
     pub source_pitch_deg: f64,
-    /// Rays in the fan, the same for every run. Invented, measured: BELLHOP's automatic count
-    /// scales with the run's range box (about 370 rays for one receiver at 150 m, 3000 for a
-    /// 1.2 km field), and a receiver 0.5 m under the surface read 46.64 dB from a one-receiver
-    /// run against 45.30 dB from the field; with a fixed fan both read the same value (1000 rays:
-    /// 46.28, 2000: 45.50, 3000 and 4000: 45.29–45.3 dB).
+    /// Rays in the fan, the same for every run. Invented: BELLHOP's automatic count scales with
+    /// the run's range box, so a one-receiver run and a whole field would read a shallow receiver
+    /// differently; with a fixed fan both read the same value, and the default is large enough
+    /// that more rays no longer change it.
     pub beams: usize,
 }
 
-/// The 17 Oct 2013 Bedford Basin cast (nams digest §4.5, App. A).
+/// The 17 Oct 2013 Bedford Basin cast (Nams 2014, §4.2 and App. A).
 pub const OCTOBER_SSP: [(f64, f64); 44] = [
     (0.0, 1496.8),
     (1.0, 1495.9),
@@ -120,7 +119,7 @@ pub const OCTOBER_SSP: [(f64, f64); 44] = [
     (60.0, 1467.3),
 ];
 
-/// BT-1 transducer pattern at 25 kHz (nams digest §4.5, App. A `.sbp`), kept as the thesis's data.
+/// BT-1 transducer pattern at 25 kHz (Nams 2014, App. A `.sbp`), kept as the thesis's data.
 pub const BT1_BEAM: [(f64, f64); 19] = [
     (-135.0, -6.90),
     (-120.0, -9.70),

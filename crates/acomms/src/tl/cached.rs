@@ -2,8 +2,9 @@
 //! source position over a range × receiver-depth grid; lookups interpolate bilinearly in
 //! (range, depth) and linearly between the two nearest bearings.
 //!
-//! Approximation (the thesis's "preparation mode" cached per transmission instead, nams digest
-//! §4.10): a lookup for a source elsewhere uses the field of the anchor with the same relative
+//! Approximation (the thesis's "preparation mode" cached per transmission instead, Nams 2014,
+//! §4.4.4; docs/models.md#nams-transmission-loss): a lookup for a source elsewhere uses the field
+//! of the anchor with the same relative
 //! geometry (horizontal range and bearing from source to receiver, receiver depth), i.e. it
 //! assumes the environment varies slowly across the mission area. Ranges beyond the grid hold the
 //! last column.
@@ -48,8 +49,8 @@ impl GridSpec {
         (1..=n).map(|i| i as f64 * self.range_step).collect()
     }
     /// Depths from the surface: a receiver at an ASC's or a buoy's shallow transducer reads its
-    /// own row, not the first row one step down (that read an uplink to the surface 1.1–1.8 dB
-    /// off a direct run, measured; BELLHOP places a receiver above 0.5 m at 0.5 m).
+    /// own row, not the first row one step down (that reads an uplink to the surface well off a
+    /// direct run; BELLHOP places a receiver above 0.5 m at 0.5 m).
     fn depths(&self) -> Vec<f64> {
         let n = (self.max_depth / self.depth_step).round() as usize;
         (0..=n).map(|i| i as f64 * self.depth_step).collect()
@@ -211,9 +212,10 @@ impl LatticeSpec {
 /// source (range, bearing, depth), so a source on an anchor reads that anchor's own field.
 ///
 /// The transmitter is always the source: BELLHOP applies the beam pattern at the source only, so
-/// swapping the ends (reciprocity) read an uplink 0.8–1.9 dB off a direct run (measured, test
-/// below). Sources between two layers blend them linearly in depth (invented, nams digest §4.6
-/// computes every link directly); a source outside the layers is refused.
+/// swapping the ends (reciprocity) reads an uplink off a direct run by more than the test below
+/// allows. Sources between two layers blend them linearly in depth (invented: Nams 2014, §4.2.2
+/// computes every link directly; docs/models.md#nams-transmission-loss); a source outside the
+/// layers is refused.
 #[derive(Debug, Clone)]
 pub struct AnchorLattice {
     pub lattice: LatticeSpec,
@@ -405,15 +407,13 @@ mod tests {
         assert!(AnchorLattice::build(&DepthPlane, none, spec(), &|_| {}).is_err());
     }
 
-    /// Issue 9: the cached grid must read within 1 dB of a direct BELLHOP run at the same point,
+    /// The cached grid must read within 1 dB of a direct BELLHOP run at the same point,
     /// for the CNA's downlink, the AUVs' uplink, and a buoy's 1 m transducer on a grid built at
     /// the ASC's 0 m. Grid: 16 bearings, 10 m × 2 m cells, anchors 500 m apart, layers at the ASC's
     /// 0 m and the AUVs' 20 m and 28 m; sources off the anchors, nodes and bearings (one AUV 390 m
-    /// beyond the lattice). Measured worst |grid − direct|: downlink 0.26 dB, uplink 0.91 dB,
-    /// buoy 0.81 dB (both worst at the AUV beyond the lattice). Before: the uplink read the
-    /// downlink's field (reciprocity swap) and the surface receiver the 2 m row, up to 1.9 dB off.
-    /// A source at 24 m, blended from the 20 m and 28 m layers, read 0.6–2.0 dB off: layers must
-    /// sit at the transmitters' depths.
+    /// beyond the lattice). The uplink must read its own field, not the downlink's (no
+    /// reciprocity swap), and the surface receiver its own row; a source blended between two
+    /// layers reads further off, so layers must sit at the transmitters' depths.
     #[test]
     #[cfg_attr(not(bellhop_installed), ignore = "BELLHOP is not installed: run scripts/install-bellhop.sh")]
     fn a_lattice_grid_agrees_with_direct_bellhop_runs_within_1_db() {

@@ -1,5 +1,5 @@
-//! `coopnav bench closed-loop`: the issue-5 mission (3 h, 5 survey AUVs, τ = 30 s, A = 5, L = 5,
-//! 10 Hz EKFs) with the planner and the issue-9 realism: the default scenario's channel (Gill
+//! `coopnav bench closed-loop`: the standard mission (3 h, 5 survey AUVs, τ = 30 s, A = 5, L = 5,
+//! 10 Hz EKFs) with the planner and the realistic world: the default scenario's channel (Gill
 //! outliers, sound-speed profile, air time, collisions, half-duplex), the BELLHOP grid and the
 //! current-estimating filters, the CNA knowing the AUVs' mission plans before their first status
 //! (`--before-first-report ignore` for the thesis's rule); wall time (median of reps), real-time
@@ -64,7 +64,7 @@ fn before_first_report(text: &str) -> Result<BeforeFirstReport, String> {
     serde_json::from_value(serde_json::Value::String(text.into())).map_err(|e| e.to_string())
 }
 
-/// Target wall time of issue 9: ≥ 5×10⁴ × real time for 3 h.
+/// Target wall time: ≥ 5×10⁴ × real time for 3 h.
 const TARGET_S: f64 = 0.22;
 
 pub fn run(args: Args) -> Result<()> {

@@ -12,7 +12,7 @@ mod post;
 
 #[derive(Subcommand)]
 pub enum Target {
-    /// One planner decision on the issue-2 workloads: branch-and-bound (1 thread and rayon) vs
+    /// One planner decision on the standard workloads: branch-and-bound (1 thread and rayon) vs
     /// brute force, with node counts and AUV-updates per second.
     Planner(planner::Args),
     /// The Table 5 Monte Carlo (Δt = 0.1 s) for MSBL, HBL One and HBL Two.
@@ -22,9 +22,9 @@ pub enum Target {
     /// against a cached-grid lookup.
     Acomms(acomms::Args),
     /// The closed loop: 3 h mission, 5 survey AUVs, τ = 30 s, planner A = 5, L = 5, 10 Hz EKFs;
-    /// wall time against the ≤ 0.22 s target (5×10⁴ × real time, issue 9), split by engine phase.
+    /// wall time against the ≤ 0.22 s target (5×10⁴ × real time), split by engine phase.
     ClosedLoop(closed_loop::Args),
-    /// Post-processing (EKF + RTS) of a generated 24 h, 10 Hz, 5-beacon field log (issue 12:
+    /// Post-processing (EKF + RTS) of a generated 24 h, 10 Hz, 5-beacon field log (targets:
     /// ≤ 10 s, ≤ 500 MB under `/usr/bin/time -v`); `--tune` times the tuning too (≤ 2 min).
     Post(post::Args),
 }

@@ -1,5 +1,5 @@
 //! `coopnav bench post`: post-processing (EKF + RTS) of a generated field log, by default the
-//! issue-12 target day: 24 h at 10 Hz (yaw rate, speed and heading rows), 5 moving beacons, a
+//! target day: 24 h at 10 Hz (yaw rate, speed and heading rows), 5 moving beacons, a
 //! range every 15 s; with `--tune`, the tuning on it too. Peak memory: run under
 //! `/usr/bin/time -v` (generating the log is part of it; its rows are reported).
 

@@ -1,4 +1,4 @@
-//! Mission metrics (digest §6): per-step cost (unpenalised, A22) and the penalised cost beside
+//! Mission metrics (docs/models.md#hudson-metrics): per-step cost (unpenalised) and the penalised cost beside
 //! it, average and total cost, max and RMS error (the worst AUV), CNA–AUV distances at decision
 //! times, distance-limit violations, and how often the search was cut short.
 

@@ -1,6 +1,6 @@
 //! Steps a CNA planner over a whole pre-deployment mission: every τ the planner plans from the
 //! CNA's pose, the CNA moves to the planned waypoint, and each survey AUV's modelled error is
-//! updated from its a-priori position (Hudson §4.1, digest §2.10, §3.2).
+//! updated from its a-priori position (Hudson 2012, Sec. 4.1).
 
 use super::metrics::{StepRecord, Summary};
 use super::Mission;
@@ -14,7 +14,7 @@ pub enum RunError {
     Plan { step: usize, t: f64, source: PlanError },
 }
 
-/// The a-priori tracks as a forecast; nothing is known past the mission end (A11).
+/// The a-priori tracks as a forecast; nothing is known past the mission end (docs/models.md#hudson-search).
 pub struct TrackForecast<'a> {
     pub tracks: &'a [Track],
     pub end_time: f64,

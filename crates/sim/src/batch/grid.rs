@@ -1,4 +1,5 @@
-//! The buoy-location grid (digest §5.7 item 1, §10 A14): a zero-drift Monte Carlo per candidate
+//! The buoy-location grid (Gill 2013, §2.3.1 and §3.1.1; the thesis's Fig. 13 is lost, so its
+//! optimal region is recomputed): a zero-drift Monte Carlo per candidate
 //! buoy position north of the path, the region within a tolerance of the best cell, and CSV
 //! output (the SVG heat map is in [`crate::output::hbl_plot`]). The caller says how one cell runs (on the
 //! engine: [`engine_cell`]).

@@ -54,7 +54,7 @@ pub struct PolicySummary {
     #[serde(skip)]
     pub auv_runs: Vec<Vec<f64>>,
     /// Per AUV, the runs in which at least one of its status messages reached the CNA (0: no
-    /// policy that plans on reports ever looked for it, by the thesis's start rule A14).
+    /// policy that plans on reports ever looked for it, by the thesis's start rule, Hudson 2012, Sec. 4.2).
     pub auv_heard_runs: Vec<usize>,
     /// Per AUV, over all runs: its status messages sent, and those the channel decoded but a
     /// collision or half-duplex lost (why an AUV is never heard, when it is that).

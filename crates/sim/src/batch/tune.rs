@@ -1,4 +1,5 @@
-//! Coefficient tuning (digest §5.7 item 3): a bounded Nelder–Mead search (argmin) over a chosen
+//! Coefficient tuning (Gill 2013, §2.3.3; docs/models.md#gill-tuning): a bounded Nelder–Mead
+//! search (argmin) over a chosen
 //! subset of the Table 2/3 coefficients of an engine scenario (survey AUV 0's filter, and its
 //! filters of ship 0 and buoy 0), on the zone Monte Carlo's cost with fixed seeds (common random
 //! numbers make the cost a deterministic function of the coefficients).
@@ -14,7 +15,7 @@ use thiserror::Error;
 
 /// A tunable coefficient (E and N share one value, as in Table 3). The first seven are the
 /// thesis's tuned set (Tables 2–3); the rest are the coefficients it kept at unpublished MSBL
-/// values (digest §5.7 item 3, §10 A2), so a user can re-derive them the same way.
+/// values (Gill 2013, §2.3.3; docs/models.md#gill-coefficients), so a user can re-derive them the same way.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Coefficient {
@@ -59,7 +60,7 @@ impl Coefficient {
 
     /// Upper bound (the lower bound is 0). Table 2 for the thesis's set; for the others the Table 2
     /// bound of the same kind of quantity (speed 5 (m/s)², heading 4π² rad², surface E/N 10 m²),
-    /// and for the range noise 10 m / 1500 m/s, the largest outlier (invented: digest §10 A2).
+    /// and for the range noise 10 m / 1500 m/s, the largest outlier (invented: docs/models.md#gill-tuning).
     pub fn upper(self) -> f64 {
         let four_pi2 = 4.0 * std::f64::consts::PI.powi(2);
         match self {
@@ -161,7 +162,7 @@ pub struct TuneSpec {
 
 impl TuneSpec {
     /// Checks every field and reports every bad one at once (the Monte Carlo's size is checked
-    /// against the work limits by `coopnav_sim::work`).
+    /// against the work limits by `coopnav_sim::batch::work`).
     pub fn validate(&self) -> Result<(), InvalidFields> {
         let mut p = Problems::new();
         if self.coefficients.is_empty() {

@@ -169,7 +169,15 @@ pub fn closed_loop(sc: &scenario::Scenario, runs: usize, policies: usize) -> Vec
         ),
     ];
     out.extend(tree.estimates(decisions * runs_total, f.n_auvs));
+    out.extend(shelf(f.shelf.as_ref(), "fleet.shelf"));
     out
+}
+
+/// A sloping shelf's grid: its nodes, from its extent and spacing (`field` names the table).
+pub fn shelf(shelf: Option<&coopnav_core::Shelf>, field: &str) -> Option<Estimate> {
+    let s = shelf?;
+    let fields = format!("{field} x_min, x_max, y_min, y_max / spacing");
+    Some(Estimate::new("bathymetry grid nodes", fields, s.nodes(), MAX_POINTS))
 }
 
 /// `runs` runs of a Gill pass in engine scenario `sc` (`runs_fields` says where the count comes
@@ -183,6 +191,7 @@ pub fn hbl_runs(sc: &scenario::Scenario, runs: f64, runs_fields: &str, recorded:
         steps * vehicles * runs,
         MAX_VEHICLE_STEPS,
     )];
+    out.extend(shelf(sc.fleet.shelf.as_ref(), "fleet.shelf"));
     if recorded {
         out.push(Estimate::new("memory of the log (bytes)", "duration_s / dt", steps * RECORD_ROW_BYTES, MAX_BYTES));
     }
@@ -207,6 +216,12 @@ pub fn hbl_tune(sc: &scenario::Scenario, spec: &TuneSpec) -> Vec<Estimate> {
 /// Shortest row of a post-processing log, bytes (`0,speed,,1,,,` and its newline; an `.alog`
 /// line is longer): bounds the rows a log file of a given size can hold.
 const MIN_LOG_ROW_BYTES: f64 = 12.0;
+
+/// The largest post-processing log file whose parsed rows fit the memory limit, bytes: what the
+/// bounded reader reads of a log before refusing it.
+pub fn max_postprocess_log_bytes() -> f64 {
+    MAX_BYTES * MIN_LOG_ROW_BYTES / std::mem::size_of::<LogRow>() as f64
+}
 
 /// A post-processing log file of `bytes` bytes, before it is read: the memory its rows take once
 /// parsed.

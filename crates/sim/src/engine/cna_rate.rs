@@ -1,13 +1,13 @@
 //! The CNA's end of the rate adaptation (a `rate_policy` on the CNA's slot; without one its
 //! broadcast stays at `comms.cna_rate`). The same rate-policy plug-ins the survey AUVs' ends use
 //! (`coopnav_acomms::selector`), with two choices the Nams thesis leaves open, both invented
-//! (nams digest §3.5, "multi-collaborator mixing": the thesis says a mixer is needed and does not
-//! design one):
+//! (Nams 2014, §5.3.2: the thesis says a mixer for several recipients is needed and does not
+//! design one; docs/models.md#nams-selector):
 //! - the distance it decides on is the one to the **farthest** survey AUV it has a forecast of
 //!   (the CNA's broadcast is every AUV's range; the farthest is the one it must still reach);
 //! - a broadcast's outcome is judged by that AUV: success when that AUV's next status decoded at
 //!   the CNA acknowledges it, failure when that status does not (Nams's implicit negative,
-//!   digest §2.2). The acknowledgements ride in the statuses the way the CNA's ride in its
+//!   Nams 2014, §5.2). The acknowledgements ride in the statuses the way the CNA's ride in its
 //!   broadcast (one bit per packet, not modelled in the status bytes).
 
 use coopnav_acomms::selector::{Choice, Outcome, RatePolicy, RatePolicySpec};

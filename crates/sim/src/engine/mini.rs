@@ -1,4 +1,4 @@
-//! Mini-packets in the engine (Gill's hybrid baseline, gill digest §3.4, §4): a ship's outrigger
+//! Mini-packets in the engine (Gill's hybrid baseline, Gill 2013, §2.2 Fig. 8 and §2.3.2): a ship's outrigger
 //! modem or a buoy sends one quantised state component per slot; every survey AUV that decodes
 //! it updates its own filter of that vehicle with the component at the transmit time, then applies
 //! the one-way travel time as a range to the transponder where that filter puts it (single,
@@ -21,7 +21,7 @@ use std::f64::consts::FRAC_PI_2;
 
 /// What every survey AUV knows of the ships and buoys from their mini-packets: one filter per
 /// vehicle (ships first, then buoys), started from the vehicle's nominal start — the state a
-/// mission start hands over by radio (digest §2.1).
+/// mission start hands over by radio (Gill 2013, §2.1).
 #[derive(Clone)]
 pub struct SurfaceFilters {
     filters: Vec<SurfaceEkf>,

@@ -76,7 +76,7 @@ pub struct RunResult {
     pub wall_s: f64,
 }
 
-/// The CNA predictors as a forecast, hiding AUVs with fewer than the required reports (A14)
+/// The CNA predictors as a forecast, hiding AUVs with fewer than the required reports (Hudson 2012, Sec. 4.2)
 /// unless their mission plan stands in (`planner.before_first_report`).
 pub struct FleetView<'a> {
     pub predictors: &'a [UnderwayPredictor],

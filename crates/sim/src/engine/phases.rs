@@ -636,7 +636,7 @@ fn event(meta: &Arrival<()>, direction: &'static str, auv: usize, decoded: bool,
 }
 
 /// A survey AUV's status: the Appendix C node report from its estimate, then the covariance
-/// trailer with its filter's horizontal covariance (issue 10: the CNA plans on what the AUVs'
+/// trailer with its filter's horizontal covariance (docs/models.md#estimator-cost: the CNA plans on what the AUVs'
 /// filters report, not on a model of them).
 fn status_with_covariance(a: &SurveyAuv, k: usize, t: f64) -> Result<Vec<u8>, EncodeError> {
     let mut bytes = a.status(k, t).encode()?;

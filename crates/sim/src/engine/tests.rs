@@ -185,11 +185,11 @@ fn the_nees_check_flags_a_filter_given_a_wrong_noise_model() {
     }
 }
 
-/// Issue 9: the centroid baseline parks the CNA on the single AUV's reported position, so its
-/// ranges are a few tens of metres, as long as the filter's error; the EKF, linearised about the
-/// wrong estimate, turns over-confident and the AUV, steering on it, runs away (tuning seed
-/// 1000's run 0: 9.3 km, NEES flag at 994 s). The iterated range update relinearises about the
-/// updated estimate and keeps the same run within 55 m (measured).
+/// The centroid baseline parks the CNA on the single AUV's reported position, so its ranges are
+/// a few tens of metres, as long as the filter's error; the EKF, linearised about the wrong
+/// estimate, turns over-confident and the AUV, steering on it, runs away (run 0 of base seed
+/// 1000 goes kilometres off). The iterated range update relinearises about the updated estimate
+/// and keeps the same run close.
 #[test]
 fn the_iterated_range_update_keeps_an_overhead_ranged_filter_from_running_away() {
     let mut sc = Scenario::example().with_auvs(1);
@@ -202,10 +202,10 @@ fn the_iterated_range_update_keeps_an_overhead_ranged_filter_from_running_away()
     assert!(iterated.auvs[0].error.max < 100.0, "{:?}", iterated.auvs[0].error);
 }
 
-/// Issue 9: on the bench's spread fleet (analytic TL) with the 7-state filter, the CNA loiters
-/// at a nearly constant bearing from auv2, the range never observes the current across it, and
-/// the random-walk current walks off with the estimate (base seed 1's run 1: 1.04 km, flagged at
-/// 7,864 s). A Gauss–Markov current with T = 600 s holds it to 33 m, unflagged (measured).
+/// On the bench's spread fleet (analytic TL) with the 7-state filter, the CNA loiters at a nearly
+/// constant bearing from auv2, the range never observes the current across it, and the
+/// random-walk current walks off with the estimate (base seed 1's run 1 goes about a kilometre
+/// off). A Gauss–Markov current with T = 600 s holds it close, unflagged.
 #[test]
 fn a_gauss_markov_current_keeps_a_spread_fleet_filter_from_running_away() {
     use coopnav_nav::{AuvModel, CurrentParams};
@@ -411,7 +411,7 @@ fn cna_out_of_range(before: BeforeFirstReport, cna_x: f64) -> Scenario {
     sc
 }
 
-/// Today's underway CNA (A14) never plans for an AUV it has not heard: started out of range it
+/// The thesis's underway CNA (Hudson 2012, Sec. 4.2) never plans for an AUV it has not heard: started out of range it
 /// never goes to find it, and the AUV never gets a range. Knowing the mission plan, it goes to
 /// the AUV, which then gets ranges and whose statuses replace the plan.
 #[test]
@@ -589,7 +589,7 @@ fn a_fork_on_the_runs_own_draws_finishes_the_run_exactly() {
     assert_eq!(run(&sc, &mut build(), 11, &faults, &mut ()).fleet, whole);
 }
 
-/// Issue 10, session 26: with the sea's range noise, the dead-reckoning errors and the CNA's GPS
+/// With the sea's range noise, the dead-reckoning errors and the CNA's GPS
 /// error off, an AUV at 80 m ranged from the surface under the summer profile keeps the profile's
 /// scale error (1500 / c̄ − 1, about +0.3 %) while its filter converts at 1500 m/s, and loses it
 /// when the filter converts with a cast of the water (`filter.sound_speed`): its error is then the
@@ -615,8 +615,8 @@ fn a_filter_converting_with_the_cast_loses_the_profiles_range_bias() {
     sc.channel.sound_speed = crate::models::channel::SoundSpeed::Constant { c: 1500.0 };
     let (matched, _) = traced(&sc, "centroid-standoff", 3);
     let [constant, cast, matched] = [constant, cast, matched].map(|r| r.auvs[0].error.mean);
-    // Measured: 1.473, 0.4728 and 0.4728 m (the cast's and the matched run's differ in the 5th
-    // digit: their travel times, so their arrival times, differ).
+    // The cast's and the matched run's errors differ only in the 5th digit: their travel times,
+    // so their arrival times, differ.
     assert!(constant > 2.0 * matched, "{constant} against {matched}");
     assert!((cast - matched).abs() < 0.01 * matched, "{cast} against {matched}");
 }

@@ -272,7 +272,7 @@ impl Craft {
     pub fn step(&mut self, speed: f64, max_rate: f64, dt: f64) {
         self.prev = self.pos;
         let Some(goal) = self.target else { return };
-        // Depth changes at most at the speed's vertical share at the 30° pitch limit (digest A5).
+        // Depth changes at most at the speed's vertical share at the 30° pitch limit (docs/models.md#hudson-motion).
         let dz_max = speed * dt * 0.5;
         self.pos.z += (goal.z - self.pos.z).clamp(-dz_max, dz_max);
         let (dx, dy) = (goal.x - self.pos.x, goal.y - self.pos.y);

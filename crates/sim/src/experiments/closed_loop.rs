@@ -1,4 +1,4 @@
-//! `closed-loop-vs-baselines` (issue 10's result): the estimator-aware planner
+//! `closed-loop-vs-baselines` (docs/evaluation.md, study 1): the estimator-aware planner
 //! (`planner-estimator`) against every baseline CNA policy and against Hudson's planner, in the
 //! closed loop with the engine's realism on, judged on the survey AUVs' TRUE mean navigation
 //! error, paired by run (common random numbers). Two scenarios: the default mission with a water
@@ -10,7 +10,7 @@
 //! the cost-to-go, the level-0 penalty and the reach cost-to-go from 5 AUVs on, L and the pitch
 //! levels with the AUV CNA) were picked on base seed [`TUNING_SEED`] (runs `run_seed(1000, 0..R)`, R = 6 to 40); the
 //! evaluation uses the base seed of `--seed` (default 1, runs `run_seed(1, 0..runs)`) and refuses
-//! the tuning seed. The
+//! that base seed. The
 //! baselines run exactly as configured elsewhere (nothing is tuned for or against them). From 6
 //! AUVs on every policy flies a schedule sized for the fleet ([`sized_schedule`]): rate 0's 1 km
 //! slots, which the planner alone modelled, lost the last slot's AUV for every policy.
@@ -64,12 +64,10 @@ pub struct Setting {
     /// with the ASC [`asc_estimator`], with the AUV CNA [`auv_cna_estimator`].
     pub estimator: fn(usize) -> EstimatorCell,
     /// `planner.estimator_pitch_levels`: None with the ASC; 1 with the AUV CNA. All 15 options at
-    /// every level made L = 5 about 20× slower than L = 3 (two 900 s missions: 0.6 s without the
-    /// terminal cost, 13.4 s with it), so the previous evaluation ran L = 3. The pitch options do
-    /// not pay in the sloping scenario: a ±45° pitch step (1.5°/s over τ) breaks the 30° limit, so
-    /// level 0 drops them and deeper levels double their cost. Tuning seed, N = 5, 20 runs: L = 3
-    /// 5.28 m with 15 options per level and with pitch options at level 0 only (identical runs);
-    /// L = 5 with them at level 0 only 4.98 m (centroid-standoff 4.90 m), L = 7 4.98 m.
+    /// every level make L = 5 about 20× slower than L = 3. The deeper pitch options do not pay in
+    /// the sloping scenario: a ±45° pitch step (1.5°/s over τ) breaks the 30° limit, so level 0
+    /// drops them and deeper levels double their cost; with pitch options at level 0 only the same
+    /// runs give the same error at a fraction of the time, and allow a deeper look-ahead.
     pub estimator_pitch_levels: Option<usize>,
     /// The AUV CNA chooses its depth by the sound-speed profile (`planner.estimator_bias_profile`,
     /// `estimator_level_off`, [`DEPTH_AWARE_BIAS_PER_KM`]).
@@ -94,37 +92,18 @@ pub struct EstimatorCell {
 /// `planner-estimator` knows its schedule's half-duplex reach (`planner.estimator_slot_reach`,
 /// `Scenario::slot_reach_m`): with Hudson's schedule at τ = 44 s and 8 AUVs, the first slot's AUV
 /// hears no broadcast sent from beyond about 2 km (its own status starts first), which the
-/// link's range-only model missed. Chosen on the tuning seed (session 32, planner-estimator's
-/// mean error, off → on): sloping N = 8, 300 runs, 6.08 → 5.99 m, trail −0.05 [−0.13, 0.03] →
-/// −0.13 [−0.24, −0.03] (runs 100–299 alone −0.065 → −0.155); 100 runs, racetrack −0.11 → −0.17,
-/// centroid-standoff −0.21 → −0.27; current N = 8 12.43 → 11.63 m (RMS 16.61 → 13.97); current
-/// N = 5 6.65 → 6.66, sloping N = 5 identical; up to 3 AUVs every reach exceeds 6 km and nothing
-/// changes. (Those 8-AUV figures are of rate 0's 1 km slots; [`sized_schedule`]'s rate 1 puts the
-/// first slot's reach at 2.7 km.)
+/// link's range-only model missed. Chosen on tuning runs (docs/evaluation.md); up to 3 AUVs every
+/// reach exceeds 6 km and nothing changes. [`sized_schedule`]'s rate 1 puts the first slot's reach
+/// at 2.7 km.
 pub const SLOT_REACH: bool = true;
 
 /// The AUV CNA's fine tree: A = 9 headings, L = 3, H = 40 levels of cost-to-go (from
 /// [`SPREAD_FLEET_MIN_AUVS`] AUVs on the spread fleets' [`SPREAD_TERMINAL_LEVELS`]), scoring true
 /// error ([`AUV_CNA_TRUTH`]); [`auv_cna_estimator`] says for which N.
 ///
-/// Session 31, N = 1 (tuning seed, sloping scenario, planner-estimator minus zigzag, m; 600 runs,
-/// the covariance cost): A = 5, H = 10 +0.03 [−0.00, 0.06]; A = 7 with H = 20 −0.03 [−0.07,
-/// 0.00], H = 40 −0.06 [−0.10, −0.02], H = 60 −0.06; with it trace sum −0.05, L = 4 −0.06, the
-/// CNA's variance per ping −0.04, reach p_u 0.79 −0.06, no level-0 penalty −0.07. The true-error
-/// cost: A = 5, H = 10 +0.04 (session 29's "no gain"); A = 7, H = 40 −0.08 [−0.12, −0.05], with
-/// H = 20 −0.09, H = 60 −0.07; A = 9, H = 40 −0.12 [−0.15, −0.08] (with no level-0 penalty −0.13,
-/// with H = 20 −0.11); A = 11 −0.11. 200 runs, the covariance cost: A = 7 alone −0.01, A = 9
-/// −0.02, A = 11 −0.03; H = 40 alone +0.02; distance limits from 200–400 m +0.12 to +0.24. Held
-/// out (runs 600–1199 of the tuning seed, from the 1200-run and 600-run means): A = 9, H = 40
-/// with the true-error cost −0.10, against +0.07 for A = 5, H = 10 with the covariance cost.
-///
-/// Session 32, the same tree at larger N (300 runs, planner-estimator minus centroid-standoff,
-/// the tree before → this one): N = 3 (A = 5, L = 5, covariance cost) −0.10 [−0.15, −0.05] →
-/// −0.14 [−0.17, −0.10] (H = 10 −0.15), zigzag −0.12 → −0.16, at three quarters of the time;
-/// N = 5 (A = 5, L = 5, true error) −0.10 [−0.14, −0.07] → −0.14 [−0.17, −0.11], trail −0.23 →
-/// −0.26, at 0.43× the time. Not at N = 2: −0.10 [−0.15, −0.04] → −0.05 [−0.08, −0.01] (100
-/// runs: H = 10 −0.00, A = 7 −0.04, A = 9 with the covariance cost +0.14, L = 4 at 7× the time
-/// −0.05 over 300); not at N = 8: trail −0.02 → +0.10 (covariance cost) or +0.16 (true error).
+/// With one AUV the finer headings and the longer cost-to-go pay under the true-error cost, not
+/// under the covariance cost; at N = 3 and 5 the same tree does better than A = 5, L = 5 at a
+/// fraction of the search time; at N = 2 and 8 it does not (docs/evaluation.md).
 pub const FINE_AUV_CNA: EstimatorCell = EstimatorCell {
     heading_options: 9,
     look_ahead: 3,
@@ -135,23 +114,19 @@ pub const FINE_AUV_CNA: EstimatorCell = EstimatorCell {
 };
 
 /// The true-error model of `planner-estimator` on the mission with a water current (the ASC
-/// grid; invented, issue 10 session 29, no thesis values): the AUVs' true dead-reckoning drift
-/// 0.002 m²/s, the channel's ranges σ 1.8 m (Gill's outliers, E[n²] ≈ 3.2 m²), an ASC whose GPS
-/// error does not drift; the current (the CNA's ADCP) taken as each AUV's mean error
-/// (coopnav_plan `true_error`, step 1). Chosen on the tuning seed (session 29, 100 runs, planner-estimator's mean error, the covariance cost at L = 5 → this at
-/// L = 5): N = 1 6.43 → 4.50, N = 2 5.78 → 4.66, N = 3 5.84 → 5.40, N = 5 7.26 → 6.46, N = 8
-/// 13.95 → 13.63 m (its RMS 16.90 → 20.36: a few runs end worse); at L = 4 see
-/// [`TRUE_ERROR_LOOK_AHEAD`]. The values are those `scenarios/auv-cna-tdma.toml` chose on its
-/// own tuning runs, with no CNA drift.
+/// grid; invented, no thesis values, docs/models.md#true-error-cost): the AUVs' true dead-reckoning
+/// drift 0.002 m²/s, the channel's ranges σ 1.8 m (Gill's outliers, E[n²] ≈ 3.2 m²), an ASC whose
+/// GPS error does not drift; the current (the CNA's ADCP) taken as each AUV's mean error
+/// (coopnav_plan `true_error`, step 1). Chosen on tuning runs: it lowers planner-estimator's error
+/// at every N (docs/evaluation.md); at L = 4 see [`TRUE_ERROR_LOOK_AHEAD`]. The values are those
+/// `scenarios/auv-cna-tdma.toml` uses, with no CNA drift.
 pub const CURRENT_TRUTH: TruthSpec =
     TruthSpec { drift_m2_s: 0.002, range_noise: RangeNoise { sigma_m: 1.8, per_km_m: 0.0 }, cna_diffusion_m2_s: 0.0 };
 
-/// L of `planner-estimator` with the ASC and [`CURRENT_TRUTH`] (chosen on the tuning seed). The
+/// L of `planner-estimator` with the ASC and [`CURRENT_TRUTH`] (chosen on tuning runs). The
 /// true-error cost's lower bound below a node (coopnav_plan `true_error`) is loose, so its
-/// search costs about brute force's: L = 5
-/// made the full comparison 5 min 32 s (659 s CPU, against 4 min 40 s and 557 s with the
-/// covariance cost). Tuning seed, 100 runs, L = 4 / 5: N = 2 4.54 / 4.66, N = 3 5.37 / 5.40,
-/// N = 5 6.65 / 6.46, N = 8 12.43 / 13.63 m (RMS 16.61 / 20.36), each at about a third of the time.
+/// search costs about brute force's: L = 4 gives about the error of L = 5 at about a third of
+/// the time.
 pub const TRUE_ERROR_LOOK_AHEAD: usize = 4;
 
 /// From this many AUVs on (a fleet spread wider than the link's plateau), `planner-estimator`
@@ -159,45 +134,35 @@ pub const TRUE_ERROR_LOOK_AHEAD: usize = 4;
 /// with the reach-time cost-to-go ([`REACH_SUCCESS`], [`SPREAD_TERMINAL_LEVELS`]) in its place.
 /// With 5 or 8 AUVs spread over 3–4.8 km every option breaks the 1 km limit for some AUV, and
 /// the penalty, C·(1 + v) with v in metres, then decides alone (the CNA minimises its largest
-/// distance, Hudson's planner's path). Chosen on the tuning seed, default mission with current:
-/// N = 8 20.1 m with the penalty, 14.3 m without (6 runs); N = 5 (40 runs) 8.2 m with the penalty
-/// and H = 10 (20 runs), 9.9 m with neither penalty nor reach term (H = 20), 7.4 m with the reach
-/// term instead of the penalty (open-loop 7.6 m, Hudson's planner 7.9 m); N = 8 (16 runs) 14.4 m
-/// without, 14.3 m with the reach term.
+/// distance, Hudson's planner's path). Chosen on tuning runs of the default mission with current:
+/// without the penalty and with the reach term in its place the error is lowest at N = 5 and 8.
 pub const SPREAD_FLEET_MIN_AUVS: usize = 5;
 
 /// p_u of the reach-time cost-to-go (coopnav_plan estimator step 7) for spread fleets: just below
 /// the 0.8 plateau of the rate-0 success curve, so the useful range r_u ≈ 0.93 km is where pings
-/// start being lost. 0.5 and 0.6 (r_u ≈ 2–2.5 km, farther than most AUVs ever are) changed
-/// nothing on the tuning seed; 0.79 did.
+/// start being lost. Smaller p_u (a useful range of 2–2.5 km, farther than most AUVs ever are)
+/// changes nothing.
 pub const REACH_SUCCESS: f64 = 0.79;
 
-/// H for spread fleets: the reach term's growth saturates at qτ·H/2, and with H = 10 it was too
-/// weak to replace the penalty (N = 5, tuning seed, case 3: 9.7 m with H = 10, 7.3 m with 20).
+/// H for spread fleets: the reach term's growth saturates at qτ·H/2, and with H = 10 it is too
+/// weak to replace the penalty.
 pub const SPREAD_TERMINAL_LEVELS: f64 = 20.0;
 
 /// k_b of `planner-estimator` with the AUV CNA, on top of the profile's own scale error
 /// (`planner.estimator_bias_profile`), which the CNA levels off at the depth it picks
-/// (`estimator_level_off`). Chosen on the tuning seed (sloping scenario, 20 runs, planner-estimator
-/// in m; L as [`auv_cna_estimator`] then gave): k_b 6 without the profile and with the thesis's pitch
-/// (today's) N = 1 / 2 / 3 / 5 / 8: 3.60 / 3.80 / 4.10 / 4.98 / 6.98; the profile alone (its
-/// ±45° pitch steps still break the 30° limit, so the CNA never leaves 10 m): N = 3 4.16, N = 5
-/// 4.90; levelling off with k_b 6 and no profile (the CNA dives towards deep AUVs, into slower
-/// water): N = 3 4.53, N = 5 6.28, N = 8 9.04; profile, levelling off and k_b 6: 3.98 / 3.80 /
-/// 4.04 / 4.66 / 6.97 with the thesis's pitch carried over levels; with every step starting level
-/// and k_b 3: 3.75 / 3.75 / 3.94 / 4.62 / 5.95. The same runs' centroid-standoff: 3.90 / 3.64 /
-/// 4.22 / 4.90 / 6.93. Session 28, 100 runs, once the filters expect Gill's outliers
-/// (`filter.range_outliers` in the scenario file): k_b 3 → 6 gave N = 2 3.55 → 3.51, N = 5 4.39 →
-/// 4.36, N = 8 5.95 → 5.82 m (racetrack −0.04 → −0.16, won), N = 3 3.77 either way.
+/// (`estimator_level_off`). Chosen on tuning runs of the sloping scenario: the profile alone
+/// cannot move a CNA whose ±45° pitch steps break the 30° limit, levelling off without the profile
+/// dives the CNA towards deep AUVs into slower water, and the two together with every step
+/// starting level do best; with the filters expecting Gill's outliers (`filter.range_outliers`)
+/// k_b 6 does better than 3 (docs/evaluation.md).
 pub const DEPTH_AWARE_BIAS_PER_KM: f64 = 6.0;
 
 /// From this many AUVs on the AUV CNA chooses its depth ([`DEPTH_AWARE_BIAS_PER_KM`]): with one
 /// AUV, over the shallow end of the shelf where the profile's scale error is small at 10 m, it
-/// was worse on the tuning seed (3.75 against 3.60 m, 20 runs; the evaluation's first run with it
-/// at every N gave 3.83 m at N = 1 against 3.79 m before, and lost its win over Hudson's planner).
+/// does worse.
 pub const DEPTH_AWARE_MIN_AUVS: usize = 2;
 
-/// The true-error model of `planner-estimator` with the AUV CNA (invented, issue 10 session 30,
+/// The true-error model of `planner-estimator` with the AUV CNA (invented, docs/models.md#true-error-cost,
 /// no thesis values): the AUVs' true drift 0.01 m²/s, the channel's ranges σ 1.8 m (Gill's
 /// outliers), and the CNA's own navigation diffusion, 0.01 m²/s per axis (the scenario's
 /// `cna.auv.nav_diffusion`). Scored from 1 to 5 AUVs but 2 ([`auv_cna_estimator`]).
@@ -224,19 +189,10 @@ pub fn asc_estimator(n: usize) -> EstimatorCell {
 /// about 17° apart within the turn limit's ±176°, against A = 5's 88°), L = 2, H = 40, the true
 /// error (`truth`) joined by the trace sum.
 ///
-/// Chosen on the tuning seed (session 33, N = 8 with the sized schedule, minus centroid-standoff
-/// / centroid, m). With the current: A = 5, L = 4, the sum of 1-σ, H = 20 +0.62 [0.52, 0.72] (10.19 m,
-/// 200 runs; centroid not run); the trace sum −0.13, with H = 40 −0.16 [−0.26, −0.06] / +0.66 [0.52,
-/// 0.79]: centroid won. Finer headings (60 runs, trace sum, H = 40): A = 7 −0.78 / −0.04, A = 9
-/// with L = 3 −1.08 / −0.33, L = 4 −1.11 / −0.36, A = 11 with L = 3 −1.33 / −0.58, A = 13 with
-/// L = 3 −1.23 / −0.49, A = 17 with L = 2 −1.39 / −0.64, A = 21 with L = 2 −1.46 / −0.71 (with
-/// L = 1 −1.27 / −0.53, with the sum of 1-σ −1.27 / −0.53, with H = 20 −1.38 / −0.63), A = 31
-/// −1.39 / −0.64; then A = 21, L = 2 over 200 runs −1.40 [−1.48, −1.32] / −0.68 [−0.76,
-/// −0.60] (8.17 m; trail −1.87). On the slope (the AUV CNA, [`AUV_CNA_TRUTH`]) A = 5, L = 4 with
-/// the filters' covariances +0.30 [0.22, 0.38] (5.61 m, 100 runs), with the true error +0.11
-/// (60 runs); A = 21, L = 2 with the trace sum and H = 40 −0.03 [−0.06, 0.00] over 200 runs
-/// (5.30 m; trail −0.11, centroid −0.22); 100 runs: the same −0.03, with H = 20 −0.02, A = 31
-/// −0.01; 60 runs: A = 11 with L = 3 0.00, the sum of 1-σ −0.02.
+/// Chosen on tuning runs at N = 8 with the sized schedule: with A = 5 the headings are 88° apart
+/// and the CNA sits west of the fleet's centroid, and centroid wins the current cell; finer
+/// headings win it from A = 7 on, best at A = 21 with L = 2 (A = 31 no better), and the same tree
+/// ties centroid-standoff on the slope where A = 5 loses (docs/evaluation.md).
 pub fn sized_fleet(truth: TruthSpec) -> EstimatorCell {
     EstimatorCell {
         heading_options: 21,
@@ -252,33 +208,12 @@ pub fn sized_fleet(truth: TruthSpec) -> EstimatorCell {
 /// tree [`FINE_AUV_CNA`] from 1 to 5 AUVs but 2 (N = 4 not measured); A = 5 and the filters'
 /// covariances at N = 2 (L = 5); on [`sized_schedule`]'s fleets [`sized_fleet`].
 ///
-/// Session 33, N = 8 with the sized schedule, A = 5 (tuning seed, minus centroid-standoff): the
-/// filters' covariances +0.30 [0.22, 0.38] m (5.61 m, 100 runs); the true error +0.14 [0.10,
-/// 0.18] over 200 runs (5.47 m), with H = 40 +0.16, with A = 7 and H = 40 +0.08 [0.05, 0.11];
-/// 100 runs: trace sum +0.16, k_b 3 or 9 +0.13 / +0.16, drift 0.03 or 0.003 m²/s +0.16 /
-/// +0.13; 60 runs: L = 5 +0.15. Finer headings did better ([`sized_fleet`]), and with them a
-/// smaller k_b ([`SIZED_AUV_CNA_BIAS_PER_KM`]).
-///
-/// L before session 32 (A = 5): 3 for one AUV, 5 for 2 to 5, 4 from 6 on. Tuning seed, sloping scenario, 20 runs, L = 3 / L = 5: N = 1 3.60 / 3.81 m,
-/// N = 2 3.80 / 3.77 m, N = 3 4.37 / 4.10 m, N = 5 5.28 / 4.98 m, N = 8 7.03 / 6.98 m (L = 6:
-/// 6.91 m, twice the time). From [`SPREAD_FLEET_MIN_AUVS`] on, 4: once the CNA chooses its depth
-/// ([`DEPTH_AWARE_BIAS_PER_KM`]) every pitch option at level 0 keeps a full subtree, and L = 5
-/// made the sloping N = 5 and 8 cells' search 3× as costly (projected 23 → 81 s and 27 → 75 s of
-/// the evaluation's CPU); L = 4 costs about a fifth of that, for N = 5 4.62 → 4.72 m and N = 8
-/// 5.95 → 6.03 m on the tuning seed (N = 3 would lose 3.94 → 4.09 m, and keeps L = 5).
-/// Session 26, with every policy cruising at the cast's depth (`cna.auv.depth = "cast"`), 100
-/// runs: N = 2 L = 3 3.99 m, L = 4 3.95, L = 5 3.86, L = 6 3.81 (3× L = 5's time); N = 1 L = 3
-/// 3.70, L = 4 and 5 3.74. So 5 from 2 AUVs on. N = 5 L = 4 4.78 m (ties centroid-standoff −0.08
-/// and trail −0.08), L = 5 4.65 m (−0.21 and −0.21, both won): 5 at N = 5 too. N = 8 L = 4 6.12,
-/// L = 5 6.02 m (trail +0.07, −0.03: a tie either way, at twice the time): 4 from 6 AUVs on.
-/// True error before session 32, chosen on the tuning seed (session 30, sloping scenario with the CNA 2 m down at least, 100 runs, covariance cost → true-error cost, m): N = 5 4.49 →
-/// 4.32 (centroid-standoff +0.05 → −0.12, its one cell not won, then won; every cell won), at 1.9×
-/// the search's CPU (the cost's lower bound, then none, cuts little); N = 8 6.18 m with it (trail +0.11, lost; the
-/// covariance cost ties trail); N = 2 3.51 → 3.60 (centroid-standoff −0.05 → +0.03); N = 3 3.79 →
-/// 3.74 with every cell won either way, not worth its CPU: with N = 3 too the full comparison took
-/// 5 min 8 s (614 s CPU, against 490 s without either). Session 29: at N = 1 it gained nothing
-/// (−0.03 to +0.12 over drift, range σ and CNA diffusion) with A = 5 and H = 10; session 31: with
-/// A = 9 and H = 40 it does ([`FINE_AUV_CNA`]), so it scores true error with one AUV too.
+/// With A = 5 at N = 8 neither cost beats centroid-standoff on the slope, whatever k_b, drift or
+/// L; the finer headings of [`sized_fleet`] do, with a smaller k_b ([`SIZED_AUV_CNA_BIAS_PER_KM`]).
+/// L = 5 at N = 2 is the deepest tree whose gain pays for its time: from [`SPREAD_FLEET_MIN_AUVS`]
+/// on, once the CNA chooses its depth ([`DEPTH_AWARE_BIAS_PER_KM`]), every pitch option at level 0
+/// keeps a full subtree and L = 5 triples the search. The true-error cost at N = 2 does not pay
+/// for its time; at N = 1 it pays only with the fine tree ([`FINE_AUV_CNA`]).
 pub fn auv_cna_estimator(n: usize) -> EstimatorCell {
     match n {
         2 => EstimatorCell {
@@ -374,19 +309,17 @@ impl Setting {
 /// Each of the N + 1 vehicles needs a slot of air time + travel + guard: 8 AUVs need 9 slots in
 /// 44 s (below 45 s, where the 4°/s turn limit would reach 180° per period), 4.89 s each. At
 /// rate 0 (3.9 s of air time) such a slot holds 1 km of travel, but the fleet spans 4.7 km: for
-/// every policy the last slot's AUV was never heard (its statuses arrive while the CNA sends its
-/// next broadcast) and the first slot's heard few broadcasts (session 32). Rate 1 (3.08 s, and a
+/// every policy the last slot's AUV is never heard (its statuses arrive while the CNA sends its
+/// next broadcast) and the first slot's hears few broadcasts. Rate 1 (3.08 s, and a
 /// success curve no worse than rate 0's in `success`) holds [`SIZED_RANGE_M`] in the same slot.
 ///
-/// Invented (issue 10, session 33): the thesis flies 15 s slots for 1–2 AUVs (digest hudson §4.3,
-/// §7.2); the air times are the Micro-Modem's (digest nams §1.4). Every field is the scenario's
+/// Invented (docs/models.md#closed-loop-schedule): the thesis flies 15 s slots for 1–2 AUVs
+/// (Hudson 2012, Sec. 6.5); the air times are the Micro-Modem's (Nams 2014, Table 2). Every field is the scenario's
 /// own (`comms.tau`, `comms.cna_rate`, `comms.status_rate`, `comms.max_range_m`).
 ///
-/// Measured on the tuning seed (session 33, 100 runs, N = 8, rate 0 with 1 km slots → this):
-/// centroid-standoff 17.8 → 9.6 m with the current and 6.3 → 5.3 m on the slope, trail 18.2 →
-/// 10.0 and 6.1 → 5.4 m: the old schedule weakened the baselines more than the planner, which
-/// alone knew its reach (`planner.estimator_slot_reach`). Up to 5 AUVs (τ = 30 s, 6 slots of
-/// 5 s) no status was lost in the air and rate 1 changed no cell's outcome, so those keep rate 0.
+/// The rate-0 schedule weakens the baselines more than the planner, which alone knows its reach
+/// (`planner.estimator_slot_reach`). Up to 5 AUVs (τ = 30 s, 6 slots of 5 s) no status is lost in
+/// the air and rate 1 changes no cell's outcome, so those keep rate 0.
 fn sized_schedule(sc: &mut Scenario) {
     sc.comms.tau = 44.0;
     sc.comms.cna_rate = Rate::R1;
@@ -396,10 +329,9 @@ fn sized_schedule(sc: &mut Scenario) {
 
 /// k_b of `planner-estimator` with the AUV CNA and [`sized_fleet`]'s fine headings (on top of
 /// the profile's own scale error, as [`DEPTH_AWARE_BIAS_PER_KM`]; invented, no thesis value,
-/// `planner.estimator_bias_per_km`). Chosen on the tuning seed
-/// (session 33, sloping N = 8, minus centroid-standoff, m): 100 runs, k_b 0 −0.10, 1.5 −0.10, 3
-/// −0.09, 6 −0.03, 9 +0.03; 300 runs, k_b 1.5 −0.11 (trail −0.17, centroid −0.29), k_b 3 −0.09
-/// (runs 100–299 alone −0.115 and −0.09); k_b 6 over 200 runs −0.03 [−0.06, 0.00].
+/// `planner.estimator_bias_per_km`). Chosen on tuning runs at N = 8 on the slope: the fine
+/// headings keep the CNA closer to the AUVs than A = 5 did, and a smaller k_b than
+/// [`DEPTH_AWARE_BIAS_PER_KM`]'s 6 does better there (docs/evaluation.md).
 pub const SIZED_AUV_CNA_BIAS_PER_KM: f64 = 1.5;
 
 /// From this many AUVs on the evaluation flies [`sized_schedule`].
@@ -410,9 +342,8 @@ pub const SIZED_SCHEDULE_MIN_AUVS: usize = 6;
 /// (rate 1: 3.08 s of air time + 2.5 km at the slowest 1488 m/s + 0.1 s guard = 4.86 s).
 pub const SIZED_RANGE_M: f64 = 2500.0;
 
-/// Runs per policy and cell of the reduced form (15-minute missions). 8 since session 27: with
-/// the iterated range update centroid no longer diverges, and 4 runs left its current N = 3 cell
-/// unresolved (−1.17 m [−2.82, 0.47]); 8 resolve it, at 0.9 s for the whole reduced form.
+/// Runs per policy and cell of the reduced form (15-minute missions): with the iterated range
+/// update centroid no longer diverges, and 8 runs resolve its current N = 3 cell where 4 do not.
 const REDUCED_RUNS: usize = 8;
 
 /// The experiment's size: (settings, runs per policy and cell, mission duration override).
@@ -666,7 +597,7 @@ fn how_much_the_path_decides(c: &Comparison) -> String {
 /// Where in the fleet the difference lies (two AUVs or more): the paired difference per AUV, the
 /// AUVs on which either policy is significantly better, and the AUVs whose status messages never
 /// reached the CNA under either policy (a policy steering by the reports never looks for those:
-/// the thesis's start rule A14).
+/// the thesis's start rule, Hudson 2012, Sec. 4.2).
 fn fleet_split(planner: &PolicySummary, b: &PolicySummary) -> Option<String> {
     let per_auv = paired_per_auv(planner, b);
     if per_auv.len() < 2 {
@@ -766,7 +697,7 @@ fn why(planner: &PolicySummary, b: &PolicySummary, tie: bool) -> String {
 }
 
 /// An SVG of every cell's paired difference with its 95 % CI (one row per scenario, N and
-/// baseline; zero marked): the plot the issue asks for beside the table.
+/// baseline; zero marked): the plot beside the table.
 pub fn difference_svg(cells: &[Cell]) -> Result<String, PlotError> {
     let title = "planner-estimator minus baseline, true mean error (m), paired 95 % CI";
     let rows: Vec<Interval> = cells
@@ -805,9 +736,9 @@ mod tests {
         }
         // With current at N = 3 the planner must beat every baseline, Hudson's planner included:
         // before the range-bias model and the cost-to-go it lost to zigzag, centroid and trail.
-        // centroid-standoff (added in session 19) is the one exception the runs of 15 minutes
-        // cannot resolve: -0.65 m [-1.41, 0.10] here (8 runs), while on the tuning seed (20 one-hour runs)
-        // the planner wins by 1.00 m [-1.37, -0.64]; its check must still be there and explained.
+        // centroid-standoff is the one exception the runs of 15 minutes cannot resolve (8 runs
+        // leave its interval across zero, while one-hour runs resolve it in the planner's favour);
+        // its check must still be there and explained.
         for name in policies().iter().skip(1).filter(|&name| name != "centroid-standoff") {
             let c = by_name(format!("current N=3: planner-estimator beats {name}"));
             assert!(c.passed, "{name}: {}", c.detail);

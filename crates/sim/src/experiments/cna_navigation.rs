@@ -1,4 +1,5 @@
-//! `closed-loop-cna-navigation`: the measured cause of issue 10's AUV-CNA cells not won. The
+//! `closed-loop-cna-navigation` (docs/evaluation.md, study 2): what the AUV CNA's own navigation
+//! error costs in the AUV-CNA cells of `closed-loop-vs-baselines`. The
 //! cells of `closed-loop-vs-baselines` whose CNA is an AUV, run twice on the same seeds: as
 //! evaluated, and with the CNA broadcasting its true position (`cna.auv.broadcasts_truth`, a
 //! counterfactual: its navigation error is still drawn, its σ grows and it surfaces as before,

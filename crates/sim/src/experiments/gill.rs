@@ -1,8 +1,9 @@
-//! Reproductions of Gill (2013), hybrid-baseline navigation (digest §7, §11): Table 5 (MSBL vs
+//! Reproductions of Gill (2013), hybrid-baseline navigation (Gill 2013, §3.1–3.2): Table 5 (MSBL vs
 //! HBL One vs HBL Two), the HBL Short vs Long cycle comparison, Table 4 (buoy quantisation
 //! resolution) and the buoy-location grid, all on the one engine from the scenario files
-//! `scenarios/gill-table5-*.toml` (with per-experiment overrides written here). Bands are the
-//! digest's §11 suggestions; the reduced (CI) forms widen each band by two Monte Carlo standard
+//! `scenarios/gill-table5-*.toml` (with per-experiment overrides written here). Bands are ours,
+//! around the thesis's values (docs/evaluation.md, study 3); the reduced (CI) forms widen each
+//! band by two Monte Carlo standard
 //! errors computed from the runs.
 
 use super::{Check, Experiment, ExperimentError, ReproOptions, ReproReport, Size};
@@ -46,21 +47,18 @@ pub fn experiments() -> Vec<Experiment> {
 
 const ID5: &str = "gill-table-5";
 
-/// Why our MSBL stays below the thesis's 3.03 m (measured; see the issue-3 notes).
+/// Why our MSBL stays below the thesis's 3.03 m.
 const MSBL_DEVIATION: &str = "our MSBL keeps the thesis's shape (perpendicular error ≈ 3 m until ~30 m before the \
 crossing, then corrected) but corrects earlier and deeper near the ship, so the zone mean is ≈ 2 m. The MSBL-era AUV \
-and ship coefficients that set this are unpublished (digest §10 A2); raising our MSBL error would mean degrading \
-its filter by hand, which we do not do. A smaller Q^A or a longer Δt only lowers it further (1.66–1.75 m for Q^A/100, Δt = 1 s, Q per 2 s, \
-measured on the old HBL loop). The engine's SD (3.2 m at 250 runs) comes from a few runs that start with the across-path \
+and ship coefficients that set this are unpublished (Gill 2013, §2.3.3; docs/models.md#gill-coefficients); raising our MSBL error would mean degrading \
+its filter by hand, which we do not do. A smaller Q^A or a longer Δt only lowers it further (1.66–1.75 m for Q^A/100, Δt = 1 s, Q per 2 s). The engine's SD (3.2 m at 250 runs) comes from a few runs that start with the across-path \
 estimate far off and diverge at the crossing (run 0: 44.7 m); they also widen the reduced form's band.";
 
-/// Why our Short vs Long difference is smaller than the thesis's (measured; see the issue-3 and
-/// issue-9 notes).
+/// Why our Short vs Long difference is smaller than the thesis's.
 const CYCLES_DEVIATION: &str = "in our simulation Long carries 20 % more buoy ranges (0.15 vs 0.125 Hz) and 60 % more \
 ship-East updates than Short, which offsets most of Short's fresher ship North/speed/heading: on the engine (250 runs, \
-seed 1) Short is 0.050 m better, 95 % CI −0.099..0.199, against the thesis's 0.22 (0.07..0.37); the old HBL loop had \
-Long 0.113 m better (−0.271..0.045). The thesis's cycle study ran with unpublished pre-optimisation AUV coefficients \
-(digest §7.2).";
+seed 1) Short is 0.050 m better, 95 % CI −0.099..0.199, against the thesis's 0.22 (0.07..0.37). The thesis's cycle study ran with unpublished pre-optimisation AUV coefficients \
+(Gill 2013, §3.1.2).";
 
 fn runs(o: &ReproOptions, full: usize, reduced: usize) -> usize {
     match o.size {
@@ -160,7 +158,7 @@ fn table_5(o: &ReproOptions) -> Result<ReproReport, ExperimentError> {
         let (plain, profile) = mc_profiled(ID5, &sc, n, o.seed)?;
         profiles.push(profile);
         let mut gated_sc = sc.clone();
-        // χ²(1) 99.9 % NIS gate: the "gating on" report of digest §10 A5.
+        // χ²(1) 99.9 % NIS gate: reported beside the thesis's ungated filter (docs/models.md#gill-filter-extensions).
         gated_sc.filter.params.range_gate.max_nis = Some(10.83);
         let gated = mc(ID5, &gated_sc, n, o.seed)?;
         rows.push((c, sim, field, plain, gated));
@@ -308,25 +306,23 @@ const TABLE_4: [([f64; 2], f64, f64, f64); 6] = [
     ([0.05, 0.05], 2.31, 1.78, 2.96),
 ];
 
-/// The Table 4 buoy set-up (reconstructed; gill digest §7.4, A14, A19: the thesis gives neither
+/// The Table 4 buoy set-up (reconstructed, docs/models.md#gill-scenario: the thesis gives neither
 /// the buoy's start, nor its drift, nor the run length of this experiment): Table 5's HBL Two file
 /// (its buoy deployed at the centre of Gill's start box and drifting with the Lake statistics),
 /// the buoy's quantisation zone centred on that deployment point at each row's resolution, and
 /// the mission running on past the measurement zone, over which the buoy's saturation and
-/// buoy-filter errors are averaged; the AUV's error is still the zone mean. The old HBL loop ran
-/// to x_rel = zone_max + 305 m; the AUV and ship close at 0.85 + 1.30 m/s from x_rel = −200 m,
-/// so 270 s reaches the same point, and the AUV's lane is lengthened to 240 m so it does not
-/// finish its line before the run ends. Measured on the old loop (250 runs, seed 1) against the
-/// thesis's saturation 0.09 / 1.11 / 2.96 m at the 0.2 / 0.1 / 0.05 m grids: 0.07 / 1.12 / 3.14.
-/// An earlier set-up (a 44 m square of random starts, the run ending at the zone exit) gave
-/// 0.08 / 4.06 / 9.79 and buoy and AUV errors 2–6× the thesis's at the two finest grids: most
-/// buoys started outside a 25.6 m or 12.8 m zone.
+/// buoy-filter errors are averaged; the AUV's error is still the zone mean. The run goes on to
+/// x_rel = zone_max + 305 m: the AUV and ship close at 0.85 + 1.30 m/s from x_rel = −200 m, so
+/// 270 s, and the AUV's lane is lengthened to 240 m so it does not finish its line before the run
+/// ends. This gives the thesis's saturation errors at the 0.2 / 0.1 / 0.05 m grids (Table 4:
+/// 0.09 / 1.11 / 2.96 m); random starts over a wider square, with the run ending at the zone exit,
+/// put most buoys outside the finest zones and the errors far above the thesis's.
 const TABLE_4_DURATION_S: f64 = 270.0;
 const TABLE_4_LANE_M: f64 = 240.0;
 
 /// Runs per grid of the reduced form. The 2× check on the finest grids is not widened by the
-/// Monte Carlo SE, so its estimate needs the runs: at 30 (the old loop's reduced size) the
-/// engine's buoy error at 0.05 m read 4.93 ± 0.76 (SE) against 3.26 ± 0.22 at 250 runs.
+/// Monte Carlo SE, so its estimate needs the runs: at 30 the buoy error at 0.05 m is too noisy
+/// for it.
 const TABLE_4_REDUCED_RUNS: usize = 100;
 
 /// Table 4's base scenario: the HBL Two file run for [`TABLE_4_DURATION_S`].
@@ -350,7 +346,7 @@ fn table_4(o: &ReproOptions) -> Result<ReproReport, ExperimentError> {
     let id = "gill-table-4";
     let n = runs(o, 250, TABLE_4_REDUCED_RUNS);
     let base = table_4_base(id)?;
-    // Digest §7.4: the buoy zone is centred on the centre of the buoy's initial region.
+    // The buoy zone is centred on the centre of the buoy's initial region (docs/models.md#gill-scenario).
     let centre = base.buoys.first().map(|b| [b.x, b.y]).ok_or_else(|| failed(id, "the HBL Two file has no buoy"))?;
     let mut rows = Vec::new();
     for (res, tb, ta, ts) in TABLE_4 {
@@ -414,8 +410,8 @@ fn table_4(o: &ReproOptions) -> Result<ReproReport, ExperimentError> {
     Ok(ReproReport::new(id.into(), table, checks, data))
 }
 
-/// The finest grids' buoy, AUV and saturation errors each within `factor` of the thesis's (the
-/// 2–6× gap of the earlier set-up, see [`TABLE_4_DURATION_S`], fails this).
+/// The finest grids' buoy, AUV and saturation errors each within `factor` of the thesis's (a
+/// set-up whose buoys start outside the finest zones, see [`TABLE_4_DURATION_S`], fails this).
 fn finest_within_factor(rows: &[([f64; 2], f64, f64, f64, ZoneSummary)], factor: f64) -> Check {
     let mut worst = (1.0, String::new());
     for (res, tb, ta, ts, s) in rows {

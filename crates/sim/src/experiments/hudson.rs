@@ -1,25 +1,25 @@
 //! Reproductions of Hudson (2012): the Sec. 5.3 variable-depth sweeps (Tables 5.3–5.9), the
 //! Appendix A / Table 6.1 pre-deployment sweep, and the Sec. 5.1–5.2 distance-penalty cases.
 //!
-//! The thesis geometry is partly lost (digest A17), so each experiment runs a canonical geometry
+//! The thesis geometry is partly lost (docs/models.md#hudson-geometry), so each experiment runs a canonical geometry
 //! recorded here and checks properties and trends rather than the exact numbers:
-//! - Sec. 5.3 (invented, digest A17): survey AUV k covers x ∈ [100k, 100k + 100] with four 500 m
+//! - Sec. 5.3 (invented, docs/models.md#hudson-geometry): survey AUV k covers x ∈ [100k, 100k + 100] with four 500 m
 //!   lanes northward, 25 m apart, at 1.5 m/s; depth z̄_k + 10·sin(2πt/T_k) with
 //!   z̄ = 70, 60, 50, 45, 40 m and T = 600, 500, 700, 450, 550 s; CNA from (140, 0, 0) heading
 //!   east; τ = 10 s; penalty case 1 (the trials' Orig. + doubling).
-//! - Table 6.1 (digest §9): one AUV on a 200 m × 100 m lawnmower (five lanes 25 m apart) at
+//! - Table 6.1 (invented; the thesis's survey path is lost): one AUV on a 200 m × 100 m lawnmower
+//!   (five lanes 25 m apart) at
 //!   1 m/s and 90 m, CNA from (140, 0, 0); τ = 30 s; penalty case 1.
 //! - Sec. 5.2: 500 m × 1500 m areas side by side (five lanes 100 m apart, spacing invented),
-//!   constant 90 m depth, CNA speed 1.5 m/s, A = 5 (A18).
+//!   constant 90 m depth, CNA speed 1.5 m/s, A = 5 (τ and A invented).
 //!
-//! Bearing model (digest A3; issue 10): no one model gives both the Sec. 5.3 and the Table 6.1
-//! results, so each experiment names its own (`BEARING_53`, `BEARING_61`); the configuration
-//! default stays the horizontal bearing (`coopnav_plan::BearingMode`). Measured on the reduced
-//! forms: with the horizontal bearing an AUV CNA scores exactly like the ASC in 5 of the 7 Sec. 5.3
-//! tables (its pitch only shortens its step), and the thesis's CNA-kind ordering holds in 1 (a
-//! tie); with the 3-D bearing it holds in 4, among them all four tables the thesis tops with an AUV
-//! CNA. Table 6.1's best RMS is 2.256 m with the horizontal bearing (thesis 2.22 m) and 2.434 m
-//! with the 3-D one.
+//! Bearing model (docs/models.md#hudson-error-model): no one model gives both the Sec. 5.3 and the
+//! Table 6.1 results, so each experiment names its own (`BEARING_53`, `BEARING_61`); the
+//! configuration default stays the horizontal bearing (`coopnav_plan::BearingMode`). With the
+//! horizontal bearing an AUV CNA scores exactly like the ASC in most Sec. 5.3 tables (its pitch
+//! only shortens its step); with the 3-D bearing the thesis's CNA-kind ordering returns, among
+//! them in all four tables the thesis tops with an AUV CNA. Table 6.1's 2.22 m floor is reached
+//! with the horizontal bearing only.
 
 use super::{Check, ExperimentError, ReproOptions, ReproReport, Size};
 use coopnav_core::{DepthProfile, Heading, Lawnmower, Track, Vec3};
@@ -94,7 +94,7 @@ struct Areas {
 
 /// Sec. 5.2 (stated): 500 m × 1500 m areas; the lane spacing (100 m) is invented.
 const AREAS_52: Areas = Areas { width: 500.0, length: 1500.0, spacing: 100.0, lanes: 5 };
-/// Sec. 5.3 (area size lost, digest A17): 100 m × 500 m areas, four lanes 25 m apart. Invented,
+/// Sec. 5.3 (area size lost, docs/models.md#hudson-geometry): 100 m × 500 m areas, four lanes 25 m apart. Invented,
 /// and chosen among 500×1500, 200×600 and 100×500 as the one whose costs have the thesis
 /// tables' magnitude (N = 2 and N = 5 best rows); it is not a fit.
 const AREAS_53: Areas = Areas { width: 100.0, length: 500.0, spacing: 25.0, lanes: 4 };
@@ -123,7 +123,7 @@ fn adjacent_lawnmowers(n: usize, areas: Areas, variable_depth: bool) -> Result<V
         .collect()
 }
 
-/// The Table 6.1 survey (digest §9).
+/// The Table 6.1 survey (invented: docs/models.md#hudson-geometry).
 fn small_lawnmower() -> Result<Vec<Track>, ExperimentError> {
     let m = Lawnmower {
         origin: (0.0, 0.0),
@@ -326,7 +326,7 @@ fn table_53(
     let mut table = String::new();
     let _ = writeln!(
         table,
-        "{id}: best results, N = {n}, tau = 10 s, canonical geometry (digest A17), {} set-ups run, {} skipped \
+        "{id}: best results, N = {n}, tau = 10 s, canonical geometry (docs/models.md#hudson-geometry), {} set-ups run, {} skipped \
          (AUV CNA, (A*B)^(L+1) > {FULL_LEAF_CAP} leaves; thesis rows among them marked 'not run')",
         setups.len(),
         skipped.len()
@@ -495,7 +495,7 @@ const T61: [(usize, usize, f64, f64, f64); 6] = [
     (9, 4, 4.00, 2.29, 2.22),
 ];
 
-/// Deepest L per A in Appendix A (digest §5.4).
+/// Deepest L per A in Appendix A (Hudson 2012, App. A).
 const L_MAX_61: [usize; 8] = [9, 7, 6, 5, 5, 5, 4, 4];
 
 fn t61(opts: &ReproOptions) -> Result<ReproReport, ExperimentError> {
@@ -575,8 +575,8 @@ fn t61(opts: &ReproOptions) -> Result<ReproReport, ExperimentError> {
             format!("ours worst {worst:.2} m with {}", worst_row.setup.label()),
         )
         .known_deviation(
-            "not explained yet (issue 10): the thesis's survey path (the Halifax trials' lawnmower) is lost and ours is \
-             invented (digest 5.4); the best rows match (2.22 m floor) but the greedy two-option rows do not",
+            "not explained yet: the thesis's survey path (the Halifax trials' lawnmower) is lost and ours is \
+             invented (docs/models.md#hudson-geometry); the best rows match (2.22 m floor) but the greedy two-option rows do not",
         ),
     ];
     Ok(ReproReport::new(
@@ -662,7 +662,7 @@ fn penalty_cases(opts: &ReproOptions) -> Result<ReproReport, ExperimentError> {
                             format!("max distance {:.0} m", c11.max_distance),
                         )
                         .known_deviation(
-                            "eq. (9)'s form is lost (hudson digest §2.7); our 5×Cost² reconstruction adds its violation \
+                            "eq. (9)'s form is lost (Hudson 2012, Sec. 3.2; docs/models.md#hudson-penalties); our 5×Cost² reconstruction adds its violation \
                              term to the cost instead of scaling it, so with no look-ahead penalty the deep search trades a far AUV for \
                              cheaper steps (2,286 m at L = 4; 1,847 m at L = 0-3, and case 10, the same with the look-ahead penalty, holds 1,847 m at every L)",
                         ),

@@ -34,7 +34,7 @@ pub fn experiments() -> Vec<Experiment> {
     ]
 }
 
-/// The reproduction's TL model (digest §6.7 item 2, k = 2).
+/// The reproduction's TL model (docs/models.md#nams-transmission-loss, k = 2).
 pub fn default_tl() -> Thorp {
     Thorp { k: 2.0, ..Thorp::default() }
 }
@@ -51,14 +51,15 @@ pub fn config(opts: &ReproOptions) -> ExperimentConfig {
 }
 
 /// Thesis values: (scenario, adaptive, best control) for Tables 9, 10 and 11 (duty cycle per
-/// nams digest §8 item 20: adaptive 0.38 vs control 1.00 in the least favourable scenario).
+/// Nams 2014, §5.4.3, which Table 11 contradicts: adaptive 0.38 vs control 1.00 in the least
+/// favourable scenario; docs/models.md#nams-metrics).
 const THESIS: [(&str, [(f64, f64); 3]); 2] = [
     ("scenario 1", [(14.8, 7.2), (32.4, 24.4), (1.00, 1.00)]),
     ("scenario 4", [(3.6, 2.9), (102.6, 57.8), (0.38, 1.00)]),
 ];
 
-/// Why scenario 4's status-period direction is not resolved (measured on the BELLHOP grid, 40
-/// repetitions, seeds 1–3, session 21).
+/// Why scenario 4's status-period direction is not resolved (on the BELLHOP grid, 40
+/// repetitions, seeds 1–3).
 const S4_PERIOD_DEVIATION: &str = "the thesis's adaptive vehicle skips 62 % of its transmit opportunities in scenario 4 \
 (duty 0.38), and that is what makes its status period 78 % longer than the control's. Ours skips only 28–30 % on the \
 synthetic shelf (duty 0.70–0.72), so the two periods end within noise of each other: on the BELLHOP grid, adaptive minus \

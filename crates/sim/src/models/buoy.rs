@@ -1,4 +1,4 @@
-//! Buoys as transponder vehicles (Gill's hybrid baseline, gill digest §1.2 and §5.5): a buoy
+//! Buoys as transponder vehicles (Gill's hybrid baseline, Gill 2013, §1.4 and §2.4.1): a buoy
 //! floats at a known GPS position, moored or drifting, and broadcasts that position in its own
 //! slot of the schedule; every survey AUV that decodes it applies the one-way travel time as a
 //! range, beside the CNA's. The spec (`[[buoys]]`) and its validation live here; the engine's
@@ -24,7 +24,7 @@ pub struct BuoySpec {
     /// Depth of its modem's transducer, m (a surface buoy's hangs just below the waves).
     #[serde(default = "default_modem_depth")]
     pub modem_depth_m: f64,
-    /// SD of its broadcast GPS position per axis, m (Gill's DGPS, digest §5.4: 0.1 m).
+    /// SD of its broadcast GPS position per axis, m (Gill's DGPS, Gill 2013, §2.4.1: 0.1 m).
     #[serde(default = "default_gps_sd")]
     pub gps_sd_m: f64,
     /// WHOI rate of its position broadcast (default 0, the most robust).
@@ -34,7 +34,7 @@ pub struct BuoySpec {
     /// `message`); default: Gill's 1.6 m × 0.6 m boxes centred on its deployment position.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub zone: Option<Zone>,
-    /// The buoy filter every survey AUV runs from its mini-packets (gill digest §3.3, Table 3).
+    /// The buoy filter every survey AUV runs from its mini-packets (Gill 2013, §2.2.2 and Table 3).
     #[serde(default = "SurfaceParams::buoy")]
     pub filter: SurfaceParams,
 }
@@ -48,8 +48,8 @@ pub enum Drift {
     Constant {
         velocity_m_s: [f64; 2],
     },
-    /// Lake Pend Oreille statistics (digest §5.5): Gill's buoys drifted 0.056 ± 0.039 m/s, half
-    /// of them on circles of about 200 m.
+    /// Lake Pend Oreille statistics (Gill 2013, §2.4.1): a drift of 0.056 ± 0.039 m/s, straight or
+    /// on a large circle (the split and the radius invented: docs/models.md#gill-buoy-drift).
     Lake(LakeDrift),
 }
 

@@ -52,7 +52,7 @@ pub enum RangeError {
     /// The filter's own Gaussian (its `range_noise` variance) plus `extra_sd` metres: the truth
     /// as the filter believes it (for studies that want a matched filter).
     Gaussian { extra_sd: f64 },
-    /// Gill's reception mixture (gill digest §5.4), conditioned on a decoded packet.
+    /// Gill's reception mixture (Gill 2013, §2.4.1), conditioned on a decoded packet.
     GillMixture(Mixture),
 }
 
@@ -225,7 +225,7 @@ impl SoundSpeed {
     /// (c̄_filters / c̄_water − 1)² when the filters convert travel times at the harmonic-mean speeds
     /// of `filters` (a constant: the thesis's fixed speed; a cast: `filter.sound_speed`): the fixed
     /// cruise depth a team holding this profile as its CTD cast would pick (an invented rule,
-    /// issue 10 session 26). Ties go to the shallowest; `lo` itself when `auv_depths` is empty.
+    /// docs/models.md#closed-loop-world). Ties go to the shallowest; `lo` itself when `auv_depths` is empty.
     pub fn least_biased_depth(&self, filters: &SoundSpeed, auv_depths: &[f64], (lo, hi): (f64, f64)) -> f64 {
         let top = lo.ceil().max(0.0) as usize;
         let deepest = auv_depths.iter().fold(hi, |d, &z| d.max(z)).floor().max(top as f64) as usize;
@@ -311,7 +311,7 @@ impl SoundSpeed {
 
 /// Each vehicle's clock: a fixed offset ~ N(0, offset_sd_s) and a drift rate ~ N(0, drift_sd_ppm)
 /// drawn per run (invented defaults: perfect clocks; Gill's measured drift is 162 ± 203 µs/h,
-/// gill digest §5.4, about 0.05 ppm). OWTT ranges see the receiver's minus the sender's error.
+/// Gill 2013, §2.1.3, about 0.05 ppm). OWTT ranges see the receiver's minus the sender's error.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct Clocks {

@@ -46,7 +46,7 @@ impl FilterSpec {
 /// `{ kind = "constant" }` (the default, the thesis's: every travel time at
 /// `range_noise.sound_speed`) or `{ kind = "cast" }`, the harmonic-mean speed of a CTD cast between
 /// the transponder's depth (as its packet reports it) and the AUV's own (its depth sensor), as a
-/// field team converts with its cast (issue 10, session 26). The cast is `channel.sound_speed`
+/// field team converts with its cast. The cast is `channel.sound_speed`
 /// unless `points = [[depth m, speed m/s], ...]` give one of its own (a real cast is not the
 /// water: an older cast, another station). Either way the range's variance stays the travel
 /// time's (`range_noise`).
@@ -93,9 +93,9 @@ impl RangeSpeed {
 /// `{ kind = "decimated", period_s = 0.5 }`, every `period_s` (a whole number of truth steps that
 /// divides one second), predicting with the mean of the heading-rate readings since its last step
 /// and taking one speed and one compass reading. Between its steps the controller steers on the
-/// last estimate; range updates still predict to their own time. A speed option (issue 9: the
-/// filters are most of a run's time), not a thesis model: its accuracy against every step is
-/// measured in the issue-9 note.
+/// last estimate; range updates still predict to their own time. A speed option (the filters
+/// are most of a run's time), not a thesis model: its accuracy against every step is in
+/// docs/evaluation.md.
 #[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
 #[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
 pub enum FilterRate {

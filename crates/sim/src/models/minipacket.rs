@@ -1,4 +1,4 @@
-//! The WHOI 13-bit mini-packet as an engine message (gill digest §2.2–§2.3): a ranging ping that
+//! The WHOI 13-bit mini-packet as an engine message (Gill 2013, §2.1.2 and App. B): a ranging ping that
 //! carries one state component of its sender (East, North, speed or heading), quantised to a box
 //! of the sender's zone and decoded by the receiver to the box centre — the codec of
 //! `coopnav_nav::codec`. Its air time and the channel's success curve it uses are here.
@@ -9,14 +9,14 @@ use coopnav_nav::codec::{decode_heading_deg, encode_heading_deg, Zone, SPEED_AXI
 use coopnav_nav::StateKind;
 
 /// Air time of a mini-packet, s. Invented (configurable as `comms.mini_packet_air_s`): the thesis
-/// gives a 2 s window per mini-packet (gill digest §2.2) that also holds the travel time, which
-/// its OWTT ranging keeps under 1 s (§2.4); 0.5 s of FH-FSK leaves the rest of the window to
+/// gives a 2 s window per mini-packet (Gill 2013, §2.1.2) that also holds the travel time, which
+/// its OWTT ranging keeps under 1 s (§2.1.3); 0.5 s of FH-FSK leaves the rest of the window to
 /// ranges up to about 2 km.
 pub const DEFAULT_AIR_S: f64 = 0.5;
 
 /// The success curve a mini-packet is drawn from: rate 0's, the FH-FSK rate it shares with the
 /// modem's mini-packet (invented: no thesis gives a mini-packet curve; Gill's 90 % success in
-/// past tests, digest §2.2, is a rate-0 figure at short range).
+/// past tests, Gill 2013, §2.1.2, is a rate-0 figure at short range; docs/models.md#gill-mini-packets).
 pub const SUCCESS_RATE: Rate = Rate::R0;
 
 /// The value a receiver decodes from a mini-packet carrying `kind` of a vehicle at `pos` with

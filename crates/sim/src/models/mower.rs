@@ -2,7 +2,7 @@
 //! block starts, which way its lanes run and to which side they step. Lane length, spacing and
 //! count stay the fleet's. Without it, blocks sit side by side (`fleet.block_offset`); Nams's
 //! two vehicles start at opposite corners of one square and fly it in opposite directions
-//! (nams digest §8 item 21).
+//! (invented: docs/models.md#nams-scenarios).
 
 use serde::{Deserialize, Serialize};
 

@@ -1,4 +1,4 @@
-//! Noise sources of Gill's simulation (digest §5.4–§5.5) that the engine's models draw from: the
+//! Noise sources of Gill's simulation (Gill 2013, §2.4.1) that the engine's models draw from: the
 //! compass-bias map, the acoustic range-error mixture ([`Acoustic`], [`draw_reception`]) and buoy
 //! drift. Each draws from the stream it is given in a fixed pattern whatever the configuration,
 //! so MSBL, HBL One and HBL Two runs with the same seed see the same noise (common random numbers).
@@ -10,7 +10,7 @@ use rand_distr::StandardNormal;
 use serde::{Deserialize, Serialize};
 use std::f64::consts::TAU;
 
-/// Gill's range-error mixture of a message (digest §5.4, §2.4): uniform "slight" errors up to
+/// Gill's range-error mixture of a message (Gill 2013, §2.4.1): uniform "slight" errors up to
 /// `slight_max_m` long or short, uniform `outlier_min_m`–`outlier_max_m` outliers, and drops; the
 /// four shares sum to 1.
 #[derive(Debug, Clone, PartialEq)]
@@ -40,7 +40,7 @@ impl Default for Acoustic {
 
 impl Acoustic {
     /// Mean square of the range error of a *received* message under the thesis's mixture
-    /// (digest §5.4: uniform "slight" errors and uniform 5–10 m outliers), in m².
+    /// (Gill 2013, §2.4.1, read as uniform "slight" errors and uniform 5–10 m outliers), in m².
     pub fn received_error_mean_square(&self) -> f64 {
         let uniform_sq = |a: f64, b: f64| (a * a + a * b + b * b) / 3.0;
         let received = self.p_slightly_long + self.p_slightly_short + self.p_outlier;
@@ -59,7 +59,7 @@ pub fn normal(rng: &mut ChaCha8Rng) -> f64 {
 }
 
 /// Compass bias per integer compass degree (rad): a random walk over heading with N(0, step)
-/// increments, or i.i.d. values (digest §10 A12).
+/// increments, or i.i.d. values (an interpretation: docs/models.md#gill-sensor-noise).
 #[derive(Debug, Clone)]
 pub struct CompassBias {
     table: Vec<f64>,
@@ -128,7 +128,8 @@ pub enum BuoyMotion {
     Circular { centre: [f64; 2], radius: f64, phase0: f64, omega: f64 },
 }
 
-/// Gill's Lake Pend Oreille drift statistics (digest §5.5): speed ~ N(mean, sd) clipped at zero,
+/// Gill's Lake Pend Oreille drift statistics (Gill 2013, §2.4.1; docs/models.md#gill-buoy-drift):
+/// speed ~ N(mean, sd) clipped at zero,
 /// a uniform direction, and a circle of `circular_radius` with odds `circular_fraction`.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -263,7 +264,7 @@ mod tests {
 
     #[test]
     fn compass_map_is_continuous_for_a_walk() {
-        // Gill's 0.047° step (digest §5.4, A12).
+        // Gill's 0.047° step (Gill 2013, §2.4.1; docs/models.md#gill-sensor-noise).
         let m = CompassBias::draw(0.047, false, &mut SeedStream::new(9).rng(5));
         let d = (m.at(0.0) - m.at(0.0175)).abs();
         assert!(d < 0.047f64.to_radians() * 5.0);

@@ -3,7 +3,7 @@
 //! (`comms.status_format`): the Appendix C node report with its covariance trailer (rate feedback
 //! from the CNA's one-bit acks), or Nams's frame 0 — the packet-success tracker's header, then the
 //! thesis status message (rate feedback from the peers' headers; each AUV keeps a shadow estimate
-//! of every other, nams digest §2.2–3.2).
+//! of every other, Nams 2014, §5.1–5.2).
 
 use coopnav_acomms::status::{Frame0, NextWaypoint, StatusMessage};
 use coopnav_acomms::tracker::{MaskWidth, TrackingHeader};

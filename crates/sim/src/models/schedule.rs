@@ -3,7 +3,7 @@
 //! ship's port or starboard modem (a mini-packet) or one survey AUV (its status message).
 //! `broadcast_then_status` is Hudson's preset (the CNA at m·τ, then AUV j at m·τ + (j + 1)·τ/(N + 1));
 //! with B buoys their slots follow the CNA's, every slot τ/(1 + B + N); `gill_cycle` is Gill's MSBL /
-//! HBL Short / HBL Long cycle (gill digest §4, Table 1) of 2 s mini-packet slots from ship0 and
+//! HBL Short / HBL Long cycle (Gill 2013, §2.3.2, Table 1) of 2 s mini-packet slots from ship0 and
 //! buoy0; `tdma` lists the slots, and a survey AUV's slot may name the rate policy its status
 //! messages use (`rate_policy`, a [`RatePolicySpec`]; otherwise the comms default), the CNA's slot
 //! the rate policy of its broadcast (otherwise `comms.cna_rate`). Validation
@@ -98,7 +98,7 @@ pub enum Schedule {
     },
     /// Gill's cycle: every slot a mini-packet from ship0's port or starboard modem or from buoy0,
     /// the ship's slots assigned to its modems by the navigation `configuration` (MSBL and HBL
-    /// Two alternate port and starboard, HBL One uses port only; gill digest §10 A7–A8). The
+    /// Two alternate port and starboard, HBL One uses port only; invented, docs/models.md#gill-cycles). The
     /// cycle's period must be `comms.tau`.
     GillCycle {
         cycle: GillCycle,

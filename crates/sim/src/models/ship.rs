@@ -1,6 +1,6 @@
-//! Ships on a fixed track (Gill's support ship, gill digest §5.1–§5.2): a surface vehicle that
+//! Ships on a fixed track (Gill's support ship, Gill 2013, §2.4.1): a surface vehicle that
 //! drives a straight line at constant speed under a look-ahead path controller and broadcasts its
-//! state as mini-packets from two outrigger modems (port and starboard, §6.2). The spec
+//! state as mini-packets from two outrigger modems (port and starboard, Gill 2013, §2.4.2). The spec
 //! (`[[ships]]`), the pilot and their validation live here; the engine's ship is in
 //! `engine/vehicles.rs`.
 
@@ -28,18 +28,21 @@ pub struct ShipSpec {
     pub start_scatter: StartScatter,
     #[serde(default)]
     pub outriggers: Outriggers,
-    /// What its broadcasts measure: DGPS position, speed and heading noise (digest §5.4).
+    /// What its broadcasts measure: DGPS position, speed and heading noise (Gill 2013, §2.4.1;
+    /// docs/models.md#gill-sensor-noise).
     #[serde(default)]
     pub sensors: ShipSensors,
     /// Quantisation zone of its East/North mini-packets.
     pub zone: Zone,
-    /// The ship filter every survey AUV runs from its broadcasts (digest §3.3; A2 reconstructed).
+    /// The ship filter every survey AUV runs from its broadcasts (Gill 2013, §2.2.2; coefficients
+    /// invented, docs/models.md#gill-coefficients).
     #[serde(default = "SurfaceParams::ship")]
     pub filter: SurfaceParams,
 }
 
-/// Look-ahead path controller (a MOOS-style virtual waypoint, digest §5.2): a heading-rate command
-/// towards the point `lookahead_m` ahead on the track. Gains invented (digest A25).
+/// Look-ahead path controller (a MOOS-style virtual waypoint; the thesis's controller is not
+/// given): a heading-rate command towards the point `lookahead_m` ahead on the track. Gains
+/// invented (docs/models.md#gill-scenario).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct Pilot {

@@ -35,7 +35,7 @@ impl TlModel {
     }
 }
 
-/// The thesis's acoustic environment (nams digest §4.5: mud half-space, 25 kHz, BT-1 pattern) over
+/// The thesis's acoustic environment (Nams 2014, §4.2 and App. A: mud half-space, 25 kHz, BT-1 pattern) over
 /// the scenario's bathymetry, with the scenario's true sound-speed profile.
 fn environment(sc: &Scenario) -> AcousticEnv {
     let mut env = AcousticEnv::nams(Arc::new(sc.bathymetry()));

@@ -1,9 +1,9 @@
-//! Table 7 metrics of one run (nams digest §4.8, with the §6.6 reading (b) accounting: one
+//! Table 7 metrics of one run (Nams 2014, §4.4 and Table 7, with our reading of its accounting: one
 //! transmission opportunity per slot network-wide, bytes summed over both directions).
 //!
 //! score = 0.5·BW/19.2 + 0.3·(1 − duty) + 0.2·mean f(P), f(P) = 1 if P ≤ Th else Th/P ("half
-//! score per doubling", continuous form), Th = 60·(1 + floor(d̄/500)) s. Reconstructed: digest
-//! §8 item 19.
+//! score per doubling", continuous form), Th = 60·(1 + floor(d̄/500)) s. Reconstructed:
+//! docs/models.md#nams-metrics.
 //!
 //! [`LinkTally`] collects the same counts from the one engine (a Nams scenario file run with
 //! `comms.status_format = "nams_frame0"` and `comms.status_to = "cna_and_auvs"`).

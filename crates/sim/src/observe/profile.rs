@@ -1,4 +1,4 @@
-//! The Monte Carlo error profile against along-path position x_rel (digest §5.6, the thesis's
+//! The Monte Carlo error profile against along-path position x_rel (Gill 2013, §3.2, the thesis's
 //! Figs. 16, 19 and 21): per x_rel bin, the mean total, |along-path| and |across-path| AUV error
 //! over every sample of every run that fell in the bin. The bins are filled by the zone observer
 //! itself ([`super::zone::GillZone`]), so a profile describes the very runs it summarises.

@@ -1,5 +1,6 @@
 //! Across-run statistics shared by the Monte Carlo tools: mean, SD and standard error of a set
-//! of runs, and the Welch 95 % confidence interval of a difference of two means (gill digest §4.3).
+//! of runs, and the Welch 95 % confidence interval of a difference of two means (as Gill 2013,
+//! §3.1.2 compares the cycles).
 
 use serde::Serialize;
 
@@ -63,7 +64,7 @@ mod tests {
 
     #[test]
     fn welch_reproduces_the_thesis_cycle_interval() {
-        // §4.3: 1.59 ± 0.95 vs 1.37 ± 0.76, n = 250 each → [0.07, 0.37].
+        // Gill 2013, §3.1.2: 1.59 ± 0.95 vs 1.37 ± 0.76, n = 250 each → [0.07, 0.37].
         let long = Stats { n: 250, mean: 1.59, sd: 0.95, se: 0.95 / 250f64.sqrt() };
         let short = Stats { n: 250, mean: 1.37, sd: 0.76, se: 0.76 / 250f64.sqrt() };
         let ci = welch_95(&long, &short);

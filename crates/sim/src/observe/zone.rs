@@ -1,4 +1,4 @@
-//! Gill's zone metric (gill digest §5.6, §7.5) as an engine [`Observer`]: the survey AUV's true
+//! Gill's zone metric (Gill 2013, §2.4.1 and §3.2, Table 5) as an engine [`Observer`]: the survey AUV's true
 //! error while it is in the measurement zone relative to the ship, x_rel = (AUV − ship) along the
 //! AUV's direction of travel in [zone_min, zone_max], split into along- and across-path parts,
 //! the across-path error in the approach window just before the zone, the error profile against
@@ -54,7 +54,8 @@ impl ZoneSpec {
         -dx * uy + dy * ux
     }
 
-    /// Gill's Table 5 zone (digest §5.1, A16) for an AUV running east: −30…75 m, 50 m approach,
+    /// Gill's Table 5 zone (Gill 2013, §2.4.1; docs/models.md#gill-scenario) for an AUV running
+    /// east: −30…75 m, 50 m approach,
     /// the profile in 25 m bins.
     pub fn table5() -> Self {
         ZoneSpec {

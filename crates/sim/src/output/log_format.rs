@@ -1,4 +1,4 @@
-//! How the simulated HBL field log is written (gill digest §6.4, §10 A28): positions in metres,
+//! How the simulated HBL field log is written (Gill 2013, §3.3; docs/models.md#gill-geodesy): positions in metres,
 //! or as latitude/longitude about a geodetic origin like the field logs, optionally with the buoy
 //! fixes rounded the way the UI AUV's Rabbit stored them (float32, maybe one more bit lost).
 

@@ -8,8 +8,14 @@
 //! Replacing an existing directory (`force`) is the one place coopnav deletes files, so it is
 //! guarded by [`check_replaceable`]: only a directory coopnav itself wrote (it holds a coopnav
 //! `manifest.json`) or an empty one may be replaced, and never the filesystem root, the home
-//! directory, the working directory or any directory that contains it. The old directory is
-//! moved aside and deleted only after the new run is in place.
+//! directory, the working directory or any directory that contains it. The new run and the old
+//! directory are exchanged in one atomic rename, so the target is at every instant the old run or
+//! the new one, whole; the old one is then deleted.
+//!
+//! A process killed outright (SIGKILL, a failed allocation) cannot clean up after itself, so every
+//! staging directory holds a marker naming its process (pid and start time): the next run writing
+//! beside it removes the staging of processes that no longer run, and restores a replaced run
+//! that such a process had moved aside.
 //!
 //! What goes in them: one closed-loop run's ([`run`]), a pre-deployment plan's ([`plan`]), the
 //! `coopnav hbl` tools' recorded pass and field log ([`record`], [`log_format`]) and plots
@@ -231,11 +237,13 @@ impl RunDir {
         let resolved = parent.join(&name);
         let staging = parent.join(format!(".{}.partial-{}", name.to_string_lossy(), std::process::id()));
         let mut live = unfinished();
+        recover_abandoned(&parent, &name.to_string_lossy());
         if staging.exists() {
             fs::remove_dir_all(&staging).map_err(io_err(&staging))?;
         }
         fs::create_dir(&staging).map_err(io_err(&staging))?;
         live.push(staging.clone());
+        fs::write(staging.join(STAGING_MARKER), Owner::this_process().to_string()).map_err(io_err(&staging))?;
         Ok(RunDir { target, resolved, staging, force, finished: false })
     }
 
@@ -298,28 +306,164 @@ impl RunDir {
                 source: std::io::Error::new(std::io::ErrorKind::Interrupted, "the run was interrupted"),
             });
         };
-        let aside = self.aside_path();
-        let replacing = self.resolved.exists();
-        if replacing {
-            fs::rename(&self.resolved, &aside).map_err(io_err(&self.target))?;
-        }
-        if let Err(e) = fs::rename(&self.staging, &self.resolved) {
-            if replacing {
-                let _ = fs::rename(&aside, &self.resolved);
+        // From here the staging directory is the run: the marker goes, so that a kill after the
+        // exchange leaves no marker inside the landed run.
+        fs::remove_file(self.staging.join(STAGING_MARKER)).map_err(io_err(&self.staging))?;
+        let replaced = match exchange(&self.staging, &self.resolved) {
+            Ok(()) => true,
+            Err(e) if e.raw_os_error() == Some(libc::ENOENT) => {
+                // Nothing to replace (or it vanished meanwhile): a plain rename, which refuses
+                // to clobber a directory another process landed in the meantime.
+                fs::rename(&self.staging, &self.resolved).map_err(io_err(&self.target))?;
+                false
             }
-            return Err(io_err(&self.target)(e));
-        }
+            Err(e) if matches!(e.raw_os_error(), Some(libc::EINVAL | libc::ENOSYS | libc::EOPNOTSUPP)) => {
+                // A filesystem without the exchange: the old run is moved aside first (a kill
+                // between the two renames is repaired by the next run, `recover_abandoned`).
+                let aside = self.resolved.with_file_name(format!(
+                    ".{}.replaced-{}",
+                    self.resolved.file_name().unwrap_or_default().to_string_lossy(),
+                    std::process::id()
+                ));
+                fs::rename(&self.resolved, &aside).map_err(io_err(&self.target))?;
+                if let Err(e) = fs::rename(&self.staging, &self.resolved) {
+                    let _ = fs::rename(&aside, &self.resolved);
+                    return Err(io_err(&self.target)(e));
+                }
+                fs::rename(&aside, &self.staging).map_err(io_err(&aside))?;
+                true
+            }
+            Err(e) => return Err(io_err(&self.target)(e)),
+        };
         live.swap_remove(index);
         self.finished = true;
-        if replacing {
-            fs::remove_dir_all(&aside).map_err(io_err(&aside))?;
+        drop(live);
+        if replaced {
+            // The old run, now at the staging path: named for this live process until deleted.
+            remove_run(&self.staging).map_err(io_err(&self.staging))?;
         }
         Ok(self.target.clone())
     }
+}
 
-    fn aside_path(&self) -> PathBuf {
-        let name = self.resolved.file_name().unwrap_or_default().to_string_lossy();
-        self.resolved.with_file_name(format!(".{name}.replaced-{}", std::process::id()))
+/// Deletes a run directory with its manifest last, so that a kill half-way leaves a directory
+/// that [`recover_abandoned`] still recognises as coopnav's.
+fn remove_run(dir: &Path) -> std::io::Result<()> {
+    for entry in fs::read_dir(dir)? {
+        let entry = entry?;
+        if entry.file_name() == MANIFEST {
+            continue;
+        }
+        if entry.file_type()?.is_dir() {
+            fs::remove_dir_all(entry.path())?;
+        } else {
+            fs::remove_file(entry.path())?;
+        }
+    }
+    let _ = fs::remove_file(dir.join(MANIFEST));
+    fs::remove_dir(dir)
+}
+
+/// The marker file inside a staging directory: the process that writes it.
+const STAGING_MARKER: &str = ".coopnav-staging";
+
+/// A process, told apart from a later one that reuses its pid by its start time (clock ticks
+/// after boot, `/proc/PID/stat` field 22).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+struct Owner {
+    pid: u32,
+    start: u64,
+}
+
+impl Owner {
+    fn this_process() -> Self {
+        let pid = std::process::id();
+        Owner { pid, start: start_time(pid).unwrap_or(0) }
+    }
+
+    fn parse(text: &str) -> Option<Self> {
+        let (pid, start) = text.trim().split_once(' ')?;
+        Some(Owner { pid: pid.parse().ok()?, start: start.parse().ok()? })
+    }
+
+    /// Whether this process still runs (the same pid with the same start time).
+    fn alive(&self) -> bool {
+        start_time(self.pid) == Some(self.start)
+    }
+}
+
+impl std::fmt::Display for Owner {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{} {}", self.pid, self.start)
+    }
+}
+
+/// A process's start time, or None when no such process runs.
+fn start_time(pid: u32) -> Option<u64> {
+    let stat = fs::read_to_string(format!("/proc/{pid}/stat")).ok()?;
+    // Fields after the command name (which may hold spaces) start at field 3.
+    let after = stat.rsplit_once(')')?.1;
+    after.split_whitespace().nth(19)?.parse().ok()
+}
+
+/// Exchanges two paths in one step (renameat2 RENAME_EXCHANGE): both must exist.
+fn exchange(a: &Path, b: &Path) -> std::io::Result<()> {
+    use std::os::unix::ffi::OsStrExt;
+    let c = |p: &Path| std::ffi::CString::new(p.as_os_str().as_bytes()).map_err(std::io::Error::other);
+    let (a, b) = (c(a)?, c(b)?);
+    // SAFETY: two valid NUL-terminated paths, relative to the working directory.
+    let r = unsafe { libc::renameat2(libc::AT_FDCWD, a.as_ptr(), libc::AT_FDCWD, b.as_ptr(), libc::RENAME_EXCHANGE) };
+    if r == 0 {
+        Ok(())
+    } else {
+        Err(std::io::Error::last_os_error())
+    }
+}
+
+/// Removes, beside `name` in `parent`, what coopnav processes that no longer run left behind:
+/// their staging directories (recognised by the marker inside, or, once exchanged, by the old
+/// run's coopnav manifest) and staged single files that coopnav wrote. Failures are ignored: this
+/// is housekeeping, and the run itself reports what matters.
+fn recover_abandoned(parent: &Path, name: &str) {
+    let Ok(entries) = fs::read_dir(parent) else { return };
+    let prefix = format!(".{name}.");
+    for entry in entries.flatten() {
+        let file_name = entry.file_name().to_string_lossy().into_owned();
+        let Some(rest) = file_name.strip_prefix(&prefix) else { continue };
+        let Some(pid) = ["partial-", "replaced-"].iter().find_map(|k| rest.strip_prefix(k)) else { continue };
+        let Ok(pid) = pid.parse::<u32>() else { continue };
+        let path = entry.path();
+        let Ok(meta) = fs::symlink_metadata(&path) else { continue };
+        if meta.is_dir() {
+            let owner = fs::read_to_string(path.join(STAGING_MARKER)).ok().and_then(|t| Owner::parse(&t));
+            if owner.is_none() && start_time(pid).is_none() && fs::remove_dir(&path).is_ok() {
+                // An empty staging directory (killed before its marker was written).
+                continue;
+            }
+            let abandoned = match owner {
+                Some(o) => o.pid == pid && !o.alive(),
+                // An exchanged-out old run keeps no marker: its manifest says coopnav wrote it,
+                // and its named process is gone.
+                None => holds_coopnav_manifest(&path) && start_time(pid).is_none(),
+            };
+            if !abandoned {
+                continue;
+            }
+            // A run moved aside by a process killed before its new run landed is the target's
+            // last whole state: it goes back.
+            let target = parent.join(name);
+            if rest.starts_with("replaced-") && fs::symlink_metadata(&target).is_err() {
+                let _ = fs::rename(&path, &target);
+            } else {
+                let _ = remove_run(&path).or_else(|_| fs::remove_dir_all(&path));
+            }
+        } else if meta.is_file() && start_time(pid).is_none() {
+            let head = fs::read(&path).map(|b| b.into_iter().take(OWNERSHIP_PREFIX).collect::<Vec<u8>>());
+            if head.is_ok_and(|h| is_coopnav_json(&h) || String::from_utf8_lossy(&h).contains("<title>coopnav replay"))
+            {
+                let _ = fs::remove_file(&path);
+            }
+        }
     }
 }
 
@@ -388,6 +532,7 @@ pub fn write_file(
     let name = target.file_name().ok_or_else(|| OutputError::Unnamed(target.to_path_buf()))?.to_string_lossy();
     let parent = target.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
     let staging = parent.join(format!(".{name}.partial-{}", std::process::id()));
+    recover_abandoned(parent, &name);
     unfinished().push(staging.clone());
     let written = (|| {
         use std::io::Write;

@@ -1,4 +1,4 @@
-//! What `coopnav hbl simulate` keeps of one engine run of a Gill pass (gill digest §5, §6.4): the
+//! What `coopnav hbl simulate` keeps of one engine run of a Gill pass (Gill 2013, §2.4.1 and §3.3): the
 //! zone metric ([`GillZone`]), one [`PassRow`] per second (AUV, ship and buoy truth and the AUV's
 //! estimates of them, x_rel: what the plots and the MOOS export read), and the run as a
 //! post-processing log (`coopnav_nav::post`): the AUV filter's start, its dead-reckoning readings

@@ -1,4 +1,4 @@
-//! The greedy one-step Fisher-information baseline (issue 10 item 4; the approach of open
+//! The greedy one-step Fisher-information baseline (the approach of open
 //! USV–AUV cooperative-localisation work): every τ the CNA goes to the reachable point whose next
 //! ping adds the most range information to the fleet, with no look-ahead and no model of the
 //! filters' covariances.

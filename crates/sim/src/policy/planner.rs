@@ -1,5 +1,5 @@
-//! The look-ahead planner as a closed-loop CNA policy (Hudson underway mode, digest §2.10,
-//! §3.3, A13–A16): it keeps its own modelled error state per survey AUV (eq. 1, stepped at every
+//! The look-ahead planner as a closed-loop CNA policy (Hudson 2012, Sec. 4.2, underway mode;
+//! docs/models.md#hudson-prediction): it keeps its own modelled error state per survey AUV (eq. 1, stepped at every
 //! ping from the CNA's pose and the AUV's *predicted* position), plans over the AUVs the CNA has
 //! heard from, and records the decisions' deadline misses and the tree levels reached.
 //! Under the estimator-aware cost it also keeps a model of each AUV's filter covariance
@@ -30,7 +30,7 @@ impl ErrorTracker {
     }
 
     /// A ping from `cna` at AUV `k` (at `auv`), received with probability `p_received` (1 = the
-    /// thesis's assumption that every ping arrives). The first ping starts the model (A12); a
+    /// thesis's assumption that every ping arrives). The first ping starts the model (docs/models.md#hudson-start); a
     /// ping counts as the expected value over reception: received → eq. 1, lost → ε² + ατ.
     pub fn ping(&mut self, k: usize, cna: &Vec3, auv: &Vec3, p_received: f64) {
         let m = self.model;
@@ -91,8 +91,8 @@ pub struct CovarianceTracker {
 /// the tracked filter covariance. Reports cannot restart it (an AUV does not know its true error):
 /// an AUV starts, when first known at time t, at S = (σ₀² + q_t·t)·I (σ₀ its launch position
 /// error) and C = 0. When the CNA's own variance falls (a fix), its new error is independent of
-/// the old one, so every C restarts at 0. An invention (issue 10, session 23). Under a current
-/// the filters do not model (`current`, m/s; session 29) each error also carries the mean −c·t
+/// the old one, so every C restarts at 0. Invented (docs/models.md#true-error-cost). Under a current
+/// the filters do not model (`current`, m/s) each error also carries the mean −c·t
 /// since launch, less what the pings took off it (`true_error` step 1).
 #[derive(Debug, Clone)]
 struct TruthTracker {
@@ -155,8 +155,8 @@ impl TruthTracker {
 /// integrated Ornstein–Uhlenbeck process; both tend to the random walk's terms as T → ∞). The
 /// rate dP/dt (q + 2·P_c·T·e(1 − e) + q_c·T²·(1 − e)² with the decay; q + 2·P_c·t + q_c·t²
 /// without) is what the planner grows it by. The speed, heading and compass-bias states are left
-/// out: the AUV's sensors observe them, the current they cannot. An invention (issue 10); digest
-/// gill §3 (the filter's prediction).
+/// out: the AUV's sensors observe them, the current they cannot. Invented; the filter's prediction
+/// is Gill 2013, §2.2.1's.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct UnheardGrowth {
     pub current_p0: f64,

@@ -22,7 +22,7 @@ use std::sync::Arc;
 use thiserror::Error;
 
 /// Every policy name, the planners first: `planner` scores with Hudson's model, `planner-estimator`
-/// with the survey AUVs' filter covariances (issue 10); `greedy-fisher` is the one-step
+/// with the survey AUVs' filter covariances (docs/models.md#estimator-cost); `greedy-fisher` is the one-step
 /// Fisher-information baseline.
 pub const POLICY_NAMES: [&str; 11] = [
     "planner",
@@ -236,7 +236,7 @@ fn modem_likelihood(sc: &Scenario) -> Result<PingLikelihood, LinkError> {
 
 /// The scenario's own TL provider seen from where the CNA pings: from the centre of every survey
 /// block at the CNA's start depth, along [`CHANNEL_BEARINGS`] bearings, to an AUV at its mission
-/// depth. An invention (issue 10): the link depends on where the CNA is, but the planner's table
+/// depth. Invented: the link depends on where the CNA is, but the planner's table
 /// depends on distance only, so it gets the mean over these sources and bearings.
 #[derive(Clone)]
 struct ChannelSample {

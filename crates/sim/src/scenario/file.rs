@@ -13,8 +13,8 @@ use thiserror::Error;
 /// printed cause chain shows them once.
 #[derive(Debug, Error)]
 pub enum ScenarioError {
-    #[error("cannot read scenario {file}: {cause}")]
-    Read { file: PathBuf, cause: std::io::Error },
+    #[error("cannot read scenario {file}: {}", read_cause(cause))]
+    Read { file: PathBuf, cause: coopnav_core::limits::InputError },
     #[error("scenario {file}: {message}")]
     Parse { file: PathBuf, message: String },
     #[error("scenario {file}: field {field} = {value}: allowed {allowed}")]
@@ -23,6 +23,14 @@ pub enum ScenarioError {
     Several { file: PathBuf, problems: Vec<Problem> },
     #[error("scenario {file}: auv[{index}] track: {cause}")]
     Track { file: PathBuf, index: usize, cause: TrackLoadError },
+}
+
+/// Why a scenario could not be read, without the path its message names already.
+fn read_cause(cause: &coopnav_core::limits::InputError) -> String {
+    match cause {
+        coopnav_core::limits::InputError::Io { source, .. } => source.to_string(),
+        other => other.to_string(),
+    }
 }
 
 impl ScenarioError {
@@ -99,10 +107,17 @@ pub fn parse<T: DeserializeOwned>(text: &str, file: &Path, validate: Validate<T>
     Ok(scenario)
 }
 
+/// The text of scenario `file`, read through the bounded reader (the input-file limit unless
+/// `allow_large`), so every front end refuses the same inputs with the same words.
+pub fn read_scenario_text(file: &Path, allow_large: bool) -> Result<String, ScenarioError> {
+    let limit = coopnav_core::limits::MAX_INPUT_FILE_BYTES;
+    coopnav_core::limits::read_text(file, "input file (bytes)", limit, allow_large)
+        .map_err(|cause| ScenarioError::Read { file: file.to_path_buf(), cause })
+}
+
 /// Reads `file`, then [`parse`]s it.
 pub fn load<T: DeserializeOwned>(file: &Path, validate: Validate<T>) -> Result<T, ScenarioError> {
-    let text =
-        std::fs::read_to_string(file).map_err(|cause| ScenarioError::Read { file: file.to_path_buf(), cause })?;
+    let text = read_scenario_text(file, false)?;
     parse(&text, file, validate)
 }
 

@@ -16,7 +16,7 @@ pub struct Scenario {
     pub name: String,
     /// Side of the square lawnmower, m (500 or 2000 in the thesis).
     pub square: f64,
-    /// Lane spacing, m. Reconstructed: nams digest §8 item 21 (50 m small, 200 m large).
+    /// Lane spacing, m. Invented: docs/models.md#nams-scenarios (50 m small, 200 m large).
     pub lane_spacing: f64,
     /// Extra ambient noise, dB (0 or 6).
     pub noise_db: f64,

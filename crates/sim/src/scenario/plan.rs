@@ -29,7 +29,7 @@ pub struct Scenario {
     pub auv: Vec<AuvSpec>,
 }
 
-/// CNA start pose (A12). Heading in compass degrees, as everywhere in files.
+/// CNA start pose (docs/models.md#hudson-start). Heading in compass degrees, as everywhere in files.
 #[derive(Debug, Clone, Copy, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct CnaStart {

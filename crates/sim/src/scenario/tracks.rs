@@ -7,8 +7,8 @@ use thiserror::Error;
 
 #[derive(Debug, Error)]
 pub enum TrackLoadError {
-    #[error("cannot read track file {path}: {source}")]
-    Read { path: PathBuf, source: std::io::Error },
+    #[error("track file: {source}")]
+    Read { path: PathBuf, source: coopnav_core::limits::InputError },
     #[error("track file {path}, line {line}: {message}")]
     Line { path: PathBuf, line: usize, message: String },
     #[error("track file {path}: {source}")]
@@ -17,8 +17,9 @@ pub enum TrackLoadError {
 
 /// Reads a `t,x,y,z` track CSV.
 pub fn load_track_csv(path: &Path) -> Result<Track, TrackLoadError> {
-    let text =
-        std::fs::read_to_string(path).map_err(|source| TrackLoadError::Read { path: path.to_path_buf(), source })?;
+    let limit = coopnav_core::limits::MAX_TABLE_FILE_BYTES;
+    let text = coopnav_core::limits::read_text(path, "track file (bytes)", limit, false)
+        .map_err(|source| TrackLoadError::Read { path: path.to_path_buf(), source })?;
     parse_track_csv(&text, path)
 }
 

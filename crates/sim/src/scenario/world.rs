@@ -68,7 +68,7 @@ pub struct Scenario {
     pub health: Health,
 }
 
-/// The survey AUVs' dead-reckoning sensors as they truly are (digest §5.5 values by default).
+/// The survey AUVs' dead-reckoning sensors as they truly are (Gill 2013, §2.4.1 values by default).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct AuvSensors {
@@ -94,14 +94,14 @@ impl Default for AuvSensors {
     }
 }
 
-/// The closed loop's channel keeps 0.15 m range noise at zero range (σ_τ = 0.1 ms, the model its
-/// reproductions were measured with), not the nav default matched to Gill's outlier mixture.
+/// The closed loop's channel keeps 0.15 m range noise at zero range (σ_τ = 0.1 ms), not the nav
+/// default matched to Gill's outlier mixture.
 ///
 /// Position process noise: Gill's Table 3 Q_E = Q_N = 0.255448 m² was tuned per step of an
-/// unknown Δt (gill digest §10 A1); read per 0.1 s step it grows σ by 2.55 m²/s per axis, and on
-/// the default mission the filters were conservative (NEES mean 0.50–0.82 against the consistent
-/// 2, σ 25–32 m against mean errors of 9–11 m). A fifth of it, [`CLOSED_LOOP_Q_EN`], measured
-/// NEES 1.5–2.7 there with the same true error (issue 9 item 4); invented, configurable as
+/// unknown Δt (docs/models.md#gill-coefficients); read per 0.1 s step it grows σ by 2.55 m²/s per
+/// axis, far more than the true dead-reckoning drift, and the filters are conservative (NEES well
+/// under its consistent value). A fifth of it, [`CLOSED_LOOP_Q_EN`], keeps the same true error with
+/// a NEES nearer consistency; invented (docs/models.md#closed-loop-world), configurable as
 /// `[filter] q`.
 fn default_filter() -> FilterSpec {
     let thesis = AuvParams::default();
@@ -163,7 +163,7 @@ pub struct Fleet {
     /// Each survey AUV's own block (one per AUV; empty: side by side from `origin`).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub lawnmowers: Vec<MowerSpec>,
-    /// The survey AUVs' IVER2 dynamics (nams digest §4.2; default `vehicle.m`'s constants), which
+    /// The survey AUVs' IVER2 dynamics (Nams 2014, App. B; default `vehicle.m`'s constants), which
     /// the other vehicles' shadow estimates also fly. The model steps at the scenario's `dt`
     /// ([`Scenario::survey_dynamics`]): `timestep` here may restate it, never differ.
     #[serde(default)]
@@ -226,7 +226,7 @@ pub struct AuvCna {
     /// When it climbs for a GPS fix (None: never; [`Surfacing`]).
     #[serde(default)]
     pub surfacing: Option<Surfacing>,
-    /// A counterfactual, not a vehicle (issue 10, `reproduce closed-loop-cna-navigation`): true =
+    /// A counterfactual, not a vehicle (`reproduce closed-loop-cna-navigation`): true =
     /// the CNA broadcasts its TRUE position. Its navigation error is still drawn, its σ still grows
     /// and it surfaces as configured; only no range or command carries the error. Default false.
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
@@ -348,7 +348,7 @@ impl Default for Comms {
     }
 }
 
-/// The underway planner (Hudson §3.3, digest A13–A16) and its adapter's options.
+/// The underway planner (Hudson 2012, Sec. 4.2; docs/models.md#hudson-prediction) and its adapter's options.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Planner {
@@ -367,7 +367,7 @@ pub struct Planner {
     /// Search the top tree levels with rayon.
     #[serde(default)]
     pub parallel: bool,
-    /// Reports needed from an AUV before the CNA plans for it (digest A14).
+    /// Reports needed from an AUV before the CNA plans for it (Hudson 2012, Sec. 4.2: two).
     #[serde(default = "one_usize")]
     pub start_after_reports: usize,
     /// What the CNA plans with for an AUV it has fewer than `start_after_reports` reports of.
@@ -409,7 +409,7 @@ pub struct Planner {
     /// the CNA holds: the scale error between the CNA's depth and each AUV's against the speed the
     /// filters convert at (`filter.sound_speed`: none where they convert with the water's own cast),
     /// on top of `estimator_bias_per_km` (coopnav_plan estimator step 4,
-    /// `BiasTable`; an invention of issue 10, session 25). With an AUV CNA and
+    /// `BiasTable`; invented, docs/models.md#estimator-cost). With an AUV CNA and
     /// `estimator_level_off` it lets the planner choose the CNA's depth.
     #[serde(default)]
     pub estimator_bias_profile: bool,
@@ -421,8 +421,8 @@ pub struct Planner {
     pub estimator_level_off: bool,
     /// `planner-estimator` knows its schedule: a broadcast still arriving when an AUV's own slot
     /// starts is lost (half-duplex), so beyond a slant range set by the slot's timing
-    /// ([`Scenario::slot_reach_m`]) no ping reaches that AUV, whatever the link. An invention
-    /// (issue 10): the thesis's link model depends on range only.
+    /// ([`Scenario::slot_reach_m`]) no ping reaches that AUV, whatever the link. Invented
+    /// (docs/models.md#closed-loop-schedule): the thesis's link model depends on range only.
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub estimator_slot_reach: bool,
     /// Levels of cost-to-go `planner-estimator` counts at each leaf (estimator step 6; 0 = none;
@@ -431,7 +431,7 @@ pub struct Planner {
     pub estimator_terminal_levels: f64,
     /// The water current the survey AUVs' filters do not model, east and north (m/s), as the CNA
     /// measures it (an ADCP): `planner-estimator` grows each AUV's modelled error along it
-    /// (coopnav_plan estimator step 1b; an invention of issue 10, session 28). Default [0, 0]: none.
+    /// (coopnav_plan estimator step 1b; invented, docs/models.md#estimator-cost). Default [0, 0]: none.
     /// Left to the user: the CNA's measurement is not the scenario's `fleet.current`.
     #[serde(default, skip_serializing_if = "coopnav_plan::estimator::is_still")]
     pub estimator_unmodelled_current: [f64; 2],
@@ -472,11 +472,11 @@ pub struct Planner {
     pub estimator_truth: Option<TruthSpec>,
 }
 
-/// What the CNA knows of a survey AUV before its reports meet the planning start rule (A14).
+/// What the CNA knows of a survey AUV before its reports meet the planning start rule (Hudson 2012, Sec. 4.2).
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum BeforeFirstReport {
-    /// Nothing: the planner and every baseline ignore the AUV until then (the thesis, digest A14).
+    /// Nothing: the planner and every baseline ignore the AUV until then (the thesis's rule).
     /// An AUV whose statuses never reach the CNA is never looked for.
     #[default]
     Ignore,
@@ -495,7 +495,7 @@ pub enum PlannerLink {
     #[default]
     Assumed,
     /// The scenario's own `comms.tl` provider, averaged over bearings from the survey blocks'
-    /// centres (policies `channel_likelihood`). An invention (issue 10): a team that has modelled
+    /// centres (policies `channel_likelihood`). Invented: a team that has modelled
     /// its site's acoustics gives the planner that model. Needs `analytic` or `bellhop_grid`.
     ScenarioChannel,
 }
@@ -517,9 +517,9 @@ pub enum EstimatorTracking {
     ExpectedPings,
     /// Only what the AUV reports counts: between reports, and from launch until the first, the
     /// covariance grows as the AUV's filter predicts it with no range (its process noise, and with
-    /// a `current` filter model the unobserved current's variance). An invention (issue 10, the
-    /// spread fleet over BELLHOP): a CNA that never hears an AUV cannot know its pings reached it,
-    /// and with `expected_pings` it believed an AUV it never heard from was the best served.
+    /// a `current` filter model the unobserved current's variance). Invented: a CNA that never
+    /// hears an AUV cannot know its pings reached it, and with `expected_pings` it believes an
+    /// AUV it never heard from is the best served.
     ReportsOnly,
 }
 
@@ -536,31 +536,25 @@ impl BeforeFirstReport {
 }
 
 // `planner-estimator`'s defaults: the settings `reproduce closed-loop-vs-baselines` chose on
-// its tuning seed (experiments::closed_loop::TUNING_SEED), so a user's mission gets them too.
-// Measured when they became the defaults (session 24, 20 paired runs, planner-estimator minus
-// centroid; tuning seed 1000 / fresh seed 7): scenarios/default.toml with the old defaults
-// (trace sum, 2 m/km, no cost-to-go, the CNA's variance counted) −0.36 / +1.64 m, with these
-// −4.60 / −2.95 m; auv-cna-tdma.toml +2.65 / +2.81 m against +0.70 / +0.92 m (centroid still
-// wins there); full-stack.toml −0.49 → −0.56 m (seed 7). Each of the four alone, dropped on the
-// tuning seed, made one of those files worse.
+// its tuning runs (base seed experiments::closed_loop::TUNING_SEED), so a user's mission gets
+// them too. Each of the four, dropped alone, makes one of the scenario files worse; together they
+// turn the default mission from a loss to centroid into a win (docs/evaluation.md).
 
 /// σ-sum: one AUV with a huge variance does not outweigh the rest as in the trace sum.
 pub const ESTIMATOR_AGGREGATE: Aggregate = Aggregate::SigmaSum;
 
-/// Invented (issue 10; gill §3 gives no sound-speed error model). Tuning seed, 6 runs per cell
-/// (`examples/closed_loop_tune.rs`): three times the filters' configured 3 m/s sound-speed
-/// uncertainty, within the ±11 m/s span of the scenarios' profiles. With the terminal levels, on
-/// the default mission with current at N = 3: 10.2 m with neither, 10.2 m with the bias alone,
-/// 8.2 m with the terminal cost alone, 6.0 m with both.
+/// Invented (docs/models.md#estimator-cost; Gill 2013 gives no sound-speed error model). Chosen on
+/// tuning runs (`examples/closed_loop_tune.rs`): three times the filters' configured 3 m/s
+/// sound-speed uncertainty, within the ±11 m/s span of the scenarios' profiles. The bias and the
+/// terminal levels pay together, not apart, on the default mission with current.
 pub const ESTIMATOR_BIAS_PER_KM: f64 = 6.0;
 
 /// Levels of cost-to-go at each leaf (see [`ESTIMATOR_BIAS_PER_KM`] for how it was chosen).
 pub const ESTIMATOR_TERMINAL_LEVELS: f64 = 10.0;
 
-/// Off: on the tuning seed (20 runs, N = 3) counting the CNA's own variance changed nothing
-/// measurable (the ASC 5.91 m on, 5.90 m off; the surfacing AUV CNA 4.40 / 4.37 m), and on
-/// auv-cna-tdma.toml it cost 1.4 m. A common CNA offset moves every AUV's estimate alike, which
-/// a per-ping noise term cannot express (docs/issue10/README.md).
+/// Off: on tuning runs counting the CNA's own variance changed nothing measurable, and on
+/// auv-cna-tdma.toml it costs. A common CNA offset moves every AUV's estimate alike, which
+/// a per-ping noise term cannot express.
 pub const ESTIMATOR_CNA_VARIANCE: bool = false;
 
 fn estimator_aggregate() -> Aggregate {
@@ -1034,13 +1028,13 @@ impl Scenario {
         }
     }
 
-    /// The benchmark mission of issue 5: 3 h, 5 survey AUVs on 16-lane blocks (long enough to
+    /// The benchmark mission (`coopnav bench closed-loop`): 3 h, 5 survey AUVs on 16-lane blocks (long enough to
     /// keep surveying for the whole 3 h), τ = 30 s, A = 5, L = 5, 10 Hz EKFs. The fleet spans
     /// 4.2 km, so its 5 s slots are planned for ranges up to 2.4 km at rate 1 (3.08 s of air
     /// time); at rate 0 (3.9 s) they hold only 1 km, and longer ranges collide with the next slot.
     /// The CNA knows the AUVs' mission plans (`planner.before_first_report = "mission_plan"`): on
     /// the BELLHOP grid it never hears auv0 and auv1 from its start otherwise, and never looks for
-    /// them (fleet mean 170 m, auv1 540 m; with the plans 83 m, the worst AUV 280 m).
+    /// them (docs/evaluation.md has the difference it makes).
     pub fn bench() -> Self {
         let mut s = Self::example().with_auvs(5);
         s.duration_s = 3.0 * 3600.0;
