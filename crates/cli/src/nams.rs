@@ -9,9 +9,11 @@ use coopnav_acomms::tl::analytic::Thorp;
 use coopnav_acomms::tl::bellhop::{AcousticEnv, Bellhop};
 use coopnav_acomms::tl::cached::{CachedGrid, GridSpec};
 use coopnav_acomms::TransmissionLoss;
+use coopnav_core::limits;
 use coopnav_core::{Bathymetry, Vec3};
 use coopnav_sim::nams::{run_experiment, ExperimentConfig, ExperimentTl};
 use coopnav_sim::output::{Manifest, RunDir};
+use coopnav_sim::work;
 use indicatif::ProgressBar;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
@@ -108,6 +110,7 @@ pub fn run(args: Args) -> Result<()> {
     };
     let text = input::read(config, args.allow_large)?;
     let file = parse_file(&text, config)?;
+    limits::check(work::nams(&file.experiment), args.allow_large)?;
     let tl = provider(&file.tl, &file.experiment)?;
     let run = match &args.out {
         Some(p) => RunDir::create_for(p, args.force, &[config.as_path()])?,

@@ -179,6 +179,32 @@ pub fn shelf(shelf: Option<&coopnav_core::Shelf>, field: &str) -> Option<Estimat
     Some(Estimate::new("bathymetry grid nodes", fields, s.nodes(), MAX_POINTS))
 }
 
+/// A Nams rate-selection experiment: every scenario × behaviour × repetition flies both
+/// vehicles over the square's lawnmower at the vehicle's step (at most `max_time`), and the
+/// shelf's grid is built once.
+pub fn nams(cfg: &crate::nams::ExperimentConfig) -> Vec<Estimate> {
+    let per_set = (cfg.behaviours.len() * cfg.repetitions) as f64;
+    let steps: f64 = cfg
+        .scenarios
+        .iter()
+        .map(|s| {
+            let lanes = (s.square / s.lane_spacing).round() + 1.0;
+            let flown = lawnmower_duration(lanes as usize, s.square, s.lane_spacing, s.speed);
+            let duration = cfg.max_time.map_or(flown, |m| m.min(flown));
+            // Two survey AUVs and the CNA's slot owner: three vehicles a step.
+            duration / cfg.vehicle.timestep * 3.0
+        })
+        .sum();
+    let mut out = vec![Estimate::new(
+        "simulated vehicle-steps",
+        "experiment.scenarios (square, lane_spacing, speed) / vehicle.timestep x behaviours x repetitions",
+        steps * per_set,
+        MAX_VEHICLE_STEPS,
+    )];
+    out.extend(shelf(Some(&cfg.shelf), "experiment.shelf"));
+    out
+}
+
 /// `runs` runs of a Gill pass in engine scenario `sc` (`runs_fields` says where the count comes
 /// from); `recorded`: one run keeps its post-processing log (a few rows per truth step).
 pub fn hbl_runs(sc: &closed_loop::Scenario, runs: f64, runs_fields: &str, recorded: bool) -> Vec<Estimate> {
