@@ -98,7 +98,9 @@ pub(crate) fn example() -> Result<String> {
 
 /// Parses and validates an experiment file (`path` names it in errors).
 pub(crate) fn parse_file(text: &str, path: &Path) -> Result<File> {
-    let file: File = toml::from_str(text).with_context(|| format!("{}: invalid experiment file", path.display()))?;
+    let file: File = toml::from_str(text)
+        .map_err(|e| anyhow::anyhow!(coopnav_core::validation::shortened(&e.to_string())))
+        .with_context(|| format!("{}: invalid experiment file", path.display()))?;
     file.experiment.validate_file(path, "experiment")?;
     Ok(file)
 }

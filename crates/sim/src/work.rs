@@ -95,20 +95,52 @@ pub fn predeploy(sc: &predeploy::Scenario) -> Vec<Estimate> {
     }
     let start = sc.mission.start_time.unwrap_or(0.0);
     let span = sc.mission.end_time.map_or(shortest, |end| end - start);
-    let motion = &sc.planner.motion;
+    let tree = TreeSize {
+        prefix: "planner.",
+        headings: sc.planner.motion.heading_options,
+        pitches: pitch_options(&sc.planner.motion.cna),
+        look_ahead: sc.planner.look_ahead,
+        pitch_levels: None,
+    };
+    if span.is_infinite() && sc.mission.end_time.is_none() {
+        // Only track files: the mission's length is known once they are read
+        // ([`predeploy_mission`]); the tree's size is not.
+        out.push(tree.estimates(0.0, sc.auv.len())[0].clone());
+        return out;
+    }
+    out.extend(decision_estimates(span, &sc.planner.motion, &tree, sc.auv.len(), samples));
+    out
+}
+
+/// The decisions over a mission of `span` seconds, the tree's work over them and the memory.
+fn decision_estimates(
+    span: f64,
+    motion: &coopnav_plan::MotionConfig,
+    tree: &TreeSize,
+    n_auvs: usize,
+    samples: f64,
+) -> Vec<Estimate> {
     let decisions = span / motion.tau;
-    out.push(Estimate::new("planner decisions", "mission length / planner.motion.tau", decisions, MAX_POINTS));
+    let mut out =
+        vec![Estimate::new("planner decisions", "mission length / planner.motion.tau", decisions, MAX_POINTS)];
+    out.extend(tree.estimates(decisions, n_auvs));
+    let bytes = samples * TRACK_SAMPLE_BYTES + decisions * n_auvs as f64 * RECORD_ROW_BYTES;
+    out.push(Estimate::new("memory (bytes)", "number of [[auv]], track lengths, planner.motion.tau", bytes, MAX_BYTES));
+    out
+}
+
+/// A pre-deployment mission once its tracks are read: the decisions over the span they cover.
+pub fn predeploy_mission(mission: &predeploy::Mission) -> Vec<Estimate> {
+    let motion = &mission.planner.motion;
     let tree = TreeSize {
         prefix: "planner.",
         headings: motion.heading_options,
         pitches: pitch_options(&motion.cna),
-        look_ahead: sc.planner.look_ahead,
+        look_ahead: mission.planner.look_ahead,
         pitch_levels: None,
     };
-    out.extend(tree.estimates(decisions, sc.auv.len()));
-    let bytes = samples * TRACK_SAMPLE_BYTES + decisions * sc.auv.len() as f64 * RECORD_ROW_BYTES;
-    out.push(Estimate::new("memory (bytes)", "number of [[auv]], track lengths, planner.motion.tau", bytes, MAX_BYTES));
-    out
+    let samples: f64 = mission.tracks.iter().map(|t| t.samples().len() as f64).sum();
+    decision_estimates(mission.end_time - mission.start_time, motion, &tree, mission.tracks.len(), samples)
 }
 
 /// What a recorded closed-loop run holds at its peak, while its run directory is written: per
