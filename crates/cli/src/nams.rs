@@ -9,8 +9,10 @@ use coopnav_acomms::tl::analytic::Thorp;
 use coopnav_acomms::tl::bellhop::{AcousticEnv, Bellhop};
 use coopnav_acomms::tl::cached::{CachedGrid, GridSpec};
 use coopnav_acomms::TransmissionLoss;
+use coopnav_core::limits;
 use coopnav_core::{Bathymetry, Vec3};
 use coopnav_sim::batch::nams::{run_experiment, ExperimentTl};
+use coopnav_sim::batch::work;
 use coopnav_sim::output::{Manifest, RunDir};
 use coopnav_sim::scenario::nams::ExperimentConfig;
 use indicatif::ProgressBar;
@@ -97,7 +99,9 @@ pub(crate) fn example() -> Result<String> {
 
 /// Parses and validates an experiment file (`path` names it in errors).
 pub(crate) fn parse_file(text: &str, path: &Path) -> Result<File> {
-    let file: File = toml::from_str(text).with_context(|| format!("{}: invalid experiment file", path.display()))?;
+    let file: File = toml::from_str(text)
+        .map_err(|e| anyhow::anyhow!(coopnav_core::validation::shortened(&e.to_string())))
+        .with_context(|| format!("{}: invalid experiment file", path.display()))?;
     file.experiment.validate_file(path, "experiment")?;
     Ok(file)
 }
@@ -109,6 +113,7 @@ pub fn run(args: Args) -> Result<()> {
     };
     let text = input::read(config, args.allow_large)?;
     let file = parse_file(&text, config)?;
+    limits::check(work::nams(&file.experiment), args.allow_large)?;
     let tl = provider(&file.tl, &file.experiment)?;
     let run = match &args.out {
         Some(p) => RunDir::create_for(p, args.force, &[config.as_path()])?,

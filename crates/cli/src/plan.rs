@@ -5,7 +5,7 @@
 
 use crate::scenario_args::{Loaded, ScenarioArgs, ScenarioCommand};
 use anyhow::{anyhow, Context, Result};
-use coopnav_core::limits::Estimate;
+use coopnav_core::limits::{self, Estimate};
 use coopnav_core::LatLon;
 use coopnav_moos::mission::EXAMPLE_ORIGIN_DEG;
 use coopnav_plan::predeploy;
@@ -66,6 +66,7 @@ pub fn run(args: Args) -> Result<()> {
     let Loaded { scenario, file, base, stem } = args.scenario.load()?;
     // Everything is validated before any output is created.
     let mission = scenario.build(&file, &base)?;
+    limits::check(work::predeploy_mission(&mission), args.scenario.allow_large())?;
     let origin = args.moos.then(|| moos_origin(args.moos_origin.as_deref())).transpose()?;
     let tracks: Vec<PathBuf> = scenario.auv.iter().filter_map(|a| a.track_csv.as_ref().map(|t| base.join(t))).collect();
     let inputs: Vec<&Path> = std::iter::once(file.as_path()).chain(tracks.iter().map(PathBuf::as_path)).collect();

@@ -190,3 +190,26 @@ fn endless_devices_and_large_pipes_are_refused() {
     refused(tmp.path(), &["simulate", "big.toml", "-o", "out"], &["input file (bytes)", "big.toml"]);
     assert!(writer.join().unwrap(), "the reader stopped before the whole 3 MB was written");
 }
+
+/// A Nams experiment's work is estimated like every other command's: 100 000 repetitions, or a
+/// nanosecond vehicle step, is refused at once.
+#[test]
+fn nams_repetitions_and_timestep() {
+    let tmp = tempfile::tempdir().unwrap();
+    edited_example(tmp.path(), &["nams", "--example"], "reps.toml", &[("repetitions = 40", "repetitions = 100000")]);
+    refused(tmp.path(), &["nams", "--config", "reps.toml", "-o", "out"], &["repetitions", "vehicle.timestep"]);
+    edited_example(tmp.path(), &["nams", "--example"], "step.toml", &[("timestep = 0.1", "timestep = 1e-9")]);
+    refused(tmp.path(), &["nams", "--config", "step.toml", "-o", "out"], &["vehicle.timestep"]);
+    edited_example(tmp.path(), &["nams", "--example"], "shelf.toml", &[("\nspacing = 50.0", "\nspacing = 1e-3")]);
+    refused(tmp.path(), &["nams", "--config", "shelf.toml", "-o", "out"], &["experiment.shelf", "spacing"]);
+}
+
+/// A shelf spacing of a millimetre asks for 1.6·10¹³ grid nodes: refused from the estimate,
+/// before the grid is built.
+#[test]
+fn simulate_shelf_spacing_1mm() {
+    let tmp = tempfile::tempdir().unwrap();
+    let edits = [("# shelf = { shallow", "shelf = { shallow"), ("spacing = 50.0 }", "spacing = 1e-3 }")];
+    edited_example(tmp.path(), &["simulate", "--example"], "s.toml", &edits);
+    refused(tmp.path(), &["simulate", "s.toml", "-o", "out"], &["fleet.shelf", "spacing"]);
+}

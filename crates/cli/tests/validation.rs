@@ -147,3 +147,59 @@ fn channel_arguments_name_every_bad_value() {
         &["--k", "--noise-db", "--source-depth", "--x", "--step"],
     );
 }
+
+/// A pre-deployment mission of track files alone is sized from the tracks once they are read,
+/// not refused as infinitely long.
+#[test]
+fn plan_with_only_track_files_is_sized_from_the_tracks() {
+    let tmp = tempfile::tempdir().unwrap();
+    let example = String::from_utf8(coopnav(tmp.path(), &["plan", "--example"]).stdout).unwrap();
+    let head = &example[..example.find("[[auv]]").expect("the example lists its AUVs")];
+    let mut text = head.to_string();
+    for (k, x) in [(1, 0.0), (2, 150.0)] {
+        let rows: String = (0..=1200).map(|i| format!("{i},{x},{},90\n", 1.5 * f64::from(i))).collect();
+        std::fs::write(tmp.path().join(format!("auv{k}.csv")), format!("t,x,y,z\n{rows}")).unwrap();
+        text.push_str(&format!("[[auv]]\nname = \"auv{k}\"\ntrack_csv = \"auv{k}.csv\"\n\n"));
+    }
+    std::fs::write(tmp.path().join("tracks.toml"), text).unwrap();
+    let out = coopnav(tmp.path(), &["plan", "tracks.toml", "-o", "out"]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(tmp.path().join("out/summary.json").is_file());
+}
+
+/// Messages a user can act on: a log's absurd time or speed names its line and field, a mission
+/// too short to sample is refused before it runs, and a huge offending value is quoted short.
+#[test]
+fn weak_inputs_get_messages_that_name_the_line_and_field() {
+    let tmp = tempfile::tempdir().unwrap();
+    let log = "# coopnav-log 2 time=relative\nt,kind,src,v1,v2,v3,v4,sigma\n0,init,,0,0,1.5,90,\n";
+    for (row, field) in [("1e300,speed,,1.5,,,,", "'t'"), ("1,speed,,1e300,,,,", "'v1'")] {
+        std::fs::write(tmp.path().join("log.csv"), format!("{log}{row}\n")).unwrap();
+        let out = coopnav(tmp.path(), &["hbl", "postprocess", "--log", "log.csv", "-o", "out"]);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success() && err.contains("line 4") && err.contains(field), "{row}: {err}");
+        assert!(!tmp.path().join("out").exists());
+    }
+    edited_example(
+        tmp.path(),
+        &["simulate", "--example"],
+        "short.toml",
+        &[("duration_s = 3600.0", "duration_s = 1e-9")],
+    );
+    let out = coopnav(tmp.path(), &["simulate", "short.toml", "-o", "out"]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success() && err.contains("field duration_s = 0.000000001"), "{err}");
+    assert!(!tmp.path().join("out").exists(), "refused before the run");
+    // An unknown key a megabyte long: the parser's message quotes the line, shortened.
+    let example = String::from_utf8(coopnav(tmp.path(), &["simulate", "--example"]).stdout).unwrap();
+    let long = example.replacen("seed = 1", &format!("seed = 1\nzzz = \"{}\"", "a".repeat(300_000)), 1);
+    std::fs::write(tmp.path().join("long.toml"), long).unwrap();
+    let out = coopnav(tmp.path(), &["simulate", "long.toml", "-o", "out"]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        !out.status.success() && err.contains("zzz") && err.contains("more characters"),
+        "{}",
+        &err[..err.len().min(600)]
+    );
+    assert!(err.len() < 2_000, "the message quotes {} bytes", err.len());
+}

@@ -46,7 +46,8 @@ impl Problems {
     }
 
     pub fn push(&mut self, field: impl Into<String>, value: impl Into<String>, allowed: impl Into<String>) {
-        self.list.push(Problem { field: field.into(), value: value.into(), allowed: allowed.into() });
+        let value = quoted(value.into());
+        self.list.push(Problem { field: field.into(), value, allowed: allowed.into() });
     }
 
     /// Adds (field, value, allowed) triples, as the models' `problems()` return them.
@@ -116,6 +117,27 @@ pub trait CheckFields {
         let mut p = Problems::new();
         self.check_fields(prefix, &mut p);
         p.finish()
+    }
+}
+
+/// `message` with every line quoted as [`quoted`] quotes a value: a parser's error that echoes
+/// a megabyte-long line of the input stays readable.
+pub fn shortened(message: &str) -> String {
+    message.lines().map(|l| quoted(l.to_string())).collect::<Vec<_>>().join("\n")
+}
+
+/// The most characters of an offending value a message quotes.
+pub const MAX_QUOTED_CHARS: usize = 200;
+
+/// `value` as a message quotes it: whole when short, else its first [`MAX_QUOTED_CHARS`]
+/// characters and how many more there were (a megabyte-long value must not fill the terminal).
+pub fn quoted(value: String) -> String {
+    match value.char_indices().nth(MAX_QUOTED_CHARS) {
+        None => value,
+        Some((cut, _)) => {
+            let more = value[cut..].chars().count();
+            format!("{}… ({more} more characters)", &value[..cut])
+        }
     }
 }
 

@@ -211,7 +211,11 @@ impl Fields<'_> {
         let v = self.text(i);
         match v.parse::<f64>() {
             Ok(x) if x.is_finite() => Ok(x),
-            _ => Err(PostError::Number { line: self.line, field, value: v.to_string() }),
+            _ => Err(PostError::Number {
+                line: self.line,
+                field,
+                value: coopnav_core::validation::quoted(v.to_string()),
+            }),
         }
     }
     /// v1, v2 of a position row as local (east, north): metres, or latitude/longitude placed by
@@ -243,7 +247,9 @@ pub fn read_field_log<R: Read>(input: R, frame: Option<&LocalFrame>) -> Result<F
     while r.read_record(&mut record).map_err(line_counted)? {
         // The version line was read before the CSV reader started counting.
         let line = record.position().map_or(0, |p| p.line()) + 1;
-        rows.push(parse_row(&Fields { row: &record, line }, frame)?);
+        let row = parse_row(&Fields { row: &record, line }, frame)?;
+        check_ranges(&row, line)?;
+        rows.push(row);
     }
     let time = match declared {
         DeclaredTime::Relative => TimeBase::Relative,
@@ -288,6 +294,52 @@ fn parse_version_line(line: &str) -> Result<DeclaredTime, PostError> {
         Some("time=relative") => Ok(DeclaredTime::Relative),
         Some("time=unix") => Ok(DeclaredTime::Unix),
         _ => Err(bad()),
+    }
+}
+
+/// What a logged quantity can physically be: generous bounds that catch a corrupt or
+/// mis-scaled field (1e300 s, a position in a speed column), not a noisy reading. Invented.
+const TIME_RANGE_S: (f64, f64) = (-1e10, 1e10);
+const POSITION_RANGE_M: (f64, f64) = (-1e8, 1e8);
+const SPEED_RANGE_M_S: (f64, f64) = (-10.0, 20.0);
+const HEADING_RANGE_DEG: (f64, f64) = (-360.0, 720.0);
+const YAW_RATE_RANGE_DEG_S: (f64, f64) = (-360.0, 360.0);
+const DEPTH_RANGE_M: (f64, f64) = (-20.0, 11_000.0);
+
+/// Refuses a row whose time or values lie outside what they can physically be, naming the line
+/// and the field (a value that large would reach the filter as a covariance it cannot invert).
+fn check_ranges(row: &LogRow, line: u64) -> Result<(), PostError> {
+    let within = |field: &'static str, value: f64, (lo, hi): (f64, f64), allowed: &'static str| {
+        if (lo..=hi).contains(&value) {
+            Ok(())
+        } else {
+            Err(PostError::OutOfRange { line, field, value, allowed })
+        }
+    };
+    within("t", row.t, TIME_RANGE_S, "a time within ±1e10 s")?;
+    if let Some((e, n)) = row.obs.position() {
+        within("v1", e, POSITION_RANGE_M, "a position within ±1e8 m")?;
+        within("v2", n, POSITION_RANGE_M, "a position within ±1e8 m")?;
+    }
+    let speed = "a speed in [-10, 20] m/s";
+    match row.obs {
+        Observation::Init { speed: s, compass_deg, .. } => {
+            within("v3", s, SPEED_RANGE_M_S, speed)?;
+            within("v4", compass_deg, HEADING_RANGE_DEG, "a compass heading in [-360, 720] deg")
+        }
+        Observation::Speed(s) => within("v1", s, SPEED_RANGE_M_S, speed),
+        Observation::Velocity { v, .. } => {
+            within("v1", v[0], SPEED_RANGE_M_S, speed)?;
+            within("v2", v[1], SPEED_RANGE_M_S, speed)
+        }
+        Observation::Heading { compass_deg } => {
+            within("v1", compass_deg, HEADING_RANGE_DEG, "a compass heading in [-360, 720] deg")
+        }
+        Observation::YawRate { compass_deg_s } => {
+            within("v1", compass_deg_s, YAW_RATE_RANGE_DEG_S, "a yaw rate in [-360, 360] deg/s")
+        }
+        Observation::Depth(d) => within("v1", d, DEPTH_RANGE_M, "a depth in [-20, 11000] m"),
+        _ => Ok(()),
     }
 }
 

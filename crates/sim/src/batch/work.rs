@@ -96,20 +96,52 @@ pub fn predeploy(sc: &plan::Scenario) -> Vec<Estimate> {
     }
     let start = sc.mission.start_time.unwrap_or(0.0);
     let span = sc.mission.end_time.map_or(shortest, |end| end - start);
-    let motion = &sc.planner.motion;
+    let tree = TreeSize {
+        prefix: "planner.",
+        headings: sc.planner.motion.heading_options,
+        pitches: pitch_options(&sc.planner.motion.cna),
+        look_ahead: sc.planner.look_ahead,
+        pitch_levels: None,
+    };
+    if span.is_infinite() && sc.mission.end_time.is_none() {
+        // Only track files: the mission's length is known once they are read
+        // ([`predeploy_mission`]); the tree's size is not.
+        out.push(tree.estimates(0.0, sc.auv.len())[0].clone());
+        return out;
+    }
+    out.extend(decision_estimates(span, &sc.planner.motion, &tree, sc.auv.len(), samples));
+    out
+}
+
+/// The decisions over a mission of `span` seconds, the tree's work over them and the memory.
+fn decision_estimates(
+    span: f64,
+    motion: &coopnav_plan::MotionConfig,
+    tree: &TreeSize,
+    n_auvs: usize,
+    samples: f64,
+) -> Vec<Estimate> {
     let decisions = span / motion.tau;
-    out.push(Estimate::new("planner decisions", "mission length / planner.motion.tau", decisions, MAX_POINTS));
+    let mut out =
+        vec![Estimate::new("planner decisions", "mission length / planner.motion.tau", decisions, MAX_POINTS)];
+    out.extend(tree.estimates(decisions, n_auvs));
+    let bytes = samples * TRACK_SAMPLE_BYTES + decisions * n_auvs as f64 * RECORD_ROW_BYTES;
+    out.push(Estimate::new("memory (bytes)", "number of [[auv]], track lengths, planner.motion.tau", bytes, MAX_BYTES));
+    out
+}
+
+/// A pre-deployment mission once its tracks are read: the decisions over the span they cover.
+pub fn predeploy_mission(mission: &coopnav_plan::predeploy::Mission) -> Vec<Estimate> {
+    let motion = &mission.planner.motion;
     let tree = TreeSize {
         prefix: "planner.",
         headings: motion.heading_options,
         pitches: pitch_options(&motion.cna),
-        look_ahead: sc.planner.look_ahead,
+        look_ahead: mission.planner.look_ahead,
         pitch_levels: None,
     };
-    out.extend(tree.estimates(decisions, sc.auv.len()));
-    let bytes = samples * TRACK_SAMPLE_BYTES + decisions * sc.auv.len() as f64 * RECORD_ROW_BYTES;
-    out.push(Estimate::new("memory (bytes)", "number of [[auv]], track lengths, planner.motion.tau", bytes, MAX_BYTES));
-    out
+    let samples: f64 = mission.tracks.iter().map(|t| t.samples().len() as f64).sum();
+    decision_estimates(mission.end_time - mission.start_time, motion, &tree, mission.tracks.len(), samples)
 }
 
 /// What a recorded closed-loop run holds at its peak, while its run directory is written: per
@@ -178,6 +210,32 @@ pub fn shelf(shelf: Option<&coopnav_core::Shelf>, field: &str) -> Option<Estimat
     let s = shelf?;
     let fields = format!("{field} x_min, x_max, y_min, y_max / spacing");
     Some(Estimate::new("bathymetry grid nodes", fields, s.nodes(), MAX_POINTS))
+}
+
+/// A Nams rate-selection experiment: every scenario × behaviour × repetition flies both
+/// vehicles over the square's lawnmower at the vehicle's step (at most `max_time`), and the
+/// shelf's grid is built once.
+pub fn nams(cfg: &crate::scenario::nams::ExperimentConfig) -> Vec<Estimate> {
+    let per_set = (cfg.behaviours.len() * cfg.repetitions) as f64;
+    let steps: f64 = cfg
+        .scenarios
+        .iter()
+        .map(|s| {
+            let lanes = (s.square / s.lane_spacing).round() + 1.0;
+            let flown = lawnmower_duration(lanes as usize, s.square, s.lane_spacing, s.speed);
+            let duration = cfg.max_time.map_or(flown, |m| m.min(flown));
+            // Two survey AUVs and the CNA's slot owner: three vehicles a step.
+            duration / cfg.vehicle.timestep * 3.0
+        })
+        .sum();
+    let mut out = vec![Estimate::new(
+        "simulated vehicle-steps",
+        "experiment.scenarios (square, lane_spacing, speed) / vehicle.timestep x behaviours x repetitions",
+        steps * per_set,
+        MAX_VEHICLE_STEPS,
+    )];
+    out.extend(shelf(Some(&cfg.shelf), "experiment.shelf"));
+    out
 }
 
 /// `runs` runs of a Gill pass in engine scenario `sc` (`runs_fields` says where the count comes

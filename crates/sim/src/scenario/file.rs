@@ -62,7 +62,7 @@ impl ScenarioError {
 }
 
 pub use coopnav_core::validation::Problem;
-use coopnav_core::validation::{self, InvalidFields};
+use coopnav_core::validation::{self, shortened, InvalidFields};
 
 /// Collects every bad field of a scenario file (the checks are core's [`validation::Problems`]),
 /// so one run of the validator reports them all, naming the file.
@@ -101,8 +101,8 @@ pub type Validate<T> = fn(&T, &Path) -> Result<(), ScenarioError>;
 
 /// Parses TOML `text` as a `T` and validates it; `file` names the text in messages.
 pub fn parse<T: DeserializeOwned>(text: &str, file: &Path, validate: Validate<T>) -> Result<T, ScenarioError> {
-    let scenario: T =
-        toml::from_str(text).map_err(|e| ScenarioError::Parse { file: file.to_path_buf(), message: e.to_string() })?;
+    let scenario: T = toml::from_str(text)
+        .map_err(|e| ScenarioError::Parse { file: file.to_path_buf(), message: shortened(&e.to_string()) })?;
     validate(&scenario, file)?;
     Ok(scenario)
 }

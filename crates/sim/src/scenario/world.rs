@@ -604,7 +604,13 @@ impl Scenario {
     /// Checks every field against its allowed range and reports every bad one at once.
     pub fn validate(&self, file: &Path) -> Result<(), ScenarioError> {
         let mut p = Problems::new(file);
-        p.positive("duration_s", self.duration_s);
+        // The error is sampled every second: a shorter mission has nothing to report.
+        p.check(
+            "duration_s",
+            self.duration_s,
+            |v| v >= 1.0,
+            "a finite number >= 1 s (the error is sampled every second)",
+        );
         p.check("dt", self.dt, |v| v > 0.0 && v <= 1.0, "0 < dt <= 1 s");
         // The survey AUVs' IVER2 model steps at dt (`survey_dynamics`); its own step key may
         // restate dt or keep its default, never name another step.
