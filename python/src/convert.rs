@@ -18,10 +18,45 @@ pub fn to_py<'py>(py: Python<'py>, value: &impl Serialize) -> PyResult<Bound<'py
 /// A Python container (dict, list, numbers, strings) as a JSON value. Keys holding `None` are
 /// dropped: an absent key is how TOML says "none", and `to_dict()` writes absent options as `None`.
 pub fn to_json(obj: &Bound<'_, PyAny>) -> PyResult<serde_json::Value> {
+    if let Some((field, value)) = non_finite(obj, "")? {
+        return Err(PyValueError::new_err(format!("field {field} = {value}: allowed a finite number")));
+    }
     let text: String = obj.py().import("json")?.call_method1("dumps", (obj,))?.extract()?;
     let mut value = serde_json::from_str(&text).map_err(|e| PyValueError::new_err(e.to_string()))?;
     drop_nulls(&mut value);
     Ok(value)
+}
+
+/// The first NaN or infinite float inside `obj`, with its field path (`fleet.current[0]`): JSON
+/// cannot carry it, and a message must name where it is.
+fn non_finite(obj: &Bound<'_, PyAny>, at: &str) -> PyResult<Option<(String, f64)>> {
+    if let Ok(dict) = obj.cast::<PyDict>() {
+        for (key, value) in dict.iter() {
+            let key: String = key.str()?.extract()?;
+            let path = if at.is_empty() { key } else { format!("{at}.{key}") };
+            if let Some(found) = non_finite(&value, &path)? {
+                return Ok(Some(found));
+            }
+        }
+    } else if let Ok(list) = obj.cast::<pyo3::types::PyList>() {
+        for (i, value) in list.iter().enumerate() {
+            if let Some(found) = non_finite(&value, &format!("{at}[{i}]"))? {
+                return Ok(Some(found));
+            }
+        }
+    } else if let Ok(tuple) = obj.cast::<pyo3::types::PyTuple>() {
+        for (i, value) in tuple.iter().enumerate() {
+            if let Some(found) = non_finite(&value, &format!("{at}[{i}]"))? {
+                return Ok(Some(found));
+            }
+        }
+    } else if let Ok(float) = obj.cast::<pyo3::types::PyFloat>() {
+        let v = float.value();
+        if !v.is_finite() {
+            return Ok(Some((at.to_string(), v)));
+        }
+    }
+    Ok(None)
 }
 
 fn drop_nulls(value: &mut serde_json::Value) {

@@ -58,6 +58,11 @@ struct Target {
 /// Every target, in one list.
 const TARGETS: &[Target] = &[
     Target { name: "closed-loop scenario", seed: closed_loop_seed, parse: closed_loop_parse },
+    Target { name: "closed-loop scenario, shelf", seed: shelf_seed, parse: closed_loop_parse },
+    Target { name: "closed-loop scenario, buoys and ships", seed: gill_seed, parse: closed_loop_parse },
+    Target { name: "closed-loop scenario, every table", seed: full_stack_seed, parse: closed_loop_parse },
+    Target { name: "closed-loop scenario, AUV CNA", seed: auv_cna_seed, parse: closed_loop_parse },
+    Target { name: "plan scenario, tracks", seed: plan_tracks_seed, parse: plan_parse },
     Target { name: "plan scenario", seed: plan_seed, parse: plan_parse },
     Target { name: "hbl scenario", seed: hbl_seed, parse: hbl_parse },
     Target { name: "hbl cycle", seed: cycle_seed, parse: cycle_parse },
@@ -86,6 +91,32 @@ fn closed_loop_seed() -> Vec<u8> {
 }
 fn closed_loop_parse(b: &[u8]) -> bool {
     scenario::Scenario::parse(&text(b), Path::new("fuzz.toml")).is_ok()
+}
+
+/// The example with its sloping shelf switched on.
+fn shelf_seed() -> Vec<u8> {
+    closed_loop::EXAMPLE.replacen("# shelf = { shallow", "shelf = { shallow", 1).into()
+}
+/// Gill's Table 5 set-up: transponder buoys and a ship broadcasting mini-packets.
+fn gill_seed() -> Vec<u8> {
+    include_str!("../../../scenarios/gill-table5-msbl.toml").into()
+}
+/// Every optional table at once (drifting buoys, ships, a shelf, finish behaviours), with the
+/// analytic transmission loss so that no BELLHOP grid is computed per input.
+fn full_stack_seed() -> Vec<u8> {
+    let file = include_str!("../../../scenarios/full-stack.toml");
+    let line = file.lines().find(|l| l.starts_with("tl = ")).expect("full-stack.toml names its tl");
+    file.replacen(line, "tl = { kind = \"analytic\", k = 1.5, freq_hz = 25000.0 }", 1).into()
+}
+fn auv_cna_seed() -> Vec<u8> {
+    include_str!("../../../scenarios/sloping-auv-cna.toml").into()
+}
+/// The plan example with its survey AUVs given as track files (parsed, not read).
+fn plan_tracks_seed() -> Vec<u8> {
+    let example = predeploy::EXAMPLE;
+    let head = &example[..example.find("[[auv]]").expect("the plan example lists its AUVs")];
+    format!("{head}[[auv]]\nname = \"auv1\"\ntrack_csv = \"auv1.csv\"\n\n[[auv]]\nname = \"auv2\"\ntrack_csv = \"auv2.csv\"\n")
+        .into()
 }
 
 fn plan_seed() -> Vec<u8> {
@@ -329,6 +360,83 @@ fn input(rng: &mut ChaCha8Rng, seed: &[u8]) -> Vec<u8> {
     b
 }
 
+/// What parsing and validating `bytes` may allocate at its peak: a fixed allowance, a few
+/// copies of the input (its text, the TOML tree, the parsed rows) and the grid a closed-loop
+/// scenario's sloping shelf asks for, as the work limits estimate it. An input within it cannot
+/// abort on an allocation before the limits are checked.
+fn parse_budget(bytes: &[u8]) -> f64 {
+    const ALLOWANCE: f64 = 1e6;
+    const COPIES: f64 = 32.0;
+    let grid = toml::from_str::<closed_loop::Scenario>(&text(bytes))
+        .ok()
+        .and_then(|sc| coopnav_sim::work::shelf(sc.fleet.shelf.as_ref(), "fleet.shelf"))
+        .map_or(0.0, |e| {
+            if e.value.is_nan() {
+                0.0
+            } else {
+                e.value.clamp(0.0, coopnav_core::bathymetry::MAX_GRID_NODES) * 8.0
+            }
+        });
+    ALLOWANCE + COPIES * bytes.len() as f64 + grid
+}
+
+/// The bytes one thread holds allocated, and its peak, counted by the test build's allocator so
+/// that a fuzz target's parse is measured apart from the tests running beside it.
+#[cfg(test)]
+mod meter {
+    use std::alloc::{GlobalAlloc, Layout, System};
+    use std::cell::Cell;
+
+    thread_local! {
+        static HELD: Cell<usize> = const { Cell::new(0) };
+        static PEAK: Cell<usize> = const { Cell::new(0) };
+    }
+
+    struct Meter;
+
+    #[global_allocator]
+    static METER: Meter = Meter;
+
+    fn change(grow: usize, shrink: usize) {
+        let _ = HELD.try_with(|held| {
+            let now = (held.get() + grow).saturating_sub(shrink);
+            held.set(now);
+            let _ = PEAK.try_with(|peak| peak.set(peak.get().max(now)));
+        });
+    }
+
+    // SAFETY: every call is forwarded to the system allocator unchanged; the counters are
+    // thread-local cells that never allocate.
+    unsafe impl GlobalAlloc for Meter {
+        unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
+            let p = unsafe { System.alloc(layout) };
+            if !p.is_null() {
+                change(layout.size(), 0);
+            }
+            p
+        }
+        unsafe fn dealloc(&self, p: *mut u8, layout: Layout) {
+            unsafe { System.dealloc(p, layout) };
+            change(0, layout.size());
+        }
+        unsafe fn realloc(&self, p: *mut u8, layout: Layout, size: usize) -> *mut u8 {
+            let q = unsafe { System.realloc(p, layout, size) };
+            if !q.is_null() {
+                change(size, layout.size());
+            }
+            q
+        }
+    }
+
+    /// `f`'s result and the most bytes it held allocated at once, on this thread.
+    pub fn measure<R>(f: impl FnOnce() -> R) -> (R, usize) {
+        let start = HELD.with(Cell::get);
+        PEAK.with(|p| p.set(start));
+        let r = f();
+        (r, PEAK.with(Cell::get) - start)
+    }
+}
+
 fn hex(b: &[u8]) -> String {
     b.iter().map(|x| format!("{x:02x}")).collect()
 }
@@ -339,13 +447,27 @@ fn fuzz(index: usize, target: &Target, count: usize) -> Result<usize, String> {
     let seed = (target.seed)();
     assert!((target.parse)(&seed), "{}: the seed input must parse", target.name);
     let mut accepted = 0;
+    let mut most = 0;
     for n in 0..count {
         let bytes = input(&mut rng, &seed);
-        match catch_unwind(AssertUnwindSafe(|| (target.parse)(&bytes))) {
-            Ok(ok) => accepted += usize::from(ok),
+        match catch_unwind(AssertUnwindSafe(|| meter::measure(|| (target.parse)(&bytes)))) {
+            Ok((ok, peak)) => {
+                accepted += usize::from(ok);
+                most = most.max(peak);
+                let budget = parse_budget(&bytes);
+                if peak as f64 > budget {
+                    return Err(format!(
+                        "{}: input {n} ({}) allocated {peak} bytes parsing, over its budget of {budget:.0}; hex {}",
+                        target.name,
+                        if ok { "accepted" } else { "refused" },
+                        hex(&bytes)
+                    ));
+                }
+            }
             Err(_) => return Err(format!("{}: input {n} panicked; hex {}", target.name, hex(&bytes))),
         }
     }
+    eprintln!("fuzz {}: at most {most} bytes held while parsing one input", target.name);
     Ok(accepted)
 }
 

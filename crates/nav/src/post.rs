@@ -55,7 +55,7 @@ pub enum PostError {
     Header { found: Vec<String>, expected: Vec<String> },
     #[error("log line {line}: field '{field}' = {value:?} is not a finite number")]
     Number { line: u64, field: &'static str, value: String },
-    #[error("log line {line}: field '{field}' = {value}: allowed {allowed}")]
+    #[error("log line {line}: field '{field}' = {value:e}: allowed {allowed}")]
     OutOfRange { line: u64, field: &'static str, value: f64, allowed: &'static str },
     #[error("log line {line}: unknown kind {kind:?} (allowed: init, yaw_rate, speed, heading, depth, range, ship_fix, buoy_fix, truth, init_ll, ship_fix_ll, buoy_fix_ll, truth_ll)")]
     Kind { line: u64, kind: String },
