@@ -251,12 +251,12 @@ fn postprocess<'py>(
     };
     let (text, name) = log_text(log)?;
     let too_large = |e: coopnav_core::limits::TooLarge| PyValueError::new_err(e.to_string());
-    coopnav_core::limits::check([coopnav_sim::work::postprocess_log(&name, text.len() as u64)], false)
+    coopnav_core::limits::check([coopnav_sim::batch::work::postprocess_log(&name, text.len() as u64)], false)
         .map_err(too_large)?;
     let log = post::read_any_log(text.as_bytes(), &cfg)
         .map_err(|e| PyValueError::new_err(format!("in {name}: {}", crate::cause_chain(&e))))?;
     // The same work limits as `coopnav hbl postprocess`, before the filter allocates its history.
-    coopnav_core::limits::check(coopnav_sim::work::postprocess(&log.rows, &cfg), false).map_err(too_large)?;
+    coopnav_core::limits::check(coopnav_sim::batch::work::postprocess(&log.rows, &cfg), false).map_err(too_large)?;
     let result = py.detach(|| post::postprocess_rows(&log.rows, &cfg)).map_err(value_error)?;
     let out = PyDict::new(py);
     out.set_item("samples", samples(py, &result)?)?;

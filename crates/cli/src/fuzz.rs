@@ -95,7 +95,7 @@ fn closed_loop_parse(b: &[u8]) -> bool {
 
 /// The example with its sloping shelf switched on.
 fn shelf_seed() -> Vec<u8> {
-    closed_loop::EXAMPLE.replacen("# shelf = { shallow", "shelf = { shallow", 1).into()
+    scenario::EXAMPLE.replacen("# shelf = { shallow", "shelf = { shallow", 1).into()
 }
 /// Gill's Table 5 set-up: transponder buoys and a ship broadcasting mini-packets.
 fn gill_seed() -> Vec<u8> {
@@ -113,7 +113,7 @@ fn auv_cna_seed() -> Vec<u8> {
 }
 /// The plan example with its survey AUVs given as track files (parsed, not read).
 fn plan_tracks_seed() -> Vec<u8> {
-    let example = predeploy::EXAMPLE;
+    let example = scenario::plan::EXAMPLE;
     let head = &example[..example.find("[[auv]]").expect("the plan example lists its AUVs")];
     format!("{head}[[auv]]\nname = \"auv1\"\ntrack_csv = \"auv1.csv\"\n\n[[auv]]\nname = \"auv2\"\ntrack_csv = \"auv2.csv\"\n")
         .into()
@@ -367,9 +367,9 @@ fn input(rng: &mut ChaCha8Rng, seed: &[u8]) -> Vec<u8> {
 fn parse_budget(bytes: &[u8]) -> f64 {
     const ALLOWANCE: f64 = 1e6;
     const COPIES: f64 = 32.0;
-    let grid = toml::from_str::<closed_loop::Scenario>(&text(bytes))
+    let grid = toml::from_str::<scenario::Scenario>(&text(bytes))
         .ok()
-        .and_then(|sc| coopnav_sim::work::shelf(sc.fleet.shelf.as_ref(), "fleet.shelf"))
+        .and_then(|sc| coopnav_sim::batch::work::shelf(sc.fleet.shelf.as_ref(), "fleet.shelf"))
         .map_or(0.0, |e| {
             if e.value.is_nan() {
                 0.0
