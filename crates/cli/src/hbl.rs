@@ -266,7 +266,7 @@ fn example(kind: ExampleKind) -> Result<()> {
     } else {
         println!("# Every field is at its default and optional: keep only what you change. Units and the");
         println!(
-            "# thesis source of each field: the rustdoc of coopnav_sim::hbl and coopnav_nav (`cargo doc --open`)."
+            "# thesis source of each field: the rustdoc of coopnav_sim::scenario::hbl and coopnav_nav (`cargo doc --open`)."
         );
     }
     print!("{text}");

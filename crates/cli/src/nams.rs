@@ -92,7 +92,7 @@ pub(crate) fn example() -> Result<String> {
     Ok(format!(
         "# coopnav Nams rate-selection experiment for `nams --config` (the thesis set-up).\n\
          # Every field is at its default and optional: keep only what you change. Units and sources:\n\
-         # the rustdoc of coopnav_sim::nams::ExperimentConfig (`cargo doc --open`).\n{}",
+         # the rustdoc of coopnav_sim::scenario::nams::ExperimentConfig (`cargo doc --open`).\n{}",
         toml::to_string_pretty(&File::default())?
     ))
 }
