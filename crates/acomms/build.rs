@@ -1,6 +1,6 @@
 //! Tells the tests whether the real BELLHOP is installed (cfg `bellhop_installed`), so a test
 //! that needs it is reported as ignored, with its reason, when it is absent — not as passed.
-//! `.ci/run` installs BELLHOP before building; after installing it by hand, touch this file.
+//! Installing BELLHOP after a build is noticed by the next one (`bellhop_cfg.rs` says what it watches).
 
 include!("bellhop_cfg.rs");
 

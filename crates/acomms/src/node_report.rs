@@ -379,6 +379,20 @@ mod tests {
             )
     }
 
+    thread_local! {
+        /// Altered reports that decoded on this thread, counted by the proptest that makes them.
+        static DECODED: std::cell::Cell<u64> = const { std::cell::Cell::new(0) };
+    }
+
+    /// The altered-report property must see many decodes: of its 2000 cases, at least a tenth.
+    #[test]
+    fn altered_reports_often_decode() {
+        DECODED.set(0);
+        altered_reports_are_refused_or_decode_consistently();
+        let n = DECODED.get();
+        assert!(n >= 200, "{n} altered reports decoded");
+    }
+
     proptest! {
         #![proptest_config(ProptestConfig::with_cases(2000))]
         #[test]
@@ -395,6 +409,28 @@ mod tests {
             prop_assert_eq!((d.src_id, d.time_of_day, d.vehicle, d.leak), (m.src_id, m.time_of_day, m.vehicle, m.leak));
             // Canonical: re-encoding the decoded message gives the same bytes.
             prop_assert_eq!(d.encode().unwrap(), bytes);
+        }
+
+        /// A valid report with a few bytes overwritten or the end cut: many of these decode
+        /// (random bytes almost never do), so the re-encoding check below is exercised.
+        #[test]
+        fn altered_reports_are_refused_or_decode_consistently(
+            m in arb_report(), edits in proptest::collection::vec((any::<usize>(), any::<u8>()), 0..3), cut in any::<bool>(),
+        ) {
+            let mut bytes = m.encode().unwrap();
+            for (at, byte) in edits {
+                let at = at % bytes.len();
+                bytes[at] = byte;
+            }
+            if cut {
+                bytes.pop();
+            }
+            if let Ok(m) = NodeReport::decode(&bytes) {
+                DECODED.set(DECODED.get() + 1);
+                let again = NodeReport::decode(&m.encode().unwrap()).unwrap();
+                prop_assert!(coopnav_core::wrap_pi(again.heading.radians() - m.heading.radians()).abs() < 1e-9);
+                prop_assert_eq!(NodeReport { heading: m.heading, ..again }, m);
+            }
         }
 
         #[test]

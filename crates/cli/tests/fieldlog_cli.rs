@@ -127,7 +127,30 @@ fn tune_reports_before_and_after_with_held_out_ranges() {
     assert!(a["log_likelihood"].as_f64().unwrap() > b["log_likelihood"].as_f64().unwrap(), "{t}");
     assert!(a["held_out_rms_filter_m"].is_number() && b["held_out_rms_smoothed_m"].is_number(), "{t}");
     // The run's outputs use the tuned values.
-    let tuned = std::fs::read_to_string(out.join("tuned_config.toml")).unwrap();
-    let sd = a["values"]["range_sd_m"].as_f64().unwrap();
-    assert!(tuned.contains(&format!("sigma_time = {}", sd / 1500.0)) || (sd - 1.8).abs() > 0.1, "{tuned}");
+    let tuned: toml::Value = toml::from_str(&std::fs::read_to_string(out.join("tuned_config.toml")).unwrap()).unwrap();
+    let values = &a["values"];
+    let noise = &tuned["auv"]["range_noise"];
+    let num = |v: &toml::Value| v.as_float().unwrap_or_else(|| panic!("{v} is not a number"));
+    let sd = values["range_sd_m"].as_f64().unwrap();
+    // The config holds σ_τ = sd / c: equal to sd up to the rounding of a division and a product.
+    let sd_in_config = num(&noise["sound_speed"]) * num(&noise["sigma_time"]);
+    assert!((sd_in_config - sd).abs() <= 1e-12 * sd, "range SD {sd} m tuned, {sd_in_config} m in the config");
+    // The other values are copied; the two files print them each their own way, equal to within
+    // the last digit.
+    let q = tuned["auv"]["q"].as_array().unwrap();
+    let copied = [
+        (&q[0], "q_en"),
+        (&q[1], "q_en"),
+        (&tuned["speed_scale"], "speed_scale"),
+        (&tuned["heading_bias_deg"], "heading_bias_deg"),
+    ];
+    for (in_config, key) in copied {
+        let (c, v) = (num(in_config), values[key].as_f64().unwrap());
+        assert!((c - v).abs() <= 1e-15 * v.abs().max(1e-300), "{key}: {v} tuned, {c} in the config");
+    }
+    // The log's ranges have an SD of 4 m and the empty config starts at c·σ_τ = 1.8 m: the tuned
+    // value is nearer the truth than the start.
+    let start = b["values"]["range_sd_m"].as_f64().unwrap();
+    assert!((start - 1.8).abs() < 1e-9, "{t}");
+    assert!((sd - 4.0).abs() < (start - 4.0).abs() / 2.0, "range SD tuned from {start} m to {sd} m; the log's is 4 m");
 }

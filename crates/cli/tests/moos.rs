@@ -287,6 +287,11 @@ fn the_replay_shows_the_run_positions_in_a_real_browser() {
     let tmp = tempfile::tempdir().unwrap();
     let run = short_simulation(tmp.path());
     let rows = csv_rows(&run.join("timeseries.csv"));
+    let mut ids: Vec<usize> = rows.iter().map(|r| num(r, "auv") as usize).collect();
+    ids.sort_unstable();
+    ids.dedup();
+    let auvs = ids.len();
+    assert!(auvs >= 2, "the example has a team: {auvs} AUVs in the time series");
     let page = format!("file://{}", run.join("replay.html").display());
     for t in [1.0, 60.0, 150.0, 299.0] {
         let profile = tempfile::tempdir().unwrap();
@@ -299,7 +304,11 @@ fn the_replay_shows_the_run_positions_in_a_real_browser() {
         let messages: Vec<&str> = console.lines().filter(|l| l.contains(":CONSOLE")).collect();
         assert!(messages.is_empty(), "console messages at t = {t}:\n{}", messages.join("\n"));
         assert!(dom.contains(&format!("<span id=\"time\">{t:.1}</span>")), "the slider is not at {t}");
-        for row in rows.iter().filter(|r| num(r, "t") == t) {
+        // The CSV's times are sums of steps (60.00000000000001): matched to within a microsecond,
+        // far below the step, and every AUV's row must be found.
+        let at_t: Vec<_> = rows.iter().filter(|r| (num(r, "t") - t).abs() < 1e-6).collect();
+        assert_eq!(at_t.len(), auvs, "rows at t = {t}");
+        for row in at_t {
             let auv = format!("auv{}", num(row, "auv") as usize + 1);
             // The page keeps 0.1 m.
             let (x, y) = drawn_position(&dom, &auv);

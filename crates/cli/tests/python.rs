@@ -31,12 +31,10 @@ fn newest_source(dir: &Path) -> Option<(SystemTime, PathBuf)> {
     newest
 }
 
-#[test]
-#[cfg_attr(
-    not(python_package_installed),
-    ignore = "coopnav's Python package is not built into tools/pyenv (or $COOPNAV_PYENV_PYTHON): run scripts/install-python.sh"
-)]
-fn the_python_package_passes_its_pytest_suite_against_this_cli() {
+/// Runs the pytest suite, restricted by the `-k` expression `select`, against this build's CLI;
+/// fails unless pytest passes with no test skipped (a skip inside a passing Rust test would hide
+/// it: the tests that need a tool are selected only where the tool is).
+fn run_pytest(select: &str) {
     let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..").canonicalize().expect("repository root");
     let python = option_env!("COOPNAV_PYENV_FOUND").expect("build.rs sets it with cfg python_package_installed");
     // A package built from older sources would test old code and could pass where this checkout
@@ -72,7 +70,7 @@ fn the_python_package_passes_its_pytest_suite_against_this_cli() {
         }
     }
     let out = Command::new(python)
-        .args(["-m", "pytest", "-q", "-p", "no:cacheprovider", "python/tests"])
+        .args(["-m", "pytest", "-q", "-rs", "-p", "no:cacheprovider", "-k", select, "python/tests"])
         .current_dir(&root)
         .env("COOPNAV_CLI", env!("CARGO_BIN_EXE_coopnav"))
         .output()
@@ -80,4 +78,28 @@ fn the_python_package_passes_its_pytest_suite_against_this_cli() {
     let report = format!("{}{}", String::from_utf8_lossy(&out.stdout), String::from_utf8_lossy(&out.stderr));
     println!("{report}");
     assert!(out.status.success(), "pytest failed:\n{report}");
+    let summary = report.lines().rev().find(|l| l.contains(" in ") && l.contains("passed")).unwrap_or_default();
+    assert!(!summary.is_empty(), "no pytest summary line with passed tests:\n{report}");
+    assert!(!summary.contains("skipped"), "pytest skipped tests (the reasons are above):\n{report}");
+}
+
+/// The pytest tests that need BELLHOP, in a Rust test of their own that is ignored without it.
+const NEEDS_BELLHOP: &str = "bellhop";
+
+#[test]
+#[cfg_attr(
+    not(python_package_installed),
+    ignore = "coopnav's Python package is not built into tools/pyenv (or $COOPNAV_PYENV_PYTHON): run scripts/install-python.sh"
+)]
+fn the_python_package_passes_its_pytest_suite_against_this_cli() {
+    run_pytest(&format!("not {NEEDS_BELLHOP}"));
+}
+
+#[test]
+#[cfg_attr(
+    not(all(python_package_installed, bellhop_installed)),
+    ignore = "needs coopnav's Python package (scripts/install-python.sh) and BELLHOP (scripts/install-bellhop.sh)"
+)]
+fn the_python_package_matches_the_cli_with_bellhop() {
+    run_pytest(NEEDS_BELLHOP);
 }

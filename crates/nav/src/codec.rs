@@ -324,7 +324,7 @@ mod tests {
     }
 
     proptest! {
-        #![proptest_config(ProptestConfig::with_cases(256))]
+        #![proptest_config(ProptestConfig::with_cases(1024))]
         #[test]
         fn word_round_trip(h in header(), index in any::<u8>()) {
             let p = MiniPacket { header: h, index };
@@ -339,8 +339,63 @@ mod tests {
         }
 
         #[test]
-        fn arbitrary_text_never_panics(text in "\\PC{0,40}") {
-            let _ = text.parse::<Sentence>();
+        fn arbitrary_text_is_refused_without_a_panic(text in "\\PC{0,40}") {
+            // Random text has no `$` first (or, if it does, no valid checksum but by chance):
+            // refused, whatever else it holds.
+            if !text.starts_with('$') {
+                prop_assert!(text.parse::<Sentence>().is_err());
+            }
+        }
+
+        /// Near-sentences: each field valid or slightly wrong, the checksum right or wrong. The
+        /// expected outcome is worked out from the grammar here, field by field.
+        #[test]
+        fn near_sentences_parse_exactly_when_well_formed(
+            talker in prop_oneof![Just("CAMUC"), Just("CAMUA"), Just("CAMUX"), Just("GPGGA")],
+            src in prop_oneof!["[0-9]{1,3}", Just(String::new()), Just("-1".to_string())],
+            dest in prop_oneof!["[0-9]{1,3}", Just("1x".to_string())],
+            hex in prop_oneof![
+                3 => (0x18u16..=0x20, any::<u8>(), any::<bool>()).prop_map(|(h, i, lower)| {
+                    let w = format!("{h:X}{i:02X}");
+                    if lower { w.to_lowercase() } else { w }
+                }),
+                1 => "[0-9A-F]{1,4}", 1 => "[0-9A-F]{5}", 1 => Just("1G".to_string()),
+            ],
+            extra in prop_oneof![Just(None), Just(Some(String::new())), Just(Some("7".to_string()))],
+            checksum_right in any::<bool>(), wrong in 1u8..=255,
+        ) {
+            let mut body = format!("{talker},{src},{dest},{hex}");
+            if let Some(e) = &extra {
+                body = format!("{body},{e}");
+            }
+            let cs = if checksum_right { xor_checksum(&body) } else { xor_checksum(&body) ^ wrong };
+            let text = format!("${body}*{cs:02X}");
+            let id = |v: &str| v.parse::<u8>().ok().filter(|_| v.bytes().all(|b| b.is_ascii_digit()));
+            let word = u16::from_str_radix(&hex, 16).ok().filter(|_| hex.len() <= 4);
+            // Appendix B: the header is the word's top five bits, 0x1A..=0x1F in its high byte.
+            let header = word.and_then(|w| match w >> 8 {
+                0x1A => Some(Header::North),
+                0x1B => Some(Header::East),
+                0x1C => Some(Header::Speed),
+                0x1D => Some(Header::Heading),
+                0x1E => Some(Header::FleetLeader),
+                0x1F => Some(Header::Abort),
+                _ => None,
+            });
+            let direction = match talker {
+                "CAMUC" => Some(Direction::Send),
+                "CAMUA" => Some(Direction::Received),
+                _ => None,
+            };
+            let parsed = text.parse::<Sentence>();
+            if !checksum_right {
+                prop_assert!(matches!(parsed, Err(CodecError::ChecksumMismatch { .. })), "{text}: {parsed:?}");
+            } else if let (None, Some(d), Some(s), Some(t), Some(w), Some(h)) = (&extra, direction, id(&src), id(&dest), word, header) {
+                let want = Sentence { direction: d, src: s, dest: t, packet: MiniPacket { header: h, index: (w & 0xFF) as u8 } };
+                prop_assert_eq!(parsed, Ok(want));
+            } else {
+                prop_assert!(parsed.is_err(), "{text} parsed as {parsed:?}");
+            }
         }
 
         #[test]

@@ -496,6 +496,7 @@ mod tests {
         let text = String::from_utf8(buf).unwrap();
         assert!(text.contains(",gps_ll,") && text.contains(",beacon_fixed_ll,8,"), "{text}");
         let back = read_field_log(text.as_bytes(), Some(&frame)).unwrap();
+        assert_eq!(back.rows.len(), log.rows.len(), "{text}");
         for (a, b) in log.rows.iter().zip(&back.rows) {
             match (a.obs.position(), b.obs.position()) {
                 (Some(p), Some(q)) => assert!((p.0 - q.0).abs() < 1e-6 && (p.1 - q.1).abs() < 1e-6),

@@ -1100,6 +1100,7 @@ mod tests {
         let text = String::from_utf8(buf).unwrap();
         assert!(text.contains(",buoy_fix_ll,,47.97") && text.contains(",range,13,0.05,"), "{text}");
         let back = read_log(text.as_bytes(), Some(&f)).unwrap();
+        assert_eq!(back.len(), entries.len(), "{text}");
         for (a, b) in entries.iter().zip(&back) {
             assert_eq!((a.t, a.record.kind()), (b.t, b.record.kind()));
             match (a.record.position(), b.record.position()) {

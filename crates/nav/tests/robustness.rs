@@ -4,7 +4,7 @@
 
 use coopnav_core::{SeedStream, Vec3};
 use coopnav_nav::ekf::is_positive_definite;
-use coopnav_nav::{AuvEkf, AuvParams, Gate, RangeMeasurement};
+use coopnav_nav::{AuvEkf, AuvParams, Gate, RangeMeasurement, UpdateOutcome};
 use rand::Rng;
 
 #[derive(Clone, Copy)]
@@ -23,6 +23,19 @@ const CALM: Hostility = Hostility { p_drop: 0.0, p_outlier: 0.0, gap: None, drif
 /// The AUV drives east along y = 0 from x = −80 at 0.85 m/s; a transponder drives west along
 /// y = 0 from x = +120 at 1.3 m/s, so it passes exactly overhead; it pings every 2 s.
 fn fly(seed: u64, h: Hostility, params: AuvParams) -> AuvEkf {
+    fly_recording(seed, h, params).0
+}
+
+/// One range update of a flight: its time, whether an outlier was added, and what the filter did.
+struct Ping {
+    t: f64,
+    outlier: bool,
+    outcome: UpdateOutcome,
+}
+
+/// [`fly`], also returning every range update.
+fn fly_recording(seed: u64, h: Hostility, params: AuvParams) -> (AuvEkf, Vec<Ping>) {
+    let mut pings = Vec::new();
     let mut rng = SeedStream::new(seed).rng(1);
     let mut f = AuvEkf::new(0.0, -78.0, 3.0, 0.85, 0.0, params);
     let dt = 0.1;
@@ -37,17 +50,19 @@ fn fly(seed: u64, h: Hostility, params: AuvParams) -> AuvEkf {
             let tr = Vec3::new(120.0 - 1.3 * t, 0.0, 1.5);
             let true_range = if h.slant { (auv - tr).norm() } else { (auv.xy() - tr.xy()).norm() };
             let mut range = true_range + 0.2 * (rng.gen::<f64>() - 0.5);
-            if rng.gen::<f64>() < h.p_outlier {
+            let outlier = rng.gen::<f64>() < h.p_outlier;
+            if outlier {
                 range += 5.0 + 5.0 * rng.gen::<f64>();
             }
             let travel_time = range / 1500.0 + h.drift * t;
             let m = RangeMeasurement { range: 1500.0 * travel_time, travel_time, transponder: tr };
-            f.update_range(&m, h.slant.then_some(10.0));
+            let outcome = f.update_range(&m, h.slant.then_some(10.0));
+            pings.push(Ping { t, outlier, outcome });
         }
         assert!(f.state().iter().all(|v| v.is_finite()), "non-finite state at t = {t}: {:?}", f.state());
         assert!(is_positive_definite(f.ekf().p()), "covariance not positive definite at t = {t}");
     }
-    f
+    (f, pings)
 }
 
 #[test]
@@ -76,7 +91,15 @@ fn outliers_are_gated_when_asked() {
     let mut gated = AuvParams::default();
     gated.range_gate = Gate { max_abs_residual: Some(4.0), max_nis: Some(10.83) };
     for seed in 0..8 {
-        fly(seed, Hostility { p_outlier: 0.3, ..CALM }, gated.clone());
+        let (_, pings) = fly_recording(seed, Hostility { p_outlier: 0.3, ..CALM }, gated.clone());
+        // Outliers add 5 to 10 m and clean ranges are within 0.1 m of the truth, while the filter
+        // starts 2 m off: the 4 m gate separates them from the first ping on. Every outlier is
+        // gated and every clean range applied.
+        assert!(pings.iter().any(|p| p.outlier) && pings.iter().any(|p| !p.outlier), "seed {seed}: both kinds drawn");
+        for p in &pings {
+            let gated = matches!(p.outcome, UpdateOutcome::Gated { .. });
+            assert_eq!(gated, p.outlier, "seed {seed}, t = {} s: outlier {}, {:?}", p.t, p.outlier, p.outcome);
+        }
     }
 }
 

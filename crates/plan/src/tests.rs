@@ -601,3 +601,26 @@ fn the_true_error_bound_cuts_where_the_auvs_errors_follow_the_cnas() {
     let whole_tree: u64 = (1..=6).map(|l| 5u64.pow(l)).sum();
     assert!(bnb.nodes < whole_tree * 9 / 10, "{} of {whole_tree} nodes", bnb.nodes);
 }
+
+/// The bounds prune: with 5 options and 4 levels below the root, a search that prunes nothing
+/// expands every node of the tree once, 5 + 25 + 125 + 625 + 3125 = 3905. Hudson's bound is
+/// exact where the line of sight cannot turn and so must cut all but an eighth of the tree; the
+/// estimator's bound is looser (diagonal and eigenvalue floors of a full covariance) and must
+/// still cut half. The floors alone (no bound below a node) cut nothing here: the count is then
+/// the whole tree.
+#[test]
+fn the_bounds_prune_most_of_the_tree() {
+    let whole_tree: u64 = (1..=5).map(|j| 5u64.pow(j)).sum();
+    for (cost, most) in
+        [(CostSpec::Hudson, whole_tree / 8), (CostSpec::Estimator(EstimatorSpec::default()), whole_tree / 2)]
+    {
+        let mut cfg = asc(5, 4, PenaltyCase::C1);
+        cfg.cost = cost;
+        let inst = instance_fixed(cfg);
+        let brute = inst.decide(exact(Algorithm::BruteForce, false));
+        let bb = inst.decide(exact(Algorithm::BranchAndBound, false));
+        assert_eq!(brute.option, bb.option);
+        assert_eq!(brute.nodes, 5 * 5u64.pow(5), "the brute force recomputes every path");
+        assert!(bb.nodes <= most, "{cost:?}: branch and bound expanded {} of {whole_tree} nodes", bb.nodes);
+    }
+}

@@ -101,9 +101,12 @@ fn float32_buoy_fixes_land_on_the_grid_and_cost_little_accuracy() {
         );
         means.push((filt, smooth));
     }
-    // The artefact is at most ±0.57 m E × ±0.42 m N on a buoy 20-100 m away: the post-processed
-    // error may move, but by far less than a metre.
-    for &(f, s) in &means[1..] {
-        assert!((f - means[0].0).abs() < 0.5 && (s - means[0].1).abs() < 0.5, "{means:?}");
+    // A float32 step here is 0.57 m E × 0.42 m N. Rounding moves each buoy fix by up to half a
+    // step (uniform: 0.2 m RMS over both axes), the lost bit by up to a whole one (0.41 m RMS).
+    // A fix misplaced by d moves the ranges it anchors by at most d, and the post-processed
+    // error is a mean over many ranges and 24 runs: it moves by at most half the fixes' RMS
+    // displacement, 0.1 m and 0.2 m.
+    for (&(f, s), most) in means[1..].iter().zip([0.1, 0.2]) {
+        assert!((f - means[0].0).abs() < most && (s - means[0].1).abs() < most, "{means:?}");
     }
 }

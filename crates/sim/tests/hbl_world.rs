@@ -142,7 +142,10 @@ fn simulated_logs_postprocess_end_to_end() {
     let (filt, smooth, nees) = (filt / n, smooth / n, nees / n);
     eprintln!("8 runs: mean filtered error {filt:.3} m, smoothed {smooth:.3} m, smoothed NEES {nees:.2}");
     assert!(smooth <= filt, "smoothed {smooth} vs filtered {filt}");
-    // Consistency: a 2-D NEES averages 2 for a consistent filter; allow a wide band since the
-    // transponder positions carry unmodelled DGPS error.
-    assert!((0.3..8.0).contains(&nees), "mean smoothed NEES {nees} (filtered error {filt}, smoothed {smooth})");
+    // Consistency: a 2-D NEES averages 2 for a consistent smoother; this one is conservative
+    // (its process noise covers the transponders' DGPS error), so the mean lies below 2. One
+    // run's mean NEES spreads by about 0.45 from seed to seed, the mean of 8 by about 0.16: the
+    // upper limit is about four of those above where these seeds put it, and is where a
+    // covariance twice too small would land; the lower one is a covariance five times too wide.
+    assert!((0.1..1.2).contains(&nees), "mean smoothed NEES {nees} (filtered error {filt}, smoothed {smooth})");
 }

@@ -319,6 +319,22 @@ mod tests {
         assert!(r.best_cost <= r.start_cost + 1e-12, "{r:?}");
         let v = r.coefficients[0].1;
         assert!(v > 0.0 && v <= 3.0);
+        // The poor start is left: the value moves and the cost falls.
+        assert!(r.iterations > 0 && v != 2.5 && r.best_cost < r.start_cost, "{r:?}");
+        // The cost reported is the cost of the value reported: the same Monte Carlo (same runs and
+        // seed) at that value, and at the start.
+        let mean_error = |q: f64| {
+            let mut sc = base.clone();
+            assert!(Coefficient::AuvQEn.set(&mut sc, q));
+            zone_monte_carlo(&sc, ZoneSpec::table5(), spec.runs, spec.seed)
+                .unwrap()
+                .summary(spec.seed)
+                .unwrap()
+                .zone_error
+                .mean
+        };
+        assert_eq!(mean_error(2.5), r.start_cost, "{r:?}");
+        assert_eq!(mean_error(v), r.best_cost, "{r:?}");
     }
 
     #[test]

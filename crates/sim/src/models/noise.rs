@@ -265,8 +265,22 @@ mod tests {
     #[test]
     fn compass_map_is_continuous_for_a_walk() {
         // Gill's 0.047° step (Gill 2013, §2.4.1; docs/models.md#gill-sensor-noise).
+        let step = 0.047f64.to_radians();
         let m = CompassBias::draw(0.047, false, &mut SeedStream::new(9).rng(5));
         let d = (m.at(0.0) - m.at(0.0175)).abs();
-        assert!(d < 0.047f64.to_radians() * 5.0);
+        assert!(d < step * 5.0);
+        let rms = |v: &mut dyn Iterator<Item = f64>| {
+            let (n, s) = v.fold((0.0, 0.0), |(n, s), x| (n + 1.0, s + x * x));
+            (s / n).sqrt()
+        };
+        // A walk's 359 steps between neighbouring degrees are N(0, step²): their RMS is the step
+        // within 15% (four times the 3.7% spread of an RMS of 359 normals); an i.i.d. map's
+        // neighbours differ by step·√2, 41% more.
+        let steps = rms(&mut m.table.windows(2).map(|w| w[1] - w[0]));
+        assert!((steps / step - 1.0).abs() < 0.15, "neighbouring degrees differ by {steps} rad RMS, step {step}");
+        // And it wanders: a walk of 360 steps spreads over about √180 steps (below 3 steps with
+        // well under a percent's chance); an i.i.d. map stays within one.
+        let spread = rms(&mut m.table.iter().copied());
+        assert!(spread > 3.0 * step, "the map's RMS is {spread} rad, step {step}");
     }
 }

@@ -1,0 +1,11 @@
+#!/usr/bin/env bash
+# Installs cargo-mutants (crates.io), the mutation tester docs/testing.md describes: it changes one
+# expression of the code at a time (a `+` to `-`, a function body to a default value...) and runs
+# the tests, reporting each change the tests did not catch. Idempotent: does nothing when
+# `cargo mutants` already runs. Not used by CI (a run over a model file takes many minutes).
+set -euo pipefail
+if cargo mutants --version >/dev/null 2>&1; then
+  exit 0
+fi
+cargo install --locked cargo-mutants
+cargo mutants --version
