@@ -61,6 +61,7 @@ pub fn run(cmd: Command) -> Result<()> {
     let flag = stop.clone();
     ctrlc::set_handler(move || flag.store(true, Ordering::SeqCst))?;
     let opts = RunOptions {
+        announce: true,
         url: args.url,
         log: args.log,
         duration: seconds("duration", args.duration)?,

@@ -22,6 +22,9 @@ use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
 /// How the process runs and when it stops.
 #[derive(Debug, Clone)]
 pub struct RunOptions {
+    /// Print one line on stderr once subscribed (`listening: ...`), so a supervisor (or a test)
+    /// knows when publishing to it starts to count.
+    pub announce: bool,
     pub url: String,
     pub log: Option<PathBuf>,
     pub duration: Option<Duration>,
@@ -90,6 +93,16 @@ pub fn run_auv(mut nav: AuvNavigator, opts: &RunOptions) -> Result<RunSummary, L
     let channels = nav.channels().clone();
     lcm.subscribe(&channels.sensors)?;
     lcm.subscribe(&channels.range)?;
+    if opts.announce {
+        eprintln!(
+            "listening: AUV {} on {} ({}, {}) publishing {}",
+            nav.auv(),
+            opts.url,
+            channels.sensors,
+            channels.range,
+            channels.estimate
+        );
+    }
     let mut log = match &opts.log {
         Some(path) => {
             let path_text = path.display().to_string();
