@@ -294,3 +294,33 @@ fn live_auv_cpu_over_a_one_hour_mission() {
         assert!(cpu / 3600.0 <= 0.05, "{cpu} s CPU over a 3600 s mission is over 5 % of a core");
     });
 }
+
+/// SIGTERM and SIGINT stop it cleanly: the buffered messages are applied, the summary printed, the
+/// exit status 0.
+#[test]
+#[cfg_attr(not(private_netns), ignore = "needs `unshare -n` (or -rn) to make a private network namespace")]
+fn live_auv_stops_cleanly_on_sigterm_and_sigint() {
+    in_private_netns("live_auv_stops_cleanly_on_sigterm_and_sigint", || {
+        let spec = SyntheticSpec { duration_s: 20.0, ..SyntheticSpec::default() };
+        let messages = stream(&spec, AUV).messages;
+        for signal in [libc::SIGTERM, libc::SIGINT] {
+            // --duration only as a bound: the signal comes first.
+            let live = Live::start(&["--duration", "60"]);
+            let got = publish_and_receive(&messages, 20.0, Duration::from_secs(1), Duration::from_secs(20));
+            let pid = live.child.as_ref().expect("running").id() as libc::pid_t;
+            // SAFETY: kill(2) on our own child's pid, which is not yet reaped.
+            assert_eq!(unsafe { libc::kill(pid, signal) }, 0);
+            let (summary, _) = live.finish(Duration::from_secs(10));
+            assert_eq!(summary["stopped_by"], "signal", "{summary}");
+            assert_eq!(summary["sensors_applied"], 200, "{summary}");
+            // Those still in the reorder buffer at the signal were applied and published at exit.
+            let published = summary["estimates_published"].as_u64().unwrap() as usize;
+            assert_eq!(published, in_process(&messages).len());
+            assert!(
+                got.len() < published,
+                "the reorder window's estimates come only at exit: {} of {published} before",
+                got.len()
+            );
+        }
+    });
+}
