@@ -43,7 +43,10 @@
 //! payload that does not decode as its channel's type, or whose values cannot be a measurement
 //! (not finite, a negative speed, a travel time outside (0, 60] s, a transmit time inconsistent
 //! with the receive and travel times by more than 1 ms) is **malformed**: counted, dropped. A
-//! sensors message of another AUV id is counted as `wrong_auv` and dropped. Every one is logged
+//! sensors message of another AUV id is counted as `wrong_auv` and dropped. A message timed more
+//! than `max_gap_s` after the newest one is counted as `implausible_time` and dropped (one corrupt
+//! time would otherwise make every later message stale), unless several come in a row: then the
+//! clock jumped, and the jump is taken (counted in `clock_jumps`). Every one is logged
 //! with `tracing` (a warning for the first ten of a kind, then at debug level); none stops the
 //! navigator.
 
@@ -160,12 +163,20 @@ pub struct Counts {
     /// Messages timed before the last one applied (later than the reorder window allows).
     pub stale: u64,
     pub wrong_auv: u64,
+    /// Messages timed more than `filter.max_gap_s` after the newest one (a corrupt or jumped
+    /// clock): dropped, unless [`CLOCK_JUMP_CONFIRMATIONS`] such messages come in a row, when the
+    /// jump is taken as real (and counted in `clock_jumps`).
+    pub implausible_time: u64,
+    pub clock_jumps: u64,
     /// Messages on channels the navigator does not read.
     pub other_channel: u64,
     /// Silences longer than `max_gap_s`, each predicted in one step.
     pub gaps: u64,
     pub estimates_published: u64,
 }
+
+/// Messages in a row timed far ahead of the newest that make the navigator accept the jump.
+pub const CLOCK_JUMP_CONFIRMATIONS: u32 = 4;
 
 /// One estimate to publish: the filter's time (s; within 1 ns of the message's), the message
 /// and its payload.
@@ -286,6 +297,8 @@ pub struct AuvNavigator {
     /// (time, channel kind byte + payload) of the messages of the last two windows.
     recent: VecDeque<(f64, Vec<u8>)>,
     recent_set: HashSet<Vec<u8>>,
+    /// Messages in a row timed far ahead of the newest.
+    ahead_in_row: u32,
     counts: Counts,
 }
 
@@ -313,6 +326,7 @@ impl AuvNavigator {
             applied_to: f64::NEG_INFINITY,
             recent: VecDeque::new(),
             recent_set: HashSet::new(),
+            ahead_in_row: 0,
             counts: Counts::default(),
         })
     }
@@ -356,6 +370,18 @@ impl AuvNavigator {
             );
             return Ok(Vec::new());
         }
+        if self.newest.is_finite() && t > self.newest + self.cfg.filter.max_gap_s {
+            self.ahead_in_row += 1;
+            if self.ahead_in_row < CLOCK_JUMP_CONFIRMATIONS {
+                self.counts.implausible_time += 1;
+                let what = format!("on {channel} at t = {t} s, over max_gap_s after the newest {} s", self.newest);
+                warn_counted("implausibly timed", self.counts.implausible_time, &what);
+                return Ok(Vec::new());
+            }
+            self.counts.clock_jumps += 1;
+            tracing::warn!("the clock jumped to t = {t} s from {} s: taken as real", self.newest);
+        }
+        self.ahead_in_row = 0;
         let mut id = Vec::with_capacity(payload.len() + 1);
         id.push(kind);
         id.extend_from_slice(payload);

@@ -255,6 +255,12 @@ fn malformed_stale_and_foreign_messages_are_counted_and_change_nothing() {
             "COOPNAV_AUV3_SENSORS",
             AuvSensors { speed: f32::INFINITY, ..sensors.clone() }.encode(&schema).unwrap(),
         ),
+        // A time a day ahead (a corrupt clock).
+        at(
+            0.0,
+            "COOPNAV_AUV3_SENSORS",
+            AuvSensors { utime: sensors.utime + 86_400_000_000, ..sensors.clone() }.encode(&schema).unwrap(),
+        ),
         // Another AUV's sensors, and a channel the navigator does not read.
         at(
             0.0,
@@ -275,4 +281,24 @@ fn malformed_stale_and_foreign_messages_are_counted_and_change_nothing() {
     assert_eq!(estimates(&live), estimates(&expected));
     let c = nav.counts();
     assert_eq!((c.malformed, c.wrong_auv, c.other_channel, c.stale, c.duplicates), (7, 1, 1, 1, 0), "{c:?}");
+    assert_eq!((c.implausible_time, c.clock_jumps), (1, 0), "{c:?}");
+}
+
+#[test]
+fn a_clock_jump_seen_in_several_messages_in_a_row_is_taken() {
+    let spec = spec(120.0);
+    let mut messages = stream(&spec, AUV).messages;
+    let schema = Schema::coopnav();
+    // From message 500 on, every sensors message an hour later (ranges dropped: they keep the old
+    // clock and would be stale).
+    messages.retain(|m| m.channel.ends_with("_SENSORS"));
+    for m in &mut messages[500..] {
+        let s = AuvSensors::decode(&schema, &m.payload).unwrap();
+        m.payload = AuvSensors { utime: s.utime + 3_600_000_000, ..s }.encode(&schema).unwrap();
+    }
+    let (live, nav) = run(&messages);
+    let c = nav.counts();
+    assert_eq!((c.implausible_time, c.clock_jumps, c.gaps), (3, 1, 1), "{c:?}");
+    assert_eq!(c.sensors_applied as usize, messages.len() - 3);
+    assert!(live.last().unwrap().t > 3600.0);
 }
