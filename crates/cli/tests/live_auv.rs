@@ -324,3 +324,33 @@ fn live_auv_stops_cleanly_on_sigterm_and_sigint() {
         }
     });
 }
+
+/// A bad config or argument is refused, naming it, before any socket is opened (run in the
+/// namespace all the same, so a mistake here cannot open one on the machine's network).
+#[test]
+#[cfg_attr(not(private_netns), ignore = "needs `unshare -n` (or -rn) to make a private network namespace")]
+fn live_auv_refuses_a_bad_config_or_argument_naming_it() {
+    in_private_netns("live_auv_refuses_a_bad_config_or_argument_naming_it", || {
+        let dir = tempfile::tempdir().unwrap();
+        let bad = dir.path().join("bad.toml");
+        std::fs::write(&bad, "reorder_window_s = 1e9\n").unwrap();
+        let cases: [(&[&str], &str); 3] = [
+            (&["--config", bad.to_str().unwrap()], "reorder_window_s = 1000000000"),
+            (&["--duration", "0"], "--duration 0: give a positive number of seconds"),
+            (&["--url", "udpm://10.0.0.1:7667"], "not a multicast group"),
+        ];
+        for (args, expected) in cases {
+            let child = Command::new(env!("CARGO_BIN_EXE_coopnav"))
+                .args(["live", "auv", "--auv", "1"])
+                .args(args)
+                .stdin(Stdio::null())
+                .stdout(Stdio::piped())
+                .stderr(Stdio::piped())
+                .spawn()
+                .unwrap();
+            let out = wait_or_kill(child, Duration::from_secs(20), "coopnav live auv with a bad input");
+            let err = String::from_utf8_lossy(&out.stderr);
+            assert!(!out.status.success() && err.contains(expected), "{args:?}: {err}");
+        }
+    });
+}

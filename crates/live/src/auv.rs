@@ -523,3 +523,31 @@ impl AuvNavigator {
         Some((t, Input::Range { travel_time: r.travel_time, transponder: Vec3::new(p.x, p.y, p.z) }))
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_config_reads_its_three_parts_and_names_a_bad_field() {
+        let c =
+            LiveConfig::from_toml("reorder_window_s = 0.5\n[start]\ne = 10.0\nn = -4.0\n[filter]\nmax_gap_s = 30.0\n")
+                .unwrap();
+        assert_eq!((c.reorder_window_s, c.start, c.filter.max_gap_s), (0.5, Start { e: 10.0, n: -4.0 }, 30.0));
+        let e = LiveConfig::from_toml("reorder_window_s = -1.0").unwrap_err().to_string();
+        assert!(e.contains("reorder_window_s = -1"), "{e}");
+        let e = LiveConfig::from_toml("[filter]\nmax_gap_s = -5.0").unwrap_err().to_string();
+        assert!(e.contains("max_gap_s"), "{e}");
+        let e = LiveConfig::from_toml("window = 2.0").unwrap_err().to_string();
+        assert!(e.contains("unknown field `window`"), "{e}");
+    }
+
+    #[test]
+    fn channels_are_named_per_auv() {
+        let c = Channels::for_auv(12);
+        assert_eq!(
+            [c.sensors.as_str(), c.range.as_str(), c.estimate.as_str()],
+            ["COOPNAV_AUV12_SENSORS", "COOPNAV_AUV12_RANGE", "COOPNAV_AUV12_ESTIMATE"]
+        );
+    }
+}
