@@ -48,7 +48,8 @@
 //! time would otherwise make every later message stale), unless several come in a row: then the
 //! clock jumped, and the jump is taken (counted in `clock_jumps`). Every one is logged
 //! with `tracing` (a warning for the first ten of a kind, then at debug level); none stops the
-//! navigator.
+//! navigator. The buffer holds at most [`MAX_BUFFERED`] messages (a flood shortens the window,
+//! counted in `released_early`), and the duplicate memory at most twice that.
 
 use coopnav_core::{CompassDeg, Heading, Vec3};
 use coopnav_lcm::messages::{AuvEstimate, AuvSensors, Message, OwttRange};
@@ -170,10 +171,17 @@ pub struct Counts {
     pub clock_jumps: u64,
     /// Messages on channels the navigator does not read.
     pub other_channel: u64,
+    /// Messages applied before their reorder window had passed because the buffer was full
+    /// ([`MAX_BUFFERED`]).
+    pub released_early: u64,
     /// Silences longer than `max_gap_s`, each predicted in one step.
     pub gaps: u64,
     pub estimates_published: u64,
 }
+
+/// Most messages the reorder buffer holds: past it the oldest is applied at once (a flood of
+/// messages shortens the window instead of growing the memory). 20 s of a 100 Hz sensor stream.
+pub const MAX_BUFFERED: usize = 2000;
 
 /// Messages in a row timed far ahead of the newest that make the navigator accept the jump.
 pub const CLOCK_JUMP_CONFIRMATIONS: u32 = 4;
@@ -396,10 +404,14 @@ impl AuvNavigator {
         self.arrivals += 1;
         self.newest = self.newest.max(t);
         let until = self.newest - self.cfg.reorder_window_s;
-        let out = self.release(|k| k.0 <= until)?;
+        let mut out = self.release(|k| k.0 <= until)?;
+        while self.buffer.len() > MAX_BUFFERED {
+            self.counts.released_early += 1;
+            out.extend(self.release_first()?);
+        }
         // Forget duplicates older than two windows behind the newest message.
         let forget = self.newest - 2.0 * self.cfg.reorder_window_s;
-        while self.recent.front().is_some_and(|(t, _)| *t < forget) {
+        while self.recent.front().is_some_and(|(t, _)| *t < forget) || self.recent.len() > 2 * MAX_BUFFERED {
             let (_, id) = self.recent.pop_front().expect("front checked");
             self.recent_set.remove(&id);
         }
@@ -409,6 +421,13 @@ impl AuvNavigator {
     /// Applies everything still buffered (at shutdown, or at the end of a test's stream).
     pub fn flush(&mut self) -> Result<Vec<Published>, LiveError> {
         self.release(|_| true)
+    }
+
+    fn release_first(&mut self) -> Result<Option<Published>, LiveError> {
+        match self.buffer.pop_first() {
+            Some((key, input)) => self.apply(key.0, input),
+            None => Ok(None),
+        }
     }
 
     fn release(&mut self, ready: impl Fn(&Key) -> bool) -> Result<Vec<Published>, LiveError> {

@@ -302,3 +302,15 @@ fn a_clock_jump_seen_in_several_messages_in_a_row_is_taken() {
     assert_eq!(c.sensors_applied as usize, messages.len() - 3);
     assert!(live.last().unwrap().t > 3600.0);
 }
+
+#[test]
+fn a_full_reorder_buffer_applies_its_oldest_message_early_and_counts_it() {
+    let messages = stream(&spec(300.0), AUV).messages;
+    let (expected, _) = run(&messages);
+    // A window longer than the stream: only the buffer's bound releases messages before the end.
+    let cfg = LiveConfig { reorder_window_s: 600.0, ..LiveConfig::default() };
+    let (live, nav) = run_with(&messages, cfg);
+    assert_eq!(estimates(&live), estimates(&expected));
+    let c = nav.counts();
+    assert_eq!(c.released_early as usize, messages.len() - coopnav_live::auv::MAX_BUFFERED, "{c:?}");
+}
