@@ -9,6 +9,11 @@
 //! - cfg `bellhop_installed`: the rule of `crates/acomms/bellhop_cfg.rs` (the Python package's
 //!   BELLHOP test needs it).
 //!
+//! - cfg `private_netns`: `unshare -n` (else `unshare -rn`, unprivileged) runs `ip link set lo
+//!   up` in a new network namespace, as crates/lcm/build.rs probes it (the `live auv` end-to-end
+//!   test runs its multicast only inside such a namespace); the program and flags are handed over
+//!   as `COOPNAV_UNSHARE_FOUND` and `COOPNAV_UNSHARE_FLAGS`.
+//!
 //! The program found is handed to the tests as `COOPNAV_CHROMIUM_FOUND` / `COOPNAV_PYMOOS_FOUND` /
 //! `COOPNAV_PYENV_FOUND`, so they run exactly what was detected.
 //!
@@ -81,6 +86,32 @@ fn main() {
         detect(o, &root);
     }
     detect_bellhop(&manifest_dir);
+    detect_netns();
+}
+
+fn which(name: &str) -> Option<PathBuf> {
+    let path = std::env::var_os("PATH")?;
+    std::env::split_paths(&path).map(|d| d.join(name)).find(|p| p.is_file())
+}
+
+/// `unshare -n` as root, `unshare -rn` where unprivileged user namespaces are allowed.
+fn detect_netns() {
+    println!("cargo::rustc-check-cfg=cfg(private_netns)");
+    println!("cargo:rerun-if-env-changed=PATH");
+    let (Some(unshare), Some(ip)) = (which("unshare"), which("ip")) else { return };
+    for flags in ["-n", "-rn"] {
+        let works = Command::new(&unshare)
+            .args([flags, &ip.display().to_string(), "link", "set", "lo", "up"])
+            .output()
+            .is_ok_and(|o| o.status.success());
+        if works {
+            println!("cargo:rerun-if-changed={}", unshare.display());
+            println!("cargo:rustc-cfg=private_netns");
+            println!("cargo:rustc-env=COOPNAV_UNSHARE_FOUND={}", unshare.display());
+            println!("cargo:rustc-env=COOPNAV_UNSHARE_FLAGS={flags}");
+            return;
+        }
+    }
 }
 
 fn detect(o: &Optional, root: &Path) {

@@ -11,6 +11,7 @@ mod channel;
 mod fuzz;
 mod hbl;
 mod input;
+mod live;
 mod nams;
 mod plan;
 mod post_report;
@@ -51,6 +52,9 @@ enum Command {
     /// Benchmarks, printed as JSON.
     #[command(subcommand)]
     Bench(bench::Target),
+    /// Live processes on LCM for a vehicle's backseat (`live auv`: a survey AUV's navigator).
+    #[command(subcommand)]
+    Live(live::Command),
 }
 
 /// Errors print as one chain of causes ("what: why: detail"), never a backtrace: a failed
@@ -88,17 +92,22 @@ const INTERRUPTED: i32 = 130;
 
 /// Runs the command; `reproduce` chooses its own exit status (see its module).
 fn run() -> Result<ExitCode> {
+    let command = Cli::parse().command;
+    tracing_subscriber::fmt()
+        .with_env_filter(tracing_subscriber::EnvFilter::from_default_env())
+        .with_writer(std::io::stderr)
+        .init();
+    // A live process stops cleanly on SIGINT/SIGTERM (it installs its own handler).
+    if let Command::Live(cmd) = command {
+        return live::run(cmd).map(|()| ExitCode::SUCCESS);
+    }
     // An interrupted run must not leave its half-written staging directory behind.
     ctrlc::set_handler(|| {
         coopnav_sim::output::remove_unfinished_runs();
         eprintln!("Interrupted: the unfinished run directory was removed");
         std::process::exit(INTERRUPTED);
     })?;
-    tracing_subscriber::fmt()
-        .with_env_filter(tracing_subscriber::EnvFilter::from_default_env())
-        .with_writer(std::io::stderr)
-        .init();
-    let done = match Cli::parse().command {
+    let done = match command {
         Command::Reproduce(args) => return reproduce::run(args),
         Command::Plan(args) => plan::run(args),
         Command::Hbl(cmd) => hbl::run_command(cmd),
@@ -107,6 +116,7 @@ fn run() -> Result<ExitCode> {
         Command::Simulate(args) => simulate::run(args),
         Command::View(args) => view::run(args),
         Command::Bench(target) => bench::run(target),
+        Command::Live(_) => unreachable!("handled above"),
     };
     done.map(|()| ExitCode::SUCCESS)
 }

@@ -1,0 +1,356 @@
+//! `coopnav live auv` end to end over real UDP multicast, only inside a private network namespace
+//! the test makes: it re-runs itself under `unshare -n` (found by build.rs), brings up the
+//! namespace's loopback, routes multicast to it, checks loopback is the only interface, and uses
+//! TTL 0, so no datagram can leave. There it starts the built binary as a child, publishes a
+//! synthetic mission's message stream at a warped rate with coopnav-lcm's publisher, receives the
+//! estimates, compares them with the in-process navigator (coopnav-live's library, which
+//! crates/live/tests/navigator.rs checks bit for bit against post-processing's forward filter)
+//! over the same stream, and ends the child by its pid if it is still running. Every loop is
+//! bounded in count and time. Ignored, with the reason, where `unshare` cannot make a namespace.
+
+use coopnav_lcm::messages::{AuvEstimate, Message};
+use coopnav_lcm::{LogReader, Schema, Udpm};
+use coopnav_live::synthetic::{stream, StreamMessage};
+use coopnav_live::{AuvNavigator, LiveConfig};
+use coopnav_nav::synthetic::SyntheticSpec;
+use std::io::{BufRead, BufReader, Read};
+use std::process::{Child, Command, Stdio};
+use std::sync::mpsc;
+use std::time::{Duration, Instant};
+
+const IN_NETNS: &str = "COOPNAV_LIVE_IN_NETNS";
+const URL: &str = "udpm://239.255.76.67:7667?ttl=0&recv_buf_size=4194304";
+const AUV: i16 = 2;
+
+#[cfg(private_netns)]
+fn unshare() -> (&'static str, &'static str) {
+    (env!("COOPNAV_UNSHARE_FOUND"), env!("COOPNAV_UNSHARE_FLAGS"))
+}
+#[cfg(not(private_netns))]
+fn unshare() -> (&'static str, &'static str) {
+    unreachable!("the tests needing a private namespace are ignored without one")
+}
+
+/// Waits for `child` at most `timeout`; past it, kills it (by its pid) and panics.
+fn wait_or_kill(mut child: Child, timeout: Duration, what: &str) -> std::process::Output {
+    let deadline = Instant::now() + timeout;
+    loop {
+        if child.try_wait().expect("try_wait").is_some() {
+            return child.wait_with_output().expect("output");
+        }
+        if Instant::now() >= deadline {
+            let _ = child.kill();
+            let out = child.wait_with_output().expect("output");
+            panic!("{what} did not finish within {timeout:?}; stderr:\n{}", String::from_utf8_lossy(&out.stderr));
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    }
+}
+
+fn ip(args: &[&str]) -> String {
+    let child = Command::new("ip").args(args).stdout(Stdio::piped()).stderr(Stdio::piped()).spawn().expect("ip");
+    let out = wait_or_kill(child, Duration::from_secs(10), "ip");
+    assert!(out.status.success(), "ip {args:?}: {}", String::from_utf8_lossy(&out.stderr));
+    String::from_utf8_lossy(&out.stdout).into_owned()
+}
+
+/// Outside a namespace, re-runs test `name` under `unshare -n` and asserts it passed there;
+/// inside, sets up multicast on the private loopback and runs `body`.
+fn in_private_netns(name: &str, body: impl FnOnce()) {
+    if std::env::var_os(IN_NETNS).is_none() {
+        let exe = std::env::current_exe().expect("test binary");
+        let child = Command::new(unshare().0)
+            .arg(unshare().1)
+            .arg(exe)
+            .args([name, "--exact", "--nocapture", "--test-threads=1", "--include-ignored"])
+            .env(IN_NETNS, "1")
+            .stdin(Stdio::null())
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped())
+            .spawn()
+            .expect("unshare -n");
+        let out = wait_or_kill(child, Duration::from_secs(300), "the test inside unshare -n");
+        let stdout = String::from_utf8_lossy(&out.stdout);
+        println!("{stdout}");
+        assert!(
+            out.status.success() && stdout.contains("1 passed"),
+            "inside the namespace:\n{stdout}\n{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        return;
+    }
+    let links = ip(&["-o", "link"]);
+    assert_eq!(links.lines().count(), 1, "not a private namespace: {links}");
+    assert!(links.contains(": lo:"), "{links}");
+    ip(&["link", "set", "lo", "up"]);
+    ip(&["route", "add", "224.0.0.0/4", "dev", "lo"]);
+    body();
+}
+
+/// The child `coopnav live auv`, started and listening (it announces on stderr once subscribed).
+struct Live {
+    child: Option<Child>,
+    stderr: mpsc::Receiver<String>,
+}
+
+impl Live {
+    fn start(args: &[&str]) -> Live {
+        let mut child = Command::new(env!("CARGO_BIN_EXE_coopnav"))
+            .args(["live", "auv", "--auv", &AUV.to_string(), "--url", URL])
+            .args(args)
+            .stdin(Stdio::null())
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped())
+            .spawn()
+            .expect("starts coopnav live auv");
+        let (tx, rx) = mpsc::channel();
+        let err = child.stderr.take().expect("piped");
+        std::thread::spawn(move || {
+            for line in BufReader::new(err).lines().take(10_000) {
+                let Ok(line) = line else { break };
+                if tx.send(line).is_err() {
+                    break;
+                }
+            }
+        });
+        let live = Live { child: Some(child), stderr: rx };
+        let deadline = Instant::now() + Duration::from_secs(20);
+        loop {
+            let left = deadline.saturating_duration_since(Instant::now());
+            match live.stderr.recv_timeout(left) {
+                Ok(line) if line.starts_with("listening:") => return live,
+                Ok(_) => continue,
+                Err(_) => panic!("coopnav live auv did not announce that it listens within 20 s"),
+            }
+        }
+    }
+
+    /// Waits for its exit (at most `timeout`, then kills it by pid) and returns its summary and
+    /// the CPU seconds (user + system) the kernel accounted to it (wait4).
+    fn finish(mut self, timeout: Duration) -> (serde_json::Value, f64) {
+        let mut child = self.child.take().expect("running");
+        let pid = child.id() as libc::pid_t;
+        let deadline = Instant::now() + timeout;
+        // SAFETY: wait4 on our own child's pid, writing only the status and rusage given.
+        let mut status = 0;
+        let mut usage: libc::rusage = unsafe { std::mem::zeroed() };
+        loop {
+            let r = unsafe { libc::wait4(pid, &mut status, libc::WNOHANG, &mut usage) };
+            assert!(r >= 0, "wait4: {}", std::io::Error::last_os_error());
+            if r == pid {
+                break;
+            }
+            if Instant::now() >= deadline {
+                // SAFETY: kill(2) on our own child's pid, which is not yet reaped.
+                unsafe { libc::kill(pid, libc::SIGKILL) };
+                unsafe { libc::wait4(pid, &mut status, 0, &mut usage) };
+                panic!("coopnav live auv (pid {pid}) did not stop within {timeout:?}: killed");
+            }
+            std::thread::sleep(Duration::from_millis(20));
+        }
+        let mut out = String::new();
+        child.stdout.take().expect("piped").read_to_string(&mut out).expect("stdout");
+        let err: Vec<String> = self.stderr.try_iter().collect();
+        let ok = libc::WIFEXITED(status) && libc::WEXITSTATUS(status) == 0;
+        assert!(ok, "coopnav live auv failed (wait status {status}): {out}\n{}", err.join("\n"));
+        let summary: serde_json::Value = serde_json::from_str(out.trim()).unwrap_or_else(|e| panic!("{e}: {out:?}"));
+        let tv = |t: libc::timeval| t.tv_sec as f64 + t.tv_usec as f64 * 1e-6;
+        let kernel_cpu = tv(usage.ru_utime) + tv(usage.ru_stime);
+        // The process's own figure (getrusage just before it prints) is within the kernel's.
+        let own = summary["cpu_s"].as_f64().expect("cpu_s");
+        assert!(own <= kernel_cpu + 1e-3 && kernel_cpu - own < 0.5, "own {own} s, kernel {kernel_cpu} s");
+        (summary, kernel_cpu)
+    }
+}
+
+impl Drop for Live {
+    fn drop(&mut self) {
+        if let Some(mut child) = self.child.take() {
+            // SAFETY: kill(2) on our own child's pid, which is not yet reaped.
+            unsafe { libc::kill(child.id() as i32, libc::SIGKILL) };
+            let _ = child.wait();
+        }
+    }
+}
+
+/// Publishes the stream at `warp` × real time; a receiving thread collects the estimates until
+/// `idle` without one (bounded by `max` messages and `limit` in all).
+fn publish_and_receive(messages: &[StreamMessage], warp: f64, idle: Duration, limit: Duration) -> Vec<Vec<u8>> {
+    let estimate_channel = format!("COOPNAV_AUV{AUV}_ESTIMATE");
+    let mut rx = Udpm::new(URL).expect("receiver");
+    rx.subscribe(&estimate_channel).expect("subscribe");
+    let max = messages.len() + 10;
+    let receiver = std::thread::spawn(move || {
+        let start = Instant::now();
+        let mut got = Vec::new();
+        let mut last = Instant::now();
+        while got.len() < max && start.elapsed() < limit {
+            match rx.recv_timeout(Duration::from_millis(200)).expect("recv") {
+                Some(m) => {
+                    last = Instant::now();
+                    got.push(m.data);
+                }
+                None if !got.is_empty() && last.elapsed() >= idle => break,
+                None => {}
+            }
+        }
+        got
+    });
+    let mut tx = Udpm::new(URL).expect("publisher");
+    let t0 = messages.first().map_or(0.0, |m| m.t);
+    let start = Instant::now();
+    for m in messages {
+        let due = Duration::from_secs_f64(((m.t - t0) / warp).max(0.0));
+        if let Some(wait) = due.checked_sub(start.elapsed()) {
+            std::thread::sleep(wait);
+        }
+        tx.publish(&m.channel, &m.payload).expect("publish");
+    }
+    receiver.join().expect("receiver thread")
+}
+
+fn in_process(messages: &[StreamMessage]) -> Vec<Vec<u8>> {
+    let mut nav = AuvNavigator::new(AUV, LiveConfig::default()).unwrap();
+    let mut out = Vec::new();
+    for m in messages {
+        out.extend(nav.handle(&m.channel, &m.payload).unwrap().into_iter().map(|p| p.payload));
+    }
+    out.extend(nav.flush().unwrap().into_iter().map(|p| p.payload));
+    out
+}
+
+#[test]
+#[cfg_attr(not(private_netns), ignore = "needs `unshare -n` (or -rn) to make a private network namespace")]
+fn live_auv_over_udp_multicast_publishes_the_library_navigators_estimates() {
+    in_private_netns("live_auv_over_udp_multicast_publishes_the_library_navigators_estimates", || {
+        let spec = SyntheticSpec { duration_s: 300.0, ..SyntheticSpec::default() };
+        let messages = stream(&spec, AUV).messages;
+        let dir = tempfile::tempdir().unwrap();
+        let log = dir.path().join("live.lcm");
+        let live = Live::start(&["--until-idle", "3", "--log", log.to_str().unwrap()]);
+        // 300 s of mission in 6 s.
+        let got = publish_and_receive(&messages, 50.0, Duration::from_secs(5), Duration::from_secs(60));
+        let (summary, cpu) = live.finish(Duration::from_secs(30));
+        println!("summary: {summary}");
+        let expected = in_process(&messages);
+        let schema = Schema::coopnav();
+        assert_eq!(got.len(), expected.len(), "estimates received vs the library's");
+        for (i, (g, e)) in got.iter().zip(&expected).enumerate() {
+            if g != e {
+                let (g, e) = (AuvEstimate::decode(&schema, g), AuvEstimate::decode(&schema, e));
+                panic!("estimate {i}: received {g:?}, library {e:?}");
+            }
+        }
+        let sensors = messages.iter().filter(|m| m.channel.ends_with("_SENSORS")).count() as u64;
+        let ranges = messages.len() as u64 - sensors;
+        assert_eq!(summary["messages"][format!("COOPNAV_AUV{AUV}_SENSORS")], sensors);
+        assert_eq!(summary["messages"][format!("COOPNAV_AUV{AUV}_RANGE")], ranges);
+        assert_eq!(summary["sensors_applied"], sensors);
+        assert_eq!(summary["estimates_published"], expected.len() as u64);
+        assert_eq!((summary["malformed"].as_u64(), summary["duplicates"].as_u64()), (Some(0), Some(0)));
+        assert_eq!(summary["stopped_by"], "idle");
+        assert!(cpu > 0.0 && cpu < 30.0, "cpu {cpu}");
+        // The log holds everything received and published, in lcm-logger's format.
+        let mut reader = LogReader::new(std::fs::File::open(&log).unwrap());
+        let mut events = 0u64;
+        let mut published = 0usize;
+        while let Some(ev) = reader.read_event().unwrap() {
+            events += 1;
+            if ev.channel.ends_with("_ESTIMATE") {
+                assert_eq!(ev.data, expected[published]);
+                published += 1;
+            }
+            assert!(events <= 100_000);
+        }
+        assert_eq!(events, summary["log_events"].as_u64().unwrap());
+        assert_eq!(events, messages.len() as u64 + expected.len() as u64);
+    });
+}
+
+/// The measured figure: CPU of `live auv` over a one-hour mission at 10 Hz (36 000 sensors
+/// messages, 239 ranges, 36 239 estimates), streamed 60 × faster than real time: the kernel's
+/// account of the child's user + system time (wait4), which the process's own figure in its
+/// summary (getrusage at exit) matches. The target is ≤ 5 % of a core in real time, i.e. ≤ 180 s over the hour.
+#[test]
+#[cfg_attr(not(private_netns), ignore = "needs `unshare -n` (or -rn) to make a private network namespace")]
+fn live_auv_cpu_over_a_one_hour_mission() {
+    in_private_netns("live_auv_cpu_over_a_one_hour_mission", || {
+        let spec = SyntheticSpec { duration_s: 3600.0, ..SyntheticSpec::default() };
+        let messages = stream(&spec, AUV).messages;
+        let live = Live::start(&["--until-idle", "3"]);
+        let got = publish_and_receive(&messages, 60.0, Duration::from_secs(5), Duration::from_secs(150));
+        let (summary, cpu) = live.finish(Duration::from_secs(30));
+        println!("summary: {summary}");
+        let wall = summary["wall_s"].as_f64().unwrap();
+        println!(
+            "live auv over a 3600 s mission ({} messages in, {} estimates out): {cpu:.3} s CPU \
+             ({:.4} % of a core over the mission's hour; {:.1} % while streamed at 60x over {wall:.1} s)",
+            messages.len(),
+            got.len(),
+            100.0 * cpu / 3600.0,
+            100.0 * cpu / wall
+        );
+        assert_eq!(summary["estimates_published"].as_u64().unwrap() as usize, got.len(), "every estimate arrived");
+        assert!(cpu / 3600.0 <= 0.05, "{cpu} s CPU over a 3600 s mission is over 5 % of a core");
+    });
+}
+
+/// SIGTERM and SIGINT stop it cleanly: the buffered messages are applied, the summary printed, the
+/// exit status 0.
+#[test]
+#[cfg_attr(not(private_netns), ignore = "needs `unshare -n` (or -rn) to make a private network namespace")]
+fn live_auv_stops_cleanly_on_sigterm_and_sigint() {
+    in_private_netns("live_auv_stops_cleanly_on_sigterm_and_sigint", || {
+        let spec = SyntheticSpec { duration_s: 20.0, ..SyntheticSpec::default() };
+        let messages = stream(&spec, AUV).messages;
+        for signal in [libc::SIGTERM, libc::SIGINT] {
+            // --duration only as a bound: the signal comes first.
+            let live = Live::start(&["--duration", "60"]);
+            let got = publish_and_receive(&messages, 20.0, Duration::from_secs(1), Duration::from_secs(20));
+            let pid = live.child.as_ref().expect("running").id() as libc::pid_t;
+            // SAFETY: kill(2) on our own child's pid, which is not yet reaped.
+            assert_eq!(unsafe { libc::kill(pid, signal) }, 0);
+            let (summary, _) = live.finish(Duration::from_secs(10));
+            assert_eq!(summary["stopped_by"], "signal", "{summary}");
+            assert_eq!(summary["sensors_applied"], 200, "{summary}");
+            // Those still in the reorder buffer at the signal were applied and published at exit.
+            let published = summary["estimates_published"].as_u64().unwrap() as usize;
+            assert_eq!(published, in_process(&messages).len());
+            assert!(
+                got.len() < published,
+                "the reorder window's estimates come only at exit: {} of {published} before",
+                got.len()
+            );
+        }
+    });
+}
+
+/// A bad config or argument is refused, naming it, before any socket is opened (run in the
+/// namespace all the same, so a mistake here cannot open one on the machine's network).
+#[test]
+#[cfg_attr(not(private_netns), ignore = "needs `unshare -n` (or -rn) to make a private network namespace")]
+fn live_auv_refuses_a_bad_config_or_argument_naming_it() {
+    in_private_netns("live_auv_refuses_a_bad_config_or_argument_naming_it", || {
+        let dir = tempfile::tempdir().unwrap();
+        let bad = dir.path().join("bad.toml");
+        std::fs::write(&bad, "reorder_window_s = 1e9\n").unwrap();
+        let cases: [(&[&str], &str); 3] = [
+            (&["--config", bad.to_str().unwrap()], "reorder_window_s = 1000000000"),
+            (&["--duration", "0"], "--duration 0: give a positive number of seconds"),
+            (&["--url", "udpm://10.0.0.1:7667"], "not a multicast group"),
+        ];
+        for (args, expected) in cases {
+            let child = Command::new(env!("CARGO_BIN_EXE_coopnav"))
+                .args(["live", "auv", "--auv", "1"])
+                .args(args)
+                .stdin(Stdio::null())
+                .stdout(Stdio::piped())
+                .stderr(Stdio::piped())
+                .spawn()
+                .unwrap();
+            let out = wait_or_kill(child, Duration::from_secs(20), "coopnav live auv with a bad input");
+            let err = String::from_utf8_lossy(&out.stderr);
+            assert!(!out.status.success() && err.contains(expected), "{args:?}: {err}");
+        }
+    });
+}

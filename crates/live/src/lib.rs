@@ -1,0 +1,18 @@
+//! coopnav-live: coopnav's filters as live processes on LCM, for a vehicle's backseat.
+//!
+//! - [`auv`]: a survey AUV's OWTT navigator ([`AuvNavigator`]) as a pure message → filter →
+//!   message machine, with no socket: LCM payloads in, `auv_estimate_t` payloads out. The tests
+//!   drive it directly;
+//! - [`run`]: the process loop around it on coopnav-lcm's UDP multicast transport ([`run_auv`]),
+//!   with its LCM log, its stop conditions (a stop flag set on SIGINT/SIGTERM, a duration, an idle
+//!   time) and its one-line summary.
+//!
+//! A separate crate so that coopnav-nav does not depend on coopnav-lcm: the filter stays a pure
+//! library, and only this crate knows the wire.
+
+pub mod auv;
+pub mod run;
+pub mod synthetic;
+
+pub use auv::{AuvNavigator, Channels, Counts, LiveConfig, LiveError, Published, Start};
+pub use run::{run_auv, RunOptions, RunSummary, StopReason};
