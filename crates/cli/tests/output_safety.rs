@@ -192,12 +192,7 @@ fn the_comparison_json_and_directory_follow_the_run_directory_rules() {
     let manifest: serde_json::Value =
         serde_json::from_slice(&std::fs::read(dir.join("cmp/manifest.json")).unwrap()).unwrap();
     assert_eq!(manifest["tool"].as_str(), Some("coopnav"));
-    let hidden: Vec<_> = std::fs::read_dir(dir)
-        .unwrap()
-        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
-        .filter(|n| n.starts_with('.'))
-        .collect();
-    assert!(hidden.is_empty(), "staging left behind: {hidden:?}");
+    assert!(hidden(dir).is_empty(), "staging left behind: {:?}", hidden(dir));
 }
 
 /// `--force` never deletes the command's own input: a scenario or a log inside the directory it
@@ -222,12 +217,7 @@ fn force_refuses_a_target_that_holds_the_commands_input() {
     let out = coopnav(dir, &home, &["hbl", "postprocess", "--log", "h/log.csv", "-o", "h", "--force"]);
     assert_refused(&out, "h/log.csv");
     assert!(log.is_file(), "the log was deleted");
-    let hidden: Vec<_> = std::fs::read_dir(dir)
-        .unwrap()
-        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
-        .filter(|n| n.starts_with('.'))
-        .collect();
-    assert!(hidden.is_empty(), "staging left behind: {hidden:?}");
+    assert!(hidden(dir).is_empty(), "staging left behind: {:?}", hidden(dir));
 }
 
 /// Every file of run directory `dir`, by name.
