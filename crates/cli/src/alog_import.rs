@@ -342,13 +342,11 @@ fn within(e: &AlogEntry, key: &str, v: f64, (lo, hi): (f64, f64), unit: &str) ->
     }
 }
 
-/// What a mapped quantity can physically be: a vehicle's speed through the water or over the
-/// ground, a compass heading (one wrap either way), a depth in the ocean, a yaw rate. Invented
-/// generous bounds: they catch a variable of another kind, not a noisy reading.
-const SPEED_RANGE: (f64, f64) = (-10.0, 20.0);
-const HEADING_RANGE: (f64, f64) = (-360.0, 720.0);
-const DEPTH_RANGE: (f64, f64) = (-20.0, 11_000.0);
-const YAW_RATE_RANGE: (f64, f64) = (-360.0, 360.0);
+// What a mapped quantity can physically be: the bounds a version-2 log's rows are held to.
+use coopnav_nav::fieldlog::{
+    DEPTH_RANGE_M as DEPTH_RANGE, HEADING_RANGE_DEG as HEADING_RANGE, SPEED_RANGE_M_S as SPEED_RANGE,
+    YAW_RATE_RANGE_DEG_S as YAW_RATE_RANGE,
+};
 
 #[cfg(test)]
 mod tests {

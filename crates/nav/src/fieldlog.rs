@@ -299,12 +299,12 @@ fn parse_version_line(line: &str) -> Result<DeclaredTime, PostError> {
 
 /// What a logged quantity can physically be: generous bounds that catch a corrupt or
 /// mis-scaled field (1e300 s, a position in a speed column), not a noisy reading. Invented.
-const TIME_RANGE_S: (f64, f64) = (-1e10, 1e10);
-const POSITION_RANGE_M: (f64, f64) = (-1e8, 1e8);
-const SPEED_RANGE_M_S: (f64, f64) = (-10.0, 20.0);
-const HEADING_RANGE_DEG: (f64, f64) = (-360.0, 720.0);
-const YAW_RATE_RANGE_DEG_S: (f64, f64) = (-360.0, 360.0);
-const DEPTH_RANGE_M: (f64, f64) = (-20.0, 11_000.0);
+pub const TIME_RANGE_S: (f64, f64) = (-1e10, 1e10);
+pub const POSITION_RANGE_M: (f64, f64) = (-1e8, 1e8);
+pub const SPEED_RANGE_M_S: (f64, f64) = (-10.0, 20.0);
+pub const HEADING_RANGE_DEG: (f64, f64) = (-360.0, 720.0);
+pub const YAW_RATE_RANGE_DEG_S: (f64, f64) = (-360.0, 360.0);
+pub const DEPTH_RANGE_M: (f64, f64) = (-20.0, 11_000.0);
 
 /// Refuses a row whose time or values lie outside what they can physically be, naming the line
 /// and the field (a value that large would reach the filter as a covariance it cannot invert).
