@@ -12,7 +12,7 @@ use coopnav_sim::batch::work;
 use coopnav_sim::engine;
 use coopnav_sim::engine::Faults;
 use coopnav_sim::output::run::{write_comparison, write_run};
-use coopnav_sim::output::{is_coopnav_json, tagged_json, write_file, OWNERSHIP_PREFIX};
+use coopnav_sim::output::{check_file_target, is_coopnav_json, tagged_json, write_file};
 use coopnav_sim::policy::PolicySpec;
 use coopnav_sim::scenario::file::Validate;
 use coopnav_sim::scenario::{Scenario, EXAMPLE};
@@ -127,7 +127,7 @@ fn compare(sc: &Scenario, runs: usize, stem: &str, file: &Path, args: &Args) -> 
     // Both outputs are opened (and refused) before any work.
     let dir = args.scenario.output().map(|_| args.scenario.run_dir(stem, &[file])).transpose()?;
     if let Some(path) = &args.json {
-        check_json_target(path, args.scenario.force(), file)?;
+        check_file_target(path, args.scenario.force(), is_coopnav_json, &[file])?;
     }
     let total = (runs * policies.len()) as u64;
     let bar = if std::io::stderr().is_terminal() { ProgressBar::new(total) } else { ProgressBar::hidden() };
@@ -144,31 +144,6 @@ fn compare(sc: &Scenario, runs: usize, stem: &str, file: &Path, args: &Args) -> 
         let out = write_comparison(dir, sc, &c, stem, &std::env::args().collect::<Vec<_>>().join(" "))
             .context("writing the comparison's run directory")?;
         println!("wrote {}", out.display());
-    }
-    Ok(())
-}
-
-/// Refuses a `--json` target that `write_file` would refuse, before the Monte Carlo runs.
-fn check_json_target(path: &Path, force: bool, input: &Path) -> Result<()> {
-    if std::fs::symlink_metadata(path).is_err() {
-        return Ok(());
-    }
-    let same = |a: &Path, b: &Path| {
-        std::fs::canonicalize(a).ok().zip(std::fs::canonicalize(b).ok()).is_some_and(|(a, b)| a == b)
-    };
-    if same(path, input) {
-        bail!("refusing to write --json {}: it is the scenario this command reads", path.display());
-    }
-    if !force {
-        bail!("output file {} already exists; choose another name or pass --force to replace it", path.display());
-    }
-    let head =
-        std::fs::read(path).map(|b| b.into_iter().take(OWNERSHIP_PREFIX).collect::<Vec<u8>>()).unwrap_or_default();
-    if !is_coopnav_json(&head) {
-        bail!(
-            "refusing to replace {} (--force replaces only a file coopnav wrote): coopnav did not write it",
-            path.display()
-        );
     }
     Ok(())
 }

@@ -458,7 +458,7 @@ fn recover_abandoned(parent: &Path, name: &str) {
                 let _ = remove_run(&path).or_else(|_| fs::remove_dir_all(&path));
             }
         } else if meta.is_file() && start_time(pid).is_none() {
-            let head = fs::read(&path).map(|b| b.into_iter().take(OWNERSHIP_PREFIX).collect::<Vec<u8>>());
+            let head = file_head(&path);
             if head.is_ok_and(|h| is_coopnav_json(&h) || String::from_utf8_lossy(&h).contains("<title>coopnav replay"))
             {
                 let _ = fs::remove_file(&path);
@@ -505,30 +505,7 @@ pub fn write_file(
     ours: fn(&[u8]) -> bool,
     inputs: &[&Path],
 ) -> Result<(), OutputError> {
-    let unsafe_file = |reason| OutputError::UnsafeFile { path: target.to_path_buf(), reason };
-    if let Ok(meta) = fs::symlink_metadata(target) {
-        if meta.file_type().is_symlink() {
-            return Err(unsafe_file("it is a symbolic link"));
-        }
-        if !meta.is_file() {
-            return Err(unsafe_file("it is not a regular file"));
-        }
-        let canonical = fs::canonicalize(target).map_err(io_err(target))?;
-        if inputs.iter().any(|i| fs::canonicalize(i).is_ok_and(|p| p == canonical)) {
-            return Err(unsafe_file("it is an input of this command"));
-        }
-        if !force {
-            return Err(OutputError::FileExists(target.to_path_buf()));
-        }
-        let mut head = Vec::with_capacity(OWNERSHIP_PREFIX);
-        use std::io::Read;
-        fs::File::open(target)
-            .and_then(|f| f.take(OWNERSHIP_PREFIX as u64).read_to_end(&mut head))
-            .map_err(io_err(target))?;
-        if !ours(&head) {
-            return Err(unsafe_file("coopnav did not write it"));
-        }
-    }
+    check_file_target(target, force, ours, inputs)?;
     let name = target.file_name().ok_or_else(|| OutputError::Unnamed(target.to_path_buf()))?.to_string_lossy();
     let parent = target.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
     let staging = parent.join(format!(".{name}.partial-{}", std::process::id()));
@@ -548,6 +525,44 @@ pub fn write_file(
         return Err(io_err(target)(e));
     }
     Ok(())
+}
+
+/// Checks, without touching it, that [`write_file`] may write `target`: absent, or a regular file
+/// that is not one of `inputs`, replaced only with `force` and only when `ours(its first bytes)`.
+/// A command calls it before its work, so that a refusal costs nothing.
+pub fn check_file_target(
+    target: &Path,
+    force: bool,
+    ours: fn(&[u8]) -> bool,
+    inputs: &[&Path],
+) -> Result<(), OutputError> {
+    let Ok(meta) = fs::symlink_metadata(target) else { return Ok(()) };
+    let unsafe_file = |reason| OutputError::UnsafeFile { path: target.to_path_buf(), reason };
+    if meta.file_type().is_symlink() {
+        return Err(unsafe_file("it is a symbolic link"));
+    }
+    if !meta.is_file() {
+        return Err(unsafe_file("it is not a regular file"));
+    }
+    let canonical = fs::canonicalize(target).map_err(io_err(target))?;
+    if inputs.iter().any(|i| fs::canonicalize(i).is_ok_and(|p| p == canonical)) {
+        return Err(unsafe_file("it is an input of this command"));
+    }
+    if !force {
+        return Err(OutputError::FileExists(target.to_path_buf()));
+    }
+    if !ours(&file_head(target).map_err(io_err(target))?) {
+        return Err(unsafe_file("coopnav did not write it"));
+    }
+    Ok(())
+}
+
+/// The first [`OWNERSHIP_PREFIX`] bytes of `path`: what tells a file coopnav wrote.
+fn file_head(path: &Path) -> std::io::Result<Vec<u8>> {
+    use std::io::Read;
+    let mut head = Vec::with_capacity(OWNERSHIP_PREFIX);
+    fs::File::open(path)?.take(OWNERSHIP_PREFIX as u64).read_to_end(&mut head)?;
+    Ok(head)
 }
 
 /// How many leading bytes of an existing output file [`write_file`]'s `ours` sees.
