@@ -445,9 +445,10 @@ pub struct PostSummary {
     /// Σ −½(ln 2πS + y²/S) over the ranges the filter saw (applied or gated, not held out): the
     /// innovation log-likelihood of the ranges.
     pub range_log_likelihood: f64,
-    /// Σ −½(ln 2πS + r²/S) over the held-out ranges, r their residual against the smoothed track
-    /// and S = R + h Pˢ hᵀ its predicted variance: how well the track smoothed without a range
-    /// predicts it (the score `--tune` maximises over folds of held-out ranges).
+    /// Σ −½(ln 2πS + min(r²/S, g)) over the held-out ranges, r their residual against the
+    /// smoothed track, S = R + h Pˢ hᵀ its predicted variance and g the gate's `max_nis`: how well
+    /// the track smoothed without a range predicts it (the score `--tune` maximises over folds of
+    /// held-out ranges; docs/models.md#post-tuning).
     pub held_out_log_predictive: f64,
     pub truth_points: usize,
     pub mean_filtered_error: Option<f64>,
@@ -944,9 +945,11 @@ impl Run<'_> {
                 seen.residual.smoothed_sd = sd;
                 seen.residual.noise_sd = noise_sd;
                 if seen.residual.held_out && sd > 0.0 {
+                    // A range the gate would reject scores as one at the gate's bound: an outlier
+                    // costs no more than that, so the score does not widen the noise to fit it.
                     let s = sd * sd;
-                    summary.held_out_log_predictive -=
-                        0.5 * ((2.0 * std::f64::consts::PI * s).ln() + smoothed * smoothed / s);
+                    let nis = (smoothed * smoothed / s).min(cfg.range_gate.max_nis.unwrap_or(f64::INFINITY));
+                    summary.held_out_log_predictive -= 0.5 * ((2.0 * std::f64::consts::PI * s).ln() + nis);
                 }
             }
         }

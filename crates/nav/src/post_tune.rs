@@ -179,6 +179,9 @@ pub struct Scored {
     pub in_sample_rms_smoothed_m: Option<f64>,
     /// Ranges the full run's innovation gate rejected.
     pub ranges_gated: usize,
+    /// The compass's whole bias (deg, clockwise): `heading_bias_deg` and the mean of the full
+    /// run's smoothed bias state, which takes up what the fixed offset leaves.
+    pub compass_bias_deg: f64,
     /// The held-out ranges' RMS residuals and log predictive density (as in `cross_validation`).
     pub held_out_rms_filter_m: Option<f64>,
     pub held_out_rms_smoothed_m: Option<f64>,
@@ -404,7 +407,11 @@ fn score(rows: &[LogRow], base: &PostConfig, k: usize, values: Tuned) -> Result<
     let cv = folds(rows, &cfg, k, None)?.cross_validation(k);
     let full = run(rows, &cfg, Pass { smooth: true, hold_out_every: 0, hold_out_phase: 0, prediction_step_s: None })?;
     let s = &full.summary;
+    let n = full.samples.len().max(1) as f64;
+    let bias_state = full.samples.iter().map(|x| x.smoothed_heading_bias).sum::<f64>() / n;
     Ok(Scored {
+        // b is the reading's offset in math heading (counter-clockwise), the compass's is clockwise.
+        compass_bias_deg: values.heading_bias_deg - bias_state.to_degrees(),
         values,
         log_likelihood: s.range_log_likelihood,
         in_sample_rms_filter_m: s.residual_rms_filter_m,
@@ -641,6 +648,57 @@ mod tests {
         let Observation::Velocity { frame: VelocityFrame::Earth, v } = dvl[0].obs else { unreachable!() };
         assert_eq!((dvl.len(), v), (1, [1.5, 1.0]));
         assert!((dvl[0].sigma.unwrap() - cfg.velocity_sd_m_s / 2.0).abs() < 1e-12);
+    }
+
+    fn scored(held_out_log_predictive: f64, ranges_gated: usize) -> Scored {
+        let values = Tuned::of(&PostConfig::default());
+        let cross_validation = CrossValidation {
+            folds: 5,
+            ranges: 50,
+            log_predictive: held_out_log_predictive,
+            rms_filter_m: None,
+            rms_smoothed_m: None,
+            mean_nis_smoothed: None,
+        };
+        Scored {
+            values,
+            log_likelihood: 0.0,
+            in_sample_rms_filter_m: None,
+            in_sample_rms_smoothed_m: None,
+            ranges_gated,
+            compass_bias_deg: 0.0,
+            held_out_rms_filter_m: None,
+            held_out_rms_smoothed_m: None,
+            held_out_log_predictive,
+            cross_validation,
+        }
+    }
+
+    #[test]
+    fn the_guard_keeps_the_start_unless_the_result_predicts_better_and_rejects_no_more() {
+        let start = scored(-100.0, 2);
+        let g = Guard::judge(&start, &scored(-80.0, 2), true, 50);
+        assert_eq!((g.kept, g.warning), (Kept::Tuned, None));
+        let g = Guard::judge(&start, &scored(-80.0, 2), false, 50);
+        assert_eq!(g.kept, Kept::BestCandidate);
+        assert!(g.warning.unwrap().contains("cap of 50 iterations"));
+        let g = Guard::judge(&start, &scored(-120.0, 2), true, 50);
+        assert_eq!(g.kept, Kept::Start);
+        assert!(g.warning.unwrap().contains("no better"));
+        let g = Guard::judge(&start, &scored(-100.0, 2), true, 50);
+        assert_eq!(g.kept, Kept::Start, "equal is not better");
+        let g = Guard::judge(&start, &scored(-80.0, 3), false, 50);
+        assert_eq!(g.kept, Kept::Start);
+        let w = g.warning.unwrap();
+        assert!(w.contains("reject 3 range(s)") && w.contains("reject 2") && w.contains("cap of 50"), "{w}");
+        assert_eq!(w.matches("tuning:").count(), 1, "one warning: {w}");
+    }
+
+    #[test]
+    fn the_floor_costs_only_residuals_larger_than_the_noise() {
+        assert_eq!(floor_penalty((40.0, 50)), 0.0);
+        assert_eq!(floor_penalty((0.0, 0)), 0.0);
+        assert!((floor_penalty((100.0, 50)) - 50.0).abs() < 1e-12);
     }
 
     #[test]
