@@ -546,16 +546,18 @@ fn postprocess(
         }
         None => None,
     };
-    let result = post::postprocess_rows(rows, &cfg)?;
-    let faults = result.summary.log_faults();
-    if strict && !faults.is_empty() {
-        anyhow::bail!("{} (--strict): {}", log.display(), faults.join("; "));
-    }
+    // The cross-validation's runs come first, so that only one run's history is held at a time.
+    limits::check(work::postprocess_folds(rows, &cfg, hold_out_every), allow_large)?;
     let held_out = match (hold_out_every, &tuned) {
         (0, _) => None,
         (_, Some(t)) if t.guard.kept == post_tune::Kept::Start => Some(t.before.cross_validation),
         (k, _) => Some(post_tune::cross_validate(rows, &cfg, k)?),
     };
+    let result = post::postprocess_rows(rows, &cfg)?;
+    let faults = result.summary.log_faults();
+    if strict && !faults.is_empty() {
+        anyhow::bail!("{} (--strict): {}", log.display(), faults.join("; "));
+    }
     let quality = Quality::of(&result, held_out);
     for w in result.summary.warnings().into_iter().chain(quality.warnings()) {
         eprintln!("warning: {}: {w}", log.display());

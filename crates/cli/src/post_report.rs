@@ -78,7 +78,7 @@ fn tuning_rows(t: &TuneReport) -> Vec<[String; 4]> {
         [
             "E/N process noise (m² per step)".into(),
             format!("{:.3e}", b.q_en),
-            format!("{:.3e}", a.q_en),
+            sd.q_en.map_or(format!("{:.3e}", a.q_en), |s| format!("{:.3e} ± {s:.3e}", a.q_en)),
             format!("{:.3e}", c.q_en),
         ],
         [
@@ -92,6 +92,12 @@ fn tuning_rows(t: &TuneReport) -> Vec<[String; 4]> {
             format!("{:.3}", b.heading_bias_deg),
             pm(a.heading_bias_deg, sd.heading_bias_deg),
             format!("{:.3}", c.heading_bias_deg),
+        ],
+        [
+            "whole compass bias, with the smoothed bias state (deg)".into(),
+            format!("{:.3}", t.before.compass_bias_deg),
+            format!("{:.3}", t.after.compass_bias_deg),
+            String::new(),
         ],
         [
             "initial E/N variance (m²)".into(),

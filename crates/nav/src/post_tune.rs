@@ -34,7 +34,7 @@ use std::borrow::Cow;
 pub struct TuneOptions {
     /// Folds of the cross-validation: every k-th range is held out, each phase in turn (≥ 2).
     pub hold_out_every: usize,
-    /// Nelder–Mead iterations at most.
+    /// Nelder–Mead iterations at most. Invented default: 300 (docs/models.md#post-tuning).
     pub max_iters: u64,
     /// During the search, the yaw-rate, speed, heading, DVL and depth rows are averaged over blocks
     /// of this many seconds and the filter predicts in steps of that length (0: every row at full
@@ -87,7 +87,8 @@ const P0_EN_MAX: f64 = 1e4;
 /// factor of 10 on the initial variance.
 const PRIOR_SD: [f64; 5] = [1.0986, 4.6052, 0.05, 5.0, 2.3026];
 
-/// Steps of the initial simplex and of the curvature's differences, in search coordinates.
+/// Steps of the initial simplex and of the curvature's differences, in search coordinates
+/// (invented, docs/models.md#post-tuning).
 const SIMPLEX_STEPS: [f64; 5] = [0.5, 1.5, 0.03, 2.0, 1.0];
 const CURVATURE_STEPS: [f64; 5] = [0.1, 0.3, 0.005, 0.2, 0.3];
 

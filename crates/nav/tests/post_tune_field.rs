@@ -147,7 +147,7 @@ fn hard(name: &str, rows: &[LogRow]) -> (TuneReport, PostResult, PostResult) {
     let defaults = postprocess_rows(rows, &PostConfig::default()).unwrap();
     let (r, run) = tuned(rows);
     eprintln!(
-        "{name}: defaults RMS {:.3} NEES {:.3} gated {}; tuned RMS {:.3} NEES {:.3} gated {}; {:?}; values {:?}",
+        "{name}: defaults RMS {:.3} NEES {:.3} gated {}; tuned RMS {:.3} NEES {:.3} gated {}; {:?}; values {:?}, compass {:.3}",
         rms(&defaults),
         nees(&defaults),
         defaults.summary.ranges_gated,
@@ -155,7 +155,8 @@ fn hard(name: &str, rows: &[LogRow]) -> (TuneReport, PostResult, PostResult) {
         nees(&run),
         run.summary.ranges_gated,
         r.guard,
-        r.chosen
+        r.chosen,
+        r.after.compass_bias_deg
     );
     assert!(r.guard.kept == Kept::Start || r.after.held_out_log_predictive > r.before.held_out_log_predictive);
     assert!(rms(&run) <= rms(&defaults), "{name}: RMS {} vs defaults {}", rms(&run), rms(&defaults));
