@@ -6,13 +6,14 @@
 //! ([`CovarianceTracker`]), stepped by the same expected EKF update the planner scores with.
 
 use crate::policy::{CnaCommand, CnaPolicy, PolicyContext, ReportedCov};
-use coopnav_core::Vec3;
+use coopnav_core::{Track, Vec3};
 use coopnav_plan::true_error::{true_error_prediction, true_error_step, Growth, PingNoise, TrueState};
 use coopnav_plan::{
-    expected_posterior, AuvError, AuvEstimate, AuvForecast, CostSpec, ErrorModel, LinkModel, LookAheadPlanner,
-    PlanError, PlanInput, PlannerConfig, RangeNoise, TrueError, TruthInput, TruthSpec,
+    expected_posterior, AuvError, AuvEstimate, AuvForecast, CostSpec, ErrorModel, HorizonSpec, LinkModel,
+    LookAheadPlanner, PlanError, PlanInput, PlannerConfig, RangeNoise, SurveyInput, TrueError, TruthInput, TruthSpec,
 };
 use serde::Serialize;
+use std::sync::Arc;
 
 /// The planner's error model (eq. 1) tracked per AUV between decisions.
 #[derive(Debug, Clone)]
@@ -298,6 +299,21 @@ impl CovarianceTracker {
     pub fn estimate(&self, k: usize) -> Option<AuvEstimate> {
         self.covs[k].map(|cov| AuvEstimate { cov, process_noise: self.rates[k] })
     }
+
+    /// AUV `k`'s modelled state at `t` for the horizon layer, known or not: its estimate, else
+    /// its filter's covariance grown from launch with no range (its process noise, or as
+    /// `reports_only`'s `unheard` says); and its true-error moments, else their launch value grown
+    /// to `t` (with the tracked truth only).
+    fn survey_state(&self, k: usize, t: f64) -> (AuvEstimate, Option<TrueError>) {
+        let estimate = self.estimate(k).unwrap_or_else(|| {
+            let q = self.start.process_noise;
+            let (grown, rate) = self.unheard.map_or((q * t.max(0.0), q), |u| u.at(q, t));
+            let [a, b, c] = self.start.cov;
+            AuvEstimate { cov: [a + grown, b, c + grown], process_noise: rate }
+        });
+        let truth = self.truth.as_ref().map(|truth| truth.errors[k].map_or_else(|| truth.grown(k, t), |(_, e)| e));
+        (estimate, truth)
+    }
 }
 
 /// How the planner's decisions went.
@@ -362,6 +378,30 @@ pub struct PlannerPolicy {
     slot_reach: Vec<f64>,
     stats: PlannerStats,
     levels_total: u64,
+    /// Every survey AUV's mission plan (fleet order), what the horizon layer follows for an AUV
+    /// the CNA has not heard from; None: no horizon layer.
+    plans: Option<Arc<[Track]>>,
+}
+
+/// The survey as the horizon layer sees it: the AUVs the CNA has heard from as their reports
+/// predict them, the others along their mission plans.
+struct Survey<'a> {
+    fleet: &'a dyn AuvForecast,
+    known: &'a [bool],
+    plans: &'a [Track],
+}
+
+impl AuvForecast for Survey<'_> {
+    fn n_auvs(&self) -> usize {
+        self.plans.len()
+    }
+    fn position(&self, k: usize, t: f64) -> Option<Vec3> {
+        if self.known[k] {
+            self.fleet.position(k, t)
+        } else {
+            Some(self.plans[k].at(t))
+        }
+    }
 }
 
 /// The AUVs of a forecast that are known, renumbered 0..m.
@@ -420,7 +460,19 @@ impl PlannerPolicy {
             slot_reach: Vec::new(),
             stats,
             levels_total: 0,
+            plans: None,
         })
+    }
+
+    /// The mission-long horizon layer (coopnav_plan `horizon`) over every AUV, those not heard
+    /// from along `plans` (their mission plans, fleet order); no effect under Hudson's cost or
+    /// with `spec.enabled = false`.
+    pub fn with_horizon(mut self, spec: HorizonSpec, plans: Vec<Track>) -> Result<Self, PlanError> {
+        if self.covariances.is_some() && spec.enabled {
+            self.planner = self.planner.with_horizon(spec)?;
+            self.plans = Some(plans.into());
+        }
+        Ok(self)
     }
 
     /// The estimator-aware cost's range bias from a known sound-speed profile (`BiasTable`).
@@ -538,7 +590,30 @@ impl CnaPolicy for PlannerPolicy {
             forecast: &forecast,
             slot_reach_m: &slot_reach,
         };
-        match self.planner.decide_with_truth(&input, truth.as_ref()) {
+        let decided = match (&self.plans, &self.covariances) {
+            (Some(plans), Some(c)) => {
+                let mut heard = vec![false; n];
+                known.iter().for_each(|&k| heard[k] = true);
+                let states: Vec<(AuvEstimate, Option<TrueError>)> = (0..n).map(|k| c.survey_state(k, ctx.t)).collect();
+                let all_estimates: Vec<AuvEstimate> = states.iter().map(|s| s.0).collect();
+                let all_truth: Vec<TrueError> = states.iter().filter_map(|s| s.1).collect();
+                let survey_truth = truth
+                    .as_ref()
+                    .filter(|_| all_truth.len() == n)
+                    .map(|t| TruthInput { errors: &all_truth, cna_variance: t.cna_variance });
+                let forecast = Survey { fleet: ctx.fleet, known: &heard, plans };
+                let plan = PlanInput {
+                    estimates: &all_estimates,
+                    forecast: &forecast,
+                    slot_reach_m: &self.slot_reach,
+                    ..input
+                };
+                let survey = SurveyInput { plan: &plan, truth: survey_truth.as_ref() };
+                self.planner.decide_with_survey(&input, truth.as_ref(), survey)
+            }
+            _ => self.planner.decide_with_truth(&input, truth.as_ref()),
+        };
+        match decided {
             Ok(d) => {
                 if d.levels_searched < d.levels_requested {
                     self.stats.deadline_misses += 1;

@@ -186,6 +186,13 @@ fn build(name: &str, sc: &Scenario, planned: Option<&TimedWaypoints>) -> Result<
             if p.estimator_tracking == EstimatorTracking::ReportsOnly {
                 policy = policy.with_reports_only(unheard_growth(sc));
             }
+            if estimator && p.horizon.enabled {
+                let plans = (0..n)
+                    .map(|k| sc.lawnmower(k).track(1.0))
+                    .collect::<Result<Vec<_>, _>>()
+                    .map_err(|e| plan_err(PlanError::Input(format!("nominal survey track: {e}"))))?;
+                policy = policy.with_horizon(p.horizon, plans).map_err(plan_err)?;
+            }
             return Ok(Policy::Planner(Box::new(policy)));
         }
         "none" => Box::new(NoCna),
