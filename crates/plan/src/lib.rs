@@ -12,6 +12,7 @@
 
 mod brute;
 mod cost_model;
+pub mod current_states;
 pub mod error_model;
 pub mod estimator;
 pub mod horizon;
@@ -37,8 +38,8 @@ pub use penalty::{
     Doubling, NoPenalty, Penalty, PenaltyCase, PenaltyFn, PenaltyPair, ScaledViolation, SideTerm, Violation,
 };
 pub use planner::{
-    Algorithm, AuvForecast, CostSpec, Deadline, Decision, DistanceLimits, FnForecast, LookAheadPlanner, PlanInput,
-    Planner, PlannerConfig, SearchConfig, SurveyInput,
+    Algorithm, AuvForecast, CostSpec, CurrentInput, Deadline, Decision, DistanceLimits, FnForecast, LookAheadPlanner,
+    PlanInput, Planner, PlannerConfig, SearchConfig, SurveyInput,
 };
 pub use true_error::{TrueError, TruthInput, TruthSpec};
 

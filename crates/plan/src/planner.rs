@@ -8,6 +8,7 @@
 //! happened (in pre-deployment mode they are the forecast ones).
 
 use crate::cost_model::{CostModel, HudsonCost, Tangential};
+use crate::current_states::{CurrentState, CurrentStates, CurrentStatesCost};
 use crate::error_model::{to_arr, AuvError, ErrorModel};
 use crate::estimator::{AuvEstimate, BiasTable, EkfCost, EstimatorSpec, LinkModel, LinkTable};
 use crate::horizon::{best_order, GoalTerm, HorizonSpec, World};
@@ -288,6 +289,16 @@ pub struct LookAheadPlanner {
     bias: Option<BiasTable>,
     /// The mission-long horizon layer over the estimator-aware costs (`horizon`); None: none.
     horizon: Option<HorizonSpec>,
+    /// The filters' current states (`current_states`), for [`LookAheadPlanner::decide_on_current_states`].
+    current_states: Option<CurrentStates>,
+}
+
+/// What the current-states cost starts from at a decision: each AUV's state (the order of
+/// `PlanInput::estimates`) and v, the CNA's own true horizontal variance per axis, m².
+#[derive(Debug, Clone, Copy)]
+pub struct CurrentInput<'a> {
+    pub states: &'a [CurrentState],
+    pub cna_variance: f64,
 }
 
 /// What the horizon layer plans over when it is not the tree's own input: every AUV of the
@@ -313,13 +324,13 @@ impl LookAheadPlanner {
     /// A planner with a perfect acoustic link.
     pub fn new(cfg: PlannerConfig) -> Result<Self, PlanError> {
         cfg.validate()?;
-        Ok(LookAheadPlanner { cfg, link: LinkTable::perfect(), bias: None, horizon: None })
+        Ok(LookAheadPlanner { cfg, link: LinkTable::perfect(), bias: None, horizon: None, current_states: None })
     }
 
     /// A planner whose estimator-aware cost weights each ping by `link`'s success probability.
     pub fn with_link(cfg: PlannerConfig, link: &dyn LinkModel) -> Result<Self, PlanError> {
         cfg.validate()?;
-        Ok(LookAheadPlanner { cfg, link: LinkTable::sample(link)?, bias: None, horizon: None })
+        Ok(LookAheadPlanner { cfg, link: LinkTable::sample(link)?, bias: None, horizon: None, current_states: None })
     }
 
     /// The estimator-aware cost's range bias from `table` (the scale error between two depths)
@@ -336,6 +347,13 @@ impl LookAheadPlanner {
             self.horizon = spec.enabled.then_some(spec);
             self
         })
+    }
+
+    /// The true-error cost on filters that estimate the water current (`current_states`), used by
+    /// [`LookAheadPlanner::decide_on_current_states`].
+    pub fn with_current_states(mut self, spec: CurrentStates) -> Self {
+        self.current_states = Some(spec);
+        self
     }
 
     pub fn config(&self) -> &PlannerConfig {
@@ -646,5 +664,50 @@ impl LookAheadPlanner {
                 "the true-error cost (cost.truth) needs each AUV's true-error moments (decide_with_truth)".into(),
             )),
         }
+    }
+}
+
+impl LookAheadPlanner {
+    /// One decision under the true-error cost on filters with current states (`current_states`):
+    /// needs `cost.truth` and [`LookAheadPlanner::with_current_states`]. `survey` (its input and
+    /// states over every AUV) is what the horizon layer, if any, plans over; None: the tree's own.
+    pub fn decide_on_current_states(
+        &self,
+        input: &PlanInput,
+        states: &CurrentInput,
+        survey: Option<(&PlanInput, &CurrentInput)>,
+    ) -> Result<Decision, PlanError> {
+        let (CostSpec::Estimator(spec @ EstimatorSpec { truth: Some(truth), .. }), Some(current)) =
+            (self.cfg.cost, self.current_states)
+        else {
+            return Err(PlanError::Input(
+                "the current-states cost needs cost.truth and the filters' current states (with_current_states)".into(),
+            ));
+        };
+        let model = |plan: &PlanInput,
+                     known: &CurrentInput|
+         -> Result<(CurrentStatesCost, Vec<CurrentState>), PlanError> {
+            let n = plan.forecast.n_auvs();
+            if known.states.len() != n {
+                return Err(PlanError::Input(format!("{} current states for {n} forecast AUVs", known.states.len())));
+            }
+            CurrentStatesCost::check(known.states)?;
+            let filter = self.estimator_model(spec, plan)?;
+            let cost = CurrentStatesCost::new(filter, truth, current, self.cfg.motion.tau, known.cna_variance);
+            Ok((cost, known.states.to_vec()))
+        };
+        let goal = match self.horizon {
+            Some(_) => {
+                let (plan, known) = survey.unwrap_or((input, states));
+                let (m, root) = model(plan, known)?;
+                self.goal(plan, &m, &root)
+            }
+            None => None,
+        };
+        self.run(|depth| {
+            let g = self.geometry(input, depth)?;
+            let (m, root) = model(input, states)?;
+            Ok(self.tree(g, m, root, goal.clone()))
+        })
     }
 }

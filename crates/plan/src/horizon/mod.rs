@@ -34,6 +34,7 @@ mod rollout;
 
 pub(crate) use rollout::{best_order, World};
 
+use crate::planner::DistanceLimits;
 use coopnav_core::validation::{CheckFields, Problems};
 use serde::{Deserialize, Serialize};
 
@@ -84,6 +85,19 @@ impl Default for HorizonSpec {
             standoff_m: standoff_m(),
             weight: weight(),
         }
+    }
+}
+
+impl HorizonSpec {
+    /// Whether the layer takes over from Hudson's distance penalties (Table 5.2; the tree then
+    /// has none, case "2"): when the survey spans more than twice the maximum CNA–AUV distance
+    /// (`survey_extent_m`, the diagonal of the box around every AUV's plan), no CNA position keeps
+    /// every AUV within it, so the look-ahead penalty doubles the cost of nearly every node alike
+    /// and, in practice, holds the CNA between the blocks, far from all of them. Choosing which
+    /// AUV to be near is then this layer's decision; the estimator-aware cost prices a far ping
+    /// itself (the link's success, the range noise and bias).
+    pub fn replaces_distance_penalties(&self, survey_extent_m: f64, limits: &DistanceLimits) -> bool {
+        self.enabled && survey_extent_m > 2.0 * limits.max
     }
 }
 

@@ -470,6 +470,12 @@ pub struct Planner {
     /// noise and the CNA's diffusion as the CNA believes them). Written only when set.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub estimator_truth: Option<TruthSpec>,
+    /// The water current east and north (m/s) as the CNA measures it (an ADCP), for filters that
+    /// estimate the current (`filter.model = { kind = "current" }`): with `estimator_truth`,
+    /// `planner-estimator` then plans on those filters' current states, which start from a
+    /// current estimate of zero (coopnav_plan `current_states`). Default [0, 0]: still water.
+    #[serde(default, skip_serializing_if = "coopnav_plan::estimator::is_still")]
+    pub estimator_current: [f64; 2],
     /// `planner-estimator`'s mission-long horizon above its tree: which AUV to serve next, valued
     /// over tens of minutes along every AUV's plan (coopnav_plan `horizon`; on by default,
     /// `enabled = false` for none). Written only when not the default.
@@ -894,6 +900,8 @@ impl Scenario {
         p.finite("planner.estimator_unmodelled_current[0]", pl.estimator_unmodelled_current[0]);
         p.finite("planner.estimator_unmodelled_current[1]", pl.estimator_unmodelled_current[1]);
         p.non_negative("planner.estimator_drift_levels", pl.estimator_drift_levels);
+        p.finite("planner.estimator_current[0]", pl.estimator_current[0]);
+        p.finite("planner.estimator_current[1]", pl.estimator_current[1]);
         self.validate_estimator_tree(p);
         if let Some(truth) = &pl.estimator_truth {
             truth.check_fields("planner.estimator_truth.", p);
