@@ -9,8 +9,8 @@ use crate::policy::{CnaCommand, CnaPolicy, PolicyContext, ReportedCov};
 use coopnav_core::Vec3;
 use coopnav_plan::true_error::{true_error_prediction, true_error_step, Growth, PingNoise, TrueState};
 use coopnav_plan::{
-    expected_posterior, AuvError, AuvEstimate, AuvForecast, CostSpec, ErrorModel, LinkModel, LookAheadPlanner,
-    PlanError, PlanInput, PlannerConfig, RangeNoise, TrueError, TruthInput, TruthSpec,
+    expected_posterior, AuvError, AuvEstimate, AuvForecast, CostSpec, Decision, ErrorModel, LinkModel,
+    LookAheadPlanner, PlanError, PlanInput, PlannerConfig, RangeNoise, TrueError, TruthInput, TruthSpec,
 };
 use serde::Serialize;
 
@@ -362,6 +362,8 @@ pub struct PlannerPolicy {
     slot_reach: Vec<f64>,
     stats: PlannerStats,
     levels_total: u64,
+    /// The newest decision's search result (None: it held, waiting or failing).
+    last: Option<Decision>,
 }
 
 /// The AUVs of a forecast that are known, renumbered 0..m.
@@ -420,6 +422,7 @@ impl PlannerPolicy {
             slot_reach: Vec::new(),
             stats,
             levels_total: 0,
+            last: None,
         })
     }
 
@@ -471,6 +474,17 @@ impl PlannerPolicy {
     pub fn tracker(&self) -> &ErrorTracker {
         &self.tracker
     }
+
+    /// The newest decision's search result: the option chosen, its cost, the levels searched
+    /// (None: that decision held position).
+    pub fn last_decision(&self) -> Option<&Decision> {
+        self.last.as_ref()
+    }
+
+    /// The planner's configuration (its motion options among it).
+    pub fn config(&self) -> &PlannerConfig {
+        self.planner.config()
+    }
 }
 
 impl CnaPolicy for PlannerPolicy {
@@ -486,6 +500,7 @@ impl CnaPolicy for PlannerPolicy {
     /// modelled errors, then the next decision.
     fn decide(&mut self, ctx: &PolicyContext) -> CnaCommand {
         self.stats.decisions += 1;
+        self.last = None;
         let n = ctx.fleet.n_auvs();
         if let Some(c) = self.covariances.as_mut() {
             c.set_cna_variance(ctx.cna_variance);
@@ -545,6 +560,7 @@ impl CnaPolicy for PlannerPolicy {
                 }
                 self.stats.min_levels_searched = self.stats.min_levels_searched.min(d.levels_searched);
                 self.levels_total += d.levels_searched as u64;
+                self.last = Some(d);
                 CnaCommand::GoTo(d.next.pos)
             }
             Err(e) => {
