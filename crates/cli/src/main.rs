@@ -52,7 +52,8 @@ enum Command {
     /// Benchmarks, printed as JSON.
     #[command(subcommand)]
     Bench(bench::Target),
-    /// Live processes on LCM for a vehicle's backseat (`live auv`: a survey AUV's navigator).
+    /// Live processes on LCM for a vehicle's backseat (`live auv`: a survey AUV's navigator;
+    /// `live cna`: the CNA's planner).
     #[command(subcommand)]
     Live(live::Command),
 }

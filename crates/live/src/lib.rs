@@ -21,4 +21,4 @@ pub mod world;
 
 pub use auv::{AuvNavigator, Channels, Counts, LiveConfig, LiveError, Published, Start};
 pub use cna::{CnaChannels, CnaCounts, CnaPlanner, Outgoing};
-pub use run::{run_auv, RunOptions, RunSummary, StopReason};
+pub use run::{run_auv, run_cna, ClockSource, CnaRunSummary, RunOptions, RunSummary, StopReason};
