@@ -81,6 +81,8 @@ pub enum LiveError {
     Policy(#[from] coopnav_sim::policy::PolicyError),
     #[error("live cna: {what}: not supported")]
     Unsupported { what: String },
+    #[error("sitl: {0}")]
+    Child(String),
 }
 
 /// Where the filter starts (local east/north, metres).

@@ -6,6 +6,9 @@
 //! - [`cna`]: the CNA's planner ([`CnaPlanner`]): the policy the scenario names, run by
 //!   coopnav-sim's own code on the CNA's fix and the statuses its modem received, a command and a
 //!   decision record every τ;
+//! - [`sitl`]: software in the loop in lockstep: the engine as the world, the CNA's decisions
+//!   taken by a `coopnav live cna` child on the bus;
+//! - [`world`]: the LCM messages a CNA receives in a simulated mission, published or recorded;
 //! - [`run`]: the process loop around them on coopnav-lcm's UDP multicast transport ([`run_auv`]),
 //!   with its LCM log, its stop conditions (a stop flag set on SIGINT/SIGTERM, a duration, an idle
 //!   time) and its one-line summary.
@@ -16,6 +19,7 @@
 pub mod auv;
 pub mod cna;
 pub mod run;
+pub mod sitl;
 pub mod synthetic;
 pub mod world;
 
