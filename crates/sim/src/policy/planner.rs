@@ -435,6 +435,8 @@ pub struct PlannerPolicy {
     slot_reach: Vec<f64>,
     stats: PlannerStats,
     levels_total: u64,
+    /// The newest decision's search result (None: it held, waiting or failing).
+    last: Option<Decision>,
     /// Every survey AUV's mission plan (fleet order), what the horizon layer follows for an AUV
     /// the CNA has not heard from; None: no horizon layer.
     plans: Option<Arc<[Track]>>,
@@ -521,6 +523,7 @@ impl PlannerPolicy {
             levels_total: 0,
             plans: None,
             current: None,
+            last: None,
         })
     }
 
@@ -607,6 +610,17 @@ impl PlannerPolicy {
         &self.tracker
     }
 
+    /// The newest decision's search result: the option chosen, its cost, the levels searched
+    /// (None: that decision held position).
+    pub fn last_decision(&self) -> Option<&Decision> {
+        self.last.as_ref()
+    }
+
+    /// The planner's configuration (its motion options among it).
+    pub fn config(&self) -> &PlannerConfig {
+        self.planner.config()
+    }
+
     /// The decision under the 2-state costs: the horizon layer (if any) over every AUV, those not
     /// heard from along their plans.
     fn decide_on_moments(
@@ -653,6 +667,7 @@ impl CnaPolicy for PlannerPolicy {
     /// modelled errors, then the next decision.
     fn decide(&mut self, ctx: &PolicyContext) -> CnaCommand {
         self.stats.decisions += 1;
+        self.last = None;
         let n = ctx.fleet.n_auvs();
         if let Some(c) = self.covariances.as_mut() {
             c.set_cna_variance(ctx.cna_variance);
@@ -744,6 +759,7 @@ impl CnaPolicy for PlannerPolicy {
                 }
                 self.stats.min_levels_searched = self.stats.min_levels_searched.min(d.levels_searched);
                 self.levels_total += d.levels_searched as u64;
+                self.last = Some(d);
                 CnaCommand::GoTo(d.next.pos)
             }
             Err(e) => {

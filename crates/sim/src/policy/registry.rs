@@ -74,7 +74,7 @@ impl Policy {
     pub fn planner_stats(&self) -> Option<PlannerStats> {
         match self {
             Policy::Planner(p) => Some(p.stats()),
-            Policy::Baseline(_) => None,
+            Policy::Baseline(b) => b.planner_stats(),
         }
     }
 }
