@@ -18,6 +18,7 @@ mod post_report;
 mod reproduce;
 mod scenario_args;
 mod simulate;
+mod sweep;
 mod view;
 
 #[derive(Parser)]
@@ -47,6 +48,8 @@ enum Command {
     /// Closed-loop mission: CNA policy, survey-AUV OWTT filters and the acoustic link together
     /// (no scenario: the embedded default mission; --runs: Monte Carlo comparison of policies).
     Simulate(simulate::Args),
+    /// Sweeps of many missions from one file, in shards (one process, many, or a Slurm array).
+    Sweep(sweep::Args),
     /// Write a run directory's interactive replay.html (time slider, tracks, pulses, errors).
     View(view::Args),
     /// Benchmarks, printed as JSON.
@@ -114,6 +117,7 @@ fn run() -> Result<ExitCode> {
         Command::Channel(args) => channel::run(args),
         Command::Nams(args) => nams::run(args),
         Command::Simulate(args) => simulate::run(args),
+        Command::Sweep(args) => sweep::run(args),
         Command::View(args) => view::run(args),
         Command::Bench(target) => bench::run(target),
         Command::Live(_) => unreachable!("handled above"),

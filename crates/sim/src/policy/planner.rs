@@ -12,7 +12,7 @@ use coopnav_plan::{
     expected_posterior, AuvError, AuvEstimate, AuvForecast, CostSpec, ErrorModel, LinkModel, LookAheadPlanner,
     PlanError, PlanInput, PlannerConfig, RangeNoise, TrueError, TruthInput, TruthSpec,
 };
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 /// The planner's error model (eq. 1) tracked per AUV between decisions.
 #[derive(Debug, Clone)]
@@ -301,7 +301,7 @@ impl CovarianceTracker {
 }
 
 /// How the planner's decisions went.
-#[derive(Debug, Clone, Default, PartialEq, Serialize)]
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
 pub struct PlannerStats {
     pub decisions: u64,
     /// Decisions whose search stopped at the deadline before the full depth.
