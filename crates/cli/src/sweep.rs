@@ -1,11 +1,12 @@
 //! `coopnav sweep`: a study of many missions from one sweep file, run in shards anywhere.
 //! `--example` prints a sweep file; `plan FILE --shards N -o DIR` checks it and writes the plan;
 //! `run DIR --shard I` (or `--all`) runs shards; `merge DIR` writes the comparison and the tables;
-//! `status DIR` says where each shard stands. The work is in the `coopnav-sweep` crate.
+//! `status DIR` says where each shard stands; `slurm DIR` writes the batch scripts for a cluster. The work is in the `coopnav-sweep` crate.
 
 use crate::input;
-use anyhow::{bail, Result};
+use anyhow::{bail, Context, Result};
 use coopnav_sweep::plan::{plan_file, Plan};
+use coopnav_sweep::slurm::{write_scripts, SlurmSpec};
 use coopnav_sweep::{merge, shard, status};
 use indicatif::{ProgressBar, ProgressStyle};
 use std::io::IsTerminal;
@@ -62,6 +63,29 @@ pub enum Command {
     },
     /// Which shards are done, failed, running, interrupted or missing.
     Status { dir: PathBuf },
+    /// Write DIR/slurm/: an `sbatch --array` script (one task per shard), the merge's script and
+    /// submit.sh, which submits both (the merge once every shard has succeeded).
+    Slurm {
+        dir: PathBuf,
+        /// The coopnav binary the tasks run (default: this one).
+        #[arg(long)]
+        coopnav: Option<PathBuf>,
+        /// CPUs per shard task.
+        #[arg(long, default_value_t = 1)]
+        cpus_per_task: usize,
+        /// Slurm partition.
+        #[arg(long)]
+        partition: Option<String>,
+        /// Wall-time limit per task (Slurm's notation, e.g. 2:00:00).
+        #[arg(long)]
+        time: Option<String>,
+        /// A further #SBATCH option for both scripts (repeatable), e.g. --sbatch=--account=lab.
+        #[arg(long = "sbatch", allow_hyphen_values = true)]
+        extra: Vec<String>,
+        /// Replace scripts coopnav wrote before.
+        #[arg(long)]
+        force: bool,
+    },
 }
 
 fn command_line() -> String {
@@ -74,7 +98,7 @@ pub fn run(args: Args) -> Result<()> {
             print!("{}", coopnav_sweep::file::EXAMPLE);
             return Ok(());
         }
-        bail!("give a sweep command (plan, run, merge, status) or --example; see `coopnav sweep --help`");
+        bail!("give a sweep command (plan, run, merge, status, slurm) or --example; see `coopnav sweep --help`");
     };
     match command {
         Command::Plan { file, shards, output, force, allow_large } => {
@@ -129,6 +153,16 @@ pub fn run(args: Args) -> Result<()> {
         Command::Status { dir } => {
             let plan = Plan::open(&dir)?;
             print!("{}", status::status_table(&status::status(&plan)?));
+        }
+        Command::Slurm { dir, coopnav, cpus_per_task, partition, time, extra, force } => {
+            let plan = Plan::open(&dir)?;
+            let coopnav = match coopnav {
+                Some(p) => std::fs::canonicalize(&p).with_context(|| format!("--coopnav {}", p.display()))?,
+                None => std::env::current_exe()?,
+            };
+            let spec = SlurmSpec { coopnav, cpus_per_task, partition, time, extra };
+            let submit = write_scripts(&plan, &spec, force)?;
+            println!("wrote {}; submit with: bash {}", submit.parent().unwrap_or(&dir).display(), submit.display());
         }
     }
     Ok(())

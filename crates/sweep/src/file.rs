@@ -55,7 +55,7 @@ impl SweepFile {
 
 /// Where in `text` a TOML error is, as " (line L)".
 fn location(text: &str, e: &toml::de::Error) -> String {
-    e.span().map_or(String::new(), |span| format!(" (line {})", text[..span.start].lines().count().max(1)))
+    e.span().map_or(String::new(), |span| format!(" (line {})", text[..span.start].matches('\n').count() + 1))
 }
 
 #[cfg(test)]

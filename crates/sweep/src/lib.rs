@@ -16,6 +16,7 @@ pub mod file;
 pub mod merge;
 pub mod plan;
 pub mod shard;
+pub mod slurm;
 pub mod status;
 pub mod table;
 

@@ -112,7 +112,7 @@ pub fn read_frames(bytes: &[u8]) -> Frames {
 }
 
 /// A shard's finished results file: the records of its every run, in id order.
-fn finished_bytes(header: &Header, records: &[Record]) -> Vec<u8> {
+pub fn finished_bytes(header: &Header, records: &[Record]) -> Vec<u8> {
     let mut out = MAGIC.to_vec();
     out.extend(frame(header));
     for r in records {
