@@ -19,6 +19,7 @@ mod reproduce;
 mod scenario_args;
 mod simulate;
 mod sitl;
+mod sweep;
 mod view;
 
 #[derive(Parser)]
@@ -51,6 +52,8 @@ enum Command {
     /// Software in the loop: the closed-loop mission with the CNA's planner as a `live cna` child
     /// process on LCM (--lockstep: the same results as `simulate` with the same seed).
     Sitl(sitl::Args),
+    /// Sweeps of many missions from one file, in shards (one process, many, or a Slurm array).
+    Sweep(sweep::Args),
     /// Write a run directory's interactive replay.html (time slider, tracks, pulses, errors).
     View(view::Args),
     /// Benchmarks, printed as JSON.
@@ -120,6 +123,7 @@ fn run() -> Result<ExitCode> {
         Command::Nams(args) => nams::run(args),
         Command::Simulate(args) => simulate::run(args),
         Command::Sitl(args) => sitl::run(args),
+        Command::Sweep(args) => sweep::run(args),
         Command::View(args) => view::run(args),
         Command::Bench(target) => bench::run(target),
         Command::Live(_) => unreachable!("handled above"),

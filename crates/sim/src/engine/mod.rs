@@ -47,7 +47,7 @@ pub use observe::{
 use peer::{PeerLink, Plans};
 use phases::Payload;
 use rand_chacha::ChaCha8Rng;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 use std::cell::Cell;
 use std::sync::Arc;
 use std::time::Instant;
@@ -61,8 +61,8 @@ pub struct Faults {
     pub silent_from_s: f64,
 }
 
-/// Everything one run produced.
-#[derive(Debug, Clone, Serialize)]
+/// Everything one run produced (read back by the sweeps, which store each run's results).
+#[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct RunResult {
     pub policy: String,
     pub seed: u64,

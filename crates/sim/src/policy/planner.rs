@@ -16,7 +16,7 @@ use coopnav_plan::{
     LinkModel, LookAheadPlanner, PlanError, PlanInput, PlannerConfig, RangeNoise, SurveyInput, TrueError, TruthInput,
     TruthSpec,
 };
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 use std::sync::Arc;
 
 /// The planner's error model (eq. 1) tracked per AUV between decisions.
@@ -374,7 +374,7 @@ impl CovarianceTracker {
 }
 
 /// How the planner's decisions went.
-#[derive(Debug, Clone, Default, PartialEq, Serialize)]
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
 pub struct PlannerStats {
     pub decisions: u64,
     /// Decisions whose search stopped at the deadline before the full depth.
