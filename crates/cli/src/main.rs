@@ -9,6 +9,7 @@ mod bench;
 mod channel;
 #[cfg(test)]
 mod fuzz;
+mod generate;
 mod hbl;
 mod input;
 mod live;
@@ -46,6 +47,8 @@ enum Command {
     Channel(channel::Args),
     /// Run a Nams adaptive-rate experiment from a TOML file (scenarios × behaviours × repetitions).
     Nams(nams::Args),
+    /// Write the missions a generator file draws, one scenario file each (for `simulate`).
+    Generate(generate::Args),
     /// Closed-loop mission: CNA policy, survey-AUV OWTT filters and the acoustic link together
     /// (no scenario: the embedded default mission; --runs: Monte Carlo comparison of policies).
     Simulate(simulate::Args),
@@ -121,6 +124,7 @@ fn run() -> Result<ExitCode> {
         Command::Hbl(cmd) => hbl::run_command(cmd),
         Command::Channel(args) => channel::run(args),
         Command::Nams(args) => nams::run(args),
+        Command::Generate(args) => generate::run(args),
         Command::Simulate(args) => simulate::run(args),
         Command::Sitl(args) => sitl::run(args),
         Command::Sweep(args) => sweep::run(args),

@@ -63,6 +63,8 @@ pub struct Scenario {
     /// The survey AUVs' filter: what it assumes (the truth is `[channel]` and `[sensors]`).
     #[serde(default = "default_filter", deserialize_with = "filter_over_default")]
     pub filter: FilterSpec,
+    /// Absent: [`default_planner`].
+    #[serde(default = "default_planner")]
     pub planner: Planner,
     #[serde(default)]
     pub health: Health,
@@ -586,6 +588,15 @@ fn estimator_terminal_levels() -> f64 {
 
 fn estimator_drift_levels() -> f64 {
     coopnav_plan::EstimatorSpec::default().drift_levels
+}
+
+/// The planner of a file with no `[planner]` table (a mission stating only its facts): the
+/// embedded example's, less what that table states of the example's own mission (the current its
+/// ADCP measures, `estimator_unmodelled_current`), which is a fact of that mission only.
+pub fn default_planner() -> Planner {
+    let mut planner = Scenario::example().planner;
+    planner.estimator_unmodelled_current = [0.0, 0.0];
+    planner
 }
 
 fn default_case() -> String {
