@@ -49,8 +49,9 @@ pub struct CurrentStates {
     /// The filters' current correlation time T, s; None: a random walk.
     #[serde(default)]
     pub correlation_s: Option<f64>,
-    /// The water current c_w east and north, m/s, as the CNA measures it (its ADCP); the filters
-    /// start from a current estimate of zero, so their current error starts at −c_w.
+    /// c_w: the water current east and north as the CNA measures it (its ADCP) minus the mean the
+    /// filters' current prior states, m/s: what their current estimate still has to learn. Their
+    /// current error starts at −c_w (a Gauss–Markov current decays towards the prior's mean).
     #[serde(default)]
     pub water: [f64; 2],
 }

@@ -198,7 +198,7 @@ fn build(name: &str, sc: &Scenario, planned: Option<&TimedWaypoints>) -> Result<
                     p0: c.p0,
                     q: c.q / sc.filter.params.step_s,
                     correlation_s: c.correlation_time_s,
-                    water: p.estimator_current,
+                    water: [p.estimator_current[0] - c.mean[0], p.estimator_current[1] - c.mean[1]],
                 };
                 policy = policy.with_current_states(spec, truth, sc.fleet.init_position_sd.powi(2));
             }
