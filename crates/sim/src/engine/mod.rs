@@ -421,7 +421,10 @@ impl<'a> Engine<'a> {
         t >= self.faults.silent_from_s && self.faults.silent_auvs.contains(&k)
     }
 
-    fn finish(self, seed: u64, wall_s: f64) -> RunResult {
+    fn finish(mut self, seed: u64, wall_s: f64) -> RunResult {
+        for (tally, auv) in self.tallies.iter_mut().zip(&self.auvs) {
+            tally.health.recovered(auv.ekf.recoveries());
+        }
         let auvs: Vec<AuvMetrics> = self.tallies.iter().enumerate().map(|(k, a)| metrics(k, a)).collect();
         let pooled: Vec<f64> = self.tallies.iter().flat_map(|a| a.errors.iter().copied()).collect();
         let modelled: Vec<f64> = self.tallies.iter().flat_map(|a| a.modelled.iter().copied()).collect();

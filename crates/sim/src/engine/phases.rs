@@ -500,7 +500,12 @@ impl Engine<'_> {
             travel_time,
             transponder: fix + shift,
         };
-        match a.ekf.update_range(&m, Some(a.truth.z)) {
+        let recovered = a.ekf.recoveries().count;
+        let outcome = a.ekf.update_range(&m, Some(a.truth.z));
+        if a.ekf.recoveries().count > recovered {
+            tracing::info!(t = meta.end, auv = k, "the filter's ranges left their NIS bounds: it recovered");
+        }
+        match outcome {
             UpdateOutcome::Applied { nis } => {
                 self.tallies[k].applied += 1;
                 self.tallies[k].health.nis(nis);
