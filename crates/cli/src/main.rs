@@ -9,6 +9,7 @@ mod bench;
 mod channel;
 #[cfg(test)]
 mod fuzz;
+mod generate;
 mod hbl;
 mod input;
 mod live;
@@ -18,6 +19,8 @@ mod post_report;
 mod reproduce;
 mod scenario_args;
 mod simulate;
+mod sitl;
+mod sweep;
 mod view;
 
 #[derive(Parser)]
@@ -44,15 +47,23 @@ enum Command {
     Channel(channel::Args),
     /// Run a Nams adaptive-rate experiment from a TOML file (scenarios × behaviours × repetitions).
     Nams(nams::Args),
+    /// Write the missions a generator file draws, one scenario file each (for `simulate`).
+    Generate(generate::Args),
     /// Closed-loop mission: CNA policy, survey-AUV OWTT filters and the acoustic link together
     /// (no scenario: the embedded default mission; --runs: Monte Carlo comparison of policies).
     Simulate(simulate::Args),
+    /// Software in the loop: the closed-loop mission with the CNA's planner as a `live cna` child
+    /// process on LCM (--lockstep: the same results as `simulate` with the same seed).
+    Sitl(sitl::Args),
+    /// Sweeps of many missions from one file, in shards (one process, many, or a Slurm array).
+    Sweep(sweep::Args),
     /// Write a run directory's interactive replay.html (time slider, tracks, pulses, errors).
     View(view::Args),
     /// Benchmarks, printed as JSON.
     #[command(subcommand)]
     Bench(bench::Target),
-    /// Live processes on LCM for a vehicle's backseat (`live auv`: a survey AUV's navigator).
+    /// Live processes on LCM for a vehicle's backseat (`live auv`: a survey AUV's navigator;
+    /// `live cna`: the CNA's planner).
     #[command(subcommand)]
     Live(live::Command),
 }
@@ -113,7 +124,10 @@ fn run() -> Result<ExitCode> {
         Command::Hbl(cmd) => hbl::run_command(cmd),
         Command::Channel(args) => channel::run(args),
         Command::Nams(args) => nams::run(args),
+        Command::Generate(args) => generate::run(args),
         Command::Simulate(args) => simulate::run(args),
+        Command::Sitl(args) => sitl::run(args),
+        Command::Sweep(args) => sweep::run(args),
         Command::View(args) => view::run(args),
         Command::Bench(target) => bench::run(target),
         Command::Live(_) => unreachable!("handled above"),

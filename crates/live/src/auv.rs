@@ -77,6 +77,12 @@ pub enum LiveError {
     Transport(#[from] coopnav_lcm::TransportError),
     #[error("LCM log {path}: {source}")]
     Log { path: String, source: coopnav_lcm::LogError },
+    #[error("live cna: {0}")]
+    Policy(#[from] coopnav_sim::policy::PolicyError),
+    #[error("live cna: {what}: not supported")]
+    Unsupported { what: String },
+    #[error("sitl: {0}")]
+    Child(String),
 }
 
 /// Where the filter starts (local east/north, metres).

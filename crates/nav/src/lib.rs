@@ -10,6 +10,7 @@ pub mod cycle;
 pub mod ekf;
 pub mod fieldlog;
 pub mod post;
+pub mod post_quality;
 pub mod post_tune;
 pub mod range;
 pub mod smoother;

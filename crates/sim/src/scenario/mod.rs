@@ -1,9 +1,10 @@
 //! Scenarios: the types, validation and loading of every input file. The engine's scenario
 //! ([`world`]) with its file loader ([`file`]), the pre-deployment planner's ([`plan`]) and its
-//! survey-track CSVs ([`tracks`]), the `coopnav hbl` tools' file ([`hbl`]) and Nams's experiment
+//! survey-track CSVs ([`tracks`]), the seeded mission generator ([`generate`]), the `coopnav hbl` tools' file ([`hbl`]) and Nams's experiment
 //! configuration ([`nams`]).
 
 pub mod file;
+pub mod generate;
 pub mod hbl;
 pub mod nams;
 pub mod plan;
