@@ -137,10 +137,23 @@ fn nees(live: &[Published], truth: &[(f64, f64, f64)]) -> Vec<f64> {
         .collect()
 }
 
+/// [`synthetic_config`] with the sigma-point range update and the range health check, and its
+/// position process noise cut to 10⁻⁸ m² a step, so over-confident that its ranges leave their
+/// bounds and it recovers.
+fn recovering_config() -> LiveConfig {
+    let mut cfg = synthetic_config();
+    cfg.filter.auv.range_update = coopnav_nav::RangeLinearisation::Unscented;
+    cfg.filter.auv.range_health = Some(coopnav_nav::consistency::RangeHealth::default());
+    cfg.filter.auv.q[0] = 1e-8;
+    cfg.filter.auv.q[1] = 1e-8;
+    cfg.filter.auv.q[3] = 1e-12;
+    cfg
+}
+
 #[test]
 fn estimates_equal_post_processings_forward_filter_bit_for_bit() {
     let spec = spec(3600.0);
-    for cfg in [LiveConfig::default(), synthetic_config()] {
+    for cfg in [LiveConfig::default(), synthetic_config(), recovering_config()] {
         let Stream { messages, .. } = stream(&spec, AUV);
         let (live, nav) = run_with(&messages, cfg.clone());
         let counts = nav.counts();
@@ -148,6 +161,9 @@ fn estimates_equal_post_processings_forward_filter_bit_for_bit() {
         assert_same_as_post(&live, &post.samples);
         assert_eq!(counts.ranges_applied as usize, post.summary.ranges_applied);
         assert_eq!(counts.ranges_gated as usize, post.summary.ranges_gated);
+        let recovering = cfg.filter.auv.range_health.is_some();
+        eprintln!("recoveries {} (health check {recovering})", counts.recoveries);
+        assert_eq!(counts.recoveries > 0, recovering, "{counts:?}");
         assert_eq!(counts.sensors_applied, 36_000);
         assert_eq!(counts.estimates_published as usize, live.len());
         assert_eq!((counts.malformed, counts.duplicates, counts.stale), (0, 0, 0));

@@ -89,8 +89,8 @@ impl CurrentParams {
     /// moves. The Gauss–Markov process c_{k+1} = φ c_k + w_k, Var w_k =
     /// q·h/step_s (the random walk's noise), pulls an unsupported estimate back to zero with time
     /// constant T and holds the variance at q·T/(2·step_s)·(1 + O(h/T)) (from σ² = φ²σ² + q·h/step_s,
-    /// 1 − φ² ≈ 2h/T): with the default q, (0.3 m/s per hour)², T = 1 h holds σ near 0.21 m/s
-    /// and T = 600 s near 0.087 m/s. T is invented (docs/models.md#gill-filter-extensions): the
+    /// 1 − φ² ≈ 2h/T): with q = (0.3 m/s per hour)², T = 1 h holds σ near 0.21 m/s and T = 600 s
+    /// near 0.087 m/s; with the default, (0.03 m/s per hour)², a tenth of those. T is invented (docs/models.md#gill-filter-extensions): the
     /// shorter it is, the fewer filters of a spread fleet run away.
     pub fn decay(&self, h: f64) -> Option<f64> {
         self.correlation_time_s.map(|t| (-h / t).exp())

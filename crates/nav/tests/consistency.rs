@@ -1,4 +1,4 @@
-//! The AUV filter stays within its χ² bounds on geometries that used to make it diverge: a range
+//! The AUV filter stays within its χ² bounds on geometries that make a linearised range update diverge: a range
 //! from a kilometre off on one bearing while a wide current prior has spread the position, and a
 //! long silence in an unmodelled current followed by ranges (the range health check recovers it).
 

@@ -156,7 +156,9 @@ fn smoothed_error(r: &PostResult) -> f64 {
 #[test]
 fn current_states_estimate_the_current_and_beat_the_thesis_model_in_one() {
     let current = [0.15, -0.1];
-    let with_current = PostConfig { model: AuvModel::Current(CurrentParams::default()), ..PostConfig::default() };
+    // The log's current is not known before the dive: a wide prior, (0.3 m/s)² and (0.3 m/s per hour)².
+    let unknown = CurrentParams { p0: 0.09, q: 2.5e-6, ..CurrentParams::default() };
+    let with_current = PostConfig { model: AuvModel::Current(unknown), ..PostConfig::default() };
     for seed in 0..3 {
         let log = mission_in(seed, current);
         let thesis = postprocess(&log, &PostConfig::default()).unwrap();

@@ -84,7 +84,9 @@ fn three_moving_beacons_and_a_current_through_the_v2_file() {
     let mut text = Vec::new();
     write_field_log(&mut text, &log, None).unwrap();
     let back = read_field_log(text.as_slice(), None).unwrap();
-    let cfg = PostConfig { model: AuvModel::Current(CurrentParams::default()), ..PostConfig::default() };
+    // The log's current is not known before the dive: a wide prior, (0.3 m/s)² and (0.3 m/s per hour)².
+    let unknown = CurrentParams { p0: 0.09, q: 2.5e-6, ..CurrentParams::default() };
+    let cfg = PostConfig { model: AuvModel::Current(unknown), ..PostConfig::default() };
     let r = postprocess_rows(&back.rows, &cfg).unwrap();
     let s = r.summary;
     assert_eq!(s.ranges, 239);
