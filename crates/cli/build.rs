@@ -9,6 +9,9 @@
 //! - cfg `bellhop_installed`: the rule of `crates/acomms/bellhop_cfg.rs` (the Python package's
 //!   BELLHOP test needs it).
 //!
+//! - cfg `slurm_installed`: slurmctld, slurmd, sbatch, squeue, sinfo and munged on PATH or in
+//!   /usr/sbin, and `slurmd -V` runs (scripts/install-slurm.sh; the sweep's Slurm test also
+//!   needs `private_netns`);
 //! - cfg `private_netns`: `unshare -n` (else `unshare -rn`, unprivileged) runs `ip link set lo
 //!   up` in a new network namespace, as crates/lcm/build.rs probes it (the `live auv` end-to-end
 //!   test runs its multicast only inside such a namespace); the program and flags are handed over
@@ -87,6 +90,24 @@ fn main() {
     }
     detect_bellhop(&manifest_dir);
     detect_netns();
+    detect_slurm();
+}
+
+/// The Slurm and MUNGE programs the two-node cluster of `tests/sweep_slurm.rs` runs.
+fn detect_slurm() {
+    println!("cargo::rustc-check-cfg=cfg(slurm_installed)");
+    let find = |name: &str| which(name).or_else(|| Some(Path::new("/usr/sbin").join(name)).filter(|p| p.is_file()));
+    let programs = ["slurmctld", "slurmd", "sbatch", "squeue", "sinfo", "munged"];
+    let found: Vec<Option<PathBuf>> = programs.iter().map(|p| find(p)).collect();
+    if found.iter().all(Option::is_some) {
+        let slurmd = found[1].as_ref().expect("all found");
+        if Command::new(slurmd).arg("-V").output().is_ok_and(|o| o.status.success()) {
+            println!("cargo:rerun-if-changed={}", slurmd.display());
+            println!("cargo:rustc-cfg=slurm_installed");
+            return;
+        }
+    }
+    println!("cargo:rerun-if-changed=/usr/sbin");
 }
 
 fn which(name: &str) -> Option<PathBuf> {

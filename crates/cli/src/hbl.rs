@@ -7,6 +7,7 @@ use coopnav_core::limits;
 use coopnav_nav::cycle::Configuration;
 use coopnav_nav::fieldlog::{BeaconId, FieldLog, TimeBase};
 use coopnav_nav::post::{self, PostConfig, PostSample, RangeResidual};
+use coopnav_nav::post_quality::Quality;
 use coopnav_nav::post_tune::{self, Scored, TuneOptions, TuneReport};
 use coopnav_sim::batch::grid::{self, GridSpec};
 use coopnav_sim::batch::tune::{tune, Coefficient, Objective, TuneSpec};
@@ -101,16 +102,19 @@ pub enum Command {
         /// Run even when the estimated work or memory is above coopnav's limits (coopnav_core::limits).
         #[arg(long)]
         allow_large: bool,
-        /// Tune range σ, E/N process noise, speed scale and compass bias from the log itself
-        /// (innovation likelihood, Nelder–Mead), print before/after with the held-out-range
-        /// residuals, write tune.json and tuned_config.toml, and post-process with the tuned values.
+        /// Tune range σ, E/N process noise, speed scale, compass bias and initial E/N variance from
+        /// the log itself (how well the track smoothed without each range predicts it,
+        /// cross-validated, Nelder–Mead), print before/after, write tune.json and
+        /// tuned_config.toml, and post-process with the tuned values — or keep the starting ones,
+        /// with a warning, when the result is not better on the held-out ranges.
         #[arg(long)]
         tune: bool,
-        /// With --tune: leave every k-th range out of the filter and predict it (cross-validation).
-        #[arg(long, default_value_t = 5)]
+        /// Folds of the cross-validation over ranges (every k-th range held out, each phase in
+        /// turn) whose held-out residuals summary.json reports and --tune scores (0: none).
+        #[arg(long, default_value_t = TuneOptions::default().hold_out_every)]
         hold_out_every: usize,
         /// With --tune: Nelder–Mead iterations at most.
-        #[arg(long, default_value_t = 80)]
+        #[arg(long, default_value_t = TuneOptions::default().max_iters)]
         tune_iters: u64,
         /// With --tune: the search averages the dead-reckoning rows over blocks of this many
         /// seconds and predicts in steps of that length (0: full rate); before/after are full rate.
@@ -222,7 +226,8 @@ pub fn run_command(cmd: Command) -> Result<()> {
                 max_iters: tune_iters,
                 dead_reckoning_block_s: tune_block_s,
             });
-            postprocess(&log, alog_map.as_deref(), config.as_deref(), &out, force, strict, allow_large, tune)
+            let files = PostFiles { log: &log, alog_map: alog_map.as_deref(), config: config.as_deref(), out: &out };
+            postprocess(files, force, strict, allow_large, hold_out_every, tune)
         }
         Command::Example { kind } => example(kind),
     }
@@ -468,16 +473,45 @@ fn tune_cmd(c: &Common, spec_path: &Path) -> Result<()> {
     Ok(())
 }
 
+/// The paths `hbl postprocess` reads and writes.
+struct PostFiles<'a> {
+    log: &'a Path,
+    alog_map: Option<&'a Path>,
+    config: Option<&'a Path>,
+    out: &'a Path,
+}
+
+/// summary.json of `hbl postprocess`: the run's counts and truth figures, what it says about its
+/// own accuracy without truth, and the tuning's choice.
+#[derive(Serialize)]
+struct PostprocessSummary<'a> {
+    #[serde(flatten)]
+    summary: &'a post::PostSummary,
+    quality: &'a Quality,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    tuning: Option<TuningSummary<'a>>,
+}
+
+/// The tuning's outcome in summary.json (the full before/after is tune.json).
+#[derive(Serialize)]
+struct TuningSummary<'a> {
+    guard: &'a post_tune::Guard,
+    chosen: &'a post_tune::Tuned,
+    searched: &'a post_tune::Tuned,
+    sd: &'a post_tune::TunedSd,
+    held_out_before: &'a post_tune::CrossValidation,
+    held_out_after: &'a post_tune::CrossValidation,
+}
+
 fn postprocess(
-    log: &Path,
-    alog_map: Option<&Path>,
-    config: Option<&Path>,
-    out: &Path,
+    files: PostFiles,
     force: bool,
     strict: bool,
     allow_large: bool,
+    hold_out_every: usize,
     tune_options: Option<TuneOptions>,
 ) -> Result<()> {
+    let PostFiles { log, alog_map, config, out } = files;
     let mut cfg = match config {
         Some(p) => {
             PostConfig::from_toml(&input::read(p, allow_large)?).with_context(|| format!("in {}", p.display()))?
@@ -504,17 +538,28 @@ fn postprocess(
         Some(opts) => {
             let report = post_tune::tune(rows, &cfg, &opts)?;
             print_tuning(&report);
+            if let Some(w) = &report.guard.warning {
+                eprintln!("warning: {}: {w}", log.display());
+            }
             cfg = report.config.clone();
             Some(report)
         }
         None => None,
+    };
+    // The cross-validation's runs come first, so that only one run's history is held at a time.
+    limits::check(work::postprocess_folds(rows, &cfg, hold_out_every), allow_large)?;
+    let held_out = match (hold_out_every, &tuned) {
+        (0, _) => None,
+        (_, Some(t)) if t.guard.kept == post_tune::Kept::Start => Some(t.before.cross_validation),
+        (k, _) => Some(post_tune::cross_validate(rows, &cfg, k)?),
     };
     let result = post::postprocess_rows(rows, &cfg)?;
     let faults = result.summary.log_faults();
     if strict && !faults.is_empty() {
         anyhow::bail!("{} (--strict): {}", log.display(), faults.join("; "));
     }
-    for w in result.summary.warnings() {
+    let quality = Quality::of(&result, held_out);
+    for w in result.summary.warnings().into_iter().chain(quality.warnings()) {
         eprintln!("warning: {}: {w}", log.display());
     }
     let inputs: Vec<&Path> = [Some(log), alog_map, config].into_iter().flatten().collect();
@@ -542,14 +587,23 @@ fn postprocess(
             return Err(e).with_context(|| format!("smoothed position at t = {t} s has no latitude/longitude"));
         }
     }
-    dir.write_json("summary.json", &result.summary)?;
+    let tuning = tuned.as_ref().map(|t| TuningSummary {
+        guard: &t.guard,
+        chosen: &t.chosen,
+        searched: &t.after.values,
+        sd: &t.sd,
+        held_out_before: &t.before.cross_validation,
+        held_out_after: &t.after.cross_validation,
+    });
+    let summary = PostprocessSummary { summary: &result.summary, quality: &quality, tuning };
+    dir.write_json("summary.json", &summary)?;
     if let Some(report) = &tuned {
         dir.write_json("tune.json", report)?;
         dir.write_bytes("tuned_config.toml", toml::to_string_pretty(&cfg)?)?;
     }
-    dir.write_bytes("report.html", crate::post_report::render(rows, &result)?)?;
+    dir.write_bytes("report.html", crate::post_report::render(rows, &result, &quality, tuned.as_ref())?)?;
     let out = dir.finish()?;
-    println!("{}\nwrote {}", serde_json::to_string_pretty(&result.summary)?, out.display());
+    println!("{}\nwrote {}", serde_json::to_string_pretty(&summary)?, out.display());
     Ok(())
 }
 
@@ -603,6 +657,8 @@ struct ResidualRow {
     innovation_m: f64,
     innovation_sd_m: f64,
     smoothed_residual_m: f64,
+    smoothed_residual_sd_m: f64,
+    held_out: bool,
     nis: f64,
 }
 
@@ -615,6 +671,8 @@ impl ResidualRow {
             innovation_m: r.innovation,
             innovation_sd_m: r.innovation_sd,
             smoothed_residual_m: r.smoothed,
+            smoothed_residual_sd_m: r.smoothed_sd,
+            held_out: r.held_out,
             nis: r.nis,
         }
     }
@@ -628,18 +686,20 @@ struct LatLonRow {
     smooth_lon_deg: f64,
 }
 
-/// The tuning's before/after table: values, likelihood, in-sample and held-out residual RMS.
+/// The tuning's before/after table: values, the held-out ranges' log predictive density, the
+/// in-sample and held-out residual RMS; then the SDs and the guard's choice.
 fn print_tuning(r: &TuneReport) {
     let o = |v: Option<f64>| v.map_or("–".to_string(), |x| format!("{x:.3}"));
     let line = |name: &str, s: &Scored| {
         let v = &s.values;
         println!(
-            "{name:<7} {:>10.3} {:>10.3e} {:>8.4} {:>9.3} {:>12.2} {:>10} {:>10} {:>10} {:>10}",
+            "{name:<7} {:>10.3} {:>10.3e} {:>8.4} {:>9.3} {:>9.2} {:>12.2} {:>10} {:>10} {:>10} {:>10}",
             v.range_sd_m,
             v.q_en,
             v.speed_scale,
             v.heading_bias_deg,
-            s.log_likelihood,
+            v.p0_en,
+            s.held_out_log_predictive,
             o(s.in_sample_rms_filter_m),
             o(s.in_sample_rms_smoothed_m),
             o(s.held_out_rms_filter_m),
@@ -647,13 +707,39 @@ fn print_tuning(r: &TuneReport) {
         )
     };
     println!(
-        "tuning: {} iterations, {} filter runs; every {}th range held out",
-        r.iterations, r.evaluations, r.hold_out_every
+        "tuning: {} iterations, {} evaluations of {} folds (every {}th range held out in turn)",
+        r.iterations, r.evaluations, r.hold_out_every, r.hold_out_every
     );
     println!(
-        "{:<7} {:>10} {:>10} {:>8} {:>9} {:>12} {:>10} {:>10} {:>10} {:>10}",
-        "", "range_sd", "q_en", "speed_k", "bias_deg", "loglik", "in_filt_m", "in_smth_m", "out_filt_m", "out_smth_m"
+        "{:<7} {:>10} {:>10} {:>8} {:>9} {:>9} {:>12} {:>10} {:>10} {:>10} {:>10}",
+        "",
+        "range_sd",
+        "q_en",
+        "speed_k",
+        "bias_deg",
+        "p0_en",
+        "heldout_lp",
+        "in_filt_m",
+        "in_smth_m",
+        "out_filt_m",
+        "out_smth_m"
     );
     line("before", &r.before);
     line("after", &r.after);
+    let sd = &r.sd;
+    println!(
+        "{:<7} {:>10} {:>10} {:>8} {:>9} {:>9}",
+        "± sd",
+        o(sd.range_sd_m),
+        sd.q_en.map_or("–".into(), |x| format!("{x:.3e}")),
+        sd.speed_scale.map_or("–".into(), |x| format!("{x:.4}")),
+        o(sd.heading_bias_deg),
+        o(sd.p0_en)
+    );
+    let kept = match r.guard.kept {
+        post_tune::Kept::Tuned => "the tuned values",
+        post_tune::Kept::BestCandidate => "the search's best candidate",
+        post_tune::Kept::Start => "the starting values",
+    };
+    println!("kept {kept}");
 }

@@ -19,6 +19,8 @@ mod post_report;
 mod reproduce;
 mod scenario_args;
 mod simulate;
+mod sitl;
+mod sweep;
 mod view;
 
 #[derive(Parser)]
@@ -50,12 +52,18 @@ enum Command {
     /// Closed-loop mission: CNA policy, survey-AUV OWTT filters and the acoustic link together
     /// (no scenario: the embedded default mission; --runs: Monte Carlo comparison of policies).
     Simulate(simulate::Args),
+    /// Software in the loop: the closed-loop mission with the CNA's planner as a `live cna` child
+    /// process on LCM (--lockstep: the same results as `simulate` with the same seed).
+    Sitl(sitl::Args),
+    /// Sweeps of many missions from one file, in shards (one process, many, or a Slurm array).
+    Sweep(sweep::Args),
     /// Write a run directory's interactive replay.html (time slider, tracks, pulses, errors).
     View(view::Args),
     /// Benchmarks, printed as JSON.
     #[command(subcommand)]
     Bench(bench::Target),
-    /// Live processes on LCM for a vehicle's backseat (`live auv`: a survey AUV's navigator).
+    /// Live processes on LCM for a vehicle's backseat (`live auv`: a survey AUV's navigator;
+    /// `live cna`: the CNA's planner).
     #[command(subcommand)]
     Live(live::Command),
 }
@@ -118,6 +126,8 @@ fn run() -> Result<ExitCode> {
         Command::Nams(args) => nams::run(args),
         Command::Generate(args) => generate::run(args),
         Command::Simulate(args) => simulate::run(args),
+        Command::Sitl(args) => sitl::run(args),
+        Command::Sweep(args) => sweep::run(args),
         Command::View(args) => view::run(args),
         Command::Bench(target) => bench::run(target),
         Command::Live(_) => unreachable!("handled above"),

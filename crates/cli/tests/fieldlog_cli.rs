@@ -124,7 +124,14 @@ fn tune_reports_before_and_after_with_held_out_ranges() {
     let t: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(out.join("tune.json")).unwrap()).unwrap();
     assert_eq!(t["hold_out_every"], 4);
     let (b, a) = (&t["before"], &t["after"]);
-    assert!(a["log_likelihood"].as_f64().unwrap() > b["log_likelihood"].as_f64().unwrap(), "{t}");
+    assert!(a["held_out_log_predictive"].as_f64().unwrap() > b["held_out_log_predictive"].as_f64().unwrap(), "{t}");
+    // summary.json records the guard's choice and what the run says without truth.
+    let s: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    assert!(s["tuning"]["guard"]["kept"].is_string(), "{s}");
+    let q = &s["quality"];
+    assert!(q["nis"]["verdict"].is_string() && q["claimed_accuracy"]["p95_sd_m"].is_number(), "{q}");
+    assert!(q["held_out"]["rms_smoothed_m"].is_number() && q["beacons"].as_array().unwrap().len() == 3, "{q}");
     assert!(a["held_out_rms_filter_m"].is_number() && b["held_out_rms_smoothed_m"].is_number(), "{t}");
     // The run's outputs use the tuned values.
     let tuned: toml::Value = toml::from_str(&std::fs::read_to_string(out.join("tuned_config.toml")).unwrap()).unwrap();

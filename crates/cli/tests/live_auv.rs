@@ -8,168 +8,25 @@
 //! over the same stream, and ends the child by its pid if it is still running. Every loop is
 //! bounded in count and time. Ignored, with the reason, where `unshare` cannot make a namespace.
 
+mod netns;
+
 use coopnav_lcm::messages::{AuvEstimate, Message};
 use coopnav_lcm::{LogReader, Schema, Udpm};
 use coopnav_live::synthetic::{stream, StreamMessage};
 use coopnav_live::{AuvNavigator, LiveConfig};
 use coopnav_nav::synthetic::SyntheticSpec;
-use std::io::{BufRead, BufReader, Read};
-use std::process::{Child, Command, Stdio};
-use std::sync::mpsc;
+use netns::{in_private_netns, wait_or_kill, Live};
+use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
-const IN_NETNS: &str = "COOPNAV_LIVE_IN_NETNS";
 const URL: &str = "udpm://239.255.76.67:7667?ttl=0&recv_buf_size=4194304";
 const AUV: i16 = 2;
 
-#[cfg(private_netns)]
-fn unshare() -> (&'static str, &'static str) {
-    (env!("COOPNAV_UNSHARE_FOUND"), env!("COOPNAV_UNSHARE_FLAGS"))
-}
-#[cfg(not(private_netns))]
-fn unshare() -> (&'static str, &'static str) {
-    unreachable!("the tests needing a private namespace are ignored without one")
-}
-
-/// Waits for `child` at most `timeout`; past it, kills it (by its pid) and panics.
-fn wait_or_kill(mut child: Child, timeout: Duration, what: &str) -> std::process::Output {
-    let deadline = Instant::now() + timeout;
-    loop {
-        if child.try_wait().expect("try_wait").is_some() {
-            return child.wait_with_output().expect("output");
-        }
-        if Instant::now() >= deadline {
-            let _ = child.kill();
-            let out = child.wait_with_output().expect("output");
-            panic!("{what} did not finish within {timeout:?}; stderr:\n{}", String::from_utf8_lossy(&out.stderr));
-        }
-        std::thread::sleep(Duration::from_millis(20));
-    }
-}
-
-fn ip(args: &[&str]) -> String {
-    let child = Command::new("ip").args(args).stdout(Stdio::piped()).stderr(Stdio::piped()).spawn().expect("ip");
-    let out = wait_or_kill(child, Duration::from_secs(10), "ip");
-    assert!(out.status.success(), "ip {args:?}: {}", String::from_utf8_lossy(&out.stderr));
-    String::from_utf8_lossy(&out.stdout).into_owned()
-}
-
-/// Outside a namespace, re-runs test `name` under `unshare -n` and asserts it passed there;
-/// inside, sets up multicast on the private loopback and runs `body`.
-fn in_private_netns(name: &str, body: impl FnOnce()) {
-    if std::env::var_os(IN_NETNS).is_none() {
-        let exe = std::env::current_exe().expect("test binary");
-        let child = Command::new(unshare().0)
-            .arg(unshare().1)
-            .arg(exe)
-            .args([name, "--exact", "--nocapture", "--test-threads=1", "--include-ignored"])
-            .env(IN_NETNS, "1")
-            .stdin(Stdio::null())
-            .stdout(Stdio::piped())
-            .stderr(Stdio::piped())
-            .spawn()
-            .expect("unshare -n");
-        let out = wait_or_kill(child, Duration::from_secs(300), "the test inside unshare -n");
-        let stdout = String::from_utf8_lossy(&out.stdout);
-        println!("{stdout}");
-        assert!(
-            out.status.success() && stdout.contains("1 passed"),
-            "inside the namespace:\n{stdout}\n{}",
-            String::from_utf8_lossy(&out.stderr)
-        );
-        return;
-    }
-    let links = ip(&["-o", "link"]);
-    assert_eq!(links.lines().count(), 1, "not a private namespace: {links}");
-    assert!(links.contains(": lo:"), "{links}");
-    ip(&["link", "set", "lo", "up"]);
-    ip(&["route", "add", "224.0.0.0/4", "dev", "lo"]);
-    body();
-}
-
-/// The child `coopnav live auv`, started and listening (it announces on stderr once subscribed).
-struct Live {
-    child: Option<Child>,
-    stderr: mpsc::Receiver<String>,
-}
-
 impl Live {
-    fn start(args: &[&str]) -> Live {
-        let mut child = Command::new(env!("CARGO_BIN_EXE_coopnav"))
-            .args(["live", "auv", "--auv", &AUV.to_string(), "--url", URL])
-            .args(args)
-            .stdin(Stdio::null())
-            .stdout(Stdio::piped())
-            .stderr(Stdio::piped())
-            .spawn()
-            .expect("starts coopnav live auv");
-        let (tx, rx) = mpsc::channel();
-        let err = child.stderr.take().expect("piped");
-        std::thread::spawn(move || {
-            for line in BufReader::new(err).lines().take(10_000) {
-                let Ok(line) = line else { break };
-                if tx.send(line).is_err() {
-                    break;
-                }
-            }
-        });
-        let live = Live { child: Some(child), stderr: rx };
-        let deadline = Instant::now() + Duration::from_secs(20);
-        loop {
-            let left = deadline.saturating_duration_since(Instant::now());
-            match live.stderr.recv_timeout(left) {
-                Ok(line) if line.starts_with("listening:") => return live,
-                Ok(_) => continue,
-                Err(_) => panic!("coopnav live auv did not announce that it listens within 20 s"),
-            }
-        }
-    }
-
-    /// Waits for its exit (at most `timeout`, then kills it by pid) and returns its summary and
-    /// the CPU seconds (user + system) the kernel accounted to it (wait4).
-    fn finish(mut self, timeout: Duration) -> (serde_json::Value, f64) {
-        let mut child = self.child.take().expect("running");
-        let pid = child.id() as libc::pid_t;
-        let deadline = Instant::now() + timeout;
-        // SAFETY: wait4 on our own child's pid, writing only the status and rusage given.
-        let mut status = 0;
-        let mut usage: libc::rusage = unsafe { std::mem::zeroed() };
-        loop {
-            let r = unsafe { libc::wait4(pid, &mut status, libc::WNOHANG, &mut usage) };
-            assert!(r >= 0, "wait4: {}", std::io::Error::last_os_error());
-            if r == pid {
-                break;
-            }
-            if Instant::now() >= deadline {
-                // SAFETY: kill(2) on our own child's pid, which is not yet reaped.
-                unsafe { libc::kill(pid, libc::SIGKILL) };
-                unsafe { libc::wait4(pid, &mut status, 0, &mut usage) };
-                panic!("coopnav live auv (pid {pid}) did not stop within {timeout:?}: killed");
-            }
-            std::thread::sleep(Duration::from_millis(20));
-        }
-        let mut out = String::new();
-        child.stdout.take().expect("piped").read_to_string(&mut out).expect("stdout");
-        let err: Vec<String> = self.stderr.try_iter().collect();
-        let ok = libc::WIFEXITED(status) && libc::WEXITSTATUS(status) == 0;
-        assert!(ok, "coopnav live auv failed (wait status {status}): {out}\n{}", err.join("\n"));
-        let summary: serde_json::Value = serde_json::from_str(out.trim()).unwrap_or_else(|e| panic!("{e}: {out:?}"));
-        let tv = |t: libc::timeval| t.tv_sec as f64 + t.tv_usec as f64 * 1e-6;
-        let kernel_cpu = tv(usage.ru_utime) + tv(usage.ru_stime);
-        // The process's own figure (getrusage just before it prints) is within the kernel's.
-        let own = summary["cpu_s"].as_f64().expect("cpu_s");
-        assert!(own <= kernel_cpu + 1e-3 && kernel_cpu - own < 0.5, "own {own} s, kernel {kernel_cpu} s");
-        (summary, kernel_cpu)
-    }
-}
-
-impl Drop for Live {
-    fn drop(&mut self) {
-        if let Some(mut child) = self.child.take() {
-            // SAFETY: kill(2) on our own child's pid, which is not yet reaped.
-            unsafe { libc::kill(child.id() as i32, libc::SIGKILL) };
-            let _ = child.wait();
-        }
+    /// `coopnav live auv --auv AUV --url URL ARGS`, listening.
+    fn auv(args: &[&str]) -> Live {
+        let auv = AUV.to_string();
+        Live::start(&[&["live", "auv", "--auv", &auv, "--url", URL][..], args].concat())
     }
 }
 
@@ -227,7 +84,7 @@ fn live_auv_over_udp_multicast_publishes_the_library_navigators_estimates() {
         let messages = stream(&spec, AUV).messages;
         let dir = tempfile::tempdir().unwrap();
         let log = dir.path().join("live.lcm");
-        let live = Live::start(&["--until-idle", "3", "--log", log.to_str().unwrap()]);
+        let live = Live::auv(&["--until-idle", "3", "--log", log.to_str().unwrap()]);
         // 300 s of mission in 6 s.
         let got = publish_and_receive(&messages, 50.0, Duration::from_secs(5), Duration::from_secs(60));
         let (summary, cpu) = live.finish(Duration::from_secs(30));
@@ -277,7 +134,7 @@ fn live_auv_cpu_over_a_one_hour_mission() {
     in_private_netns("live_auv_cpu_over_a_one_hour_mission", || {
         let spec = SyntheticSpec { duration_s: 3600.0, ..SyntheticSpec::default() };
         let messages = stream(&spec, AUV).messages;
-        let live = Live::start(&["--until-idle", "3"]);
+        let live = Live::auv(&["--until-idle", "3"]);
         let got = publish_and_receive(&messages, 60.0, Duration::from_secs(5), Duration::from_secs(150));
         let (summary, cpu) = live.finish(Duration::from_secs(30));
         println!("summary: {summary}");
@@ -305,7 +162,7 @@ fn live_auv_stops_cleanly_on_sigterm_and_sigint() {
         let messages = stream(&spec, AUV).messages;
         for signal in [libc::SIGTERM, libc::SIGINT] {
             // --duration only as a bound: the signal comes first.
-            let live = Live::start(&["--duration", "60"]);
+            let live = Live::auv(&["--duration", "60"]);
             let got = publish_and_receive(&messages, 20.0, Duration::from_secs(1), Duration::from_secs(20));
             let pid = live.child.as_ref().expect("running").id() as libc::pid_t;
             // SAFETY: kill(2) on our own child's pid, which is not yet reaped.

@@ -64,7 +64,8 @@ fn run_directory_holds_residuals_and_the_latlon_track() {
     let used = summary["ranges_applied"].as_u64().unwrap() + summary["ranges_gated"].as_u64().unwrap();
     assert_eq!(residuals.lines().count() as u64, used + 1, "{residuals}");
     let html = std::fs::read_to_string(post.join("report.html")).unwrap();
-    for id in ["id=\"track\"", "id=\"residuals\"", "id=\"nis\"", "id=\"sigma\"", "residual RMS before"] {
+    let ids = ["id=\"track\"", "id=\"residuals\"", "id=\"nis\"", "id=\"sigma\"", "id=\"north-error\""];
+    for id in ids.into_iter().chain(["id=\"beacon-residuals\"", "residual RMS before", "mean NIS of"]) {
         assert!(html.contains(id), "report.html lacks {id}");
     }
     assert!(!html.contains("<script") && !html.contains("src=\"http"), "report.html must be self-contained");

@@ -146,14 +146,17 @@ impl Message for Position {
     }
 }
 
-/// `coopnav.cna_fix_t`: the CNA's own fix.
+/// `coopnav.cna_fix_t`: the CNA's own fix and its variance.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct CnaFix {
     pub utime: i64,
     pub x: f64,
     pub y: f64,
     pub depth: f64,
+    /// Radians, counter-clockwise from east.
     pub heading: f64,
+    /// Horizontal position variance per axis, m².
+    pub variance: f64,
     /// One of [`CnaFix::SOURCE_GPS`], [`CnaFix::SOURCE_DEAD_RECKONING`], [`CnaFix::SOURCE_USBL`].
     pub source: i8,
 }
@@ -173,6 +176,7 @@ impl Message for CnaFix {
             .with("y", Value::Double(self.y))
             .with("depth", Value::Double(self.depth))
             .with("heading", Value::Double(self.heading))
+            .with("variance", Value::Double(self.variance))
             .with("source", Value::Int8(self.source))
     }
     fn from_record(r: &Record) -> Result<Self, CodecError> {
@@ -182,6 +186,7 @@ impl Message for CnaFix {
             y: get_f64(r, "y")?,
             depth: get_f64(r, "depth")?,
             heading: get_f64(r, "heading")?,
+            variance: get_f64(r, "variance")?,
             source: get_i8(r, "source")?,
         })
     }
@@ -250,14 +255,17 @@ impl Message for OwttRange {
     }
 }
 
-/// `coopnav.cna_command_t`: a heading or waypoint command.
+/// `coopnav.cna_command_t`: the CNA's next leg (a waypoint, or hold).
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct CnaCommand {
     pub utime: i64,
+    pub seq: i64,
     pub has_waypoint: bool,
+    /// Radians, counter-clockwise from east.
     pub heading: f64,
     pub waypoint_x: f64,
     pub waypoint_y: f64,
+    pub waypoint_depth: f64,
     pub speed: f32,
 }
 
@@ -266,32 +274,60 @@ impl Message for CnaCommand {
     fn to_record(&self) -> Record {
         Record::new(Self::TYPE_NAME)
             .with("utime", Value::Int64(self.utime))
+            .with("seq", Value::Int64(self.seq))
             .with("has_waypoint", Value::Boolean(self.has_waypoint))
             .with("heading", Value::Double(self.heading))
             .with("waypoint_x", Value::Double(self.waypoint_x))
             .with("waypoint_y", Value::Double(self.waypoint_y))
+            .with("waypoint_depth", Value::Double(self.waypoint_depth))
             .with("speed", Value::Float(self.speed))
     }
     fn from_record(r: &Record) -> Result<Self, CodecError> {
         Ok(Self {
             utime: get_i64(r, "utime")?,
+            seq: get_i64(r, "seq")?,
             has_waypoint: get_bool(r, "has_waypoint")?,
             heading: get_f64(r, "heading")?,
             waypoint_x: get_f64(r, "waypoint_x")?,
             waypoint_y: get_f64(r, "waypoint_y")?,
+            waypoint_depth: get_f64(r, "waypoint_depth")?,
             speed: get_f32(r, "speed")?,
         })
     }
 }
 
-/// `coopnav.decision_t`: one planning decision.
+/// `coopnav.decision_t`: one decision of the CNA's policy and the planner's tally.
 #[derive(Debug, Clone, PartialEq, Default)]
 pub struct Decision {
     pub utime: i64,
-    pub cost: Vec<f64>,
-    pub levels: i32,
-    pub elapsed_s: f64,
+    pub seq: i64,
     pub policy: String,
+    /// One of the `OUTCOME_*` constants.
+    pub outcome: i8,
+    /// Per motion option (as many as `option_pitch`): its heading change, rad.
+    pub option_turn: Vec<f64>,
+    pub option_pitch: Vec<f64>,
+    pub option: i32,
+    pub cost: f64,
+    pub levels_requested: i32,
+    pub levels_searched: i32,
+    pub nodes: i64,
+    pub elapsed_s: f64,
+    pub fix_utime: i64,
+    pub n_status: i32,
+    pub decisions: i64,
+    pub deadline_misses: i64,
+    pub failures: i64,
+    pub waiting: i64,
+    pub min_levels_searched: i32,
+    pub mean_levels_searched: f64,
+}
+
+impl Decision {
+    pub const OUTCOME_PLANNED: i8 = 1;
+    pub const OUTCOME_WAITING: i8 = 2;
+    pub const OUTCOME_FAILED: i8 = 3;
+    pub const OUTCOME_BASELINE: i8 = 4;
 }
 
 impl Message for Decision {
@@ -299,19 +335,49 @@ impl Message for Decision {
     fn to_record(&self) -> Record {
         Record::new(Self::TYPE_NAME)
             .with("utime", Value::Int64(self.utime))
-            .with("n_options", len_i32(self.cost.len()))
-            .with("cost", doubles(&self.cost))
-            .with("levels", Value::Int32(self.levels))
-            .with("elapsed_s", Value::Double(self.elapsed_s))
+            .with("seq", Value::Int64(self.seq))
             .with("policy", Value::String(self.policy.clone()))
+            .with("outcome", Value::Int8(self.outcome))
+            .with("n_options", len_i32(self.option_turn.len()))
+            .with("option_turn", doubles(&self.option_turn))
+            .with("option_pitch", doubles(&self.option_pitch))
+            .with("option", Value::Int32(self.option))
+            .with("cost", Value::Double(self.cost))
+            .with("levels_requested", Value::Int32(self.levels_requested))
+            .with("levels_searched", Value::Int32(self.levels_searched))
+            .with("nodes", Value::Int64(self.nodes))
+            .with("elapsed_s", Value::Double(self.elapsed_s))
+            .with("fix_utime", Value::Int64(self.fix_utime))
+            .with("n_status", Value::Int32(self.n_status))
+            .with("decisions", Value::Int64(self.decisions))
+            .with("deadline_misses", Value::Int64(self.deadline_misses))
+            .with("failures", Value::Int64(self.failures))
+            .with("waiting", Value::Int64(self.waiting))
+            .with("min_levels_searched", Value::Int32(self.min_levels_searched))
+            .with("mean_levels_searched", Value::Double(self.mean_levels_searched))
     }
     fn from_record(r: &Record) -> Result<Self, CodecError> {
         Ok(Self {
             utime: get_i64(r, "utime")?,
-            cost: each(r, "cost", as_f64)?,
-            levels: get_i32(r, "levels")?,
-            elapsed_s: get_f64(r, "elapsed_s")?,
+            seq: get_i64(r, "seq")?,
             policy: get_string(r, "policy")?,
+            outcome: get_i8(r, "outcome")?,
+            option_turn: each(r, "option_turn", as_f64)?,
+            option_pitch: each(r, "option_pitch", as_f64)?,
+            option: get_i32(r, "option")?,
+            cost: get_f64(r, "cost")?,
+            levels_requested: get_i32(r, "levels_requested")?,
+            levels_searched: get_i32(r, "levels_searched")?,
+            nodes: get_i64(r, "nodes")?,
+            elapsed_s: get_f64(r, "elapsed_s")?,
+            fix_utime: get_i64(r, "fix_utime")?,
+            n_status: get_i32(r, "n_status")?,
+            decisions: get_i64(r, "decisions")?,
+            deadline_misses: get_i64(r, "deadline_misses")?,
+            failures: get_i64(r, "failures")?,
+            waiting: get_i64(r, "waiting")?,
+            min_levels_searched: get_i32(r, "min_levels_searched")?,
+            mean_levels_searched: get_f64(r, "mean_levels_searched")?,
         })
     }
 }

@@ -77,6 +77,12 @@ pub enum LiveError {
     Transport(#[from] coopnav_lcm::TransportError),
     #[error("LCM log {path}: {source}")]
     Log { path: String, source: coopnav_lcm::LogError },
+    #[error("live cna: {0}")]
+    Policy(#[from] coopnav_sim::policy::PolicyError),
+    #[error("live cna: {what}: not supported")]
+    Unsupported { what: String },
+    #[error("sitl: {0}")]
+    Child(String),
 }
 
 /// Where the filter starts (local east/north, metres).
@@ -176,6 +182,9 @@ pub struct Counts {
     pub released_early: u64,
     /// Silences longer than `max_gap_s`, each predicted in one step.
     pub gaps: u64,
+    /// Times the filter's own range check (`filter.auv.range_health`) found it out of its NIS
+    /// bounds and recovered it (each also logged as a warning).
+    pub recoveries: u64,
     pub estimates_published: u64,
 }
 
@@ -460,7 +469,16 @@ impl AuvNavigator {
             });
         }
         let filter = self.filter.as_mut().expect("started above");
+        let recovered = each!(filter, f => f.recoveries().count);
         let applied = each!(filter, f => apply(f, cfg, t, &input, &mut self.depth, &mut self.counts.gaps));
+        if each!(filter, f => f.recoveries().count) > recovered {
+            self.counts.recoveries += 1;
+            tracing::warn!(
+                t,
+                auv = self.auv,
+                "the filter's ranges left their NIS bounds: it recovered (inflated and relinearised)"
+            );
+        }
         match applied {
             Applied::Sensors => self.counts.sensors_applied += 1,
             Applied::Range(UpdateOutcome::Applied { .. }) => self.counts.ranges_applied += 1,

@@ -3,7 +3,13 @@
 //! - [`auv`]: a survey AUV's OWTT navigator ([`AuvNavigator`]) as a pure message → filter →
 //!   message machine, with no socket: LCM payloads in, `auv_estimate_t` payloads out. The tests
 //!   drive it directly;
-//! - [`run`]: the process loop around it on coopnav-lcm's UDP multicast transport ([`run_auv`]),
+//! - [`cna`]: the CNA's planner ([`CnaPlanner`]): the policy the scenario names, run by
+//!   coopnav-sim's own code on the CNA's fix and the statuses its modem received, a command and a
+//!   decision record every τ;
+//! - [`sitl`]: software in the loop in lockstep: the engine as the world, the CNA's decisions
+//!   taken by a `coopnav live cna` child on the bus;
+//! - [`world`]: the LCM messages a CNA receives in a simulated mission, published or recorded;
+//! - [`run`]: the process loop around them on coopnav-lcm's UDP multicast transport ([`run_auv`]),
 //!   with its LCM log, its stop conditions (a stop flag set on SIGINT/SIGTERM, a duration, an idle
 //!   time) and its one-line summary.
 //!
@@ -11,8 +17,12 @@
 //! library, and only this crate knows the wire.
 
 pub mod auv;
+pub mod cna;
 pub mod run;
+pub mod sitl;
 pub mod synthetic;
+pub mod world;
 
 pub use auv::{AuvNavigator, Channels, Counts, LiveConfig, LiveError, Published, Start};
-pub use run::{run_auv, RunOptions, RunSummary, StopReason};
+pub use cna::{CnaChannels, CnaCounts, CnaPlanner, Outgoing};
+pub use run::{run_auv, run_cna, ClockSource, CnaRunSummary, RunOptions, RunSummary, StopReason};

@@ -14,6 +14,7 @@
 //! enough to reach 8°. Headings inside are math convention (0 = east, counter-clockwise), so E
 //! advances with cos ψ and N with sin ψ; the thesis writes the same model clockwise from north.
 
+use crate::consistency::{sigma_point_range, NisWindow, RangeHealth};
 use crate::ekf::{propagate_covariance, wrap_angle, Ekf, Gate, SparseRows, UnitReading, UpdateOutcome};
 use crate::range::{RangeMeasurement, RangeNoise};
 use coopnav_core::validation::{CheckFields, InvalidFields, Problems};
@@ -37,10 +38,28 @@ pub const CURRENT_N: usize = 6;
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct CurrentParams {
-    /// Initial variance of each current component ((m/s)²); default (0.3 m/s)².
+    /// The current (east, north, m/s) the team states before the dive, from an ADCP (a CNA's or
+    /// the ship's) or the site's tide tables: the filter's initial current and, for a
+    /// Gauss–Markov current, the mean it returns to. Default [0, 0]. Written only when set.
+    #[serde(skip_serializing_if = "is_still")]
+    pub mean: [f64; 2],
+    /// Initial variance of each current component ((m/s)²): how well `mean` is known. Default
+    /// (0.03 m/s)², an ADCP's average over the site (invented, docs/models.md#current-prior): a
+    /// dead-reckoning filter's position spreads by about 110 m an hour from it, where (0.3 m/s)²
+    /// spread it by 1.1 km.
     pub p0: f64,
-    /// Per-step process noise of each component ((m/s)² per `step_s`); default (0.3 m/s per hour)².
+    /// Per-step process noise of each component ((m/s)² per `step_s`). Default (0.03 m/s per
+    /// hour)², a tidal current's change (invented, docs/models.md#current-prior).
     pub q: f64,
+    /// Whether the ranges estimate the current (false, the default) or only consider it (true):
+    /// the Schmidt–Kalman treatment of a weakly observable state, in which a range update leaves
+    /// the current's mean and variance at the team's statement and carries its correlation with
+    /// the position ([`crate::ekf::Ekf::update_scalar_considering`]). Ranges from one bearing
+    /// observe the current along that bearing only, and a filter that estimates it from them can
+    /// end worse than one that keeps the stated current (docs/models.md#range-consistency).
+    /// Written only when set.
+    #[serde(skip_serializing_if = "std::ops::Not::not")]
+    pub consider: bool,
     /// Correlation time T (s) of a first-order Gauss–Markov current, ċ = −c/T + w; absent (the
     /// default): a random walk. See [`CurrentParams::decay`].
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -49,8 +68,14 @@ pub struct CurrentParams {
 
 impl Default for CurrentParams {
     fn default() -> Self {
-        CurrentParams { p0: 0.09, q: 0.09 / 36_000.0, correlation_time_s: None }
+        let (p0, q) = (0.03 * 0.03, 0.03 * 0.03 / 36_000.0);
+        CurrentParams { mean: [0.0, 0.0], p0, q, consider: false, correlation_time_s: None }
     }
+}
+
+/// Whether a stated current is zero (the default, left out when written).
+fn is_still(mean: &[f64; 2]) -> bool {
+    *mean == [0.0, 0.0]
 }
 
 impl CurrentParams {
@@ -74,6 +99,8 @@ impl CurrentParams {
 
 impl CheckFields for CurrentParams {
     fn check_fields(&self, prefix: &str, p: &mut Problems) {
+        p.finite(&format!("{prefix}mean[0]"), self.mean[0]);
+        p.finite(&format!("{prefix}mean[1]"), self.mean[1]);
         p.positive(&format!("{prefix}p0"), self.p0);
         p.non_negative(&format!("{prefix}q"), self.q);
         if let Some(t) = self.correlation_time_s {
@@ -132,6 +159,10 @@ pub struct AuvParams {
     /// default): every range is Gaussian, as in the thesis.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub range_outliers: Option<RangeOutliers>,
+    /// The windowed NIS check that detects a filter which has left its bounds and recovers it
+    /// ([`RangeHealth`]); absent (the default): no check, as in the thesis.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub range_health: Option<RangeHealth>,
 }
 
 /// Long ranges the filter expects besides its Gaussian noise, an extension of Gill 2013, §2.2.1
@@ -260,6 +291,12 @@ pub enum RangeLinearisation {
     Ekf,
     /// The iterated EKF: relinearised about the updated estimate ([`IteratedRange`]).
     Iterated(IteratedRange),
+    /// The sigma-point (unscented) update over the position prior
+    /// ([`crate::consistency::sigma_point_range`]): the range's mean, regression row and the
+    /// variance its curvature adds are taken over the prior's spread, not at its mean, so a wide
+    /// prior or a transponder overhead does not make the filter over-confident
+    /// (docs/models.md#range-consistency).
+    Unscented,
 }
 
 impl RangeLinearisation {
@@ -323,6 +360,7 @@ impl Default for AuvParams {
             range_update: RangeLinearisation::Ekf,
             range_gate_recovery: None,
             range_outliers: None,
+            range_health: None,
         }
     }
 }
@@ -350,6 +388,9 @@ impl CheckFields for AuvParams {
         }
         if let Some(o) = &self.range_outliers {
             o.check_fields(&format!("{prefix}range_outliers."), p);
+        }
+        if let Some(h) = &self.range_health {
+            h.check_fields(&format!("{prefix}range_health."), p);
         }
     }
 }
@@ -407,16 +448,18 @@ fn decayed<const M: usize>(
     x_new: SVector<f64, M>,
     g: SparseRows<2, 3>,
     phi: f64,
+    mean: [f64; 2],
 ) -> (SVector<f64, M>, SparseRows<4, 3>) {
     let [e, n] = g;
     let decay = |c| (c, [(c, phi - 1.0), (c, 0.0), (c, 0.0)]);
-    (decayed_mean(x_new, phi), [e, n, decay(CURRENT_E), decay(CURRENT_N)])
+    (decayed_mean(x_new, phi, mean), [e, n, decay(CURRENT_E), decay(CURRENT_N)])
 }
 
-/// The current states of `x` multiplied by `phi`.
-fn decayed_mean<const M: usize>(mut x: SVector<f64, M>, phi: f64) -> SVector<f64, M> {
-    x[CURRENT_E] *= phi;
-    x[CURRENT_N] *= phi;
+/// The current states of `x` decayed by `phi` towards the stated `mean`: c ← m + φ (c − m)
+/// (exactly φ c for the default, still water).
+fn decayed_mean<const M: usize>(mut x: SVector<f64, M>, phi: f64, mean: [f64; 2]) -> SVector<f64, M> {
+    x[CURRENT_E] = mean[0] + (x[CURRENT_E] - mean[0]) * phi;
+    x[CURRENT_N] = mean[1] + (x[CURRENT_N] - mean[1]) * phi;
     x
 }
 
@@ -454,6 +497,19 @@ pub struct AuvEkf<const M: usize = 5> {
     current: Option<CurrentParams>,
     /// Ranges rejected by the gate since the last one applied ([`GateRecovery`]).
     gated_in_row: u32,
+    /// The last ranges' NIS ([`RangeHealth`]).
+    nis_window: NisWindow,
+    /// The recoveries [`RangeHealth`] made.
+    recoveries: Recoveries,
+}
+
+/// How often a filter's [`RangeHealth`] check found it out of its bounds and recovered it, and
+/// when first and last (filter time, s).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]
+pub struct Recoveries {
+    pub count: u32,
+    pub first_s: Option<f64>,
+    pub last_s: Option<f64>,
 }
 
 impl AuvEkf<5> {
@@ -461,7 +517,15 @@ impl AuvEkf<5> {
     pub fn new(t0: f64, e: f64, n: f64, speed: f64, psi: f64, params: AuvParams) -> Self {
         let x0 = AuvState::from([e, n, speed, psi, 0.0]);
         let p0 = SMatrix::<f64, 5, 5>::from_diagonal(&SVector::from(params.p0));
-        AuvEkf { ekf: Ekf::new(t0, x0, p0, [false, false, false, true, true]), params, current: None, gated_in_row: 0 }
+        let ekf = Ekf::new(t0, x0, p0, [false, false, false, true, true]);
+        AuvEkf {
+            ekf,
+            params,
+            current: None,
+            gated_in_row: 0,
+            nis_window: NisWindow::default(),
+            recoveries: Recoveries::default(),
+        }
     }
 }
 
@@ -476,11 +540,14 @@ impl AuvEkf<7> {
         params: AuvParams,
         current: CurrentParams,
     ) -> Self {
-        let x0 = SVector::<f64, 7>::from([e, n, speed, psi, 0.0, 0.0, 0.0]);
+        let [ce, cn] = current.mean;
+        let x0 = SVector::<f64, 7>::from([e, n, speed, psi, 0.0, ce, cn]);
         let [pe, pn, ps, ppsi, pb] = params.p0;
         let p0 = SMatrix::<f64, 7, 7>::from_diagonal(&SVector::from([pe, pn, ps, ppsi, pb, current.p0, current.p0]));
         let angles = [false, false, false, true, true, false, false];
-        AuvEkf { ekf: Ekf::new(t0, x0, p0, angles), params, current: Some(current), gated_in_row: 0 }
+        let ekf = Ekf::new(t0, x0, p0, angles);
+        let (nis_window, recoveries) = (NisWindow::default(), Recoveries::default());
+        AuvEkf { ekf, params, current: Some(current), gated_in_row: 0, nis_window, recoveries }
     }
 }
 
@@ -500,6 +567,22 @@ impl<const M: usize> AuvEkf<M> {
     pub fn position(&self) -> (f64, f64) {
         (self.ekf.x()[E], self.ekf.x()[N])
     }
+    /// A range's scalar update, the Schmidt–Kalman one when the current is only considered
+    /// ([`CurrentParams::consider`]).
+    fn range_scalar(&mut self, innovation: f64, h: SMatrix<f64, 1, M>, r: f64, gate: &Gate) -> UpdateOutcome {
+        match self.current {
+            Some(c) if c.consider => {
+                let considered = std::array::from_fn(|i| i == CURRENT_E || i == CURRENT_N);
+                self.ekf.update_scalar_considering(innovation, h, r, gate, &considered)
+            }
+            _ => self.ekf.update_scalar(innovation, h, r, gate),
+        }
+    }
+
+    /// The recoveries its [`RangeHealth`] check made.
+    pub fn recoveries(&self) -> Recoveries {
+        self.recoveries
+    }
 
     /// Dead-reckons to time `t` with the measured heading rate `yaw_rate` (rad/s, math sense)
     /// held over the interval (eq. 7). Does nothing if `t` is not after the filter time.
@@ -513,7 +596,7 @@ impl<const M: usize> AuvEkf<M> {
         match self.current_decay(h) {
             None => self.ekf.predict_sparse(t, x_new, &g, &q),
             Some(phi) => {
-                let (x_new, g) = decayed(x_new, g, phi);
+                let (x_new, g) = decayed(x_new, g, phi, self.stated_current());
                 self.ekf.predict_sparse(t, x_new, &g, &q)
             }
         }
@@ -540,7 +623,7 @@ impl<const M: usize> AuvEkf<M> {
         match self.current_decay(h) {
             None => self.ekf.predict_and_read(t, x_new, &g, &q, &speed, &compass),
             Some(phi) => {
-                let (x_new, g) = decayed(x_new, g, phi);
+                let (x_new, g) = decayed(x_new, g, phi, self.stated_current());
                 self.ekf.predict_and_read(t, x_new, &g, &q, &speed, &compass)
             }
         }
@@ -562,11 +645,17 @@ impl<const M: usize> AuvEkf<M> {
         self.current.and_then(|c| c.decay(h))
     }
 
+    /// The current the team stated ([`CurrentParams::mean`]); zero for the thesis's states.
+    #[inline(always)]
+    fn stated_current(&self) -> [f64; 2] {
+        self.current.map_or([0.0, 0.0], |c| c.mean)
+    }
+
     /// The mean map of a step from `x` over `h` seconds at heading rate `yaw_rate`: [`transition`]
     /// with the Gauss–Markov current's decay (the unscented smoother pushes sigma points through it).
     pub fn mean_step(&self, x: &SVector<f64, M>, h: f64, yaw_rate: f64) -> SVector<f64, M> {
         let x_new = transition(x, h, h * yaw_rate);
-        self.current_decay(h).map_or(x_new, |phi| decayed_mean(x_new, phi))
+        self.current_decay(h).map_or(x_new, |phi| decayed_mean(x_new, phi, self.stated_current()))
     }
 
     /// The prediction from `x` over `h` seconds at heading rate `yaw_rate`: the propagated mean,
@@ -595,7 +684,7 @@ impl<const M: usize> AuvEkf<M> {
         let g = transition_jacobian_entries(x, h, x[PSI].sin_cos());
         match self.current_decay(h) {
             None => propagate_covariance(&mut p, &g, &self.step_q(h)),
-            Some(phi) => propagate_covariance(&mut p, &decayed(*x, g, phi).1, &self.step_q(h)),
+            Some(phi) => propagate_covariance(&mut p, &decayed(*x, g, phi, self.stated_current()).1, &self.step_q(h)),
         }
         p
     }
@@ -699,8 +788,12 @@ impl<const M: usize> AuvEkf<M> {
     ) -> UpdateOutcome {
         let range_variance = self.params.range_noise.variance(m.travel_time);
         let gate = self.params.range_gate;
+        if let Some(up) = self.health_check(m, auv_depth, range_variance, transponder_sd) {
+            self.gated_in_row = 0;
+            return up.outcome;
+        }
         let up = match self.params.range_outliers {
-            None => self.update_range_with(m, auv_depth, range_variance, transponder_sd, &gate),
+            None => self.update_range_unchecked(m, auv_depth, range_variance, transponder_sd, &gate),
             Some(outliers) => {
                 self.update_range_expecting(outliers, m, auv_depth, range_variance, transponder_sd, &gate)
             }
@@ -716,7 +809,67 @@ impl<const M: usize> AuvEkf<M> {
         }
         self.gated_in_row = 0;
         self.inflate_position(&up, &m.transponder, auv_depth, recovery);
-        self.update_range_with(m, auv_depth, range_variance, transponder_sd, &Gate::OFF).outcome
+        self.update_range_unchecked(m, auv_depth, range_variance, transponder_sd, &Gate::OFF).outcome
+    }
+
+    /// The [`RangeHealth`] check of a range about to be applied: its innovation and variance (as
+    /// the filter's update kind predicts them) join the window; when the window leaves its bound
+    /// the filter recovers ([`Self::recover`]) and applies the range without the gate, which is
+    /// returned. None (nothing done yet) without a check or inside the bound.
+    fn health_check(
+        &mut self,
+        m: &RangeMeasurement,
+        auv_depth: Option<f64>,
+        range_variance: f64,
+        transponder_sd: f64,
+    ) -> Option<RangeUpdate> {
+        let health = self.params.range_health?;
+        let (y, s) = self.predicted_innovation(m, auv_depth, range_variance, transponder_sd)?;
+        let added = self.nis_window.push(&health, y, s)?;
+        self.recover(added);
+        Some(self.update_range_unchecked(m, auv_depth, range_variance, transponder_sd, &Gate::OFF))
+    }
+
+    /// A range's innovation and its variance as the update kind predicts them: at the prior mean
+    /// (EKF, iterated) or over its sigma points (unscented). None when it is unusable.
+    fn predicted_innovation(
+        &self,
+        m: &RangeMeasurement,
+        auv_depth: Option<f64>,
+        range_variance: f64,
+        transponder_sd: f64,
+    ) -> Option<(f64, f64)> {
+        match self.params.range_update {
+            RangeLinearisation::Unscented => {
+                let (h, r, _) = self.sigma_prior(m, auv_depth, range_variance, transponder_sd)?;
+                let (y, s) = (r.0, (h * self.ekf.p() * h.transpose())[(0, 0)] + r.1);
+                Some((y, s))
+            }
+            _ => {
+                let (_, _, prior) = self.range_prior(m, auv_depth, range_variance, transponder_sd)?;
+                Some((prior.value, prior.variance))
+            }
+        }
+    }
+
+    /// Recovery from a filter out of its bounds ([`RangeHealth`]): `added` m² on each horizontal
+    /// position variance and the current states' variances raised to their prior, as process
+    /// noise at the filter's time (the smoother sees it as a step).
+    fn recover(&mut self, added: f64) {
+        let mut q = SVector::<f64, M>::zeros();
+        (q[E], q[N]) = (added, added);
+        if let (Some(c), true) = (self.current, M > CURRENT_N) {
+            let p = self.ekf.p();
+            (q[CURRENT_E], q[CURRENT_N]) =
+                ((c.p0 - p[(CURRENT_E, CURRENT_E)]).max(0.0), (c.p0 - p[(CURRENT_N, CURRENT_N)]).max(0.0));
+        }
+        let (t, x) = (self.ekf.t(), *self.ekf.x());
+        let no_transition: SparseRows<0, 1> = [];
+        self.ekf.predict_sparse(t, x, &no_transition, &q);
+        let r = &mut self.recoveries;
+        r.count += 1;
+        r.first_s.get_or_insert(t);
+        r.last_s = Some(t);
     }
 
     /// The range update of a filter that expects `outliers` ([`RangeOutliers`]): the Kalman update
@@ -732,6 +885,9 @@ impl<const M: usize> AuvEkf<M> {
         transponder_sd: f64,
         gate: &Gate,
     ) -> RangeUpdate {
+        if self.params.range_update == RangeLinearisation::Unscented {
+            return self.update_range_unscented_expecting(outliers, m, auv_depth, range_variance, transponder_sd, gate);
+        }
         let Some((h, _, Innovation { value: y, variance: s })) =
             self.range_prior(m, auv_depth, range_variance, transponder_sd)
         else {
@@ -752,6 +908,34 @@ impl<const M: usize> AuvEkf<M> {
             self.ekf.predict(t, x, SMatrix::identity(), spread);
         }
         up
+    }
+
+    /// [`Self::update_range_expecting`] with the sigma-point statistics: the weighted update of
+    /// the regression row, its noise variance raised by (1/w − 1)·S (the PDA's spread as there).
+    fn update_range_unscented_expecting(
+        &mut self,
+        outliers: RangeOutliers,
+        m: &RangeMeasurement,
+        auv_depth: Option<f64>,
+        range_variance: f64,
+        transponder_sd: f64,
+        gate: &Gate,
+    ) -> RangeUpdate {
+        let Some((h, (y, r), _)) = self.sigma_prior(m, auv_depth, range_variance, transponder_sd) else {
+            return RangeUpdate::UNUSABLE;
+        };
+        let s = (h * self.ekf.p() * h.transpose())[(0, 0)] + r;
+        let w = outliers.inlier_probability(y, s);
+        if !(w >= OUTLIER_ONLY) {
+            return RangeUpdate { outcome: UpdateOutcome::Gated { nis: y * y / s }, innovation: y, variance: s };
+        }
+        let shift = (outliers.update == OutlierUpdate::Pda).then(|| self.ekf.p() * h.transpose() * (y / s));
+        let outcome = self.range_scalar(y, h, r + (1.0 / w - 1.0) * s, gate);
+        if let Some(shift) = shift.filter(|_| outcome.applied() && w < 1.0) {
+            let (t, x) = (self.ekf.t(), *self.ekf.x());
+            self.ekf.predict(t, x, SMatrix::identity(), shift * shift.transpose() * (w * (1.0 - w)));
+        }
+        RangeUpdate { outcome, innovation: y, variance: s }
     }
 
     /// Adds the isotropic horizontal position variance that makes the rejected range `up` a
@@ -777,7 +961,8 @@ impl<const M: usize> AuvEkf<M> {
     }
 
     /// The range update with the range variance (m²), the transponder's horizontal SD (m, each
-    /// axis) and the gate given by the caller (a log row with its own σ, a tuned noise).
+    /// axis) and the gate given by the caller (a log row with its own σ, a tuned noise), after
+    /// the [`RangeHealth`] check when the filter has one.
     pub fn update_range_with(
         &mut self,
         m: &RangeMeasurement,
@@ -786,6 +971,24 @@ impl<const M: usize> AuvEkf<M> {
         transponder_sd: f64,
         gate: &Gate,
     ) -> RangeUpdate {
+        if let Some(up) = self.health_check(m, auv_depth, range_variance, transponder_sd) {
+            return up;
+        }
+        self.update_range_unchecked(m, auv_depth, range_variance, transponder_sd, gate)
+    }
+
+    /// [`Self::update_range_with`] without the health check.
+    fn update_range_unchecked(
+        &mut self,
+        m: &RangeMeasurement,
+        auv_depth: Option<f64>,
+        range_variance: f64,
+        transponder_sd: f64,
+        gate: &Gate,
+    ) -> RangeUpdate {
+        if self.params.range_update == RangeLinearisation::Unscented {
+            return self.update_range_unscented(m, auv_depth, range_variance, transponder_sd, gate);
+        }
         let Some(prior) = self.range_prior(m, auv_depth, range_variance, transponder_sd) else {
             return RangeUpdate::UNUSABLE;
         };
@@ -804,12 +1007,61 @@ impl<const M: usize> AuvEkf<M> {
     ) -> RangeUpdate {
         let Innovation { value: innovation, variance } = prior;
         let outcome = match self.params.range_update {
-            RangeLinearisation::Ekf => self.ekf.update_scalar(innovation, h, r, gate),
+            RangeLinearisation::Ekf => self.range_scalar(innovation, h, r, gate),
             RangeLinearisation::Iterated(it) => {
                 self.update_range_iterated(m, auv_depth, range_variance, transponder_sd, gate, it, prior)
             }
+            // The expecting update raises the variance of the prior it was given: the regression
+            // row and the curvature's variance are in `h` and `r` ([`Self::sigma_prior`]).
+            RangeLinearisation::Unscented => self.range_scalar(innovation, h, r, gate),
         };
         RangeUpdate { outcome, innovation, variance }
+    }
+
+    /// The sigma-point range update ([`RangeLinearisation::Unscented`]): the scalar Joseph update
+    /// with the regression row and the range variance plus the curvature's, gated on the NIS of
+    /// the sigma-point innovation.
+    fn update_range_unscented(
+        &mut self,
+        m: &RangeMeasurement,
+        auv_depth: Option<f64>,
+        range_variance: f64,
+        transponder_sd: f64,
+        gate: &Gate,
+    ) -> RangeUpdate {
+        let Some((h, (y, r), _)) = self.sigma_prior(m, auv_depth, range_variance, transponder_sd) else {
+            return RangeUpdate::UNUSABLE;
+        };
+        let variance = (h * self.ekf.p() * h.transpose())[(0, 0)] + r;
+        let outcome = self.range_scalar(y, h, r, gate);
+        RangeUpdate { outcome, innovation: y, variance }
+    }
+
+    /// A range's sigma-point statistics over the position prior: the regression row h (position
+    /// columns only), (innovation z − z̄, the variance R + Ω the row leaves to the noise: the
+    /// range's, the transponder's along the line of sight at the mean, and the curvature's), and
+    /// the line of sight at the mean. None when the prior's position block is not positive
+    /// definite.
+    fn sigma_prior(
+        &self,
+        m: &RangeMeasurement,
+        auv_depth: Option<f64>,
+        range_variance: f64,
+        transponder_sd: f64,
+    ) -> Option<(SMatrix<f64, 1, M>, (f64, f64), Option<SMatrix<f64, 1, M>>)> {
+        let (x, p) = (self.ekf.x(), self.ekf.p());
+        let mean = nalgebra::Vector2::new(x[E], x[N]);
+        let block = nalgebra::Matrix2::new(p[(E, E)], p[(E, N)], p[(N, E)], p[(N, N)]);
+        let sigma = sigma_point_range(mean, block, &m.transponder, auv_depth)?;
+        let line_of_sight = range_gradient::<M>((x[E], x[N]), &m.transponder, auv_depth).map(|g| g.1);
+        // Overhead in 2-D the transponder's error is all along the (unknown) line of sight.
+        let r = match &line_of_sight {
+            Some(los) => with_transponder_variance(range_variance, transponder_sd, los),
+            None => range_variance + transponder_sd.powi(2),
+        };
+        let mut h = SMatrix::<f64, 1, M>::zeros();
+        (h[E], h[N]) = (sigma.h[0], sigma.h[1]);
+        Some((h, (m.range - sigma.predicted, r + sigma.unexplained), line_of_sight))
     }
 
     /// A range's line of sight h, its noise variance with the transponder's term, and its
@@ -875,7 +1127,7 @@ impl<const M: usize> AuvEkf<M> {
             }
         }
         let Some((y, h, r)) = last else { return UpdateOutcome::Unusable };
-        match self.ekf.update_scalar(y, h, r, &Gate::OFF) {
+        match self.range_scalar(y, h, r, &Gate::OFF) {
             UpdateOutcome::Applied { .. } => UpdateOutcome::Applied { nis },
             other => other,
         }
@@ -996,6 +1248,10 @@ impl AuvFilter {
             let p = f.ekf().p();
             [p[(E, E)], p[(E, N)], p[(N, N)]]
         })
+    }
+    /// The recoveries its range health check made ([`AuvEkf::recoveries`]).
+    pub fn recoveries(&self) -> Recoveries {
+        each_model!(self, f => f.recoveries())
     }
     /// Every state and covariance entry finite ([`Ekf::is_finite`]).
     #[inline]

@@ -334,6 +334,37 @@ impl<const N: usize> Ekf<N> {
         self.commit(x_new, p_new).map_or(UpdateOutcome::Unusable, |()| UpdateOutcome::Applied { nis })
     }
 
+    /// The scalar update of [`Self::update_scalar`] with the gain's entries at the `considered`
+    /// states set to zero: the Schmidt–Kalman ("consider") update, which leaves those states'
+    /// mean and variance as they were and carries their correlation with the rest (Schmidt
+    /// 1966). The covariance is the Joseph form P − k (P hᵀ)ᵀ − (P hᵀ) kᵀ + s k kᵀ,
+    /// valid for any gain, so the result stays the covariance of the estimate's error.
+    pub fn update_scalar_considering(
+        &mut self,
+        innovation: f64,
+        h: SMatrix<f64, 1, N>,
+        r: f64,
+        gate: &Gate,
+        considered: &[bool; N],
+    ) -> UpdateOutcome {
+        if !(innovation.is_finite() && all_finite(h.as_slice()) && r.is_finite()) {
+            return UpdateOutcome::Unusable;
+        }
+        let pht = self.p * h.transpose();
+        let s = (h * pht)[(0, 0)] + r;
+        if !(s > 0.0 && s.is_finite()) {
+            return UpdateOutcome::Unusable;
+        }
+        let nis = innovation * innovation / s;
+        if !gate.admits(&[innovation], nis) {
+            return UpdateOutcome::Gated { nis };
+        }
+        let k = SVector::<f64, N>::from_fn(|i, _| if considered[i] { 0.0 } else { pht[i] / s });
+        let p_new = symmetrise(self.p - k * pht.transpose() - pht * k.transpose() + k * k.transpose() * s);
+        let x_new = self.x + k * innovation;
+        self.commit(x_new, p_new).map_or(UpdateOutcome::Unusable, |()| UpdateOutcome::Applied { nis })
+    }
+
     /// Takes an update's posterior unless it is non-finite; records it in the history.
     fn commit(&mut self, x_new: SVector<f64, N>, p_new: SMatrix<f64, N, N>) -> Option<()> {
         if !(all_finite(x_new.as_slice()) && all_finite(p_new.as_slice())) {

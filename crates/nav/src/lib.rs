@@ -5,10 +5,12 @@
 
 pub mod auv;
 pub mod codec;
+pub mod consistency;
 pub mod cycle;
 pub mod ekf;
 pub mod fieldlog;
 pub mod post;
+pub mod post_quality;
 pub mod post_tune;
 pub mod range;
 pub mod smoother;
@@ -17,7 +19,7 @@ pub mod synthetic;
 
 pub use auv::{
     AuvEkf, AuvFilter, AuvModel, AuvParams, CurrentParams, GateRecovery, IteratedRange, OutlierUpdate, ParamError,
-    RangeLinearisation, RangeOutliers,
+    RangeLinearisation, RangeOutliers, Recoveries,
 };
 pub use ekf::{Ekf, Gate, UpdateOutcome};
 pub use range::{RangeMeasurement, RangeNoise};

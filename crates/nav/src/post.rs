@@ -443,8 +443,13 @@ pub struct PostSummary {
     pub held_out_rms_filter_m: Option<f64>,
     pub held_out_rms_smoothed_m: Option<f64>,
     /// Σ −½(ln 2πS + y²/S) over the ranges the filter saw (applied or gated, not held out): the
-    /// innovation log-likelihood `--tune` maximises.
+    /// innovation log-likelihood of the ranges.
     pub range_log_likelihood: f64,
+    /// Σ −½(ln 2πS + min(r²/S, g)) over the held-out ranges, r their residual against the
+    /// smoothed track, S = R + h Pˢ hᵀ its predicted variance and g the gate's `max_nis`: how well
+    /// the track smoothed without a range predicts it (the score `--tune` maximises over folds of
+    /// held-out ranges; docs/models.md#post-tuning).
+    pub held_out_log_predictive: f64,
     pub truth_points: usize,
     pub mean_filtered_error: Option<f64>,
     pub mean_smoothed_error: Option<f64>,
@@ -536,6 +541,11 @@ pub struct RangeResidual {
     pub innovation_sd: f64,
     /// Against the smoothed track at the same step.
     pub smoothed: f64,
+    /// The smoothed residual's predicted SD √(R + h Pˢ hᵀ) (m): the range noise with the smoothed
+    /// track's own uncertainty along the line of sight.
+    pub smoothed_sd: f64,
+    /// The range noise alone √R (m), with the transponder fix's term along the smoothed line of sight.
+    pub noise_sd: f64,
     /// Normalised innovation squared y²/S (χ² with 1 degree of freedom when consistent).
     pub nis: f64,
 }
@@ -654,7 +664,7 @@ pub fn postprocess(entries: &[Entry], cfg: &PostConfig) -> Result<PostResult, Po
 
 /// Runs the post-processing EKF and the RTS smoother over general log rows.
 pub fn postprocess_rows(rows: &[LogRow], cfg: &PostConfig) -> Result<PostResult, PostError> {
-    run(rows, cfg, Pass { smooth: true, hold_out_every: 0, prediction_step_s: None })
+    run(rows, cfg, Pass { smooth: true, hold_out_every: 0, hold_out_phase: 0, prediction_step_s: None })
 }
 
 /// What one pass over a log computes.
@@ -662,8 +672,10 @@ pub fn postprocess_rows(rows: &[LogRow], cfg: &PostConfig) -> Result<PostResult,
 pub(crate) struct Pass {
     /// Record the compact history and run the backward pass (false: forward filter only).
     pub smooth: bool,
-    /// Leave every k-th range out of the filter and only predict it (0: use every range).
+    /// Leave every k-th range out of the filter and only predict it (0: use every range): the
+    /// ranges numbered (from 1) n with n mod k = `hold_out_phase` mod k.
     pub hold_out_every: usize,
+    pub hold_out_phase: usize,
     /// Longest prediction piece (s) instead of `auv.step_s`: the tuning's coarse steps over its
     /// block-averaged dead reckoning. Q stays per `auv.step_s` (a step of h adds Q·h/step_s), so
     /// the process noise means the same at any piece length.
@@ -797,6 +809,8 @@ struct RangeSeen {
     range: f64,
     at: Vec3,
     auv_depth: Option<f64>,
+    /// The range's noise variance and its transponder fix's horizontal SD.
+    noise: (f64, f64),
 }
 
 /// One post-processing pass over time-sorted events, for either state vector.
@@ -876,7 +890,7 @@ impl Run<'_> {
                     };
                     let auv_depth = if cfg.slant_range { depth } else { None };
                     let k = self.pass.hold_out_every;
-                    let held_out = k > 0 && summary.ranges % k == 0;
+                    let held_out = k > 0 && summary.ranges % k == self.pass.hold_out_phase % k;
                     let variance = row.sigma.map_or_else(|| cfg.auv.range_noise.variance(travel_time), |s| s * s);
                     let gate = if held_out { HOLD_OUT } else { cfg.range_gate };
                     let sd = fix_sd.unwrap_or(cfg.transponder_sd_m);
@@ -896,9 +910,12 @@ impl Run<'_> {
                             innovation: up.innovation,
                             innovation_sd: up.variance.sqrt(),
                             smoothed: f64::NAN,
+                            smoothed_sd: f64::NAN,
+                            noise_sd: f64::NAN,
                             nis,
                         };
-                        ranges.push(RangeSeen { residual, step, range: m.range, at: transponder, auv_depth });
+                        let noise = (variance, sd);
+                        ranges.push(RangeSeen { residual, step, range: m.range, at: transponder, auv_depth, noise });
                     }
                     match up.outcome {
                         _ if held_out => summary.ranges_held_out += 1,
@@ -923,8 +940,17 @@ impl Run<'_> {
             samples = self.smooth(&f, history, &mut backward)?;
             score(&mut samples, &mut summary, &truth_at, &backward);
             let smoothed = backward.residual_smoothed;
-            for (seen, smoothed) in ranges.iter_mut().zip(smoothed) {
+            for (seen, (smoothed, sd, noise_sd)) in ranges.iter_mut().zip(smoothed) {
                 seen.residual.smoothed = smoothed;
+                seen.residual.smoothed_sd = sd;
+                seen.residual.noise_sd = noise_sd;
+                if seen.residual.held_out && sd > 0.0 {
+                    // A range the gate would reject scores as one at the gate's bound: an outlier
+                    // costs no more than that, so the score does not widen the noise to fit it.
+                    let s = sd * sd;
+                    let nis = (smoothed * smoothed / s).min(cfg.range_gate.max_nis.unwrap_or(f64::INFINITY));
+                    summary.held_out_log_predictive -= 0.5 * ((2.0 * std::f64::consts::PI * s).ln() + nis);
+                }
             }
         }
         let residuals: Vec<RangeResidual> = ranges.into_iter().map(|r| r.residual).collect();
@@ -997,7 +1023,9 @@ fn sample<const M: usize>(filtered: &Smoothed<M>, s: &Smoothed<M>) -> PostSample
 struct Backward<'a> {
     ranges: &'a [RangeSeen],
     truth_at: &'a [(usize, [f64; 2])],
-    residual_smoothed: Vec<f64>,
+    /// Per range: its residual against the smoothed track, that residual's predicted SD and the
+    /// range noise's SD.
+    residual_smoothed: Vec<(f64, f64, f64)>,
     /// Per truth point: (filtered error, smoothed error, filtered NEES, smoothed NEES).
     truth_scores: Vec<(f64, f64, Option<f64>, Option<f64>)>,
 }
@@ -1007,7 +1035,7 @@ impl<'a> Backward<'a> {
         Backward {
             ranges,
             truth_at,
-            residual_smoothed: vec![f64::NAN; ranges.len()],
+            residual_smoothed: vec![(f64::NAN, f64::NAN, f64::NAN); ranges.len()],
             truth_scores: vec![(f64::NAN, f64::NAN, None, None); truth_at.len()],
         }
     }
@@ -1017,7 +1045,15 @@ impl<'a> Backward<'a> {
         let first = self.ranges.partition_point(|r| r.step < k);
         for (i, r) in self.ranges.iter().enumerate().skip(first).take_while(|(_, r)| r.step == k) {
             let dz = r.auv_depth.map_or(0.0, |z| z - r.at.z);
-            self.residual_smoothed[i] = r.range - (x[0] - r.at.x).hypot(x[1] - r.at.y).hypot(dz);
+            let (de, dn) = (x[0] - r.at.x, x[1] - r.at.y);
+            let predicted = de.hypot(dn).hypot(dz);
+            // Line of sight h = ∂ρ/∂(E, N), as the filter's range Jacobian (zero overhead).
+            let h = if predicted > 1e-6 { [de / predicted, dn / predicted] } else { [0.0, 0.0] };
+            let p = &smoothed.p;
+            let track = h[0] * h[0] * p[(0, 0)] + 2.0 * h[0] * h[1] * p[(0, 1)] + h[1] * h[1] * p[(1, 1)];
+            let (variance, fix_sd) = r.noise;
+            let noise = variance + fix_sd * fix_sd * (h[0] * h[0] + h[1] * h[1]);
+            self.residual_smoothed[i] = (r.range - predicted, (noise + track).sqrt(), noise.sqrt());
         }
         let first = self.truth_at.partition_point(|(s, _)| *s < k);
         for (i, (_, tr)) in self.truth_at.iter().enumerate().skip(first).take_while(|(_, (s, _))| *s == k) {

@@ -1,18 +1,28 @@
-//! Tuning the post-processing filter from the log itself: the range σ, the
-//! E/N process noise, the speed log's scale and the compass bias that maximise the innovation
-//! log-likelihood of the ranges (`PostSummary::range_log_likelihood`), by a Nelder–Mead search
-//! (argmin) in log/linear coordinates, with cross-validation: every k-th range is left out of the
-//! filter during tuning and only predicted, so its residual before and after tuning is an honest
-//! out-of-sample figure beside the in-sample one.
+//! Tuning the post-processing filter from the log itself, for prediction: the range σ, the E/N
+//! process noise, the speed log's scale, the compass bias and the initial E/N variance that best
+//! predict the ranges the smoothed track did not use (docs/models.md#post-tuning).
 //!
-//! Speed: the search runs the forward filter only, over the log with its dead-reckoning rows
-//! averaged in blocks (`dead_reckoning_block_s`) and predicted in steps of that length; the
-//! likelihood needs only the range innovations, and the dead reckoning between two ranges carries
-//! the same information averaged. The before/after figures are always the full-rate smoothed runs.
+//! The score is cross-validated over ranges: the ranges are split into `hold_out_every` folds
+//! (every k-th range, each phase in turn); for each fold the filter and smoother run without it,
+//! and each held-out range is scored by its log predictive density under the smoothed track,
+//! N(r; 0, R + h Pˢ hᵀ) (`PostSummary::held_out_log_predictive`). The search (Nelder–Mead,
+//! argmin) minimises the negative total plus a Gaussian prior that keeps a weakly identified value
+//! near its starting one, within physical bounds: the range σ may not fall below what the
+//! smoothed track's own residuals on the ranges it used show, and the initial variance may only
+//! widen from the configured one.
+//!
+//! A guard ([`Guard`]) keeps the starting values when the result predicts the held-out ranges
+//! worse than they do or rejects more ranges at the gate, and flags a search that stopped at its
+//! cap. The tuned values carry an SD from the score's curvature, and the filter's compass-bias
+//! state starts no narrower than the tuned bias's SD.
+//!
+//! Speed: the search runs over the log with its dead-reckoning rows averaged in blocks
+//! (`dead_reckoning_block_s`) and predicted in steps of that length; the before/after figures are
+//! always full-rate runs.
 
-use crate::auv::VelocityFrame;
+use crate::auv::{VelocityFrame, BIAS};
 use crate::fieldlog::{LogRow, Observation};
-use crate::post::{run, Pass, PostConfig, PostError, PostSummary};
+use crate::post::{run, Pass, PostConfig, PostError, PostResult};
 use argmin::core::{CostFunction, Executor, State};
 use argmin::solver::neldermead::NelderMead;
 use serde::{Deserialize, Serialize};
@@ -22,12 +32,12 @@ use std::borrow::Cow;
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct TuneOptions {
-    /// Leave every k-th range out (≥ 2).
+    /// Folds of the cross-validation: every k-th range is held out, each phase in turn (≥ 2).
     pub hold_out_every: usize,
-    /// Nelder–Mead iterations at most.
+    /// Nelder–Mead iterations at most. Invented default: 300 (docs/models.md#post-tuning).
     pub max_iters: u64,
     /// During the search, the yaw-rate, speed, heading, DVL and depth rows are averaged over blocks
-    /// of this many seconds and the filter predicts in steps of this length (0: every row at full
+    /// of this many seconds and the filter predicts in steps of that length (0: every row at full
     /// rate). Invented default: 1 s keeps the tuned values within the bands `tests/post_tune.rs`
     /// states of the full-rate ones, at a fraction of the time.
     pub dead_reckoning_block_s: f64,
@@ -35,7 +45,7 @@ pub struct TuneOptions {
 
 impl Default for TuneOptions {
     fn default() -> Self {
-        TuneOptions { hold_out_every: 5, max_iters: 80, dead_reckoning_block_s: 1.0 }
+        TuneOptions { hold_out_every: 5, max_iters: 300, dead_reckoning_block_s: 1.0 }
     }
 }
 
@@ -48,13 +58,39 @@ pub struct Tuned {
     pub q_en: f64,
     pub speed_scale: f64,
     pub heading_bias_deg: f64,
+    /// Initial E and N variance `p0[0] = p0[1]` (m²): how far the start may be off.
+    pub p0_en: f64,
 }
 
-/// Bounds of the search (invented): wide enough for any working sensor.
+/// The tuned quantities' SDs (None where the score is not curved upwards there), from the
+/// diagonal of the score's curvature at the result: each one's spread with the others held.
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize)]
+pub struct TunedSd {
+    pub range_sd_m: Option<f64>,
+    pub q_en: Option<f64>,
+    pub speed_scale: Option<f64>,
+    pub heading_bias_deg: Option<f64>,
+    pub p0_en: Option<f64>,
+}
+
+/// Outer bounds of the search (invented, docs/models.md#post-tuning): wide enough for any
+/// working sensor. The range σ's lower bound is only the outermost one: the floor that matters is
+/// the consistency floor of [`Problem::cost`].
 const RANGE_SD_M: (f64, f64) = (0.05, 50.0);
 const Q_EN: (f64, f64) = (1e-8, 3.0);
 const SPEED_SCALE: (f64, f64) = (0.7, 1.4);
 const HEADING_BIAS_DEG: (f64, f64) = (-30.0, 30.0);
+const P0_EN_MAX: f64 = 1e4;
+
+/// The prior's SDs in search coordinates (invented, docs/models.md#post-tuning): a factor of 3 on
+/// the range σ, of 100 on the process noise, 0.05 on the speed scale, 5° on the compass bias and a
+/// factor of 10 on the initial variance.
+const PRIOR_SD: [f64; 5] = [1.0986, 4.6052, 0.05, 5.0, 2.3026];
+
+/// Steps of the initial simplex and of the curvature's differences, in search coordinates
+/// (invented, docs/models.md#post-tuning).
+const SIMPLEX_STEPS: [f64; 5] = [0.5, 1.5, 0.03, 2.0, 1.0];
+const CURVATURE_STEPS: [f64; 5] = [0.1, 0.3, 0.005, 0.2, 0.3];
 
 impl Tuned {
     fn of(cfg: &PostConfig) -> Tuned {
@@ -63,6 +99,7 @@ impl Tuned {
             q_en: cfg.auv.q[0],
             speed_scale: cfg.speed_scale,
             heading_bias_deg: cfg.heading_bias_deg,
+            p0_en: cfg.auv.p0[0],
         }
     }
     fn apply(&self, cfg: &PostConfig) -> PostConfig {
@@ -72,55 +109,151 @@ impl Tuned {
         c.auv.q[1] = self.q_en;
         c.speed_scale = self.speed_scale;
         c.heading_bias_deg = self.heading_bias_deg;
+        c.auv.p0[0] = self.p0_en;
+        c.auv.p0[1] = self.p0_en;
         c
     }
     /// Search coordinates: logs of the variances' scales, the others as they are.
     fn to_search(self) -> Vec<f64> {
-        vec![self.range_sd_m.ln(), self.q_en.ln(), self.speed_scale, self.heading_bias_deg]
-    }
-    /// Back from search coordinates, clamped into the bounds; also how far outside they were.
-    fn from_search(u: &[f64]) -> (Tuned, f64) {
-        let clamp = |v: f64, (lo, hi): (f64, f64)| (v.clamp(lo, hi), (v - v.clamp(lo, hi)).abs());
-        let (range_sd_m, a) = clamp(u[0].exp(), RANGE_SD_M);
-        let (q_en, b) = clamp(u[1].exp(), Q_EN);
-        let (speed_scale, c) = clamp(u[2], SPEED_SCALE);
-        let (heading_bias_deg, d) = clamp(u[3], HEADING_BIAS_DEG);
-        (Tuned { range_sd_m, q_en, speed_scale, heading_bias_deg }, a + b + c + d)
+        vec![self.range_sd_m.ln(), self.q_en.ln(), self.speed_scale, self.heading_bias_deg, self.p0_en.ln()]
     }
 }
 
-/// The figures of one configuration, all with the same ranges held out.
+/// The search's bounds for one log and start.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct Bounds {
+    pub range_sd_m: (f64, f64),
+    pub q_en: (f64, f64),
+    pub speed_scale: (f64, f64),
+    pub heading_bias_deg: (f64, f64),
+    /// From the configured initial variance (the start only widens) up.
+    pub p0_en: (f64, f64),
+}
+
+impl Bounds {
+    fn of(start: &Tuned) -> Bounds {
+        Bounds {
+            range_sd_m: RANGE_SD_M,
+            q_en: Q_EN,
+            speed_scale: SPEED_SCALE,
+            heading_bias_deg: HEADING_BIAS_DEG,
+            p0_en: (start.p0_en, P0_EN_MAX.max(start.p0_en)),
+        }
+    }
+    /// Back from search coordinates, clamped into the bounds; also how far outside they were.
+    fn from_search(&self, u: &[f64]) -> (Tuned, f64) {
+        let clamp = |v: f64, (lo, hi): (f64, f64)| (v.clamp(lo, hi), (v - v.clamp(lo, hi)).abs());
+        let (range_sd_m, a) = clamp(u[0].exp(), self.range_sd_m);
+        let (q_en, b) = clamp(u[1].exp(), self.q_en);
+        let (speed_scale, c) = clamp(u[2], self.speed_scale);
+        let (heading_bias_deg, d) = clamp(u[3], self.heading_bias_deg);
+        let (p0_en, e) = clamp(u[4].exp(), self.p0_en);
+        (Tuned { range_sd_m, q_en, speed_scale, heading_bias_deg, p0_en }, a + b + c + d + e)
+    }
+}
+
+/// The cross-validated figures of one configuration: every range held out once, predicted by
+/// the track smoothed without its fold.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct CrossValidation {
+    pub folds: usize,
+    /// Held-out ranges scored (those with a fix and usable geometry).
+    pub ranges: usize,
+    /// Σ of the held-out ranges' log predictive densities (higher is better).
+    pub log_predictive: f64,
+    /// RMS residual of the held-out ranges against the filter's prediction and the smoothed track.
+    pub rms_filter_m: Option<f64>,
+    pub rms_smoothed_m: Option<f64>,
+    /// Mean r²/(R + h Pˢ hᵀ) of the held-out ranges: 1 when the smoothed track's claimed
+    /// uncertainty and the range noise are right, above 1 when they are too small.
+    pub mean_nis_smoothed: Option<f64>,
+}
+
+/// The figures of one configuration: cross-validated, and of the full run that uses every range.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct Scored {
     pub values: Tuned,
-    /// Innovation log-likelihood of the ranges the filter used.
+    /// Innovation log-likelihood of the ranges the full run used.
     pub log_likelihood: f64,
     /// RMS residual of the used ranges: innovation, and against the smoothed track (in-sample).
     pub in_sample_rms_filter_m: Option<f64>,
     pub in_sample_rms_smoothed_m: Option<f64>,
-    /// RMS residual of the held-out ranges against the filter's prediction and the smoothed track.
+    /// Ranges the full run's innovation gate rejected.
+    pub ranges_gated: usize,
+    /// The compass's whole bias (deg, clockwise): `heading_bias_deg` and the mean of the full
+    /// run's smoothed bias state, which takes up what the fixed offset leaves.
+    pub compass_bias_deg: f64,
+    /// The held-out ranges' RMS residuals and log predictive density (as in `cross_validation`).
     pub held_out_rms_filter_m: Option<f64>,
     pub held_out_rms_smoothed_m: Option<f64>,
+    pub held_out_log_predictive: f64,
+    pub cross_validation: CrossValidation,
 }
 
-impl Scored {
-    fn of(values: Tuned, s: &PostSummary) -> Scored {
-        Scored {
-            values,
-            log_likelihood: s.range_log_likelihood,
-            in_sample_rms_filter_m: s.residual_rms_filter_m,
-            in_sample_rms_smoothed_m: s.residual_rms_smoothed_m,
-            held_out_rms_filter_m: s.held_out_rms_filter_m,
-            held_out_rms_smoothed_m: s.held_out_rms_smoothed_m,
-        }
+/// Which values the run keeps.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Kept {
+    /// The search converged to values that predict the held-out ranges better.
+    Tuned,
+    /// The search stopped at its cap; its best candidate still predicts the held-out ranges
+    /// better and rejects no more ranges, so it is kept.
+    BestCandidate,
+    /// The starting (configured) values: the result was not better.
+    Start,
+}
+
+/// What the guard decided, and why in one sentence (None when the tuning converged and won).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Guard {
+    pub kept: Kept,
+    pub converged: bool,
+    pub warning: Option<String>,
+}
+
+impl Guard {
+    fn judge(before: &Scored, after: &Scored, converged: bool, max_iters: u64) -> Guard {
+        let worse = !(after.held_out_log_predictive > before.held_out_log_predictive);
+        let more_gated = after.ranges_gated > before.ranges_gated;
+        let cap = format!("the search stopped at its cap of {max_iters} iterations before converging");
+        let (kept, warning) = if worse || more_gated {
+            let why = if worse {
+                format!(
+                    "the tuned values predict the held-out ranges no better than the starting ones (log predictive density {:.2} against {:.2})",
+                    after.held_out_log_predictive, before.held_out_log_predictive
+                )
+            } else {
+                format!(
+                    "the tuned values reject {} range(s) at the gate where the starting ones reject {}",
+                    after.ranges_gated, before.ranges_gated
+                )
+            };
+            let also = if converged { String::new() } else { format!(", and {cap}") };
+            (Kept::Start, Some(format!("tuning: kept the starting values: {why}{also}")))
+        } else if !converged {
+            let w = format!(
+                "tuning: {cap}; kept its best candidate, which predicts the held-out ranges better than the starting values and rejects no more ranges"
+            );
+            (Kept::BestCandidate, Some(w))
+        } else {
+            (Kept::Tuned, None)
+        };
+        Guard { kept, converged, warning }
     }
 }
 
-/// Before and after tuning, and the tuned config.
+/// Before and after tuning, the guard's choice and the config the run uses.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct TuneReport {
     pub before: Scored,
+    /// The search's result (kept or not: see `guard`).
     pub after: Scored,
+    /// The SDs of the search's result.
+    pub sd: TunedSd,
+    pub bounds: Bounds,
+    pub guard: Guard,
+    /// The values the run uses: `after`'s, or `before`'s when the guard kept the start.
+    pub chosen: Tuned,
     pub hold_out_every: usize,
     pub iterations: u64,
     pub evaluations: u64,
@@ -144,29 +277,152 @@ pub enum TuneError {
     Optimiser(String),
 }
 
+/// Sums over the folds' held-out ranges, and over the ranges each fold used.
+#[derive(Debug, Default)]
+struct Folds {
+    log_predictive: f64,
+    held_out: Vec<(f64, f64, f64)>,
+    /// Σ r²/R and count over the used ranges (R the range noise alone).
+    used_excess: (f64, usize),
+}
+
+impl Folds {
+    fn add(&mut self, r: &PostResult) {
+        self.log_predictive += r.summary.held_out_log_predictive;
+        for x in &r.residuals {
+            if x.held_out && !x.smoothed.is_nan() {
+                self.held_out.push((x.innovation, x.smoothed, x.smoothed_sd));
+            } else if x.applied && !x.smoothed.is_nan() && x.noise_sd > 0.0 {
+                self.used_excess.0 += (x.smoothed / x.noise_sd).powi(2);
+                self.used_excess.1 += 1;
+            }
+        }
+    }
+    fn cross_validation(&self, folds: usize) -> CrossValidation {
+        let rms = |f: &dyn Fn(&(f64, f64, f64)) -> f64| {
+            let n = self.held_out.len();
+            (n > 0).then(|| (self.held_out.iter().map(|x| f(x).powi(2)).sum::<f64>() / n as f64).sqrt())
+        };
+        CrossValidation {
+            folds,
+            ranges: self.held_out.len(),
+            log_predictive: self.log_predictive,
+            rms_filter_m: rms(&|x| x.0),
+            rms_smoothed_m: rms(&|x| x.1),
+            mean_nis_smoothed: rms(&|x| x.1 / x.2).map(|v| v * v),
+        }
+    }
+}
+
+/// Runs the `folds` cross-validation passes of `cfg` over `rows` (predicting in steps of `step_s`).
+fn folds(rows: &[LogRow], cfg: &PostConfig, folds: usize, step_s: Option<f64>) -> Result<Folds, PostError> {
+    let mut sum = Folds::default();
+    for phase in 0..folds {
+        let pass = Pass { smooth: true, hold_out_every: folds, hold_out_phase: phase, prediction_step_s: step_s };
+        sum.add(&run(rows, cfg, pass)?);
+    }
+    Ok(sum)
+}
+
+/// The full-rate cross-validation of `cfg` over `rows` in `folds` folds (≥ 2): what a run with
+/// these values says about its own accuracy on ranges it did not use.
+pub fn cross_validate(rows: &[LogRow], cfg: &PostConfig, k: usize) -> Result<CrossValidation, TuneError> {
+    if k < 2 {
+        return Err(TuneError::HoldOut(k));
+    }
+    Ok(folds(rows, cfg, k, None)?.cross_validation(k))
+}
+
 /// The search: its rows (block-averaged or the log's own) and prediction step (None: `auv.step_s`).
 struct Problem<'a> {
     rows: Cow<'a, [LogRow]>,
     step_s: Option<f64>,
     base: &'a PostConfig,
+    start: Tuned,
+    bounds: Bounds,
     hold_out_every: usize,
 }
 
+/// The cost of a run the filter or smoother could not complete (a singular covariance at an
+/// extreme candidate): worse than any completed one.
+const FAILED: f64 = 1e12;
+
 impl Problem<'_> {
-    /// Negative log-likelihood of the forward filter, plus a penalty outside the bounds.
-    fn cost(&self, u: &[f64]) -> Result<f64, PostError> {
-        let (values, outside) = Tuned::from_search(u);
-        let pass = Pass { smooth: false, hold_out_every: self.hold_out_every, prediction_step_s: self.step_s };
-        let r = run(&self.rows, &values.apply(self.base), pass)?;
-        Ok(-r.summary.range_log_likelihood + 1e3 * outside)
+    /// Negative cross-validated log predictive density, plus the prior, the consistency floor
+    /// and a penalty outside the bounds.
+    fn cost(&self, u: &[f64]) -> f64 {
+        let (values, outside) = self.bounds.from_search(u);
+        let Ok(f) = folds(&self.rows, &values.apply(self.base), self.hold_out_every, self.step_s) else {
+            return FAILED;
+        };
+        -f.log_predictive + self.prior(&values) + floor_penalty(f.used_excess) + 1e3 * outside
+    }
+
+    /// −log of the Gaussian prior about the start, in search coordinates.
+    fn prior(&self, values: &Tuned) -> f64 {
+        let (v, s) = (values.to_search(), self.start.to_search());
+        v.iter().zip(&s).zip(PRIOR_SD).map(|((v, s), sd)| 0.5 * ((v - s) / sd).powi(2)).sum()
+    }
+
+    /// The diagonal SDs of the cost's curvature at `u` (search coordinates), in the values' units.
+    fn sd(&self, u: &[f64], values: &Tuned) -> TunedSd {
+        let c0 = self.cost(u);
+        let mut sd = [None; 5];
+        for (i, step) in CURVATURE_STEPS.iter().enumerate() {
+            let at = |d: f64| {
+                let mut v = u.to_vec();
+                v[i] += d;
+                // At a bound the curvature is the penalty's, not the log's: no SD.
+                (self.bounds.from_search(&v).1 == 0.0).then(|| self.cost(&v))
+            };
+            let (Some(up), Some(down)) = (at(*step), at(-*step)) else { continue };
+            let curvature = (up - 2.0 * c0 + down) / (step * step);
+            sd[i] = (curvature > 0.0 && curvature.is_finite()).then(|| 1.0 / curvature.sqrt());
+        }
+        // Log coordinates: an SD s of ln v is about v·s in v.
+        TunedSd {
+            range_sd_m: sd[0].map(|s| s * values.range_sd_m),
+            q_en: sd[1].map(|s| s * values.q_en),
+            speed_scale: sd[2],
+            heading_bias_deg: sd[3],
+            p0_en: sd[4].map(|s| s * values.p0_en),
+        }
     }
 }
 
-/// The full-rate smoothed figures of `values` (before and after the search).
-fn score(rows: &[LogRow], base: &PostConfig, hold_out_every: usize, values: Tuned) -> Result<Scored, PostError> {
-    let pass = Pass { smooth: true, hold_out_every, prediction_step_s: None };
-    let r = run(rows, &values.apply(base), pass)?;
-    Ok(Scored::of(values, &r.summary))
+/// The range σ's consistency floor: the smoothed track's residuals on the ranges it used have
+/// variance R − h Pˢ hᵀ ≤ R when the noise is right, so a mean r²/R above 1 says the range σ is
+/// set below what the log shows. Each range's excess costs as much as a unit of log density
+/// (invented weight, docs/models.md#post-tuning).
+fn floor_penalty((sum, n): (f64, usize)) -> f64 {
+    if n == 0 {
+        return 0.0;
+    }
+    let mean = sum / n as f64;
+    n as f64 * (mean - 1.0).max(0.0)
+}
+
+/// The full-rate figures of `values`: the cross-validation and the full run.
+fn score(rows: &[LogRow], base: &PostConfig, k: usize, values: Tuned) -> Result<Scored, PostError> {
+    let cfg = values.apply(base);
+    let cv = folds(rows, &cfg, k, None)?.cross_validation(k);
+    let full = run(rows, &cfg, Pass { smooth: true, hold_out_every: 0, hold_out_phase: 0, prediction_step_s: None })?;
+    let s = &full.summary;
+    let n = full.samples.len().max(1) as f64;
+    let bias_state = full.samples.iter().map(|x| x.smoothed_heading_bias).sum::<f64>() / n;
+    Ok(Scored {
+        // b is the reading's offset in math heading (counter-clockwise), the compass's is clockwise.
+        compass_bias_deg: values.heading_bias_deg - bias_state.to_degrees(),
+        values,
+        log_likelihood: s.range_log_likelihood,
+        in_sample_rms_filter_m: s.residual_rms_filter_m,
+        in_sample_rms_smoothed_m: s.residual_rms_smoothed_m,
+        ranges_gated: s.ranges_gated,
+        held_out_rms_filter_m: cv.rms_filter_m,
+        held_out_rms_smoothed_m: cv.rms_smoothed_m,
+        held_out_log_predictive: cv.log_predictive,
+        cross_validation: cv,
+    })
 }
 
 /// A running mean of one dead-reckoning kind within a block: the first row's time, the sums of
@@ -289,7 +545,7 @@ impl CostFunction for Problem<'_> {
     type Param = Vec<f64>;
     type Output = f64;
     fn cost(&self, u: &Vec<f64>) -> Result<f64, argmin::core::Error> {
-        Ok(Problem::cost(self, u)?)
+        Ok(Problem::cost(self, u))
     }
 }
 
@@ -307,21 +563,22 @@ pub fn tune(rows: &[LogRow], cfg: &PostConfig, opts: &TuneOptions) -> Result<Tun
     }
     cfg.validate()?;
     let start = Tuned::of(cfg);
-    let before = score(rows, cfg, opts.hold_out_every, start)?;
+    let k = opts.hold_out_every;
+    let before = score(rows, cfg, k, start)?;
     if before.in_sample_rms_filter_m.is_none() {
         return Err(TuneError::NoRanges);
     }
-    let problem = if block_s > cfg.auv.step_s {
-        let rows = Cow::Owned(block_averaged(rows, block_s, cfg));
-        Problem { rows, step_s: Some(block_s), base: cfg, hold_out_every: opts.hold_out_every }
+    let (rows_searched, step_s) = if block_s > cfg.auv.step_s {
+        (Cow::Owned(block_averaged(rows, block_s, cfg)), Some(block_s))
     } else {
-        Problem { rows: Cow::Borrowed(rows), step_s: None, base: cfg, hold_out_every: opts.hold_out_every }
+        (Cow::Borrowed(rows), None)
     };
+    let bounds = Bounds::of(&start);
+    let problem = Problem { rows: rows_searched, step_s, base: cfg, start, bounds, hold_out_every: k };
     // Initial simplex: the start and one vertex per coordinate, a step typical of its scale.
     let origin = start.to_search();
-    let steps = [0.5, 1.5, 0.03, 2.0];
     let mut simplex = vec![origin.clone()];
-    for (i, step) in steps.iter().enumerate() {
+    for (i, step) in SIMPLEX_STEPS.iter().enumerate() {
         let mut v = origin.clone();
         v[i] += step;
         simplex.push(v);
@@ -331,20 +588,23 @@ pub fn tune(rows: &[LogRow], cfg: &PostConfig, opts: &TuneOptions) -> Result<Tun
         .configure(|s| s.max_iters(opts.max_iters))
         .run()
         .map_err(|e| TuneError::Optimiser(e.to_string()))?;
+    let problem = res.problem.problem.as_ref().ok_or_else(|| TuneError::Optimiser("no problem returned".into()))?;
     let state = res.state();
     let best = state.get_best_param().cloned().unwrap_or(origin);
     let evaluations = state.get_func_counts().get("cost_count").copied().unwrap_or(0);
     let iterations = state.get_iter();
-    let (values, _) = Tuned::from_search(&best);
-    let after = score(rows, cfg, opts.hold_out_every, values)?;
-    Ok(TuneReport {
-        before,
-        after,
-        hold_out_every: opts.hold_out_every,
-        iterations,
-        evaluations,
-        config: values.apply(cfg),
-    })
+    let converged = iterations < opts.max_iters;
+    let (values, _) = bounds.from_search(&best);
+    let sd = problem.sd(&best, &values);
+    let after = score(rows, cfg, k, values)?;
+    let guard = Guard::judge(&before, &after, converged, opts.max_iters);
+    let chosen = if guard.kept == Kept::Start { start } else { values };
+    let mut config = chosen.apply(cfg);
+    if let (Some(s), true) = (sd.heading_bias_deg, guard.kept != Kept::Start) {
+        // The compass-bias state starts no narrower than the tuned bias is known.
+        config.auv.p0[BIAS] = config.auv.p0[BIAS].max(s.to_radians().powi(2));
+    }
+    Ok(TuneReport { before, after, sd, bounds, guard, chosen, hold_out_every: k, iterations, evaluations, config })
 }
 
 #[cfg(test)]
@@ -389,6 +649,57 @@ mod tests {
         let Observation::Velocity { frame: VelocityFrame::Earth, v } = dvl[0].obs else { unreachable!() };
         assert_eq!((dvl.len(), v), (1, [1.5, 1.0]));
         assert!((dvl[0].sigma.unwrap() - cfg.velocity_sd_m_s / 2.0).abs() < 1e-12);
+    }
+
+    fn scored(held_out_log_predictive: f64, ranges_gated: usize) -> Scored {
+        let values = Tuned::of(&PostConfig::default());
+        let cross_validation = CrossValidation {
+            folds: 5,
+            ranges: 50,
+            log_predictive: held_out_log_predictive,
+            rms_filter_m: None,
+            rms_smoothed_m: None,
+            mean_nis_smoothed: None,
+        };
+        Scored {
+            values,
+            log_likelihood: 0.0,
+            in_sample_rms_filter_m: None,
+            in_sample_rms_smoothed_m: None,
+            ranges_gated,
+            compass_bias_deg: 0.0,
+            held_out_rms_filter_m: None,
+            held_out_rms_smoothed_m: None,
+            held_out_log_predictive,
+            cross_validation,
+        }
+    }
+
+    #[test]
+    fn the_guard_keeps_the_start_unless_the_result_predicts_better_and_rejects_no_more() {
+        let start = scored(-100.0, 2);
+        let g = Guard::judge(&start, &scored(-80.0, 2), true, 50);
+        assert_eq!((g.kept, g.warning), (Kept::Tuned, None));
+        let g = Guard::judge(&start, &scored(-80.0, 2), false, 50);
+        assert_eq!(g.kept, Kept::BestCandidate);
+        assert!(g.warning.unwrap().contains("cap of 50 iterations"));
+        let g = Guard::judge(&start, &scored(-120.0, 2), true, 50);
+        assert_eq!(g.kept, Kept::Start);
+        assert!(g.warning.unwrap().contains("no better"));
+        let g = Guard::judge(&start, &scored(-100.0, 2), true, 50);
+        assert_eq!(g.kept, Kept::Start, "equal is not better");
+        let g = Guard::judge(&start, &scored(-80.0, 3), false, 50);
+        assert_eq!(g.kept, Kept::Start);
+        let w = g.warning.unwrap();
+        assert!(w.contains("reject 3 range(s)") && w.contains("reject 2") && w.contains("cap of 50"), "{w}");
+        assert_eq!(w.matches("tuning:").count(), 1, "one warning: {w}");
+    }
+
+    #[test]
+    fn the_floor_costs_only_residuals_larger_than_the_noise() {
+        assert_eq!(floor_penalty((40.0, 50)), 0.0);
+        assert_eq!(floor_penalty((0.0, 0)), 0.0);
+        assert!((floor_penalty((100.0, 50)) - 50.0).abs() < 1e-12);
     }
 
     #[test]

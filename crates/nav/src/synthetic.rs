@@ -2,6 +2,10 @@
 //! tests and the 24-hour benchmark): one AUV and any number of moving beacons, written as general
 //! log rows. Every number here is invented for testing, not taken from a thesis.
 //!
+//! [`SyntheticSpec::field_like`] is shaped like a short field run: one moving beacon, a ping every
+//! 18 s for about 16 minutes, truth every second, and the pings of one early minute lost during
+//! the first turn.
+//!
 //! The AUV runs at a constant speed through the water with heading ψ(t) = ψ₀ + A sin(2πt/T), with
 //! A = 2.405 rad (the first zero of J₀), so its mean heading has no drift and it stays near the
 //! start however long the log; a water current carries it. Beacon i circles a point 800 m from
@@ -37,6 +41,11 @@ pub struct SyntheticSpec {
     pub heading_sd_deg: f64,
     /// A truth row every this many seconds.
     pub truth_every_s: f64,
+    /// Distance of each beacon's circle centre from the start (m).
+    pub beacon_distance_m: f64,
+    /// Pings sent within [from, to] s are lost (no fix, no range row): an acoustic silence. The
+    /// noise is still drawn for them, so the other ranges are the same with or without it.
+    pub range_silence_s: Option<[f64; 2]>,
     pub seed: u64,
 }
 
@@ -55,7 +64,32 @@ impl Default for SyntheticSpec {
             speed_sd: 0.05,
             heading_sd_deg: 0.5,
             truth_every_s: 10.0,
+            beacon_distance_m: 800.0,
+            range_silence_s: None,
             seed: 1,
+        }
+    }
+}
+
+impl SyntheticSpec {
+    /// A field-like run (invented, shaped like a 16.5-minute single-beacon OWTT run): 990 s, one
+    /// beacon circling 300 m away, a ping every 18 s (51 ranges arrive), truth at 1 Hz, and the pings
+    /// between 60 s and 120 s lost while the AUV turns (three ranges, then a minute of silence).
+    /// The range noise is 0.8 m plus the τ-proportional part, the speed log 3 % slow and the
+    /// compass 3° off: none of them the post-processing defaults.
+    pub fn field_like(seed: u64) -> SyntheticSpec {
+        SyntheticSpec {
+            duration_s: 990.0,
+            beacons: 1,
+            range_every_s: 18.0,
+            range_sd_m: 0.8,
+            speed_scale: 1.03,
+            heading_bias_deg: 3.0,
+            truth_every_s: 1.0,
+            beacon_distance_m: 300.0,
+            range_silence_s: Some([60.0, 120.0]),
+            seed,
+            ..SyntheticSpec::default()
         }
     }
 }
@@ -79,11 +113,12 @@ fn compass(psi: f64) -> f64 {
     CompassDeg::from(Heading::from_radians(psi)).0
 }
 
-/// Beacon `i` of `n` at time t: circling its centre at 0.5 m/s on a 100 m radius.
-fn beacon_at(i: u32, n: u32, t: f64) -> (f64, f64) {
+/// Beacon `i` of `n` at time t: circling its centre, `distance` from the start, at 0.5 m/s on a
+/// 100 m radius.
+fn beacon_at(i: u32, n: u32, t: f64, distance: f64) -> (f64, f64) {
     let bearing = std::f64::consts::TAU * f64::from(i) / f64::from(n.max(1));
     let phase = 0.5 * t / 100.0 + bearing;
-    (800.0 * bearing.cos() + 100.0 * phase.cos(), 800.0 * bearing.sin() + 100.0 * phase.sin())
+    (distance * bearing.cos() + 100.0 * phase.cos(), distance * bearing.sin() + 100.0 * phase.sin())
 }
 
 /// The true AUV track sampled every `dt` (midpoint integration, fine enough to be the truth).
@@ -140,8 +175,11 @@ pub fn synthetic_log(spec: &SyntheticSpec) -> Vec<LogRow> {
         }
         if k % range_every == 0 && spec.beacons > 0 {
             let beacon = (k / range_every) as u32 % spec.beacons;
-            let (be, bn) = beacon_at(beacon, spec.beacons, t);
-            rows.push(row(t, Observation::BeaconFix { beacon, e: be, n: bn, depth: 0.0, fixed: false }));
+            let (be, bn) = beacon_at(beacon, spec.beacons, t, spec.beacon_distance_m);
+            let lost = spec.range_silence_s.is_some_and(|[from, to]| (from..=to).contains(&t));
+            if !lost {
+                rows.push(row(t, Observation::BeaconFix { beacon, e: be, n: bn, depth: 0.0, fixed: false }));
+            }
             // Distance to where the AUV is on arrival (two fixed-point iterations).
             let dist = |tau: f64| {
                 let (e, n) = at(t + tau);
@@ -151,7 +189,9 @@ pub fn synthetic_log(spec: &SyntheticSpec) -> Vec<LogRow> {
             let sd = (spec.range_sd_m.powi(2) + (tau * spec.sigma_sound_speed).powi(2)).sqrt();
             let noise: f64 = acoustic.sample(StandardNormal);
             let travel_time = (dist(tau) + sd * noise).max(0.1) / SOUND_SPEED;
-            pending_ranges.push(row(t + travel_time, Observation::Range { beacon, travel_time }));
+            if !lost {
+                pending_ranges.push(row(t + travel_time, Observation::Range { beacon, travel_time }));
+            }
         }
     }
     rows.extend(pending_ranges.into_iter().filter(|r| r.t <= spec.duration_s));
@@ -180,5 +220,25 @@ mod tests {
         // One ping every 15 s; the last one (sent at the end) arrives after the log ends.
         assert_eq!(ranges, 479);
         assert!(rows.windows(2).all(|w| w[0].t <= w[1].t), "rows in time order");
+    }
+
+    #[test]
+    fn the_field_like_run_has_three_pings_then_a_minute_of_silence() {
+        let rows = synthetic_log(&SyntheticSpec::field_like(1));
+        let sent: Vec<f64> = rows
+            .iter()
+            .filter_map(|r| match r.obs {
+                Observation::Range { travel_time, .. } => Some(r.t - travel_time),
+                _ => None,
+            })
+            .collect();
+        assert_eq!(sent.len(), 51, "{sent:?}");
+        assert!((sent[2] - 54.0).abs() < 1e-9 && (sent[3] - 126.0).abs() < 1e-9, "{sent:?}");
+        let truth = rows.iter().filter(|r| matches!(r.obs, Observation::Truth { .. })).count();
+        assert_eq!(truth, 990);
+        // The same noise on the ranges after the silence as without it.
+        let all = synthetic_log(&SyntheticSpec { range_silence_s: None, ..SyntheticSpec::field_like(1) });
+        let tail = |rows: &[LogRow]| rows.iter().filter(|r| r.t > 130.0).copied().collect::<Vec<_>>();
+        assert_eq!(tail(&rows), tail(&all));
     }
 }

@@ -12,8 +12,10 @@
 
 mod brute;
 mod cost_model;
+pub mod current_states;
 pub mod error_model;
 pub mod estimator;
+pub mod horizon;
 pub mod motion;
 pub mod penalty;
 pub mod planner;
@@ -30,13 +32,14 @@ pub use error_model::{AuvError, BearingMode, CostMode, ErrorModel};
 pub use estimator::{
     expected_posterior, Aggregate, AuvEstimate, BiasTable, EstimatorSpec, LinkModel, LinkTable, RangeNoise,
 };
+pub use horizon::{GoalTerm, HorizonSpec};
 pub use motion::{CnaKind, CnaPose, MotionConfig, MotionOption};
 pub use penalty::{
     Doubling, NoPenalty, Penalty, PenaltyCase, PenaltyFn, PenaltyPair, ScaledViolation, SideTerm, Violation,
 };
 pub use planner::{
-    Algorithm, AuvForecast, CostSpec, Deadline, Decision, DistanceLimits, FnForecast, LookAheadPlanner, PlanInput,
-    Planner, PlannerConfig, SearchConfig,
+    Algorithm, AuvForecast, CostSpec, CurrentInput, Deadline, Decision, DistanceLimits, FnForecast, LookAheadPlanner,
+    PlanInput, Planner, PlannerConfig, SearchConfig, SurveyInput,
 };
 pub use true_error::{TrueError, TruthInput, TruthSpec};
 

@@ -8,13 +8,15 @@
 //! happened (in pre-deployment mode they are the forecast ones).
 
 use crate::cost_model::{CostModel, HudsonCost, Tangential};
+use crate::current_states::{CurrentState, CurrentStates, CurrentStatesCost};
 use crate::error_model::{to_arr, AuvError, ErrorModel};
 use crate::estimator::{AuvEstimate, BiasTable, EkfCost, EstimatorSpec, LinkModel, LinkTable};
+use crate::horizon::{best_order, GoalTerm, HorizonSpec, World};
 use crate::motion::{CnaPose, FastOption, FastPose, MotionConfig, MotionOption};
 use crate::penalty::PenaltyPair;
 use crate::search::{branch_and_bound, Shared};
 use crate::tree::{reaches, rest_floors, Tree};
-use crate::true_error::{TrueErrorCost, TruthInput, TruthSpec};
+use crate::true_error::{TrueErrorCost, TrueState, TruthInput, TruthSpec};
 use crate::{brute, PlanError, SearchOutcome};
 use coopnav_core::validation::{CheckFields, Problems};
 use coopnav_core::Vec3;
@@ -285,6 +287,27 @@ pub struct LookAheadPlanner {
     link: LinkTable,
     /// The estimator-aware cost's range bias from a known sound-speed profile (step 4).
     bias: Option<BiasTable>,
+    /// The mission-long horizon layer over the estimator-aware costs (`horizon`); None: none.
+    horizon: Option<HorizonSpec>,
+    /// The filters' current states (`current_states`), for [`LookAheadPlanner::decide_on_current_states`].
+    current_states: Option<CurrentStates>,
+}
+
+/// What the current-states cost starts from at a decision: each AUV's state (the order of
+/// `PlanInput::estimates`) and v, the CNA's own true horizontal variance per axis, m².
+#[derive(Debug, Clone, Copy)]
+pub struct CurrentInput<'a> {
+    pub states: &'a [CurrentState],
+    pub cna_variance: f64,
+}
+
+/// What the horizon layer plans over when it is not the tree's own input: every AUV of the
+/// survey (those the CNA has not heard from along their mission plans), their states and, under
+/// the true-error cost, their true-error moments.
+#[derive(Clone, Copy)]
+pub struct SurveyInput<'a> {
+    pub plan: &'a PlanInput<'a>,
+    pub truth: Option<&'a TruthInput<'a>>,
 }
 
 /// The cost-independent part of a tree: predicted AUV positions and the CNA's options.
@@ -301,19 +324,35 @@ impl LookAheadPlanner {
     /// A planner with a perfect acoustic link.
     pub fn new(cfg: PlannerConfig) -> Result<Self, PlanError> {
         cfg.validate()?;
-        Ok(LookAheadPlanner { cfg, link: LinkTable::perfect(), bias: None })
+        Ok(LookAheadPlanner { cfg, link: LinkTable::perfect(), bias: None, horizon: None, current_states: None })
     }
 
     /// A planner whose estimator-aware cost weights each ping by `link`'s success probability.
     pub fn with_link(cfg: PlannerConfig, link: &dyn LinkModel) -> Result<Self, PlanError> {
         cfg.validate()?;
-        Ok(LookAheadPlanner { cfg, link: LinkTable::sample(link)?, bias: None })
+        Ok(LookAheadPlanner { cfg, link: LinkTable::sample(link)?, bias: None, horizon: None, current_states: None })
     }
 
     /// The estimator-aware cost's range bias from `table` (the scale error between two depths)
     /// instead of `bias_per_km_m`.
     pub fn with_bias(mut self, table: BiasTable) -> Self {
         self.bias = Some(table);
+        self
+    }
+
+    /// The mission-long horizon layer (`horizon`) above the estimator-aware costs' trees; a spec
+    /// with `enabled = false` is none. Hudson's cost is the thesis's planner and never has it.
+    pub fn with_horizon(mut self, spec: HorizonSpec) -> Result<Self, PlanError> {
+        Ok(CheckFields::validate(&spec, "horizon.")?).map(|()| {
+            self.horizon = spec.enabled.then_some(spec);
+            self
+        })
+    }
+
+    /// The true-error cost on filters that estimate the water current (`current_states`), used by
+    /// [`LookAheadPlanner::decide_on_current_states`].
+    pub fn with_current_states(mut self, spec: CurrentStates) -> Self {
+        self.current_states = Some(spec);
         self
     }
 
@@ -362,7 +401,7 @@ impl LookAheadPlanner {
         Ok(Geometry { auv, depth: levels, n, options, root_options, root_pose })
     }
 
-    fn tree<M: CostModel>(&self, g: Geometry, model: M, root_state: Vec<M::State>) -> Tree<M> {
+    fn tree<M: CostModel>(&self, g: Geometry, model: M, root_state: Vec<M::State>, goal: Option<GoalTerm>) -> Tree<M> {
         let cfg = &self.cfg;
         Tree {
             motion: cfg.motion,
@@ -380,6 +419,7 @@ impl LookAheadPlanner {
             auv: g.auv,
             rest_floor: rest_floors(&model.level_floors(&root_state, g.depth), 1.0 + model.terminal_levels()),
             tie_tolerance: cfg.search.tie_tolerance,
+            goal,
             model,
             root_pose: g.root_pose,
             root_state,
@@ -394,7 +434,7 @@ impl LookAheadPlanner {
             alpha_tau: self.cfg.error.alpha * self.cfg.motion.tau,
         };
         let root = input.errors.iter().map(|e| Tangential { eps2: e.eps2, los: e.los }).collect();
-        Ok(self.tree(g, model, root))
+        Ok(self.tree(g, model, root, None))
     }
 
     fn estimator_model(&self, spec: EstimatorSpec, input: &PlanInput) -> Result<EkfCost, PlanError> {
@@ -416,31 +456,81 @@ impl LookAheadPlanner {
         Ok(model)
     }
 
-    fn estimator_tree(&self, spec: EstimatorSpec, input: &PlanInput, depth: usize) -> Result<Tree<EkfCost>, PlanError> {
+    fn estimator_tree(
+        &self,
+        spec: EstimatorSpec,
+        input: &PlanInput,
+        depth: usize,
+        goal: Option<GoalTerm>,
+    ) -> Result<Tree<EkfCost>, PlanError> {
         let g = self.geometry(input, depth)?;
         let model = self.estimator_model(spec, input)?;
         let root = input.estimates.iter().map(|e| e.cov).collect();
-        Ok(self.tree(g, model, root))
+        Ok(self.tree(g, model, root, goal))
     }
 
-    fn true_error_tree(
+    /// The true-error model and its root states for `input` with the moments `known`.
+    fn true_error_model(
         &self,
         (spec, truth): (EstimatorSpec, TruthSpec),
         input: &PlanInput,
         known: &TruthInput,
-        depth: usize,
-    ) -> Result<Tree<TrueErrorCost>, PlanError> {
-        let g = self.geometry(input, depth)?;
-        if known.errors.len() != g.n {
-            return Err(PlanError::Input(format!(
-                "{} true-error states for {} forecast AUVs",
-                known.errors.len(),
-                g.n
-            )));
+    ) -> Result<(TrueErrorCost, Vec<TrueState>), PlanError> {
+        let n = input.forecast.n_auvs();
+        if known.errors.len() != n {
+            return Err(PlanError::Input(format!("{} true-error states for {n} forecast AUVs", known.errors.len())));
         }
         let root = TrueErrorCost::root(input.estimates.iter().map(|e| e.cov), known)?;
-        let model = TrueErrorCost::new(self.estimator_model(spec, input)?, truth, self.cfg.motion.tau);
-        Ok(self.tree(g, model, root))
+        Ok((TrueErrorCost::new(self.estimator_model(spec, input)?, truth, self.cfg.motion.tau), root))
+    }
+
+    /// The horizon layer's goal for this decision (None without the layer, or when the forecast
+    /// cannot place every AUV now): the best visiting order over `survey`'s AUVs under `model`
+    /// from `root`, and the tree levels' goal positions.
+    fn goal<M: CostModel>(&self, survey: &PlanInput, model: &M, root: &[M::State]) -> Option<GoalTerm> {
+        let spec = self.horizon?;
+        let motion = &self.cfg.motion;
+        let per_segment = ((spec.segment_s / motion.tau).round() as usize).max(1);
+        let levels = (per_segment * spec.segments).max(self.cfg.look_ahead + 1);
+        let n = survey.forecast.n_auvs();
+        let mut auv: Vec<[f64; 3]> = Vec::with_capacity(levels * n);
+        for j in 0..levels {
+            let t = survey.t + (j + 1) as f64 * motion.tau;
+            for k in 0..n {
+                // Past the end of what is known the AUV is held where it was last forecast.
+                match survey.forecast.position(k, t) {
+                    Some(p) => auv.push(to_arr(&p)),
+                    None if j > 0 => auv.push(auv[(j - 1) * n + k]),
+                    None => return None,
+                }
+            }
+        }
+        let step = motion.speed * motion.tau;
+        let world = World {
+            auv,
+            n,
+            levels_per_segment: per_segment,
+            segments: spec.segments,
+            cna: to_arr(&survey.cna.pos),
+            step,
+            standoff: spec.standoff_m,
+        };
+        let order = best_order(model, &world, root)?;
+        let target = order.targets[0];
+        let goal = (0..levels).map(|l| world.auv[l * n + target]).map(|a| [a[0], a[1]]).collect();
+        Some(GoalTerm { target, per_metre: spec.weight * order.delay / step, standoff_m: spec.standoff_m, goal })
+    }
+
+    fn true_error_tree(
+        &self,
+        spec: (EstimatorSpec, TruthSpec),
+        input: &PlanInput,
+        known: &TruthInput,
+        (depth, goal): (usize, Option<GoalTerm>),
+    ) -> Result<Tree<TrueErrorCost>, PlanError> {
+        let g = self.geometry(input, depth)?;
+        let (model, root) = self.true_error_model(spec, input, known)?;
+        Ok(self.tree(g, model, root, goal))
     }
 
     fn decision<M: CostModel>(&self, tree: &Tree<M>, out: SearchOutcome, requested: usize) -> Decision {
@@ -536,17 +626,88 @@ impl LookAheadPlanner {
     /// One decision; `truth` (each AUV's true-error moments and the CNA's own variance) is what
     /// the true-error cost starts from, required by it and ignored by the other costs.
     pub fn decide_with_truth(&self, input: &PlanInput, truth: Option<&TruthInput>) -> Result<Decision, PlanError> {
+        self.decide_with_survey(input, truth, SurveyInput { plan: input, truth })
+    }
+
+    /// [`LookAheadPlanner::decide_with_truth`], with the horizon layer (if any) planning over
+    /// `survey` instead of the tree's own AUVs.
+    pub fn decide_with_survey(
+        &self,
+        input: &PlanInput,
+        truth: Option<&TruthInput>,
+        survey: SurveyInput,
+    ) -> Result<Decision, PlanError> {
         match (self.cfg.cost, truth) {
             (CostSpec::Hudson, _) => self.run(|depth| self.hudson_tree(input, depth)),
             (CostSpec::Estimator(spec @ EstimatorSpec { truth: None, .. }), _) => {
-                self.run(|depth| self.estimator_tree(spec, input, depth))
+                let goal = match self.horizon {
+                    Some(_) => {
+                        let model = self.estimator_model(spec, survey.plan)?;
+                        let root: Vec<[f64; 3]> = survey.plan.estimates.iter().map(|e| e.cov).collect();
+                        self.goal(survey.plan, &model, &root)
+                    }
+                    None => None,
+                };
+                self.run(|depth| self.estimator_tree(spec, input, depth, goal.clone()))
             }
             (CostSpec::Estimator(spec @ EstimatorSpec { truth: Some(t), .. }), Some(known)) => {
-                self.run(|depth| self.true_error_tree((spec, t), input, known, depth))
+                let goal = match (self.horizon, survey.truth) {
+                    (Some(_), Some(survey_known)) => {
+                        let (model, root) = self.true_error_model((spec, t), survey.plan, survey_known)?;
+                        self.goal(survey.plan, &model, &root)
+                    }
+                    _ => None,
+                };
+                self.run(|depth| self.true_error_tree((spec, t), input, known, (depth, goal.clone())))
             }
             (CostSpec::Estimator(_), None) => Err(PlanError::Input(
                 "the true-error cost (cost.truth) needs each AUV's true-error moments (decide_with_truth)".into(),
             )),
         }
+    }
+}
+
+impl LookAheadPlanner {
+    /// One decision under the true-error cost on filters with current states (`current_states`):
+    /// needs `cost.truth` and [`LookAheadPlanner::with_current_states`]. `survey` (its input and
+    /// states over every AUV) is what the horizon layer, if any, plans over; None: the tree's own.
+    pub fn decide_on_current_states(
+        &self,
+        input: &PlanInput,
+        states: &CurrentInput,
+        survey: Option<(&PlanInput, &CurrentInput)>,
+    ) -> Result<Decision, PlanError> {
+        let (CostSpec::Estimator(spec @ EstimatorSpec { truth: Some(truth), .. }), Some(current)) =
+            (self.cfg.cost, self.current_states)
+        else {
+            return Err(PlanError::Input(
+                "the current-states cost needs cost.truth and the filters' current states (with_current_states)".into(),
+            ));
+        };
+        let model = |plan: &PlanInput,
+                     known: &CurrentInput|
+         -> Result<(CurrentStatesCost, Vec<CurrentState>), PlanError> {
+            let n = plan.forecast.n_auvs();
+            if known.states.len() != n {
+                return Err(PlanError::Input(format!("{} current states for {n} forecast AUVs", known.states.len())));
+            }
+            CurrentStatesCost::check(known.states)?;
+            let filter = self.estimator_model(spec, plan)?;
+            let cost = CurrentStatesCost::new(filter, truth, current, self.cfg.motion.tau, known.cna_variance);
+            Ok((cost, known.states.to_vec()))
+        };
+        let goal = match self.horizon {
+            Some(_) => {
+                let (plan, known) = survey.unwrap_or((input, states));
+                let (m, root) = model(plan, known)?;
+                self.goal(plan, &m, &root)
+            }
+            None => None,
+        };
+        self.run(|depth| {
+            let g = self.geometry(input, depth)?;
+            let (m, root) = model(input, states)?;
+            Ok(self.tree(g, m, root, goal.clone()))
+        })
     }
 }

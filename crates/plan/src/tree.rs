@@ -8,6 +8,7 @@
 //! count the last level 1 + H times.
 
 use crate::cost_model::{norm, Below, CostModel};
+use crate::horizon::GoalTerm;
 use crate::motion::{FastOption, FastPose, MotionConfig};
 use crate::penalty::{Penalty, PenaltyFn, PenaltyPair, Violation};
 use crate::planner::DistanceLimits;
@@ -49,6 +50,9 @@ pub(crate) struct Tree<M: CostModel> {
     pub step: f64,
     /// `SearchConfig::tie_tolerance`: level-0 options within this relative margin of the minimum tie.
     pub tie_tolerance: f64,
+    /// The mission-long horizon's pull (`horizon::GoalTerm`), added to every leaf's penalised
+    /// cost; None: no horizon layer.
+    pub goal: Option<GoalTerm>,
 }
 
 /// When a node being expanded is cut: its path cost so far `acc` plus the raw cost summed over
@@ -179,7 +183,10 @@ impl<M: CostModel> Tree<M> {
                 break;
             }
         }
-        total
+        match &self.goal {
+            Some(g) if level + 1 < self.depth => total + g.bound(self.depth - 1, p, self.depth - 1 - level, self.step),
+            _ => total,
+        }
     }
 
     /// Expands `parent` (a node at level − 1, or the root) by option `opt` into a node at `level`:
@@ -254,7 +261,11 @@ impl<M: CostModel> Tree<M> {
                 return None;
             }
         }
-        Some((pose, self.penalise(level, &pose, raw, dmin2, dmax2)))
+        let cost = self.penalise(level, &pose, raw, dmin2, dmax2);
+        match &self.goal {
+            Some(g) if leaf => Some((pose, cost + g.cost(level, pose.p))),
+            _ => Some((pose, cost)),
+        }
     }
 
     #[inline(always)]

@@ -86,6 +86,18 @@ def from_json(cls, j):
     return msg
 
 
+def decision(c, **fields):
+    """A decision_t with the given fields and a tally of hand-picked values."""
+    m = c.decision_t()
+    m.seq, m.outcome, m.levels_requested, m.levels_searched, m.nodes = 41, c.decision_t.OUTCOME_PLANNED, 5, 4, 2**40
+    m.elapsed_s, m.fix_utime, m.n_status = 0.0123, 1_700_000_000_000_000, 12
+    m.decisions, m.deadline_misses, m.failures, m.waiting = 42, 1, 2, 3
+    m.min_levels_searched, m.mean_levels_searched = 3, 4.75
+    for k, v in fields.items():
+        setattr(m, k, v)
+    return m
+
+
 def samples():
     """Hand-made messages, values chosen by hand (edges, unicode, NaN and infinities)."""
     import coopnav as c
@@ -103,15 +115,15 @@ def samples():
     ]
     return [
         pos,
-        make(c.cna_fix_t, utime=1_700_000_000_123_456, x=1234.5, y=-987.25, depth=0.5, heading=math.pi, source=c.cna_fix_t.SOURCE_GPS),
+        make(c.cna_fix_t, utime=1_700_000_000_123_456, x=1234.5, y=-987.25, depth=0.5, heading=math.pi, variance=9.0, source=c.cna_fix_t.SOURCE_GPS),
         make(c.status_frame_t, utime=2**63 - 1, src=-7, receive_time=3600.000125, n=6, data=bytes([0, 1, 127, 128, 254, 255])),
         make(c.status_frame_t, utime=0, src=0, receive_time=0.0, n=0, data=b""),
         make(c.owtt_range_t, utime=42, src=-128, transmit_time=100.0, receive_time=100.5, transponder=pos, travel_time=0.666),
-        make(c.cna_command_t, utime=5, has_waypoint=True, heading=-1.0, waypoint_x=500.0, waypoint_y=-250.0, speed=1.75),
-        make(c.cna_command_t, utime=6, has_waypoint=False, heading=0.1, waypoint_x=0.0, waypoint_y=0.0, speed=3.4028234663852886e38),
-        make(c.decision_t, utime=7, n_options=3, cost=[1.0, 2.5, -math.inf], levels=4, elapsed_s=0.0123, policy="centroid-standoff"),
-        make(c.decision_t, utime=8, n_options=0, cost=[], levels=0, elapsed_s=0.0, policy=""),
-        make(c.decision_t, utime=9, n_options=1, cost=[0.5], levels=1, elapsed_s=1.0, policy="ünïcode Ω 波 \U0001F30A"),
+        make(c.cna_command_t, utime=5, seq=17, has_waypoint=True, heading=-1.0, waypoint_x=500.0, waypoint_y=-250.0, waypoint_depth=2.0, speed=1.75),
+        make(c.cna_command_t, utime=6, seq=-1, has_waypoint=False, heading=0.1, waypoint_x=0.0, waypoint_y=0.0, waypoint_depth=-0.0, speed=3.4028234663852886e38),
+        decision(c, utime=7, n_options=3, option_turn=[-0.5, 0.0, 0.5], option_pitch=[0.0, 0.0, 0.0], option=2, cost=2.5, policy="planner-estimator"),
+        decision(c, utime=8, n_options=0, option_turn=[], option_pitch=[], option=-1, cost=math.nan, policy=""),
+        decision(c, utime=9, n_options=1, option_turn=[math.inf], option_pitch=[-1e-300], option=0, cost=-math.inf, policy="ünïcode Ω 波 \U0001F30A"),
         est[0],
         est[1],
         make(c.auv_sensors_t, utime=11, auv=3, heading=2.0, speed=1.5, depth=35.25, dvl_lock=True,

@@ -47,6 +47,8 @@ pub struct PolicySummary {
     /// check flagged as diverged, over all runs.
     pub nees_mean: f64,
     pub diverged: usize,
+    /// The filters' own recoveries (`filter.range_health`), over every AUV and run.
+    pub recoveries: u64,
     /// Per-run fleet mean errors, in run order.
     pub runs: Vec<f64>,
     /// Per AUV, its own mean true error in each run (run order): where in the fleet a difference
@@ -294,6 +296,7 @@ fn summarise(name: &str, rs: &[RunResult]) -> PolicySummary {
         healthy: rs.iter().all(|r| r.fleet.healthy),
         nees_mean: avg(&|r| r.auvs.iter().map(|a| a.health.nees_mean).sum::<f64>() / r.auvs.len().max(1) as f64),
         diverged: rs.iter().map(|r| r.fleet.diverged).sum(),
+        recoveries: rs.iter().flat_map(|r| &r.auvs).map(|a| u64::from(a.health.recoveries)).sum(),
         runs,
         auv_runs,
         auv_heard_runs,

@@ -319,6 +319,14 @@ pub fn postprocess(rows: &[LogRow], cfg: &PostConfig) -> Vec<Estimate> {
     ]
 }
 
+/// The filter steps of a `folds`-fold cross-validation of the log (one run per fold, each with
+/// the history of one run: the memory is [`postprocess`]'s).
+pub fn postprocess_folds(rows: &[LogRow], cfg: &PostConfig, folds: usize) -> Vec<Estimate> {
+    let steps = postprocess(rows, cfg)[0].value * folds as f64;
+    let fields = "--hold-out-every × the log's time span (silences up to max_gap_s) / auv.step_s";
+    vec![Estimate::new("cross-validation filter steps", fields, steps, MAX_VEHICLE_STEPS)]
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

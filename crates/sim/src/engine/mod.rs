@@ -27,25 +27,27 @@ use crate::models::metrics::{AuvMetrics, ErrorStats, FleetMetrics, LinkStats};
 use crate::models::peer::StatusFormat;
 use crate::models::schedule::Slot;
 use crate::models::surfacing::OwnNav;
+use crate::policy::belief;
 use crate::policy::planner::{ErrorTracker, PlannerStats};
 use crate::policy::registry::Policy;
 use crate::policy::ReportedCov;
 use crate::scenario::start::cna_start;
-use crate::scenario::world::{BeforeFirstReport, Scenario};
+use crate::scenario::world::Scenario;
 use coopnav_acomms::tl::{TlError, TransmissionLoss, TL_CEILING};
 use coopnav_core::{Bathymetry, Iver2State, SeedStream, Vec3};
-use coopnav_plan::predict::{StatusReport, UnderwayPredictor};
+use coopnav_plan::predict::UnderwayPredictor;
 use coopnav_plan::AuvForecast;
 use inflight::InFlight;
 use mini::SurfaceFilters;
 pub use observe::{
-    BuoyFix, BuoySample, CnaChoice, CommsEvent, DeadReckoning, Decision, FilterStart, Observer, Phase, PhaseClock,
-    RangeHeard, ShadowSample, ShipPose, ShipSample, StatusChoice, StatusFrames, StatusSent, Timing, Trace, TraceRow,
+    BuoyFix, BuoySample, CnaChoice, CnaStatusHeard, CommsEvent, DeadReckoning, Decision, FilterStart, Observer, Phase,
+    PhaseClock, RangeHeard, ShadowSample, ShipPose, ShipSample, StatusChoice, StatusFrames, StatusSent, Timing, Trace,
+    TraceRow,
 };
 use peer::{PeerLink, Plans};
 use phases::Payload;
 use rand_chacha::ChaCha8Rng;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 use std::cell::Cell;
 use std::sync::Arc;
 use std::time::Instant;
@@ -59,8 +61,8 @@ pub struct Faults {
     pub silent_from_s: f64,
 }
 
-/// Everything one run produced.
-#[derive(Debug, Clone, Serialize)]
+/// Everything one run produced (read back by the sweeps, which store each run's results).
+#[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct RunResult {
     pub policy: String,
     pub seed: u64,
@@ -302,7 +304,7 @@ impl<'a> Engine<'a> {
             rng_gps: streams.rng(stream::CNA_GPS),
             rng_nav: streams.rng(stream::CNA_NAV),
             clock: sc.channel.clocks.draw(&mut streams.rng(stream::CNA_CLOCK)),
-            predictors: auvs.iter().map(|a| cna_predictor(sc, a)).collect(),
+            predictors: (0..n).map(|k| belief::predictor(sc, k, &bathy)).collect(),
             model: ErrorTracker::new(n, cfg.error, sc.comms.tau, sc.planner.sigma0, sc.planner.eps0),
             acked: vec![Vec::new(); n],
             reported: vec![None; n],
@@ -421,7 +423,10 @@ impl<'a> Engine<'a> {
         t >= self.faults.silent_from_s && self.faults.silent_auvs.contains(&k)
     }
 
-    fn finish(self, seed: u64, wall_s: f64) -> RunResult {
+    fn finish(mut self, seed: u64, wall_s: f64) -> RunResult {
+        for (tally, auv) in self.tallies.iter_mut().zip(&self.auvs) {
+            tally.health.recovered(auv.ekf.recoveries());
+        }
         let auvs: Vec<AuvMetrics> = self.tallies.iter().enumerate().map(|(k, a)| metrics(k, a)).collect();
         let pooled: Vec<f64> = self.tallies.iter().flat_map(|a| a.errors.iter().copied()).collect();
         let modelled: Vec<f64> = self.tallies.iter().flat_map(|a| a.modelled.iter().copied()).collect();
@@ -441,23 +446,6 @@ impl<'a> Engine<'a> {
             wall_s,
         }
     }
-}
-
-/// The CNA's predictor of survey AUV `a`, knowing its mission plan when the scenario says the
-/// operator gave it (`planner.before_first_report = "mission_plan"`): launch point and time,
-/// planned speed and every planned waypoint, as the fleet configuration defines them.
-fn cna_predictor(sc: &Scenario, a: &SurveyAuv) -> UnderwayPredictor {
-    let predictor = UnderwayPredictor::new(sc.predictor_config());
-    if sc.planner.before_first_report == BeforeFirstReport::Ignore {
-        return predictor;
-    }
-    predictor.with_plan(StatusReport {
-        t: 0.0,
-        pos: a.truth,
-        speed: sc.fleet.speed,
-        heading: a.ctrl.state.heading,
-        waypoints: a.ctrl.waypoints().iter().map(|w| (w.x, w.y)).collect(),
-    })
 }
 
 /// Every survey AUV's side of Nams's link, when the statuses are Nams's frame 0.

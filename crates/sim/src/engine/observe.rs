@@ -185,6 +185,17 @@ pub struct Decision {
     pub to: Option<Vec3>,
 }
 
+/// A survey AUV's status the CNA's modem received (its frame 0 decoded and not lost to a
+/// collision): the status codec's bytes as they arrived, before the CNA reads them.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct CnaStatusHeard<'a> {
+    /// Transmission time and the end of its arrival at the CNA, s.
+    pub t_tx: f64,
+    pub t_rx: f64,
+    pub auv: usize,
+    pub bytes: &'a [u8],
+}
+
 /// Hooks the engine calls; every one defaults to doing nothing.
 pub trait Observer {
     /// Every CNA decision (every τ), with the leg it chose.
@@ -219,6 +230,8 @@ pub trait Observer {
     fn on_status_frames(&mut self, _frames: &StatusFrames) {}
     /// A survey AUV's shadow estimate of another, at its status slot.
     fn on_shadow(&mut self, _sample: &ShadowSample) {}
+    /// A status the CNA's modem received, at the end of its arrival (before the CNA reads it).
+    fn on_cna_status(&mut self, _status: &CnaStatusHeard) {}
     /// A packet whose fate is known (at the end of its arrival).
     fn on_packet(&mut self, _event: &CommsEvent) {}
     /// A phase of the run ended: the set-up once, then each phase of every step, in order.

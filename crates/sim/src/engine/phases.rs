@@ -7,8 +7,8 @@
 
 use super::inflight::Arrival;
 use super::observe::{
-    BuoyFix, CnaChoice, CommsEvent, DeadReckoning, Decision, Observer, RangeHeard, ShadowSample, ShipPose,
-    StatusChoice, StatusFrames, StatusSent, TraceRow,
+    BuoyFix, CnaChoice, CnaStatusHeard, CommsEvent, DeadReckoning, Decision, Observer, RangeHeard, ShadowSample,
+    ShipPose, StatusChoice, StatusFrames, StatusSent, TraceRow,
 };
 use super::peer::PeerLink;
 use super::vehicles::lerp;
@@ -23,11 +23,11 @@ use crate::models::noise::normal;
 use crate::models::peer::{StatusFormat, StatusTo};
 use crate::models::schedule::{Message, Owner};
 use crate::models::surfacing::Step;
+use crate::policy::belief::read_node_status;
 use crate::policy::ReportedCov;
 use crate::policy::{CnaCommand, PolicyContext};
 use crate::scenario::world::Scenario;
-use coopnav_acomms::codec::{DecodeError, EncodeError};
-use coopnav_acomms::node_report::NodeReport;
+use coopnav_acomms::codec::EncodeError;
 use coopnav_acomms::selector::{Choice, Outcome};
 use coopnav_acomms::status::{CovTrailer, CovarianceReport};
 use coopnav_acomms::status::{Frame0, LocalOrigin, NextWaypoint};
@@ -367,6 +367,9 @@ impl Engine<'_> {
                 }
                 (Payload::Status { rate, slot_id, bytes, decoded, heard_broadcasts, .. }, Owner::Cna) => {
                     let Owner::Auv(j) = meta.from else { continue };
+                    if decoded && survived {
+                        obs.on_cna_status(&CnaStatusHeard { t_tx: meta.t_tx, t_rx: meta.end, auv: j, bytes: &bytes });
+                    }
                     let message = (decoded && survived).then(|| self.read_at_cna(j, &bytes, meta.t_tx)).flatten();
                     self.tallies[j].up.record_arrival(rate.index(), (decoded, survived), message.is_some());
                     obs.on_packet(&event(&meta, "up", j, decoded, survived));
@@ -418,11 +421,7 @@ impl Engine<'_> {
     /// from a node report's trailer, the AUV's covariance (None: not decodable).
     fn read_at_cna(&self, j: usize, bytes: &[u8], t_tx: f64) -> Option<(StatusReport, Option<ReportedCov>)> {
         let Some(link) = self.peers.get(j) else {
-            let (m, cov) = read_status(bytes).ok()?;
-            let t = resolve_time(m.time_of_day, t_tx);
-            let pos = Vec3::new(m.x, m.y, m.depth);
-            let report = StatusReport { t, pos, speed: m.speed, heading: m.heading, waypoints: m.waypoints };
-            return Some((report, Some(ReportedCov { t, cov: cov.to_cov() })));
+            return read_node_status(bytes, t_tx).map(|(report, cov)| (report, Some(cov)));
         };
         let status = Frame0::decode(bytes, link.width()).ok()?.status;
         // The CNA knows the plans: a waypoint id names the next three of AUV j's.
@@ -500,7 +499,12 @@ impl Engine<'_> {
             travel_time,
             transponder: fix + shift,
         };
-        match a.ekf.update_range(&m, Some(a.truth.z)) {
+        let recovered = a.ekf.recoveries().count;
+        let outcome = a.ekf.update_range(&m, Some(a.truth.z));
+        if a.ekf.recoveries().count > recovered {
+            tracing::info!(t = meta.end, auv = k, "the filter's ranges left their NIS bounds: it recovered");
+        }
+        match outcome {
             UpdateOutcome::Applied { nis } => {
                 self.tallies[k].applied += 1;
                 self.tallies[k].health.nis(nis);
@@ -661,20 +665,4 @@ fn nams_frame0(
     let status = StatusFormat::nams_status(link.mode(), pos, Heading::from_radians(psi), speed, (next, latlon));
     let f = link.frame0(slot, rate, status)?;
     Ok((f.bytes, f.header_entries, f.header_bits))
-}
-
-/// Splits a received status into its node report and covariance trailer and decodes both.
-fn read_status(bytes: &[u8]) -> Result<(NodeReport, CovarianceReport), DecodeError> {
-    let split = bytes.len().saturating_sub(CovTrailer::BYTES);
-    Ok((NodeReport::decode(&bytes[..split])?, CovTrailer::decode(&bytes[split..])?))
-}
-
-/// Resolves a time of day (s) to the absolute time nearest `t_now`.
-fn resolve_time(time_of_day: u32, t_now: f64) -> f64 {
-    let day = 86_400.0;
-    let base = (t_now / day).floor() * day + time_of_day as f64;
-    [base - day, base, base + day]
-        .into_iter()
-        .min_by(|a, b| (a - t_now).abs().total_cmp(&(b - t_now).abs()))
-        .unwrap_or(base)
 }

@@ -9,6 +9,7 @@ use crate::models::finish::Action;
 use crate::models::minipacket;
 use crate::models::noise::{normal, BuoyMotion, CompassBias};
 use crate::models::ship::ShipSpec;
+use crate::scenario::start::{auv_launch, Launch};
 use crate::scenario::world::Scenario;
 use coopnav_acomms::node_report::{NodeReport, VehicleType};
 use coopnav_acomms::selector::{RatePolicy, RatePolicySpec};
@@ -91,15 +92,10 @@ pub struct SurveyAuv {
 impl SurveyAuv {
     pub fn new(sc: &Scenario, k: usize, streams: &SeedStream, bathy: &Bathymetry) -> Self {
         let rng = |id: u64| streams.rng(stream::AUV_BASE + 10 * k as u64 + id);
-        let lawn = sc.lawnmower(k);
-        let pts = lawn.waypoints();
-        let start = pts[0];
-        let heading = pts.get(1).map_or(0.0, |b| (b.1 - start.1).atan2(b.0 - start.0));
+        let Launch { waypoints: pts, pos: truth, heading, bottom } = auv_launch(sc, k, bathy);
+        let (start, z0) = ((truth.x, truth.y), truth.z);
         let waypoints: Vec<Waypoint> =
             pts.iter().map(|&(x, y)| Waypoint { x, y, target: sc.fleet.depth, speed: sc.fleet.speed }).collect();
-        let bottom = bathy.depth_at(start.0, start.1);
-        let z0 = sc.fleet.depth.depth_over(bottom);
-        let truth = Vec3::new(start.0, start.1, z0);
         let mut r_init = rng(stream::INIT);
         let sd = sc.fleet.init_position_sd;
         let (ex, ey) = (start.0 + sd * normal(&mut r_init), start.1 + sd * normal(&mut r_init));

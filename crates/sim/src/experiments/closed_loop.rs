@@ -806,6 +806,7 @@ mod tests {
             healthy: true,
             nees_mean: 1.0,
             diverged: 0,
+            recoveries: 0,
             auv_status_sent: vec![10; auv_runs.len()],
             auv_status_lost_in_air: vec![0; auv_runs.len()],
             runs,

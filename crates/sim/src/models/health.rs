@@ -3,6 +3,7 @@
 //! divergence flag when the NEES stays above its 99.9 % chi-square bound for a sustained window.
 
 use super::metrics::FilterHealth;
+use coopnav_nav::Recoveries;
 use serde::{Deserialize, Serialize};
 
 /// χ²(2) quantile: −2 ln(1 − p) (closed form for two degrees of freedom).
@@ -51,6 +52,7 @@ pub struct Tally {
     nis_in_95: u64,
     above_since: Option<f64>,
     diverged_at: Option<f64>,
+    recoveries: Recoveries,
 }
 
 impl Tally {
@@ -78,6 +80,11 @@ impl Tally {
         self.nis_in_95 += u64::from(nis <= CHI2_1_95);
     }
 
+    /// The filter's own recoveries ([`Recoveries`]) over the run, as it ended.
+    pub fn recovered(&mut self, recoveries: Recoveries) {
+        self.recoveries = recoveries;
+    }
+
     pub fn summary(&self) -> FilterHealth {
         let n = self.samples.max(1) as f64;
         let per_nis = |v: f64| (self.nis_n > 0).then(|| v / self.nis_n as f64);
@@ -89,6 +96,8 @@ impl Tally {
             nis_mean: per_nis(self.nis),
             nis_in_95: per_nis(self.nis_in_95 as f64),
             diverged_at_s: self.diverged_at,
+            recoveries: self.recoveries.count,
+            recovered_first_s: self.recoveries.first_s,
         }
     }
 }

@@ -134,6 +134,12 @@ pub struct FilterHealth {
     pub nis_in_95: Option<f64>,
     /// When the NEES had stayed above its 99.9 % bound for the divergence window, if it did.
     pub diverged_at_s: Option<f64>,
+    /// How often the filter's own check on its ranges (`filter.range_health`, NIS only, no
+    /// truth) found it out of its bounds and recovered it, and when first (s).
+    #[serde(default)]
+    pub recoveries: u32,
+    #[serde(default)]
+    pub recovered_first_s: Option<f64>,
 }
 
 /// Summary of the whole fleet.

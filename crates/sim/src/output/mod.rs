@@ -263,8 +263,14 @@ impl RunDir {
         &self.target
     }
 
-    fn staged(&self, name: &str) -> PathBuf {
-        self.staging.join(name)
+    /// Where file `name` (a path inside the run, `cells/cell-0.toml`) is staged; its folders are
+    /// made on the way.
+    fn staged(&self, name: &str) -> Result<PathBuf, OutputError> {
+        let path = self.staging.join(name);
+        if let Some(parent) = path.parent().filter(|p| *p != self.staging) {
+            fs::create_dir_all(parent).map_err(io_err(parent))?;
+        }
+        Ok(path)
     }
 
     pub fn write_text(&self, name: &str, text: &str) -> Result<(), OutputError> {
@@ -272,12 +278,12 @@ impl RunDir {
     }
 
     pub fn write_bytes(&self, name: &str, bytes: impl AsRef<[u8]>) -> Result<(), OutputError> {
-        let path = self.staged(name);
+        let path = self.staged(name)?;
         fs::write(&path, bytes).map_err(io_err(&path))
     }
 
     pub fn write_json<T: Serialize + ?Sized>(&self, name: &str, value: &T) -> Result<(), OutputError> {
-        let path = self.staged(name);
+        let path = self.staged(name)?;
         let text =
             serde_json::to_string_pretty(value).map_err(|source| OutputError::Json { path: path.clone(), source })?;
         fs::write(&path, text + "\n").map_err(io_err(&path))
@@ -285,7 +291,7 @@ impl RunDir {
 
     /// Writes `rows` as CSV with a header taken from the row type's field names.
     pub fn write_csv<T: Serialize>(&self, name: &str, rows: impl IntoIterator<Item = T>) -> Result<(), OutputError> {
-        let path = self.staged(name);
+        let path = self.staged(name)?;
         let csv_err = |source| OutputError::Csv { path: path.clone(), source };
         let mut w = csv::Writer::from_path(&path).map_err(csv_err)?;
         for row in rows {

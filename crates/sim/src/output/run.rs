@@ -63,17 +63,25 @@ pub fn write_comparison(
 
 /// The paired differences of a comparison: the first policy minus each other one.
 fn difference_svg(c: &Comparison, name: &str) -> Result<String, PlotError> {
-    let reference = c.policies.first().map_or("the first policy", |p| p.policy.as_str());
+    differences_svg(&[(name.to_string(), c)])
+}
+
+/// The paired differences of several comparisons (one per labelled cell), one row per
+/// (cell, baseline): the first policy of each minus each other one.
+pub fn differences_svg(cells: &[(String, &Comparison)]) -> Result<String, PlotError> {
+    let reference =
+        cells.first().and_then(|(_, c)| c.policies.first()).map_or("the first policy", |p| p.policy.as_str());
     let title = format!("{reference} minus each policy, fleet mean true error (m), paired 95 % CI");
-    let rows: Vec<Interval> = c
-        .paired
+    let rows: Vec<Interval> = cells
         .iter()
-        .map(|p| Interval {
-            label: format!("{name} N={} vs {}", c.n_auvs, p.baseline),
-            mean: p.difference.mean,
-            low: p.difference.low,
-            high: p.difference.high,
-            good: p.planner_better,
+        .flat_map(|(name, c)| {
+            c.paired.iter().map(move |p| Interval {
+                label: format!("{name} N={} vs {}", c.n_auvs, p.baseline),
+                mean: p.difference.mean,
+                low: p.difference.low,
+                high: p.difference.high,
+                good: p.planner_better,
+            })
         })
         .collect();
     intervals_svg(&title, &format!("difference, m (negative = {reference} better)"), &rows)

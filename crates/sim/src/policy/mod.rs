@@ -9,6 +9,7 @@
 //! as a policy.
 
 mod baselines;
+pub mod belief;
 mod greedy;
 pub mod planner;
 pub mod registry;
@@ -80,4 +81,8 @@ pub trait CnaPolicy: Send {
         true
     }
     fn decide(&mut self, ctx: &PolicyContext) -> CnaCommand;
+    /// How its planning went, for a policy that plans (or relays a planner's tally).
+    fn planner_stats(&self) -> Option<PlannerStats> {
+        None
+    }
 }

@@ -6,13 +6,18 @@
 //! ([`CovarianceTracker`]), stepped by the same expected EKF update the planner scores with.
 
 use crate::policy::{CnaCommand, CnaPolicy, PolicyContext, ReportedCov};
-use coopnav_core::Vec3;
+use coopnav_core::{Track, Vec3};
+use coopnav_plan::current_states::{
+    current_ping, current_prediction, CurrentGrowth, CurrentPingNoise, CurrentState, CurrentStates,
+};
 use coopnav_plan::true_error::{true_error_prediction, true_error_step, Growth, PingNoise, TrueState};
 use coopnav_plan::{
-    expected_posterior, AuvError, AuvEstimate, AuvForecast, CostSpec, ErrorModel, LinkModel, LookAheadPlanner,
-    PlanError, PlanInput, PlannerConfig, RangeNoise, TrueError, TruthInput, TruthSpec,
+    expected_posterior, AuvError, AuvEstimate, AuvForecast, CostSpec, CurrentInput, Decision, ErrorModel, HorizonSpec,
+    LinkModel, LookAheadPlanner, PlanError, PlanInput, PlannerConfig, RangeNoise, SurveyInput, TrueError, TruthInput,
+    TruthSpec,
 };
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
+use std::sync::Arc;
 
 /// The planner's error model (eq. 1) tracked per AUV between decisions.
 #[derive(Debug, Clone)]
@@ -142,6 +147,59 @@ impl TruthTracker {
     fn silent(&mut self, k: usize, t: f64) {
         if self.errors[k].is_some() {
             self.errors[k] = Some((t, self.grown(k, t)));
+        }
+    }
+}
+
+/// The CNA's model of each survey AUV's filter and true error when the filters estimate the water
+/// current (`coopnav_plan::current_states`): stepped at every ping by the same recursion the
+/// current-states cost scores with, from launch (t = 0), every ping counted with its expected
+/// arrival. Reports do not restart it (they carry the position covariance only, not the
+/// current's). Invented (docs/models.md#current-states-cost).
+#[derive(Debug, Clone)]
+struct CurrentTracker {
+    spec: CurrentStates,
+    /// The filters' position noise q_f and the truth's drift q_t per axis, m²/s.
+    q_filter: f64,
+    q_truth: f64,
+    filter_noise: RangeNoise,
+    truth_noise: RangeNoise,
+    start: CurrentState,
+    states: Vec<Option<(f64, CurrentState)>>,
+}
+
+impl CurrentTracker {
+    /// AUV `k`'s state at `t` before this period's ping: grown since it was last stepped, or launch.
+    fn grown(&self, k: usize, t: f64) -> CurrentState {
+        let (since, state) = self.states[k].unwrap_or((0.0, self.start));
+        current_prediction(&state, &CurrentGrowth::over(&self.spec, t - since, self.q_filter, self.q_truth))
+    }
+
+    /// A ping at `t` from `cna` to AUV `k` at `auv`, arriving with probability `p`, the CNA's
+    /// own variance `v`.
+    fn ping(&mut self, k: usize, t: f64, (cna, auv, p): (&Vec3, &Vec3, f64), v: f64) {
+        let (filter, truth) = (self.filter_noise, self.truth_noise);
+        let next = current_ping(
+            &self.grown(k, t),
+            [cna.x, cna.y, cna.z],
+            [auv.x, auv.y, auv.z],
+            |r, hh| CurrentPingNoise { filter: filter.variance(r), truth: truth.variance(r) + v * hh },
+            |_| p,
+        );
+        self.states[k] = Some((t, next));
+    }
+
+    fn silent(&mut self, k: usize, t: f64) {
+        if self.states[k].is_some() {
+            self.states[k] = Some((t, self.grown(k, t)));
+        }
+    }
+
+    /// AUV `k`'s state at `t` (stepped, or grown from launch for an AUV never pinged).
+    fn state(&self, k: usize, t: f64) -> CurrentState {
+        match self.states[k] {
+            Some((since, s)) if since == t => s,
+            _ => self.grown(k, t),
         }
     }
 }
@@ -298,10 +356,25 @@ impl CovarianceTracker {
     pub fn estimate(&self, k: usize) -> Option<AuvEstimate> {
         self.covs[k].map(|cov| AuvEstimate { cov, process_noise: self.rates[k] })
     }
+
+    /// AUV `k`'s modelled state at `t` for the horizon layer, known or not: its estimate, else
+    /// its filter's covariance grown from launch with no range (its process noise, or as
+    /// `reports_only`'s `unheard` says); and its true-error moments, else their launch value grown
+    /// to `t` (with the tracked truth only).
+    fn survey_state(&self, k: usize, t: f64) -> (AuvEstimate, Option<TrueError>) {
+        let estimate = self.estimate(k).unwrap_or_else(|| {
+            let q = self.start.process_noise;
+            let (grown, rate) = self.unheard.map_or((q * t.max(0.0), q), |u| u.at(q, t));
+            let [a, b, c] = self.start.cov;
+            AuvEstimate { cov: [a + grown, b, c + grown], process_noise: rate }
+        });
+        let truth = self.truth.as_ref().map(|truth| truth.errors[k].map_or_else(|| truth.grown(k, t), |(_, e)| e));
+        (estimate, truth)
+    }
 }
 
 /// How the planner's decisions went.
-#[derive(Debug, Clone, Default, PartialEq, Serialize)]
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
 pub struct PlannerStats {
     pub decisions: u64,
     /// Decisions whose search stopped at the deadline before the full depth.
@@ -362,6 +435,34 @@ pub struct PlannerPolicy {
     slot_reach: Vec<f64>,
     stats: PlannerStats,
     levels_total: u64,
+    /// The newest decision's search result (None: it held, waiting or failing).
+    last: Option<Decision>,
+    /// Every survey AUV's mission plan (fleet order), what the horizon layer follows for an AUV
+    /// the CNA has not heard from; None: no horizon layer.
+    plans: Option<Arc<[Track]>>,
+    /// The filters' current states, under the current-states cost only.
+    current: Option<CurrentTracker>,
+}
+
+/// The survey as the horizon layer sees it: the AUVs the CNA has heard from as their reports
+/// predict them, the others along their mission plans.
+struct Survey<'a> {
+    fleet: &'a dyn AuvForecast,
+    known: &'a [bool],
+    plans: &'a [Track],
+}
+
+impl AuvForecast for Survey<'_> {
+    fn n_auvs(&self) -> usize {
+        self.plans.len()
+    }
+    fn position(&self, k: usize, t: f64) -> Option<Vec3> {
+        if self.known[k] {
+            self.fleet.position(k, t)
+        } else {
+            Some(self.plans[k].at(t))
+        }
+    }
 }
 
 /// The AUVs of a forecast that are known, renumbered 0..m.
@@ -420,7 +521,44 @@ impl PlannerPolicy {
             slot_reach: Vec::new(),
             stats,
             levels_total: 0,
+            plans: None,
+            current: None,
+            last: None,
         })
+    }
+
+    /// Plans on filters that estimate the water current (`coopnav_plan::current_states`), with the
+    /// true-error cost's `truth` and the AUVs' launch position variance; no effect under Hudson's
+    /// cost or without the true-error cost.
+    pub fn with_current_states(mut self, spec: CurrentStates, truth: TruthSpec, launch_variance: f64) -> Self {
+        let Some(c) = self.covariances.as_ref() else { return self };
+        let CostSpec::Estimator(e) = self.planner.config().cost else { return self };
+        if e.truth.is_none() {
+            return self;
+        }
+        let n = c.covs.len();
+        self.current = Some(CurrentTracker {
+            spec,
+            q_filter: c.start.process_noise,
+            q_truth: truth.drift_m2_s,
+            filter_noise: c.noise,
+            truth_noise: truth.range_noise,
+            start: CurrentState::launch(&spec, c.start.cov, launch_variance),
+            states: vec![None; n],
+        });
+        self.planner = self.planner.clone().with_current_states(spec);
+        self
+    }
+
+    /// The mission-long horizon layer (coopnav_plan `horizon`) over every AUV, those not heard
+    /// from along `plans` (their mission plans, fleet order); no effect under Hudson's cost or
+    /// with `spec.enabled = false`.
+    pub fn with_horizon(mut self, spec: HorizonSpec, plans: Vec<Track>) -> Result<Self, PlanError> {
+        if self.covariances.is_some() && spec.enabled {
+            self.planner = self.planner.with_horizon(spec)?;
+            self.plans = Some(plans.into());
+        }
+        Ok(self)
     }
 
     /// The estimator-aware cost's range bias from a known sound-speed profile (`BiasTable`).
@@ -471,6 +609,49 @@ impl PlannerPolicy {
     pub fn tracker(&self) -> &ErrorTracker {
         &self.tracker
     }
+
+    /// The newest decision's search result: the option chosen, its cost, the levels searched
+    /// (None: that decision held position).
+    pub fn last_decision(&self) -> Option<&Decision> {
+        self.last.as_ref()
+    }
+
+    /// The planner's configuration (its motion options among it).
+    pub fn config(&self) -> &PlannerConfig {
+        self.planner.config()
+    }
+
+    /// The decision under the 2-state costs: the horizon layer (if any) over every AUV, those not
+    /// heard from along their plans.
+    fn decide_on_moments(
+        &self,
+        input: &PlanInput,
+        truth: Option<&TruthInput>,
+        (ctx, n, known): (&PolicyContext, usize, &[usize]),
+    ) -> Result<Decision, PlanError> {
+        match (&self.plans, &self.covariances) {
+            (Some(plans), Some(c)) => {
+                let mut heard = vec![false; n];
+                known.iter().for_each(|&k| heard[k] = true);
+                let states: Vec<(AuvEstimate, Option<TrueError>)> = (0..n).map(|k| c.survey_state(k, ctx.t)).collect();
+                let all_estimates: Vec<AuvEstimate> = states.iter().map(|s| s.0).collect();
+                let all_truth: Vec<TrueError> = states.iter().filter_map(|s| s.1).collect();
+                let survey_truth = truth
+                    .filter(|_| all_truth.len() == n)
+                    .map(|t| TruthInput { errors: &all_truth, cna_variance: t.cna_variance });
+                let forecast = Survey { fleet: ctx.fleet, known: &heard, plans };
+                let plan = PlanInput {
+                    estimates: &all_estimates,
+                    forecast: &forecast,
+                    slot_reach_m: &self.slot_reach,
+                    ..*input
+                };
+                let survey = SurveyInput { plan: &plan, truth: survey_truth.as_ref() };
+                self.planner.decide_with_survey(input, truth, survey)
+            }
+            _ => self.planner.decide_with_truth(input, truth),
+        }
+    }
 }
 
 impl CnaPolicy for PlannerPolicy {
@@ -486,6 +667,7 @@ impl CnaPolicy for PlannerPolicy {
     /// modelled errors, then the next decision.
     fn decide(&mut self, ctx: &PolicyContext) -> CnaCommand {
         self.stats.decisions += 1;
+        self.last = None;
         let n = ctx.fleet.n_auvs();
         if let Some(c) = self.covariances.as_mut() {
             c.set_cna_variance(ctx.cna_variance);
@@ -498,9 +680,12 @@ impl CnaPolicy for PlannerPolicy {
                     let likelihood = self.lost_pings.as_ref().map_or(1.0, |f| f(range));
                     self.tracker.ping(k, &ctx.cna.pos, &p, likelihood);
                     let beyond = self.slot_reach.get(k).is_some_and(|&reach| range >= reach);
+                    let arrives = if beyond { 0.0 } else { likelihood };
                     if let Some(c) = self.covariances.as_mut() {
-                        let arrives = if beyond { 0.0 } else { likelihood };
                         c.ping(k, ctx.t, ctx.reported(k), (&ctx.cna.pos, &p, arrives));
+                    }
+                    if let Some(c) = self.current.as_mut() {
+                        c.ping(k, ctx.t, (&ctx.cna.pos, &p, arrives), ctx.cna_variance);
                     }
                     known.push(k);
                 }
@@ -508,6 +693,9 @@ impl CnaPolicy for PlannerPolicy {
                     self.tracker.silent(k);
                     if let Some(c) = self.covariances.as_mut() {
                         c.silent(k, ctx.t, ctx.reported(k));
+                    }
+                    if let Some(c) = self.current.as_mut() {
+                        c.silent(k, ctx.t);
                     }
                 }
             }
@@ -538,13 +726,40 @@ impl CnaPolicy for PlannerPolicy {
             forecast: &forecast,
             slot_reach_m: &slot_reach,
         };
-        match self.planner.decide_with_truth(&input, truth.as_ref()) {
+        let decided = match (&self.current, &self.covariances) {
+            (Some(current), Some(c)) => {
+                let states: Vec<CurrentState> = known.iter().map(|&k| current.state(k, ctx.t)).collect();
+                let v = ctx.cna_variance;
+                let here = CurrentInput { states: &states, cna_variance: v };
+                match &self.plans {
+                    Some(plans) => {
+                        let mut heard = vec![false; n];
+                        known.iter().for_each(|&k| heard[k] = true);
+                        let all_estimates: Vec<AuvEstimate> = (0..n).map(|k| c.survey_state(k, ctx.t).0).collect();
+                        let all_states: Vec<CurrentState> = (0..n).map(|k| current.state(k, ctx.t)).collect();
+                        let forecast = Survey { fleet: ctx.fleet, known: &heard, plans };
+                        let plan = PlanInput {
+                            estimates: &all_estimates,
+                            forecast: &forecast,
+                            slot_reach_m: &self.slot_reach,
+                            ..input
+                        };
+                        let survey = CurrentInput { states: &all_states, cna_variance: v };
+                        self.planner.decide_on_current_states(&input, &here, Some((&plan, &survey)))
+                    }
+                    None => self.planner.decide_on_current_states(&input, &here, None),
+                }
+            }
+            _ => self.decide_on_moments(&input, truth.as_ref(), (ctx, n, &known)),
+        };
+        match decided {
             Ok(d) => {
                 if d.levels_searched < d.levels_requested {
                     self.stats.deadline_misses += 1;
                 }
                 self.stats.min_levels_searched = self.stats.min_levels_searched.min(d.levels_searched);
                 self.levels_total += d.levels_searched as u64;
+                self.last = Some(d);
                 CnaCommand::GoTo(d.next.pos)
             }
             Err(e) => {

@@ -12,6 +12,7 @@ use coopnav_acomms::selector::{FixedRate, RatePolicy};
 use coopnav_acomms::tl::{TlError, TransmissionLoss, TL_CEILING};
 use coopnav_core::{Bathymetry, DepthTarget, Vec3};
 use coopnav_nav::AuvModel;
+use coopnav_plan::current_states::CurrentStates;
 use coopnav_plan::predeploy::runner;
 use coopnav_plan::predeploy::Mission;
 use coopnav_plan::{
@@ -73,7 +74,7 @@ impl Policy {
     pub fn planner_stats(&self) -> Option<PlannerStats> {
         match self {
             Policy::Planner(p) => Some(p.stats()),
-            Policy::Baseline(_) => None,
+            Policy::Baseline(b) => b.planner_stats(),
         }
     }
 }
@@ -150,8 +151,14 @@ fn build(name: &str, sc: &Scenario, planned: Option<&TimedWaypoints>) -> Result<
                     drift_levels: p.estimator_drift_levels,
                     truth: p.estimator_truth,
                 });
-                if let Some(case) = p.estimator_penalty_case.as_deref().and_then(PenaltyCase::from_id) {
-                    cfg.penalties = case.penalties();
+                let area = survey_area(sc);
+                let extent = (area.max.0 - area.min.0).hypot(area.max.1 - area.min.1);
+                match p.estimator_penalty_case.as_deref().and_then(PenaltyCase::from_id) {
+                    Some(case) => cfg.penalties = case.penalties(),
+                    None if p.horizon.replaces_distance_penalties(extent, &cfg.limits) => {
+                        cfg.penalties = PenaltyCase::C2.penalties()
+                    }
+                    None => {}
                 }
                 cfg.look_ahead = p.estimator_look_ahead.unwrap_or(cfg.look_ahead);
                 cfg.motion.heading_options = p.estimator_heading_options.unwrap_or(cfg.motion.heading_options);
@@ -185,6 +192,22 @@ fn build(name: &str, sc: &Scenario, planned: Option<&TimedWaypoints>) -> Result<
             }
             if p.estimator_tracking == EstimatorTracking::ReportsOnly {
                 policy = policy.with_reports_only(unheard_growth(sc));
+            }
+            if let (true, Some(truth), AuvModel::Current(c)) = (estimator, p.estimator_truth, sc.filter.model) {
+                let spec = CurrentStates {
+                    p0: c.p0,
+                    q: c.q / sc.filter.params.step_s,
+                    correlation_s: c.correlation_time_s,
+                    water: p.estimator_current,
+                };
+                policy = policy.with_current_states(spec, truth, sc.fleet.init_position_sd.powi(2));
+            }
+            if estimator && p.horizon.enabled {
+                let plans = (0..n)
+                    .map(|k| sc.lawnmower(k).track(1.0))
+                    .collect::<Result<Vec<_>, _>>()
+                    .map_err(|e| plan_err(PlanError::Input(format!("nominal survey track: {e}"))))?;
+                policy = policy.with_horizon(p.horizon, plans).map_err(plan_err)?;
             }
             return Ok(Policy::Planner(Box::new(policy)));
         }

@@ -25,8 +25,8 @@ use coopnav_core::{Bathymetry, CompassDeg, DepthTarget, Heading, Iver2Params, La
 use coopnav_nav::{AuvModel, AuvParams, RangeNoise};
 use coopnav_plan::predict::{PredictorConfig, WaypointUse};
 use coopnav_plan::{
-    Aggregate, CnaKind, Deadline, DistanceLimits, ErrorModel, MotionConfig, PenaltyCase, PlanError, PlannerConfig,
-    SearchConfig, TruthSpec,
+    Aggregate, CnaKind, Deadline, DistanceLimits, ErrorModel, HorizonSpec, MotionConfig, PenaltyCase, PlanError,
+    PlannerConfig, SearchConfig, TruthSpec,
 };
 use serde::{Deserialize, Serialize};
 use std::path::Path;
@@ -472,6 +472,21 @@ pub struct Planner {
     /// noise and the CNA's diffusion as the CNA believes them). Written only when set.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub estimator_truth: Option<TruthSpec>,
+    /// The water current east and north (m/s) as the CNA measures it (an ADCP), for filters that
+    /// estimate the current (`filter.model = { kind = "current" }`): with `estimator_truth`,
+    /// `planner-estimator` then plans on those filters' current states, which start from a
+    /// current estimate of zero (coopnav_plan `current_states`). Default [0, 0]: still water.
+    #[serde(default, skip_serializing_if = "coopnav_plan::estimator::is_still")]
+    pub estimator_current: [f64; 2],
+    /// `planner-estimator`'s mission-long horizon above its tree: which AUV to serve next, valued
+    /// over tens of minutes along every AUV's plan (coopnav_plan `horizon`; on by default,
+    /// `enabled = false` for none). Written only when not the default.
+    #[serde(default, skip_serializing_if = "is_default_horizon")]
+    pub horizon: HorizonSpec,
+}
+
+fn is_default_horizon(h: &HorizonSpec) -> bool {
+    *h == HorizonSpec::default()
 }
 
 /// What the CNA knows of a survey AUV before its reports meet the planning start rule (Hudson 2012, Sec. 4.2).
@@ -896,10 +911,13 @@ impl Scenario {
         p.finite("planner.estimator_unmodelled_current[0]", pl.estimator_unmodelled_current[0]);
         p.finite("planner.estimator_unmodelled_current[1]", pl.estimator_unmodelled_current[1]);
         p.non_negative("planner.estimator_drift_levels", pl.estimator_drift_levels);
+        p.finite("planner.estimator_current[0]", pl.estimator_current[0]);
+        p.finite("planner.estimator_current[1]", pl.estimator_current[1]);
         self.validate_estimator_tree(p);
         if let Some(truth) = &pl.estimator_truth {
             truth.check_fields("planner.estimator_truth.", p);
         }
+        pl.horizon.check_fields("planner.horizon.", p);
         if pl.estimator_pitch_levels == Some(0) {
             p.push("planner.estimator_pitch_levels", "0", ">= 1 (or absent: every level)");
         }
