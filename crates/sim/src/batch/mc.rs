@@ -81,6 +81,36 @@ pub struct Comparison {
     pub seed: u64,
     pub policies: Vec<PolicySummary>,
     pub paired: Vec<Paired>,
+    /// Per policy (in the order of `policies`), per AUV over all runs: where the CNA was and what
+    /// the AUV's filter made of it.
+    pub auvs: Vec<Vec<AuvSummary>>,
+}
+
+/// One survey AUV under one policy, over all runs.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct AuvSummary {
+    /// Mean true horizontal CNA–AUV distance, m.
+    pub distance_mean: f64,
+    /// Fraction of the CNA's broadcasts (ranges) the AUV received.
+    pub downlink_success: f64,
+    /// Mean NEES of its filter (the mean over runs of each run's mean; 2 when consistent).
+    pub nees_mean: f64,
+}
+
+fn auv_summaries(rs: &[RunResult]) -> Vec<AuvSummary> {
+    let n_auvs = rs.first().map_or(0, |r| r.auvs.len());
+    let runs = rs.len().max(1) as f64;
+    (0..n_auvs)
+        .map(|k| {
+            let (sent, got) =
+                rs.iter().fold((0u64, 0u64), |a, r| (a.0 + r.auvs[k].downlink.sent, a.1 + r.auvs[k].downlink.received));
+            AuvSummary {
+                distance_mean: rs.iter().map(|r| r.auvs[k].distance_mean).sum::<f64>() / runs,
+                downlink_success: if sent == 0 { 0.0 } else { got as f64 / sent as f64 },
+                nees_mean: rs.iter().map(|r| r.auvs[k].health.nees_mean).sum::<f64>() / runs,
+            }
+        })
+        .collect()
 }
 
 /// Runs every policy `runs` times and pairs the first policy (the reference) with each other
@@ -227,7 +257,8 @@ pub fn compare(sc: &Scenario, names: &[String], runs: usize, results: &[RunResul
             .collect(),
         None => Vec::new(),
     };
-    Comparison { n_auvs: sc.fleet.n_auvs, runs, seed: sc.seed, policies: summaries, paired }
+    let auvs = results.chunks(runs.max(1)).take(names.len()).map(auv_summaries).collect();
+    Comparison { n_auvs: sc.fleet.n_auvs, runs, seed: sc.seed, policies: summaries, paired, auvs }
 }
 
 fn summarise(name: &str, rs: &[RunResult]) -> PolicySummary {

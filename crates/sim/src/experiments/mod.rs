@@ -4,10 +4,13 @@
 //!
 //! `coopnav reproduce <id>` runs one; CI runs the reduced forms through the sim crate's tests.
 
+pub mod aiding;
 pub mod closed_loop;
 pub mod cna_navigation;
+pub mod generalization;
 pub mod gill;
 pub mod hudson;
+pub mod missions;
 pub mod nams;
 
 use serde::Serialize;
@@ -125,6 +128,8 @@ pub fn registry() -> Vec<Experiment> {
     all.extend(nams::experiments());
     all.extend(closed_loop::experiments());
     all.extend(cna_navigation::experiments());
+    all.extend(generalization::experiments());
+    all.extend(aiding::experiments());
     all
 }
 

@@ -1,0 +1,343 @@
+//! `closed-loop-generalization`: `planner-estimator` against Hudson's planner and every baseline
+//! on missions nobody tuned for: the seeded generator's missions of `scenarios/generalization.toml`
+//! (N 1–8; adjacent, spread, diagonal and separated blocks; any lane heading; currents to
+//! 0.15 m/s; ASC and AUV CNA; mild and harsh channels; 5- and 7-state filters; 1–3 h), each flown
+//! exactly as `coopnav simulate` flies its written file, paired by run (common random numbers) and
+//! judged on the AUVs' TRUE mean error.
+//!
+//! Per mission and baseline the paired 95 % CI of (planner-estimator − baseline) is below zero
+//! (won), straddles it (tied) or lies above it (lost). Per baseline, the pooled difference is the
+//! mean over missions of each mission's mean difference, its CI the t interval over missions (the
+//! missions are the generator's draws). The checks: every pooled CI below zero, and at most
+//! [`MAX_LOST_SHARE`] of the missions lost against any one baseline. Every lost mission is printed
+//! with what its runs measured ([`missions::measured`]).
+//!
+//! Seeds: the file's mission seeds (and their runs') are refused when they meet any seed a setting
+//! was chosen on ([`missions::CHOSEN_ON`]).
+
+use super::closed_loop::policies;
+use super::missions::{self, Study, StudySize};
+use super::{Check, Experiment, ExperimentError, ReproOptions, ReproReport};
+use crate::batch::mc::{monte_carlo_grid, Ci, Comparison};
+use crate::output::plot::{intervals_svg, Interval};
+use serde::Serialize;
+use std::fmt::Write as _;
+
+const ID: &str = "closed-loop-generalization";
+const FILE: &str = "scenarios/generalization.toml";
+const RANGES: &str = include_str!("../../../../scenarios/generalization.toml");
+
+/// The study's size: every mission of the file, 10 paired runs each.
+pub const FULL: StudySize = StudySize { missions: None, runs: 10 };
+/// The reduced form: the file's first 3 missions, 3 runs each.
+pub const REDUCED: StudySize = StudySize { missions: Some(3), runs: 3 };
+
+/// The largest share of missions `planner-estimator` may lose against any one baseline.
+pub const MAX_LOST_SHARE: f64 = 0.02;
+
+pub fn experiments() -> Vec<Experiment> {
+    vec![Experiment {
+        id: ID,
+        about: "Closed loop on generated missions nobody tuned for: planner-estimator vs Hudson's planner and every baseline, won/tied/lost per mission",
+        run: generalization,
+    }]
+}
+
+fn fail(message: String) -> ExperimentError {
+    ExperimentError::Failed { id: ID.into(), message }
+}
+
+/// A mission's paired 95 % CI against one baseline: below zero, across it, above it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Verdict {
+    Won,
+    Tied,
+    Lost,
+}
+
+impl Verdict {
+    pub fn of(d: &Ci) -> Verdict {
+        if d.high < 0.0 {
+            Verdict::Won
+        } else if d.low > 0.0 {
+            Verdict::Lost
+        } else {
+            Verdict::Tied
+        }
+    }
+}
+
+/// planner-estimator minus one baseline on one mission.
+#[derive(Debug, Clone, Serialize)]
+pub struct Outcome {
+    pub mission: usize,
+    pub baseline: String,
+    pub difference: Ci,
+    pub verdict: Verdict,
+}
+
+/// One baseline over every mission.
+#[derive(Debug, Clone, Serialize)]
+pub struct Tally {
+    pub baseline: String,
+    pub won: usize,
+    pub tied: usize,
+    pub lost: usize,
+    /// Mean over missions of the per-mission mean difference, t CI over missions.
+    pub pooled: Ci,
+}
+
+/// Per baseline (in first-seen order), its counts and pooled difference.
+pub fn tallies(outcomes: &[Outcome]) -> Vec<Tally> {
+    let mut names: Vec<&str> = Vec::new();
+    for o in outcomes {
+        if !names.contains(&o.baseline.as_str()) {
+            names.push(&o.baseline);
+        }
+    }
+    names
+        .into_iter()
+        .map(|name| {
+            let own: Vec<&Outcome> = outcomes.iter().filter(|o| o.baseline == name).collect();
+            let count = |v: Verdict| own.iter().filter(|o| o.verdict == v).count();
+            let means: Vec<f64> = own.iter().map(|o| o.difference.mean).collect();
+            Tally {
+                baseline: name.to_string(),
+                won: count(Verdict::Won),
+                tied: count(Verdict::Tied),
+                lost: count(Verdict::Lost),
+                pooled: Ci::of(&means),
+            }
+        })
+        .collect()
+}
+
+/// The checks on the outcomes: per baseline, the pooled CI below zero and at most
+/// [`MAX_LOST_SHARE`] of its missions lost.
+pub fn verdict(outcomes: &[Outcome]) -> Vec<Check> {
+    let mut checks = Vec::new();
+    for t in tallies(outcomes) {
+        let missions = t.won + t.tied + t.lost;
+        let p = &t.pooled;
+        checks.push(Check::new(
+            format!("pooled difference vs {} below zero", t.baseline),
+            p.high < 0.0,
+            format!("{:.2} m [{:.2}, {:.2}] over {missions} missions", p.mean, p.low, p.high),
+        ));
+        let allowed = (MAX_LOST_SHARE * missions as f64).floor() as usize;
+        checks.push(Check::new(
+            format!("at most {:.0} % of missions lost vs {}", 100.0 * MAX_LOST_SHARE, t.baseline),
+            t.lost <= allowed,
+            format!("{} lost, {} tied, {} won of {missions} (at most {allowed} may be lost)", t.lost, t.tied, t.won),
+        ));
+    }
+    checks
+}
+
+fn generalization(opts: &ReproOptions) -> Result<ReproReport, ExperimentError> {
+    run_with_progress(opts, &|_| {})
+}
+
+/// Runs the study; `progress(done)` counts the finished runs.
+pub fn run_with_progress(opts: &ReproOptions, progress: &(dyn Fn(u64) + Sync)) -> Result<ReproReport, ExperimentError> {
+    let study = missions::study(ID, FILE, RANGES, opts, FULL, REDUCED)?;
+    evaluate(&study, progress)
+}
+
+/// Every mission of `study`, every policy (planner-estimator first), its runs.
+pub fn evaluate(study: &Study, progress: &(dyn Fn(u64) + Sync)) -> Result<ReproReport, ExperimentError> {
+    let names = policies();
+    let scenarios: Vec<_> = study.missions.iter().map(|m| m.scenario.clone()).collect();
+    let comparisons = monte_carlo_grid(&scenarios, &names, study.runs, progress).map_err(|e| fail(e.to_string()))?;
+    let mut outcomes = Vec::new();
+    for (m, c) in study.missions.iter().zip(&comparisons) {
+        for p in &c.paired {
+            outcomes.push(Outcome {
+                mission: m.facts.index,
+                baseline: p.baseline.clone(),
+                difference: p.difference,
+                verdict: Verdict::of(&p.difference),
+            });
+        }
+    }
+    let r = &study.ranges;
+    let mut table = format!(
+        "planner-estimator minus each baseline, true mean navigation error of the survey AUVs (m), paired by run: \
+         {} generated missions ({FILE}, mission seeds {}..{}), {} runs per policy and mission; each mission flown as \
+         `coopnav simulate` flies its file (`coopnav generate {FILE}` writes them). A mission is won when its paired \
+         95 % CI lies below zero, lost when above; the pooled difference is the mean over missions, CI over missions.\n\n",
+        study.missions.len(),
+        r.seed,
+        r.seed + study.missions.len() as u64,
+        study.runs
+    );
+    let tallies = tallies(&outcomes);
+    let _ =
+        writeln!(table, "{:<18} {:>4} {:>4} {:>4}   pooled difference [95 % CI]", "baseline", "won", "tied", "lost");
+    for t in &tallies {
+        let p = &t.pooled;
+        let _ = writeln!(
+            table,
+            "{:<18} {:>4} {:>4} {:>4}   {:+8.2} [{:+8.2}, {:+8.2}]",
+            t.baseline, t.won, t.tied, t.lost, p.mean, p.low, p.high
+        );
+    }
+    table += "\nEvery mission lost, with what its runs measured (planner-estimator | the baseline):\n";
+    let lost: Vec<&Outcome> = outcomes.iter().filter(|o| o.verdict == Verdict::Lost).collect();
+    if lost.is_empty() {
+        table += "  none\n";
+    }
+    for o in &lost {
+        let (m, c) = mission(study, &comparisons, o.mission)?;
+        let b = index_of(c, &o.baseline)?;
+        let d = &o.difference;
+        let _ = writeln!(
+            table,
+            "  mission {} (seed {}) vs {}: {:+.2} m [{:+.2}, {:+.2}]\n    {}\n    {}",
+            o.mission,
+            m.facts.seed,
+            o.baseline,
+            d.mean,
+            d.low,
+            d.high,
+            m.facts.line(),
+            missions::measured(c, 0, b)
+        );
+    }
+    table += "\nThe five largest differences (whatever their verdict):\n";
+    let mut worst: Vec<&Outcome> = outcomes.iter().collect();
+    worst.sort_by(|a, b| b.difference.mean.total_cmp(&a.difference.mean));
+    for o in worst.iter().take(5) {
+        let (m, _) = mission(study, &comparisons, o.mission)?;
+        let d = &o.difference;
+        let _ = writeln!(
+            table,
+            "  mission {} vs {}: {:+.2} m [{:+.2}, {:+.2}] ({:?}); {}",
+            o.mission,
+            o.baseline,
+            d.mean,
+            d.low,
+            d.high,
+            o.verdict,
+            m.facts.line()
+        );
+    }
+    let mut checks = verdict(&outcomes);
+    let unhealthy: Vec<usize> = study
+        .missions
+        .iter()
+        .zip(&comparisons)
+        .filter(|(_, c)| c.policies.iter().any(|s| !s.healthy))
+        .map(|(m, _)| m.facts.index)
+        .collect();
+    checks.push(Check::new(
+        "every filter stays finite",
+        unhealthy.is_empty(),
+        format!("missions with a non-finite filter: {unhealthy:?}"),
+    ));
+    let mut plots = Vec::new();
+    for t in &tallies {
+        let rows: Vec<Interval> = outcomes
+            .iter()
+            .filter(|o| o.baseline == t.baseline)
+            .map(|o| {
+                let f = &study.missions.iter().find(|m| m.facts.index == o.mission).expect("own mission").facts;
+                Interval {
+                    label: format!("{} N={} {} {} {}", o.mission, f.n_auvs, f.layout.name(), f.cna, f.filter),
+                    mean: o.difference.mean,
+                    low: o.difference.low,
+                    high: o.difference.high,
+                    good: o.verdict == Verdict::Won,
+                }
+            })
+            .collect();
+        let title = format!("planner-estimator minus {}, per mission, true mean error (m), paired 95 % CI", t.baseline);
+        let svg = intervals_svg(&title, "difference, m (negative = planner-estimator better)", &rows)
+            .map_err(|e| fail(e.to_string()))?;
+        plots.push((format!("differences-vs-{}.svg", t.baseline), svg));
+    }
+    let facts: Vec<_> = study.missions.iter().map(|m| &m.facts).collect();
+    let data = serde_json::json!({
+        "missions": facts, "runs": study.runs, "outcomes": outcomes, "tallies": tallies, "comparisons": comparisons,
+    });
+    Ok(ReproReport { plots, ..ReproReport::new(ID.into(), table, checks, data) })
+}
+
+fn mission<'a>(
+    study: &'a Study,
+    comparisons: &'a [Comparison],
+    index: usize,
+) -> Result<(&'a crate::scenario::generate::Mission, &'a Comparison), ExperimentError> {
+    study
+        .missions
+        .iter()
+        .zip(comparisons)
+        .find(|(m, _)| m.facts.index == index)
+        .ok_or_else(|| fail(format!("mission {index} not in the study")))
+}
+
+fn index_of(c: &Comparison, policy: &str) -> Result<usize, ExperimentError> {
+    c.policies.iter().position(|s| s.policy == policy).ok_or_else(|| fail(format!("{policy} not in the comparison")))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::experiments::{closed_loop::TUNING_SEED, Size};
+
+    #[test]
+    fn the_reduced_study_reports_every_baseline_and_every_mission() {
+        let report = generalization(&ReproOptions { size: Size::Reduced, seed: 1 }).unwrap();
+        let baselines = policies().len() - 1;
+        let tallies = report.data["tallies"].as_array().unwrap();
+        assert_eq!(tallies.len(), baselines);
+        for t in tallies {
+            let n: u64 = ["won", "tied", "lost"].iter().map(|k| t[k].as_u64().unwrap()).sum();
+            assert_eq!(n, 3, "{t}");
+            assert!(report.table.contains(t["baseline"].as_str().unwrap()));
+        }
+        assert_eq!(report.data["missions"].as_array().unwrap().len(), 3);
+        assert_eq!(report.data["runs"], 3);
+        // Two checks per baseline, and the filters' finiteness.
+        assert_eq!(report.checks.len(), 2 * baselines + 1);
+        assert_eq!(report.plots.len(), baselines);
+        assert!(report.plots.iter().all(|(name, svg)| name.starts_with("differences-vs-") && svg.contains("<svg")));
+        assert!(report.table.contains("Every mission lost"));
+    }
+
+    fn outcome(mission: usize, baseline: &str, mean: f64, half: f64) -> Outcome {
+        let difference = Ci { mean, low: mean - half, high: mean + half };
+        Outcome { mission, baseline: baseline.into(), difference, verdict: Verdict::of(&difference) }
+    }
+
+    #[test]
+    fn the_verdict_fails_on_a_lost_share_above_two_percent_or_a_pooled_ci_not_below_zero() {
+        // 100 missions vs one baseline, all won: both checks pass.
+        let won: Vec<Outcome> = (0..100).map(|i| outcome(i, "zigzag", -2.0 - (i % 7) as f64, 0.5)).collect();
+        assert!(verdict(&won).iter().all(|c| c.passed), "{:?}", verdict(&won));
+        // Three lost of 100 (> 2 %): the lost-share check fails, the pooled one still passes.
+        let mut three = won.clone();
+        for o in three.iter_mut().take(3) {
+            *o = outcome(o.mission, "zigzag", 1.0, 0.5);
+        }
+        let checks = verdict(&three);
+        assert!(checks[0].passed && !checks[1].passed, "{checks:?}");
+        assert!(checks[1].detail.starts_with("3 lost"), "{}", checks[1].detail);
+        // Two lost of 100 is allowed.
+        let two: Vec<Outcome> = three.iter().skip(1).cloned().chain([won[0].clone()]).collect();
+        assert!(verdict(&two)[1].passed);
+        // No mission lost, but a pooled difference whose CI reaches zero: the pooled check fails.
+        let tied: Vec<Outcome> =
+            (0..50).map(|i| outcome(i, "racetrack", if i % 2 == 0 { -1.0 } else { 0.9 }, 3.0)).collect();
+        let checks = verdict(&tied);
+        assert!(!checks[0].passed && checks[1].passed, "{checks:?}");
+        assert_eq!(tallies(&tied)[0].tied, 50);
+    }
+
+    #[test]
+    fn a_seed_range_holding_the_tuning_seed_is_refused() {
+        let e = generalization(&ReproOptions { size: Size::Reduced, seed: TUNING_SEED - 1 }).unwrap_err();
+        assert!(e.to_string().contains(&TUNING_SEED.to_string()), "{e}");
+    }
+}
