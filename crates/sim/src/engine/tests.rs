@@ -5,6 +5,7 @@ use super::*;
 use crate::models::finish::Finish;
 use crate::models::schedule::{Schedule, SlotSpec};
 use crate::policy::PolicySpec;
+use crate::scenario::world::BeforeFirstReport;
 use coopnav_nav::StateKind;
 
 /// One AUV on a short lawnmower (two 300 m lanes, done after about 480 s), then `duration` s.
