@@ -12,6 +12,7 @@ from pathlib import Path
 __all__ = ["merged_dir", "read_fleet", "read_runs", "read_table"]
 
 TABLES = ("runs", "fleet")
+ENGINES = ("pandas", "polars")
 
 
 def merged_dir(path):
@@ -31,16 +32,16 @@ def read_table(path, table, engine="pandas"):
     """The sweep table ``table`` ("runs" or "fleet") of ``path`` as a DataFrame of ``engine``."""
     if table not in TABLES:
         raise ValueError(f"table {table!r}: allowed {', '.join(TABLES)}")
+    if engine not in ENGINES:
+        raise ValueError(f"engine {engine!r}: allowed {', '.join(ENGINES)}")
     file = merged_dir(path) / f"{table}.parquet"
     if engine == "pandas":
         import pandas
 
         return pandas.read_parquet(file)
-    if engine == "polars":
-        import polars
+    import polars
 
-        return polars.read_parquet(file)
-    raise ValueError(f"engine {engine!r}: allowed pandas, polars")
+    return polars.read_parquet(file)
 
 
 def read_runs(path, engine="pandas"):
