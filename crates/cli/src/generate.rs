@@ -1,4 +1,4 @@
-//! `coopnav generate`: writes the missions a generator file draws (`scenarios/generalization.toml`
+//! `coopnav generate`: writes the missions a generator file draws (`scenarios/generators/generalization.toml`
 //! and the like), one scenario file each, that `coopnav simulate` runs as they are, with an index
 //! of every mission's facts (missions.csv).
 

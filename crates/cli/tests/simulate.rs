@@ -74,7 +74,8 @@ fn the_closed_loop_bench_splits_its_fleet_error_by_auv() {
 #[test]
 fn generated_missions_run_as_they_are_written() {
     let tmp = tempfile::tempdir().unwrap();
-    let ranges = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenarios/generalization.toml");
+    let ranges =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenarios/generators/generalization.toml");
     let ranges = ranges.to_str().unwrap();
     let out = coopnav(tmp.path(), &["generate", ranges, "--missions", "3", "--seed", "500", "-o", "g"]);
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));

@@ -1,6 +1,6 @@
 //! `aiding-never-hurts`: the system invariant that a CNA's ranges never leave the survey AUVs
 //! worse off than dead reckoning alone, on the seeded generator's missions of
-//! `scenarios/aiding-never-hurts.toml` (N 1–6, separated and adjacent blocks, currents to
+//! `scenarios/generators/aiding-never-hurts.toml` (N 1–6, separated and adjacent blocks, currents to
 //! 0.12 m/s, 5- and 7-state filters, ASC and AUV CNA), each flown as `coopnav simulate` flies its
 //! written file, paired by run (common random numbers), on TRUE error.
 //!
@@ -26,8 +26,8 @@ use serde::Serialize;
 use std::fmt::Write as _;
 
 const ID: &str = "aiding-never-hurts";
-const FILE: &str = "scenarios/aiding-never-hurts.toml";
-const RANGES: &str = include_str!("../../../../scenarios/aiding-never-hurts.toml");
+const FILE: &str = "scenarios/generators/aiding-never-hurts.toml";
+const RANGES: &str = include_str!("../../../../scenarios/generators/aiding-never-hurts.toml");
 
 /// Dead reckoning alone: the reference every policy is paired with.
 const DEAD_RECKONING: &str = "none";

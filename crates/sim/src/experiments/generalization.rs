@@ -1,5 +1,5 @@
 //! `closed-loop-generalization`: `planner-estimator` against Hudson's planner and every baseline
-//! on missions nobody tuned for: the seeded generator's missions of `scenarios/generalization.toml`
+//! on missions nobody tuned for: the seeded generator's missions of `scenarios/generators/generalization.toml`
 //! (N 1–8; adjacent, spread, diagonal and separated blocks; any lane heading; currents to
 //! 0.15 m/s; ASC and AUV CNA; mild and harsh channels; 5- and 7-state filters; 1–3 h), each flown
 //! exactly as `coopnav simulate` flies its written file, paired by run (common random numbers) and
@@ -24,8 +24,8 @@ use serde::Serialize;
 use std::fmt::Write as _;
 
 const ID: &str = "closed-loop-generalization";
-const FILE: &str = "scenarios/generalization.toml";
-const RANGES: &str = include_str!("../../../../scenarios/generalization.toml");
+const FILE: &str = "scenarios/generators/generalization.toml";
+const RANGES: &str = include_str!("../../../../scenarios/generators/generalization.toml");
 
 /// The study's size: every mission of the file, 10 paired runs each.
 pub const FULL: StudySize = StudySize { missions: None, runs: 10 };

@@ -136,7 +136,7 @@ pub fn measured(c: &Comparison, a: usize, b: usize) -> String {
 mod tests {
     use super::*;
 
-    const RANGES: &str = include_str!("../../../../scenarios/generalization.toml");
+    const RANGES: &str = include_str!("../../../../scenarios/generators/generalization.toml");
 
     #[test]
     fn a_seed_range_meeting_a_chosen_seed_is_refused() {

@@ -1,5 +1,5 @@
 //! Seeded mission generator: the missions a field team flies, drawn from ranges stated in a file
-//! (`scenarios/generalization.toml`, `scenarios/aiding-never-hurts.toml`), each a full closed-loop
+//! (`scenarios/generators/generalization.toml`, `scenarios/generators/aiding-never-hurts.toml`), each a full closed-loop
 //! scenario that `coopnav simulate` accepts.
 //!
 //! The file holds the data (how many AUVs, which block layouts, lane headings, currents, CNA
@@ -400,7 +400,7 @@ impl Mission {
 mod tests {
     use super::*;
 
-    const GENERALIZATION: &str = include_str!("../../../../scenarios/generalization.toml");
+    const GENERALIZATION: &str = include_str!("../../../../scenarios/generators/generalization.toml");
 
     fn ranges() -> Ranges {
         Ranges::parse(GENERALIZATION, Path::new("generalization.toml")).unwrap()
