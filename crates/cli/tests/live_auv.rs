@@ -15,8 +15,7 @@ use coopnav_lcm::{LogReader, Schema, Udpm};
 use coopnav_live::synthetic::{stream, StreamMessage};
 use coopnav_live::{AuvNavigator, LiveConfig};
 use coopnav_nav::synthetic::SyntheticSpec;
-use netns::{in_private_netns, wait_or_kill, Live};
-use std::process::{Command, Stdio};
+use netns::{in_private_netns, refused, Live};
 use std::time::{Duration, Instant};
 
 const URL: &str = "udpm://239.255.76.67:7667?ttl=0&recv_buf_size=4194304";
@@ -197,17 +196,7 @@ fn live_auv_refuses_a_bad_config_or_argument_naming_it() {
             (&["--url", "udpm://10.0.0.1:7667"], "not a multicast group"),
         ];
         for (args, expected) in cases {
-            let child = Command::new(env!("CARGO_BIN_EXE_coopnav"))
-                .args(["live", "auv", "--auv", "1"])
-                .args(args)
-                .stdin(Stdio::null())
-                .stdout(Stdio::piped())
-                .stderr(Stdio::piped())
-                .spawn()
-                .unwrap();
-            let out = wait_or_kill(child, Duration::from_secs(20), "coopnav live auv with a bad input");
-            let err = String::from_utf8_lossy(&out.stderr);
-            assert!(!out.status.success() && err.contains(expected), "{args:?}: {err}");
+            refused(&[&["live", "auv", "--auv", "1"][..], args].concat(), expected);
         }
     });
 }

@@ -16,9 +16,8 @@ use coopnav_live::CnaChannels;
 use coopnav_sim::policy::CnaCommand;
 use coopnav_sim::scenario::file::load;
 use coopnav_sim::scenario::Scenario;
-use netns::{in_private_netns, wait_or_kill, Live};
+use netns::{in_private_netns, refused, Live};
 use std::path::PathBuf;
-use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
 const URL: &str = "udpm://239.255.76.67:7667?ttl=0&recv_buf_size=4194304";
@@ -183,17 +182,7 @@ fn live_cna_refuses_a_bad_policy_clock_or_scenario_naming_it() {
             (&[bad.to_str().unwrap()], "comms.tau"),
         ];
         for (args, expected) in cases {
-            let child = Command::new(env!("CARGO_BIN_EXE_coopnav"))
-                .args(["live", "cna"])
-                .args(args)
-                .stdin(Stdio::null())
-                .stdout(Stdio::piped())
-                .stderr(Stdio::piped())
-                .spawn()
-                .unwrap();
-            let out = wait_or_kill(child, Duration::from_secs(20), "coopnav live cna with a bad input");
-            let err = String::from_utf8_lossy(&out.stderr);
-            assert!(!out.status.success() && err.contains(expected), "{args:?}: {err}");
+            refused(&[&["live", "cna"][..], args].concat(), expected);
         }
     });
 }

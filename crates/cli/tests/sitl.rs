@@ -13,7 +13,7 @@ use coopnav_live::sitl::{run_lockstep, SitlOptions};
 use coopnav_live::CnaChannels;
 use coopnav_sim::scenario::file::load;
 use coopnav_sim::scenario::Scenario;
-use netns::{in_private_netns, wait_or_kill};
+use netns::{in_private_netns, refused, wait_or_kill};
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
@@ -140,15 +140,6 @@ fn sitl_refuses_what_it_does_not_implement_yet() {
         (&["sitl", "--warp", "30"][..], "free-running sitl (--warp) is not implemented yet"),
         (&["sitl", "--lockstep", "--live-auvs"][..], "--live-auvs is not implemented yet"),
     ] {
-        let child = Command::new(env!("CARGO_BIN_EXE_coopnav"))
-            .args(args)
-            .stdin(Stdio::null())
-            .stdout(Stdio::piped())
-            .stderr(Stdio::piped())
-            .spawn()
-            .unwrap();
-        let out = wait_or_kill(child, Duration::from_secs(20), "coopnav sitl");
-        let err = String::from_utf8_lossy(&out.stderr);
-        assert!(!out.status.success() && err.contains(expected), "{args:?}: {err}");
+        refused(args, expected);
     }
 }

@@ -22,6 +22,21 @@ fn unshare() -> (&'static str, &'static str) {
     unreachable!("the tests needing a private namespace are ignored without one")
 }
 
+/// Runs `coopnav` with `args` (bounded by 20 s, killed by its pid past it) and checks that it
+/// fails with a message containing `expected`.
+pub fn refused(args: &[&str], expected: &str) {
+    let child = Command::new(env!("CARGO_BIN_EXE_coopnav"))
+        .args(args)
+        .stdin(Stdio::null())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let out = wait_or_kill(child, Duration::from_secs(20), &format!("coopnav {args:?}"));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success() && err.contains(expected), "{args:?}: {err}");
+}
+
 /// Waits for `child` at most `timeout`; past it, kills it (by its pid) and panics.
 pub fn wait_or_kill(mut child: Child, timeout: Duration, what: &str) -> std::process::Output {
     let deadline = Instant::now() + timeout;
