@@ -1,7 +1,7 @@
 """Compare CNA policies over seeds on the default closed-loop mission and plot the distributions
 of the survey AUVs' true navigation error.
 
-    python examples/compare_policies.py --runs 20 --policies planner,centroid,zigzag --out errors.png
+    python examples/compare_policies.py --runs 20 --policies planner-estimator,centroid,zigzag --out errors.png
 
 Every policy flies the same seeded runs (run i of each shares its sensor noise and channel draws),
 so differences come from the policy. matplotlib is optional: without it the script prints the
@@ -18,7 +18,7 @@ import coopnav
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--runs", type=int, default=10, help="seeded runs per policy")
-    parser.add_argument("--policies", default="planner,centroid,zigzag,none")
+    parser.add_argument("--policies", default="planner-estimator,planner,centroid,zigzag,none")
     parser.add_argument("--duration", type=float, default=1800.0, help="mission length, s")
     parser.add_argument("--out", default="policy_errors.png", help="plot file (needs matplotlib)")
     args = parser.parse_args()

@@ -5,8 +5,12 @@
 use anyhow::{bail, Result};
 use coopnav_sim::experiments::{self, Check, ReproOptions, ReproReport, Size};
 use coopnav_sim::output::{Manifest, RunDir};
+use indicatif::{ProgressBar, ProgressStyle};
+use std::io::IsTerminal;
 use std::path::PathBuf;
 use std::process::ExitCode;
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::time::Duration;
 
 /// Exit status when the only failed checks are documented known deviations.
 pub const KNOWN_DEVIATIONS_ONLY: u8 = 3;
@@ -62,10 +66,19 @@ pub fn run(args: Args) -> Result<ExitCode> {
         return Ok(ExitCode::SUCCESS);
     }
     let id = args.id.unwrap_or_default();
-    let opts = ReproOptions { size: if args.reduced { Size::Reduced } else { Size::Full }, seed: args.seed };
     // Refuse a bad output directory before the work, not after it.
     let dir = args.out.as_ref().map(|p| RunDir::create(p, args.force)).transpose()?;
-    let report = experiments::run(&id, &opts)?;
+    let bar = spinner(&id)?;
+    let finished = AtomicU64::new(0);
+    let tell = |_: u64| {
+        let n = finished.fetch_add(1, Ordering::Relaxed) + 1;
+        bar.set_message(format!("{n} simulation runs finished"));
+    };
+    let size = if args.reduced { Size::Reduced } else { Size::Full };
+    let opts = ReproOptions { size, seed: args.seed, progress: &tell };
+    let report = experiments::run(&id, &opts);
+    bar.finish_and_clear();
+    let report = report?;
     let text = printed(&report);
     println!("{text}");
     if args.json {
@@ -94,6 +107,18 @@ pub fn run(args: Args) -> Result<ExitCode> {
             bail!("{}: {n} property check(s) failed without a documented reason; see above", report.id)
         }
     }
+}
+
+/// On a terminal, a line on stderr that shows the reproduction running: its id, the time it has
+/// taken and the simulation runs it has finished (nothing where stderr is not a terminal).
+fn spinner(id: &str) -> Result<ProgressBar> {
+    if !std::io::stderr().is_terminal() {
+        return Ok(ProgressBar::hidden());
+    }
+    let bar = ProgressBar::new_spinner().with_message("starting");
+    bar.set_style(ProgressStyle::with_template(&format!("{{spinner}} {id} [{{elapsed_precise}}] {{msg}}"))?);
+    bar.enable_steady_tick(Duration::from_millis(200));
+    Ok(bar)
 }
 
 /// The table and one line per check, as printed.

@@ -35,8 +35,8 @@ struct Reduced {
 
 const REDUCED: &[Reduced] = &[
     Reduced {
-        readme: "simulate s.toml --runs 100 --policy planner,centroid,zigzag",
-        run: "simulate s.toml --runs 2 --policy planner,centroid,zigzag",
+        readme: "simulate s.toml --runs 100 --policy planner-estimator,planner,centroid,zigzag",
+        run: "simulate s.toml --runs 2 --policy planner-estimator,planner,centroid,zigzag",
         input: None,
     },
     Reduced {

@@ -22,7 +22,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let (runs, seed): (usize, u64) = (runs.parse()?, seed.parse()?);
     let sizes: Option<Vec<usize>> =
         sizes.map(|s| s.split(',').map(str::parse).collect::<Result<_, _>>()).transpose()?;
-    let (mut settings, _, duration) = setup(&ReproOptions { size: Size::Full, seed })?;
+    let (mut settings, _, duration) = setup(&ReproOptions::new(Size::Full, seed))?;
     settings.retain(|s| only == "all" || s.name == only);
     if settings.is_empty() {
         return Err(format!("no scenario {only} (allowed: current, sloping-auv-cna, all)").into());

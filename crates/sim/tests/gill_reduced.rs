@@ -4,7 +4,7 @@
 use coopnav_sim::experiments::{run, ReproOptions, Size};
 
 fn check_all(id: &str) {
-    let report = run(id, &ReproOptions { size: Size::Reduced, seed: 1 }).expect(id);
+    let report = run(id, &ReproOptions::new(Size::Reduced, 1)).expect(id);
     for c in &report.checks {
         assert!(c.acceptable(), "{id}: {} failed: {}\n{}", c.name, c.detail, report.table);
     }

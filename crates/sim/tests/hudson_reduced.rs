@@ -5,7 +5,7 @@ use coopnav_sim::experiments::{registry, ReproOptions, Size};
 
 #[test]
 fn hudson_reductions_pass_their_checks() {
-    let opts = ReproOptions { size: Size::Reduced, seed: 1 };
+    let opts = ReproOptions::new(Size::Reduced, 1);
     let hudson: Vec<_> = registry().into_iter().filter(|e| e.id.starts_with("hudson-")).collect();
     assert_eq!(hudson.len(), 9, "5.3-5.9, 6.1 and the penalty cases");
     for e in hudson {

@@ -166,7 +166,7 @@ pub fn verdict(aided: &[Aided], nees: &[FilterNees], bounds: (f64, f64)) -> Vec<
 
 fn aiding_never_hurts(opts: &ReproOptions) -> Result<ReproReport, ExperimentError> {
     let study = missions::study(ID, FILE, RANGES, opts, FULL, REDUCED)?;
-    evaluate(&study, &|_| {})
+    evaluate(&study, opts.progress)
 }
 
 /// Every mission of `study`, every policy (`none` first), its runs.
@@ -318,14 +318,14 @@ mod tests {
     #[test]
     #[ignore = "fails: on mission 1 one filter is under-confident (mean NEES 0.35-0.48 below the 0.54 bound); reproduce aiding-never-hurts"]
     fn the_reduced_invariant_holds() {
-        let report = aiding_never_hurts(&ReproOptions { size: Size::Reduced, seed: 1 }).unwrap();
+        let report = aiding_never_hurts(&ReproOptions::new(Size::Reduced, 1)).unwrap();
         let failed: Vec<String> = report.checks.iter().filter(|c| !c.passed).map(Check::line).collect();
         assert!(failed.is_empty(), "{}\n{}", report.table, failed.join("\n"));
     }
 
     #[test]
     fn the_reduced_study_reports_every_policy_and_filter() {
-        let report = aiding_never_hurts(&ReproOptions { size: Size::Reduced, seed: 1 }).unwrap();
+        let report = aiding_never_hurts(&ReproOptions::new(Size::Reduced, 1)).unwrap();
         let n = policies().len();
         // Per pinging policy: worse and NEES; for none: NEES only.
         assert_eq!(report.checks.len(), 2 * (n - 1) + 1, "{:?}", report.checks);

@@ -372,7 +372,7 @@ fn fail(message: String) -> ExperimentError {
 }
 
 fn closed_loop_vs_baselines(opts: &ReproOptions) -> Result<ReproReport, ExperimentError> {
-    run_with_progress(opts, &|_| {})
+    run_with_progress(opts, opts.progress)
 }
 
 /// One cell's paired difference (planner-estimator − baseline), m.
@@ -722,7 +722,7 @@ mod tests {
 
     #[test]
     fn reduced_form_runs_every_cell_and_explains_each_cell_not_won() {
-        let r = closed_loop_vs_baselines(&ReproOptions { size: Size::Reduced, seed: 1 }).unwrap();
+        let r = closed_loop_vs_baselines(&ReproOptions::new(Size::Reduced, 1)).unwrap();
         let by_name =
             |name: String| r.checks.iter().find(|c| c.name == name).unwrap_or_else(|| panic!("no check {name}"));
         for (scenario, n) in [("current", 1), ("current", 3), ("sloping-auv-cna", 2)] {
@@ -762,7 +762,7 @@ mod tests {
 
     #[test]
     fn spread_fleets_trade_the_level_0_penalty_for_the_reach_cost_to_go() {
-        let (settings, _, _) = setup(&ReproOptions { size: Size::Full, seed: 1 }).unwrap();
+        let (settings, _, _) = setup(&ReproOptions::new(Size::Full, 1)).unwrap();
         for setting in &settings {
             let (small, spread) = (setting.scenario(2, 1, None).planner, setting.scenario(5, 1, None).planner);
             assert_eq!((small.estimator_penalty_case, small.estimator_reach_success), (None, 0.0));
@@ -774,7 +774,7 @@ mod tests {
 
     #[test]
     fn in_the_current_the_estimator_scores_true_error_with_the_current_as_its_mean() {
-        let (settings, _, _) = setup(&ReproOptions { size: Size::Full, seed: 1 }).unwrap();
+        let (settings, _, _) = setup(&ReproOptions::new(Size::Full, 1)).unwrap();
         let cell = |name: &str| settings.iter().find(|s| s.name == name).unwrap().scenario(3, 1, None);
         // (The sloping scenario's AUV CNA: `the_auv_cna_works_below_the_surface_at_every_fleet_size`.)
         let current = cell("current");
@@ -851,7 +851,7 @@ mod tests {
     /// and 8 planner-estimator scores true error with the CNA's own diffusion.
     #[test]
     fn the_auv_cna_works_below_the_surface_at_every_fleet_size() {
-        let (settings, _, _) = setup(&ReproOptions { size: Size::Full, seed: 1 }).unwrap();
+        let (settings, _, _) = setup(&ReproOptions::new(Size::Full, 1)).unwrap();
         let sloping = settings.iter().find(|s| s.name == "sloping-auv-cna").unwrap();
         for n in [1, 2, 3, 5, 8] {
             let sc = sloping.scenario(n, 1, None);
@@ -876,7 +876,7 @@ mod tests {
     /// has which.
     #[test]
     fn each_cell_plans_with_its_tree() {
-        let (settings, _, _) = setup(&ReproOptions { size: Size::Full, seed: 1 }).unwrap();
+        let (settings, _, _) = setup(&ReproOptions::new(Size::Full, 1)).unwrap();
         for setting in &settings {
             for &n in &setting.n {
                 let p = setting.scenario(n, 1, None).planner;
@@ -920,7 +920,7 @@ mod tests {
     /// last one under rate 0's (the measured reason for the change); smaller fleets keep rate 0.
     #[test]
     fn eight_auvs_fly_a_schedule_sized_for_the_fleet() {
-        let (settings, _, _) = setup(&ReproOptions { size: Size::Full, seed: 1 }).unwrap();
+        let (settings, _, _) = setup(&ReproOptions::new(Size::Full, 1)).unwrap();
         let heard = |sc: &Scenario| {
             let c = monte_carlo(sc, &["centroid-standoff".to_string()], 1, &|_| {}).unwrap();
             c.policies[0].auv_heard_runs.clone()
@@ -940,7 +940,7 @@ mod tests {
 
     #[test]
     fn the_tuning_seed_is_refused() {
-        let e = closed_loop_vs_baselines(&ReproOptions { size: Size::Reduced, seed: TUNING_SEED }).unwrap_err();
+        let e = closed_loop_vs_baselines(&ReproOptions::new(Size::Reduced, TUNING_SEED)).unwrap_err();
         assert!(e.to_string().contains("--seed"), "{e}");
     }
 

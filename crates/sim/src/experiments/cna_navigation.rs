@@ -36,7 +36,7 @@ fn cna_navigation(opts: &ReproOptions) -> Result<ReproReport, ExperimentError> {
     }
     let exact: Vec<Setting> = as_evaluated.iter().map(broadcasting_truth).collect();
     let both: Vec<Setting> = as_evaluated.into_iter().chain(exact).collect();
-    let report = evaluate(&both, runs, duration, opts.seed, &policies(), &|_| {})?;
+    let report = evaluate(&both, runs, duration, opts.seed, &policies(), opts.progress)?;
     let cells: Vec<Cell> = serde_json::from_value(report.data["cells"].clone()).map_err(|e| fail(e.to_string()))?;
     let table = format!("{}\n{}", side_by_side(&both, &cells), report.table);
     Ok(ReproReport { id: ID.into(), table, ..report })
@@ -100,7 +100,7 @@ mod tests {
 
     #[test]
     fn the_counterfactual_runs_every_auv_cna_cell_twice_and_the_exact_cna_navigates_the_fleet_better() {
-        let r = cna_navigation(&ReproOptions { size: Size::Reduced, seed: 1 }).unwrap();
+        let r = cna_navigation(&ReproOptions::new(Size::Reduced, 1)).unwrap();
         assert_eq!(r.id, ID);
         let comparisons = r.data["comparisons"].as_array().unwrap();
         // The reduced form flies the sloping scenario at N = 2: as evaluated, then exact.
@@ -114,7 +114,7 @@ mod tests {
 
     #[test]
     fn only_the_broadcast_changes_in_the_counterfactual() {
-        let (settings, _, _) = setup(&ReproOptions { size: Size::Full, seed: 1 }).unwrap();
+        let (settings, _, _) = setup(&ReproOptions::new(Size::Full, 1)).unwrap();
         let sloping = settings.iter().find(|s| s.base.cna.auv.is_some()).unwrap();
         let exact = broadcasting_truth(sloping);
         let (a, b) = (sloping.scenario(3, 1, None), exact.scenario(3, 1, None));

@@ -136,7 +136,7 @@ pub fn verdict(outcomes: &[Outcome]) -> Vec<Check> {
 }
 
 fn generalization(opts: &ReproOptions) -> Result<ReproReport, ExperimentError> {
-    run_with_progress(opts, &|_| {})
+    run_with_progress(opts, opts.progress)
 }
 
 /// Runs the study; `progress(done)` counts the finished runs.
@@ -288,7 +288,7 @@ mod tests {
 
     #[test]
     fn the_reduced_study_reports_every_baseline_and_every_mission() {
-        let report = generalization(&ReproOptions { size: Size::Reduced, seed: 1 }).unwrap();
+        let report = generalization(&ReproOptions::new(Size::Reduced, 1)).unwrap();
         let baselines = policies().len() - 1;
         let tallies = report.data["tallies"].as_array().unwrap();
         assert_eq!(tallies.len(), baselines);
@@ -337,7 +337,7 @@ mod tests {
 
     #[test]
     fn a_seed_range_holding_the_tuning_seed_is_refused() {
-        let e = generalization(&ReproOptions { size: Size::Reduced, seed: TUNING_SEED - 1 }).unwrap_err();
+        let e = generalization(&ReproOptions::new(Size::Reduced, TUNING_SEED - 1)).unwrap_err();
         assert!(e.to_string().contains(&TUNING_SEED.to_string()), "{e}");
     }
 }

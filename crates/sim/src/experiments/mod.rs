@@ -26,16 +26,36 @@ pub enum Size {
     Reduced,
 }
 
-#[derive(Debug, Clone, Copy)]
-pub struct ReproOptions {
+/// Called once after each simulation run a reproduction finishes, from any thread, with the number
+/// of runs its current batch has finished (a reproduction may run several batches, each counting
+/// from 1). Reproductions that run no closed-loop simulations (the planner-only tables) never call it.
+pub type Progress<'a> = dyn Fn(u64) + Sync + 'a;
+
+/// How to run a reproduction: its size, its base seed and whom to tell of its progress.
+#[derive(Clone, Copy)]
+pub struct ReproOptions<'a> {
     pub size: Size,
     /// Base seed; run i uses `coopnav_core::run_seed(seed, i)`.
     pub seed: u64,
+    pub progress: &'a Progress<'a>,
 }
 
-impl Default for ReproOptions {
+impl ReproOptions<'static> {
+    /// `size` from base seed `seed`, telling no one of its progress.
+    pub fn new(size: Size, seed: u64) -> Self {
+        ReproOptions { size, seed, progress: &|_| {} }
+    }
+}
+
+impl Default for ReproOptions<'static> {
     fn default() -> Self {
-        ReproOptions { size: Size::Full, seed: 1 }
+        ReproOptions::new(Size::Full, 1)
+    }
+}
+
+impl std::fmt::Debug for ReproOptions<'_> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("ReproOptions").field("size", &self.size).field("seed", &self.seed).finish_non_exhaustive()
     }
 }
 

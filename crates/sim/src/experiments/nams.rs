@@ -69,7 +69,7 @@ TL +2.0 s at seed 1. The thesis's +44.8 s is out of reach of our channel, and th
 fn tables_9_11(opts: &ReproOptions) -> Result<ReproReport, ExperimentError> {
     let tl = default_tl();
     let label = format!("analytic spreading + Thorp absorption, k = {}", tl.k);
-    report(opts, ID, &ExperimentTl::Shared(Arc::new(tl)), &label, &|_| {})
+    report(opts, ID, &ExperimentTl::Shared(Arc::new(tl)), &label, opts.progress)
 }
 
 /// The same cells with the transmission loss of a BELLHOP grid over each square (the engine's
@@ -80,7 +80,7 @@ fn tables_9_11_bellhop_grid(opts: &ReproOptions) -> Result<ReproReport, Experime
         "BELLHOP grid over each square ({} bearings, anchors every {} m, source layers every {} m)",
         g.bearings, g.anchor_spacing_m, g.source_depth_step_m
     );
-    report(opts, GRID_ID, &ExperimentTl::PerCell(TlModel::BellhopGrid(g)), &label, &|_| {})
+    report(opts, GRID_ID, &ExperimentTl::PerCell(TlModel::BellhopGrid(g)), &label, opts.progress)
 }
 
 fn best_control<'a>(r: &'a ExperimentResult, scenario: &str) -> Option<&'a Cell> {
@@ -222,7 +222,7 @@ mod tests {
 
     #[test]
     fn reduced_reproduction_keeps_the_ordering() {
-        let r = tables_9_11(&ReproOptions { size: Size::Reduced, seed: 1 }).unwrap();
+        let r = tables_9_11(&ReproOptions::new(Size::Reduced, 1)).unwrap();
         for c in &r.checks {
             assert!(c.passed, "{}: {}", c.name, c.detail);
         }
