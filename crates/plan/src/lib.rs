@@ -10,6 +10,7 @@
 //! [`predeploy`] steps it over a whole pre-deployment mission whose survey tracks are known a
 //! priori.
 
+pub mod auto;
 mod brute;
 mod cost_model;
 pub mod current_states;

@@ -47,7 +47,7 @@ fn main() -> Result<(), Box<dyn Error>> {
     let mut total = 0.0;
     for s in &settings {
         for &n in &s.n {
-            let sc = s.scenario(n, 1, None);
+            let sc = s.scenario(n, 1, None)?;
             for p in policies().iter().filter(|p| chosen(&s.name, n, p)) {
                 let spec = PolicySpec::new(p, &sc)?;
                 let (mut cpu_ns, mut split) = (0u64, [0.0f64; 7]);

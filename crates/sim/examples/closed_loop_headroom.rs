@@ -152,7 +152,7 @@ fn scenario_for(name: &str, n: &str, duration: Option<f64>) -> Result<Scenario, 
     } else {
         let (settings, _, _) = setup(&ReproOptions::new(Size::Full, TUNING_SEED + 1))?;
         let setting = settings.iter().find(|s| s.name == name).ok_or_else(|| format!("no scenario {name}"))?;
-        setting.scenario(n.parse()?, TUNING_SEED, None)
+        setting.scenario(n.parse()?, TUNING_SEED, None)?
     };
     sc.seed = TUNING_SEED;
     if let Some(d) = duration {

@@ -26,7 +26,7 @@ fn main() -> Result<(), Error> {
     let (settings, _, _) = setup(&ReproOptions::new(Size::Full, TUNING_SEED + 1))?;
     let setting =
         settings.iter().find(|s| s.name == scenario.as_str()).ok_or_else(|| format!("no scenario {scenario}"))?;
-    let mut sc = setting.scenario(n, TUNING_SEED, duration);
+    let mut sc = setting.scenario(n, TUNING_SEED, duration)?;
     for assignment in rest.iter().skip(1) {
         sc = overridden(&sc, assignment)?;
     }

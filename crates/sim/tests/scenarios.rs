@@ -112,11 +112,11 @@ fn on_the_spread_fleet_the_tuned_estimator_planner_hears_every_auv_and_its_defau
     let file = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../scenarios").join(SPREAD_FLEET);
     let tuned = Scenario::load(&file).unwrap_or_else(|e| panic!("{e}"));
     let mut defaults = tuned.clone();
-    defaults.planner.estimator_penalty_case = None;
+    defaults.planner.estimator_penalty_case = Some(defaults.planner.penalty_case.clone());
     defaults.planner.link = Default::default();
     defaults.planner.estimator_tracking = Default::default();
-    defaults.planner.estimator_reach_success = 0.0;
-    defaults.planner.estimator_terminal_levels = 0.0;
+    defaults.planner.estimator_reach_success = Some(0.0);
+    defaults.planner.estimator_terminal_levels = Some(0.0);
     let statuses = |sc: &Scenario| -> Vec<u64> {
         let mut policy = PolicySpec::new("planner-estimator", sc).unwrap().build(sc).unwrap();
         let r = run(sc, &mut policy, sc.seed, &Faults::default(), &mut ());

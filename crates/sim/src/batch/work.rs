@@ -162,6 +162,7 @@ pub fn closed_loop(sc: &scenario::Scenario, runs: usize, policies: usize) -> Vec
     let runs_total = runs as f64 * policies as f64;
     let pitches = sc.cna.auv.as_ref().map_or(1, |a| a.pitch_options);
     let p = &sc.planner;
+    let e = sc.estimator_settings();
     // The larger of the two planners' trees: Hudson's and `planner-estimator`'s own A, L and
     // pitch levels.
     let hudson = TreeSize {
@@ -173,10 +174,10 @@ pub fn closed_loop(sc: &scenario::Scenario, runs: usize, policies: usize) -> Vec
     };
     let estimator = TreeSize {
         prefix: "planner.estimator_",
-        headings: p.estimator_heading_options.unwrap_or(p.heading_options),
+        headings: e.heading_options,
         pitches,
-        look_ahead: p.estimator_look_ahead.unwrap_or(p.look_ahead),
-        pitch_levels: p.estimator_pitch_levels,
+        look_ahead: e.look_ahead,
+        pitch_levels: e.pitch_levels,
     };
     let tree = if estimator.leaves() > hudson.leaves() { estimator } else { hudson };
     let decisions = sc.duration_s / sc.comms.tau;

@@ -6,14 +6,19 @@
 //! 2, 3, 5 and 8 survey AUVs. A cell is won when the paired 95 % CI of (planner − baseline) lies
 //! entirely below zero; every other cell is printed with its measured cause.
 //!
-//! Seeds: the planner's settings chosen by experiment (the aggregate `sigma_sum`, the range bias,
-//! the cost-to-go, the level-0 penalty and the reach cost-to-go from 5 AUVs on, L and the pitch
-//! levels with the AUV CNA) were picked on base seed [`TUNING_SEED`] (runs `run_seed(1000, 0..R)`, R = 6 to 40); the
-//! evaluation uses the base seed of `--seed` (default 1, runs `run_seed(1, 0..runs)`) and refuses
-//! that base seed. The
-//! baselines run exactly as configured elsewhere (nothing is tuned for or against them). From 6
-//! AUVs on every policy flies a schedule sized for the fleet ([`sized_schedule`]): rate 0's 1 km
-//! slots, which the planner alone modelled, lost the last slot's AUV for every policy.
+//! The cells are data: `scenarios/experiments/closed-loop-vs-baselines.toml` names each scenario
+//! file, the fleet sizes it is flown with, the overlays laid over it from a fleet size on (from 6
+//! AUVs on every policy flies a schedule sized for the fleet: rate 0's 1 km slots lost the last
+//! slot's AUV for every policy) and the reduced form. Nothing is set per cell here: each cell flies
+//! what `coopnav simulate` flies for its file, `planner-estimator` with the settings of the
+//! planner's rule for the mission (coopnav_plan `auto`) where the file sets none.
+//!
+//! Seeds: the rule's settings (the aggregate `sigma_sum`, the range bias, the cost-to-go, the
+//! level-0 penalty and the reach cost-to-go from 5 AUVs on, L and the pitch levels with the AUV
+//! CNA, the fine headings from 6 AUVs on) were picked on base seed [`TUNING_SEED`] (runs
+//! `run_seed(1000, 0..R)`, R = 6 to 40); the evaluation uses the base seed of `--seed` (default 1,
+//! runs `run_seed(1, 0..runs)`) and refuses that base seed. The baselines run exactly as
+//! configured elsewhere (nothing is tuned for or against them).
 
 use super::{Check, Experiment, ExperimentError, ReproOptions, ReproReport, Size};
 use crate::batch::mc::{comparison_table, monte_carlo_grid};
@@ -21,14 +26,13 @@ use crate::batch::mc::{paired_per_auv, Ci, Comparison, PolicySummary};
 use crate::output::plot::PlotError;
 use crate::output::plot::{intervals_svg, Interval};
 use crate::policy::registry::POLICY_NAMES;
-use crate::scenario::world::{
-    ESTIMATOR_AGGREGATE, ESTIMATOR_BIAS_PER_KM, ESTIMATOR_CNA_VARIANCE, ESTIMATOR_TERMINAL_LEVELS,
-};
+use crate::scenario::file::overlay;
+use crate::scenario::generate::SizeRule;
 use crate::scenario::Scenario;
-use coopnav_acomms::Rate;
-use coopnav_plan::{Aggregate, PenaltyCase, RangeNoise, TruthSpec};
+use coopnav_plan::auto::{self, ASC_TRUTH, BIAS_PER_KM, DEPTH_AWARE_BIAS_PER_KM, REACH_SUCCESS, SPREAD_FLEET_MIN_AUVS};
 use serde::{Deserialize, Serialize};
 use std::fmt::Write as _;
+use std::path::Path;
 
 const ID: &str = "closed-loop-vs-baselines";
 
@@ -55,316 +59,121 @@ pub fn experiments() -> Vec<Experiment> {
     }]
 }
 
-/// One evaluation scenario: its name, its mission for N survey AUVs and the planners' look-ahead.
+/// The experiment's cells, embedded: scenario files, N per scenario, the fleet-size overlays and
+/// the reduced form.
+const CELLS: &str = include_str!("../../../../scenarios/experiments/closed-loop-vs-baselines.toml");
+
+/// Where [`CELLS`] lives, for messages.
+const CELLS_FILE: &str = "scenarios/experiments/closed-loop-vs-baselines.toml";
+
+/// The scenario files [`CELLS`] may name, embedded, by the name it gives them (relative to its
+/// folder; "default" is the embedded default mission, as in a sweep file).
+const FILES: [(&str, &str); 2] = [("default", crate::scenario::world::EXAMPLE), ("../sloping-auv-cna.toml", SLOPING)];
+
+/// [`CELLS`] as written.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct CellsFile {
+    runs: usize,
+    scenario: Vec<ScenarioCells>,
+    #[serde(default)]
+    fleet_size: Vec<SizeRule>,
+    reduced: ReducedCells,
+}
+
+/// One scenario file and the fleet sizes it is flown with.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ScenarioCells {
+    name: String,
+    file: String,
+    n_auvs: Vec<usize>,
+}
+
+/// The reduced form: runs, mission length, and which scenarios and N it keeps.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ReducedCells {
+    runs: usize,
+    duration_s: f64,
+    cells: Vec<ReducedScenario>,
+}
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ReducedScenario {
+    scenario: String,
+    n_auvs: Vec<usize>,
+}
+
+/// One evaluation scenario: its name, the fleet sizes it is flown with, its mission file and the
+/// overlays laid over it from a fleet size on ([`CELLS`]).
+#[derive(Debug, Clone)]
 pub struct Setting {
     pub name: String,
     pub n: Vec<usize>,
     pub base: Scenario,
-    /// `planner-estimator`'s tree and cost for N AUVs (Hudson's `planner` keeps A = 5, L = 5):
-    /// with the ASC [`asc_estimator`], with the AUV CNA [`auv_cna_estimator`].
-    pub estimator: fn(usize) -> EstimatorCell,
-    /// `planner.estimator_pitch_levels`: None with the ASC; 1 with the AUV CNA. All 15 options at
-    /// every level make L = 5 about 20× slower than L = 3. The deeper pitch options do not pay in
-    /// the sloping scenario: a ±45° pitch step (1.5°/s over τ) breaks the 30° limit, so level 0
-    /// drops them and deeper levels double their cost; with pitch options at level 0 only the same
-    /// runs give the same error at a fraction of the time, and allow a deeper look-ahead.
-    pub estimator_pitch_levels: Option<usize>,
-    /// The AUV CNA chooses its depth by the sound-speed profile (`planner.estimator_bias_profile`,
-    /// `estimator_level_off`, [`DEPTH_AWARE_BIAS_PER_KM`]).
-    pub depth_aware: bool,
-}
-
-/// `planner-estimator`'s tree and cost in one cell: A heading options, L levels, H levels of
-/// cost-to-go (None: [`ESTIMATOR_TERMINAL_LEVELS`], or [`SPREAD_TERMINAL_LEVELS`] from
-/// [`SPREAD_FLEET_MIN_AUVS`] AUVs on), the true-error model it scores (None: the filters'
-/// covariances), how it joins the AUVs' terms, and k_b (None: [`ESTIMATOR_BIAS_PER_KM`], or
-/// [`DEPTH_AWARE_BIAS_PER_KM`] where the AUV CNA chooses its depth).
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct EstimatorCell {
-    pub heading_options: usize,
-    pub look_ahead: usize,
-    pub terminal_levels: Option<f64>,
-    pub truth: Option<TruthSpec>,
-    pub aggregate: Aggregate,
-    pub bias_per_km: Option<f64>,
-}
-
-/// `planner-estimator` knows its schedule's half-duplex reach (`planner.estimator_slot_reach`,
-/// `Scenario::slot_reach_m`): with Hudson's schedule at τ = 44 s and 8 AUVs, the first slot's AUV
-/// hears no broadcast sent from beyond about 2 km (its own status starts first), which the
-/// link's range-only model missed. Chosen on tuning runs (docs/evaluation.md); up to 3 AUVs every
-/// reach exceeds 6 km and nothing changes. [`sized_schedule`]'s rate 1 puts the first slot's reach
-/// at 2.7 km.
-pub const SLOT_REACH: bool = true;
-
-/// The AUV CNA's fine tree: A = 9 headings, L = 3, H = 40 levels of cost-to-go (from
-/// [`SPREAD_FLEET_MIN_AUVS`] AUVs on the spread fleets' [`SPREAD_TERMINAL_LEVELS`]), scoring true
-/// error ([`AUV_CNA_TRUTH`]); [`auv_cna_estimator`] says for which N.
-///
-/// With one AUV the finer headings and the longer cost-to-go pay under the true-error cost, not
-/// under the covariance cost; at N = 3 and 5 the same tree does better than A = 5, L = 5 at a
-/// fraction of the search time; at N = 2 and 8 it does not (docs/evaluation.md).
-pub const FINE_AUV_CNA: EstimatorCell = EstimatorCell {
-    heading_options: 9,
-    look_ahead: 3,
-    terminal_levels: Some(40.0),
-    truth: Some(AUV_CNA_TRUTH),
-    aggregate: ESTIMATOR_AGGREGATE,
-    bias_per_km: None,
-};
-
-/// The true-error model of `planner-estimator` on the mission with a water current (the ASC
-/// grid; invented, no thesis values, docs/models.md#true-error-cost): the AUVs' true dead-reckoning
-/// drift 0.002 m²/s, the channel's ranges σ 1.8 m (Gill's outliers, E[n²] ≈ 3.2 m²), an ASC whose
-/// GPS error does not drift; the current (the CNA's ADCP) taken as each AUV's mean error
-/// (coopnav_plan `true_error`, step 1). Chosen on tuning runs: it lowers planner-estimator's error
-/// at every N (docs/evaluation.md); at L = 4 see [`TRUE_ERROR_LOOK_AHEAD`]. The values are those
-/// `scenarios/auv-cna-tdma.toml` uses, with no CNA drift.
-pub const CURRENT_TRUTH: TruthSpec =
-    TruthSpec { drift_m2_s: 0.002, range_noise: RangeNoise { sigma_m: 1.8, per_km_m: 0.0 }, cna_diffusion_m2_s: 0.0 };
-
-/// L of `planner-estimator` with the ASC and [`CURRENT_TRUTH`] (chosen on tuning runs). The
-/// true-error cost's lower bound below a node (coopnav_plan `true_error`) is loose, so its
-/// search costs about brute force's: L = 4 gives about the error of L = 5 at about a third of
-/// the time.
-pub const TRUE_ERROR_LOOK_AHEAD: usize = 4;
-
-/// From this many AUVs on (a fleet spread wider than the link's plateau), `planner-estimator`
-/// runs without the level-0 distance penalty (Table 5.2 case 3, look-ahead doubling only) and
-/// with the reach-time cost-to-go ([`REACH_SUCCESS`], [`SPREAD_TERMINAL_LEVELS`]) in its place.
-/// With 5 or 8 AUVs spread over 3–4.8 km every option breaks the 1 km limit for some AUV, and
-/// the penalty, C·(1 + v) with v in metres, then decides alone (the CNA minimises its largest
-/// distance, Hudson's planner's path). Chosen on tuning runs of the default mission with current:
-/// without the penalty and with the reach term in its place the error is lowest at N = 5 and 8.
-pub const SPREAD_FLEET_MIN_AUVS: usize = 5;
-
-/// p_u of the reach-time cost-to-go (coopnav_plan estimator step 7) for spread fleets: just below
-/// the 0.8 plateau of the rate-0 success curve, so the useful range r_u ≈ 0.93 km is where pings
-/// start being lost. Smaller p_u (a useful range of 2–2.5 km, farther than most AUVs ever are)
-/// changes nothing.
-pub const REACH_SUCCESS: f64 = 0.79;
-
-/// H for spread fleets: the reach term's growth saturates at qτ·H/2, and with H = 10 it is too
-/// weak to replace the penalty.
-pub const SPREAD_TERMINAL_LEVELS: f64 = 20.0;
-
-/// k_b of `planner-estimator` with the AUV CNA, on top of the profile's own scale error
-/// (`planner.estimator_bias_profile`), which the CNA levels off at the depth it picks
-/// (`estimator_level_off`). Chosen on tuning runs of the sloping scenario: the profile alone
-/// cannot move a CNA whose ±45° pitch steps break the 30° limit, levelling off without the profile
-/// dives the CNA towards deep AUVs into slower water, and the two together with every step
-/// starting level do best; with the filters expecting Gill's outliers (`filter.range_outliers`)
-/// k_b 6 does better than 3 (docs/evaluation.md).
-pub const DEPTH_AWARE_BIAS_PER_KM: f64 = 6.0;
-
-/// From this many AUVs on the AUV CNA chooses its depth ([`DEPTH_AWARE_BIAS_PER_KM`]): with one
-/// AUV, over the shallow end of the shelf where the profile's scale error is small at 10 m, it
-/// does worse.
-pub const DEPTH_AWARE_MIN_AUVS: usize = 2;
-
-/// The true-error model of `planner-estimator` with the AUV CNA (invented, docs/models.md#true-error-cost,
-/// no thesis values): the AUVs' true drift 0.01 m²/s, the channel's ranges σ 1.8 m (Gill's
-/// outliers), and the CNA's own navigation diffusion, 0.01 m²/s per axis (the scenario's
-/// `cna.auv.nav_diffusion`). Scored from 1 to 5 AUVs but 2 ([`auv_cna_estimator`]).
-pub const AUV_CNA_TRUTH: TruthSpec =
-    TruthSpec { drift_m2_s: 0.01, range_noise: RangeNoise { sigma_m: 1.8, per_km_m: 0.0 }, cna_diffusion_m2_s: 0.01 };
-
-/// `planner-estimator` with the ASC: A = 5, [`TRUE_ERROR_LOOK_AHEAD`], [`CURRENT_TRUTH`]; on
-/// [`sized_schedule`]'s fleets [`sized_fleet`].
-pub fn asc_estimator(n: usize) -> EstimatorCell {
-    if n >= SIZED_SCHEDULE_MIN_AUVS {
-        return sized_fleet(CURRENT_TRUTH);
-    }
-    EstimatorCell {
-        heading_options: 5,
-        look_ahead: TRUE_ERROR_LOOK_AHEAD,
-        terminal_levels: None,
-        truth: Some(CURRENT_TRUTH),
-        aggregate: ESTIMATOR_AGGREGATE,
-        bias_per_km: None,
-    }
-}
-
-/// `planner-estimator` on [`sized_schedule`]'s fleets, with either CNA: fine headings (A = 21,
-/// about 17° apart within the turn limit's ±176°, against A = 5's 88°), L = 2, H = 40, the true
-/// error (`truth`) joined by the trace sum.
-///
-/// Chosen on tuning runs at N = 8 with the sized schedule: with A = 5 the headings are 88° apart
-/// and the CNA sits west of the fleet's centroid, and centroid wins the current cell; finer
-/// headings win it from A = 7 on, best at A = 21 with L = 2 (A = 31 no better), and the same tree
-/// ties centroid-standoff on the slope where A = 5 loses (docs/evaluation.md).
-pub fn sized_fleet(truth: TruthSpec) -> EstimatorCell {
-    EstimatorCell {
-        heading_options: 21,
-        look_ahead: 2,
-        terminal_levels: Some(40.0),
-        truth: Some(truth),
-        aggregate: Aggregate::TraceSum,
-        bias_per_km: None,
-    }
-}
-
-/// `planner-estimator` with the AUV CNA (pitch options at level 0 only) for N AUVs: the fine
-/// tree [`FINE_AUV_CNA`] from 1 to 5 AUVs but 2 (N = 4 not measured); A = 5 and the filters'
-/// covariances at N = 2 (L = 5); on [`sized_schedule`]'s fleets [`sized_fleet`].
-///
-/// With A = 5 at N = 8 neither cost beats centroid-standoff on the slope, whatever k_b, drift or
-/// L; the finer headings of [`sized_fleet`] do, with a smaller k_b ([`SIZED_AUV_CNA_BIAS_PER_KM`]).
-/// L = 5 at N = 2 is the deepest tree whose gain pays for its time: from [`SPREAD_FLEET_MIN_AUVS`]
-/// on, once the CNA chooses its depth ([`DEPTH_AWARE_BIAS_PER_KM`]), every pitch option at level 0
-/// keeps a full subtree and L = 5 triples the search. The true-error cost at N = 2 does not pay
-/// for its time; at N = 1 it pays only with the fine tree ([`FINE_AUV_CNA`]).
-pub fn auv_cna_estimator(n: usize) -> EstimatorCell {
-    match n {
-        2 => EstimatorCell {
-            heading_options: 5,
-            look_ahead: 5,
-            terminal_levels: None,
-            truth: None,
-            aggregate: ESTIMATOR_AGGREGATE,
-            bias_per_km: None,
-        },
-        _ if n < SIZED_SCHEDULE_MIN_AUVS => EstimatorCell {
-            terminal_levels: FINE_AUV_CNA.terminal_levels.filter(|_| n < SPREAD_FLEET_MIN_AUVS),
-            ..FINE_AUV_CNA
-        },
-        _ => EstimatorCell { bias_per_km: Some(SIZED_AUV_CNA_BIAS_PER_KM), ..sized_fleet(AUV_CNA_TRUTH) },
-    }
+    pub fleet_size: Vec<SizeRule>,
 }
 
 impl Setting {
-    /// A scenario with an ASC CNA: [`asc_estimator`], every option at every level.
-    pub fn asc(name: &'static str, n: Vec<usize>, base: Scenario) -> Self {
-        Setting {
-            name: name.into(),
-            n,
-            base,
-            estimator: asc_estimator,
-            estimator_pitch_levels: None,
-            depth_aware: false,
-        }
-    }
-
-    /// A scenario with an AUV CNA: [`auv_cna_estimator`], the pitch options at level 0 only, the
-    /// depth chosen by the sound-speed profile.
-    pub fn auv_cna(name: &'static str, n: Vec<usize>, base: Scenario) -> Self {
-        Setting {
-            name: name.into(),
-            n,
-            base,
-            estimator: auv_cna_estimator,
-            estimator_pitch_levels: Some(1),
-            depth_aware: true,
-        }
-    }
-
-    /// The mission for `n` AUVs, with the evaluation's planner settings and seed.
-    pub fn scenario(&self, n: usize, seed: u64, duration: Option<f64>) -> Scenario {
+    /// The mission for `n` AUVs: the file with `fleet.n_auvs = n`, every fleet-size overlay that
+    /// applies (in file order), the evaluation's seed and, if given, the duration. The planners'
+    /// settings are the file's and, for `planner-estimator`, the rule's for that mission.
+    pub fn scenario(&self, n: usize, seed: u64, duration: Option<f64>) -> Result<Scenario, ExperimentError> {
         let mut sc = self.base.with_auvs(n);
+        for rule in self.fleet_size.iter().filter(|r| n >= r.min_auvs) {
+            sc = overlay(&sc, toml::Value::Table(rule.patch.clone()))
+                .map_err(|e| fail(format!("{CELLS_FILE}: fleet_size (min_auvs = {}): {e}", rule.min_auvs)))?;
+        }
         sc.seed = seed;
-        sc.planner.heading_options = 5;
-        sc.planner.look_ahead = 5;
-        let estimator = (self.estimator)(n);
-        sc.planner.estimator_heading_options = Some(estimator.heading_options);
-        sc.planner.estimator_look_ahead = Some(estimator.look_ahead);
-        sc.planner.estimator_pitch_levels = self.estimator_pitch_levels;
-        sc.planner.estimator_aggregate = estimator.aggregate;
-        sc.planner.estimator_bias_per_km = ESTIMATOR_BIAS_PER_KM;
-        sc.planner.estimator_terminal_levels = ESTIMATOR_TERMINAL_LEVELS;
-        sc.planner.estimator_cna_variance = ESTIMATOR_CNA_VARIANCE;
-        sc.planner.estimator_slot_reach = SLOT_REACH;
-        // Set either way: the library file asks for them (it flies 3 AUVs).
-        let depth_aware = self.depth_aware && n >= DEPTH_AWARE_MIN_AUVS;
-        sc.planner.estimator_bias_profile = depth_aware;
-        sc.planner.estimator_level_off = depth_aware;
-        if depth_aware {
-            sc.planner.estimator_bias_per_km = DEPTH_AWARE_BIAS_PER_KM;
-        }
-        if let Some(k_b) = estimator.bias_per_km {
-            sc.planner.estimator_bias_per_km = k_b;
-        }
-        if let Some(truth) = estimator.truth {
-            sc.planner.estimator_truth = Some(truth);
-            sc.planner.estimator_unmodelled_current = [sc.fleet.current.0, sc.fleet.current.1];
-        }
-        if n >= SPREAD_FLEET_MIN_AUVS {
-            sc.planner.estimator_penalty_case = Some(PenaltyCase::C3.id().to_string());
-            sc.planner.estimator_reach_success = REACH_SUCCESS;
-            sc.planner.estimator_terminal_levels = SPREAD_TERMINAL_LEVELS;
-        }
-        if let Some(h) = estimator.terminal_levels {
-            sc.planner.estimator_terminal_levels = h;
-        }
-        if n >= SIZED_SCHEDULE_MIN_AUVS {
-            sized_schedule(&mut sc);
-        }
         if let Some(d) = duration {
             sc.duration_s = d;
         }
-        sc
+        Ok(sc)
     }
 }
 
-/// Hudson's schedule for more than 5 AUVs, sized for the fleet as a field team would size it.
-/// Each of the N + 1 vehicles needs a slot of air time + travel + guard: 8 AUVs need 9 slots in
-/// 44 s (below 45 s, where the 4°/s turn limit would reach 180° per period), 4.89 s each. At
-/// rate 0 (3.9 s of air time) such a slot holds 1 km of travel, but the fleet spans 4.7 km: for
-/// every policy the last slot's AUV is never heard (its statuses arrive while the CNA sends its
-/// next broadcast) and the first slot's hears few broadcasts. Rate 1 (3.08 s, and a
-/// success curve no worse than rate 0's in `success`) holds [`SIZED_RANGE_M`] in the same slot.
-///
-/// Invented (docs/models.md#closed-loop-schedule): the thesis flies 15 s slots for 1–2 AUVs
-/// (Hudson 2012, Sec. 6.5); the air times are the Micro-Modem's (Nams 2014, Table 2). Every field is the scenario's
-/// own (`comms.tau`, `comms.cna_rate`, `comms.status_rate`, `comms.max_range_m`).
-///
-/// The rate-0 schedule weakens the baselines more than the planner, which alone knows its reach
-/// (`planner.estimator_slot_reach`). Up to 5 AUVs (τ = 30 s, 6 slots of 5 s) no status is lost in
-/// the air and rate 1 changes no cell's outcome, so those keep rate 0.
-fn sized_schedule(sc: &mut Scenario) {
-    sc.comms.tau = 44.0;
-    sc.comms.cna_rate = Rate::R1;
-    sc.comms.status_rate = Rate::R1;
-    sc.comms.max_range_m = SIZED_RANGE_M;
+/// The experiment's size: (settings, runs per policy and cell, mission duration override), read
+/// from [`CELLS`].
+pub fn setup(opts: &ReproOptions) -> Result<(Vec<Setting>, usize, Option<f64>), ExperimentError> {
+    setup_from(CELLS, opts)
 }
 
-/// k_b of `planner-estimator` with the AUV CNA and [`sized_fleet`]'s fine headings (on top of
-/// the profile's own scale error, as [`DEPTH_AWARE_BIAS_PER_KM`]; invented, no thesis value,
-/// `planner.estimator_bias_per_km`). Chosen on tuning runs at N = 8 on the slope: the fine
-/// headings keep the CNA closer to the AUVs than A = 5 did, and a smaller k_b than
-/// [`DEPTH_AWARE_BIAS_PER_KM`]'s 6 does better there (docs/evaluation.md).
-pub const SIZED_AUV_CNA_BIAS_PER_KM: f64 = 1.5;
-
-/// From this many AUVs on the evaluation flies [`sized_schedule`].
-pub const SIZED_SCHEDULE_MIN_AUVS: usize = 6;
-
-/// The longest range [`sized_schedule`]'s slots hold (invented, no thesis value): the 8-AUV
-/// fleet's half-span and more
-/// (rate 1: 3.08 s of air time + 2.5 km at the slowest 1488 m/s + 0.1 s guard = 4.86 s).
-pub const SIZED_RANGE_M: f64 = 2500.0;
-
-/// Runs per policy and cell of the reduced form (15-minute missions): with the iterated range
-/// update centroid no longer diverges, and 8 runs resolve its current N = 3 cell where 4 do not.
-const REDUCED_RUNS: usize = 8;
-
-/// The experiment's size: (settings, runs per policy and cell, mission duration override).
-pub fn setup(opts: &ReproOptions) -> Result<(Vec<Setting>, usize, Option<f64>), ExperimentError> {
-    let sloping = toml::from_str(SLOPING).map_err(|e| fail(format!("scenarios/sloping-auv-cna.toml: {e}")))?;
-    let current = Scenario::example();
-    Ok(match opts.size {
-        Size::Full => (
-            vec![
-                Setting::asc("current", vec![1, 2, 3, 5, 8], current),
-                Setting::auv_cna("sloping-auv-cna", vec![1, 2, 3, 5, 8], sloping),
-            ],
-            100,
-            None,
-        ),
-        Size::Reduced => (
-            vec![Setting::asc("current", vec![1, 3], current), Setting::auv_cna("sloping-auv-cna", vec![2], sloping)],
-            REDUCED_RUNS,
-            Some(900.0),
-        ),
-    })
+/// [`setup`] from the cells file's text.
+fn setup_from(text: &str, opts: &ReproOptions) -> Result<(Vec<Setting>, usize, Option<f64>), ExperimentError> {
+    let file: CellsFile = toml::from_str(text).map_err(|e| fail(format!("{CELLS_FILE}: {e}")))?;
+    let mut settings = Vec::new();
+    for s in &file.scenario {
+        let text = FILES.iter().find(|(name, _)| *name == s.file).map(|(_, text)| *text).ok_or_else(|| {
+            let known: Vec<&str> = FILES.iter().map(|(name, _)| *name).collect();
+            fail(format!("{CELLS_FILE}: scenario {}: file {:?} is not one of {}", s.name, s.file, known.join(", ")))
+        })?;
+        let base: Scenario = toml::from_str(text).map_err(|e| fail(format!("{CELLS_FILE}: {}: {e}", s.file)))?;
+        settings.push(Setting { name: s.name.clone(), n: s.n_auvs.clone(), base, fleet_size: file.fleet_size.clone() });
+    }
+    let (runs, duration) = match opts.size {
+        Size::Full => (file.runs, None),
+        Size::Reduced => {
+            let mut reduced = Vec::new();
+            for cell in &file.reduced.cells {
+                let mut s = settings.iter().find(|s| s.name == cell.scenario).cloned().ok_or_else(|| {
+                    fail(format!("{CELLS_FILE}: reduced.cells names scenario {:?}, not in [[scenario]]", cell.scenario))
+                })?;
+                s.n = cell.n_auvs.clone();
+                reduced.push(s);
+            }
+            settings = reduced;
+            (file.reduced.runs, Some(file.reduced.duration_s))
+        }
+    };
+    // Every cell is checked before any run: a bad overlay fails here, naming the file.
+    for s in &settings {
+        for &n in &s.n {
+            s.scenario(n, opts.seed, duration)?.validate(Path::new(CELLS_FILE)).map_err(|e| fail(e.to_string()))?;
+        }
+    }
+    Ok((settings, runs, duration))
 }
 
 fn fail(message: String) -> ExperimentError {
@@ -412,31 +221,34 @@ pub fn evaluate(
     if policies.first().map(String::as_str) != Some(JUDGED) {
         return Err(fail(format!("the first policy must be {JUDGED}, the one judged")));
     }
+    // The AUV CNA's true-error model as the rule gives it for the first AUV-CNA scenario.
+    let auv_diffusion = settings.iter().find_map(|s| s.base.cna.auv.as_ref().map(|a| a.nav_diffusion));
+    let auv_cna_truth = auto::auv_cna_truth(auv_diffusion.unwrap_or(0.0));
     let mut table = format!(
         "True mean navigation error of the survey AUVs (m), {runs} runs per policy and cell, base seed {seed} \
          (settings chosen on base seed {TUNING_SEED}); planners A=5, L=5; planner-estimator: its tree and cost per \
          cell below (with the AUV CNA: every policy cruising at the depth the sound-speed profile favours for the \
          fleet, its pitch options at level 0 only, from 2 AUVs on its depth chosen by the profile with the \
          range bias the profile gives plus {DEPTH_AWARE_BIAS_PER_KM} m/km, levelling off at each step's depth), \
-         aggregate sigma_sum, range bias {ESTIMATOR_BIAS_PER_KM} m/km; from \
+         aggregate sigma_sum, range bias {BIAS_PER_KM} m/km; from \
          {SPREAD_FLEET_MIN_AUVS} AUVs on no level-0 distance penalty and the reach cost-to-go (p_u {REACH_SUCCESS}). \
          The true-error cost scores the AUVs' expected true error: with the ASC in a current its filters do not \
          model, the current (its ADCP) as their mean error (drift {} m²/s, ranges σ {} m); with the AUV CNA drift \
          {} m²/s and the CNA's own diffusion {} m²/s.\n\
          Every difference is planner-estimator minus the baseline, paired by run; a cell is won when its 95 % CI \
          lies below zero.\n",
-        CURRENT_TRUTH.drift_m2_s,
-        CURRENT_TRUTH.range_noise.sigma_m,
-        AUV_CNA_TRUTH.drift_m2_s,
-        AUV_CNA_TRUTH.cna_diffusion_m2_s
+        ASC_TRUTH.drift_m2_s, ASC_TRUTH.range_noise.sigma_m, auv_cna_truth.drift_m2_s, auv_cna_truth.cna_diffusion_m2_s
     );
-    table += &estimator_trees(settings, seed, duration);
-    table.push('\n');
     let (mut checks, mut cells, mut data) = (Vec::new(), Vec::new(), Vec::new());
     // Every cell's runs go through one pool (no cell waits for the previous cell's slowest run).
     let names: Vec<&str> = settings.iter().flat_map(|s| s.n.iter().map(move |_| s.name.as_str())).collect();
-    let scenarios: Vec<Scenario> =
-        settings.iter().flat_map(|s| s.n.iter().map(move |&n| s.scenario(n, seed, duration))).collect();
+    let scenarios: Vec<Scenario> = settings
+        .iter()
+        .flat_map(|s| s.n.iter().map(move |&n| s.scenario(n, seed, duration)))
+        .collect::<Result<_, _>>()?;
+    let named: Vec<(&str, &Scenario)> = names.iter().copied().zip(&scenarios).collect();
+    table += &estimator_trees(&named);
+    table.push('\n');
     let comparisons = monte_carlo_grid(&scenarios, policies, runs, progress).map_err(|e| fail(e.to_string()))?;
     for ((name, sc), c) in names.iter().zip(&scenarios).zip(comparisons) {
         let comms = &sc.comms;
@@ -461,27 +273,29 @@ pub fn evaluate(
     Ok(ReproReport { plots, ..ReproReport::new(ID.into(), table, checks, data) })
 }
 
-/// planner-estimator's tree and cost in every cell, as its scenario sets them: A headings, L
-/// levels, H levels of cost-to-go, whether it scores true error or the filters' covariances, and
-/// how it joins the AUVs' terms.
-fn estimator_trees(settings: &[Setting], seed: u64, duration: Option<f64>) -> String {
+/// planner-estimator's tree and cost in every cell, as its scenario and the rule set them: A
+/// headings, L levels, H levels of cost-to-go, whether it scores true error or the filters'
+/// covariances, and how it joins the AUVs' terms.
+fn estimator_trees(scenarios: &[(&str, &Scenario)]) -> String {
     let mut out = String::from(
         "planner-estimator's tree per cell (A headings, L levels, H levels of cost-to-go, cost, aggregate):\n",
     );
-    for s in settings {
-        let cells: Vec<String> =
-            s.n.iter()
-                .map(|&n| {
-                    let p = s.scenario(n, seed, duration).planner;
-                    let a = p.estimator_heading_options.unwrap_or(p.heading_options);
-                    let l = p.estimator_look_ahead.unwrap_or(p.look_ahead);
-                    let cost = if p.estimator_truth.is_some() { "true error" } else { "covariance" };
-                    let aggregate = serde_json::to_value(p.estimator_aggregate).unwrap_or_default();
-                    let aggregate = aggregate.as_str().unwrap_or("?");
-                    format!("N={n}: A={a} L={l} H={} {cost} {aggregate}", p.estimator_terminal_levels)
-                })
-                .collect();
-        let _ = writeln!(out, "  {}: {}", s.name, cells.join(" | "));
+    let mut names: Vec<&str> = scenarios.iter().map(|(name, _)| *name).collect();
+    names.dedup();
+    for name in names {
+        let cells: Vec<String> = scenarios
+            .iter()
+            .filter(|(own, _)| *own == name)
+            .map(|(_, sc)| {
+                let e = sc.estimator_settings();
+                let (a, l, h) = (e.heading_options, e.look_ahead, e.terminal_levels);
+                let cost = if e.truth.is_some() { "true error" } else { "covariance" };
+                let aggregate = serde_json::to_value(e.aggregate).unwrap_or_default();
+                let aggregate = aggregate.as_str().unwrap_or("?");
+                format!("N={}: A={a} L={l} H={h} {cost} {aggregate}", sc.fleet.n_auvs)
+            })
+            .collect();
+        let _ = writeln!(out, "  {name}: {}", cells.join(" | "));
     }
     out
 }
@@ -718,7 +532,8 @@ mod tests {
     use super::*;
     use crate::batch::mc::monte_carlo;
     use crate::models::surfacing::at_surface;
-    use coopnav_plan::CnaKind;
+    use coopnav_acomms::Rate;
+    use coopnav_plan::{CnaKind, PenaltyCase};
 
     #[test]
     fn reduced_form_runs_every_cell_and_explains_each_cell_not_won() {
@@ -764,28 +579,30 @@ mod tests {
     fn spread_fleets_trade_the_level_0_penalty_for_the_reach_cost_to_go() {
         let (settings, _, _) = setup(&ReproOptions::new(Size::Full, 1)).unwrap();
         for setting in &settings {
-            let (small, spread) = (setting.scenario(2, 1, None).planner, setting.scenario(5, 1, None).planner);
-            assert_eq!((small.estimator_penalty_case, small.estimator_reach_success), (None, 0.0));
-            assert_eq!(small.estimator_terminal_levels, ESTIMATOR_TERMINAL_LEVELS);
-            assert_eq!(spread.estimator_penalty_case.as_deref(), Some(PenaltyCase::C3.id()));
-            assert_eq!((spread.estimator_reach_success, spread.estimator_terminal_levels), (0.79, 20.0));
+            let small = setting.scenario(2, 1, None).unwrap().estimator_settings();
+            let spread = setting.scenario(5, 1, None).unwrap().estimator_settings();
+            assert_eq!((small.penalty_case, small.reach_success, small.terminal_levels), (None, 0.0, 10.0));
+            assert_eq!(spread.penalty_case, Some(PenaltyCase::C3));
+            assert_eq!((spread.reach_success, spread.terminal_levels), (0.79, 20.0));
         }
     }
 
+    /// The ASC's cells score true error with the current the default mission's ADCP measures as
+    /// its mean, and `simulate` on the default mission flies the same planner as the N = 3 cell.
     #[test]
     fn in_the_current_the_estimator_scores_true_error_with_the_current_as_its_mean() {
         let (settings, _, _) = setup(&ReproOptions::new(Size::Full, 1)).unwrap();
-        let cell = |name: &str| settings.iter().find(|s| s.name == name).unwrap().scenario(3, 1, None);
+        let cell = |name: &str| settings.iter().find(|s| s.name == name).unwrap().scenario(3, 1, None).unwrap();
         // (The sloping scenario's AUV CNA: `the_auv_cna_works_below_the_surface_at_every_fleet_size`.)
         let current = cell("current");
-        assert_eq!(current.planner.estimator_truth, Some(CURRENT_TRUTH));
+        let e = current.estimator_settings();
+        assert_eq!(e.truth, Some(ASC_TRUTH));
         let water = [current.fleet.current.0, current.fleet.current.1];
-        assert!(water != [0.0, 0.0] && current.planner.estimator_unmodelled_current == water);
-        // The default mission (`simulate`'s) flies the same planner.
-        let default = Scenario::example().planner;
-        assert_eq!(default.estimator_truth, Some(CURRENT_TRUTH));
-        assert_eq!(default.estimator_look_ahead, Some(TRUE_ERROR_LOOK_AHEAD));
-        assert_eq!(default.estimator_unmodelled_current, water);
+        assert!(water != [0.0, 0.0] && e.unmodelled_current == water && current.cna.adcp_current == water);
+        let default = Scenario::example();
+        assert_eq!(default.planner, current.planner);
+        assert_eq!(default.estimator_settings(), e);
+        assert_eq!(e.look_ahead, 4);
     }
 
     fn summary(policy: &str, auv_runs: Vec<Vec<f64>>, auv_heard_runs: Vec<usize>) -> PolicySummary {
@@ -854,64 +671,47 @@ mod tests {
         let (settings, _, _) = setup(&ReproOptions::new(Size::Full, 1)).unwrap();
         let sloping = settings.iter().find(|s| s.name == "sloping-auv-cna").unwrap();
         for n in [1, 2, 3, 5, 8] {
-            let sc = sloping.scenario(n, 1, None);
+            let sc = sloping.scenario(n, 1, None).unwrap();
             let depth = sc.cna_cruise_depth();
             assert!(!at_surface(depth), "N = {n}: cruise depth {depth} m");
             match sc.planner_config().motion.cna {
                 CnaKind::Auv { min_depth, .. } => assert!(!at_surface(min_depth) && depth >= min_depth, "N = {n}"),
                 CnaKind::Asc {} => panic!("N = {n}: an ASC"),
             }
-            let truth = sc.planner.estimator_truth;
-            assert_eq!(truth, [1, 3, 5, 8].contains(&n).then_some(AUV_CNA_TRUTH), "N = {n}");
             let diffusion = sc.cna.auv.as_ref().unwrap().nav_diffusion;
-            assert_eq!(AUV_CNA_TRUTH.cna_diffusion_m2_s, diffusion, "the scenario's own diffusion");
+            assert_eq!(diffusion, 0.01, "the scenario's own diffusion");
+            let truth = sc.estimator_settings().truth;
+            assert_eq!(
+                truth.map(|t| (t.drift_m2_s, t.cna_diffusion_m2_s)),
+                (n != 2).then_some((0.01, diffusion)),
+                "N = {n}"
+            );
         }
     }
 
-    /// The fine tree (A = 9, L = 3, H = 40 below the spread fleets' H) for planner-estimator with
-    /// the AUV CNA and 1, 3 or 5 AUVs; the fine headings of `sized_fleet` (A = 21, L = 2, H = 40,
-    /// the trace sum) with either CNA from 6 AUVs on; Hudson's planner, the ASC's cells up to 5
-    /// AUVs and the AUV CNA's N = 2 keep A = 5, their L and H. k_b is the AUV CNA's own where it
-    /// chooses its depth, smaller with the fine headings. The report's header says which cell
-    /// has which.
+    /// The report's header says which tree and cost each cell flies (the rule's, written out:
+    /// `coopnav_plan::auto`'s test holds every setting of every cell).
     #[test]
     fn each_cell_plans_with_its_tree() {
         let (settings, _, _) = setup(&ReproOptions::new(Size::Full, 1)).unwrap();
-        for setting in &settings {
-            for &n in &setting.n {
-                let p = setting.scenario(n, 1, None).planner;
-                let fine = setting.name == "sloping-auv-cna" && [1, 3, 5].contains(&n);
-                let sized = n >= SIZED_SCHEDULE_MIN_AUVS;
-                let (a, l, h) = match (fine, sized) {
-                    (_, true) => (21, 2, 40.0),
-                    (true, false) => (9, 3, if n >= SPREAD_FLEET_MIN_AUVS { SPREAD_TERMINAL_LEVELS } else { 40.0 }),
-                    (false, false) => {
-                        let h =
-                            if n >= SPREAD_FLEET_MIN_AUVS { SPREAD_TERMINAL_LEVELS } else { ESTIMATOR_TERMINAL_LEVELS };
-                        (5, if setting.name == "current" { TRUE_ERROR_LOOK_AHEAD } else { 5 }, h)
-                    }
-                };
-                let cell = format!("{} N = {n}", setting.name);
-                assert_eq!(p.estimator_heading_options, Some(a), "{cell}");
-                assert_eq!(p.estimator_look_ahead, Some(l), "{cell}");
-                assert_eq!(p.estimator_terminal_levels, h, "{cell}");
-                let aggregate = if sized { Aggregate::TraceSum } else { ESTIMATOR_AGGREGATE };
-                assert_eq!(p.estimator_aggregate, aggregate, "{cell}");
-                let k_b = match (setting.name == "sloping-auv-cna", sized) {
-                    (true, true) => SIZED_AUV_CNA_BIAS_PER_KM,
-                    (true, false) if n >= DEPTH_AWARE_MIN_AUVS => DEPTH_AWARE_BIAS_PER_KM,
-                    _ => ESTIMATOR_BIAS_PER_KM,
-                };
-                assert_eq!(p.estimator_bias_per_km, k_b, "{cell}");
-                assert_eq!((p.heading_options, p.look_ahead), (5, 5), "Hudson's planner, {cell}");
-            }
+        let cells: Vec<(String, Scenario)> = settings
+            .iter()
+            .flat_map(|s| s.n.iter().map(|&n| (s.name.clone(), s.scenario(n, 1, None).unwrap())))
+            .collect();
+        for (name, sc) in &cells {
+            assert_eq!((sc.planner.heading_options, sc.planner.look_ahead), (5, 5), "Hudson's planner, {name}");
         }
-        let header = estimator_trees(&settings, 1, None);
+        let named: Vec<(&str, &Scenario)> = cells.iter().map(|(name, sc)| (name.as_str(), sc)).collect();
+        let header = estimator_trees(&named);
+        let current = "current: N=1: A=5 L=4 H=10 true error sigma_sum | N=2: A=5 L=4 H=10 true error sigma_sum | \
+                       N=3: A=5 L=4 H=10 true error sigma_sum | N=5: A=5 L=4 H=20 true error sigma_sum | \
+                       N=8: A=21 L=2 H=40 true error trace_sum";
         let sloping =
-            "sloping-auv-cna: N=1: A=9 L=3 H=40 true error sigma_sum | N=2: A=5 L=5 H=10 covariance sigma_sum";
+            "sloping-auv-cna: N=1: A=9 L=3 H=40 true error sigma_sum | N=2: A=5 L=5 H=10 covariance sigma_sum | \
+                       N=3: A=9 L=3 H=40 true error sigma_sum | N=5: A=9 L=3 H=20 true error sigma_sum | \
+                       N=8: A=21 L=2 H=40 true error trace_sum";
+        assert!(header.contains(current), "{header}");
         assert!(header.contains(sloping), "{header}");
-        assert!(header.contains("N=5: A=9 L=3 H=20 true error sigma_sum | N=8: A=21 L=2 H=40 true error trace_sum"));
-        assert!(header.contains("N=5: A=5 L=4 H=20 true error sigma_sum | N=8: A=21 L=2 H=40 true error trace_sum"));
     }
 
     /// From 6 AUVs on the schedule is sized for the fleet: rate 1 in 44 s slots holding 2.5 km,
@@ -926,16 +726,38 @@ mod tests {
             c.policies[0].auv_heard_runs.clone()
         };
         for setting in &settings {
-            let small = setting.scenario(5, 1, None).comms;
+            let small = setting.scenario(5, 1, None).unwrap().comms;
             assert_eq!((small.cna_rate, small.status_rate, small.tau), (Rate::R0, Rate::R0, 30.0), "{}", setting.name);
-            let sized = setting.scenario(8, 1, Some(900.0));
+            let sized = setting.scenario(8, 1, Some(900.0)).unwrap();
             let c = &sized.comms;
-            assert_eq!((c.cna_rate, c.status_rate, c.tau, c.max_range_m), (Rate::R1, Rate::R1, 44.0, SIZED_RANGE_M));
+            assert_eq!((c.cna_rate, c.status_rate, c.tau, c.max_range_m), (Rate::R1, Rate::R1, 44.0, 2500.0));
             assert_eq!(heard(&sized), vec![1; 8], "{}: every AUV heard", setting.name);
             let mut rate0 = sized.clone();
             (rate0.comms.cna_rate, rate0.comms.status_rate, rate0.comms.max_range_m) = (Rate::R0, Rate::R0, 1000.0);
             assert_eq!(heard(&rate0)[7], 0, "{}: the last slot's AUV, rate 0", setting.name);
         }
+    }
+
+    /// A cell file naming a scenario file the experiment does not embed, or a reduced cell of a
+    /// scenario it does not list, is refused by name; a bad fleet-size overlay is refused before
+    /// any run.
+    #[test]
+    fn bad_cells_are_refused_by_name() {
+        let opts = ReproOptions::new(Size::Reduced, 1);
+        let err = |text: String| {
+            assert_ne!(text, CELLS);
+            setup_from(&text, &opts).map(|_| ()).unwrap_err().to_string()
+        };
+        let e = err(CELLS.replace("file = \"default\"", "file = \"elsewhere.toml\""));
+        assert!(e.contains("\"elsewhere.toml\" is not one of default, ../sloping-auv-cna.toml"), "{e}");
+        let e = err(CELLS.replace("{ scenario = \"current\"", "{ scenario = \"nowhere\""));
+        assert!(e.contains("reduced.cells names scenario \"nowhere\""), "{e}");
+        let full = ReproOptions::new(Size::Full, 1);
+        let bad = CELLS.replace("max_range_m = 2500.0", "max_range_m = \"far\"");
+        assert_ne!(bad, CELLS);
+        let e = setup_from(&bad, &full).map(|_| ()).unwrap_err().to_string();
+        assert!(e.contains("fleet_size (min_auvs = 6)"), "{e}");
+        assert!(setup_from(CELLS, &full).is_ok());
     }
 
     #[test]

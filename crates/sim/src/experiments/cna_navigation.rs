@@ -48,7 +48,7 @@ fn broadcasting_truth(s: &Setting) -> Setting {
     if let Some(auv) = base.cna.auv.as_mut() {
         auv.broadcasts_truth = true;
     }
-    Setting { name: format!("{}-{EXACT}", s.name), n: s.n.clone(), base, ..*s }
+    Setting { name: format!("{}-{EXACT}", s.name), base, ..s.clone() }
 }
 
 /// Per scenario, N and baseline: the paired difference as evaluated beside the one with the
@@ -117,7 +117,7 @@ mod tests {
         let (settings, _, _) = setup(&ReproOptions::new(Size::Full, 1)).unwrap();
         let sloping = settings.iter().find(|s| s.base.cna.auv.is_some()).unwrap();
         let exact = broadcasting_truth(sloping);
-        let (a, b) = (sloping.scenario(3, 1, None), exact.scenario(3, 1, None));
+        let (a, b) = (sloping.scenario(3, 1, None).unwrap(), exact.scenario(3, 1, None).unwrap());
         assert!(!a.cna.auv.as_ref().unwrap().broadcasts_truth && b.cna.auv.as_ref().unwrap().broadcasts_truth);
         let mut b = b;
         b.cna.auv.as_mut().unwrap().broadcasts_truth = false;

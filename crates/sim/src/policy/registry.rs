@@ -133,6 +133,7 @@ fn build(name: &str, sc: &Scenario, planned: Option<&TimedWaypoints>) -> Result<
     let baseline: Box<dyn CnaPolicy> = match name {
         "planner" | "planner-estimator" => {
             let p = &sc.planner;
+            let e = sc.estimator_settings();
             // The estimator-aware cost always weights a ping by the link model; Hudson's planner
             // only when asked (the thesis assumes every ping arrives).
             let estimator = name == "planner-estimator";
@@ -143,36 +144,36 @@ fn build(name: &str, sc: &Scenario, planned: Option<&TimedWaypoints>) -> Result<
             if estimator {
                 cfg.cost = CostSpec::Estimator(EstimatorSpec {
                     range_noise: noise,
-                    aggregate: p.estimator_aggregate,
-                    bias_per_km_m: p.estimator_bias_per_km,
-                    terminal_levels: p.estimator_terminal_levels,
-                    reach_success: p.estimator_reach_success,
-                    unmodelled_current: p.estimator_unmodelled_current,
+                    aggregate: e.aggregate,
+                    bias_per_km_m: e.bias_per_km,
+                    terminal_levels: e.terminal_levels,
+                    reach_success: e.reach_success,
+                    unmodelled_current: e.unmodelled_current,
                     drift_levels: p.estimator_drift_levels,
-                    truth: p.estimator_truth,
+                    truth: e.truth,
                 });
                 let area = survey_area(sc);
                 let extent = (area.max.0 - area.min.0).hypot(area.max.1 - area.min.1);
-                match p.estimator_penalty_case.as_deref().and_then(PenaltyCase::from_id) {
+                match e.penalty_case {
                     Some(case) => cfg.penalties = case.penalties(),
                     None if p.horizon.replaces_distance_penalties(extent, &cfg.limits) => {
                         cfg.penalties = PenaltyCase::C2.penalties()
                     }
                     None => {}
                 }
-                cfg.look_ahead = p.estimator_look_ahead.unwrap_or(cfg.look_ahead);
-                cfg.motion.heading_options = p.estimator_heading_options.unwrap_or(cfg.motion.heading_options);
+                cfg.look_ahead = e.look_ahead;
+                cfg.motion.heading_options = e.heading_options;
                 if let CnaKind::Auv { pitch_levels, level_off, .. } = &mut cfg.motion.cna {
-                    *pitch_levels = p.estimator_pitch_levels;
-                    *level_off = p.estimator_level_off;
+                    *pitch_levels = e.pitch_levels;
+                    *level_off = e.level_off;
                 }
             }
             let mut policy =
                 PlannerPolicy::new(cfg, n, p.sigma0, p.eps0, likelihood, Some((start, noise))).map_err(plan_err)?;
-            if !p.estimator_cna_variance {
+            if !e.cna_variance {
                 policy = policy.without_cna_variance();
             }
-            if estimator && p.estimator_bias_profile {
+            if estimator && e.bias_profile {
                 // The scale error a range between two depths carries: travel time at the water's
                 // harmonic-mean speed, converted at the filters' (the engine's straight-ray model;
                 // none where the filters convert with a cast of this water, `filter.sound_speed`).
@@ -184,21 +185,21 @@ fn build(name: &str, sc: &Scenario, planned: Option<&TimedWaypoints>) -> Result<
                 .map_err(plan_err)?;
                 policy = policy.with_bias(table);
             }
-            if let Some(truth) = p.estimator_truth.filter(|_| estimator) {
-                policy = policy.with_truth(truth, sc.fleet.init_position_sd.powi(2), p.estimator_unmodelled_current);
+            if let Some(truth) = e.truth.filter(|_| estimator) {
+                policy = policy.with_truth(truth, sc.fleet.init_position_sd.powi(2), e.unmodelled_current);
             }
-            if estimator && p.estimator_slot_reach {
+            if estimator && e.slot_reach {
                 policy = policy.with_slot_reach(sc.slot_reach_m());
             }
             if p.estimator_tracking == EstimatorTracking::ReportsOnly {
                 policy = policy.with_reports_only(unheard_growth(sc));
             }
-            if let (true, Some(truth), AuvModel::Current(c)) = (estimator, p.estimator_truth, sc.filter.model) {
+            if let (true, Some(truth), AuvModel::Current(c)) = (estimator, e.truth, sc.filter.model) {
                 let spec = CurrentStates {
                     p0: c.p0,
                     q: c.q / sc.filter.params.step_s,
                     correlation_s: c.correlation_time_s,
-                    water: [p.estimator_current[0] - c.mean[0], p.estimator_current[1] - c.mean[1]],
+                    water: [e.current[0] - c.mean[0], e.current[1] - c.mean[1]],
                 };
                 policy = policy.with_current_states(spec, truth, sc.fleet.init_position_sd.powi(2));
             }

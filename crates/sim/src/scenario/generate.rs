@@ -11,7 +11,8 @@
 //! - **Layout** ([`Layout`]): blocks side by side, side by side with gaps, corner to corner along a
 //!   diagonal, or in groups more than a kilometre apart. The fleet's footprint is centred on the
 //!   origin.
-//! - **Current**: a constant current of the drawn speed towards the drawn compass direction.
+//! - **Current**: a constant current of the drawn speed towards the drawn compass direction; the
+//!   CNA's ADCP measures it (`cna.adcp_current`), as a team's would.
 //! - **CNA**: it starts 100 m short of the first lane of a drawn block, on the lane heading (where
 //!   a team launching from that block would put it in the water).
 //! - **Duration**: drawn in hours, to the whole minute. Headings are drawn to 0.1°, lengths and
@@ -20,14 +21,15 @@
 //!   fleet) are TOML tables laid over the scenario ([`overlay`]): what each means is in the file.
 //!
 //! A generated mission states no planner keys: its planner is what a file without `[planner]`
-//! gets ([`default_planner`]). Mission i's seed is the file's `seed` + i: the same file and index
+//! gets ([`Planner::default`]), `planner-estimator`'s settings the planner's rule for the mission
+//! (coopnav_plan `auto`). Mission i's seed is the file's `seed` + i: the same file and index
 //! always give the same mission, and its Monte Carlo run j uses `run_seed(mission seed, j)`.
 //! Every draw of a mission comes from its own seed, in a fixed order, whether or not the layout
 //! uses it, so one mission never depends on another.
 
 use crate::models::mower::{MowerSpec, Turn};
 use crate::scenario::file::{self as scenario_file, overlay, Problems, ScenarioError};
-use crate::scenario::world::{default_planner, Scenario};
+use crate::scenario::world::{Planner, Scenario};
 use coopnav_core::{CompassDeg, Heading};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -321,7 +323,8 @@ impl Ranges {
         sc.cna.heading_compass_deg = heading;
         sc.seed = seed;
         sc.duration_s = duration_s;
-        sc.planner = default_planner();
+        sc.cna.adcp_current = [sc.fleet.current.0, sc.fleet.current.1];
+        sc.planner = Planner::default();
         sc.validate(&name())?;
 
         let facts = Facts {

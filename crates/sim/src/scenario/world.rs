@@ -23,6 +23,7 @@ use coopnav_acomms::{Rate, Receiver, SuccessModel};
 use coopnav_core::validation::CheckFields;
 use coopnav_core::{Bathymetry, CompassDeg, DepthTarget, Heading, Iver2Params, Lawnmower, Shelf};
 use coopnav_nav::{AuvModel, AuvParams, RangeNoise};
+use coopnav_plan::auto::{self, CnaFact, EstimatorSettings, MissionFacts};
 use coopnav_plan::predict::{PredictorConfig, WaypointUse};
 use coopnav_plan::{
     Aggregate, CnaKind, Deadline, DistanceLimits, ErrorModel, HorizonSpec, MotionConfig, PenaltyCase, PlanError,
@@ -63,8 +64,8 @@ pub struct Scenario {
     /// The survey AUVs' filter: what it assumes (the truth is `[channel]` and `[sensors]`).
     #[serde(default = "default_filter", deserialize_with = "filter_over_default")]
     pub filter: FilterSpec,
-    /// Absent: [`default_planner`].
-    #[serde(default = "default_planner")]
+    /// Absent: every key's default, `planner-estimator`'s from the mission ([`Planner`]).
+    #[serde(default)]
     pub planner: Planner,
     #[serde(default)]
     pub health: Health,
@@ -202,6 +203,11 @@ pub struct Cna {
     /// Invented: 150 m, the trail baseline's stand-off.
     #[serde(default = "default_standoff")]
     pub standoff_radius_m: f64,
+    /// The water current east and north (m/s) as the CNA's ADCP measures it: a fact a field team
+    /// states (not the scenario's `fleet.current`, the truth), read by `planner-estimator`'s rule.
+    /// Default [0, 0]: none measured. Written only when set.
+    #[serde(default, skip_serializing_if = "coopnav_plan::estimator::is_still")]
+    pub adcp_current: [f64; 2],
 }
 
 fn default_standoff() -> f64 {
@@ -354,7 +360,11 @@ impl Default for Comms {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Planner {
+    /// A of Hudson's planner (default 5, as the evaluation flies it).
+    #[serde(default = "five")]
     pub heading_options: usize,
+    /// L of Hudson's planner (default 5, as the evaluation flies it).
+    #[serde(default = "five")]
     pub look_ahead: usize,
     /// Table 5.2 penalty case id.
     #[serde(default = "default_case")]
@@ -398,86 +408,86 @@ pub struct Planner {
     pub eps0: f64,
     #[serde(default)]
     pub predictor: PredictorConfig,
-    /// How `planner-estimator` joins the AUVs' covariances into a level's cost (default
-    /// [`ESTIMATOR_AGGREGATE`]).
-    #[serde(default = "estimator_aggregate")]
-    pub estimator_aggregate: Aggregate,
+    // `planner-estimator`'s settings: each absent key comes from the planner's rule for the
+    // mission (`coopnav_plan::auto::for_mission`, [`Scenario::estimator_settings`]); a key the file
+    // sets overrides the rule's value. None is never written.
+    /// How `planner-estimator` joins the AUVs' covariances into a level's cost.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub estimator_aggregate: Option<Aggregate>,
     /// The range bias `planner-estimator` assumes, m of 1-σ per km of range (coopnav_plan
-    /// estimator step 4; default [`ESTIMATOR_BIAS_PER_KM`]). The filters' own sound-speed term
-    /// is 1000·σ_c/c (2 m/km for their default σ_c = 3 m/s).
-    #[serde(default = "estimator_bias_per_km")]
-    pub estimator_bias_per_km: f64,
+    /// estimator step 4). The filters' own sound-speed term is 1000·σ_c/c (2 m/km for their
+    /// default σ_c = 3 m/s).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub estimator_bias_per_km: Option<f64>,
     /// `planner-estimator` also prices the range bias `channel.sound_speed` causes, as a CTD cast
     /// the CNA holds: the scale error between the CNA's depth and each AUV's against the speed the
     /// filters convert at (`filter.sound_speed`: none where they convert with the water's own cast),
     /// on top of `estimator_bias_per_km` (coopnav_plan estimator step 4,
     /// `BiasTable`; invented, docs/models.md#estimator-cost). With an AUV CNA and
     /// `estimator_level_off` it lets the planner choose the CNA's depth.
-    #[serde(default)]
-    pub estimator_bias_profile: bool,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub estimator_bias_profile: Option<bool>,
     /// `planner-estimator` models the AUV CNA as the engine flies it: each step starts level, its
     /// pitch is cut at the limit and its depth at the depth limits (coopnav_plan
     /// `CnaKind::Auv::level_off`); false is the thesis's model, where a ±45° pitch step breaks the
     /// 30° limit and so the CNA never changes depth.
-    #[serde(default)]
-    pub estimator_level_off: bool,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub estimator_level_off: Option<bool>,
     /// `planner-estimator` knows its schedule: a broadcast still arriving when an AUV's own slot
     /// starts is lost (half-duplex), so beyond a slant range set by the slot's timing
     /// ([`Scenario::slot_reach_m`]) no ping reaches that AUV, whatever the link. Invented
     /// (docs/models.md#closed-loop-schedule): the thesis's link model depends on range only.
-    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
-    pub estimator_slot_reach: bool,
-    /// Levels of cost-to-go `planner-estimator` counts at each leaf (estimator step 6; 0 = none;
-    /// default [`ESTIMATOR_TERMINAL_LEVELS`]).
-    #[serde(default = "estimator_terminal_levels")]
-    pub estimator_terminal_levels: f64,
-    /// The water current the survey AUVs' filters do not model, east and north (m/s), as the CNA
-    /// measures it (an ADCP): `planner-estimator` grows each AUV's modelled error along it
-    /// (coopnav_plan estimator step 1b; invented, docs/models.md#estimator-cost). Default [0, 0]: none.
-    /// Left to the user: the CNA's measurement is not the scenario's `fleet.current`.
-    #[serde(default, skip_serializing_if = "coopnav_plan::estimator::is_still")]
-    pub estimator_unmodelled_current: [f64; 2],
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub estimator_slot_reach: Option<bool>,
+    /// Levels of cost-to-go `planner-estimator` counts at each leaf (estimator step 6; 0 = none).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub estimator_terminal_levels: Option<f64>,
+    /// The water current the survey AUVs' filters do not model, east and north (m/s):
+    /// `planner-estimator` grows each AUV's modelled error along it (coopnav_plan estimator step
+    /// 1b; invented, docs/models.md#estimator-cost). The rule takes `cna.adcp_current` for filters
+    /// that do not estimate the current.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub estimator_unmodelled_current: Option<[f64; 2]>,
     /// Levels over which that current's drift builds up unseen (estimator step 1b's m; default 4).
     #[serde(default = "estimator_drift_levels")]
     pub estimator_drift_levels: f64,
     /// Success probability that makes a ping useful for `planner-estimator`'s reach cost-to-go
     /// (coopnav_plan estimator step 7: each AUV's growth until the CNA is within the range where
     /// the link's success reaches it; 0 = none).
-    #[serde(default)]
-    pub estimator_reach_success: f64,
-    /// Table 5.2 penalty case of `planner-estimator` (default: `penalty_case`). Its cost already
-    /// prices what Hudson's distance limits stand for (a far ping is lost and noisy, one from
-    /// overhead teaches nothing horizontally), so case "2" (no penalties) is an option.
-    #[serde(default)]
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub estimator_reach_success: Option<f64>,
+    /// Table 5.2 penalty case of `planner-estimator` (the rule's "none" is `penalty_case`). Its
+    /// cost already prices what Hudson's distance limits stand for (a far ping is lost and noisy,
+    /// one from overhead teaches nothing horizontally), so case "2" (no penalties) is an option.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub estimator_penalty_case: Option<String>,
-    /// L of `planner-estimator` (default: `look_ahead`).
-    #[serde(default)]
+    /// L of `planner-estimator`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub estimator_look_ahead: Option<usize>,
-    /// A of `planner-estimator`, its heading options per level (≥ 2; default: `heading_options`).
-    #[serde(default)]
+    /// A of `planner-estimator`, its heading options per level (≥ 2).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub estimator_heading_options: Option<usize>,
     /// With an AUV CNA, how many levels of `planner-estimator`'s tree offer the pitch options, from
-    /// level 0 (≥ 1; deeper levels hold the pitch; default: every level). Fewer pitch levels make
-    /// a deeper look-ahead affordable (coopnav_plan `CnaKind::Auv::pitch_levels`).
-    #[serde(default)]
+    /// level 0 (≥ 1; deeper levels hold the pitch; a number ≥ L: every level). Fewer pitch levels
+    /// make a deeper look-ahead affordable (coopnav_plan `CnaKind::Auv::pitch_levels`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub estimator_pitch_levels: Option<usize>,
     /// Whether `planner-estimator` adds the CNA's own horizontal variance (GPS σ², or an AUV
     /// CNA's navigation variance since its last fix) to each ping's range variance (coopnav_plan
-    /// estimator step 2); false, the default ([`ESTIMATOR_CNA_VARIANCE`]), scores every broadcast
-    /// position as exact.
-    #[serde(default)]
-    pub estimator_cna_variance: bool,
-    /// Some: `planner-estimator` scores the AUVs' expected true error under their filters' gains
-    /// instead of the filters' covariance (coopnav_plan `true_error`; the truth's drift, range
-    /// noise and the CNA's diffusion as the CNA believes them). Written only when set.
+    /// estimator step 2); false scores every broadcast position as exact.
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub estimator_truth: Option<TruthSpec>,
-    /// The water current east and north (m/s) as the CNA measures it (an ADCP), for filters that
-    /// estimate the current (`filter.model = { kind = "current" }`): with `estimator_truth`,
-    /// `planner-estimator` then plans on those filters' current states, which start from a
-    /// current estimate of zero (coopnav_plan `current_states`). Default [0, 0]: still water.
-    #[serde(default, skip_serializing_if = "coopnav_plan::estimator::is_still")]
-    pub estimator_current: [f64; 2],
+    pub estimator_cna_variance: Option<bool>,
+    /// A truth model: `planner-estimator` scores the AUVs' expected true error under their
+    /// filters' gains (coopnav_plan `true_error`; the truth's drift, range noise and the CNA's
+    /// diffusion as the CNA believes them); `"covariance"`: the filters' covariance instead.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub estimator_truth: Option<TruthChoice>,
+    /// The water current east and north (m/s) for filters that estimate the current
+    /// (`filter.model = { kind = "current" }`): with a truth model, `planner-estimator` then plans
+    /// on those filters' current states, which start from the filters' prior mean (coopnav_plan
+    /// `current_states`). The rule takes `cna.adcp_current` for such filters.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub estimator_current: Option<[f64; 2]>,
     /// `planner-estimator`'s mission-long horizon above its tree: which AUV to serve next, valued
     /// over tens of minutes along every AUV's plan (coopnav_plan `horizon`; on by default,
     /// `enabled = false` for none). Written only when not the default.
@@ -552,51 +562,40 @@ impl BeforeFirstReport {
     }
 }
 
-// `planner-estimator`'s defaults: the settings `reproduce closed-loop-vs-baselines` chose on
-// its tuning runs (base seed experiments::closed_loop::TUNING_SEED), so a user's mission gets
-// them too. Each of the four, dropped alone, makes one of the scenario files worse; together they
-// turn the default mission from a loss to centroid into a win (docs/evaluation.md).
-
-/// σ-sum: one AUV with a huge variance does not outweigh the rest as in the trace sum.
-pub const ESTIMATOR_AGGREGATE: Aggregate = Aggregate::SigmaSum;
-
-/// Invented (docs/models.md#estimator-cost; Gill 2013 gives no sound-speed error model). Chosen on
-/// tuning runs (`examples/closed_loop_tune.rs`): three times the filters' configured 3 m/s
-/// sound-speed uncertainty, within the ±11 m/s span of the scenarios' profiles. The bias and the
-/// terminal levels pay together, not apart, on the default mission with current.
-pub const ESTIMATOR_BIAS_PER_KM: f64 = 6.0;
-
-/// Levels of cost-to-go at each leaf (see [`ESTIMATOR_BIAS_PER_KM`] for how it was chosen).
-pub const ESTIMATOR_TERMINAL_LEVELS: f64 = 10.0;
-
-/// Off: on tuning runs counting the CNA's own variance changed nothing measurable, and on
-/// auv-cna-tdma.toml it costs. A common CNA offset moves every AUV's estimate alike, which
-/// a per-ping noise term cannot express.
-pub const ESTIMATOR_CNA_VARIANCE: bool = false;
-
-fn estimator_aggregate() -> Aggregate {
-    ESTIMATOR_AGGREGATE
-}
-
-fn estimator_bias_per_km() -> f64 {
-    ESTIMATOR_BIAS_PER_KM
-}
-
-fn estimator_terminal_levels() -> f64 {
-    ESTIMATOR_TERMINAL_LEVELS
-}
-
 fn estimator_drift_levels() -> f64 {
     coopnav_plan::EstimatorSpec::default().drift_levels
 }
 
-/// The planner of a file with no `[planner]` table (a mission stating only its facts): the
-/// embedded example's, less what that table states of the example's own mission (the current its
-/// ADCP measures, `estimator_unmodelled_current`), which is a fact of that mission only.
-pub fn default_planner() -> Planner {
-    let mut planner = Scenario::example().planner;
-    planner.estimator_unmodelled_current = [0.0, 0.0];
-    planner
+/// `planner.estimator_truth`: a truth model, or the word `"covariance"` (the filters' covariance).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(untagged)]
+pub enum TruthChoice {
+    Model(TruthSpec),
+    Cost(CovarianceWord),
+}
+
+/// The word `"covariance"`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub enum CovarianceWord {
+    #[serde(rename = "covariance")]
+    Covariance,
+}
+
+impl TruthChoice {
+    /// The truth model, None for the covariance cost.
+    pub fn model(self) -> Option<TruthSpec> {
+        match self {
+            TruthChoice::Model(t) => Some(t),
+            TruthChoice::Cost(_) => None,
+        }
+    }
+}
+
+impl Default for Planner {
+    /// The planner of a file with no `[planner]` table: every key's default.
+    fn default() -> Self {
+        toml::from_str("").expect("an empty [planner] table reads with every default")
+    }
 }
 
 fn default_case() -> String {
@@ -604,6 +603,9 @@ fn default_case() -> String {
 }
 fn one_usize() -> usize {
     1
+}
+fn five() -> usize {
+    5
 }
 
 impl Scenario {
@@ -879,18 +881,22 @@ impl Scenario {
         p.check("sensors.yaw_rate_white_deg_s", s.yaw_rate_white_deg_s, |v| (0.0..=10.0).contains(&v), "0..=10 deg/s");
     }
 
-    /// The planner's own checks of `planner-estimator`'s A and L; its other fields are reported
-    /// once, by `planner_config`'s. A tree too large is blamed on the estimator's L if set, else A.
+    /// The planner's own checks of `planner-estimator`'s A and L (the file's or the rule's); its
+    /// other fields are reported once, by `planner_config`'s. A tree too large is blamed on the
+    /// estimator's L if the file sets it, else on its A if set, else on the mission's N (the rule
+    /// chose both).
     fn validate_estimator_tree(&self, p: &mut Problems) {
         let pl = &self.planner;
-        if pl.estimator_look_ahead.is_none() && pl.estimator_heading_options.is_none() {
-            return;
-        }
+        let settings = self.estimator_settings();
         let mut cfg = self.planner_config();
-        cfg.look_ahead = pl.estimator_look_ahead.unwrap_or(cfg.look_ahead);
-        cfg.motion.heading_options = pl.estimator_heading_options.unwrap_or(cfg.motion.heading_options);
+        cfg.look_ahead = settings.look_ahead;
+        cfg.motion.heading_options = settings.heading_options;
         let Err(PlanError::Invalid(found)) = cfg.validate() else { return };
-        let size = if pl.estimator_look_ahead.is_some() { "look_ahead" } else { "heading_options" };
+        let size = if pl.estimator_look_ahead.is_some() || pl.estimator_heading_options.is_none() {
+            "look_ahead"
+        } else {
+            "heading_options"
+        };
         for bad in found.0 {
             let own = match bad.field.as_str() {
                 "look_ahead" => size,
@@ -905,16 +911,28 @@ impl Scenario {
         let pl = &self.planner;
         p.positive("planner.sigma0", pl.sigma0);
         p.non_negative("planner.eps0", pl.eps0);
-        p.non_negative("planner.estimator_terminal_levels", pl.estimator_terminal_levels);
-        p.probability("planner.estimator_reach_success", pl.estimator_reach_success);
-        p.non_negative("planner.estimator_bias_per_km", pl.estimator_bias_per_km);
-        p.finite("planner.estimator_unmodelled_current[0]", pl.estimator_unmodelled_current[0]);
-        p.finite("planner.estimator_unmodelled_current[1]", pl.estimator_unmodelled_current[1]);
+        if let Some(h) = pl.estimator_terminal_levels {
+            p.non_negative("planner.estimator_terminal_levels", h);
+        }
+        if let Some(p_u) = pl.estimator_reach_success {
+            p.probability("planner.estimator_reach_success", p_u);
+        }
+        if let Some(k_b) = pl.estimator_bias_per_km {
+            p.non_negative("planner.estimator_bias_per_km", k_b);
+        }
+        for (key, current) in [
+            ("planner.estimator_unmodelled_current", pl.estimator_unmodelled_current),
+            ("planner.estimator_current", pl.estimator_current),
+            ("cna.adcp_current", Some(self.cna.adcp_current)),
+        ] {
+            if let Some([east, north]) = current {
+                p.finite(&format!("{key}[0]"), east);
+                p.finite(&format!("{key}[1]"), north);
+            }
+        }
         p.non_negative("planner.estimator_drift_levels", pl.estimator_drift_levels);
-        p.finite("planner.estimator_current[0]", pl.estimator_current[0]);
-        p.finite("planner.estimator_current[1]", pl.estimator_current[1]);
         self.validate_estimator_tree(p);
-        if let Some(truth) = &pl.estimator_truth {
+        if let Some(truth) = pl.estimator_truth.and_then(TruthChoice::model) {
             truth.check_fields("planner.estimator_truth.", p);
         }
         pl.horizon.check_fields("planner.horizon.", p);
@@ -1026,6 +1044,45 @@ impl Scenario {
             limits: p.limits,
             penalties: PenaltyCase::from_id(&p.penalty_case).unwrap_or(PenaltyCase::C1).penalties(),
             search: SearchConfig { parallel: p.parallel, deadline: p.deadline, ..SearchConfig::default() },
+        }
+    }
+
+    /// The facts of this mission the planner's rule reads (coopnav_plan `auto`): N, the CNA's
+    /// kind and navigation diffusion, the current its ADCP measures, the filters' model.
+    pub fn mission_facts(&self) -> MissionFacts {
+        MissionFacts {
+            n_auvs: self.fleet.n_auvs,
+            cna: self.cna.auv.as_ref().map_or(CnaFact::Asc, |a| CnaFact::Auv { nav_diffusion_m2_s: a.nav_diffusion }),
+            adcp_current: self.cna.adcp_current,
+            filters_estimate_current: matches!(self.filter.model, AuvModel::Current(_)),
+        }
+    }
+
+    /// `planner-estimator`'s settings: the rule's for this mission ([`Scenario::mission_facts`],
+    /// coopnav_plan `auto::for_mission`), each replaced by the file's `planner.estimator_*` key
+    /// where it sets one (an unknown penalty case is refused by `validate`).
+    pub fn estimator_settings(&self) -> EstimatorSettings {
+        let p = &self.planner;
+        let rule = auto::for_mission(&self.mission_facts());
+        EstimatorSettings {
+            heading_options: p.estimator_heading_options.unwrap_or(rule.heading_options),
+            look_ahead: p.estimator_look_ahead.unwrap_or(rule.look_ahead),
+            pitch_levels: p.estimator_pitch_levels.or(rule.pitch_levels),
+            aggregate: p.estimator_aggregate.unwrap_or(rule.aggregate),
+            bias_per_km: p.estimator_bias_per_km.unwrap_or(rule.bias_per_km),
+            bias_profile: p.estimator_bias_profile.unwrap_or(rule.bias_profile),
+            level_off: p.estimator_level_off.unwrap_or(rule.level_off),
+            slot_reach: p.estimator_slot_reach.unwrap_or(rule.slot_reach),
+            terminal_levels: p.estimator_terminal_levels.unwrap_or(rule.terminal_levels),
+            reach_success: p.estimator_reach_success.unwrap_or(rule.reach_success),
+            penalty_case: match &p.estimator_penalty_case {
+                Some(id) => PenaltyCase::from_id(id),
+                None => rule.penalty_case,
+            },
+            cna_variance: p.estimator_cna_variance.unwrap_or(rule.cna_variance),
+            truth: p.estimator_truth.map_or(rule.truth, TruthChoice::model),
+            unmodelled_current: p.estimator_unmodelled_current.unwrap_or(rule.unmodelled_current),
+            current: p.estimator_current.unwrap_or(rule.current),
         }
     }
 
@@ -1310,25 +1367,28 @@ mod tests {
         assert!(e.contains("hopeful") && e.contains("reports_only") && e.contains("expected_pings"), "{e}");
     }
 
+    /// Without `estimator_truth` the rule's truth model is scored; a file's model replaces it and
+    /// `"covariance"` scores the filters' covariance; the absent key is not written.
     #[test]
-    fn the_estimator_scores_its_covariance_unless_the_file_gives_a_truth_model() {
-        // The default mission gives one (its current is unmodelled); without that line, none.
-        assert!(Scenario::parse(EXAMPLE, Path::new("e.toml")).unwrap().planner.estimator_truth.is_some());
-        let without = example_without_estimator_settings();
-        let plain = Scenario::parse(&without, Path::new("e.toml")).unwrap();
+    fn the_estimator_scores_the_rules_truth_model_unless_the_file_says_otherwise() {
+        let plain = Scenario::parse(EXAMPLE, Path::new("e.toml")).unwrap();
         assert_eq!(plain.planner.estimator_truth, None);
-        assert!(!toml::to_string(&plain).unwrap().contains("estimator_truth"), "the default is not written");
-        let with = |v: &str| without.replace("[planner]\n", &format!("[planner]\nestimator_truth = {v}\n"));
+        assert_eq!(plain.estimator_settings().truth, Some(auto::ASC_TRUTH));
+        assert!(!toml::to_string(&plain).unwrap().contains("estimator_truth"), "the rule's is not written");
+        let with = |v: &str| EXAMPLE.replace("[planner]\n", &format!("[planner]\nestimator_truth = {v}\n"));
         let truth = "{ drift_m2_s = 0.03, range_noise = { sigma_m = 1.8, per_km_m = 0.0 }, cna_diffusion_m2_s = 0.01 }";
         let sc = Scenario::parse(&with(truth), Path::new("t.toml")).unwrap();
-        let spec = sc.planner.estimator_truth.unwrap();
+        let spec = sc.estimator_settings().truth.unwrap();
         assert_eq!((spec.drift_m2_s, spec.range_noise.sigma_m, spec.cna_diffusion_m2_s), (0.03, 1.8, 0.01));
         let again = Scenario::parse(&toml::to_string(&sc).unwrap(), Path::new("t.toml")).unwrap();
-        assert_eq!(again.planner.estimator_truth, Some(spec));
+        assert_eq!(again.planner.estimator_truth, Some(TruthChoice::Model(spec)));
+        let covariance = Scenario::parse(&with("\"covariance\""), Path::new("c.toml")).unwrap();
+        assert_eq!(covariance.estimator_settings().truth, None);
+        let again = Scenario::parse(&toml::to_string(&covariance).unwrap(), Path::new("c.toml")).unwrap();
+        assert_eq!(again.planner.estimator_truth, Some(TruthChoice::Cost(CovarianceWord::Covariance)));
         let e = err(&with(&truth.replace("drift_m2_s = 0.03", "drift_m2_s = -0.03")));
         assert!(e.contains("planner.estimator_truth.drift_m2_s") && e.contains(">= 0"), "{e}");
-        let e = err(&with(&truth.replace("cna_diffusion_m2_s", "cna_drift")));
-        assert!(e.contains("cna_drift"), "{e}");
+        assert!(Scenario::parse(&with("\"none\""), Path::new("n.toml")).is_err());
     }
 
     #[test]
