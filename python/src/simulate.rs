@@ -11,9 +11,9 @@ use coopnav_core::Vec3;
 use coopnav_sim::batch::mc;
 use coopnav_sim::batch::mc::comparison_table;
 use coopnav_sim::batch::work;
-use coopnav_sim::engine;
 use coopnav_sim::engine::Faults;
 use coopnav_sim::engine::{CommsEvent, Decision, Observer, Trace, TraceRow};
+use coopnav_sim::observe::metrics;
 use coopnav_sim::policy::PolicySpec;
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
@@ -103,7 +103,7 @@ fn simulate<'py>(
     let mut built = PolicySpec::new(policy, &sc).and_then(|spec| spec.build(&sc)).map_err(value_error)?;
     let result = interruptible(py, |stop| {
         let mut recorder = Recorder { trace: Trace::default(), stop };
-        let mut r = engine::run(&sc, &mut built, sc.seed, &Faults::default(), &mut recorder);
+        let mut r = metrics::run(&sc, &mut built, sc.seed, &Faults::default(), &mut recorder);
         r.trace = Some(recorder.trace);
         r
     })?;

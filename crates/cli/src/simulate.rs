@@ -9,8 +9,8 @@ use coopnav_core::limits::{self, Estimate};
 use coopnav_sim::batch::mc;
 use coopnav_sim::batch::mc::comparison_table;
 use coopnav_sim::batch::work;
-use coopnav_sim::engine;
 use coopnav_sim::engine::Faults;
+use coopnav_sim::observe::metrics;
 use coopnav_sim::output::run::{write_comparison, write_run};
 use coopnav_sim::output::{check_file_target, is_coopnav_json, tagged_json, write_file};
 use coopnav_sim::policy::PolicySpec;
@@ -83,7 +83,7 @@ pub fn run(args: Args) -> Result<()> {
 fn single(sc: &Scenario, spec: &PolicySpec, stem: &str, file: &Path, args: &Args) -> Result<()> {
     let dir = args.scenario.run_dir(stem, &[file])?;
     let mut policy = spec.build(sc)?;
-    let result = engine::run_traced(sc, &mut policy, sc.seed, &Faults::default());
+    let result = metrics::run_traced(sc, &mut policy, sc.seed, &Faults::default());
     let out = write_run(dir, sc, &result, &std::env::args().collect::<Vec<_>>().join(" "))
         .context("writing the run directory")?;
     println!(

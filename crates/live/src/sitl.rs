@@ -19,7 +19,8 @@ use crate::world::{clock_message, decision_index, fix_message, status_message, u
 use coopnav_core::Vec3;
 use coopnav_lcm::messages::{Clock, CnaCommand as CommandMsg, Decision, Message};
 use coopnav_lcm::{Schema, Udpm};
-use coopnav_sim::engine::{self, CnaStatusHeard, CommsEvent, Faults, Observer, RunResult, Trace, TraceRow};
+use coopnav_sim::engine::{self, CnaStatusHeard, CommsEvent, Faults, Observer, Trace, TraceRow};
+use coopnav_sim::observe::metrics::{self, RunResult};
 use coopnav_sim::policy::{CnaCommand, CnaPolicy, PlannerStats, Policy, PolicyContext, PolicySpec};
 use coopnav_sim::scenario::Scenario;
 use serde::Serialize;
@@ -333,7 +334,7 @@ pub fn run_lockstep(sc: &Scenario, policy: &str, opts: &SitlOptions) -> Result<S
     };
     let mut policy = Policy::Baseline(Box::new(remote));
     let mut obs = WorldObserver { trace: Trace::default(), pending, schema: Schema::coopnav() };
-    let mut result = engine::run(sc, &mut policy, sc.seed, &Faults::default(), &mut obs);
+    let mut result = metrics::run(sc, &mut policy, sc.seed, &Faults::default(), &mut obs);
     result.trace = Some(obs.trace);
     {
         let mut bus = bus.lock().expect("bus");

@@ -11,7 +11,8 @@ use crate::auv::LiveError;
 use crate::cna::CnaChannels;
 use coopnav_lcm::messages::{Clock, CnaFix, Message, StatusFrame};
 use coopnav_lcm::Schema;
-use coopnav_sim::engine::{self, CnaStatusHeard, Faults, Observer, RunResult};
+use coopnav_sim::engine::{CnaStatusHeard, Faults, Observer};
+use coopnav_sim::observe::metrics::{self, RunResult};
 use coopnav_sim::policy::{CnaCommand, CnaPolicy, PlannerStats, Policy, PolicyContext, PolicySpec};
 use coopnav_sim::scenario::Scenario;
 use std::sync::{Arc, Mutex};
@@ -146,7 +147,7 @@ pub fn record(sc: &Scenario, policy: &str) -> Result<Recorded, LiveError> {
     let recorder = Recorder { inner, log: log.clone(), schema: Schema::coopnav(), channels, sc: sc.clone() };
     let mut tap = StatusTap { log: log.clone(), schema: Schema::coopnav(), channel: CnaChannels::default().status };
     let mut policy = Policy::Baseline(Box::new(recorder));
-    let result = engine::run(sc, &mut policy, sc.seed, &Faults::default(), &mut tap);
+    let result = metrics::run(sc, &mut policy, sc.seed, &Faults::default(), &mut tap);
     let stats = policy.planner_stats();
     drop(policy);
     let log = std::mem::take(&mut *log.lock().expect("log lock"));

@@ -9,7 +9,8 @@ use coopnav_lcm::messages::{CnaCommand as CommandMsg, Decision, Message};
 use coopnav_lcm::Schema;
 use coopnav_live::world::{record, Recorded};
 use coopnav_live::{CnaChannels, CnaPlanner, Outgoing};
-use coopnav_sim::engine::{self, Faults};
+use coopnav_sim::engine::Faults;
+use coopnav_sim::observe::metrics;
 use coopnav_sim::policy::{CnaCommand, PolicySpec};
 use coopnav_sim::scenario::file::load;
 use coopnav_sim::scenario::Scenario;
@@ -38,7 +39,7 @@ fn decisions_equal_the_engines(file: &str, policy: &str) {
     let rec = record(&sc, policy).unwrap();
     // Recording is transparent: the run is the engine's own.
     let mut plain = PolicySpec::new(policy, &sc).unwrap().build(&sc).unwrap();
-    let direct = engine::run(&sc, &mut plain, sc.seed, &Faults::default(), &mut ());
+    let direct = metrics::run(&sc, &mut plain, sc.seed, &Faults::default(), &mut ());
     assert_eq!(serde_json::to_string(&rec.result).unwrap(), serde_json::to_string(&direct).unwrap());
     let (cna, out) = replay(&sc, policy, &rec);
     let schema = Schema::coopnav();

@@ -1,7 +1,8 @@
 //! Criterion bench: one closed-loop hour (3 survey AUVs, planner A = 5, L = 5, 10 Hz EKFs) and a
 //! baseline hour (centroid), so the planner's share of a run shows as the difference.
 
-use coopnav_sim::engine::{run, Faults};
+use coopnav_sim::engine::Faults;
+use coopnav_sim::observe::metrics::run;
 use coopnav_sim::policy::PolicySpec;
 use coopnav_sim::scenario::Scenario;
 use criterion::{criterion_group, criterion_main, Criterion};

@@ -8,9 +8,10 @@
 
 use coopnav_core::run_seed;
 use coopnav_sim::engine::Observer;
-use coopnav_sim::engine::{run, Faults, PhaseClock, Timing};
+use coopnav_sim::engine::{Faults, PhaseClock, Timing};
 use coopnav_sim::experiments::closed_loop::{policies, setup};
 use coopnav_sim::experiments::{ReproOptions, Size};
+use coopnav_sim::observe::metrics::run;
 use coopnav_sim::policy::PolicySpec;
 use std::error::Error;
 

@@ -27,10 +27,10 @@
 use coopnav_core::{run_seed, Vec3};
 use coopnav_plan::{MotionConfig, MotionOption};
 use coopnav_sim::batch::mc::{compare, comparison_table};
-use coopnav_sim::engine::{run, Faults, RunResult};
-use coopnav_sim::engine::{Mission, Observer, TraceRow};
+use coopnav_sim::engine::{Faults, Observer, TraceRow};
 use coopnav_sim::experiments::closed_loop::{setup, TUNING_SEED};
 use coopnav_sim::experiments::{ReproOptions, Size};
+use coopnav_sim::observe::metrics::{run, RunResult, ScoredMission as Mission};
 use coopnav_sim::policy::{CnaCommand, CnaPolicy, PolicyContext};
 use coopnav_sim::policy::{Policy, PolicySpec};
 use coopnav_sim::scenario::Scenario;

@@ -1,9 +1,10 @@
 //! Every file of the scenario library (`scenarios/*.toml` at the repository root) loads,
 //! validates and runs, reduced to a short mission with a shallow planner.
 
-use coopnav_sim::engine::{run, Faults};
+use coopnav_sim::engine::Faults;
 use coopnav_sim::models::peer::StatusTo;
 use coopnav_sim::models::schedule::Owner;
+use coopnav_sim::observe::metrics::{run, RunResult};
 use coopnav_sim::observe::zone::{zone_monte_carlo, ZoneSpec};
 use coopnav_sim::policy::PolicySpec;
 use coopnav_sim::scenario::Scenario;
@@ -32,7 +33,7 @@ fn uses_bellhop(file: &PathBuf) -> bool {
 }
 
 /// Runs `file` for 600 s with a shallow planner; checks the run is healthy and every AUV filtered.
-fn runs_reduced(file: &PathBuf) -> coopnav_sim::engine::RunResult {
+fn runs_reduced(file: &PathBuf) -> RunResult {
     let mut sc = Scenario::load(file).unwrap_or_else(|e| panic!("{e}"));
     sc.duration_s = sc.duration_s.min(600.0);
     sc.planner.look_ahead = sc.planner.look_ahead.min(3);
@@ -49,7 +50,7 @@ fn runs_reduced(file: &PathBuf) -> coopnav_sim::engine::RunResult {
 /// AUVs' own slots) and, where the schedule gives it status slots for the CNA, its status reached
 /// the CNA: the example's geometry serves the whole fleet under its own transmission loss. (Nams's
 /// statuses are for the other vehicle: `nams_scenarios_run_on_the_engine_with_nams_metrics`.)
-fn assert_every_auv_served(file: &PathBuf, r: &coopnav_sim::engine::RunResult) {
+fn assert_every_auv_served(file: &PathBuf, r: &RunResult) {
     let sc = Scenario::load(file).unwrap();
     let slots = sc.comms.schedule.slots(sc.comms.tau, sc.fleet.n_auvs, sc.buoys.len());
     let for_cna = sc.comms.status_to == StatusTo::Cna;
@@ -96,7 +97,7 @@ const SPREAD_FLEET: &str = "spread-fleet.toml";
 
 /// The spread fleet's reduced run: the middle AUV, near the CNA's start, is heard; an end AUV,
 /// 1.3-2.1 km away where the grid hears nothing, never gets a ping.
-fn assert_the_end_auvs_start_out_of_reach(file: &Path, r: &coopnav_sim::engine::RunResult) {
+fn assert_the_end_auvs_start_out_of_reach(file: &Path, r: &RunResult) {
     let (middle, ends) = (&r.auvs[2], [&r.auvs[0], &r.auvs[4]]);
     assert!(middle.ranges_applied > 0 && middle.uplink.received > 0, "{file:?}: {:?}", r.auvs);
     assert!(ends.iter().any(|a| a.downlink.received == 0), "{file:?}: {:?}", r.auvs);

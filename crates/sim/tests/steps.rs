@@ -2,7 +2,8 @@
 //! several `dt` gives the same true trajectories (without noise) and the same error statistics
 //! (within the Monte Carlo spread).
 
-use coopnav_sim::engine::{run, run_traced, Faults};
+use coopnav_sim::engine::Faults;
+use coopnav_sim::observe::metrics::{run, run_traced};
 use coopnav_sim::policy::PolicySpec;
 use coopnav_sim::scenario::Scenario;
 

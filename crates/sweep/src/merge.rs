@@ -12,7 +12,7 @@ use crate::plan::Plan;
 use crate::shard::{read_finished, Outcome, Record};
 use crate::table::tables;
 use coopnav_sim::batch::mc::{compare, comparison_table, Comparison};
-use coopnav_sim::engine::RunResult;
+use coopnav_sim::observe::metrics::RunResult;
 use coopnav_sim::output::run::differences_svg;
 use coopnav_sim::output::{Manifest, RunDir, MANIFEST};
 use serde::Serialize;

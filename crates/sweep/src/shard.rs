@@ -17,7 +17,8 @@
 use crate::error::{io, SweepError};
 use crate::plan::{Plan, VERSION};
 use coopnav_core::run_seed;
-use coopnav_sim::engine::{run, Faults, RunResult};
+use coopnav_sim::engine::Faults;
+use coopnav_sim::observe::metrics::{run, RunResult};
 use coopnav_sim::output::write_file;
 use coopnav_sim::policy::PolicySpec;
 use rayon::prelude::*;

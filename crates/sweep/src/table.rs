@@ -9,8 +9,8 @@ use crate::expand::Cell;
 use crate::plan::Plan;
 use crate::shard::{Outcome, Record};
 use coopnav_core::run_seed;
-use coopnav_sim::engine::RunResult;
 use coopnav_sim::models::metrics::AuvMetrics;
+use coopnav_sim::observe::metrics::RunResult;
 
 /// A column's values, one per row, None where the row has none.
 #[derive(Debug, Clone, PartialEq)]

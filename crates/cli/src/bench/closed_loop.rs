@@ -8,10 +8,10 @@
 
 use anyhow::{Context, Result};
 use coopnav_nav::{AuvModel, CurrentParams};
-use coopnav_sim::engine;
 use coopnav_sim::engine::{Faults, PhaseClock};
 use coopnav_sim::models::filter::FilterRate;
 use coopnav_sim::models::tl_spec::{GridModel, TlModel};
+use coopnav_sim::observe::metrics;
 use coopnav_sim::policy::PolicySpec;
 use coopnav_sim::scenario::{BeforeFirstReport, Scenario};
 use serde_json::json;
@@ -93,12 +93,12 @@ pub fn run(args: Args) -> Result<()> {
     let mut walls = Vec::new();
     for _ in 0..args.reps.max(1) {
         let mut policy = spec.build(&sc)?;
-        walls.push(engine::run(&sc, &mut policy, sc.seed, &Faults::default(), &mut ()).wall_s);
+        walls.push(metrics::run(&sc, &mut policy, sc.seed, &Faults::default(), &mut ()).wall_s);
     }
     walls.sort_by(f64::total_cmp);
     let wall_s = walls[walls.len() / 2];
     let mut clock = PhaseClock::start();
-    let r = engine::run(&sc, &mut spec.build(&sc)?, sc.seed, &Faults::default(), &mut clock);
+    let r = metrics::run(&sc, &mut spec.build(&sc)?, sc.seed, &Faults::default(), &mut clock);
     let t = clock.timing;
     let out = json!({
         "target": "closed-loop",

@@ -3,8 +3,9 @@
 //! channel draws), so the planner's advantage over a baseline is judged run by run (paired 95 %
 //! CI). Runs go through rayon and are merged in index order: bit-identical on any thread count.
 
-use crate::engine::{run, Faults, Observer, RunResult};
+use crate::engine::{Faults, Observer};
 use crate::models::metrics::LinkStats;
+use crate::observe::metrics::{run, RunResult};
 use crate::observe::stats::{t_975, Stats};
 use crate::policy::registry::{PolicyError, PolicySpec};
 use crate::scenario::world::Scenario;

@@ -4,9 +4,10 @@
 //! scenario s uses seed run_seed(run_seed(base, s), i) for every behaviour (common random numbers).
 
 use super::nams_setup::{engine_scenario, slot_length};
-use crate::engine::{run, run_with_tl, Faults};
+use crate::engine::Faults;
 use crate::models::tl_spec::TlModel;
 use crate::observe::link_tally::{LinkTally, RunMetrics};
+use crate::observe::metrics::{run, run_with_tl};
 use crate::policy::PolicySpec;
 use crate::scenario::nams::ExperimentConfig;
 use crate::scenario::world::{Scenario as EngineScenario, ScenarioError};

@@ -2,7 +2,8 @@
 //! graceful degradation when packets are lost, and the run directory.
 
 use crate::batch::mc::{monte_carlo, monte_carlo_grid, Comparison};
-use crate::engine::{run, run_traced, Faults, RunResult};
+use crate::engine::Faults;
+use crate::observe::metrics::{run, run_traced, RunResult};
 use crate::output::run::{write_run, PLOTS};
 use crate::output::RunDir;
 use crate::policy::{PolicySpec, POLICY_NAMES};

@@ -133,6 +133,7 @@ impl Engine<'_> {
         kind: StateKind,
         value: f64,
         travel_time: Option<f64>,
+        obs: &mut dyn Observer,
     ) {
         let sc = self.sc;
         let Some(filter) = self.surface[k].of(meta.from) else { return };
@@ -144,6 +145,6 @@ impl Engine<'_> {
             Owner::Buoy(b) => Vec3::new(s[0], s[1], sc.buoys[b].modem_depth_m),
             Owner::Cna | Owner::Auv(_) => return,
         };
-        self.apply_range(k, meta, transponder, travel_time);
+        self.apply_range(k, meta, transponder, travel_time, obs);
     }
 }

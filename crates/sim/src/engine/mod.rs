@@ -1,6 +1,7 @@
 //! The one mission engine. It owns the loop only: every truth step runs the named phases of
 //! `phases` in order — decide, advance, transmit, deliver, sense, observe — and reports what
-//! it saw to an [`Observer`]. The vehicles are in `vehicles`, packets in flight and their fate
+//! it saw to an [`Observer`]; what a run is scored by (its error and link metrics, Hudson's
+//! modelled error) are observers too (`crate::observe::metrics`). The vehicles are in `vehicles`, packets in flight and their fate
 //! in `inflight`, filter consistency in [`health`]; the models it plugs in (channel truth,
 //! schedule, finish behaviour) in [`crate::models`].
 //!
@@ -22,13 +23,10 @@ mod vehicles;
 
 use crate::models::channel::Clock;
 use crate::models::filter::RangeSpeed;
-use crate::models::health;
-use crate::models::metrics::{AuvMetrics, ErrorStats, FleetMetrics, LinkStats};
 use crate::models::peer::StatusFormat;
 use crate::models::schedule::Slot;
 use crate::models::surfacing::OwnNav;
 use crate::policy::belief;
-use crate::policy::planner::{ErrorTracker, PlannerStats};
 use crate::policy::registry::Policy;
 use crate::policy::ReportedCov;
 use crate::scenario::start::cna_start;
@@ -40,14 +38,13 @@ use coopnav_plan::AuvForecast;
 use inflight::InFlight;
 use mini::SurfaceFilters;
 pub use observe::{
-    BuoyFix, BuoySample, CnaChoice, CnaStatusHeard, CommsEvent, DeadReckoning, Decision, FilterStart, Observer, Phase,
-    PhaseClock, RangeHeard, ShadowSample, ShipPose, ShipSample, StatusChoice, StatusFrames, StatusSent, Timing, Trace,
-    TraceRow,
+    BuoyFix, BuoySample, CnaChoice, CnaFix, CnaStatusHeard, CommsEvent, DeadReckoning, Decision, FilterStart,
+    LinkArrival, Observer, Phase, PhaseClock, RangeHeard, RangeUpdate, RunEnd, ShadowSample, ShipPose, ShipSample,
+    StatusChoice, StatusFrames, StatusSent, Timing, Trace, TraceRow,
 };
 use peer::{PeerLink, Plans};
 use phases::Payload;
 use rand_chacha::ChaCha8Rng;
-use serde::{Deserialize, Serialize};
 use std::cell::Cell;
 use std::sync::Arc;
 use std::time::Instant;
@@ -59,23 +56,6 @@ pub struct Faults {
     /// AUVs whose packets (both directions) are all lost from `silent_from_s` on.
     pub silent_auvs: Vec<usize>,
     pub silent_from_s: f64,
-}
-
-/// Everything one run produced (read back by the sweeps, which store each run's results).
-#[derive(Debug, Clone, Serialize, Deserialize)]
-pub struct RunResult {
-    pub policy: String,
-    pub seed: u64,
-    pub auvs: Vec<AuvMetrics>,
-    pub fleet: FleetMetrics,
-    pub planner: Option<PlannerStats>,
-    /// The recorded time series ([`run_traced`] only).
-    #[serde(skip)]
-    pub trace: Option<Trace>,
-    /// Wall time of the whole run, s (not part of the deterministic results; a [`PhaseClock`]
-    /// observer splits it by phase).
-    #[serde(skip)]
-    pub wall_s: f64,
 }
 
 /// The CNA predictors as a forecast, hiding AUVs with fewer than the required reports (Hudson 2012, Sec. 4.2)
@@ -107,27 +87,12 @@ struct Cna {
     rng_nav: ChaCha8Rng,
     clock: Clock,
     predictors: Vec<UnderwayPredictor>,
-    model: ErrorTracker,
     /// Status slots received since its last broadcast, per AUV (its one-bit-per-AUV ack).
     acked: Vec<Vec<u64>>,
     /// The newest covariance each AUV reported (the status message's trailer).
     reported: Vec<Option<ReportedCov>>,
     /// Its broadcast's rate policy, when its slot names one.
     rate: Option<cna_rate::CnaRate>,
-}
-
-/// Per-AUV sums for the run's metrics.
-#[derive(Clone, Default)]
-struct AuvTally {
-    errors: Vec<f64>,
-    distances: Vec<f64>,
-    violations: u64,
-    modelled: Vec<f64>,
-    down: LinkStats,
-    buoys: LinkStats,
-    up: LinkStats,
-    applied: u64,
-    health: health::Tally,
 }
 
 /// One run's state.
@@ -158,53 +123,18 @@ struct Engine<'a> {
     /// Index of the next slot over the whole run (cycle = index / slots per cycle).
     next_slot: u64,
     status_sent: Vec<u64>,
-    tallies: Vec<AuvTally>,
+    /// Whether every survey AUV's filter was finite at every sample.
     finite: bool,
     /// Truth steps per second (the observe phase runs once a second).
     per_second: u64,
 }
 
-/// Runs `policy` over scenario `sc` with run seed `seed`, reporting to `obs`.
-pub fn run(sc: &Scenario, policy: &mut Policy, seed: u64, faults: &Faults, obs: &mut dyn Observer) -> RunResult {
-    run_on(sc, policy, seed, faults, None, obs)
-}
-
-/// [`run`] on a transmission-loss model the caller built (one model shared by an experiment's many
-/// runs, e.g. a BELLHOP grid of its own layout) instead of the scenario's `comms.tl`.
-pub fn run_with_tl(
-    sc: &Scenario,
-    policy: &mut Policy,
-    seed: u64,
-    tl: Arc<dyn TransmissionLoss>,
-    obs: &mut dyn Observer,
-) -> RunResult {
-    run_on(sc, policy, seed, &Faults::default(), Some(tl), obs)
-}
-
-fn run_on(
-    sc: &Scenario,
-    policy: &mut Policy,
-    seed: u64,
-    faults: &Faults,
-    tl: Option<Arc<dyn TransmissionLoss>>,
-    obs: &mut dyn Observer,
-) -> RunResult {
-    let mut mission = Mission::start(Engine::new(sc, policy, seed, faults, tl), seed, obs);
-    while !mission.done() {
-        if obs.stop() {
-            break;
-        }
-        mission.step(obs);
-    }
-    mission.finish()
-}
-
 /// A run its caller steps, and may fork: a copy of the whole state at a step, driven on by
 /// another policy (clairvoyant rollouts measure how much any CNA path could gain,
-/// `examples/closed_loop_headroom.rs`). [`run`] is a `Mission` stepped to its end.
+/// `examples/closed_loop_headroom.rs`). A scored run (`observe::metrics::run`) is a `Mission`
+/// stepped to its end.
 pub struct Mission<'a> {
     engine: Engine<'a>,
-    seed: u64,
     /// The next truth step, and the run's count.
     step: u64,
     steps: u64,
@@ -212,18 +142,19 @@ pub struct Mission<'a> {
 }
 
 impl<'a> Mission<'a> {
-    /// Runs `policy` over scenario `sc` with run seed `seed` (the set-up reported to `obs`).
+    /// Runs `policy` over scenario `sc` with run seed `seed` (the set-up reported to `obs`), on
+    /// the transmission-loss model `tl` when the caller built one (one model shared by an
+    /// experiment's many runs, e.g. a BELLHOP grid of its own layout), else on the scenario's
+    /// `comms.tl`.
     pub fn new(
         sc: &'a Scenario,
         policy: &'a mut Policy,
         seed: u64,
         faults: &'a Faults,
+        tl: Option<Arc<dyn TransmissionLoss>>,
         obs: &mut dyn Observer,
     ) -> Self {
-        Mission::start(Engine::new(sc, policy, seed, faults, None), seed, obs)
-    }
-
-    fn start(engine: Engine<'a>, seed: u64, obs: &mut dyn Observer) -> Self {
+        let engine = Engine::new(sc, policy, seed, faults, tl);
         let t_start = Instant::now();
         for (auv, a) in engine.auvs.iter().enumerate() {
             let ((x, y), (speed, heading)) = (a.ekf.position(), a.ekf.speed_heading());
@@ -234,7 +165,7 @@ impl<'a> Mission<'a> {
         }
         obs.on_phase_end(Phase::Setup);
         let steps = (engine.sc.duration_s / engine.sc.dt).round() as u64;
-        Mission { engine, seed, step: 0, steps, t_start }
+        Mission { engine, step: 0, steps, t_start }
     }
 
     pub fn done(&self) -> bool {
@@ -266,21 +197,20 @@ impl<'a> Mission<'a> {
         if let Some(seed) = redraw {
             engine.redraw(&SeedStream::new(seed));
         }
-        Mission { engine, seed: self.seed, step: self.step, steps: self.steps, t_start: Instant::now() }
+        Mission { engine, step: self.step, steps: self.steps, t_start: Instant::now() }
     }
 
-    /// The metrics of the steps run.
-    pub fn finish(self) -> RunResult {
-        self.engine.finish(self.seed, self.t_start.elapsed().as_secs_f64())
+    /// The policy driving this run.
+    pub fn policy(&mut self) -> &mut Policy {
+        self.engine.policy
     }
-}
 
-/// [`run`] keeping the whole time series in the result.
-pub fn run_traced(sc: &Scenario, policy: &mut Policy, seed: u64, faults: &Faults) -> RunResult {
-    let mut trace = Trace::default();
-    let mut r = run(sc, policy, seed, faults, &mut trace);
-    r.trace = Some(trace);
-    r
+    /// Ends the run after the steps run: reports its end to `obs` and returns its wall time, s.
+    pub fn finish(self, obs: &mut dyn Observer) -> f64 {
+        let recoveries: Vec<_> = self.engine.auvs.iter().map(|a| a.ekf.recoveries()).collect();
+        obs.on_end(&RunEnd { recoveries: &recoveries, finite: self.engine.finite });
+        self.t_start.elapsed().as_secs_f64()
+    }
 }
 
 impl<'a> Engine<'a> {
@@ -296,7 +226,6 @@ impl<'a> Engine<'a> {
         let bathy = sc.bathymetry();
         let auvs: Vec<SurveyAuv> = (0..n).map(|k| SurveyAuv::new(sc, k, &streams, &bathy)).collect();
         let start = cna_start(sc);
-        let cfg = sc.planner_config();
         let cna = Cna {
             craft: Craft { pos: start.pos, prev: start.pos, heading: start.heading.radians(), target: None },
             nav_error: (0.0, 0.0),
@@ -305,7 +234,6 @@ impl<'a> Engine<'a> {
             rng_nav: streams.rng(stream::CNA_NAV),
             clock: sc.channel.clocks.draw(&mut streams.rng(stream::CNA_CLOCK)),
             predictors: (0..n).map(|k| belief::predictor(sc, k, &bathy)).collect(),
-            model: ErrorTracker::new(n, cfg.error, sc.comms.tau, sc.planner.sigma0, sc.planner.eps0),
             acked: vec![Vec::new(); n],
             reported: vec![None; n],
             rate: sc
@@ -338,7 +266,6 @@ impl<'a> Engine<'a> {
             next_decision: 0,
             next_slot: 0,
             status_sent: vec![0; n],
-            tallies: (0..n).map(|_| AuvTally::default()).collect(),
             finite: true,
             per_second: ((1.0 / sc.dt).round() as u64).max(1),
         }
@@ -366,7 +293,6 @@ impl<'a> Engine<'a> {
             next_decision: self.next_decision,
             next_slot: self.next_slot,
             status_sent: self.status_sent.clone(),
-            tallies: self.tallies.clone(),
             finite: self.finite,
             per_second: self.per_second,
         }
@@ -422,30 +348,6 @@ impl<'a> Engine<'a> {
     fn silent(&self, k: usize, t: f64) -> bool {
         t >= self.faults.silent_from_s && self.faults.silent_auvs.contains(&k)
     }
-
-    fn finish(mut self, seed: u64, wall_s: f64) -> RunResult {
-        for (tally, auv) in self.tallies.iter_mut().zip(&self.auvs) {
-            tally.health.recovered(auv.ekf.recoveries());
-        }
-        let auvs: Vec<AuvMetrics> = self.tallies.iter().enumerate().map(|(k, a)| metrics(k, a)).collect();
-        let pooled: Vec<f64> = self.tallies.iter().flat_map(|a| a.errors.iter().copied()).collect();
-        let modelled: Vec<f64> = self.tallies.iter().flat_map(|a| a.modelled.iter().copied()).collect();
-        let diverged = auvs.iter().filter(|a| a.health.diverged_at_s.is_some()).count();
-        RunResult {
-            policy: self.policy.as_policy().name().to_string(),
-            seed,
-            auvs,
-            fleet: FleetMetrics {
-                error: ErrorStats::of(&pooled),
-                modelled_mean: mean(&modelled),
-                healthy: self.finite,
-                diverged,
-            },
-            planner: self.policy.planner_stats(),
-            trace: None,
-            wall_s,
-        }
-    }
 }
 
 /// Every survey AUV's side of Nams's link, when the statuses are Nams's frame 0.
@@ -474,30 +376,3 @@ impl TransmissionLoss for Unavailable {
         Err(TlError::Invalid("the scenario's transmission-loss model could not be built".into()))
     }
 }
-
-fn mean(v: &[f64]) -> Option<f64> {
-    (!v.is_empty()).then(|| v.iter().sum::<f64>() / v.len() as f64)
-}
-
-fn metrics(k: usize, a: &AuvTally) -> AuvMetrics {
-    let n = a.distances.len().max(1) as f64;
-    AuvMetrics {
-        name: format!("auv{k}"),
-        error: ErrorStats::of(&a.errors),
-        modelled_mean: mean(&a.modelled),
-        downlink: a.down,
-        buoy_link: a.buoys,
-        ranges_applied: a.applied,
-        uplink: a.up,
-        distance_mean: a.distances.iter().sum::<f64>() / n,
-        distance_min: a.distances.iter().copied().fold(f64::INFINITY, f64::min),
-        distance_max: a.distances.iter().copied().fold(0.0, f64::max),
-        limit_violation: a.violations as f64 / n,
-        health: a.health.summary(),
-    }
-}
-
-#[cfg(test)]
-mod peer_tests;
-#[cfg(test)]
-mod tests;

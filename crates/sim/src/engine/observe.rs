@@ -7,6 +7,7 @@ use crate::models::schedule::Owner;
 use coopnav_acomms::selector::Choice;
 use coopnav_acomms::Rate;
 use coopnav_core::Vec3;
+use coopnav_nav::{Recoveries, UpdateOutcome};
 use serde::Serialize;
 use std::time::Instant;
 
@@ -30,7 +31,9 @@ pub struct TraceRow {
     pub p_nn: f64,
     /// Normalised estimation error squared of the horizontal position (2 degrees of freedom).
     pub nees: f64,
-    /// The planner's modelled error, m (empty before the model starts).
+    /// The planner's modelled error, m (empty before the model starts). The engine leaves it
+    /// empty; a scored run (`observe::metrics`) fills it from Hudson's error model before any
+    /// other observer sees the row.
     pub modelled: Option<f64>,
     pub cna_x: f64,
     pub cna_y: f64,
@@ -185,6 +188,47 @@ pub struct Decision {
     pub to: Option<Vec3>,
 }
 
+/// The CNA's position fix at a decision (before its policy decides), whether its policy
+/// transmits, and where its forecast puts each survey AUV then (by index; None: no forecast;
+/// empty when the policy does not transmit).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct CnaFix<'a> {
+    pub t: f64,
+    pub fix: Vec3,
+    pub transmits: bool,
+    pub forecast: &'a [Option<Vec3>],
+}
+
+/// A survey AUV's filter offered a range (at the end of its arrival): applied, gated or unusable.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RangeUpdate {
+    pub t: f64,
+    pub auv: usize,
+    pub outcome: UpdateOutcome,
+}
+
+/// A packet's fate on one survey AUV's link (at the end of its arrival): a broadcast from the CNA,
+/// a buoy or a ship to AUV `auv`, or AUV `auv`'s status to the CNA (`from` is then the AUV). `rate`
+/// is the packet's rate index; `received`: its content was used (for a status, the CNA could read
+/// it).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LinkArrival {
+    pub auv: usize,
+    pub from: Owner,
+    pub rate: u8,
+    pub decoded: bool,
+    pub survived: bool,
+    pub received: bool,
+}
+
+/// The end of a run: every survey AUV's filter recoveries (by index) and whether every filter
+/// stayed finite at every sample.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RunEnd<'a> {
+    pub recoveries: &'a [Recoveries],
+    pub finite: bool,
+}
+
 /// A survey AUV's status the CNA's modem received (its frame 0 decoded and not lost to a
 /// collision): the status codec's bytes as they arrived, before the CNA reads them.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -234,6 +278,15 @@ pub trait Observer {
     fn on_cna_status(&mut self, _status: &CnaStatusHeard) {}
     /// A packet whose fate is known (at the end of its arrival).
     fn on_packet(&mut self, _event: &CommsEvent) {}
+    /// The CNA's fix at every decision, before its policy decides.
+    fn on_cna_fix(&mut self, _fix: &CnaFix) {}
+    /// Every range a survey AUV's filter was offered, with what the filter did with it.
+    fn on_range_update(&mut self, _update: &RangeUpdate) {}
+    /// Every packet on a survey AUV's link whose fate is known (beside [`Observer::on_packet`],
+    /// with its rate and whether its content was used).
+    fn on_link(&mut self, _arrival: &LinkArrival) {}
+    /// Once, when the run ends ([`super::Mission::finish`]).
+    fn on_end(&mut self, _end: &RunEnd) {}
     /// A phase of the run ended: the set-up once, then each phase of every step, in order.
     fn on_phase_end(&mut self, _phase: Phase) {}
     /// Asked before every truth step: true ends the run there (a caller's cancellation, e.g.

@@ -7,8 +7,8 @@
 
 use super::inflight::Arrival;
 use super::observe::{
-    BuoyFix, CnaChoice, CnaStatusHeard, CommsEvent, DeadReckoning, Decision, Observer, RangeHeard, ShadowSample,
-    ShipPose, StatusChoice, StatusFrames, StatusSent, TraceRow,
+    BuoyFix, CnaChoice, CnaFix, CnaStatusHeard, CommsEvent, DeadReckoning, Decision, LinkArrival, Observer, RangeHeard,
+    RangeUpdate, ShadowSample, ShipPose, StatusChoice, StatusFrames, StatusSent, TraceRow,
 };
 use super::peer::PeerLink;
 use super::vehicles::lerp;
@@ -33,7 +33,7 @@ use coopnav_acomms::status::{CovTrailer, CovarianceReport};
 use coopnav_acomms::status::{Frame0, LocalOrigin, NextWaypoint};
 use coopnav_acomms::{Rate, Reception};
 use coopnav_core::{Heading, Vec3};
-use coopnav_nav::{RangeMeasurement, StateKind, UpdateOutcome};
+use coopnav_nav::{RangeMeasurement, StateKind};
 use coopnav_plan::predict::StatusReport;
 use coopnav_plan::{AuvForecast, CnaPose};
 use rand_chacha::ChaCha8Rng;
@@ -56,12 +56,16 @@ pub enum Payload {
 }
 
 impl Engine<'_> {
-    /// The CNA's decision at each m·τ: its position fix, the planner model's pings, the policy.
     /// Whether the CNA's next decision falls in the step ending at `t_next`.
     pub(super) fn decision_due(&self, t_next: f64) -> bool {
         (self.next_decision as f64) * self.sc.comms.tau < t_next - 1e-9
     }
 
+    /// The CNA's decision at each m·τ: its position fix, then the policy's command.
+    /// Reads: the scenario, the CNA's predictors and the statuses it was sent. Writes: the CNA's
+    /// own navigation (its surfacing cycle, its navigation error and the GPS and navigation
+    /// draws), its target, the policy's state and the decision counter. Reports the fix
+    /// ([`Observer::on_cna_fix`]) and the decision.
     pub(super) fn decide(&mut self, t_next: f64, obs: &mut dyn Observer) {
         let tau = self.sc.comms.tau;
         if !self.decision_due(t_next) {
@@ -75,20 +79,9 @@ impl Engine<'_> {
         let transmits = self.policy.as_policy().transmits();
         let cna = &mut self.cna;
         let fleet = FleetView { predictors: &cna.predictors, min_reports: self.sc.planner.start_after_reports };
-        for k in 0..self.auvs.len() {
-            if !transmits {
-                cna.model.silent(k);
-                continue;
-            }
-            if let Some(p) = fleet.position(k, t_dec) {
-                cna.model.ping(k, &fix, &p, 1.0);
-            }
-        }
-        for (k, tally) in self.tallies.iter_mut().enumerate() {
-            if let Some(e) = cna.model.total(k) {
-                tally.modelled.push(e);
-            }
-        }
+        let forecast: Vec<Option<Vec3>> =
+            if transmits { (0..self.auvs.len()).map(|k| fleet.position(k, t_dec)).collect() } else { Vec::new() };
+        obs.on_cna_fix(&CnaFix { t: t_dec, fix, transmits, forecast: &forecast });
         let pose = CnaPose { pos: fix, heading: Heading::from_radians(cna.craft.heading), pitch: 0.0 };
         let ctx = PolicyContext {
             t: t_dec,
@@ -144,7 +137,9 @@ impl Engine<'_> {
     }
 
     /// Truth to `t_next`: the CNA craft, the ships, then every survey AUV (after its finish
-    /// behaviour's action).
+    /// behaviour's action). Reads: the scenario, the bathymetry, the CNA's target, each AUV's
+    /// estimate (for its finish behaviour). Writes: every vehicle's true state and its truth draws.
+    /// Reports every ship's pose.
     pub(super) fn advance(&mut self, t_next: f64, obs: &mut dyn Observer) {
         let sc = self.sc;
         self.cna.craft.step(sc.cna.speed, sc.cna.max_turn_rate_deg_s.to_radians(), sc.dt);
@@ -158,7 +153,10 @@ impl Engine<'_> {
         }
     }
 
-    /// Every slot starting in [t, t_next): its owner transmits.
+    /// Every slot starting in [t, t_next): its owner transmits. Reads: the scenario, the slots,
+    /// every vehicle's truth and the senders' estimates and plans. Writes: the packets in the
+    /// water, the slot counter, the senders' rate selectors, acknowledgement lists and link draws,
+    /// the CNA's rate policy. Reports each slot's choices and every message sent.
     pub(super) fn transmit(&mut self, t: f64, t_next: f64, obs: &mut dyn Observer) {
         let per_cycle = self.slots.len() as u64;
         if per_cycle == 0 {
@@ -349,20 +347,24 @@ impl Engine<'_> {
         farthest
     }
 
-    /// Every addressed packet whose arrival ended by `t_next`, in time order.
+    /// Every addressed packet whose arrival ended by `t_next`, in time order. Reads: the packets
+    /// in the water. Writes: the receivers' filters, selectors and peer trackers, the CNA's
+    /// predictors, acknowledgements, reported covariances and rate policy. Reports every packet's
+    /// fate ([`Observer::on_packet`], [`Observer::on_link`]), every usable range and every
+    /// filter update.
     pub(super) fn deliver(&mut self, t_next: f64, obs: &mut dyn Observer) {
         for (meta, payload, survived) in self.air.due(t_next) {
             match (payload, meta.to) {
                 (Payload::Broadcast { id, rate, fix, travel_time, acked, decoded }, Owner::Auv(k)) => {
                     let received = decoded && survived;
-                    self.tallies[k].down.record_arrival(rate.index(), (decoded, survived), received);
+                    obs.on_link(&link(&meta, k, rate.index(), (decoded, survived), received));
                     obs.on_packet(&event(&meta, "down", k, decoded, survived));
                     if received {
                         if self.cna.rate.is_some() {
                             self.auvs[k].heard_broadcasts.push(id);
                         }
                         heard(obs, &meta, k, travel_time);
-                        self.hear_broadcast(k, &meta, fix, travel_time, &acked);
+                        self.hear_broadcast(k, &meta, fix, travel_time, &acked, obs);
                     }
                 }
                 (Payload::Status { rate, slot_id, bytes, decoded, heard_broadcasts, .. }, Owner::Cna) => {
@@ -371,7 +373,7 @@ impl Engine<'_> {
                         obs.on_cna_status(&CnaStatusHeard { t_tx: meta.t_tx, t_rx: meta.end, auv: j, bytes: &bytes });
                     }
                     let message = (decoded && survived).then(|| self.read_at_cna(j, &bytes, meta.t_tx)).flatten();
-                    self.tallies[j].up.record_arrival(rate.index(), (decoded, survived), message.is_some());
+                    obs.on_link(&link(&meta, j, rate.index(), (decoded, survived), message.is_some()));
                     obs.on_packet(&event(&meta, "up", j, decoded, survived));
                     if let Some((report, cov)) = message {
                         if let Some(policy) = self.cna.rate.as_mut() {
@@ -391,24 +393,21 @@ impl Engine<'_> {
                 }
                 (Payload::Position { rate, fix, travel_time, decoded }, Owner::Auv(k)) => {
                     let received = decoded && survived;
-                    self.tallies[k].buoys.record(rate.index(), received);
+                    obs.on_link(&link(&meta, k, rate.index(), (decoded, survived), received));
                     obs.on_packet(&event(&meta, "buoy", k, decoded, survived));
                     if received {
                         heard(obs, &meta, k, travel_time);
-                        self.apply_range(k, &meta, fix, travel_time);
+                        self.apply_range(k, &meta, fix, travel_time, obs);
                     }
                 }
                 (Payload::Mini { kind, value, travel_time, decoded }, Owner::Auv(k)) => {
                     let received = decoded && survived;
-                    let (stats, direction) = match meta.from {
-                        Owner::Ship(..) => (&mut self.tallies[k].down, "ship"),
-                        _ => (&mut self.tallies[k].buoys, "buoy"),
-                    };
-                    stats.record(SUCCESS_RATE.index(), received);
+                    let direction = if matches!(meta.from, Owner::Ship(..)) { "ship" } else { "buoy" };
+                    obs.on_link(&link(&meta, k, SUCCESS_RATE.index(), (decoded, survived), received));
                     obs.on_packet(&event(&meta, direction, k, decoded, survived));
                     if received {
                         heard(obs, &meta, k, travel_time);
-                        self.hear_mini(k, &meta, kind, value, travel_time);
+                        self.hear_mini(k, &meta, kind, value, travel_time, obs);
                     }
                 }
                 (Payload::Broadcast { .. } | Payload::Position { .. } | Payload::Mini { .. }, _)
@@ -472,13 +471,21 @@ impl Engine<'_> {
 
     /// AUV `k` decoded the CNA's broadcast at the end of its arrival: the acknowledgements feed
     /// its rate selector, and the range updates its filter.
-    fn hear_broadcast(&mut self, k: usize, meta: &Arrival<()>, fix: Vec3, travel_time: Option<f64>, acked: &[u64]) {
+    fn hear_broadcast(
+        &mut self,
+        k: usize,
+        meta: &Arrival<()>,
+        fix: Vec3,
+        travel_time: Option<f64>,
+        acked: &[u64],
+        obs: &mut dyn Observer,
+    ) {
         let a = &mut self.auvs[k];
         let outcomes: Vec<Outcome> =
             a.unacked.drain(..).map(|slot| Outcome { slot, success: acked.contains(&slot) }).collect();
         a.selector.feedback(&outcomes, true);
         a.cna_heard = Some(fix);
-        self.apply_range(k, meta, fix, travel_time);
+        self.apply_range(k, meta, fix, travel_time, obs);
     }
 
     /// AUV `k`'s filter applies the range of a decoded broadcast from a transponder at `fix`. The
@@ -486,7 +493,14 @@ impl Engine<'_> {
     /// the AUV's own dead-reckoned motion over the decode delay, so the filter can apply it now.
     /// The travel time becomes a range at the speed `filter.sound_speed` gives between the
     /// transponder's reported depth and the AUV's measured one.
-    pub(super) fn apply_range(&mut self, k: usize, meta: &Arrival<()>, fix: Vec3, travel_time: Option<f64>) {
+    pub(super) fn apply_range(
+        &mut self,
+        k: usize,
+        meta: &Arrival<()>,
+        fix: Vec3,
+        travel_time: Option<f64>,
+        obs: &mut dyn Observer,
+    ) {
         let a = &mut self.auvs[k];
         let Some(travel_time) = travel_time else { return };
         a.ekf.predict_to(meta.end, a.yaw_measured);
@@ -504,18 +518,13 @@ impl Engine<'_> {
         if a.ekf.recoveries().count > recovered {
             tracing::info!(t = meta.end, auv = k, "the filter's ranges left their NIS bounds: it recovered");
         }
-        match outcome {
-            UpdateOutcome::Applied { nis } => {
-                self.tallies[k].applied += 1;
-                self.tallies[k].health.nis(nis);
-            }
-            UpdateOutcome::Gated { nis } => self.tallies[k].health.nis(nis),
-            UpdateOutcome::Unusable => {}
-        }
+        obs.on_range_update(&RangeUpdate { t: meta.end, auv: k, outcome });
     }
 
     /// Filters to `t_next` at the end of truth step `step` (every step, or every few with a
     /// decimated filter rate): prediction, speed and compass; a surfaced AUV's GPS once a second.
+    /// Reads: the scenario, each AUV's truth. Writes: each AUV's filter, its sensor draws and its
+    /// yaw-rate sum. Reports every filter step's dead reckoning.
     pub(super) fn sense(&mut self, step: u64, t_next: f64, obs: &mut dyn Observer) {
         let whole_second = (t_next - t_next.round()).abs() < 1e-6;
         let every = self.sc.filter.rate.steps(self.sc.dt);
@@ -541,6 +550,8 @@ impl Engine<'_> {
     }
 
     /// Once a second: true error, the filter's σ and NEES, distances, and the observer.
+    /// Reads: every vehicle's truth and every filter. Writes: only whether every filter stayed
+    /// finite. Reports the ships, the buoys and one row per survey AUV.
     pub(super) fn observe(&mut self, t: f64, obs: &mut dyn Observer) {
         if !self.ships.is_empty() {
             let ships: Vec<Vec3> = self.ships.iter().map(|s| s.pos).collect();
@@ -552,10 +563,9 @@ impl Engine<'_> {
         if !self.buoys.is_empty() {
             obs.on_buoys(t, &self.buoy_samples(t));
         }
-        let limits = self.sc.planner.limits;
         let cna = self.cna.craft.pos;
         let mut rows = Vec::with_capacity(self.auvs.len());
-        for (k, (a, tally)) in self.auvs.iter().zip(self.tallies.iter_mut()).enumerate() {
+        for (k, a) in self.auvs.iter().enumerate() {
             self.finite &= a.finite();
             let (ex, ey) = a.ekf.position();
             let [p_ee, p_en, p_nn] = a.ekf.position_cov();
@@ -564,10 +574,6 @@ impl Engine<'_> {
             let nees = nees_2d(dx, dy, p_ee, p_en, p_nn);
             let error = dx.hypot(dy);
             let d = (a.truth.x - cna.x).hypot(a.truth.y - cna.y);
-            tally.errors.push(error);
-            tally.distances.push(d);
-            tally.violations += u64::from(d < limits.min || d > limits.max);
-            tally.health.sample(&self.sc.health, t, error, sigma, nees);
             rows.push(TraceRow {
                 t,
                 auv: k,
@@ -582,7 +588,7 @@ impl Engine<'_> {
                 p_en,
                 p_nn,
                 nees,
-                modelled: self.cna.model.total(k),
+                modelled: None,
                 cna_x: cna.x,
                 cna_y: cna.y,
                 cna_z: cna.z,
@@ -628,6 +634,11 @@ fn heard(obs: &mut dyn Observer, meta: &Arrival<()>, k: usize, travel_time: Opti
     if let Some(travel_time) = travel_time {
         obs.on_range(&RangeHeard { t_tx: meta.t_tx, auv: k, from: meta.from, travel_time });
     }
+}
+
+/// A packet's fate on AUV `auv`'s link, for [`Observer::on_link`].
+fn link(meta: &Arrival<()>, auv: usize, rate: u8, (decoded, survived): (bool, bool), received: bool) -> LinkArrival {
+    LinkArrival { auv, from: meta.from, rate, decoded, survived, received }
 }
 
 fn event(meta: &Arrival<()>, direction: &'static str, auv: usize, decoded: bool, survived: bool) -> CommsEvent {

@@ -8,9 +8,10 @@
 //! buoy's slots only.
 
 use super::profile::{add_to_bin, merge_bins, BinSums, ProfileBin};
-use crate::engine::{run, Faults, RunResult};
+use crate::engine::Faults;
 use crate::engine::{BuoySample, Observer, TraceRow};
 use crate::models::schedule::Owner;
+use crate::observe::metrics::{run, RunResult};
 use crate::observe::stats::Stats;
 use crate::policy::{PolicyError, PolicySpec};
 use crate::scenario::Scenario;

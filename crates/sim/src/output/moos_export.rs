@@ -3,7 +3,7 @@
 //! `cna`, ranges and packets as pulses, planned legs), written into the run directory as
 //! `run.alog` (mapping: `coopnav_moos::export`) with its interactive `replay.html`.
 
-use crate::engine::RunResult as ClosedLoopResult;
+use crate::observe::metrics::RunResult as ClosedLoopResult;
 use crate::output::record::PassRow;
 use crate::output::{RunDir, WriteError};
 use crate::scenario;

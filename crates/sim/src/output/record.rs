@@ -6,12 +6,12 @@
 //! and each decoded range from the ship's modems and the buoy.
 
 use super::log_format::LogFormat;
-use crate::engine::RunResult;
 use crate::engine::{
     BuoyFix, BuoySample, DeadReckoning, FilterStart, Observer, RangeHeard, ShipPose, ShipSample, TraceRow,
 };
 use crate::models::noise::normal;
 use crate::models::schedule::Owner;
+use crate::observe::metrics::RunResult;
 use crate::observe::zone::{zone_run, GillZone, ZoneSpec};
 use crate::policy::{PolicyError, PolicySpec};
 use crate::scenario::Scenario;

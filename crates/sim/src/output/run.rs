@@ -3,7 +3,8 @@
 //! and a self-contained report.html that shows every plot inline.
 
 use crate::batch::mc::{comparison_table, Comparison};
-use crate::engine::{RunResult, Trace, TraceRow};
+use crate::engine::{Trace, TraceRow};
+use crate::observe::metrics::RunResult;
 use crate::output::plot::{intervals_svg, Interval};
 use crate::output::plot::{line_svg, track_svg, Labels, PlotError, Series};
 use crate::output::report::HtmlReport;

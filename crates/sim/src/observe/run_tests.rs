@@ -1,11 +1,14 @@
 //! The engine end to end: finished vehicles, collisions and half-duplex through a hand-built
 //! schedule, and the NEES check against a filter given the wrong noise model.
 
-use super::*;
+use crate::engine::*;
 use crate::models::finish::Finish;
 use crate::models::schedule::{Schedule, SlotSpec};
+use crate::observe::metrics::{run, RunResult, ScoredMission as Mission};
 use crate::policy::PolicySpec;
+use crate::scenario::world::Scenario;
 use crate::scenario::BeforeFirstReport;
+use coopnav_core::Vec3;
 use coopnav_nav::StateKind;
 
 /// One AUV on a short lawnmower (two 300 m lanes, done after about 480 s), then `duration` s.

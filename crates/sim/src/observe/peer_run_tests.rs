@@ -2,11 +2,14 @@
 //! counted at the peer, both vehicles' selectors adapting on each other's tracker headers, the
 //! shadow estimates, and the per-AUV lawnmowers.
 
-use super::*;
+use crate::engine::*;
 use crate::models::peer::{EstimatorMode, StatusFormat, StatusTo};
+use crate::observe::metrics::run;
 use crate::policy::PolicySpec;
+use crate::scenario::world::Scenario;
 use coopnav_acomms::selector::Choice;
 use coopnav_acomms::Rate;
+use coopnav_core::Vec3;
 use std::path::Path;
 
 const NAMS_1: &str = include_str!("../../../../scenarios/nams-1.toml");
