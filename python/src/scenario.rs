@@ -37,11 +37,12 @@ pub struct Scenario {
 fn checked<T: DeserializeOwned>(
     text: &str,
     file: &Path,
+    read: fn(&str, &Path) -> Result<T, scenario_file::ScenarioError>,
     work: fn(&T) -> Vec<Estimate>,
     validate: scenario_file::Validate<T>,
     allow_large: bool,
 ) -> PyResult<T> {
-    let scenario = scenario_file::parse(text, file, |_, _| Ok(())).map_err(value_error)?;
+    let scenario = read(text, file).map_err(value_error)?;
     limits::check(work(&scenario), allow_large).map_err(value_error)?;
     validate(&scenario, file).map_err(value_error)?;
     Ok(scenario)
@@ -54,10 +55,22 @@ fn one_run(sc: &scenario::Scenario) -> Vec<Estimate> {
 impl Scenario {
     fn parse(text: &str, kind: &str, file: PathBuf, base: PathBuf, allow_large: bool) -> PyResult<Self> {
         let kind = match kind {
-            "simulate" => Kind::Simulate(checked(text, &file, one_run, scenario::Scenario::validate, allow_large)?),
-            "plan" => {
-                Kind::Plan(checked(text, &file, work::predeploy, scenario::plan::Scenario::validate, allow_large)?)
-            }
+            "simulate" => Kind::Simulate(checked(
+                text,
+                &file,
+                scenario::Scenario::read,
+                one_run,
+                scenario::Scenario::validate,
+                allow_large,
+            )?),
+            "plan" => Kind::Plan(checked(
+                text,
+                &file,
+                scenario::plan::Scenario::read,
+                work::predeploy,
+                scenario::plan::Scenario::validate,
+                allow_large,
+            )?),
             other => return Err(unknown_kind(other)),
         };
         Ok(Scenario { kind, file, base })

@@ -5,7 +5,7 @@
 
 use anyhow::{bail, Context, Result};
 use coopnav_live::{run_auv, run_cna, AuvNavigator, ClockSource, CnaPlanner, LiveConfig, RunOptions};
-use coopnav_sim::scenario::file::{parse, read_scenario_text};
+use coopnav_sim::scenario::file::read_scenario_text;
 use coopnav_sim::scenario::{Scenario, EXAMPLE};
 use std::path::PathBuf;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -103,8 +103,8 @@ fn stop_flag() -> Result<Arc<AtomicBool>> {
 
 fn cna(args: CnaArgs) -> Result<()> {
     let scenario: Scenario = match &args.scenario {
-        Some(path) => parse(&read_scenario_text(path, false)?, path, Scenario::validate)?,
-        None => parse(EXAMPLE, &PathBuf::from("<embedded default>"), Scenario::validate)?,
+        Some(path) => Scenario::parse(&read_scenario_text(path, false)?, path)?,
+        None => Scenario::parse(EXAMPLE, &PathBuf::from("<embedded default>"))?,
     };
     let clock = if args.clock == "bus" { ClockSource::Bus } else { ClockSource::System };
     let opts = RunOptions {

@@ -44,6 +44,7 @@ impl ScenarioCommand for Plan {
     const EXAMPLE: &'static str = EXAMPLE;
     const EMBEDDED: &'static str = "example";
     const RUN_PREFIX: &'static str = "plan";
+    const READ: fn(&str, &Path) -> Result<Scenario, coopnav_sim::scenario::file::ScenarioError> = Scenario::read;
     const VALIDATE: Validate<Scenario> = Scenario::validate;
     const WORK: fn(&Scenario) -> Vec<Estimate> = work::predeploy;
 }
@@ -67,7 +68,14 @@ pub fn run(args: Args) -> Result<()> {
     // Everything is validated before any output is created.
     let mission = scenario.build(&file, &base)?;
     limits::check(work::predeploy_mission(&mission), args.scenario.allow_large())?;
-    let origin = args.moos.then(|| moos_origin(args.moos_origin.as_deref())).transpose()?;
+    // The MOOS files' LatOrigin/LongOrigin: the scenario's site origin, where its metres start.
+    let origin = match (scenario.site.origin, args.moos_origin.as_deref()) {
+        (Some(_), Some(_)) => {
+            anyhow::bail!("--moos-origin: the scenario's site.origin already places its metres; leave the option out")
+        }
+        (Some(site), None) => args.moos.then_some(site.latlon()),
+        (None, text) => args.moos.then(|| moos_origin(text)).transpose()?,
+    };
     let tracks: Vec<PathBuf> = scenario.auv.iter().filter_map(|a| a.track_csv.as_ref().map(|t| base.join(t))).collect();
     let inputs: Vec<&Path> = std::iter::once(file.as_path()).chain(tracks.iter().map(PathBuf::as_path)).collect();
     let dir = args.scenario.run_dir(&stem, &inputs)?;

@@ -9,7 +9,7 @@ use crate::input;
 use anyhow::Result;
 use coopnav_core::limits::{self, Estimate};
 use coopnav_sim::output::RunDir;
-use coopnav_sim::scenario::file::{self as scenario_file, Validate};
+use coopnav_sim::scenario::file::{ScenarioError, Validate};
 use serde::de::DeserializeOwned;
 use std::marker::PhantomData;
 use std::path::{Path, PathBuf};
@@ -27,6 +27,8 @@ pub trait ScenarioCommand {
     const EMBEDDED: &'static str;
     /// Fresh run directories are `runs/<RUN_PREFIX>-<scenario name>`.
     const RUN_PREFIX: &'static str;
+    /// Reads the scenario type from text without validating it (`file` names it in messages).
+    const READ: fn(&str, &Path) -> Result<Self::Scenario, ScenarioError>;
     /// The scenario type's validation (`file` names it in messages).
     const VALIDATE: Validate<Self::Scenario>;
     /// The sizes the scenario asks for, checked before validation (which may build tables).
@@ -107,7 +109,7 @@ impl<C: ScenarioCommand> ScenarioArgs<C> {
 
     /// Parses `text` (read from `file`), checks its sizes against the work limits, validates it.
     fn parse(&self, text: &str, file: &Path) -> Result<C::Scenario> {
-        let scenario = scenario_file::parse(text, file, |_, _| Ok(()))?;
+        let scenario = (C::READ)(text, file)?;
         limits::check((C::WORK)(&scenario), self.allow_large)?;
         (C::VALIDATE)(&scenario, file)?;
         Ok(scenario)

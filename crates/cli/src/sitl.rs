@@ -53,6 +53,8 @@ impl ScenarioCommand for Sitl {
     const EXAMPLE: &'static str = EXAMPLE;
     const EMBEDDED: &'static str = "default";
     const RUN_PREFIX: &'static str = "sitl";
+    const READ: fn(&str, &std::path::Path) -> Result<Scenario, coopnav_sim::scenario::file::ScenarioError> =
+        Scenario::read;
     const VALIDATE: Validate<Scenario> = Scenario::validate;
     const WORK: fn(&Scenario) -> Vec<Estimate> = |scenario| work::closed_loop(scenario, 1, 1);
 }

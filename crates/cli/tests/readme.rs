@@ -158,9 +158,25 @@ fn make_input(dir: &Path, (command, file, edits): (&str, &str, &[(&str, &str)]))
     edited_example(dir, &command.split_whitespace().collect::<Vec<_>>(), file, edits);
 }
 
+/// Copies directory `from` into `to`, recursively.
+fn copy_dir(from: &Path, to: &Path) {
+    std::fs::create_dir_all(to).unwrap();
+    for e in std::fs::read_dir(from).unwrap() {
+        let e = e.unwrap();
+        let target = to.join(e.file_name());
+        if e.file_type().unwrap().is_dir() {
+            copy_dir(&e.path(), &target);
+        } else {
+            std::fs::copy(e.path(), &target).unwrap();
+        }
+    }
+}
+
 #[test]
 fn every_readme_command_runs() {
     let tmp = tempfile::tempdir().unwrap();
+    // The README's commands run from the repository's root: the scenario library is there.
+    copy_dir(&Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenarios"), &tmp.path().join("scenarios"));
     let mut used = vec![false; REDUCED.len()];
     let mut ran = 0;
     for line in readme_commands() {

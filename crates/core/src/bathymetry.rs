@@ -111,6 +111,11 @@ impl Bathymetry {
         Ok(Bathymetry { x0, y0, dx, dy, nx, ny, depth })
     }
 
+    /// Re-checks a grid read by serde (as [`Bathymetry::new`] checks a built one).
+    pub fn check(&self) -> Result<(), BathymetryError> {
+        Bathymetry::new(self.x0, self.y0, self.dx, self.dy, self.nx, self.ny, self.depth.clone()).map(|_| ())
+    }
+
     /// The synthetic shelf.
     pub fn shelf(s: &Shelf) -> Result<Self, BathymetryError> {
         if !(s.spacing > 0.0 && s.x_max > s.x_min && s.y_max > s.y_min && s.x_deep != s.x_shallow) {
@@ -313,6 +318,22 @@ impl Bathymetry {
         let lo = d(i, j) * (1.0 - tx) + d(i + 1, j) * tx;
         let hi = d(i, j + 1) * (1.0 - tx) + d(i + 1, j + 1) * tx;
         lo * (1.0 - ty) + hi * ty
+    }
+
+    /// The grid's nodes span [x_min, x_max] × [y_min, y_max]: `((x_min, y_min), (x_max, y_max))`.
+    pub fn bounds(&self) -> ((f64, f64), (f64, f64)) {
+        let far = |o: f64, d: f64, n: usize| o + d * (n - 1) as f64;
+        ((self.x0, self.y0), (far(self.x0, self.dx, self.nx), far(self.y0, self.dy, self.ny)))
+    }
+
+    /// Nodes along x and along y.
+    pub fn shape(&self) -> (usize, usize) {
+        (self.nx, self.ny)
+    }
+
+    /// Shallowest node of the grid.
+    pub fn min_depth(&self) -> f64 {
+        self.depth.iter().copied().fold(f64::INFINITY, f64::min)
     }
 
     /// Deepest node of the grid.

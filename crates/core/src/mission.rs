@@ -138,34 +138,78 @@ impl Lawnmower {
 
     /// Samples the pattern flown at constant speed from t = 0, every `dt` seconds (and at the end).
     pub fn track(&self, dt: f64) -> Result<Track, TrackError> {
-        let wps = self.waypoints();
-        let total = self.path_length();
-        let duration = if self.speed > 0.0 { total / self.speed } else { 0.0 };
-        let n = (duration / dt).ceil().max(0.0) as usize;
-        let mut samples = Vec::with_capacity(n + 1);
-        let (mut seg, mut seg_start) = (0usize, 0.0);
-        for k in 0..=n {
-            let t = (k as f64 * dt).min(duration);
-            let s = t * self.speed;
-            while seg + 2 < wps.len() && s > seg_start + seg_len(&wps, seg) {
-                seg_start += seg_len(&wps, seg);
-                seg += 1;
-            }
-            let (x, y) = if wps.len() < 2 {
-                wps.first().copied().unwrap_or(self.origin)
-            } else {
-                let len = seg_len(&wps, seg);
-                let f = if len > 0.0 { ((s - seg_start) / len).clamp(0.0, 1.0) } else { 0.0 };
-                let (a, b) = (wps[seg], wps[seg + 1]);
-                (a.0 + (b.0 - a.0) * f, a.1 + (b.1 - a.1) * f)
-            };
-            samples.push(TrackSample { t, pos: Vec3::new(x, y, self.depth.at(t)) });
-            if t >= duration {
-                break;
-            }
-        }
-        Track::new(samples)
+        track_through(&self.waypoints(), self.origin, self.speed, &self.depth, dt)
     }
+}
+
+/// A survey AUV's planned path: waypoints flown in order at constant speed and depth profile (a
+/// lawnmower's turning points, or the waypoints of an imported mission).
+#[derive(Debug, Clone, PartialEq)]
+pub struct SurveyPath {
+    pub waypoints: Vec<(f64, f64)>,
+    pub speed: f64,
+    pub depth: DepthProfile,
+}
+
+impl SurveyPath {
+    /// The horizontal waypoints, in order.
+    pub fn waypoints(&self) -> Vec<(f64, f64)> {
+        self.waypoints.clone()
+    }
+
+    /// Total path length, metres.
+    pub fn path_length(&self) -> f64 {
+        self.waypoints.windows(2).map(|w| (w[1].0 - w[0].0).hypot(w[1].1 - w[0].1)).sum()
+    }
+
+    /// Samples the path flown at constant speed from t = 0, every `dt` seconds (and at the end).
+    pub fn track(&self, dt: f64) -> Result<Track, TrackError> {
+        let start = self.waypoints.first().copied().unwrap_or((0.0, 0.0));
+        track_through(&self.waypoints, start, self.speed, &self.depth, dt)
+    }
+}
+
+impl From<Lawnmower> for SurveyPath {
+    fn from(m: Lawnmower) -> Self {
+        SurveyPath { waypoints: m.waypoints(), speed: m.speed, depth: m.depth }
+    }
+}
+
+/// `wps` flown at constant `speed` from t = 0, sampled every `dt` s and at the end; `fallback` is
+/// the position when there are no waypoints.
+fn track_through(
+    wps: &[(f64, f64)],
+    fallback: (f64, f64),
+    speed: f64,
+    depth: &DepthProfile,
+    dt: f64,
+) -> Result<Track, TrackError> {
+    let total: f64 = wps.windows(2).map(|w| (w[1].0 - w[0].0).hypot(w[1].1 - w[0].1)).sum();
+    let duration = if speed > 0.0 { total / speed } else { 0.0 };
+    let n = (duration / dt).ceil().max(0.0) as usize;
+    let mut samples = Vec::with_capacity(n + 1);
+    let (mut seg, mut seg_start) = (0usize, 0.0);
+    for k in 0..=n {
+        let t = (k as f64 * dt).min(duration);
+        let s = t * speed;
+        while seg + 2 < wps.len() && s > seg_start + seg_len(wps, seg) {
+            seg_start += seg_len(wps, seg);
+            seg += 1;
+        }
+        let (x, y) = if wps.len() < 2 {
+            wps.first().copied().unwrap_or(fallback)
+        } else {
+            let len = seg_len(wps, seg);
+            let f = if len > 0.0 { ((s - seg_start) / len).clamp(0.0, 1.0) } else { 0.0 };
+            let (a, b) = (wps[seg], wps[seg + 1]);
+            (a.0 + (b.0 - a.0) * f, a.1 + (b.1 - a.1) * f)
+        };
+        samples.push(TrackSample { t, pos: Vec3::new(x, y, depth.at(t)) });
+        if t >= duration {
+            break;
+        }
+    }
+    Track::new(samples)
 }
 
 fn seg_len(wps: &[(f64, f64)], i: usize) -> f64 {

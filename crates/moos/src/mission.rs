@@ -1,6 +1,6 @@
 //! MOOS-IvP mission files for a planned CNA path: a `.moos` (the community's global settings and
 //! the usual ProcessConfig blocks: uSimMarine, pHelmIvP, pMarinePIDV22, pNodeReporter, pLogger,
-//! launched by pAntler) and a `.bhv` whose BHV_Waypoint behaviours fly the CNA's waypoints at the
+//! and pMarineViewer to watch it, launched by pAntler) and a `.bhv` whose BHV_Waypoint behaviours fly the CNA's waypoints at the
 //! planned speed, with every leg's timing as comments.
 //!
 //! An ASC CNA gets one BHV_Waypoint with all the points. An AUV CNA changes depth along its plan:
@@ -92,6 +92,7 @@ fn moos_file(spec: &MissionSpec, bhv_name: &str) -> String {
             "Run = pMarinePIDV22 @ NewConsole = false",
             "Run = pNodeReporter @ NewConsole = false",
             "Run = pLogger @ NewConsole = false",
+            "Run = pMarineViewer @ NewConsole = false",
         ],
     );
     let start = format!(
@@ -149,6 +150,20 @@ fn moos_file(spec: &MissionSpec, bhv_name: &str) -> String {
         &mut f,
         "pLogger",
         &["AppTick = 8", "CommsTick = 8", "AsyncLog = true", &file, "PATH = ./", "WildCardLogging = true"],
+    );
+    // The operator's view: the CNA's node reports and its path as the helm posts it.
+    block(
+        &mut f,
+        "pMarineViewer",
+        &[
+            "AppTick = 4",
+            "CommsTick = 4",
+            "tiff_viewable = false",
+            "hash_viewable = true",
+            "vehicle_shape_scale = 1.5",
+            "seglist_viewable_all = true",
+            "point_viewable_labels = false",
+        ],
     );
     f
 }

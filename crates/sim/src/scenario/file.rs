@@ -107,6 +107,18 @@ pub fn parse<T: DeserializeOwned>(text: &str, file: &Path, validate: Validate<T>
     Ok(scenario)
 }
 
+/// Builds a `T` from a TOML tree (a file whose site was resolved, `scenario::site`) and validates it.
+pub fn parse_tree<T: DeserializeOwned>(
+    tree: toml::Value,
+    file: &Path,
+    validate: Validate<T>,
+) -> Result<T, ScenarioError> {
+    let scenario = T::deserialize(tree)
+        .map_err(|e| ScenarioError::Parse { file: file.to_path_buf(), message: shortened(&e.to_string()) })?;
+    validate(&scenario, file)?;
+    Ok(scenario)
+}
+
 /// The text of scenario `file`, read through the bounded reader (the input-file limit unless
 /// `allow_large`), so every front end refuses the same inputs with the same words.
 pub fn read_scenario_text(file: &Path, allow_large: bool) -> Result<String, ScenarioError> {

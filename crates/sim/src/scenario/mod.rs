@@ -8,7 +8,9 @@ pub mod generate;
 pub mod hbl;
 pub mod nams;
 pub mod plan;
+pub mod site;
 pub mod start;
+pub mod survey_import;
 pub mod tracks;
 pub mod world;
 

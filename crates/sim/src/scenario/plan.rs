@@ -27,6 +27,9 @@ pub struct Scenario {
     #[serde(default)]
     pub mission: MissionSection,
     pub auv: Vec<AuvSpec>,
+    /// The site's geodetic origin (`scenario::site`; a site grid is `simulate`'s, refused here).
+    #[serde(default, skip_serializing_if = "super::site::Site::is_empty")]
+    pub site: super::site::Site,
 }
 
 /// CNA start pose (docs/models.md#hudson-start). Heading in compass degrees, as everywhere in files.
@@ -154,11 +157,22 @@ impl Scenario {
     /// Parses TOML text and checks every field that needs no track file; `file` names it in
     /// messages.
     pub fn parse(text: &str, file: &Path) -> Result<Self, ScenarioError> {
-        scenario_file::parse(text, file, Self::validate)
+        let scenario = Self::read(text, file)?;
+        scenario.validate(file)?;
+        Ok(scenario)
+    }
+
+    /// [`Scenario::parse`] without the validation; positions in latitude/longitude are placed on
+    /// the plane at `site.origin` (`scenario::site`).
+    pub fn read(text: &str, file: &Path) -> Result<Self, ScenarioError> {
+        match super::site::resolved(text, file, &toml::Value::Table(toml::Table::new()))? {
+            Some(tree) => scenario_file::parse_tree(tree, file, |_, _| Ok(())),
+            None => scenario_file::parse(text, file, |_, _| Ok(())),
+        }
     }
 
     pub fn load(file: &Path) -> Result<Self, ScenarioError> {
-        scenario_file::load(file, Self::validate)
+        Self::parse(&scenario_file::read_scenario_text(file, false)?, file)
     }
 
     /// Checks the planner settings, the CNA pose, the mission span and each AUV's settings, and
@@ -166,6 +180,9 @@ impl Scenario {
     /// checked by [`Scenario::build`]).
     pub fn validate(&self, file: &Path) -> Result<(), ScenarioError> {
         let mut p = Problems::new(file);
+        if self.site.bathymetry.is_some() {
+            p.push("site.bathymetry", "a grid", "none: the pre-deployment planner takes no bathymetry");
+        }
         self.validate_planner(&mut p);
         let c = &self.cna;
         for (name, v) in [

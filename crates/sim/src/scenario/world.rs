@@ -16,12 +16,13 @@ use crate::models::surfacing::Surfacing;
 use crate::models::tl_spec::TlModel;
 pub use crate::scenario::file::ScenarioError;
 use crate::scenario::file::{self as scenario_file, overlay, Problems};
+use crate::scenario::site::{self, PathSpec, Site};
 use coopnav_acomms::node_report::{BODY_BITS, HEADER_BITS};
 use coopnav_acomms::selector::AdaptiveConfig;
 use coopnav_acomms::status::CovTrailer;
 use coopnav_acomms::{Rate, Receiver, SuccessModel};
 use coopnav_core::validation::CheckFields;
-use coopnav_core::{Bathymetry, CompassDeg, DepthTarget, Heading, Iver2Params, Lawnmower, Shelf};
+use coopnav_core::{Bathymetry, CompassDeg, DepthTarget, Heading, Iver2Params, Lawnmower, Shelf, SurveyPath};
 use coopnav_nav::{AuvModel, AuvParams, RangeNoise};
 use coopnav_plan::auto::{self, CnaFact, EstimatorSettings, MissionFacts};
 use coopnav_plan::predict::{PredictorConfig, WaypointUse};
@@ -69,6 +70,9 @@ pub struct Scenario {
     pub planner: Planner,
     #[serde(default)]
     pub health: Health,
+    /// The site: geodetic origin and bathymetry (`scenario::site`). Written only when given.
+    #[serde(default, skip_serializing_if = "Site::is_empty")]
+    pub site: Site,
 }
 
 /// The survey AUVs' dead-reckoning sensors as they truly are (Gill 2013, §2.4.1 values by default).
@@ -166,6 +170,11 @@ pub struct Fleet {
     /// Each survey AUV's own block (one per AUV; empty: side by side from `origin`).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub lawnmowers: Vec<MowerSpec>,
+    /// Each survey AUV's own waypoints instead of a lawnmower (one per AUV; `fleet.survey` imports
+    /// them from `.bhv` or CSV files, `scenario::site`). With them the lawnmower keys above are
+    /// unused and may be left out.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub paths: Vec<PathSpec>,
     /// The survey AUVs' IVER2 dynamics (Nams 2014, App. B; default `vehicle.m`'s constants), which
     /// the other vehicles' shadow estimates also fly. The model steps at the scenario's `dt`
     /// ([`Scenario::survey_dynamics`]): `timestep` here may restate it, never differ.
@@ -283,6 +292,11 @@ impl From<CruiseDepth> for DepthWord {
         }
     }
 }
+
+/// The most survey AUVs a scenario may have: node-report source ids are 5 bits
+/// (`coopnav_acomms::node_report`), and AUV k sends as id k + 1. Below it, the schedule check
+/// (`comms.schedule`) says whether N fit in τ.
+pub const MAX_SURVEY_AUVS: usize = 31;
 
 /// Spacing of the track points `"cast"` weighs, m.
 pub const CAST_SAMPLE_M: f64 = 25.0;
@@ -598,6 +612,16 @@ impl Default for Planner {
     }
 }
 
+/// The fleet's lawnmower keys a file with `fleet.paths` may leave out: the embedded example's.
+fn lawnmower_keys() -> toml::Value {
+    let example: toml::Table = EXAMPLE.parse().expect("the embedded example scenario parses");
+    let fleet = example["fleet"].as_table().expect("the example has a fleet table");
+    let keys = ["origin", "lane_heading_compass_deg", "lane_length", "lane_spacing", "lanes", "block_offset"];
+    toml::Value::Table(
+        fleet.iter().filter(|(k, _)| keys.contains(&k.as_str())).map(|(k, v)| (k.clone(), v.clone())).collect(),
+    )
+}
+
 fn default_case() -> String {
     PenaltyCase::C1.id().to_string()
 }
@@ -613,13 +637,24 @@ impl Scenario {
         toml::from_str(EXAMPLE).expect("the embedded example scenario parses")
     }
 
-    /// Parses and validates TOML text; `file` names it in messages.
+    /// Parses and validates TOML text; `file` names it in messages, and relative file names in
+    /// it (`site.bathymetry.file`, `fleet.survey.files`) are relative to its directory.
     pub fn parse(text: &str, file: &Path) -> Result<Self, ScenarioError> {
-        scenario_file::parse(text, file, Self::validate)
+        let scenario = Self::read(text, file)?;
+        scenario.validate(file)?;
+        Ok(scenario)
+    }
+
+    /// [`Scenario::parse`] without the validation (for callers that check sizes first).
+    pub fn read(text: &str, file: &Path) -> Result<Self, ScenarioError> {
+        match site::resolved(text, file, &lawnmower_keys())? {
+            Some(tree) => scenario_file::parse_tree(tree, file, |_, _| Ok(())),
+            None => scenario_file::parse(text, file, |_, _| Ok(())),
+        }
     }
 
     pub fn load(file: &Path) -> Result<Self, ScenarioError> {
-        scenario_file::load(file, Self::validate)
+        Self::parse(&scenario_file::read_scenario_text(file, false)?, file)
     }
 
     /// The survey AUVs' IVER2 constants with the model stepping at the engine's `dt`: the truth
@@ -673,8 +708,12 @@ impl Scenario {
 
     fn validate_fleet(&self, p: &mut Problems) {
         let f = &self.fleet;
-        if !(1..=8).contains(&f.n_auvs) {
-            p.push("fleet.n_auvs", f.n_auvs.to_string(), "1..=8");
+        if !(1..=MAX_SURVEY_AUVS).contains(&f.n_auvs) {
+            p.push(
+                "fleet.n_auvs",
+                f.n_auvs.to_string(),
+                format!("1..={MAX_SURVEY_AUVS} (the status message's 5-bit source id; the schedule must fit them too)"),
+            );
         }
         p.positive("fleet.lane_length", f.lane_length);
         p.positive("fleet.lane_spacing", f.lane_spacing);
@@ -685,19 +724,23 @@ impl Scenario {
         p.check("fleet.lane_heading_compass_deg", f.lane_heading_compass_deg, |_| true, "a finite number");
         p.check("fleet.speed", f.speed, |v| v > 0.0 && v <= 3.0, "0 < speed <= 3 m/s");
         p.positive("fleet.seafloor_depth", f.seafloor_depth);
-        match f.depth {
-            DepthTarget::Depth { depth } => p.check(
-                "fleet.depth.depth",
-                depth,
-                |v| v >= 0.0 && v < f.seafloor_depth,
-                "0 <= depth < fleet.seafloor_depth",
-            ),
-            DepthTarget::Altitude { altitude } => p.check(
-                "fleet.depth.altitude",
-                altitude,
-                |v| v > 0.0 && v < f.seafloor_depth,
-                "0 < altitude < fleet.seafloor_depth",
-            ),
+        if self.site.bathymetry.is_some() {
+            self.validate_site(p);
+        } else {
+            match f.depth {
+                DepthTarget::Depth { depth } => p.check(
+                    "fleet.depth.depth",
+                    depth,
+                    |v| v >= 0.0 && v < f.seafloor_depth,
+                    "0 <= depth < fleet.seafloor_depth",
+                ),
+                DepthTarget::Altitude { altitude } => p.check(
+                    "fleet.depth.altitude",
+                    altitude,
+                    |v| v > 0.0 && v < f.seafloor_depth,
+                    "0 < altitude < fleet.seafloor_depth",
+                ),
+            }
         }
         if let Some(shelf) = &f.shelf {
             if let Err(e) = Bathymetry::shelf(shelf) {
@@ -726,11 +769,28 @@ impl Scenario {
         for (k, m) in f.lawnmowers.iter().enumerate() {
             p.extend(m.problems(&format!("fleet.lawnmowers[{k}].")));
         }
+        if !f.paths.is_empty() {
+            if f.paths.len() != f.n_auvs {
+                p.push("fleet.paths", format!("{} entries", f.paths.len()), "one per survey AUV");
+            }
+            if !f.lawnmowers.is_empty() {
+                p.push("fleet.lawnmowers", "given with fleet.paths", "one of fleet.lawnmowers, fleet.paths");
+            }
+        }
+        for (k, path) in f.paths.iter().enumerate() {
+            if path.waypoints.is_empty() {
+                p.push(format!("fleet.paths[{k}].waypoints"), "none", "at least one waypoint");
+            }
+            if let Some((i, w)) = path.waypoints.iter().enumerate().find(|(_, w)| !(w.0.is_finite() && w.1.is_finite()))
+            {
+                p.push(format!("fleet.paths[{k}].waypoints[{i}]"), format!("{w:?}"), "finite metres");
+            }
+        }
         for (field, v) in [("fleet.origin[0]", f.origin.0), ("fleet.origin[1]", f.origin.1)] {
             p.check(field, v, |v| v.abs() < 10_000.0, "within ±10 000 m (status message range ±16 000 m)");
         }
         // Every survey waypoint must fit the status message's ±16 000 m fields (with room for drift).
-        let extent = (0..f.n_auvs.min(8))
+        let extent = (0..f.n_auvs.min(MAX_SURVEY_AUVS))
             .flat_map(|k| self.lawnmower(k).waypoints())
             .map(|(x, y)| x.abs().max(y.abs()))
             .fold(0.0, f64::max);
@@ -740,6 +800,50 @@ impl Scenario {
                 format!("survey reaching {extent:.0} m from the origin"),
                 "every lawnmower within ±15 000 m (status message fields are ±16 000 m)",
             );
+        }
+    }
+
+    /// A site grid: valid, alone (no shelf), under every survey waypoint, and deep enough along
+    /// each survey path for the fleet's depth or altitude.
+    fn validate_site(&self, p: &mut Problems) {
+        let f = &self.fleet;
+        let Some(b) = &self.site.bathymetry else { return };
+        if let Err(e) = b.grid.check() {
+            p.push("site.bathymetry.grid", e.to_string(), "a valid grid");
+            return;
+        }
+        if f.shelf.is_some() {
+            p.push("fleet.shelf", "given with site.bathymetry", "one seafloor: fleet.shelf or site.bathymetry");
+        }
+        let ((x0, y0), (x1, y1)) = b.grid.bounds();
+        for k in 0..f.n_auvs.min(MAX_SURVEY_AUVS) {
+            let wps = self.lawnmower(k).waypoints();
+            if let Some(w) = wps.iter().find(|w| !(x0..=x1).contains(&w.0) || !(y0..=y1).contains(&w.1)) {
+                p.push(
+                    format!("site.bathymetry (survey AUV {k})"),
+                    format!("waypoint ({:.1}, {:.1}) m", w.0, w.1),
+                    format!("inside the grid {} ({x0:.0}..{x1:.0} m east, {y0:.0}..{y1:.0} m north)", b.source),
+                );
+                continue;
+            }
+            let shallowest = along(&wps, CAST_SAMPLE_M)
+                .into_iter()
+                .map(|(x, y)| (b.grid.depth_at(x, y), (x, y)))
+                .min_by(|a, b| a.0.total_cmp(&b.0));
+            let Some((water, at)) = shallowest else { continue };
+            let (ok, what) = match f.depth {
+                DepthTarget::Depth { depth } => (depth >= 0.0 && depth < water, format!("depth {depth} m")),
+                DepthTarget::Altitude { altitude } => {
+                    (altitude > 0.0 && altitude < water, format!("altitude {altitude} m"))
+                }
+            };
+            if !ok {
+                p.push(
+                    "fleet.depth",
+                    format!("{what} for survey AUV {k}"),
+                    format!("within the water along its path ({water:.1} m deep at ({:.0}, {:.0}) m)", at.0, at.1),
+                );
+            }
         }
     }
 
@@ -962,8 +1066,12 @@ impl Scenario {
         }
     }
 
-    /// The seafloor: the shelf if given, else a flat bottom at `seafloor_depth`.
+    /// The seafloor: the site's grid if given, else the shelf if given, else a flat bottom at
+    /// `seafloor_depth`.
     pub fn bathymetry(&self) -> Bathymetry {
+        if let Some(b) = &self.site.bathymetry {
+            return b.grid.clone();
+        }
         let flat =
             || Bathymetry::new(-20_000.0, -20_000.0, 40_000.0, 40_000.0, 2, 2, vec![self.fleet.seafloor_depth; 4]);
         let grid = match &self.fleet.shelf {
@@ -1094,9 +1202,18 @@ impl Scenario {
         c
     }
 
-    /// The lawnmower of survey AUV `k`.
-    pub fn lawnmower(&self, k: usize) -> Lawnmower {
+    /// The survey path of survey AUV `k`: its `fleet.paths` entry if given, else its lawnmower.
+    pub fn lawnmower(&self, k: usize) -> SurveyPath {
         let f = &self.fleet;
+        let depth = coopnav_core::DepthProfile::Constant {
+            depth: match f.depth {
+                DepthTarget::Depth { depth } => depth,
+                DepthTarget::Altitude { altitude } => f.seafloor_depth - altitude,
+            },
+        };
+        if let Some(p) = f.paths.get(k) {
+            return SurveyPath { waypoints: p.waypoints.clone(), speed: f.speed, depth };
+        }
         let heading = Heading::from(CompassDeg(f.lane_heading_compass_deg));
         let (ux, uy) = heading.unit();
         let off = k as f64 * f.block_offset;
@@ -1104,20 +1221,8 @@ impl Scenario {
             Some(m) => (m.origin, Heading::from(CompassDeg(m.lane_heading_compass_deg)), m.spacing(f.lane_spacing)),
             None => ((f.origin.0 + uy * off, f.origin.1 - ux * off), heading, -f.lane_spacing),
         };
-        Lawnmower {
-            origin,
-            lane_heading,
-            lane_length: f.lane_length,
-            spacing,
-            lanes: f.lanes,
-            speed: f.speed,
-            depth: coopnav_core::DepthProfile::Constant {
-                depth: match f.depth {
-                    DepthTarget::Depth { depth } => depth,
-                    DepthTarget::Altitude { altitude } => f.seafloor_depth - altitude,
-                },
-            },
-        }
+        Lawnmower { origin, lane_heading, lane_length: f.lane_length, spacing, lanes: f.lanes, speed: f.speed, depth }
+            .into()
     }
 
     /// The benchmark mission (`coopnav bench closed-loop`): 3 h, 5 survey AUVs on 16-lane blocks (long enough to
@@ -1413,8 +1518,8 @@ mod tests {
 
     #[test]
     fn bad_files_name_the_field() {
-        let e = err(&EXAMPLE.replace("n_auvs = 3", "n_auvs = 9"));
-        assert!(e.contains("fleet.n_auvs") && e.contains("1..=8") && e.contains("s.toml"), "{e}");
+        let e = err(&EXAMPLE.replace("n_auvs = 3", "n_auvs = 32"));
+        assert!(e.contains("fleet.n_auvs") && e.contains("1..=31") && e.contains("s.toml"), "{e}");
         let e = err(&EXAMPLE.replace("tau = 30.0", "tau = 1.0"));
         assert!(e.contains("comms.tau"), "{e}");
         let e = err(&EXAMPLE.replace("penalty_case = \"1\"", "penalty_case = \"zz\""));
