@@ -163,6 +163,16 @@ pub struct AuvParams {
     /// ([`RangeHealth`]); absent (the default): no check, as in the thesis.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub range_health: Option<RangeHealth>,
+    /// The water current (east, north, m/s) the team states before the dive (an ADCP, the
+    /// site's tide tables), in which the thesis's 5-state filter dead-reckons as a known drift
+    /// without estimating it: each step moves the position by the current times the step, the
+    /// Jacobian unchanged. Default [0, 0], still water (the thesis's filter, Gill 2013, §2.2.1).
+    /// The 7-state filter states its current as `model.mean` and ignores this field.
+    /// Why: a filter dead-reckoning in a current it neither models nor is told of drifts by the
+    /// current times the time since its last fix, which no random-walk process noise can match
+    /// both in a still sea and in a current (docs/models.md#stated-current). Written only when set.
+    #[serde(skip_serializing_if = "is_still")]
+    pub stated_current: [f64; 2],
 }
 
 /// Long ranges the filter expects besides its Gaussian noise, an extension of Gill 2013, §2.2.1
@@ -361,6 +371,7 @@ impl Default for AuvParams {
             range_gate_recovery: None,
             range_outliers: None,
             range_health: None,
+            stated_current: [0.0, 0.0],
         }
     }
 }
@@ -392,6 +403,8 @@ impl CheckFields for AuvParams {
         if let Some(h) = &self.range_health {
             h.check_fields(&format!("{prefix}range_health."), p);
         }
+        p.finite(&format!("{prefix}stated_current[0]"), self.stated_current[0]);
+        p.finite(&format!("{prefix}stated_current[1]"), self.stated_current[1]);
     }
 }
 
@@ -635,7 +648,20 @@ impl<const M: usize> AuvEkf<M> {
     fn step_model(&self, h: f64, yaw_rate: f64) -> (SVector<f64, M>, SparseRows<2, 3>, SVector<f64, M>) {
         let x = *self.ekf.x();
         let sin_cos = x[PSI].sin_cos();
-        (transition_at(&x, h, h * yaw_rate, sin_cos), transition_jacobian_entries(&x, h, sin_cos), self.step_q(h))
+        let x_new = self.drifted(transition_at(&x, h, h * yaw_rate, sin_cos), h);
+        (x_new, transition_jacobian_entries(&x, h, sin_cos), self.step_q(h))
+    }
+
+    /// `x_new` moved by the stated current over `h` seconds ([`AuvParams::stated_current`]): the
+    /// thesis's states only, and only when a current is stated (else `x_new` unchanged, bit for bit).
+    #[inline(always)]
+    fn drifted(&self, mut x_new: SVector<f64, M>, h: f64) -> SVector<f64, M> {
+        let [ce, cn] = self.params.stated_current;
+        if M <= CURRENT_N && (ce != 0.0 || cn != 0.0) {
+            x_new[E] += h * ce;
+            x_new[N] += h * cn;
+        }
+        x_new
     }
 
     /// The Gauss–Markov current's decay over `h` seconds ([`CurrentParams::decay`]); None for
@@ -654,7 +680,7 @@ impl<const M: usize> AuvEkf<M> {
     /// The mean map of a step from `x` over `h` seconds at heading rate `yaw_rate`: [`transition`]
     /// with the Gauss–Markov current's decay (the unscented smoother pushes sigma points through it).
     pub fn mean_step(&self, x: &SVector<f64, M>, h: f64, yaw_rate: f64) -> SVector<f64, M> {
-        let x_new = transition(x, h, h * yaw_rate);
+        let x_new = self.drifted(transition(x, h, h * yaw_rate), h);
         self.current_decay(h).map_or(x_new, |phi| decayed_mean(x_new, phi, self.stated_current()))
     }
 

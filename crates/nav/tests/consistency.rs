@@ -109,3 +109,24 @@ fn after_a_long_silence_the_health_check_recovers_a_filter_its_gate_had_locked_o
     assert!(count >= 1, "recovered");
     assert!(recovered < NEES_999, "back within its bounds: worst NEES {recovered} after {count} recoveries");
 }
+
+/// The thesis's filter holding station for two hours in a 0.1 m/s current east, as
+/// [`after_a_long_silence`] dead-reckons it, with the current the team states (`stated_current`,
+/// m/s). Returns its NEES at the end and its position covariance.
+fn dead_reckoned_in_a_stated_current(stated_current: [f64; 2]) -> (f64, [f64; 3]) {
+    let params = AuvParams { stated_current, ..AuvParams::default() };
+    let mut f = AuvEkf::new(0.0, 0.0, 0.0, 0.0, 0.0, params);
+    hold_station(&mut f, 0.0, 7200.0);
+    let p = f.ekf().p();
+    (nees(&f, (720.0, 0.0)), [p[(0, 0)], p[(0, 1)], p[(1, 1)]])
+}
+
+#[test]
+fn a_stated_current_carries_the_thesis_filter_with_the_water_and_leaves_its_covariance_alone() {
+    let (unstated, p_unstated) = dead_reckoned_in_a_stated_current([0.0, 0.0]);
+    assert!(unstated > NEES_999, "720 m off in a current it is not told of: NEES {unstated}");
+    // Stated 0.005 m/s off (an ADCP's error), it ends 36 m off: well within its σ of 135 m.
+    let (stated, p_stated) = dead_reckoned_in_a_stated_current([0.105, 0.0]);
+    assert!(stated < 1.0, "NEES {stated}");
+    assert_eq!(p_stated, p_unstated, "the drift is a known input: the covariance is the same");
+}

@@ -5,6 +5,7 @@
 
 use crate::models::buoy::BuoySpec;
 use crate::models::channel::Clock;
+use crate::models::filter::Adcp;
 use crate::models::finish::Action;
 use crate::models::minipacket;
 use crate::models::noise::{normal, BuoyMotion, CompassBias};
@@ -15,7 +16,7 @@ use coopnav_acomms::node_report::{NodeReport, VehicleType};
 use coopnav_acomms::selector::{RatePolicy, RatePolicySpec};
 use coopnav_acomms::Rate;
 use coopnav_core::{hypot_within, wrap_pi, Bathymetry, Heading, Iver2, Iver2State, SeedStream, Vec3, Waypoint};
-use coopnav_nav::{AuvFilter, Side, StateKind};
+use coopnav_nav::{AuvFilter, AuvModel, AuvParams, Side, StateKind};
 use rand_chacha::ChaCha8Rng;
 
 /// Stream ids of one run: the CNA's, a block of ten per survey AUV and one per buoy.
@@ -89,6 +90,22 @@ pub struct SurveyAuv {
     pub station: (f64, f64),
 }
 
+/// The filter's model and coefficients with the current the team states ([`Adcp`]): the true
+/// current plus the ADCP's error, drawn from `r_init` after the start position (so a scenario
+/// without an ADCP draws as before); the file's own without one.
+fn stated_current(sc: &Scenario, r_init: &mut ChaCha8Rng) -> (AuvModel, AuvParams) {
+    let (mut model, mut params) = (sc.filter.model, sc.filter.params.clone());
+    if let Some(Adcp { sd_m_s }) = sc.filter.adcp {
+        let (e, n) = sc.fleet.current;
+        let stated = [e + sd_m_s * normal(r_init), n + sd_m_s * normal(r_init)];
+        match &mut model {
+            AuvModel::Current(c) => c.mean = stated,
+            AuvModel::Thesis => params.stated_current = stated,
+        }
+    }
+    (model, params)
+}
+
 impl SurveyAuv {
     pub fn new(sc: &Scenario, k: usize, streams: &SeedStream, bathy: &Bathymetry) -> Self {
         let rng = |id: u64| streams.rng(stream::AUV_BASE + 10 * k as u64 + id);
@@ -99,6 +116,7 @@ impl SurveyAuv {
         let mut r_init = rng(stream::INIT);
         let sd = sc.fleet.init_position_sd;
         let (ex, ey) = (start.0 + sd * normal(&mut r_init), start.1 + sd * normal(&mut r_init));
+        let (model, params) = stated_current(sc, &mut r_init);
         let mut state = Iver2State::at_rest(Vec3::new(ex, ey, z0), Heading::from_radians(heading));
         state.altitude = bottom - z0;
         let s = &sc.sensors;
@@ -106,7 +124,7 @@ impl SurveyAuv {
             ctrl: Iver2::new(sc.survey_dynamics(), state, waypoints),
             truth,
             prev: truth,
-            ekf: AuvFilter::new(&sc.filter.model, 0.0, ex, ey, 0.0, heading, sc.filter.params.clone()),
+            ekf: AuvFilter::new(&model, 0.0, ex, ey, 0.0, heading, params),
             clock: sc.channel.clocks.draw(&mut rng(stream::CLOCK)),
             yaw_measured: 0.0,
             yaw_sum: 0.0,

@@ -17,12 +17,38 @@ pub struct FilterSpec {
     pub params: AuvParams,
     pub rate: FilterRate,
     pub sound_speed: FilterSoundSpeed,
+    /// Where the filters' stated current comes from ([`Adcp`]); absent (the default): the file's
+    /// own `stated_current` or `model.mean`.
+    pub adcp: Option<Adcp>,
+}
+
+/// The team states the water current to the survey AUVs' filters from an ADCP: the scenario's
+/// true current (`fleet.current`) plus an error drawn N(0, `sd_m_s`²) on each axis, per run and
+/// AUV. It becomes the 5-state filter's `stated_current` and the 7-state filter's `model.mean`
+/// (whose `p0` should then be `sd_m_s`², the statement's variance). Invented
+/// (docs/models.md#stated-current): the simulator stands for the ADCP, so that a filter's prior is
+/// as wrong as it says, run by run.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Adcp {
+    /// SD of the statement's error on each axis (m/s, ≥ 0).
+    pub sd_m_s: f64,
 }
 
 impl CheckFields for FilterSpec {
     fn check_fields(&self, prefix: &str, p: &mut Problems) {
         self.model.check_fields(&format!("{prefix}model."), p);
         self.params.check_fields(prefix, p);
+        if let Some(a) = &self.adcp {
+            p.non_negative(&format!("{prefix}{ADCP_KEY}.sd_m_s"), a.sd_m_s);
+        }
+        if matches!(self.model, AuvModel::Current(_)) && self.params.stated_current != [0.0, 0.0] {
+            p.push(
+                format!("{prefix}stated_current"),
+                format!("{:?}", self.params.stated_current),
+                "[0, 0] with model = { kind = \"current\" } (state its current as model.mean)",
+            );
+        }
         if let FilterSoundSpeed::Cast { points: Some(points) } = &self.sound_speed {
             p.extend(SoundSpeed::Profile { points: points.clone() }.problems(&format!("{prefix}{SOUND_SPEED_KEY}.")));
         }
@@ -137,6 +163,7 @@ fn whole_steps(period_s: f64, dt: f64) -> Option<u64> {
 const MODEL_KEY: &str = "model";
 const RATE_KEY: &str = "rate";
 const SOUND_SPEED_KEY: &str = "sound_speed";
+const ADCP_KEY: &str = "adcp";
 
 impl Serialize for FilterSpec {
     fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
@@ -152,6 +179,9 @@ impl Serialize for FilterSpec {
             if self.sound_speed != (FilterSoundSpeed::Constant {}) {
                 let speed = toml::Value::try_from(&self.sound_speed).map_err(S::Error::custom)?;
                 t.insert(SOUND_SPEED_KEY.into(), speed);
+            }
+            if let Some(adcp) = &self.adcp {
+                t.insert(ADCP_KEY.into(), toml::Value::try_from(adcp).map_err(S::Error::custom)?);
             }
         }
         table.serialize(s)
@@ -177,7 +207,11 @@ impl<'de> Deserialize<'de> for FilterSpec {
             Some(s) => s.try_into().map_err(|e| D::Error::custom(format!("{SOUND_SPEED_KEY}: {e}")))?,
             None => FilterSoundSpeed::default(),
         };
-        Ok(FilterSpec { model, params: value.try_into().map_err(D::Error::custom)?, rate, sound_speed })
+        let adcp = match take(ADCP_KEY) {
+            Some(a) => Some(a.try_into().map_err(|e| D::Error::custom(format!("{ADCP_KEY}: {e}")))?),
+            None => None,
+        };
+        Ok(FilterSpec { model, params: value.try_into().map_err(D::Error::custom)?, rate, sound_speed, adcp })
     }
 }
 
@@ -264,5 +298,24 @@ mod tests {
             let (field, ..) = FilterRate::Decimated { period_s: bad }.problem("filter.", 0.1).expect("refused");
             assert_eq!(field, "filter.rate.period_s", "{bad}");
         }
+    }
+
+    #[test]
+    fn the_adcp_key_reads_back_and_a_stated_current_beside_the_current_states_is_refused() {
+        let plain: FilterSpec = toml::from_str("sigma_speed = 0.2\n").unwrap();
+        assert!(plain.adcp.is_none() && !toml::to_string(&plain).unwrap().contains("adcp"));
+        let spec: FilterSpec = toml::from_str("adcp = { sd_m_s = 0.005 }\n").unwrap();
+        assert_eq!(spec.adcp, Some(Adcp { sd_m_s: 0.005 }));
+        let back: FilterSpec = toml::from_str(&toml::to_string(&spec).unwrap()).unwrap();
+        assert_eq!(back, spec, "round trip");
+        let typo = toml::from_str::<FilterSpec>("adcp = { sd = 0.005 }\n").unwrap_err().to_string();
+        assert!(typo.contains("adcp") && typo.contains("sd"), "{typo}");
+        let both: FilterSpec =
+            toml::from_str("model = { kind = \"current\" }\nstated_current = [0.1, 0.0]\nadcp = { sd_m_s = -1.0 }\n")
+                .unwrap();
+        let e = both.validate("filter.").unwrap_err().to_string();
+        assert!(e.contains("filter.stated_current") && e.contains("filter.adcp.sd_m_s"), "{e}");
+        let thesis: FilterSpec = toml::from_str("stated_current = [0.1, 0.0]\n").unwrap();
+        assert!(thesis.validate("filter.").is_ok());
     }
 }

@@ -119,6 +119,7 @@ fn default_filter() -> FilterSpec {
         params,
         rate: FilterRate::EveryStep,
         sound_speed: FilterSoundSpeed::Constant {},
+        adcp: None,
     }
 }
 
