@@ -385,3 +385,98 @@ mod tests {
         assert!(e.contains("planner.penalty.primary.too_close.cost_scale = 0.5"), "{e}");
     }
 }
+
+/// Each penalty's value at hand-computed points, so that a changed operator or comparison in a
+/// formula changes a checked number.
+#[cfg(test)]
+mod value_tests {
+    use super::*;
+
+    fn v(too_close: f64, too_far: f64) -> Violation {
+        Violation { too_close, too_far }
+    }
+
+    #[test]
+    fn a_violation_on_either_side_counts() {
+        assert!(!v(0.0, 0.0).any());
+        assert!(v(0.5, 0.0).any());
+        assert!(v(0.0, 0.5).any());
+        assert!(v(2.0, 3.0).any());
+    }
+
+    #[test]
+    fn no_penalty_and_doubling_values() {
+        assert_eq!(NoPenalty {}.apply(3.0, &v(1.0, 0.0)), 3.0);
+        assert_eq!(PenaltyFn::None {}.apply(3.0, &v(0.0, 4.0)), 3.0);
+        let d = Doubling {};
+        assert_eq!(d.apply(3.0, &v(0.0, 0.0)), 3.0);
+        assert_eq!(d.apply(3.0, &v(0.2, 0.0)), 6.0);
+        assert_eq!(d.apply(3.0, &v(0.0, 0.2)), 6.0);
+        assert_eq!(PenaltyFn::Doubling {}.apply(3.0, &v(0.0, 0.2)), 6.0);
+    }
+
+    #[test]
+    fn side_term_is_a_c_plus_m_c_vp_plus_b_vp() {
+        // a = 2, m = 3, b = 5, C = 4, v = 1.5: 2·4 + (3·4 + 5)·v^p.
+        let linear = SideTerm { cost_scale: 2.0, cost_violation: 3.0, violation: 5.0, power: 1.0 };
+        assert_eq!(linear.apply(4.0, 1.5), 8.0 + 17.0 * 1.5);
+        let square = SideTerm { power: 2.0, ..linear };
+        assert_eq!(square.apply(4.0, 1.5), 8.0 + 17.0 * 2.25);
+        let cube = SideTerm { power: 3.0, ..linear };
+        assert!((cube.apply(4.0, 1.5) - (8.0 + 17.0 * 3.375)).abs() < 1e-12);
+    }
+
+    #[test]
+    fn the_violated_side_picks_the_term() {
+        // Distinct terms per side, so the branch taken shows in the value.
+        let close = SideTerm { cost_scale: 3.0, cost_violation: 0.0, violation: 1.0, power: 1.0 };
+        let far = SideTerm { cost_scale: 5.0, cost_violation: 0.0, violation: 7.0, power: 1.0 };
+        let p = ScaledViolation { too_close: close, too_far: far };
+        assert_eq!(p.apply(2.0, &v(0.0, 0.0)), 2.0);
+        assert_eq!(p.apply(2.0, &v(0.5, 0.0)), 6.0 + 0.5);
+        assert_eq!(p.apply(2.0, &v(0.0, 0.5)), 10.0 + 3.5);
+        assert_eq!(p.apply(2.0, &v(0.5, 9.0)), 6.0 + 0.5);
+        let f = PenaltyFn::Scaled { too_close: close, too_far: far };
+        assert_eq!(f.apply(2.0, &v(0.0, 0.5)), 10.0 + 3.5);
+    }
+
+    #[test]
+    fn the_lower_limits_are_inclusive_and_named() {
+        let ok = SideTerm { cost_scale: 1.0, cost_violation: 0.0, violation: 0.0, power: 1.0 };
+        let fine = PenaltyFn::Scaled { too_close: ok, too_far: ok };
+        fine.validate("p.").unwrap();
+        let low_power = PenaltyFn::Scaled { too_close: ok, too_far: SideTerm { power: 0.5, ..ok } };
+        let e = low_power.validate("p.").unwrap_err().to_string();
+        assert!(e.contains("p.too_far.power = 0.5"), "{e}");
+        let pair = PenaltyPair { primary: fine, look_ahead: low_power };
+        let e = pair.validate("planner.penalty.").unwrap_err().to_string();
+        assert!(e.contains("planner.penalty.look_ahead.too_far.power = 0.5"), "{e}");
+        let pair = PenaltyPair { primary: low_power, look_ahead: fine };
+        let e = pair.validate("planner.penalty.").unwrap_err().to_string();
+        assert!(e.contains("planner.penalty.primary.too_far.power = 0.5"), "{e}");
+    }
+
+    #[test]
+    fn presets_are_the_documented_shapes() {
+        // docs/models.md#hudson-penalties: Orig.^p is C·(1 + 2v^p) / C·(1 + v^p), 5×Cost^p is
+        // 5C + 25v^p / C + 2v^p, "New" is 2C + v_TC³ / 2C + v_TF².
+        let s = |a, m, b, p| SideTerm { cost_scale: a, cost_violation: m, violation: b, power: p };
+        let c4 = PenaltyCase::C4.penalties();
+        assert_eq!(c4.primary, PenaltyFn::Scaled { too_close: s(1.0, 2.0, 0.0, 2.0), too_far: s(1.0, 1.0, 0.0, 2.0) });
+        assert_eq!(c4.look_ahead, PenaltyFn::Doubling {});
+        let c10a = PenaltyCase::C10a.penalties();
+        assert_eq!(
+            c10a.primary,
+            PenaltyFn::Scaled { too_close: s(5.0, 0.0, 25.0, 2.0), too_far: s(1.0, 0.0, 2.0, 2.0) }
+        );
+        assert_eq!(
+            c10a.look_ahead,
+            PenaltyFn::Scaled { too_close: s(2.0, 0.0, 1.0, 3.0), too_far: s(2.0, 0.0, 1.0, 2.0) }
+        );
+        let c2 = PenaltyCase::C2.penalties();
+        assert_eq!((c2.primary, c2.look_ahead), (PenaltyFn::None {}, PenaltyFn::None {}));
+        assert_eq!(PenaltyCase::C12a.id(), "12a");
+        assert_eq!(PenaltyCase::from_id("12a"), Some(PenaltyCase::C12a));
+        assert_eq!(PenaltyCase::from_id("14"), None);
+    }
+}

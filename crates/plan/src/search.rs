@@ -586,3 +586,39 @@ mod tests {
         }
     }
 }
+
+/// The state the workers share: the best path is the least value offered, and the clock check
+/// raises the abort flag exactly once the deadline has passed.
+#[cfg(test)]
+mod shared_tests {
+    use super::Shared;
+    use std::sync::atomic::Ordering;
+    use std::time::{Duration, Instant};
+
+    #[test]
+    fn the_shared_best_is_the_least_value_offered() {
+        let s = Shared::new(None);
+        assert_eq!(s.bound(), f64::INFINITY);
+        s.offer(5.0);
+        assert_eq!(s.bound(), 5.0);
+        s.offer(7.5);
+        assert_eq!(s.bound(), 5.0);
+        s.offer(0.25);
+        assert_eq!(s.bound(), 0.25);
+    }
+
+    #[test]
+    fn the_clock_aborts_only_after_the_deadline() {
+        let none = Shared::new(None);
+        assert!(!none.check_clock());
+        let later = Shared::new(Some(Instant::now() + Duration::from_secs(3600)));
+        assert!(!later.check_clock());
+        assert!(!later.abort.load(Ordering::Relaxed));
+        let passed = Shared::new(Some(Instant::now()));
+        assert!(passed.check_clock());
+        assert!(passed.abort.load(Ordering::Relaxed));
+        // An abort raised elsewhere is reported without a deadline.
+        none.abort.store(true, Ordering::Relaxed);
+        assert!(none.check_clock());
+    }
+}
