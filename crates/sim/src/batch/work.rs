@@ -379,7 +379,11 @@ mod tests {
         let e = leaves(&sc);
         assert_eq!(e.value, 27.0 * 9f64.powi(5), "{}", e.fields);
         assert!(e.fields.contains("planner.estimator_pitch_levels"), "{}", e.fields);
+        // Left out: the rule's, level 0 only with an AUV CNA.
         sc.planner.estimator_pitch_levels = None;
+        assert_eq!(leaves(&sc).value, 27.0 * 9f64.powi(5));
+        // Every level of L = 6.
+        sc.planner.estimator_pitch_levels = Some(6);
         assert_eq!(leaves(&sc).value, 27f64.powi(6));
         sc.planner.estimator_heading_options = Some(3);
         assert_eq!((leaves(&sc).value, leaves(&sc).fields.starts_with("planner.heading")), (15f64.powi(5), true));
