@@ -9,7 +9,7 @@
 //! | `VIEW_COMMS_PULSE` | each data packet | beam from sender (`sx`,`sy`) to receiver (`tx`,`ty`) |
 //! | `VIEW_SEGLIST` | each leg the planner chose | `pts={x,y,depth:…}`, label `cna_leg` |
 //!
-//! Truth and estimate are separate vehicles (`auv1` and `auv1_est`), `GROUP` says which
+//! Truth and estimate are separate vehicles (`auv0` and `auv0_est`), `GROUP` says which
 //! (`truth`, `estimate`, `cna`, `beacon`). Positions between a track's samples are interpolated
 //! linearly; `SPD` and `HDG` (compass degrees, 0 = north, clockwise) are the speed and course over
 //! ground from the previous second (from the next one at the first second). `TIME` is the Unix

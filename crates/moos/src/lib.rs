@@ -3,12 +3,13 @@
 //!
 //! It owns the `.alog` text format (reading and writing, [`alog`]), a run as those tools see it
 //! ([`run`]: vehicle tracks, acoustic pulses, planned legs) and its export as an alog
-//! ([`export`]), MOOS mission files for a planned CNA path ([`mission`]), and the interactive replay page built from an alog ([`replay`]). It knows nothing about simulators or filters: callers fill in a [`RunLog`] from
+//! ([`export`]), MOOS mission files for a planned CNA path ([`mission`]), the interactive replay page built from an alog ([`replay`]), and the one colour of each vehicle in every drawn output ([`palette`]). It knows nothing about simulators or filters: callers fill in a [`RunLog`] from
 //! their own records.
 
 pub mod alog;
 pub mod export;
 pub mod mission;
+pub mod palette;
 pub mod replay;
 pub mod run;
 

@@ -11,6 +11,7 @@
 //! Size: tracks are decimated to at most [`MAX_SAMPLES`] points in all and quantised to
 //! [`QUANTUM_M`], so a 3-hour, 5-AUV run stays near 1 MB.
 
+use crate::palette;
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
 
@@ -97,7 +98,12 @@ pub fn from_alog(log: &Alog) -> Result<String, ReplayError> {
     data.push_str(",\"legs\":");
     write_legs(&mut data, log);
     data.push('}');
-    Ok(PAGE.replace("__TITLE__", &html_escape(meta("COOPNAV_SCENARIO"))).replace("__DATA__", &data))
+    let colours: Vec<String> = palette::VEHICLES.iter().map(|c| format!("\"{}\"", palette::hex(*c))).collect();
+    Ok(PAGE
+        .replace("__TITLE__", &html_escape(meta("COOPNAV_SCENARIO")))
+        .replace("__PALETTE__", &format!("[{}]", colours.join(", ")))
+        .replace("__CNA_COLOUR__", &palette::hex(palette::CNA))
+        .replace("__DATA__", &data))
 }
 
 /// Every NODE_REPORT, grouped by NAME, in time order.

@@ -54,7 +54,7 @@ pub struct Sample {
 /// One vehicle's track, samples in time order.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Vehicle {
-    /// The NODE_REPORT `NAME`: `auv1`, `auv1_est`, `cna`.
+    /// The NODE_REPORT `NAME`: `auv0`, `auv0_est`, `cna`.
     pub name: String,
     pub role: Role,
     /// The NODE_REPORT `TYPE` (MOOS vehicle types: `auv`, `ship`, `buoy`).

@@ -44,9 +44,10 @@ fn vehicle(name: String, role: Role, kind: &'static str, samples: Vec<Sample>) -
     Vehicle { name, role, kind, samples }
 }
 
-/// Survey AUV `k` of a closed-loop or plan run, numbered from 1 as MOOS fleets are.
-fn auv_name(k: usize) -> String {
-    format!("auv{}", k + 1)
+/// Survey AUV `k` of a closed-loop or plan run, numbered from 0 as in the terminal, the report
+/// and the CSVs.
+pub fn auv_name(k: usize) -> String {
+    format!("auv{k}")
 }
 
 /// A closed-loop mission (`simulate`): every AUV's truth and estimate (with the filter's 1σ)
@@ -152,8 +153,8 @@ pub fn hbl_run(rows: &[PassRow], origin: Option<LocalFrame>) -> RunLog {
         .map(|r| Sample { sd: Some(r.auv_sd[0].hypot(r.auv_sd[1])), ..sample(r.t, r.auv_est[0], r.auv_est[1], 0.0) })
         .collect();
     let mut vehicles = vec![
-        vehicle("auv1".into(), Role::Truth, "auv", track(&|r| Some(r.auv_true))),
-        vehicle("auv1_est".into(), Role::Estimate, "auv", estimate),
+        vehicle(auv_name(0), Role::Truth, "auv", track(&|r| Some(r.auv_true))),
+        vehicle(format!("{}_est", auv_name(0)), Role::Estimate, "auv", estimate),
         vehicle("cna".into(), Role::Cna, "ship", track(&|r| Some(r.ship_true))),
         vehicle("cna_est".into(), Role::Estimate, "ship", track(&|r| Some(r.ship_est))),
     ];

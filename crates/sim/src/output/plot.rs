@@ -2,6 +2,7 @@
 //! track plots (x east, y north, equal scales). Each returns the SVG as a string, so it can be
 //! written as a file or inlined into an HTML report.
 
+use coopnav_moos::palette;
 use plotters::prelude::*;
 use thiserror::Error;
 
@@ -35,7 +36,8 @@ impl Series {
         Series { name: name.into(), points, colour: None, dashed: false }
     }
 
-    /// Draws in palette colour `k`, so related series (one vehicle's truth and estimate) match.
+    /// Draws in survey AUV `k`'s colour (`coopnav_moos::palette`), so one vehicle's series match
+    /// each other and the replay page.
     pub fn colour(mut self, k: usize) -> Self {
         self.colour = Some(k);
         self
@@ -132,7 +134,14 @@ fn draw(labels: Labels, series: &[Series], x: (f64, f64), y: (f64, f64)) -> Resu
             .map_err(|e| fail(&e))?;
         chart.configure_mesh().x_desc(labels.x).y_desc(labels.y).draw().map_err(|e| fail(&e))?;
         for (i, s) in series.iter().enumerate() {
-            let style = Palette99::pick(s.colour.unwrap_or(i)).to_rgba().stroke_width(2);
+            let colour = match s.colour {
+                Some(k) => {
+                    let (r, g, b) = palette::vehicle(k);
+                    RGBColor(r, g, b).to_rgba()
+                }
+                None => Palette99::pick(i).to_rgba(),
+            };
+            let style = colour.stroke_width(2);
             let points = s.points.iter().copied();
             let drawn = if s.dashed {
                 chart.draw_series(DashedLineSeries::new(points, 6, 4, style))
@@ -266,8 +275,8 @@ mod tests {
             Series::new("auv0 estimated", vec![(0.0, 0.1), (1.0, 1.1)]).colour(3).dashed(),
         ];
         let svg = line_svg(Labels { title: "t", x: "x", y: "y" }, &s).unwrap();
-        let colour = Palette99::pick(3).to_rgba();
-        let hex = format!("#{:02X}{:02X}{:02X}", colour.0, colour.1, colour.2);
+        let (r, g, b) = palette::vehicle(3);
+        let hex = format!("#{r:02X}{g:02X}{b:02X}");
         assert!(svg.matches(&hex).count() >= 4, "both series and both legend samples in {hex}");
         assert!(svg.matches("<polyline").count() > 2, "the dashed series is drawn as several segments");
     }
