@@ -4,6 +4,7 @@ use anyhow::Result;
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
 
+mod advise;
 mod alog_import;
 mod bench;
 mod channel;
@@ -52,6 +53,9 @@ enum Command {
     /// Closed-loop mission: CNA policy, survey-AUV OWTT filters and the acoustic link together
     /// (no scenario: the embedded default mission; --runs: Monte Carlo comparison of policies).
     Simulate(simulate::Args),
+    /// Before going to sea: the Monte Carlo over candidate CNA policies, cycles and status rates,
+    /// written as one page with the recommendation, an error map and the MOOS files to fly.
+    Advise(advise::Args),
     /// Software in the loop: the closed-loop mission with the CNA's planner as a `live cna` child
     /// process on LCM (--lockstep: the same results as `simulate` with the same seed).
     Sitl(sitl::Args),
@@ -126,6 +130,7 @@ fn run() -> Result<ExitCode> {
         Command::Nams(args) => nams::run(args),
         Command::Generate(args) => generate::run(args),
         Command::Simulate(args) => simulate::run(args),
+        Command::Advise(args) => advise::run(args),
         Command::Sitl(args) => sitl::run(args),
         Command::Sweep(args) => sweep::run(args),
         Command::View(args) => view::run(args),

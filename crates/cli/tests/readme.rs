@@ -35,6 +35,12 @@ struct Reduced {
 
 const REDUCED: &[Reduced] = &[
     Reduced {
+        readme: "advise scenarios/geographic-survey.toml -o advice",
+        run:
+            "advise scenarios/geographic-survey.toml -o advice --runs 2 --duration 300 --policy planner-estimator,none",
+        input: None,
+    },
+    Reduced {
         readme: "simulate s.toml --runs 100 --policy planner-estimator,planner,centroid,zigzag",
         run: "simulate s.toml --runs 2 --policy planner-estimator,planner,centroid,zigzag",
         input: None,

@@ -3,6 +3,7 @@
 //! behaviours × repetitions ([`nams`], each cell an engine scenario from [`nams_setup`]), and the
 //! work estimates that check a set-up's size before it runs ([`work`]).
 
+pub mod advise;
 pub mod grid;
 pub mod mc;
 pub mod nams;

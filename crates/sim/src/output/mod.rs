@@ -22,6 +22,7 @@
 //! ([`hbl_plot`]), the shared SVG plots ([`plot`]), HTML reports ([`report`]) and the MOOS-IvP
 //! alog export ([`moos_export`]).
 
+pub mod advise;
 pub mod hbl_plot;
 pub mod log_format;
 pub mod moos_export;
