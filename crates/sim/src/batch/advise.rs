@@ -9,7 +9,8 @@
 //! Runs go through rayon and are merged in job order: bit-identical on any thread count.
 
 use crate::batch::mc::Ci;
-use crate::engine::{run, Faults, Observer, TraceRow};
+use crate::engine::{Faults, Observer, TraceRow};
+use crate::observe::metrics::run;
 use crate::policy::registry::{PolicyError, PolicySpec};
 use crate::scenario::world::Scenario;
 use coopnav_acomms::Rate;
