@@ -109,7 +109,7 @@ fn the_simulate_alog_holds_every_vehicle_track_of_the_time_series() {
     let rows = csv_rows(&run.join("timeseries.csv"));
     assert!(rows.len() >= 3 * 299, "{} rows", rows.len());
     for row in &rows {
-        let auv = format!("auv{}", num(row, "auv") as usize + 1);
+        let auv = format!("auv{}", num(row, "auv") as usize);
         let truth = by_key.get(&at_row(&auv, row)).unwrap_or_else(|| panic!("no report of {auv} at {}", row["t"]));
         let estimate = by_key[&at_row(&format!("{auv}_est"), row)];
         let cna = by_key[&at_row("cna", row)];
@@ -311,7 +311,7 @@ fn the_replay_shows_the_run_positions_in_a_real_browser() {
         let at_t: Vec<_> = rows.iter().filter(|r| (num(r, "t") - t).abs() < 1e-6).collect();
         assert_eq!(at_t.len(), auvs, "rows at t = {t}");
         for row in at_t {
-            let auv = format!("auv{}", num(row, "auv") as usize + 1);
+            let auv = format!("auv{}", num(row, "auv") as usize);
             // The page keeps 0.1 m.
             let (x, y) = drawn_position(&dom, &auv);
             close(x, num(row, "true_x"), 0.051, &format!("{auv} x at {t}"));

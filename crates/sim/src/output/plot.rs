@@ -25,8 +25,9 @@ impl PlotError {
 pub struct Series {
     pub name: String,
     pub points: Vec<(f64, f64)>,
-    /// Palette index; by default the series' position, so every line differs.
-    pub colour: Option<usize>,
+    /// A vehicle's colour (`coopnav_moos::palette`); by default a colour by the series'
+    /// position, so every line differs.
+    pub colour: Option<palette::Rgb>,
     /// Dashed rather than solid: how a plot tells an estimate from the truth of the same vehicle.
     pub dashed: bool,
 }
@@ -39,7 +40,13 @@ impl Series {
     /// Draws in survey AUV `k`'s colour (`coopnav_moos::palette`), so one vehicle's series match
     /// each other and the replay page.
     pub fn colour(mut self, k: usize) -> Self {
-        self.colour = Some(k);
+        self.colour = Some(palette::vehicle(k));
+        self
+    }
+
+    /// Draws in the CNA's colour, as the replay page does.
+    pub fn cna(mut self) -> Self {
+        self.colour = Some(palette::CNA);
         self
     }
 
@@ -135,10 +142,7 @@ fn draw(labels: Labels, series: &[Series], x: (f64, f64), y: (f64, f64)) -> Resu
         chart.configure_mesh().x_desc(labels.x).y_desc(labels.y).draw().map_err(|e| fail(&e))?;
         for (i, s) in series.iter().enumerate() {
             let colour = match s.colour {
-                Some(k) => {
-                    let (r, g, b) = palette::vehicle(k);
-                    RGBColor(r, g, b).to_rgba()
-                }
+                Some((r, g, b)) => RGBColor(r, g, b).to_rgba(),
                 None => Palette99::pick(i).to_rgba(),
             };
             let style = colour.stroke_width(2);

@@ -97,7 +97,7 @@ fn plots(n: usize, tr: &Trace) -> Result<Vec<String>, PlotError> {
         tracks.push(Series::new(format!("auv{k} true"), per_auv(&|r| (r.true_x, r.true_y), k)).colour(k));
         tracks.push(Series::new(format!("auv{k} estimated"), per_auv(&|r| (r.est_x, r.est_y), k)).colour(k).dashed());
     }
-    tracks.push(Series::new("CNA", tr.cna.iter().map(|(_, p)| (p.x, p.y)).collect()).colour(n));
+    tracks.push(Series::new("CNA", tr.cna.iter().map(|(_, p)| (p.x, p.y)).collect()).cna());
     let mut errors = Vec::new();
     for k in 0..n {
         errors.push(Series::new(format!("auv{k} true error"), per_auv(&|r| (r.t, r.error), k)).colour(k));
