@@ -161,10 +161,12 @@ impl ErrorMap {
         let lo = pts.iter().fold((f64::INFINITY, f64::INFINITY), |a, p| (a.0.min(p.0), a.1.min(p.1)));
         let hi = pts.iter().fold((f64::NEG_INFINITY, f64::NEG_INFINITY), |a, p| (a.0.max(p.0), a.1.max(p.1)));
         let side = (hi.0 - lo.0).max(hi.1 - lo.1).max(1.0);
+        // Centred on the survey, one cell of margin on its longer side.
         let cell_m = side / (cells - 2) as f64;
+        let half = cells as f64 * cell_m / 2.0;
         ErrorMap {
-            x0: lo.0 - cell_m,
-            y0: lo.1 - cell_m,
+            x0: (lo.0 + hi.0) / 2.0 - half,
+            y0: (lo.1 + hi.1) / 2.0 - half,
             cell_m,
             nx: cells,
             ny: cells,

@@ -102,15 +102,13 @@ pub fn map_svg(sc: &Scenario, map: &ErrorMap, cna_path: &[(f64, f64)]) -> String
         w - 2.0 * pad,
         h - 2.0 * pad
     );
-    for (v, anchor_x, anchor_y, text) in [
-        (map.x0, pad, h - pad + 18.0, format!("{:.0}", map.x0)),
-        (map.x0 + side, w - pad, h - pad + 18.0, format!("{:.0} m east", map.x0 + side)),
-        (map.y0, pad - 6.0, h - pad, format!("{:.0}", map.y0)),
-        (map.y0 + side, pad - 6.0, pad + 4.0, format!("{:.0} m north", map.y0 + side)),
+    for (x, y, anchor, text) in [
+        (pad, h - pad + 18.0, "middle", format!("{:.0}", map.x0)),
+        (w - pad, h - pad + 18.0, "middle", format!("{:.0} m east", map.x0 + side)),
+        (4.0, h - pad - 4.0, "start", format!("{:.0}", map.y0)),
+        (4.0, pad - 8.0, "start", format!("{:.0} m north", map.y0 + side)),
     ] {
-        let _ = v;
-        let anchor = if anchor_y > h - pad { "middle" } else { "end" };
-        let _ = write!(s, r#"<text x="{anchor_x:.1}" y="{anchor_y:.1}" text-anchor="{anchor}">{}</text>"#, esc(&text));
+        let _ = write!(s, r#"<text x="{x:.1}" y="{y:.1}" text-anchor="{anchor}">{}</text>"#, esc(&text));
     }
     // Colour bar.
     let (bx, by, bh) = (w + 10.0, pad, h - 2.0 * pad);
