@@ -5,21 +5,9 @@
 
 mod common;
 
-use common::coopnav;
+use common::{coopnav, copy_dir};
 use std::path::{Path, PathBuf};
 use std::process::Command;
-
-fn copy_dir(from: &Path, to: &Path) {
-    std::fs::create_dir_all(to).unwrap();
-    for e in std::fs::read_dir(from).unwrap() {
-        let e = e.unwrap();
-        if e.file_type().unwrap().is_dir() {
-            copy_dir(&e.path(), &to.join(e.file_name()));
-        } else {
-            std::fs::copy(e.path(), to.join(e.file_name())).unwrap();
-        }
-    }
-}
 
 /// Runs the advice on a 5-minute look at the survey, 2 runs per candidate; its run directory.
 fn advised(tmp: &Path) -> PathBuf {

@@ -6,7 +6,7 @@
 
 mod common;
 
-use common::{coopnav, edited_example};
+use common::{coopnav, copy_dir, edited_example};
 use std::path::Path;
 
 /// The README's test command, the second of its two commands; `.ci/run` must run exactly this.
@@ -162,20 +162,6 @@ fn run(dir: &Path, args: &str, stdout_file: Option<&str>) -> Vec<u8> {
 
 fn make_input(dir: &Path, (command, file, edits): (&str, &str, &[(&str, &str)])) {
     edited_example(dir, &command.split_whitespace().collect::<Vec<_>>(), file, edits);
-}
-
-/// Copies directory `from` into `to`, recursively.
-fn copy_dir(from: &Path, to: &Path) {
-    std::fs::create_dir_all(to).unwrap();
-    for e in std::fs::read_dir(from).unwrap() {
-        let e = e.unwrap();
-        let target = to.join(e.file_name());
-        if e.file_type().unwrap().is_dir() {
-            copy_dir(&e.path(), &target);
-        } else {
-            std::fs::copy(e.path(), &target).unwrap();
-        }
-    }
 }
 
 #[test]

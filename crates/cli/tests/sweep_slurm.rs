@@ -6,6 +6,9 @@
 //! same plan run in one process (`sweep run --all`). Every wait is bounded (the script's own, and
 //! this test's backstop).
 
+mod common;
+
+use common::copy_dir;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
@@ -16,18 +19,6 @@ fn coopnav(args: &[&str]) -> String {
     let out = Command::new(COOPNAV).args(args).output().expect("coopnav runs");
     assert!(out.status.success(), "coopnav {args:?}: {}", String::from_utf8_lossy(&out.stderr));
     String::from_utf8_lossy(&out.stdout).into_owned()
-}
-
-fn copy_dir(from: &Path, to: &Path) {
-    std::fs::create_dir_all(to).unwrap();
-    for e in std::fs::read_dir(from).unwrap() {
-        let e = e.unwrap();
-        if e.file_type().unwrap().is_dir() {
-            copy_dir(&e.path(), &to.join(e.file_name()));
-        } else {
-            std::fs::copy(e.path(), to.join(e.file_name())).unwrap();
-        }
-    }
 }
 
 /// Every file under `dir` but the manifests (they name the command and the directory).

@@ -71,3 +71,18 @@ pub fn measured(dir: &Path, args: &[&str]) -> (Output, Usage) {
     let usage = Usage { cpu_s: seconds(usage.ru_utime) + seconds(usage.ru_stime), peak_kb: usage.ru_maxrss as u64 };
     (output, usage)
 }
+
+/// Copies directory `from` into `to`, recursively (a test's own copy of the library's scenarios).
+#[allow(dead_code)] // not every test binary copies a directory
+pub fn copy_dir(from: &Path, to: &Path) {
+    std::fs::create_dir_all(to).unwrap();
+    for e in std::fs::read_dir(from).unwrap() {
+        let e = e.unwrap();
+        let target = to.join(e.file_name());
+        if e.file_type().unwrap().is_dir() {
+            copy_dir(&e.path(), &target);
+        } else {
+            std::fs::copy(e.path(), &target).unwrap();
+        }
+    }
+}
