@@ -7,6 +7,7 @@ use coopnav_sim::models::schedule::Owner;
 use coopnav_sim::observe::metrics::{run, RunResult};
 use coopnav_sim::observe::zone::{zone_monte_carlo, ZoneSpec};
 use coopnav_sim::policy::PolicySpec;
+use coopnav_sim::scenario::world::{CovarianceWord, TruthChoice};
 use coopnav_sim::scenario::Scenario;
 use std::path::{Path, PathBuf};
 
@@ -103,10 +104,12 @@ fn assert_the_end_auvs_start_out_of_reach(file: &Path, r: &RunResult) {
     assert!(ends.iter().any(|a| a.downlink.received == 0), "{file:?}: {:?}", r.auvs);
 }
 
-/// The spread fleet's whole mission with `planner-estimator`: with the file's settings every AUV's
-/// statuses reach the CNA; with the estimator's defaults (level-0 distance penalty, the assumed
-/// link, pings counted as expected, no reach cost-to-go) an end AUV is never heard, as on the
-/// benchmark without the file's settings.
+/// The spread fleet's whole mission with `planner-estimator`: with the file's settings (and the
+/// mission rule's for the keys it leaves unset) every AUV's statuses reach the CNA; with the
+/// estimator's settings from before the mission rule (Hudson's A = 5, L = 5 and level-0 distance
+/// penalty, the assumed link, pings counted as expected, the filters' covariances, no cost-to-go;
+/// every setting the file leaves unset written out, so that the rule supplies none) an end AUV is
+/// never heard.
 #[test]
 #[cfg_attr(not(bellhop_installed), ignore = "BELLHOP is not installed: run scripts/install-bellhop.sh")]
 fn on_the_spread_fleet_the_tuned_estimator_planner_hears_every_auv_and_its_defaults_do_not() {
@@ -118,6 +121,15 @@ fn on_the_spread_fleet_the_tuned_estimator_planner_hears_every_auv_and_its_defau
     defaults.planner.estimator_tracking = Default::default();
     defaults.planner.estimator_reach_success = Some(0.0);
     defaults.planner.estimator_terminal_levels = Some(0.0);
+    let p = &mut defaults.planner;
+    p.estimator_heading_options = Some(p.heading_options);
+    p.estimator_look_ahead = Some(p.look_ahead);
+    p.estimator_bias_profile = Some(false);
+    p.estimator_level_off = Some(false);
+    p.estimator_slot_reach = Some(false);
+    p.estimator_truth = Some(TruthChoice::Cost(CovarianceWord::Covariance));
+    p.estimator_unmodelled_current = Some([0.0, 0.0]);
+    p.estimator_current = Some([0.0, 0.0]);
     let statuses = |sc: &Scenario| -> Vec<u64> {
         let mut policy = PolicySpec::new("planner-estimator", sc).unwrap().build(sc).unwrap();
         let r = run(sc, &mut policy, sc.seed, &Faults::default(), &mut ());
