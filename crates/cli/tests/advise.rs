@@ -69,7 +69,13 @@ fn a_bhv_survey_in_lat_lon_over_a_grid_gets_a_recommendation_a_map_and_a_plan() 
     for c in cands {
         assert!(page.contains(c["label"].as_str().unwrap()), "every candidate has its row");
     }
-    assert!(page.contains("<th>auv2 p95</th>") && page.contains("<svg"), "per-AUV columns and the inline map");
+    assert!(
+        page.contains("<th>auv0 mean</th>")
+            && page.contains("<th>auv1 p95</th>")
+            && !page.contains("<th>auv2 ")
+            && page.contains("<svg"),
+        "per-AUV columns (auv0 and auv1) and the inline map"
+    );
     let map = std::fs::read_to_string(dir.join("error-map.svg")).unwrap();
     assert!(map.contains("peak ") && map.matches("<polyline").count() >= 3, "paths, CNA path and peak");
     // The plan to fly: MOOS files with a simulator and a viewer, at the site's origin.
@@ -85,14 +91,14 @@ fn a_bhv_survey_in_lat_lon_over_a_grid_gets_a_recommendation_a_map_and_a_plan() 
     }
     let bhv = std::fs::read_to_string(dir.join("plan/cna.bhv")).unwrap();
     assert!(bhv.contains("Behavior = BHV_Waypoint") && bhv.contains("points"), "{bhv}");
-    // Survey AUV 1 flies the .bhv's first lawnmower, now about the site origin: its first point is
+    // Survey AUV 0 (auv0, as everywhere) flies the .bhv's first lawnmower, now about the site origin: its first point is
     // (−706.75, 655.53) m (crates/sim/tests/site.rs computes it by hand).
-    let auv = std::fs::read_to_string(dir.join("plan/auv1.bhv")).unwrap();
+    let auv = std::fs::read_to_string(dir.join("plan/auv0.bhv")).unwrap();
     let pts = auv.lines().find_map(|l| l.trim().strip_prefix("points    = ")).unwrap();
     let first: Vec<f64> = pts.split(':').next().unwrap().split(',').map(|v| v.parse().unwrap()).collect();
     assert!((first[0] + 706.75).abs() < 0.25 && (first[1] - 655.53).abs() < 0.25, "{first:?}");
     let csv = std::fs::read_to_string(dir.join("plan/waypoints.csv")).unwrap();
-    let row = csv.lines().find(|l| l.starts_with("auv1,0,")).unwrap();
+    let row = csv.lines().find(|l| l.starts_with("auv0,0,")).unwrap();
     let f: Vec<&str> = row.split(',').collect();
     // Back on the Earth: MOOS local (100, 100) about (43.655, −70.21).
     let (lat, lon): (f64, f64) = (f[4].parse().unwrap(), f[5].parse().unwrap());

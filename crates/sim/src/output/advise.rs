@@ -203,7 +203,7 @@ pub fn write_advice(dir: RunDir, sc: &Scenario, advice: &Advice, command: &str) 
         row("cna", i, p);
     }
     for k in 0..sc.fleet.n_auvs {
-        let name = format!("auv{}", k + 1);
+        let name = format!("auv{k}");
         let pts = sc.lawnmower(k).waypoints();
         for (i, &p) in pts.iter().enumerate() {
             row(&name, i, p);
@@ -275,7 +275,7 @@ fn page(sc: &Scenario, a: &Advice, svg: &str, origin: LatLon, command: &str) -> 
     );
     h.push_str("<h2>Every candidate</h2>\n<table id=\"candidates\"><tr><th>candidate</th><th>fleet mean [m]</th><th>95 % CI [m]</th>");
     for k in 0..sc.fleet.n_auvs {
-        let _ = write!(h, "<th>auv{} mean</th><th>auv{} p95</th>", k + 1, k + 1);
+        let _ = write!(h, "<th>auv{k} mean</th><th>auv{k} p95</th>");
     }
     h.push_str("</tr>\n");
     let mut order: Vec<usize> = (0..a.candidates.len()).collect();
