@@ -1,12 +1,16 @@
-//! `coopnav sitl [FILE] --lockstep -o DIR`: the closed-loop mission with the CNA's planner
-//! outside the engine, as a `coopnav live cna` child process on LCM (coopnav-live's `sitl`; the
-//! world waits for each decision), written to the same run directory as `coopnav simulate`, plus
-//! the child's LCM log (`cna.lcm`) and the world's account of it (`sitl.json`).
+//! `coopnav sitl [FILE] --lockstep|--warp W [--live-auvs] -o DIR`: the closed-loop mission with
+//! the CNA's planner outside the engine, as a `coopnav live cna` child process on LCM, and with
+//! `--live-auvs` one `coopnav live auv` child per survey AUV (coopnav-live's `sitl`), written to
+//! the same run directory as `coopnav simulate`, plus each child's LCM log (`cna.lcm`,
+//! `auvK.lcm`), the navigators' configs (`auvK.toml`) and the world's account of its children
+//! (`sitl.json`).
 
 use crate::scenario_args::{Loaded, ScenarioArgs, ScenarioCommand};
 use anyhow::{bail, Context, Result};
 use coopnav_core::limits::Estimate;
-use coopnav_live::sitl::{run_lockstep, SitlOptions};
+use coopnav_live::import::field_log;
+use coopnav_live::sitl::{self as world, LiveAuvs, Pace, SitlOptions, SitlRun};
+use coopnav_live::LiveConfig;
 use coopnav_sim::batch::work;
 use coopnav_sim::output::run::write_run;
 use coopnav_sim::scenario::file::Validate;
@@ -23,12 +27,13 @@ pub struct Args {
     seed: Option<u64>,
     /// The world's clock on the bus; the world waits for each decision (results equal
     /// `coopnav simulate`'s with the same seed).
-    #[arg(long)]
+    #[arg(long, conflicts_with = "warp")]
     lockstep: bool,
-    /// Free-running at W × wall-clock time (not implemented yet: use --lockstep).
+    /// Free running at W × wall-clock time: the CNA's commands are applied when they arrive.
     #[arg(long)]
     warp: Option<f64>,
-    /// One `live auv` per survey AUV in place of the engine's filters (not implemented yet).
+    /// One `live auv` per survey AUV on the world's sensor and range messages; the run is scored
+    /// on their estimates.
     #[arg(long)]
     live_auvs: bool,
     /// LCM URL (UDP multicast) of the world and its child.
@@ -63,12 +68,12 @@ pub fn run(args: Args) -> Result<()> {
     if args.scenario.print_example() {
         return Ok(());
     }
-    if args.warp.is_some() || !args.lockstep {
-        bail!("free-running sitl (--warp) is not implemented yet: give --lockstep");
-    }
-    if args.live_auvs {
-        bail!("--live-auvs is not implemented yet: the engine's own filters navigate the survey AUVs");
-    }
+    let pace = match (args.lockstep, args.warp) {
+        (true, None) => Pace::Lockstep,
+        (false, Some(w)) if w.is_finite() && w > 0.0 && w <= 1000.0 => Pace::Warp(w),
+        (false, Some(w)) => bail!("--warp {w}: give a factor in (0, 1000]"),
+        _ => bail!("give --lockstep (the world waits for each decision) or --warp W (free running)"),
+    };
     if !(args.decision_timeout.is_finite() && args.decision_timeout > 0.0 && args.decision_timeout < 1e6) {
         bail!("--decision-timeout {}: give a positive number of seconds", args.decision_timeout);
     }
@@ -77,9 +82,11 @@ pub fn run(args: Args) -> Result<()> {
         scenario.seed = seed;
     }
     let dir = args.scenario.run_dir(&stem, &[&file])?;
-    let log = std::env::temp_dir().join(format!("coopnav-sitl-{}-cna.lcm", std::process::id()));
-    let exe = std::env::current_exe().context("the coopnav binary's path")?;
-    let mut child = vec![exe.display().to_string(), "live".into(), "cna".into()];
+    let work = std::env::temp_dir().join(format!("coopnav-sitl-{}", std::process::id()));
+    std::fs::create_dir_all(&work).with_context(|| format!("creating {}", work.display()))?;
+    let log = work.join("cna.lcm");
+    let exe = std::env::current_exe().context("the coopnav binary's path")?.display().to_string();
+    let mut child = vec![exe.clone(), "live".into(), "cna".into()];
     if file.is_file() {
         child.push(file.display().to_string());
     }
@@ -91,25 +98,92 @@ pub fn run(args: Args) -> Result<()> {
     ] {
         child.extend([flag.to_string(), value.to_string()]);
     }
-    let opts =
-        SitlOptions { url: args.url.clone(), child, decision_timeout: Duration::from_secs_f64(args.decision_timeout) };
-    let run = run_lockstep(&scenario, &args.policy, &opts)?;
-    let bytes = std::fs::read(&log).with_context(|| format!("the child's log {}", log.display()));
-    let _ = std::fs::remove_file(&log);
-    dir.write_bytes("cna.lcm", bytes?)?;
-    let world = serde_json::json!({ "world": run.counts, "live_cna": run.child_summary });
+    let live_auvs = args.live_auvs.then(|| LiveAuvs {
+        program: vec![exe.clone(), "live".into(), "auv".into()],
+        dir: work.clone(),
+        faults: Default::default(),
+        restart: None,
+        estimate_timeout: Duration::from_secs(5),
+    });
+    let opts = SitlOptions {
+        url: args.url.clone(),
+        child,
+        decision_timeout: Duration::from_secs_f64(args.decision_timeout),
+        pace,
+        live_auvs,
+    };
+    let outcome = world::run(&scenario, &args.policy, &opts);
+    let imported = match &outcome {
+        Ok(run) => import_logs(run),
+        Err(_) => Ok(()),
+    };
+    let kept = imported.and_then(|()| keep_logs(&dir, &work));
+    let _ = std::fs::remove_dir_all(&work);
+    let run = outcome?;
+    kept?;
+    let world = serde_json::json!({
+        "pace": match pace { Pace::Lockstep => "lockstep".to_string(), Pace::Warp(w) => format!("warp {w}") },
+        "wall_s": run.wall_s,
+        "world": run.counts,
+        "latencies": run.latencies,
+        "live_auvs": run.auvs,
+        "live_cna": run.child_summary,
+        "live_auv_summaries": run.auv_summaries,
+    });
     dir.write_json("sitl.json", &world)?;
     let out = write_run(dir, &scenario, &run.result, &std::env::args().collect::<Vec<_>>().join(" "))
         .context("writing the run directory")?;
     let c = &run.counts;
+    let mode = match pace {
+        Pace::Lockstep => "lockstep".to_string(),
+        Pace::Warp(w) => format!("warp {w}"),
+    };
+    let live = if run.auvs.is_some() { " · live AUVs" } else { "" };
     println!(
-        "sitl lockstep · policy {} · {} decisions ({} missed, {} on other inputs) · {} statuses to the CNA -> {}",
+        "sitl {mode}{live} · policy {} · {} decisions ({} missed, {} on other inputs) · {} statuses to the CNA · fleet error {:.2} m -> {}",
         run.result.policy,
         c.decisions,
         c.missed_decisions,
         c.input_mismatches,
         c.statuses_published,
+        run.result.fleet.error.mean,
         out.display()
     );
+    Ok(())
+}
+
+/// Each live navigator's LCM log as a post-processing log beside it (`auvK.log`, with the
+/// world's truth of AUV K once a second), and its filter's config as `hbl postprocess --config`
+/// reads it (`auvK.post.toml`): `coopnav hbl postprocess --log auvK.log --config auvK.post.toml`.
+fn import_logs(run: &SitlRun) -> Result<()> {
+    let rows = run.result.trace.as_ref().map(|t| t.rows.as_slice()).unwrap_or_default();
+    for (k, logs) in run.auv_logs.iter().enumerate() {
+        let truth: Vec<(f64, f64, f64)> =
+            rows.iter().filter(|r| r.auv == k).map(|r| (r.t, r.true_x, r.true_y)).collect();
+        for log in logs {
+            let config = log.with_extension("toml");
+            let text = std::fs::read_to_string(&config).with_context(|| format!("{}", config.display()))?;
+            let cfg = LiveConfig::from_toml(&text).with_context(|| format!("{}", config.display()))?;
+            let file = std::fs::File::open(log).with_context(|| format!("{}", log.display()))?;
+            let imported = field_log(std::io::BufReader::new(file), k as i16, cfg.start, &truth)?;
+            std::fs::write(log.with_extension("log"), imported.log)?;
+            std::fs::write(log.with_extension("post.toml"), toml::to_string(&cfg.filter)?)?;
+        }
+    }
+    Ok(())
+}
+
+/// Copies the children's logs and configs from the work directory into the run directory.
+fn keep_logs(dir: &coopnav_sim::output::RunDir, work: &std::path::Path) -> Result<()> {
+    let mut names: Vec<_> = std::fs::read_dir(work)
+        .with_context(|| format!("reading {}", work.display()))?
+        .filter_map(|e| e.ok())
+        .map(|e| e.file_name().to_string_lossy().into_owned())
+        .collect();
+    names.sort();
+    for name in names {
+        let bytes = std::fs::read(work.join(&name)).with_context(|| format!("the child's file {name}"))?;
+        dir.write_bytes(&name, bytes)?;
+    }
     Ok(())
 }

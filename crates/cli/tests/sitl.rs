@@ -3,6 +3,7 @@
 //! multicast give the run directory `coopnav simulate` writes for the same scenario and seed,
 //! byte for byte but for the command line the manifest and report quote; and a child that stops
 //! answering is reported by the world, which holds the CNA's last command and finishes the run.
+//! Free running and live AUVs: `sitl_live.rs`.
 //! Ignored, with the reason, where `unshare` cannot make a namespace.
 
 mod netns;
@@ -112,11 +113,8 @@ fn sitl_reports_a_cna_that_stopped_commanding_and_holds_its_last_command() {
         let bin = env!("CARGO_BIN_EXE_coopnav").to_string();
         let child =
             [&bin, "live", "cna", path.to_str().unwrap(), "--policy", "planner", "--clock", "bus", "--url", URL];
-        let opts = SitlOptions {
-            url: URL.into(),
-            child: child.iter().map(|s| s.to_string()).collect(),
-            decision_timeout: Duration::from_millis(150),
-        };
+        let child = child.iter().map(|s| s.to_string()).collect();
+        let opts = SitlOptions::lockstep(URL, child, Duration::from_millis(150));
         let run = run_lockstep(&sc, "planner", &opts).unwrap();
         assert!(stopper.join().unwrap(), "decision 40 was seen");
         let answered = run.child_summary.as_ref().unwrap()["decisions"].as_u64().unwrap();
@@ -133,12 +131,14 @@ fn sitl_reports_a_cna_that_stopped_commanding_and_holds_its_last_command() {
     });
 }
 
-/// Without --lockstep, and with --live-auvs, sitl says plainly what is not implemented.
+/// Without a pace, with a warp that is no factor, or with both paces, sitl says what it takes.
 #[test]
-fn sitl_refuses_what_it_does_not_implement_yet() {
+fn sitl_refuses_a_missing_or_impossible_pace() {
     for (args, expected) in [
-        (&["sitl", "--warp", "30"][..], "free-running sitl (--warp) is not implemented yet"),
-        (&["sitl", "--lockstep", "--live-auvs"][..], "--live-auvs is not implemented yet"),
+        (&["sitl"][..], "give --lockstep (the world waits for each decision) or --warp W (free running)"),
+        (&["sitl", "--warp", "0"][..], "--warp 0: give a factor in (0, 1000]"),
+        (&["sitl", "--warp", "nan"][..], "--warp NaN: give a factor in (0, 1000]"),
+        (&["sitl", "--lockstep", "--warp", "30"][..], "cannot be used with"),
     ] {
         refused(args, expected);
     }

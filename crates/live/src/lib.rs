@@ -6,8 +6,10 @@
 //! - [`cna`]: the CNA's planner ([`CnaPlanner`]): the policy the scenario names, run by
 //!   coopnav-sim's own code on the CNA's fix and the statuses its modem received, a command and a
 //!   decision record every τ;
-//! - [`sitl`]: software in the loop in lockstep: the engine as the world, the CNA's decisions
-//!   taken by a `coopnav live cna` child on the bus;
+//! - [`sitl`]: software in the loop, in lockstep or free running: the engine as the world, the
+//!   CNA's decisions taken by a `coopnav live cna` child on the bus, and with live AUVs every
+//!   survey AUV navigated by a `coopnav live auv` child;
+//! - [`import`]: a live navigator's LCM log as a post-processing log;
 //! - [`world`]: the LCM messages a CNA receives in a simulated mission, published or recorded;
 //! - [`run`]: the process loop around them on coopnav-lcm's UDP multicast transport ([`run_auv`]),
 //!   with its LCM log, its stop conditions (a stop flag set on SIGINT/SIGTERM, a duration, an idle
@@ -18,6 +20,7 @@
 
 pub mod auv;
 pub mod cna;
+pub mod import;
 pub mod run;
 pub mod sitl;
 pub mod synthetic;

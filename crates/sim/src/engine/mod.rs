@@ -25,10 +25,10 @@ use crate::models::channel::Clock;
 use crate::models::filter::RangeSpeed;
 use crate::models::peer::StatusFormat;
 use crate::models::schedule::Slot;
-use crate::models::surfacing::OwnNav;
+use crate::models::surfacing::{OwnNav, Step};
 use crate::policy::belief;
 use crate::policy::registry::Policy;
-use crate::policy::ReportedCov;
+use crate::policy::{CnaCommand, ReportedCov};
 use crate::scenario::start::cna_start;
 use crate::scenario::world::Scenario;
 use coopnav_acomms::tl::{TlError, TransmissionLoss, TL_CEILING};
@@ -93,6 +93,9 @@ struct Cna {
     reported: Vec<Option<ReportedCov>>,
     /// Its broadcast's rate policy, when its slot names one.
     rate: Option<cna_rate::CnaRate>,
+    /// The last decision's step of its surfacing cycle, its true position and the fix its policy
+    /// saw: a command that arrives later ([`Mission::steer`]) steers relative to that fix.
+    last_decision: Option<(Step, Vec3, Vec3)>,
 }
 
 /// One run's state.
@@ -188,6 +191,19 @@ impl<'a> Mission<'a> {
         self.step += 1;
     }
 
+    /// Steers the CNA by `command` now, as its last decision would have had the policy returned
+    /// it then (relative to the fix the policy saw; a climbing AUV CNA keeps climbing): a
+    /// command that reached the CNA after its decision (a live planner in free-running software
+    /// in the loop). Before the first decision it does nothing. Reports the new leg as a decision
+    /// at the current time.
+    pub fn steer(&mut self, command: CnaCommand, obs: &mut dyn Observer) {
+        let Some((step, here, fix)) = self.engine.cna.last_decision else { return };
+        let t = self.t();
+        let craft = &mut self.engine.cna.craft;
+        craft.target = phases::target(step, command, here, fix, craft.pos, craft.target);
+        obs.on_decision(&Decision { t, from: craft.pos, to: craft.target });
+    }
+
     /// A copy of this run as it stands, driven by `policy` from here on. `redraw`: None keeps this
     /// run's own future random draws (the copy sees the same noise); Some(seed) draws every noise
     /// source afresh from run seed `seed`. The state drawn at the start (clocks, compass-bias maps,
@@ -241,6 +257,7 @@ impl<'a> Engine<'a> {
                 .schedule
                 .cna_policy()
                 .map(|spec| cna_rate::CnaRate::new(spec, n).expect("validated rate policy")),
+            last_decision: None,
         };
         Engine {
             sc,

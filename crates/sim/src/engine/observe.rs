@@ -96,14 +96,16 @@ pub struct DeadReckoning {
     pub truth: Vec3,
 }
 
-/// A usable range a survey AUV decoded: the sender, its transmit time and the travel time the
-/// AUV measured (on its own clock).
+/// A usable range a survey AUV decoded: the sender, its transmit time, the travel time the
+/// AUV measured (on its own clock) and the transmitter's position the packet carried (its fix at
+/// launch; none for a mini-packet, which carries one component).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct RangeHeard {
     pub t_tx: f64,
     pub auv: usize,
     pub from: Owner,
     pub travel_time: f64,
+    pub fix: Option<Vec3>,
 }
 
 /// A ship's truth at the end of a step: its reference point and math heading (rad).

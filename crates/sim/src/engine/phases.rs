@@ -98,15 +98,8 @@ impl Engine<'_> {
         let here = cna.craft.pos;
         // The policy decides even while the CNA surfaces, so its own models keep stepping.
         let command = self.policy.as_policy().decide(&ctx);
-        // The command is relative to the fix the policy saw.
-        let steer = |p: Vec3, z: f64| Some(Vec3::new(here.x + p.x - fix.x, here.y + p.y - fix.y, z));
-        cna.craft.target = match (step, command) {
-            (Step::Climb, _) => Some(Vec3::new(here.x, here.y, 0.0)),
-            (Step::Fix { to }, CnaCommand::GoTo(p)) => steer(p, to),
-            (Step::Fix { to }, CnaCommand::Hold) => Some(Vec3::new(here.x, here.y, to)),
-            (Step::Work | Step::WorkWithFix, CnaCommand::GoTo(p)) => steer(p, p.z),
-            (Step::Work | Step::WorkWithFix, CnaCommand::Hold) => None,
-        };
+        cna.craft.target = target(step, command, here, fix, here, None);
+        cna.last_decision = Some((step, here, fix));
         obs.on_decision(&Decision { t: t_dec, from: here, to: cna.craft.target });
     }
 
@@ -363,7 +356,7 @@ impl Engine<'_> {
                         if self.cna.rate.is_some() {
                             self.auvs[k].heard_broadcasts.push(id);
                         }
-                        heard(obs, &meta, k, travel_time);
+                        heard(obs, &meta, k, travel_time, Some(fix));
                         self.hear_broadcast(k, &meta, fix, travel_time, &acked, obs);
                     }
                 }
@@ -396,7 +389,7 @@ impl Engine<'_> {
                     obs.on_link(&link(&meta, k, rate.index(), (decoded, survived), received));
                     obs.on_packet(&event(&meta, "buoy", k, decoded, survived));
                     if received {
-                        heard(obs, &meta, k, travel_time);
+                        heard(obs, &meta, k, travel_time, Some(fix));
                         self.apply_range(k, &meta, fix, travel_time, obs);
                     }
                 }
@@ -406,7 +399,7 @@ impl Engine<'_> {
                     obs.on_link(&link(&meta, k, SUCCESS_RATE.index(), (decoded, survived), received));
                     obs.on_packet(&event(&meta, direction, k, decoded, survived));
                     if received {
-                        heard(obs, &meta, k, travel_time);
+                        heard(obs, &meta, k, travel_time, None);
                         self.hear_mini(k, &meta, kind, value, travel_time, obs);
                     }
                 }
@@ -617,6 +610,28 @@ pub(super) fn measured_travel(
     (tt, error.map(|e| tt + e + clocks))
 }
 
+/// The CNA's target for `command` at a decision of surfacing step `step` taken at true position
+/// `here` on fix `fix` (the command is relative to the fix the policy saw), the CNA now at `now`
+/// with target `current` (at the decision itself, `now` is `here`; a climb keeps climbing).
+pub(super) fn target(
+    step: Step,
+    command: CnaCommand,
+    here: Vec3,
+    fix: Vec3,
+    now: Vec3,
+    current: Option<Vec3>,
+) -> Option<Vec3> {
+    let steer = |p: Vec3, z: f64| Some(Vec3::new(here.x + p.x - fix.x, here.y + p.y - fix.y, z));
+    match (step, command) {
+        (Step::Climb, _) if now == here => Some(Vec3::new(here.x, here.y, 0.0)),
+        (Step::Climb, _) => current,
+        (Step::Fix { to }, CnaCommand::GoTo(p)) => steer(p, to),
+        (Step::Fix { to }, CnaCommand::Hold) => Some(Vec3::new(now.x, now.y, to)),
+        (Step::Work | Step::WorkWithFix, CnaCommand::GoTo(p)) => steer(p, p.z),
+        (Step::Work | Step::WorkWithFix, CnaCommand::Hold) => None,
+    }
+}
+
 pub(super) fn arrival(
     from: Owner,
     to: Owner,
@@ -630,9 +645,9 @@ pub(super) fn arrival(
 }
 
 /// Reports AUV `k`'s decoded packet with a usable range.
-fn heard(obs: &mut dyn Observer, meta: &Arrival<()>, k: usize, travel_time: Option<f64>) {
+fn heard(obs: &mut dyn Observer, meta: &Arrival<()>, k: usize, travel_time: Option<f64>, fix: Option<Vec3>) {
     if let Some(travel_time) = travel_time {
-        obs.on_range(&RangeHeard { t_tx: meta.t_tx, auv: k, from: meta.from, travel_time });
+        obs.on_range(&RangeHeard { t_tx: meta.t_tx, auv: k, from: meta.from, travel_time, fix });
     }
 }
 

@@ -16,6 +16,7 @@ use crate::models::metrics::{AuvMetrics, ErrorStats, FleetMetrics, LinkStats};
 use crate::models::schedule::Owner;
 use crate::policy::planner::{ErrorTracker, PlannerStats};
 use crate::policy::registry::Policy;
+use crate::policy::CnaCommand;
 use crate::scenario::world::Scenario;
 use coopnav_acomms::tl::TransmissionLoss;
 use coopnav_core::Vec3;
@@ -125,6 +126,11 @@ impl<'a> ScoredMission<'a> {
     /// One truth step.
     pub fn step(&mut self, obs: &mut dyn Observer) {
         self.mission.step(&mut Scored { score: &mut self.score, inner: obs });
+    }
+
+    /// Steers the CNA by a command that arrived after its decision (see [`Mission::steer`]).
+    pub fn steer(&mut self, command: CnaCommand, obs: &mut dyn Observer) {
+        self.mission.steer(command, &mut Scored { score: &mut self.score, inner: obs });
     }
 
     /// A copy of this run and its score as they stand, driven by `policy` from here on (see
