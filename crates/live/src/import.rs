@@ -77,7 +77,7 @@ pub fn field_log(input: impl Read, auv: i16, start: Start, truth: &[(f64, f64, f
                     let p = r.transponder;
                     rows.push((
                         r.transmit_time,
-                        format!("{},beacon_fix,{id},{},{},{},", r.transmit_time, p.x, p.y, p.z),
+                        format!("{},beacon_fix,{id},{},{},{},,", r.transmit_time, p.x, p.y, p.z),
                     ));
                     rows.push((r.receive_time, format!("{},range,{id},{},,,,", r.receive_time, r.travel_time)));
                     out.ranges += 1;

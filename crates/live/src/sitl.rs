@@ -56,7 +56,8 @@
 //! The world can spoil its own publications to the live AUVs, deterministically by count: drop,
 //! duplicate, delay (by mission seconds), swap with the next (reorder) or corrupt (malformed)
 //! every n-th message; and kill one navigator at a mission time and start it again later
-//! ([`Restart`]: from the last estimate the world received from it). Every fault injected is
+//! ([`Restart`]: from the vehicle's own navigation then, the engine filter's estimate, as a
+//! backseat process restarted at sea takes the frontseat's position). Every fault injected is
 //! counted in `sitl.json`; the navigators count what they saw.
 
 use crate::auv::{Channels, LiveConfig, LiveError, Start};
@@ -201,6 +202,8 @@ pub struct AuvWorldCounts {
     pub dropped: u64,
     pub duplicated: u64,
     pub delayed: u64,
+    /// Delayed messages still held when the mission ended: never sent.
+    pub delayed_past_end: u64,
     pub reordered: u64,
     pub malformed: u64,
     /// Lockstep waits for estimates that ran out (the world ran on).
@@ -271,6 +274,10 @@ struct World {
     delayed: VecDeque<(f64, String, Vec<u8>)>,
     reorder_held: Option<(String, Vec<u8>)>,
     down: Option<usize>,
+    /// Each AUV's own navigation (the engine filter's estimate) at the latest sample.
+    own_nav: Vec<(f64, f64)>,
+    /// Mission time each navigator's process started.
+    since: Vec<f64>,
     t: f64,
 }
 
@@ -610,6 +617,10 @@ impl Observer for WorldObserver {
         self.trace.on_sample(t, cna, rows);
         if self.live {
             self.scored.push(Scored::Sample { t, cna, rows: rows.to_vec() });
+            let mut w = self.world.lock().expect("world");
+            for r in rows {
+                w.own_nav[r.auv] = (r.est_x, r.est_y);
+            }
         }
     }
     fn on_packet(&mut self, event: &CommsEvent) {
@@ -847,8 +858,10 @@ fn wait_for_estimates(world: &Shared, navs: &Navigators, t: f64, timeout: Durati
     let deadline = Instant::now() + timeout;
     let mut w = world.lock().expect("world");
     loop {
-        let behind = (0..navs.children.len())
-            .any(|k| navs.children[k].is_some() && w.down != Some(k) && w.newest_estimate[k] < want);
+        // A navigator started less than a window and a second ago has no estimate to wait for.
+        let behind = (0..navs.children.len()).any(|k| {
+            navs.children[k].is_some() && w.down != Some(k) && utime(w.since[k]) < want && w.newest_estimate[k] < want
+        });
         if !behind {
             return;
         }
@@ -977,6 +990,8 @@ pub fn run(sc: &Scenario, policy: &str, opts: &SitlOptions) -> Result<SitlRun, L
         delayed: VecDeque::new(),
         reorder_held: None,
         down: None,
+        own_nav: vec![(0.0, 0.0); n],
+        since: vec![0.0; n],
         t: 0.0,
     }));
     let remote =
@@ -1080,7 +1095,9 @@ pub fn run(sc: &Scenario, policy: &str, opts: &SitlOptions) -> Result<SitlRun, L
             }
             w.close_outstanding();
         }
-        w.release_delayed(f64::INFINITY);
+        // Messages held past the mission's end never arrive.
+        w.auv_counts.delayed_past_end = w.delayed.len() as u64;
+        w.delayed.clear();
         if let Some((c, p)) = w.reorder_held.take() {
             w.publish(&c, &p);
         }
@@ -1161,15 +1178,15 @@ fn restart_step(world: &Shared, navs: &mut Navigators, t: f64) -> Result<(), Liv
         navs.kill(r.auv);
         w.down = Some(r.auv);
     } else if w.down == Some(r.auv) && t >= r.restart_at_s {
-        w.drain();
-        // A supervisor restarts it from the last estimate it published.
-        if let Some(e) = w.estimates[r.auv].values().next_back() {
-            navs.configs[r.auv].start = Start { e: e.x, n: e.y };
-        }
+        // Started again where the vehicle's own navigation puts it now, as a backseat process
+        // restarted at sea takes the frontseat's position.
+        let (e, n) = w.own_nav[r.auv];
+        navs.configs[r.auv].start = Start { e, n };
         drop(w);
         navs.start(r.auv)?;
         let mut w = world.lock().expect("world");
         w.down = None;
+        w.since[r.auv] = t;
         w.auv_counts.restarts += 1;
     }
     Ok(())
