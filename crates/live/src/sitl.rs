@@ -50,7 +50,10 @@
 //! one (counted in `samples_on_older_estimate`), or, before any, the engine's row (counted in
 //! `samples_on_engine_filter`). The counts of ranges applied and the filters' NIS stay the
 //! engine filters'. `sitl.json` holds both fleet errors. The live navigator cannot equal the
-//! engine's filter bit for bit (docs/design.md, "Software in the loop").
+//! engine's filter bit for bit, even in lockstep: `auv_sensors_t` has no yaw rate (the navigator
+//! predicts with none) and carries speed and depth as `f32`; the engine's filter moves a range's
+//! transponder by its own motion over the decode delay and applies it at the arrival's end, with
+//! the sound speed between the two depths; a surfaced AUV's GPS fixes have no message.
 //!
 //! # Faults ([`BusFaults`])
 //! The world can spoil its own publications to the live AUVs, deterministically by count: drop,
