@@ -70,7 +70,10 @@ fn bad_scenarios_name_the_field() {
     assert!(e.contains("platform.max_turn_rate_deg_s") && e.contains("180"), "{e}");
     let e = err_of(&EXAMPLE.replace("case = \"8\"", "case = \"14\""));
     assert!(e.contains("policy.planner.penalty.case") && e.contains("12a"), "{e}");
-    let e = err_of(&EXAMPLE.replace("kind = \"hudson\"", "kind = \"estimator\""));
+    let e = err_of(&EXAMPLE.replace(
+        "cost = { kind = \"hudson\", alpha = 0.1, bearing = \"horizontal\" }",
+        "cost = { kind = \"estimator\" }",
+    ));
     assert!(e.contains("policy.planner.cost.kind = estimator") && e.contains("hudson"), "{e}");
     let e = err_of(
         &EXAMPLE.replace("speed = 1.5\ndepth = { kind = \"constant\"", "speed = 0.0\ndepth = { kind = \"constant\""),
