@@ -176,7 +176,9 @@ pub fn closed_loop(sc: &scenario::Scenario, runs: usize, policies: usize) -> Vec
         .planner_specs()
         .into_iter()
         .map(|(name, spec)| {
-            let cfg = sc.spec_config(spec);
+            // The survey's extent only chooses penalties, not the tree; left out, so that no
+            // survey waypoint is computed before its size is checked.
+            let cfg = spec.config(&sc.platform(), &sc.mission_facts(), 0.0);
             let pitch_levels = match cfg.motion.cna {
                 coopnav_plan::CnaKind::Auv { pitch_levels, .. } => pitch_levels,
                 coopnav_plan::CnaKind::Asc {} => None,
