@@ -49,8 +49,14 @@ class Planner:
         """From ``coopnav_plan::PlannerConfig``'s fields: look_ahead, motion, penalties (and error,
         cost, limits, search)."""
     @staticmethod
-    def from_scenario(scenario: Scenario) -> Planner:
-        """The planner a scenario configures."""
+    def from_scenario(scenario: Scenario, policy: str = "planner") -> Planner:
+        """The planner a scenario's ``[policy.NAME]`` table configures (``planner``, or
+        ``planner-estimator`` with its settings from the mission rule)."""
+    @staticmethod
+    def from_spec(spec: Settings, platform: Settings) -> Planner:
+        """From a ``[policy.planner]`` table (``coopnav_plan::PlannerSpec``: tree, limits, penalty,
+        deadline, search, cost of kind ``hudson``) and a ``[platform]`` table (speed, tau,
+        max_turn_rate_deg_s, cna), as every scenario file writes them."""
     @property
     def config(self) -> Dict[str, Any]: ...
     def initial_errors(

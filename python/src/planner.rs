@@ -7,9 +7,10 @@ use crate::convert::{column, columns, matrix, to_py, toml_text};
 use crate::scenario::{Kind, Scenario};
 use crate::value_error;
 use coopnav_core::{Heading, Vec3};
+use coopnav_plan::auto::{CnaFact, MissionFacts};
 use coopnav_plan::predeploy;
-use coopnav_plan::PlannerConfig;
 use coopnav_plan::{AuvError, AuvEstimate, AuvForecast, CnaPose, LookAheadPlanner, PlanInput, Planner as _};
+use coopnav_plan::{PlannerConfig, PlannerSpec, Platform};
 use numpy::{PyArray1, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2, PyReadonlyArray3};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
@@ -91,14 +92,43 @@ impl Planner {
         Ok(Planner { inner: LookAheadPlanner::new(cfg).map_err(value_error)? })
     }
 
-    /// The planner a scenario configures (the closed loop's, or the pre-deployment one).
+    /// The planner a scenario's `[policy.NAME]` table configures: the closed loop's `planner` or
+    /// `planner-estimator` (with the settings its table and the planner's rule give for the
+    /// mission), or the pre-deployment file's `planner`.
     #[staticmethod]
-    fn from_scenario(scenario: &Scenario) -> PyResult<Self> {
+    #[pyo3(signature = (scenario, policy = "planner"))]
+    fn from_scenario(scenario: &Scenario, policy: &str) -> PyResult<Self> {
         let cfg = match &scenario.kind {
-            Kind::Simulate(sc) => sc.planner_config(),
+            Kind::Simulate(sc) => coopnav_sim::policy::registry::planner_config(policy, sc).map_err(value_error)?,
+            Kind::Plan(_) if policy != "planner" => {
+                return Err(PyValueError::new_err(format!(
+                    "policy '{policy}': a \"plan\" scenario has only [policy.planner]"
+                )))
+            }
             Kind::Plan(sc) => sc.build(&scenario.file, &scenario.base).map_err(value_error)?.planner,
         };
         Ok(Planner { inner: LookAheadPlanner::new(cfg).map_err(value_error)? })
+    }
+
+    /// A planner from a `[policy.planner]` table as every scenario file writes it (a dict or TOML
+    /// text with `coopnav_plan::PlannerSpec`'s keys: tree, limits, penalty, deadline, search,
+    /// cost) on `platform` (`coopnav_plan::Platform`'s keys: speed, tau, max_turn_rate_deg_s,
+    /// cna). Hudson's cost only: the estimator cost reads a mission (`from_scenario`).
+    #[staticmethod]
+    fn from_spec(spec: &Bound<'_, PyAny>, platform: &Bound<'_, PyAny>) -> PyResult<Self> {
+        let spec: PlannerSpec = toml::from_str(&toml_text(spec, "planner spec")?)
+            .map_err(|e| PyValueError::new_err(format!("planner spec: {e}")))?;
+        let platform: Platform = toml::from_str(&toml_text(platform, "platform")?)
+            .map_err(|e| PyValueError::new_err(format!("platform: {e}")))?;
+        if spec.estimator_cost().is_some() {
+            return Err(PyValueError::new_err(
+                "planner spec: cost.kind = \"estimator\" reads a mission: use Planner.from_scenario(scenario, \"planner-estimator\")",
+            ));
+        }
+        let facts =
+            MissionFacts { n_auvs: 1, cna: CnaFact::Asc, adcp_current: [0.0, 0.0], filters_estimate_current: false };
+        spec.validate(&platform, &facts, 0.0).map_err(value_error)?;
+        Ok(Planner { inner: LookAheadPlanner::new(spec.config(&platform, &facts, 0.0)).map_err(value_error)? })
     }
 
     /// The config as a dict (edit it and build a new `Planner`).

@@ -109,3 +109,30 @@ def test_bad_planner_input_raises_value_error_naming_the_field():
         coopnav.Planner(cfg)
     with pytest.raises(ValueError, match="needs a \"simulate\" scenario"):
         coopnav.simulate(coopnav.Scenario.example("plan"))
+
+
+def test_a_planner_from_its_table_is_the_scenarios_planner():
+    """`Planner.from_spec` reads the `[policy.planner]` table and `[platform]` of a scenario file,
+    as `coopnav plan` does: the same dicts give the same config as the scenario's own planner."""
+    scenario = coopnav.Scenario.example("plan")
+    d = scenario.to_dict()
+    from_table = coopnav.Planner.from_spec(d["policy"]["planner"], d["platform"])
+    assert from_table.config == coopnav.Planner.from_scenario(scenario).config
+    assert from_table.config["look_ahead"] == d["policy"]["planner"]["tree"]["look_ahead"]
+    spec = dict(d["policy"]["planner"], tree={"heading_options": 1})
+    with pytest.raises(ValueError, match="tree.heading_options"):
+        coopnav.Planner.from_spec(spec, d["platform"])
+    with pytest.raises(ValueError, match="from_scenario"):
+        coopnav.Planner.from_spec({"cost": {"kind": "estimator"}}, d["platform"])
+
+
+def test_the_closed_loops_estimator_planner_is_its_rules():
+    """The closed-loop example's `planner-estimator`: at N = 3 with the ASC its rule's A = 5, L = 4
+    (crates/plan/src/auto.rs), Hudson's planner A = 5, L = 5 from its own table."""
+    scenario = coopnav.Scenario.example()
+    estimator = coopnav.Planner.from_scenario(scenario, "planner-estimator").config
+    hudson = coopnav.Planner.from_scenario(scenario).config
+    assert (estimator["motion"]["heading_options"], estimator["look_ahead"], estimator["cost"]["kind"]) == (5, 4, "estimator")
+    assert (hudson["motion"]["heading_options"], hudson["look_ahead"], hudson["cost"]["kind"]) == (5, 5, "hudson")
+    with pytest.raises(ValueError, match="unknown policy 'zigzag'"):
+        coopnav.Planner.from_scenario(scenario, "zigzag")

@@ -42,7 +42,7 @@ fn plan_heading_options_1e9() {
         "s.toml",
         &[("heading_options = 5", "heading_options = 1000000000")],
     );
-    refused(tmp.path(), &["plan", "s.toml", "-o", "out"], &["planner.heading_options", "planner leaves"]);
+    refused(tmp.path(), &["plan", "s.toml", "-o", "out"], &["policy.planner.tree.heading_options", "planner leaves"]);
 }
 
 #[test]
@@ -56,14 +56,14 @@ fn plan_lanes_1e9() {
 fn plan_tau_1e_minus_6() {
     let tmp = tempfile::tempdir().unwrap();
     edited_example(tmp.path(), &["plan", "--example"], "s.toml", &[("tau = 10.0", "tau = 0.000001")]);
-    refused(tmp.path(), &["plan", "s.toml", "-o", "out"], &["planner.motion.tau", "planner decisions"]);
+    refused(tmp.path(), &["plan", "s.toml", "-o", "out"], &["platform.tau", "planner decisions"]);
 }
 
 #[test]
 fn plan_look_ahead_16() {
     let tmp = tempfile::tempdir().unwrap();
     edited_example(tmp.path(), &["plan", "--example"], "s.toml", &[("look_ahead = 4", "look_ahead = 16")]);
-    refused(tmp.path(), &["plan", "s.toml", "-o", "out"], &["planner.look_ahead", "1.526e11"]);
+    refused(tmp.path(), &["plan", "s.toml", "-o", "out"], &["policy.planner.tree.look_ahead", "1.526e11"]);
 }
 
 #[test]
@@ -101,7 +101,7 @@ fn simulate_lanes_and_heading_options_1e9() {
         "s.toml",
         &[("heading_options = 5", "heading_options = 1000000000")],
     );
-    refused(tmp.path(), &["simulate", "s.toml", "-o", "out"], &["planner.heading_options"]);
+    refused(tmp.path(), &["simulate", "s.toml", "-o", "out"], &["policy.planner.tree.heading_options"]);
 }
 
 #[test]

@@ -83,7 +83,7 @@ fn generated_missions_run_as_they_are_written() {
     assert_eq!(index.lines().count(), 4, "{index}");
     assert!(index.lines().nth(1).unwrap().starts_with("mission-000.toml,500,"), "{index}");
     let text = std::fs::read_to_string(tmp.path().join("g/mission-002.toml")).unwrap();
-    assert!(text.contains("seed = 502") && !text.contains("\n[planner"), "{text}");
+    assert!(text.contains("seed = 502") && !text.contains("\n[policy"), "{text}");
     // A shorter copy of the mission runs (the full one is the same file with its own duration).
     let duration = text.lines().find(|l| l.starts_with("duration_s = ")).unwrap();
     std::fs::write(tmp.path().join("m.toml"), text.replace(duration, "duration_s = 300.0")).unwrap();

@@ -31,7 +31,7 @@
 //!   and are not read here.
 //! - A decision: the policy's `decide` with the same context the engine builds — time, τ, the
 //!   fix as the CNA's pose, the scenario's transit speed, the predictors (with
-//!   `planner.start_after_reports`), the reported covariances and the fix's variance — then
+//!   `policy.start_after_reports`), the reported covariances and the fix's variance — then
 //!   the command and the record.
 //!
 //! # Faults
@@ -158,7 +158,7 @@ impl CnaPlanner {
             policy,
             tau: sc.comms.tau,
             speed: sc.cna.speed,
-            min_reports: sc.planner.start_after_reports,
+            min_reports: sc.policy.start_after_reports,
             epoch_utime,
             status_slots,
             predictors: (0..n).map(|k| belief::predictor(sc, k, &bathy)).collect(),

@@ -54,7 +54,7 @@ pub struct MissionFacts {
 }
 
 /// Every setting of `planner-estimator` the rule chooses (Hudson's own planner keeps its file's).
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
 pub struct EstimatorSettings {
     /// A: heading options per level.
     pub heading_options: usize,

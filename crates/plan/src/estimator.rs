@@ -156,7 +156,8 @@ impl RangeNoise {
     }
 }
 
-/// The estimator-aware cost's settings (`[planner.cost] kind = "estimator"`).
+/// The estimator-aware cost's settings as the search runs them (a `PlannerSpec`'s
+/// `cost = { kind = "estimator" }` resolved for a mission).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct EstimatorSpec {

@@ -23,6 +23,7 @@ pub mod planner;
 pub mod predeploy;
 pub mod predict;
 mod search;
+pub mod spec;
 #[cfg(test)]
 mod tests;
 mod tree;
@@ -42,6 +43,7 @@ pub use planner::{
     Algorithm, AuvForecast, CostSpec, CurrentInput, Deadline, Decision, DistanceLimits, FnForecast, LookAheadPlanner,
     PlanInput, Planner, PlannerConfig, SearchConfig, SurveyInput,
 };
+pub use spec::{EstimatorCost, HudsonCost, PenaltySpec, PlannerCost, PlannerSpec, Platform, SearchSpec, TreeSpec};
 pub use true_error::{TrueError, TruthInput, TruthSpec};
 
 use thiserror::Error;

@@ -73,7 +73,7 @@ use crate::PlanError;
 use coopnav_core::validation::{CheckFields, Problems};
 use serde::{Deserialize, Serialize};
 
-/// What the truth model needs beyond the filter's own settings (`[planner.cost] truth = {...}`).
+/// What the truth model needs beyond the filter's own settings (the estimator cost's `truth = {...}`).
 /// Every default is invented (docs/models.md#true-error-cost), chosen on tuning runs apart from
 /// the evaluation's seeds.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]

@@ -102,7 +102,7 @@ fn main() -> Result<(), Error> {
     println!(
         "policy: CNA-AUV distance mean (m), time closer than {} m / farther than {} m (%), CNA to the AUVs' centroid (m), \
          CNA depth (m)",
-        sc.planner.limits.min, sc.planner.limits.max
+        sc.policy.planner.limits.min, sc.policy.planner.limits.max
     );
     for (name, runs_of) in names.iter().zip(done.chunks(runs)) {
         let g = runs_of.iter().fold(Geometry::new(&sc), |acc, (_, g, _)| acc.merged(g));
@@ -384,7 +384,7 @@ struct Geometry {
 
 impl Geometry {
     fn new(sc: &Scenario) -> Self {
-        let (min, max) = (sc.planner.limits.min, sc.planner.limits.max);
+        let (min, max) = (sc.policy.planner.limits.min, sc.policy.planner.limits.max);
         Geometry {
             min,
             max,

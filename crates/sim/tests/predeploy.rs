@@ -60,16 +60,21 @@ fn same_run_on_one_and_two_threads() {
 
 #[test]
 fn bad_scenarios_name_the_field() {
-    let e = err_of(&EXAMPLE.replace("look_ahead = 4", "look_ahead = 4\nlookahead = 3"));
+    let e = err_of(&EXAMPLE.replace("look_ahead = 4 }", "look_ahead = 4, lookahead = 3 }"));
     assert!(e.contains("unknown field") && e.contains("lookahead"), "{e}");
     let e = err_of(&EXAMPLE.replace("heading_options = 5", "heading_options = 1"));
-    assert!(e.contains("heading_options") && e.contains(">= 2"), "{e}");
+    assert!(e.contains("policy.planner.tree.heading_options") && e.contains(">= 2"), "{e}");
     let e = err_of(&EXAMPLE.replace("speed = 3.0 ", "speed = -2.0 "));
-    assert!(e.contains("speed") && e.contains("> 0"), "{e}");
+    assert!(e.contains("platform.speed") && e.contains("> 0"), "{e}");
     let e = err_of(&EXAMPLE.replace("max_turn_rate_deg_s = 4.0", "max_turn_rate_deg_s = 18.0"));
-    assert!(e.contains("max_turn_rate_deg_s") && e.contains("180"), "{e}");
+    assert!(e.contains("platform.max_turn_rate_deg_s") && e.contains("180"), "{e}");
     let e = err_of(&EXAMPLE.replace("case = \"8\"", "case = \"14\""));
-    assert!(e.contains("planner.penalty") && e.contains("12a"), "{e}");
+    assert!(e.contains("policy.planner.penalty.case") && e.contains("12a"), "{e}");
+    let e = err_of(&EXAMPLE.replace(
+        "cost = { kind = \"hudson\", alpha = 0.1, bearing = \"horizontal\" }",
+        "cost = { kind = \"estimator\" }",
+    ));
+    assert!(e.contains("policy.planner.cost.kind = estimator") && e.contains("hudson"), "{e}");
     let e = err_of(
         &EXAMPLE.replace("speed = 1.5\ndepth = { kind = \"constant\"", "speed = 0.0\ndepth = { kind = \"constant\""),
     );
@@ -81,7 +86,7 @@ fn bad_track_files_name_the_line() {
     let dir = tempfile::tempdir().unwrap();
     let with_csv = |csv: &str| {
         std::fs::write(dir.path().join("t.csv"), csv).unwrap();
-        let text = "[cna]\nx = 0.0\ny = 0.0\nheading_compass_deg = 90.0\n[planner]\nlook_ahead = 1\npenalty = { case = \"1\" }\n[planner.motion]\nspeed = 2.0\ntau = 10.0\nheading_options = 3\ncna = { kind = \"asc\" }\n[[auv]]\nname = \"a\"\ntrack_csv = \"t.csv\"\n";
+        let text = "[cna]\nx = 0.0\ny = 0.0\nheading_compass_deg = 90.0\n[platform]\nspeed = 2.0\ntau = 10.0\ncna = { kind = \"asc\" }\n[policy.planner]\ntree = { heading_options = 3, look_ahead = 1 }\npenalty = { case = \"1\" }\ndeadline = { kind = \"none\" }\ncost = { kind = \"hudson\" }\n[[auv]]\nname = \"a\"\ntrack_csv = \"t.csv\"\n";
         Scenario::parse(text, Path::new("s.toml")).unwrap().build(Path::new("s.toml"), dir.path())
     };
     assert!(with_csv("t,x,y,z\n0,0,0,90\n100,150,0,90\n").is_ok());
@@ -94,7 +99,7 @@ fn bad_track_files_name_the_line() {
 #[test]
 fn missing_track_file_is_reported() {
     let dir = tempfile::tempdir().unwrap();
-    let text = "[cna]\nx = 0.0\ny = 0.0\nheading_compass_deg = 90.0\n[planner]\nlook_ahead = 1\npenalty = { case = \"1\" }\n[planner.motion]\nspeed = 2.0\ntau = 10.0\nheading_options = 3\ncna = { kind = \"asc\" }\n[[auv]]\nname = \"a\"\ntrack_csv = \"missing.csv\"\n";
+    let text = "[cna]\nx = 0.0\ny = 0.0\nheading_compass_deg = 90.0\n[platform]\nspeed = 2.0\ntau = 10.0\ncna = { kind = \"asc\" }\n[policy.planner]\ntree = { heading_options = 3, look_ahead = 1 }\npenalty = { case = \"1\" }\ndeadline = { kind = \"none\" }\ncost = { kind = \"hudson\" }\n[[auv]]\nname = \"a\"\ntrack_csv = \"missing.csv\"\n";
     let s = Scenario::parse(text, Path::new("s.toml")).unwrap();
     match s.build(Path::new("s.toml"), dir.path()) {
         Err(e @ ScenarioError::Track { .. }) => assert!(e.to_string().contains("missing.csv"), "{e}"),
@@ -148,4 +153,26 @@ fn stray_keys_in_tagged_tables_are_rejected() {
         "penalty = { primary = { kind = \"none\" }, look_ahead = { kind = \"doubling\", factor = 3 } }",
     ));
     assert!(e.contains("unknown field") && e.contains("factor"), "{e}");
+}
+
+/// A file in the old form (`[planner]` with `[planner.motion]`) is refused with every moved key
+/// and its new place in one message.
+#[test]
+fn an_old_form_file_is_refused_listing_every_moved_key() {
+    let old =
+        "[cna]\nx = 0.0\ny = 0.0\nheading_compass_deg = 90.0\n[planner]\nlook_ahead = 1\npenalty = { case = \"1\" }\n\
+               [planner.motion]\nspeed = 2.0\ntau = 10.0\nheading_options = 3\ncna = { kind = \"asc\" }\n\
+               [[auv]]\nname = \"a\"\ntrack_csv = \"t.csv\"\n";
+    let e = err_of(old);
+    for line in [
+        "planner.look_ahead -> policy.planner.tree.look_ahead",
+        "planner.penalty -> policy.planner.penalty",
+        "planner.motion.speed -> platform.speed",
+        "planner.motion.tau -> platform.tau",
+        "planner.motion.heading_options -> policy.planner.tree.heading_options",
+        "planner.motion.cna -> platform.cna",
+    ] {
+        assert!(e.contains(line), "{line}: {e}");
+    }
+    assert!(e.contains("6 moved key(s)"), "{e}");
 }

@@ -1,6 +1,7 @@
 //! Every file of the scenario library (`scenarios/*.toml` at the repository root) loads,
 //! validates and runs, reduced to a short mission with a shallow planner.
 
+use coopnav_plan::PlannerCost;
 use coopnav_sim::engine::Faults;
 use coopnav_sim::models::peer::StatusTo;
 use coopnav_sim::models::schedule::Owner;
@@ -37,8 +38,9 @@ fn uses_bellhop(file: &PathBuf) -> bool {
 fn runs_reduced(file: &PathBuf) -> RunResult {
     let mut sc = Scenario::load(file).unwrap_or_else(|e| panic!("{e}"));
     sc.duration_s = sc.duration_s.min(600.0);
-    sc.planner.look_ahead = sc.planner.look_ahead.min(3);
-    sc.planner.deadline = coopnav_plan::Deadline::None;
+    let look_ahead = sc.planner_config().look_ahead.min(3);
+    sc.policy.planner.tree.look_ahead = Some(look_ahead);
+    sc.policy.planner.deadline = coopnav_plan::Deadline::None;
     let mut policy = PolicySpec::new("planner", &sc).unwrap().build(&sc).unwrap();
     let r = run(&sc, &mut policy, sc.seed, &Faults::default(), &mut ());
     let name = file.display();
@@ -116,20 +118,22 @@ fn on_the_spread_fleet_the_tuned_estimator_planner_hears_every_auv_and_its_defau
     let file = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../scenarios").join(SPREAD_FLEET);
     let tuned = Scenario::load(&file).unwrap_or_else(|e| panic!("{e}"));
     let mut defaults = tuned.clone();
-    defaults.planner.estimator_penalty_case = Some(defaults.planner.penalty_case.clone());
-    defaults.planner.link = Default::default();
-    defaults.planner.estimator_tracking = Default::default();
-    defaults.planner.estimator_reach_success = Some(0.0);
-    defaults.planner.estimator_terminal_levels = Some(0.0);
-    let p = &mut defaults.planner;
-    p.estimator_heading_options = Some(p.heading_options);
-    p.estimator_look_ahead = Some(p.look_ahead);
-    p.estimator_bias_profile = Some(false);
-    p.estimator_level_off = Some(false);
-    p.estimator_slot_reach = Some(false);
-    p.estimator_truth = Some(TruthChoice::Cost(CovarianceWord::Covariance));
-    p.estimator_unmodelled_current = Some([0.0, 0.0]);
-    p.estimator_current = Some([0.0, 0.0]);
+    let hudson = defaults.planner_config();
+    defaults.policy.link = Default::default();
+    let p = &mut defaults.policy.planner_estimator;
+    p.penalty = defaults.policy.planner.penalty.clone();
+    p.tree.heading_options = Some(hudson.motion.heading_options);
+    p.tree.look_ahead = Some(hudson.look_ahead);
+    p.tree.level_off = Some(false);
+    let PlannerCost::Estimator(c) = &mut p.cost else { panic!("the spread fleet's planner-estimator") };
+    c.tracking = Default::default();
+    c.reach_success = Some(0.0);
+    c.terminal_levels = Some(0.0);
+    c.bias_profile = Some(false);
+    c.slot_reach = Some(false);
+    c.truth = Some(TruthChoice::Cost(CovarianceWord::Covariance));
+    c.unmodelled_current = Some([0.0, 0.0]);
+    c.current = Some([0.0, 0.0]);
     let statuses = |sc: &Scenario| -> Vec<u64> {
         let mut policy = PolicySpec::new("planner-estimator", sc).unwrap().build(sc).unwrap();
         let r = run(sc, &mut policy, sc.seed, &Faults::default(), &mut ());

@@ -53,7 +53,7 @@ pub struct Args {
     /// `decimated`: a speed option that changes the results; default: every step).
     #[arg(long, value_name = "PERIOD")]
     filter_period: Option<f64>,
-    /// What the CNA plans with for an AUV it has not heard yet (`planner.before_first_report`:
+    /// What the CNA plans with for an AUV it has not heard yet (`policy.before_first_report`:
     /// ignore or mission_plan; default: the benchmark scenario's).
     #[arg(long, value_name = "WHAT", value_parser = before_first_report)]
     before_first_report: Option<BeforeFirstReport>,
@@ -69,7 +69,8 @@ const TARGET_S: f64 = 0.22;
 
 pub fn run(args: Args) -> Result<()> {
     let mut sc = Scenario::bench();
-    sc.planner.parallel = args.parallel;
+    sc.policy.planner.search.parallel = args.parallel;
+    sc.policy.planner_estimator.search.parallel = args.parallel;
     if let Tl::BellhopGrid = args.tl {
         // 1 km between anchors keeps the grid at 21 anchors × 16 bearings for this fleet.
         sc.comms.tl = TlModel::BellhopGrid(GridModel { anchor_spacing_m: 1000.0, ..GridModel::default() });
@@ -81,7 +82,7 @@ pub fn run(args: Args) -> Result<()> {
         sc.filter.rate = FilterRate::Decimated { period_s };
     }
     if let Some(before) = args.before_first_report {
-        sc.planner.before_first_report = before;
+        sc.policy.before_first_report = before;
     }
     let prepare = Instant::now();
     sc.validate(Path::new("bench closed-loop"))
@@ -105,8 +106,8 @@ pub fn run(args: Args) -> Result<()> {
         "mission_s": sc.duration_s,
         "n_auvs": sc.fleet.n_auvs,
         "tau_s": sc.comms.tau,
-        "a": sc.planner.heading_options,
-        "l": sc.planner.look_ahead,
+        "a": sc.planner_config().motion.heading_options,
+        "l": sc.planner_config().look_ahead,
         "dt_s": sc.dt,
         "policy": args.policy,
         "tl": serde_json::to_value(&sc.comms.tl)?,
@@ -114,7 +115,7 @@ pub fn run(args: Args) -> Result<()> {
         "filter_rate": serde_json::to_value(sc.filter.rate)?,
         "tl_prepare_s (grid computed or read from disk, untimed below)": prepare_s,
         "parallel_planner": args.parallel,
-        "before_first_report": serde_json::to_value(sc.planner.before_first_report)?,
+        "before_first_report": serde_json::to_value(sc.policy.before_first_report)?,
         "reps": walls.len(),
         "wall_s": wall_s,
         "wall_s (the run split by phase, clock read at every phase end)": r.wall_s,

@@ -14,8 +14,8 @@ use crate::scenario::Scenario;
 fn short(n: usize, duration: f64) -> Scenario {
     let mut sc = Scenario::example().with_auvs(n);
     sc.duration_s = duration;
-    sc.planner.look_ahead = 3;
-    sc.planner.deadline = coopnav_plan::Deadline::None;
+    sc.policy.planner.tree.look_ahead = Some(3);
+    sc.policy.planner.deadline = coopnav_plan::Deadline::None;
     sc
 }
 
@@ -198,7 +198,7 @@ fn status_rates_follow_the_fixed_rate_or_the_adaptive_selector() {
 #[test]
 fn an_auv_cna_plans_with_pitch_and_broadcasts_its_own_estimate() {
     let mut sc = short(2, 1200.0);
-    sc.planner.look_ahead = 2;
+    sc.policy.planner.tree.look_ahead = Some(2);
     sc.cna.auv = Some(scenario::AuvCna {
         pitch_options: 3,
         depth: scenario::CruiseDepth::Metres(10.0),
@@ -269,7 +269,8 @@ fn a_cast_cruise_depth_follows_the_fleets_depths_and_reads_back() {
 #[test]
 fn a_drifting_buoys_batch_is_identical_on_one_and_two_threads() {
     let mut alone = Scenario::example().with_auvs(2);
-    (alone.duration_s, alone.planner.look_ahead, alone.planner.deadline) = (600.0, 3, coopnav_plan::Deadline::None);
+    (alone.duration_s, alone.policy.planner.tree.look_ahead, alone.policy.planner.deadline) =
+        (600.0, Some(3), coopnav_plan::Deadline::None);
     let mut sc = alone.clone();
     sc.buoys = vec![toml::from_str(
         "x = 900.0\ny = 300.0\ndrift = { kind = \"lake\", mean_m_s = 0.056, sd_m_s = 0.039, circular_fraction = 0.5, \

@@ -96,11 +96,12 @@ pub fn predeploy(sc: &plan::Scenario) -> Vec<Estimate> {
     }
     let start = sc.mission.start_time.unwrap_or(0.0);
     let span = sc.mission.end_time.map_or(shortest, |end| end - start);
+    let cfg = sc.policy.planner.config(&sc.platform, &facts_for_size(sc), 0.0);
     let tree = TreeSize {
-        prefix: "planner.",
-        headings: sc.planner.motion.heading_options,
-        pitches: pitch_options(&sc.planner.motion.cna),
-        look_ahead: sc.planner.look_ahead,
+        prefix: "policy.planner.tree.",
+        headings: cfg.motion.heading_options,
+        pitches: pitch_options(&cfg.motion.cna),
+        look_ahead: cfg.look_ahead,
         pitch_levels: None,
     };
     if span.is_infinite() && sc.mission.end_time.is_none() {
@@ -109,8 +110,18 @@ pub fn predeploy(sc: &plan::Scenario) -> Vec<Estimate> {
         out.push(tree.estimates(0.0, sc.auv.len())[0].clone());
         return out;
     }
-    out.extend(decision_estimates(span, &sc.planner.motion, &tree, sc.auv.len(), samples));
+    out.extend(decision_estimates(span, &cfg.motion, &tree, sc.auv.len(), samples));
     out
+}
+
+/// The mission facts a pre-deployment planner's size is read with (Hudson's cost reads none).
+fn facts_for_size(sc: &plan::Scenario) -> coopnav_plan::auto::MissionFacts {
+    coopnav_plan::auto::MissionFacts {
+        n_auvs: sc.auv.len(),
+        cna: coopnav_plan::auto::CnaFact::Asc,
+        adcp_current: [0.0, 0.0],
+        filters_estimate_current: false,
+    }
 }
 
 /// The decisions over a mission of `span` seconds, the tree's work over them and the memory.
@@ -122,11 +133,10 @@ fn decision_estimates(
     samples: f64,
 ) -> Vec<Estimate> {
     let decisions = span / motion.tau;
-    let mut out =
-        vec![Estimate::new("planner decisions", "mission length / planner.motion.tau", decisions, MAX_POINTS)];
+    let mut out = vec![Estimate::new("planner decisions", "mission length / platform.tau", decisions, MAX_POINTS)];
     out.extend(tree.estimates(decisions, n_auvs));
     let bytes = samples * TRACK_SAMPLE_BYTES + decisions * n_auvs as f64 * RECORD_ROW_BYTES;
-    out.push(Estimate::new("memory (bytes)", "number of [[auv]], track lengths, planner.motion.tau", bytes, MAX_BYTES));
+    out.push(Estimate::new("memory (bytes)", "number of [[auv]], track lengths, platform.tau", bytes, MAX_BYTES));
     out
 }
 
@@ -134,7 +144,7 @@ fn decision_estimates(
 pub fn predeploy_mission(mission: &coopnav_plan::predeploy::Mission) -> Vec<Estimate> {
     let motion = &mission.planner.motion;
     let tree = TreeSize {
-        prefix: "planner.",
+        prefix: "policy.planner.tree.",
         headings: motion.heading_options,
         pitches: pitch_options(&motion.cna),
         look_ahead: mission.planner.look_ahead,
@@ -161,25 +171,28 @@ pub fn closed_loop(sc: &scenario::Scenario, runs: usize, policies: usize) -> Vec
     let vehicles = (f.n_auvs + 1) as f64;
     let runs_total = runs as f64 * policies as f64;
     let pitches = sc.cna.auv.as_ref().map_or(1, |a| a.pitch_options);
-    let p = &sc.planner;
-    let e = sc.estimator_settings();
-    // The larger of the two planners' trees: Hudson's and `planner-estimator`'s own A, L and
-    // pitch levels.
-    let hudson = TreeSize {
-        prefix: "planner.",
-        headings: p.heading_options,
-        pitches,
-        look_ahead: p.look_ahead,
-        pitch_levels: None,
-    };
-    let estimator = TreeSize {
-        prefix: "planner.estimator_",
-        headings: e.heading_options,
-        pitches,
-        look_ahead: e.look_ahead,
-        pitch_levels: e.pitch_levels,
-    };
-    let tree = if estimator.leaves() > hudson.leaves() { estimator } else { hudson };
+    // The largest of the planners' trees: each instance's own A, L and pitch levels.
+    let tree = sc
+        .planner_specs()
+        .into_iter()
+        .map(|(name, spec)| {
+            // The survey's extent only chooses penalties, not the tree; left out, so that no
+            // survey waypoint is computed before its size is checked.
+            let cfg = spec.config(&sc.platform(), &sc.mission_facts(), 0.0);
+            let pitch_levels = match cfg.motion.cna {
+                coopnav_plan::CnaKind::Auv { pitch_levels, .. } => pitch_levels,
+                coopnav_plan::CnaKind::Asc {} => None,
+            };
+            TreeSize {
+                prefix: tree_prefix(name),
+                headings: cfg.motion.heading_options,
+                pitches,
+                look_ahead: cfg.look_ahead,
+                pitch_levels,
+            }
+        })
+        .reduce(|best, t| if t.leaves() > best.leaves() { t } else { best })
+        .expect("three planner instances");
     let decisions = sc.duration_s / sc.comms.tau;
     let mut out = vec![
         Estimate::new(
@@ -204,6 +217,15 @@ pub fn closed_loop(sc: &scenario::Scenario, runs: usize, policies: usize) -> Vec
     out.extend(tree.estimates(decisions * runs_total, f.n_auvs));
     out.extend(shelf(f.shelf.as_ref(), "fleet.shelf"));
     out
+}
+
+/// Where a planner instance's tree keys sit in a scenario file.
+fn tree_prefix(name: &str) -> &'static str {
+    match name {
+        "planner-estimator" => "policy.planner-estimator.tree.",
+        "open-loop" => "policy.open-loop.tree.",
+        _ => "policy.planner.tree.",
+    }
 }
 
 /// A sloping shelf's grid: its nodes, from its extent and spacing (`field` names the table).
@@ -369,24 +391,24 @@ mod tests {
     fn the_estimators_pitch_levels_shrink_its_tree() {
         let file = include_str!("../../../../scenarios/sloping-auv-cna.toml");
         let mut sc = scenario::Scenario::parse(file, Path::new("sloping-auv-cna.toml")).unwrap();
-        sc.planner.estimator_heading_options = Some(9);
-        sc.planner.estimator_look_ahead = Some(6);
-        sc.planner.estimator_pitch_levels = Some(1);
+        let tree = &mut sc.policy.planner_estimator.tree;
+        (tree.heading_options, tree.look_ahead, tree.pitch_levels) = (Some(9), Some(6), Some(1));
         let leaves = |sc: &scenario::Scenario| {
             closed_loop(sc, 1, 1).into_iter().find(|e| e.what == "planner leaves per decision").unwrap()
         };
         // (9·3)·9⁵ against Hudson's 15⁵ (A = 5, L = 5, three pitch options).
         let e = leaves(&sc);
         assert_eq!(e.value, 27.0 * 9f64.powi(5), "{}", e.fields);
-        assert!(e.fields.contains("planner.estimator_pitch_levels"), "{}", e.fields);
+        assert!(e.fields.contains("policy.planner-estimator.tree.pitch_levels"), "{}", e.fields);
         // Left out: the rule's, level 0 only with an AUV CNA.
-        sc.planner.estimator_pitch_levels = None;
+        sc.policy.planner_estimator.tree.pitch_levels = None;
         assert_eq!(leaves(&sc).value, 27.0 * 9f64.powi(5));
         // Every level of L = 6.
-        sc.planner.estimator_pitch_levels = Some(6);
+        sc.policy.planner_estimator.tree.pitch_levels = Some(6);
         assert_eq!(leaves(&sc).value, 27f64.powi(6));
-        sc.planner.estimator_heading_options = Some(3);
-        assert_eq!((leaves(&sc).value, leaves(&sc).fields.starts_with("planner.heading")), (15f64.powi(5), true));
+        sc.policy.planner_estimator.tree.heading_options = Some(3);
+        let hudson = leaves(&sc);
+        assert_eq!((hudson.value, hudson.fields.starts_with("policy.planner.tree.heading")), (15f64.powi(5), true));
     }
 
     #[test]
@@ -394,16 +416,16 @@ mod tests {
         let plan = plan::Scenario::parse(plan::EXAMPLE, Path::new("example")).unwrap();
         assert!(check(predeploy(&plan), false).is_ok());
         let mut wide = plan.clone();
-        wide.planner.motion.heading_options = 1_000_000_000;
+        wide.policy.planner.tree.heading_options = Some(1_000_000_000);
         let e = check(predeploy(&wide), false).unwrap_err().to_string();
-        assert!(e.contains("planner.heading_options") && e.contains("--allow-large"), "{e}");
+        assert!(e.contains("policy.planner.tree.heading_options") && e.contains("--allow-large"), "{e}");
 
         let sim = scenario::Scenario::parse(scenario::EXAMPLE, Path::new("default")).unwrap();
         assert!(check(closed_loop(&sim, 100, 3), false).is_ok());
         let mut wide_estimator = sim.clone();
-        wide_estimator.planner.estimator_heading_options = Some(1_000_000);
+        wide_estimator.policy.planner_estimator.tree.heading_options = Some(1_000_000);
         let e = check(closed_loop(&wide_estimator, 1, 1), false).unwrap_err().to_string();
-        assert!(e.contains("planner.estimator_heading_options") && e.contains("--allow-large"), "{e}");
+        assert!(e.contains("policy.planner-estimator.tree.heading_options") && e.contains("--allow-large"), "{e}");
         let long = scenario::Scenario { duration_s: 1e9, ..sim };
         assert!(check(closed_loop(&long, 1, 1), false).unwrap_err().to_string().contains("duration_s / dt"));
 

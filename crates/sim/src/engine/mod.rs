@@ -59,7 +59,7 @@ pub struct Faults {
 }
 
 /// The CNA predictors as a forecast, hiding AUVs with fewer than the required reports (Hudson 2012, Sec. 4.2)
-/// unless their mission plan stands in (`planner.before_first_report`).
+/// unless their mission plan stands in (`policy.before_first_report`).
 pub struct FleetView<'a> {
     pub predictors: &'a [UnderwayPredictor],
     pub min_reports: usize,

@@ -78,7 +78,7 @@ impl Engine<'_> {
         let fix = self.cna_fix(t_dec, matches!(step, Step::Fix { .. } | Step::WorkWithFix));
         let transmits = self.policy.as_policy().transmits();
         let cna = &mut self.cna;
-        let fleet = FleetView { predictors: &cna.predictors, min_reports: self.sc.planner.start_after_reports };
+        let fleet = FleetView { predictors: &cna.predictors, min_reports: self.sc.policy.start_after_reports };
         let forecast: Vec<Option<Vec3>> =
             if transmits { (0..self.auvs.len()).map(|k| fleet.position(k, t_dec)).collect() } else { Vec::new() };
         obs.on_cna_fix(&CnaFix { t: t_dec, fix, transmits, forecast: &forecast });

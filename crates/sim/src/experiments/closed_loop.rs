@@ -287,7 +287,9 @@ fn estimator_trees(scenarios: &[(&str, &Scenario)]) -> String {
             .iter()
             .filter(|(own, _)| *own == name)
             .map(|(_, sc)| {
-                let e = sc.estimator_settings();
+                let Some(e) = sc.estimator_settings() else {
+                    return format!("N={}: Hudson's cost", sc.fleet.n_auvs);
+                };
                 let (a, l, h) = (e.heading_options, e.look_ahead, e.terminal_levels);
                 let cost = if e.truth.is_some() { "true error" } else { "covariance" };
                 let aggregate = serde_json::to_value(e.aggregate).unwrap_or_default();
@@ -579,8 +581,8 @@ mod tests {
     fn spread_fleets_trade_the_level_0_penalty_for_the_reach_cost_to_go() {
         let (settings, _, _) = setup(&ReproOptions::new(Size::Full, 1)).unwrap();
         for setting in &settings {
-            let small = setting.scenario(2, 1, None).unwrap().estimator_settings();
-            let spread = setting.scenario(5, 1, None).unwrap().estimator_settings();
+            let small = setting.scenario(2, 1, None).unwrap().estimator_settings().unwrap();
+            let spread = setting.scenario(5, 1, None).unwrap().estimator_settings().unwrap();
             assert_eq!((small.penalty_case, small.reach_success, small.terminal_levels), (None, 0.0, 10.0));
             assert_eq!(spread.penalty_case, Some(PenaltyCase::C3));
             assert_eq!((spread.reach_success, spread.terminal_levels), (0.79, 20.0));
@@ -595,13 +597,13 @@ mod tests {
         let cell = |name: &str| settings.iter().find(|s| s.name == name).unwrap().scenario(3, 1, None).unwrap();
         // (The sloping scenario's AUV CNA: `the_auv_cna_works_below_the_surface_at_every_fleet_size`.)
         let current = cell("current");
-        let e = current.estimator_settings();
+        let e = current.estimator_settings().unwrap();
         assert_eq!(e.truth, Some(ASC_TRUTH));
         let water = [current.fleet.current.0, current.fleet.current.1];
         assert!(water != [0.0, 0.0] && e.unmodelled_current == water && current.cna.adcp_current == water);
         let default = Scenario::example();
-        assert_eq!(default.planner, current.planner);
-        assert_eq!(default.estimator_settings(), e);
+        assert_eq!(default.policy, current.policy);
+        assert_eq!(default.estimator_settings(), Some(e));
         assert_eq!(e.look_ahead, 4);
     }
 
@@ -680,7 +682,7 @@ mod tests {
             }
             let diffusion = sc.cna.auv.as_ref().unwrap().nav_diffusion;
             assert_eq!(diffusion, 0.01, "the scenario's own diffusion");
-            let truth = sc.estimator_settings().truth;
+            let truth = sc.estimator_settings().unwrap().truth;
             assert_eq!(
                 truth.map(|t| (t.drift_m2_s, t.cna_diffusion_m2_s)),
                 (n != 2).then_some((0.01, diffusion)),
@@ -699,7 +701,8 @@ mod tests {
             .flat_map(|s| s.n.iter().map(|&n| (s.name.clone(), s.scenario(n, 1, None).unwrap())))
             .collect();
         for (name, sc) in &cells {
-            assert_eq!((sc.planner.heading_options, sc.planner.look_ahead), (5, 5), "Hudson's planner, {name}");
+            let hudson = sc.planner_config();
+            assert_eq!((hudson.motion.heading_options, hudson.look_ahead), (5, 5), "Hudson's planner, {name}");
         }
         let named: Vec<(&str, &Scenario)> = cells.iter().map(|(name, sc)| (name.as_str(), sc)).collect();
         let header = estimator_trees(&named);

@@ -6,7 +6,7 @@
 //! `analytic` (the files written before the models existed).
 //!
 //! The planner's lost-ping likelihood keeps an analytic model ([`TlModel::assumed`]): what the
-//! CNA believes, apart from the truth (unless `planner.link = "scenario_channel"` gives it this
+//! CNA believes, apart from the truth (unless `policy.link = "scenario_channel"` gives it this
 //! provider).
 
 use super::tl_spec::{GridModel, TlModel, MAX_GRID_FIELDS};
@@ -195,7 +195,7 @@ fn source_layers(g: &GridModel, sc: &Scenario, cna_depth: f64, (lo, hi): ((f64, 
         let layers = ((bottom - top) / g.source_depth_step_m).ceil().max(0.0) as usize;
         (0..=layers).map(move |i| (top + i as f64 * g.source_depth_step_m).min(bottom))
     };
-    if let CnaKind::Auv { min_depth, max_depth, .. } = sc.planner_config().motion.cna {
+    if let CnaKind::Auv { min_depth, max_depth, .. } = sc.platform().cna {
         // Without these layers a depth change of more than the tolerance would leave every
         // later CNA packet without a transmission loss, i.e. lost. From the surface even below a
         // working `min_depth`: the CNA climbs there for its GPS fixes, and pings meanwhile.

@@ -178,11 +178,14 @@ pub struct Score {
 impl Score {
     pub fn new(sc: &Scenario) -> Self {
         let n = sc.fleet.n_auvs;
-        let error = sc.planner_config().error;
+        // Hudson's modelled error and distance limits as `[policy.planner]` sets them, whichever
+        // policy flies.
+        let hudson = &sc.policy.planner;
+        let cost = hudson.hudson_cost();
         Score {
-            limits: sc.planner.limits,
+            limits: hudson.limits,
             health: sc.health.clone(),
-            model: ErrorTracker::new(n, error, sc.comms.tau, sc.planner.sigma0, sc.planner.eps0),
+            model: ErrorTracker::new(n, cost.error_model(), sc.comms.tau, cost.sigma0, cost.eps0),
             tallies: vec![AuvTally::default(); n],
             finite: true,
         }

@@ -16,8 +16,8 @@ fn short_survey(finish: Finish, duration: f64) -> Scenario {
     let mut sc = Scenario::example().with_auvs(1);
     (sc.fleet.lanes, sc.fleet.lane_length, sc.duration_s) = (2, 300.0, duration);
     sc.fleet.finish = finish;
-    sc.planner.look_ahead = 3;
-    sc.planner.deadline = coopnav_plan::Deadline::None;
+    sc.policy.planner.tree.look_ahead = Some(3);
+    sc.policy.planner.deadline = coopnav_plan::Deadline::None;
     sc.cna.x = 150.0;
     sc.validate(std::path::Path::new("t")).unwrap();
     sc
@@ -416,7 +416,7 @@ fn a_decimated_filter_dead_reckons_like_one_run_every_step() {
 fn cna_out_of_range(before: BeforeFirstReport, cna_x: f64) -> Scenario {
     let mut sc = short_survey(Finish::Loiter { radius_m: 50.0 }, 4000.0);
     sc.cna.x = cna_x;
-    sc.planner.before_first_report = before;
+    sc.policy.before_first_report = before;
     sc.validate(std::path::Path::new("t")).unwrap();
     sc
 }

@@ -22,7 +22,7 @@ pub const PLOTS: [(&str, &str); 3] = [
 /// Writes `result` (recorded with a trace) into `dir` and finishes it.
 pub fn write_run(dir: RunDir, sc: &Scenario, result: &RunResult, command: &str) -> Result<PathBuf, WriteError> {
     let trace = result.trace.as_ref().ok_or(WriteError::NotRecorded)?;
-    let inputs = serde_json::json!({ "scenario": sc, "policy": result.policy });
+    let inputs = serde_json::json!({ "scenario": sc, "policy": result.policy, "planners": sc.resolved_planners() });
     dir.write_json("manifest.json", &Manifest::new(command, Some(result.seed), inputs))?;
     dir.write_json("summary.json", result)?;
     dir.write_csv("timeseries.csv", trace.rows.iter())?;
@@ -54,7 +54,8 @@ pub fn write_comparison(
     command: &str,
 ) -> Result<PathBuf, WriteError> {
     let policies: Vec<&str> = c.policies.iter().map(|p| p.policy.as_str()).collect();
-    let inputs = serde_json::json!({ "scenario": sc, "policies": policies, "runs": c.runs });
+    let inputs =
+        serde_json::json!({ "scenario": sc, "policies": policies, "runs": c.runs, "planners": sc.resolved_planners() });
     dir.write_json(COMPARISON_FILES[0].0, &Manifest::new(command, Some(c.seed), inputs))?;
     dir.write_text(COMPARISON_FILES[1].0, &comparison_table(c))?;
     dir.write_json(COMPARISON_FILES[2].0, c)?;

@@ -1,6 +1,6 @@
 //! What the CNA knows of the survey AUVs, built the same way wherever the CNA runs (the engine's
 //! CNA and `coopnav live cna`): one underway predictor per AUV, started from the AUV's mission
-//! plan when the operator gave it (`planner.before_first_report = "mission_plan"`), and what a
+//! plan when the operator gave it (`policy.before_first_report = "mission_plan"`), and what a
 //! received status message (Appendix C node report with the covariance trailer) tells it.
 
 use crate::policy::ReportedCov;
@@ -17,7 +17,7 @@ use coopnav_plan::predict::{StatusReport, UnderwayPredictor};
 /// speed and every planned waypoint, as the fleet configuration defines them.
 pub fn predictor(sc: &Scenario, k: usize, bathy: &Bathymetry) -> UnderwayPredictor {
     let predictor = UnderwayPredictor::new(sc.predictor_config());
-    if sc.planner.before_first_report == BeforeFirstReport::Ignore {
+    if sc.policy.before_first_report == BeforeFirstReport::Ignore {
         return predictor;
     }
     let launch = auv_launch(sc, k, bathy);

@@ -8,16 +8,12 @@
 //! the range noise. A single range is rank one, so the score joins it with the information of
 //! the previous ping the CNA sent that AUV, and a weak prior keeps the determinant defined:
 //! score = Σ_k ln det(J_prev,k + J_k + I/σ_prior²). The point maximising it is chosen among the
-//! current position and `CANDIDATES` points one τ of travel away. σ_prior is invented (marked).
+//! current position and `candidates` points one τ of travel away (`[policy.greedy-fisher]`, with
+//! σ_prior; both invented, docs/models.md#baselines).
 
 use super::{CnaCommand, CnaPolicy, PolicyContext};
 use coopnav_core::Vec3;
 use coopnav_plan::{LinkTable, RangeNoise};
-
-/// Reachable points tried per decision, evenly spread in heading. Invented.
-const CANDIDATES: usize = 16;
-/// The prior that keeps a rank-one information matrix invertible, m. Invented.
-const SIGMA_PRIOR_M: f64 = 100.0;
 
 /// Greedy one-step Fisher-information placement.
 #[derive(Debug, Clone)]
@@ -26,11 +22,15 @@ pub struct GreedyFisher {
     noise: RangeNoise,
     /// Information [J_ee, J_en, J_nn] of the previous ping, per AUV.
     previous: Vec<[f64; 3]>,
+    /// Reachable points tried per decision, evenly spread in heading.
+    candidates: usize,
+    /// σ_prior, m: the prior that keeps a rank-one information matrix invertible.
+    sigma_prior_m: f64,
 }
 
 impl GreedyFisher {
-    pub fn new(n_auvs: usize, link: LinkTable, noise: RangeNoise) -> Self {
-        GreedyFisher { link, noise, previous: vec![[0.0; 3]; n_auvs] }
+    pub fn new(n_auvs: usize, link: LinkTable, noise: RangeNoise, candidates: usize, sigma_prior_m: f64) -> Self {
+        GreedyFisher { link, noise, previous: vec![[0.0; 3]; n_auvs], candidates, sigma_prior_m }
     }
 
     /// Expected information of one ping from `cna` to the AUV at `auv`.
@@ -46,7 +46,7 @@ impl GreedyFisher {
     }
 
     fn score(&self, cna: &Vec3, auvs: &[(usize, Vec3)]) -> f64 {
-        let prior = 1.0 / (SIGMA_PRIOR_M * SIGMA_PRIOR_M);
+        let prior = 1.0 / (self.sigma_prior_m * self.sigma_prior_m);
         auvs.iter()
             .map(|(k, p)| {
                 let [a, b, c] = self.information(cna, p);
@@ -78,8 +78,8 @@ impl CnaPolicy for GreedyFisher {
             return CnaCommand::Hold;
         }
         let step = ctx.speed * ctx.tau;
-        let ring = (0..CANDIDATES).map(|i| {
-            let a = std::f64::consts::TAU * i as f64 / CANDIDATES as f64;
+        let ring = (0..self.candidates).map(|i| {
+            let a = std::f64::consts::TAU * i as f64 / self.candidates as f64;
             Vec3::new(here.x + step * a.cos(), here.y + step * a.sin(), here.z)
         });
         let mut best = (self.score(&here, &auvs), here);
@@ -117,7 +117,7 @@ mod tests {
         // One still AUV 300 m east: the ping sent now is along x, so the next one should come
         // from a point that turns the line of sight (north or south), not from further along x.
         let fleet = FnForecast { n: 1, f: |_: usize, _: f64| Some(Vec3::new(300.0, 0.0, 20.0)) };
-        let mut g = GreedyFisher::new(1, LinkTable::perfect(), RangeNoise::default());
+        let mut g = GreedyFisher::new(1, LinkTable::perfect(), RangeNoise::default(), 16, 100.0);
         let CnaCommand::GoTo(p) = g.decide(&ctx((0.0, 0.0), &fleet)) else { panic!("expected a target") };
         assert!(p.y.abs() > 50.0, "{p:?}");
         assert!((p.x.hypot(p.y) - 60.0).abs() < 1e-9);
@@ -125,10 +125,10 @@ mod tests {
 
     #[test]
     fn a_ping_carries_information_and_nothing_known_holds() {
-        let g = GreedyFisher::new(1, LinkTable::perfect(), RangeNoise::default());
+        let g = GreedyFisher::new(1, LinkTable::perfect(), RangeNoise::default(), 16, 100.0);
         assert!(g.information(&Vec3::zeros(), &Vec3::new(100.0, 0.0, 0.0))[0] > 0.0);
         let none = FnForecast { n: 1, f: |_: usize, _: f64| None };
-        let mut g = GreedyFisher::new(1, LinkTable::perfect(), RangeNoise::default());
+        let mut g = GreedyFisher::new(1, LinkTable::perfect(), RangeNoise::default(), 16, 100.0);
         assert_eq!(g.decide(&ctx((0.0, 0.0), &none)), CnaCommand::Hold);
     }
 }

@@ -281,7 +281,7 @@ impl CovarianceTracker {
         self.truth.as_ref().map_or(0.0, |truth| truth.cna_variance)
     }
 
-    /// Counts reports only (`planner.estimator_tracking = "reports_only"`): a ping teaches the model
+    /// Counts reports only (`[policy.planner-estimator]` `cost.tracking = "reports_only"`): a ping teaches the model
     /// nothing until the AUV's report shows it; an AUV never heard from grows from launch (t = 0)
     /// as `unheard` says.
     pub fn reports_only(mut self, unheard: UnheardGrowth) -> Self {

@@ -16,9 +16,9 @@ use coopnav_plan::current_states::CurrentStates;
 use coopnav_plan::predeploy::runner;
 use coopnav_plan::predeploy::Mission;
 use coopnav_plan::{
-    AuvEstimate, CnaKind, CostSpec, Deadline, EstimatorSpec, LinkTable, LookAheadPlanner, PenaltyCase, PlanError,
-    RangeNoise,
+    AuvEstimate, CostSpec, Deadline, EstimatorSpec, LinkTable, LookAheadPlanner, PlanError, RangeNoise,
 };
+use coopnav_plan::{PlannerConfig, PlannerSpec};
 use std::sync::Arc;
 use thiserror::Error;
 
@@ -52,7 +52,7 @@ pub enum PolicyError {
 /// Why the planners' link model could not be built.
 #[derive(Debug, Error)]
 pub enum LinkError {
-    #[error("the planner's link model (planner.link = \"scenario_channel\"): {0}")]
+    #[error("the policies' link model (policy.link = \"scenario_channel\"): {0}")]
     Channel(#[from] TlError),
     #[error("the CNA slot's rate_policy: {0}")]
     RatePolicy(String),
@@ -78,13 +78,6 @@ impl Policy {
         }
     }
 }
-
-/// Capture radius of the fixed patterns, m; inset of the racetrack, m; zig-zag legs. Invented.
-const CAPTURE_RADIUS: f64 = 20.0;
-const RACETRACK_INSET: f64 = 100.0;
-const ZIGZAG_LEGS: usize = 4;
-/// Trail one AUV this far directly behind it, m (BHV_Trail-style). Invented.
-const TRAIL_RANGE: f64 = 150.0;
 
 /// The bounding box of every AUV's lawnmower.
 pub fn survey_area(sc: &Scenario) -> Rect {
@@ -125,104 +118,35 @@ impl PolicySpec {
 /// Deepest CNA or AUV depth the planner's bias table covers, m (deeper holds its last value).
 const BIAS_TABLE_DEPTH_M: f64 = 200.0;
 
-/// Builds policy `name` for scenario `sc` (`planned`: a precomputed open-loop plan).
+/// Builds policy `name` for scenario `sc` from its `[policy.NAME]` table (`planned`: a
+/// precomputed open-loop plan).
 fn build(name: &str, sc: &Scenario, planned: Option<&TimedWaypoints>) -> Result<Policy, PolicyError> {
     let n = sc.fleet.n_auvs;
+    let pol = &sc.policy;
     let plan_err = |source| PolicyError::Plan { name: name.to_string(), source };
     let link_err = |source| PolicyError::Link { name: name.to_string(), source };
     let baseline: Box<dyn CnaPolicy> = match name {
-        "planner" | "planner-estimator" => {
-            let p = &sc.planner;
-            let e = sc.estimator_settings();
-            // The estimator-aware cost always weights a ping by the link model; Hudson's planner
-            // only when asked (the thesis assumes every ping arrives).
-            let estimator = name == "planner-estimator";
-            let likelihood =
-                (p.model_lost_pings || estimator).then(|| modem_likelihood(sc)).transpose().map_err(link_err)?;
-            let (start, noise) = filter_model(sc);
-            let mut cfg = sc.planner_config();
-            if estimator {
-                cfg.cost = CostSpec::Estimator(EstimatorSpec {
-                    range_noise: noise,
-                    aggregate: e.aggregate,
-                    bias_per_km_m: e.bias_per_km,
-                    terminal_levels: e.terminal_levels,
-                    reach_success: e.reach_success,
-                    unmodelled_current: e.unmodelled_current,
-                    drift_levels: p.estimator_drift_levels,
-                    truth: e.truth,
-                });
-                let area = survey_area(sc);
-                let extent = (area.max.0 - area.min.0).hypot(area.max.1 - area.min.1);
-                match e.penalty_case {
-                    Some(case) => cfg.penalties = case.penalties(),
-                    None if p.horizon.replaces_distance_penalties(extent, &cfg.limits) => {
-                        cfg.penalties = PenaltyCase::C2.penalties()
-                    }
-                    None => {}
-                }
-                cfg.look_ahead = e.look_ahead;
-                cfg.motion.heading_options = e.heading_options;
-                if let CnaKind::Auv { pitch_levels, level_off, .. } = &mut cfg.motion.cna {
-                    *pitch_levels = e.pitch_levels;
-                    *level_off = e.level_off;
-                }
-            }
-            let mut policy =
-                PlannerPolicy::new(cfg, n, p.sigma0, p.eps0, likelihood, Some((start, noise))).map_err(plan_err)?;
-            if !e.cna_variance {
-                policy = policy.without_cna_variance();
-            }
-            if estimator && e.bias_profile {
-                // The scale error a range between two depths carries: travel time at the water's
-                // harmonic-mean speed, converted at the filters' (the engine's straight-ray model;
-                // none where the filters convert with a cast of this water, `filter.sound_speed`).
-                let filters = sc.filter.range_speed(&sc.channel.sound_speed);
-                let water = &sc.channel.sound_speed;
-                let table = coopnav_plan::BiasTable::sample(BIAS_TABLE_DEPTH_M, |z_cna, z_auv| {
-                    filters.between(z_cna, z_auv) / water.mean_between(z_cna, z_auv) - 1.0
-                })
-                .map_err(plan_err)?;
-                policy = policy.with_bias(table);
-            }
-            if let Some(truth) = e.truth.filter(|_| estimator) {
-                policy = policy.with_truth(truth, sc.fleet.init_position_sd.powi(2), e.unmodelled_current);
-            }
-            if estimator && e.slot_reach {
-                policy = policy.with_slot_reach(sc.slot_reach_m());
-            }
-            if p.estimator_tracking == EstimatorTracking::ReportsOnly {
-                policy = policy.with_reports_only(unheard_growth(sc));
-            }
-            if let (true, Some(truth), AuvModel::Current(c)) = (estimator, e.truth, sc.filter.model) {
-                let spec = CurrentStates {
-                    p0: c.p0,
-                    q: c.q / sc.filter.params.step_s,
-                    correlation_s: c.correlation_time_s,
-                    water: [e.current[0] - c.mean[0], e.current[1] - c.mean[1]],
-                };
-                policy = policy.with_current_states(spec, truth, sc.fleet.init_position_sd.powi(2));
-            }
-            if estimator && p.horizon.enabled {
-                let plans = (0..n)
-                    .map(|k| sc.lawnmower(k).track(1.0))
-                    .collect::<Result<Vec<_>, _>>()
-                    .map_err(|e| plan_err(PlanError::Input(format!("nominal survey track: {e}"))))?;
-                policy = policy.with_horizon(p.horizon, plans).map_err(plan_err)?;
-            }
-            return Ok(Policy::Planner(Box::new(policy)));
-        }
+        "planner" => return planner(name, &sc.policy.planner, sc),
+        "planner-estimator" => return planner(name, &sc.policy.planner_estimator, sc),
         "none" => Box::new(NoCna),
-        "racetrack" => Box::new(FixedPattern::racetrack(survey_area(sc), RACETRACK_INSET, CAPTURE_RADIUS)),
-        "zigzag" => Box::new(FixedPattern::zigzag(survey_area(sc), ZIGZAG_LEGS, CAPTURE_RADIUS)),
+        "racetrack" => {
+            let r = &pol.racetrack;
+            Box::new(FixedPattern::racetrack(survey_area(sc), r.inset_m, r.capture_radius_m))
+        }
+        "zigzag" => Box::new(FixedPattern::zigzag(survey_area(sc), pol.zigzag.legs, pol.zigzag.capture_radius_m)),
         "centroid" => Box::new(Centroid),
-        "centroid-standoff" => Box::new(CentroidStandoff { radius: sc.cna.standoff_radius_m }),
-        "trail" => Box::new(Trail { auv: n / 2, range: TRAIL_RANGE, angle: std::f64::consts::PI }),
-        "relay" => Box::new(MidpointRelay { base: (sc.cna.x, sc.cna.y), auv: n / 2 }),
+        "centroid-standoff" => Box::new(CentroidStandoff { radius: pol.centroid_standoff.radius_m }),
+        "trail" => Box::new(Trail {
+            auv: pol.trail.auv.unwrap_or(n / 2),
+            range: pol.trail.range_m,
+            angle: std::f64::consts::PI * (pol.trail.angle_deg / 180.0),
+        }),
+        "relay" => Box::new(MidpointRelay { base: (sc.cna.x, sc.cna.y), auv: pol.relay.auv.unwrap_or(n / 2) }),
         "greedy-fisher" => {
             let link =
                 LinkTable::sample(&LikelihoodLink(&modem_likelihood(sc).map_err(link_err)?)).map_err(plan_err)?;
-            Box::new(GreedyFisher::new(n, link, filter_model(sc).1))
+            let g = &pol.greedy_fisher;
+            Box::new(GreedyFisher::new(n, link, filter_model(sc).1, g.candidates, g.sigma_prior_m))
         }
         "open-loop" => match planned {
             Some(p) => Box::new(p.clone()),
@@ -233,8 +157,102 @@ fn build(name: &str, sc: &Scenario, planned: Option<&TimedWaypoints>) -> Result<
     Ok(Policy::Baseline(baseline))
 }
 
+/// The look-ahead search's whole configuration for planner instance `name` (`planner` or
+/// `planner-estimator`) on `sc`: its spec's tree, penalties, limits and search on the scenario's
+/// platform, and its cost with the settings its table and the rule give (the policy built from
+/// it adds what that cost reads of the mission as it flies: `build`).
+pub fn planner_config(name: &str, sc: &Scenario) -> Result<PlannerConfig, PolicyError> {
+    match name {
+        "planner" => Ok(spec_planner_config(&sc.policy.planner, sc)),
+        "planner-estimator" => Ok(spec_planner_config(&sc.policy.planner_estimator, sc)),
+        _ => Err(PolicyError::Unknown { name: name.to_string() }),
+    }
+}
+
+fn spec_planner_config(spec: &PlannerSpec, sc: &Scenario) -> PlannerConfig {
+    let mut cfg = sc.spec_config(spec);
+    if let (Some(e), Some(cost)) = (spec.estimator_settings(&sc.mission_facts()), spec.estimator_cost()) {
+        cfg.cost = CostSpec::Estimator(EstimatorSpec {
+            range_noise: filter_model(sc).1,
+            aggregate: e.aggregate,
+            bias_per_km_m: e.bias_per_km,
+            terminal_levels: e.terminal_levels,
+            reach_success: e.reach_success,
+            unmodelled_current: e.unmodelled_current,
+            drift_levels: cost.drift_levels(),
+            truth: e.truth,
+        });
+    }
+    cfg
+}
+
+/// The planner instance `name` from its spec: Hudson's cost, or the estimator-aware cost with
+/// the settings its spec and the rule give for this mission, and what that cost reads of the
+/// mission (the filters' model, the sound-speed profile, the schedule, the survey plans).
+fn planner(name: &str, spec: &PlannerSpec, sc: &Scenario) -> Result<Policy, PolicyError> {
+    let n = sc.fleet.n_auvs;
+    let plan_err = |source| PolicyError::Plan { name: name.to_string(), source };
+    let link_err = |source| PolicyError::Link { name: name.to_string(), source };
+    let settings = spec.estimator_settings(&sc.mission_facts());
+    let hudson = spec.hudson_cost();
+    // The estimator-aware cost always weights a ping by the link model; Hudson's planner only
+    // when asked (the thesis assumes every ping arrives).
+    let likelihood =
+        (hudson.model_lost_pings || settings.is_some()).then(|| modem_likelihood(sc)).transpose().map_err(link_err)?;
+    let (start, noise) = filter_model(sc);
+    let cfg = spec_planner_config(spec, sc);
+    let (Some(e), Some(cost)) = (settings, spec.estimator_cost()) else {
+        let policy = PlannerPolicy::new(cfg, n, hudson.sigma0, hudson.eps0, likelihood, Some((start, noise)))
+            .map_err(plan_err)?;
+        return Ok(Policy::Planner(Box::new(policy.without_cna_variance())));
+    };
+    let mut policy =
+        PlannerPolicy::new(cfg, n, hudson.sigma0, hudson.eps0, likelihood, Some((start, noise))).map_err(plan_err)?;
+    if !e.cna_variance {
+        policy = policy.without_cna_variance();
+    }
+    if e.bias_profile {
+        // The scale error a range between two depths carries: travel time at the water's
+        // harmonic-mean speed, converted at the filters' (the engine's straight-ray model;
+        // none where the filters convert with a cast of this water, `filter.sound_speed`).
+        let filters = sc.filter.range_speed(&sc.channel.sound_speed);
+        let water = &sc.channel.sound_speed;
+        let table = coopnav_plan::BiasTable::sample(BIAS_TABLE_DEPTH_M, |z_cna, z_auv| {
+            filters.between(z_cna, z_auv) / water.mean_between(z_cna, z_auv) - 1.0
+        })
+        .map_err(plan_err)?;
+        policy = policy.with_bias(table);
+    }
+    if let Some(truth) = e.truth {
+        policy = policy.with_truth(truth, sc.fleet.init_position_sd.powi(2), e.unmodelled_current);
+    }
+    if e.slot_reach {
+        policy = policy.with_slot_reach(sc.slot_reach_m());
+    }
+    if cost.tracking == EstimatorTracking::ReportsOnly {
+        policy = policy.with_reports_only(unheard_growth(sc));
+    }
+    if let (Some(truth), AuvModel::Current(c)) = (e.truth, sc.filter.model) {
+        let spec = CurrentStates {
+            p0: c.p0,
+            q: c.q / sc.filter.params.step_s,
+            correlation_s: c.correlation_time_s,
+            water: [e.current[0] - c.mean[0], e.current[1] - c.mean[1]],
+        };
+        policy = policy.with_current_states(spec, truth, sc.fleet.init_position_sd.powi(2));
+    }
+    if let Some(horizon) = spec.horizon() {
+        let plans = (0..n)
+            .map(|k| sc.lawnmower(k).track(1.0))
+            .collect::<Result<Vec<_>, _>>()
+            .map_err(|e| plan_err(PlanError::Input(format!("nominal survey track: {e}"))))?;
+        policy = policy.with_horizon(horizon, plans).map_err(plan_err)?;
+    }
+    Ok(Policy::Planner(Box::new(policy)))
+}
+
 /// The downlink's success probability over a slant distance, as a real CNA can know it: the
-/// modem's success curves over the TL model `planner.link` names (never the draws), at
+/// modem's success curves over the TL model `policy.link` names (never the draws), at
 /// `comms.cna_rate` or, when the CNA's slots name a rate policy, at what that policy sends once it
 /// has settled on this link ([`RatePolicy::settled_success`]; the engine's policy decides on the
 /// farthest AUV, so for a nearer one this counts a faster rate than it gets, pessimistic where a
@@ -246,7 +264,7 @@ fn modem_likelihood(sc: &Scenario) -> Result<PingLikelihood, LinkError> {
         None => Box::new(FixedRate { rate: sc.comms.cna_rate }),
     };
     let at_tl = move |tl: f64| policy.settled_success(&|rate| success.p_success(rate, tl));
-    match sc.planner.link {
+    match sc.policy.link {
         PlannerLink::Assumed => {
             let tl = sc.comms.tl.assumed();
             Ok(Box::new(move |d: f64| at_tl(tl.at_distance(d))))
@@ -336,7 +354,8 @@ fn unheard_growth(sc: &Scenario) -> UnheardGrowth {
 
 /// The pre-deployment plan on the nominal survey tracks (no current, no nav error), flown by time.
 fn open_loop(sc: &Scenario) -> Result<TimedWaypoints, PlanError> {
-    let mut cfg = sc.planner_config();
+    let spec = &sc.policy.open_loop;
+    let mut cfg = sc.spec_config(spec);
     cfg.search.deadline = Deadline::None;
     let tracks = (0..sc.fleet.n_auvs)
         .map(|k| sc.lawnmower(k).track(1.0))
@@ -348,8 +367,8 @@ fn open_loop(sc: &Scenario) -> Result<TimedWaypoints, PlanError> {
         cna: cna_start(sc),
         names: (0..n).map(|k| format!("auv{k}")).collect(),
         tracks,
-        sigma0: vec![sc.planner.sigma0; n],
-        eps0: vec![sc.planner.eps0; n],
+        sigma0: vec![spec.hudson_cost().sigma0; n],
+        eps0: vec![spec.hudson_cost().eps0; n],
         start_time: 0.0,
         end_time: sc.duration_s,
     };
@@ -369,7 +388,7 @@ mod tests {
     /// The planners' success likelihood at each distance, under `link`.
     fn likelihood_at(sc: &Scenario, link: PlannerLink, distances: &[f64]) -> Vec<f64> {
         let mut sc = sc.clone();
-        sc.planner.link = link;
+        sc.policy.link = link;
         let f = modem_likelihood(&sc).unwrap();
         distances.iter().map(|&d| f(d)).collect()
     }

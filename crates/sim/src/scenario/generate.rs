@@ -20,8 +20,8 @@
 //! - Named variants (CNA kind, channel, filter) and fleet-size rules (a schedule sized for the
 //!   fleet) are TOML tables laid over the scenario ([`overlay`]): what each means is in the file.
 //!
-//! A generated mission states no planner keys: its planner is what a file without `[planner]`
-//! gets ([`Planner::default`]), `planner-estimator`'s settings the planner's rule for the mission
+//! A generated mission states no policy keys: its policies are what a file without `[policy]`
+//! gets ([`Policies::default`]), `planner-estimator`'s settings the planner's rule for the mission
 //! (coopnav_plan `auto`). Mission i's seed is the file's `seed` + i: the same file and index
 //! always give the same mission, and its Monte Carlo run j uses `run_seed(mission seed, j)`.
 //! Every draw of a mission comes from its own seed, in a fixed order, whether or not the layout
@@ -29,7 +29,7 @@
 
 use crate::models::mower::{MowerSpec, Turn};
 use crate::scenario::file::{self as scenario_file, overlay, Problems, ScenarioError};
-use crate::scenario::world::{Planner, Scenario};
+use crate::scenario::world::{Policies, Scenario};
 use coopnav_core::{CompassDeg, Heading};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -324,7 +324,7 @@ impl Ranges {
         sc.seed = seed;
         sc.duration_s = duration_s;
         sc.cna.adcp_current = [sc.fleet.current.0, sc.fleet.current.1];
-        sc.planner = Planner::default();
+        sc.policy = Policies::default();
         sc.validate(&name())?;
 
         let facts = Facts {
@@ -383,17 +383,17 @@ impl Mission {
     }
 
     /// The mission as a scenario file: a comment naming its facts, then every table but
-    /// `[planner]` (which a mission does not state). `coopnav simulate` reads it back to the same
+    /// `[policy]` (which a mission does not state). `coopnav simulate` reads it back to the same
     /// scenario.
     pub fn to_toml(&self) -> Result<String, toml::ser::Error> {
         let mut value = toml::Value::try_from(&self.scenario)?;
         if let toml::Value::Table(t) = &mut value {
-            t.remove("planner");
+            t.remove("policy");
         }
         let mut out = String::new();
         let _ =
             writeln!(out, "# Generated mission {} (seed {}): {}", self.facts.index, self.facts.seed, self.facts.line());
-        out.push_str("# No [planner] table: the planner a file without one gets.\n");
+        out.push_str("# No [policy] table: the policies a file without one gets.\n");
         out.push_str(&toml::to_string(&value)?);
         Ok(out)
     }
@@ -416,7 +416,7 @@ mod tests {
             let m = r.mission(i, Path::new("generalization.toml")).unwrap();
             let text = m.to_toml().unwrap();
             let table: toml::Table = toml::from_str(&text).unwrap();
-            assert!(!table.contains_key("planner"), "mission {i} states planner keys");
+            assert!(!table.contains_key("policy"), "mission {i} states policy keys");
             let back = Scenario::parse(&text, Path::new("mission.toml")).unwrap();
             assert_eq!(back, m.scenario, "mission {i}");
         }

@@ -6,8 +6,10 @@
 pub mod file;
 pub mod generate;
 pub mod hbl;
+pub mod moved;
 pub mod nams;
 pub mod plan;
+pub mod policies;
 pub mod site;
 pub mod start;
 pub mod survey_import;

@@ -1,17 +1,16 @@
-//! Pre-deployment scenario files (TOML): the CNA start pose, the planner settings and each survey
-//! AUV's a-priori track (a lawnmower description or a CSV file). Parsed with
+//! Pre-deployment scenario files (TOML): the CNA start pose, its platform (`[platform]`), the
+//! planner (`[policy.planner]`, the closed loop's dialect: `coopnav_plan::PlannerSpec`) and each
+//! survey AUV's a-priori track (a lawnmower description or a CSV file). Parsed with
 //! `deny_unknown_fields` and validated before anything runs; errors name the file and the field.
 
 use super::tracks::{load_track_csv, TrackLoadError};
 pub use crate::scenario::file::ScenarioError;
-use crate::scenario::file::{self as scenario_file, Problem, Problems};
-use coopnav_core::validation::{CheckFields, InvalidFields};
+use crate::scenario::file::{self as scenario_file, Problems};
+use coopnav_core::validation::CheckFields;
 use coopnav_core::{CompassDeg, DepthProfile, Heading, Lawnmower, Track, Vec3};
+use coopnav_plan::auto::{CnaFact, MissionFacts};
 use coopnav_plan::predeploy::Mission;
-use coopnav_plan::{
-    CnaPose, DistanceLimits, ErrorModel, MotionConfig, PenaltyCase, PenaltyFn, PenaltyPair, PlanError, PlannerConfig,
-    SearchConfig,
-};
+use coopnav_plan::{CnaKind, CnaPose, PlannerSpec, Platform};
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 
@@ -23,7 +22,9 @@ pub const EXAMPLE: &str = include_str!("example.toml");
 #[serde(deny_unknown_fields)]
 pub struct Scenario {
     pub cna: CnaStart,
-    pub planner: PlannerSection,
+    /// The CNA as a vehicle (speed, decision period, turn limit, ASC or AUV).
+    pub platform: Platform,
+    pub policy: PlanPolicies,
     #[serde(default)]
     pub mission: MissionSection,
     pub auv: Vec<AuvSpec>,
@@ -45,33 +46,13 @@ pub struct CnaStart {
     pub pitch_deg: f64,
 }
 
-/// Planner settings (see `coopnav_plan::PlannerConfig`).
+/// The policy table of a pre-deployment file: Hudson's planner, as a closed-loop scenario's
+/// `[policy.planner]` writes it (`coopnav_plan::PlannerSpec`; the pre-deployment planner has
+/// no filters to read, so its cost is Hudson's).
 #[derive(Debug, Clone, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
-pub struct PlannerSection {
-    pub look_ahead: usize,
-    pub penalty: PenaltySpec,
-    pub motion: MotionConfig,
-    #[serde(default)]
-    pub error: ErrorModel,
-    #[serde(default)]
-    pub limits: DistanceLimits,
-    /// Pre-deployment planning is offline: no deadline unless asked for, so runs are repeatable.
-    #[serde(default = "offline_search")]
-    pub search: SearchConfig,
-}
-
-fn offline_search() -> SearchConfig {
-    SearchConfig { deadline: coopnav_plan::Deadline::None, ..SearchConfig::default() }
-}
-
-/// A Table 5.2 case, or a custom primary/look-ahead pair.
-#[derive(Debug, Clone, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct PenaltySpec {
-    pub case: Option<String>,
-    pub primary: Option<PenaltyFn>,
-    pub look_ahead: Option<PenaltyFn>,
+pub struct PlanPolicies {
+    pub planner: PlannerSpec,
 }
 
 /// Mission time span; by default from 0 to the end of the shortest survey track.
@@ -87,18 +68,14 @@ pub struct MissionSection {
 #[serde(deny_unknown_fields)]
 pub struct AuvSpec {
     pub name: String,
-    /// Initial radial and tangential errors, m (Table 5.1: 1 m).
-    #[serde(default = "one")]
-    pub sigma0: f64,
-    #[serde(default = "one")]
-    pub eps0: f64,
+    /// Initial radial and tangential errors, m (absent: the planner's `cost.sigma0`, `cost.eps0`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub sigma0: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub eps0: Option<f64>,
     pub lawnmower: Option<LawnmowerSpec>,
     /// CSV with columns t,x,y,z (relative paths are relative to the scenario file).
     pub track_csv: Option<PathBuf>,
-}
-
-fn one() -> f64 {
-    1.0
 }
 
 /// A lawnmower in file units (compass heading).
@@ -165,6 +142,7 @@ impl Scenario {
     /// [`Scenario::parse`] without the validation; positions in latitude/longitude are placed on
     /// the plane at `site.origin` (`scenario::site`).
     pub fn read(text: &str, file: &Path) -> Result<Self, ScenarioError> {
+        super::moved::refuse_old_form(text, file, super::moved::PLAN)?;
         match super::site::resolved(text, file, &toml::Value::Table(toml::Table::new()))? {
             Some(tree) => scenario_file::parse_tree(tree, file, |_, _| Ok(())),
             None => scenario_file::parse(text, file, |_, _| Ok(())),
@@ -204,8 +182,9 @@ impl Scenario {
             p.push("auv", "no [[auv]]", "at least one [[auv]]");
         }
         for (i, a) in self.auv.iter().enumerate() {
-            p.positive(&format!("auv[{i}].sigma0"), a.sigma0);
-            p.positive(&format!("auv[{i}].eps0"), a.eps0);
+            let (sigma0, eps0) = self.initial_errors(a);
+            p.positive(&format!("auv[{i}].sigma0"), sigma0);
+            p.positive(&format!("auv[{i}].eps0"), eps0);
             match (&a.lawnmower, &a.track_csv) {
                 (Some(m), None) => m.check_fields(&format!("auv[{i}].lawnmower."), &mut p),
                 (None, Some(_)) => {}
@@ -219,25 +198,39 @@ impl Scenario {
         p.finish()
     }
 
-    /// The penalty choice, then the planner's own checks, named as the file names them.
+    /// The planner's own checks, named as the file names them; its cost must be Hudson's.
     fn validate_planner(&self, p: &mut Problems) {
-        let penalties = match self.penalties() {
-            Ok(penalties) => penalties,
-            Err(problem) => return p.push(problem.field, problem.value, problem.allowed),
-        };
-        match self.planner_config_with(penalties).validate() {
-            Ok(()) => {}
-            Err(PlanError::Invalid(found)) => {
-                found.0.into_iter().for_each(|bad| p.push(planner_field(&bad.field), bad.value, bad.allowed))
-            }
-            Err(other) => p.push("planner", other.to_string(), "a valid planner configuration"),
+        let spec = &self.policy.planner;
+        if spec.estimator_cost().is_some() {
+            p.push(
+                "policy.planner.cost.kind",
+                "estimator",
+                "\"hudson\" (the pre-deployment planner has no survey-AUV filters to read)",
+            );
         }
+        spec.check(&self.platform, &self.facts(), 0.0, "policy.planner.", p);
+    }
+
+    /// What the planner's rule would read of this mission (unused under Hudson's cost; the
+    /// spec's checks take it).
+    fn facts(&self) -> MissionFacts {
+        let cna = match self.platform.cna {
+            CnaKind::Asc {} => CnaFact::Asc,
+            CnaKind::Auv { .. } => CnaFact::Auv { nav_diffusion_m2_s: 0.0 },
+        };
+        MissionFacts { n_auvs: self.auv.len(), cna, adcp_current: [0.0, 0.0], filters_estimate_current: false }
+    }
+
+    /// AUV `a`'s initial σ₀ and ε₀: its own, else the planner's.
+    fn initial_errors(&self, a: &AuvSpec) -> (f64, f64) {
+        let cost = self.policy.planner.hudson_cost();
+        (a.sigma0.unwrap_or(cost.sigma0), a.eps0.unwrap_or(cost.eps0))
     }
 
     /// Validates everything and builds the mission (tracks read relative to `base_dir`).
     pub fn build(&self, file: &Path, base_dir: &Path) -> Result<Mission, ScenarioError> {
         self.validate(file)?;
-        let planner = self.planner_config(file)?;
+        let planner = self.policy.planner.config(&self.platform, &self.facts(), 0.0);
         let tracks = self
             .auv
             .iter()
@@ -267,46 +260,11 @@ impl Scenario {
             },
             names: self.auv.iter().map(|a| a.name.clone()).collect(),
             tracks,
-            sigma0: self.auv.iter().map(|a| a.sigma0).collect(),
-            eps0: self.auv.iter().map(|a| a.eps0).collect(),
+            sigma0: self.auv.iter().map(|a| self.initial_errors(a).0).collect(),
+            eps0: self.auv.iter().map(|a| self.initial_errors(a).1).collect(),
             start_time,
             end_time,
         })
-    }
-
-    fn planner_config(&self, file: &Path) -> Result<PlannerConfig, ScenarioError> {
-        let penalties = self.penalties().map_err(|p| ScenarioError::fields(file, InvalidFields(vec![p])))?;
-        Ok(self.planner_config_with(penalties))
-    }
-
-    fn planner_config_with(&self, penalties: PenaltyPair) -> PlannerConfig {
-        let p = &self.planner;
-        PlannerConfig {
-            look_ahead: p.look_ahead,
-            motion: p.motion,
-            error: p.error,
-            cost: coopnav_plan::CostSpec::Hudson,
-            limits: p.limits,
-            penalties,
-            search: p.search,
-        }
-    }
-
-    fn penalties(&self) -> Result<PenaltyPair, Problem> {
-        let p = &self.planner.penalty;
-        let problem = |field: &str, value: String, allowed: String| Problem { field: field.into(), value, allowed };
-        match (&p.case, p.primary, p.look_ahead) {
-            (Some(id), None, None) => PenaltyCase::from_id(id).map(PenaltyCase::penalties).ok_or_else(|| {
-                let ids: Vec<&str> = PenaltyCase::ALL.iter().map(|c| c.id()).collect();
-                problem("planner.penalty.case", format!("'{id}'"), ids.join(", "))
-            }),
-            (None, Some(primary), Some(look_ahead)) => Ok(PenaltyPair { primary, look_ahead }),
-            _ => Err(problem(
-                "planner.penalty",
-                given(p),
-                "either case = \"<Table 5.2 case>\" or both primary and look_ahead".into(),
-            )),
-        }
     }
 
     /// AUV `i`'s track (CSV paths relative to `base_dir`).
@@ -325,29 +283,5 @@ impl Scenario {
                 "exactly one of [auv.lawnmower] or track_csv",
             )),
         }
-    }
-}
-
-/// A planner setting's name in the file: `PlannerConfig`'s own path under `planner`, except the
-/// penalty pair, which sits under `planner.penalty`.
-fn planner_field(field: &str) -> String {
-    if let Some(rest) = field.strip_prefix("penalties.") {
-        format!("planner.penalty.{rest}")
-    } else {
-        format!("planner.{field}")
-    }
-}
-
-/// Which of a penalty's keys a file gave, e.g. "case and primary".
-fn given(p: &PenaltySpec) -> String {
-    let keys: Vec<&str> =
-        [("case", p.case.is_some()), ("primary", p.primary.is_some()), ("look_ahead", p.look_ahead.is_some())]
-            .into_iter()
-            .filter_map(|(k, set)| set.then_some(k))
-            .collect();
-    if keys.is_empty() {
-        "none of case, primary, look_ahead".into()
-    } else {
-        keys.join(" and ")
     }
 }

@@ -15,7 +15,8 @@ use crate::models::ship::{ShipSpec, MAX_SHIPS};
 use crate::models::surfacing::Surfacing;
 use crate::models::tl_spec::TlModel;
 pub use crate::scenario::file::ScenarioError;
-use crate::scenario::file::{self as scenario_file, overlay, Problems};
+use crate::scenario::file::{self as scenario_file, overlay, Problem, Problems};
+pub use crate::scenario::policies::{BeforeFirstReport, PlannerLink, Policies};
 use crate::scenario::site::{self, PathSpec, Site};
 use coopnav_acomms::node_report::{BODY_BITS, HEADER_BITS};
 use coopnav_acomms::selector::AdaptiveConfig;
@@ -24,12 +25,10 @@ use coopnav_acomms::{Rate, Receiver, SuccessModel};
 use coopnav_core::validation::CheckFields;
 use coopnav_core::{Bathymetry, CompassDeg, DepthTarget, Heading, Iver2Params, Lawnmower, Shelf, SurveyPath};
 use coopnav_nav::{AuvModel, AuvParams, RangeNoise};
-use coopnav_plan::auto::{self, CnaFact, EstimatorSettings, MissionFacts};
-use coopnav_plan::predict::{PredictorConfig, WaypointUse};
-use coopnav_plan::{
-    Aggregate, CnaKind, Deadline, DistanceLimits, ErrorModel, HorizonSpec, MotionConfig, PenaltyCase, PlanError,
-    PlannerConfig, SearchConfig, TruthSpec,
-};
+use coopnav_plan::auto::{CnaFact, EstimatorSettings, MissionFacts};
+use coopnav_plan::predict::PredictorConfig;
+pub use coopnav_plan::spec::{CovarianceWord, EstimatorTracking, TruthChoice};
+use coopnav_plan::{CnaKind, PlannerConfig, PlannerSpec, Platform};
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 
@@ -65,9 +64,11 @@ pub struct Scenario {
     /// The survey AUVs' filter: what it assumes (the truth is `[channel]` and `[sensors]`).
     #[serde(default = "default_filter", deserialize_with = "filter_over_default")]
     pub filter: FilterSpec,
-    /// Absent: every key's default, `planner-estimator`'s from the mission ([`Planner`]).
+    /// The CNA policies: what the CNA knows of the fleet, and each policy instance's own table
+    /// (`[policy.planner]`, `[policy.planner-estimator]`, `[policy.zigzag]`, ...; [`Policies`]).
+    /// Absent: every default, `planner-estimator`'s settings from the planner's rule for the mission.
     #[serde(default)]
-    pub planner: Planner,
+    pub policy: Policies,
     #[serde(default)]
     pub health: Health,
     /// The site: geodetic origin and bathymetry (`scenario::site`). Written only when given.
@@ -209,19 +210,11 @@ pub struct Cna {
     /// An AUV CNA instead of an ASC.
     #[serde(default)]
     pub auv: Option<AuvCna>,
-    /// Radius of the `centroid-standoff` baseline's loiter circle around the fleet's centroid, m.
-    /// Invented: 150 m, the trail baseline's stand-off.
-    #[serde(default = "default_standoff")]
-    pub standoff_radius_m: f64,
     /// The water current east and north (m/s) as the CNA's ADCP measures it: a fact a field team
     /// states (not the scenario's `fleet.current`, the truth), read by `planner-estimator`'s rule.
     /// Default [0, 0]: none measured. Written only when set.
     #[serde(default, skip_serializing_if = "coopnav_plan::estimator::is_still")]
     pub adcp_current: [f64; 2],
-}
-
-fn default_standoff() -> f64 {
-    150.0
 }
 
 /// An AUV as the CNA (Hudson's AUV-CNA case: heading and pitch options).
@@ -371,248 +364,6 @@ impl Default for Comms {
     }
 }
 
-/// The underway planner (Hudson 2012, Sec. 4.2; docs/models.md#hudson-prediction) and its adapter's options.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct Planner {
-    /// A of Hudson's planner (default 5, as the evaluation flies it).
-    #[serde(default = "five")]
-    pub heading_options: usize,
-    /// L of Hudson's planner (default 5, as the evaluation flies it).
-    #[serde(default = "five")]
-    pub look_ahead: usize,
-    /// Table 5.2 penalty case id.
-    #[serde(default = "default_case")]
-    pub penalty_case: String,
-    #[serde(default)]
-    pub error: ErrorModel,
-    #[serde(default)]
-    pub limits: DistanceLimits,
-    /// The thesis's real-time budget per decision (τ − margin); fast-time runs rarely reach it.
-    #[serde(default)]
-    pub deadline: Deadline,
-    /// Search the top tree levels with rayon.
-    #[serde(default)]
-    pub parallel: bool,
-    /// Reports needed from an AUV before the CNA plans for it (Hudson 2012, Sec. 4.2: two).
-    #[serde(default = "one_usize")]
-    pub start_after_reports: usize,
-    /// What the CNA plans with for an AUV it has fewer than `start_after_reports` reports of.
-    /// Written only when not the thesis's default, so existing manifests read as before.
-    #[serde(default, skip_serializing_if = "BeforeFirstReport::is_ignore")]
-    pub before_first_report: BeforeFirstReport,
-    /// Thesis option: use at most min(L, 3) reported waypoints (default: all received).
-    #[serde(default)]
-    pub thesis_waypoints: bool,
-    /// Model lost pings in the tracked error (expected value over the success likelihood);
-    /// false = the thesis's behaviour (every ping assumed received).
-    #[serde(default)]
-    pub model_lost_pings: bool,
-    /// Which channel the planners' link model (lost pings, the estimator's link table) is built
-    /// on. Written only when not the default, so existing manifests read as before.
-    #[serde(default, skip_serializing_if = "PlannerLink::is_assumed")]
-    pub link: PlannerLink,
-    /// What `planner-estimator`'s model of an AUV's filter covariance takes between that AUV's
-    /// reports. Written only when not the default, so existing manifests read as before.
-    #[serde(default, skip_serializing_if = "EstimatorTracking::is_expected_pings")]
-    pub estimator_tracking: EstimatorTracking,
-    /// Initial modelled σ₀ and ε₀, m (Table 5.1: 1 m).
-    #[serde(default = "one")]
-    pub sigma0: f64,
-    #[serde(default = "one")]
-    pub eps0: f64,
-    #[serde(default)]
-    pub predictor: PredictorConfig,
-    // `planner-estimator`'s settings: each absent key comes from the planner's rule for the
-    // mission (`coopnav_plan::auto::for_mission`, [`Scenario::estimator_settings`]); a key the file
-    // sets overrides the rule's value. None is never written.
-    /// How `planner-estimator` joins the AUVs' covariances into a level's cost.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub estimator_aggregate: Option<Aggregate>,
-    /// The range bias `planner-estimator` assumes, m of 1-σ per km of range (coopnav_plan
-    /// estimator step 4). The filters' own sound-speed term is 1000·σ_c/c (2 m/km for their
-    /// default σ_c = 3 m/s).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub estimator_bias_per_km: Option<f64>,
-    /// `planner-estimator` also prices the range bias `channel.sound_speed` causes, as a CTD cast
-    /// the CNA holds: the scale error between the CNA's depth and each AUV's against the speed the
-    /// filters convert at (`filter.sound_speed`: none where they convert with the water's own cast),
-    /// on top of `estimator_bias_per_km` (coopnav_plan estimator step 4,
-    /// `BiasTable`; invented, docs/models.md#estimator-cost). With an AUV CNA and
-    /// `estimator_level_off` it lets the planner choose the CNA's depth.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub estimator_bias_profile: Option<bool>,
-    /// `planner-estimator` models the AUV CNA as the engine flies it: each step starts level, its
-    /// pitch is cut at the limit and its depth at the depth limits (coopnav_plan
-    /// `CnaKind::Auv::level_off`); false is the thesis's model, where a ±45° pitch step breaks the
-    /// 30° limit and so the CNA never changes depth.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub estimator_level_off: Option<bool>,
-    /// `planner-estimator` knows its schedule: a broadcast still arriving when an AUV's own slot
-    /// starts is lost (half-duplex), so beyond a slant range set by the slot's timing
-    /// ([`Scenario::slot_reach_m`]) no ping reaches that AUV, whatever the link. Invented
-    /// (docs/models.md#closed-loop-schedule): the thesis's link model depends on range only.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub estimator_slot_reach: Option<bool>,
-    /// Levels of cost-to-go `planner-estimator` counts at each leaf (estimator step 6; 0 = none).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub estimator_terminal_levels: Option<f64>,
-    /// The water current the survey AUVs' filters do not model, east and north (m/s):
-    /// `planner-estimator` grows each AUV's modelled error along it (coopnav_plan estimator step
-    /// 1b; invented, docs/models.md#estimator-cost). The rule takes `cna.adcp_current` for filters
-    /// that do not estimate the current.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub estimator_unmodelled_current: Option<[f64; 2]>,
-    /// Levels over which that current's drift builds up unseen (estimator step 1b's m; default 4).
-    #[serde(default = "estimator_drift_levels")]
-    pub estimator_drift_levels: f64,
-    /// Success probability that makes a ping useful for `planner-estimator`'s reach cost-to-go
-    /// (coopnav_plan estimator step 7: each AUV's growth until the CNA is within the range where
-    /// the link's success reaches it; 0 = none).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub estimator_reach_success: Option<f64>,
-    /// Table 5.2 penalty case of `planner-estimator` (the rule's "none" is `penalty_case`). Its
-    /// cost already prices what Hudson's distance limits stand for (a far ping is lost and noisy,
-    /// one from overhead teaches nothing horizontally), so case "2" (no penalties) is an option.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub estimator_penalty_case: Option<String>,
-    /// L of `planner-estimator`.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub estimator_look_ahead: Option<usize>,
-    /// A of `planner-estimator`, its heading options per level (≥ 2).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub estimator_heading_options: Option<usize>,
-    /// With an AUV CNA, how many levels of `planner-estimator`'s tree offer the pitch options, from
-    /// level 0 (≥ 1; deeper levels hold the pitch; a number ≥ L: every level). Fewer pitch levels
-    /// make a deeper look-ahead affordable (coopnav_plan `CnaKind::Auv::pitch_levels`).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub estimator_pitch_levels: Option<usize>,
-    /// Whether `planner-estimator` adds the CNA's own horizontal variance (GPS σ², or an AUV
-    /// CNA's navigation variance since its last fix) to each ping's range variance (coopnav_plan
-    /// estimator step 2); false scores every broadcast position as exact.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub estimator_cna_variance: Option<bool>,
-    /// A truth model: `planner-estimator` scores the AUVs' expected true error under their
-    /// filters' gains (coopnav_plan `true_error`; the truth's drift, range noise and the CNA's
-    /// diffusion as the CNA believes them); `"covariance"`: the filters' covariance instead.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub estimator_truth: Option<TruthChoice>,
-    /// The water current east and north (m/s) for filters that estimate the current
-    /// (`filter.model = { kind = "current" }`): with a truth model, `planner-estimator` then plans
-    /// on those filters' current states, which start from the filters' prior mean (coopnav_plan
-    /// `current_states`). The rule takes `cna.adcp_current` for such filters.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub estimator_current: Option<[f64; 2]>,
-    /// `planner-estimator`'s mission-long horizon above its tree: which AUV to serve next, valued
-    /// over tens of minutes along every AUV's plan (coopnav_plan `horizon`; on by default,
-    /// `enabled = false` for none). Written only when not the default.
-    #[serde(default, skip_serializing_if = "is_default_horizon")]
-    pub horizon: HorizonSpec,
-}
-
-fn is_default_horizon(h: &HorizonSpec) -> bool {
-    *h == HorizonSpec::default()
-}
-
-/// What the CNA knows of a survey AUV before its reports meet the planning start rule (Hudson 2012, Sec. 4.2).
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum BeforeFirstReport {
-    /// Nothing: the planner and every baseline ignore the AUV until then (the thesis's rule).
-    /// An AUV whose statuses never reach the CNA is never looked for.
-    #[default]
-    Ignore,
-    /// Its mission plan as the operator knew it before launch (launch point, planned lawnmower
-    /// waypoints and speed), followed from t = 0 until the reports take over. An invention, not
-    /// in the thesis: a field team knows its AUVs' plans.
-    MissionPlan,
-}
-
-/// The transmission loss behind the planners' ping success likelihood (`planner.link`).
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum PlannerLink {
-    /// The analytic model the CNA is configured with (`comms.tl.assumed()`: the default Thorp
-    /// model under the BELLHOP kinds), apart from the sea it plays in.
-    #[default]
-    Assumed,
-    /// The scenario's own `comms.tl` provider, averaged over bearings from the survey blocks'
-    /// centres (policies `channel_likelihood`). Invented: a team that has modelled
-    /// its site's acoustics gives the planner that model. Needs `analytic` or `bellhop_grid`.
-    ScenarioChannel,
-}
-
-impl PlannerLink {
-    fn is_assumed(&self) -> bool {
-        *self == PlannerLink::Assumed
-    }
-}
-
-/// How `planner-estimator`'s model of each AUV's filter covariance moves between that AUV's status
-/// reports (`planner.estimator_tracking`; closed loop `CovarianceTracker`).
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum EstimatorTracking {
-    /// Every ping counts with the update its success probability under the planner's link model
-    /// expects, whether or not the AUV answered.
-    #[default]
-    ExpectedPings,
-    /// Only what the AUV reports counts: between reports, and from launch until the first, the
-    /// covariance grows as the AUV's filter predicts it with no range (its process noise, and with
-    /// a `current` filter model the unobserved current's variance). Invented: a CNA that never
-    /// hears an AUV cannot know its pings reached it, and with `expected_pings` it believes an
-    /// AUV it never heard from is the best served.
-    ReportsOnly,
-}
-
-impl EstimatorTracking {
-    fn is_expected_pings(&self) -> bool {
-        *self == EstimatorTracking::ExpectedPings
-    }
-}
-
-impl BeforeFirstReport {
-    fn is_ignore(&self) -> bool {
-        *self == BeforeFirstReport::Ignore
-    }
-}
-
-fn estimator_drift_levels() -> f64 {
-    coopnav_plan::EstimatorSpec::default().drift_levels
-}
-
-/// `planner.estimator_truth`: a truth model, or the word `"covariance"` (the filters' covariance).
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(untagged)]
-pub enum TruthChoice {
-    Model(TruthSpec),
-    Cost(CovarianceWord),
-}
-
-/// The word `"covariance"`.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
-pub enum CovarianceWord {
-    #[serde(rename = "covariance")]
-    Covariance,
-}
-
-impl TruthChoice {
-    /// The truth model, None for the covariance cost.
-    pub fn model(self) -> Option<TruthSpec> {
-        match self {
-            TruthChoice::Model(t) => Some(t),
-            TruthChoice::Cost(_) => None,
-        }
-    }
-}
-
-impl Default for Planner {
-    /// The planner of a file with no `[planner]` table: every key's default.
-    fn default() -> Self {
-        toml::from_str("").expect("an empty [planner] table reads with every default")
-    }
-}
-
 /// The fleet's lawnmower keys a file with `fleet.paths` may leave out: the embedded example's.
 fn lawnmower_keys() -> toml::Value {
     let example: toml::Table = EXAMPLE.parse().expect("the embedded example scenario parses");
@@ -621,16 +372,6 @@ fn lawnmower_keys() -> toml::Value {
     toml::Value::Table(
         fleet.iter().filter(|(k, _)| keys.contains(&k.as_str())).map(|(k, v)| (k.clone(), v.clone())).collect(),
     )
-}
-
-fn default_case() -> String {
-    PenaltyCase::C1.id().to_string()
-}
-fn one_usize() -> usize {
-    1
-}
-fn five() -> usize {
-    5
 }
 
 impl Scenario {
@@ -648,6 +389,7 @@ impl Scenario {
 
     /// [`Scenario::parse`] without the validation (for callers that check sizes first).
     pub fn read(text: &str, file: &Path) -> Result<Self, ScenarioError> {
+        crate::scenario::moved::refuse_old_form(text, file, crate::scenario::moved::SIMULATE)?;
         match site::resolved(text, file, &lawnmower_keys())? {
             Some(tree) => scenario_file::parse_tree(tree, file, |_, _| Ok(())),
             None => scenario_file::parse(text, file, |_, _| Ok(())),
@@ -692,7 +434,7 @@ impl Scenario {
         self.filter.check_fields("filter.", &mut p);
         p.extend(self.filter.rate.problem("filter.", self.dt));
         p.check("health.divergence_window_s", self.health.divergence_window_s, |v| v > 0.0, "a finite number > 0");
-        self.validate_planner(&mut p);
+        self.validate_policies(&mut p);
         if p.is_empty() && !matches!(self.comms.tl, TlModel::Analytic(_)) {
             // The BELLHOP kinds need the program, and a grid is computed (or read from the disk
             // cache) here, once, so that a run never finds it missing.
@@ -857,7 +599,6 @@ impl Scenario {
         p.positive("cna.speed", c.speed);
         p.positive("cna.max_turn_rate_deg_s", c.max_turn_rate_deg_s);
         p.non_negative("cna.gps_sd", c.gps_sd);
-        p.non_negative("cna.standoff_radius_m", c.standoff_radius_m);
         if let Some(a) = &c.auv {
             if a.pitch_options == 0 {
                 p.push("cna.auv.pitch_options", "0", ">= 1");
@@ -986,85 +727,55 @@ impl Scenario {
         p.check("sensors.yaw_rate_white_deg_s", s.yaw_rate_white_deg_s, |v| (0.0..=10.0).contains(&v), "0..=10 deg/s");
     }
 
-    /// The planner's own checks of `planner-estimator`'s A and L (the file's or the rule's); its
-    /// other fields are reported once, by `planner_config`'s. A tree too large is blamed on the
-    /// estimator's L if the file sets it, else on its A if set, else on the mission's N (the rule
-    /// chose both).
-    fn validate_estimator_tree(&self, p: &mut Problems) {
-        let pl = &self.planner;
-        let settings = self.estimator_settings();
-        let mut cfg = self.planner_config();
-        cfg.look_ahead = settings.look_ahead;
-        cfg.motion.heading_options = settings.heading_options;
-        let Err(PlanError::Invalid(found)) = cfg.validate() else { return };
-        let size = if pl.estimator_look_ahead.is_some() || pl.estimator_heading_options.is_none() {
-            "look_ahead"
-        } else {
-            "heading_options"
-        };
-        for bad in found.0 {
-            let own = match bad.field.as_str() {
-                "look_ahead" => size,
-                "motion.heading_options" if pl.estimator_heading_options.is_some() => "heading_options",
-                _ => continue,
-            };
-            p.push(format!("planner.estimator_{own}"), bad.value, bad.allowed);
+    /// The policies' tables: the baselines' fields, and each planner instance's spec on this
+    /// mission's platform and facts, every field named by its path in the file
+    /// (`policy.planner-estimator.tree.look_ahead`; the vehicle's facts by their own tables).
+    fn validate_policies(&self, p: &mut Problems) {
+        let pol = &self.policy;
+        pol.check_baselines(self.fleet.n_auvs, p);
+        let [east, north] = self.cna.adcp_current;
+        p.finite("cna.adcp_current[0]", east);
+        p.finite("cna.adcp_current[1]", north);
+        let (platform, facts) = (self.platform(), self.mission_facts());
+        let mut found: Vec<Problem> = Vec::new();
+        for (name, spec) in self.planner_specs() {
+            let mut own = coopnav_core::validation::Problems::new();
+            spec.check(&platform, &facts, self.survey_extent_m(spec), &format!("policy.{name}."), &mut own);
+            for bad in own.finish().err().into_iter().flat_map(|f| f.0) {
+                let field = platform_field(&bad.field);
+                if !found.iter().any(|f| f.field == field) {
+                    found.push(Problem { field, ..bad });
+                }
+            }
+        }
+        found.into_iter().for_each(|bad| p.push(bad.field, bad.value, bad.allowed));
+        if pol.open_loop.estimator_cost().is_some() {
+            p.push(
+                "policy.open-loop.cost.kind",
+                "estimator",
+                "\"hudson\" (the pre-deployment plan is made on the nominal tracks, with no filter to read)",
+            );
+        }
+        if pol.link == PlannerLink::ScenarioChannel && self.comms.tl == TlModel::Bellhop {
+            // A direct BELLHOP run per sampled distance and bearing would take hours.
+            p.push("policy.link", "scenario_channel", "\"assumed\", or comms.tl of kind analytic or bellhop_grid");
         }
     }
 
-    fn validate_planner(&self, p: &mut Problems) {
-        let pl = &self.planner;
-        p.positive("planner.sigma0", pl.sigma0);
-        p.non_negative("planner.eps0", pl.eps0);
-        if let Some(h) = pl.estimator_terminal_levels {
-            p.non_negative("planner.estimator_terminal_levels", h);
+    /// Every planner instance by its policy name.
+    pub fn planner_specs(&self) -> [(&'static str, &PlannerSpec); 3] {
+        let pol = &self.policy;
+        [("planner", &pol.planner), ("planner-estimator", &pol.planner_estimator), ("open-loop", &pol.open_loop)]
+    }
+
+    /// The survey's extent for `spec`'s penalty choice, m: the diagonal of the box around every
+    /// AUV's plan with the estimator cost (`PlannerSpec::config`), 0 under Hudson's (unused).
+    fn survey_extent_m(&self, spec: &PlannerSpec) -> f64 {
+        if spec.estimator_cost().is_none() {
+            return 0.0;
         }
-        if let Some(p_u) = pl.estimator_reach_success {
-            p.probability("planner.estimator_reach_success", p_u);
-        }
-        if let Some(k_b) = pl.estimator_bias_per_km {
-            p.non_negative("planner.estimator_bias_per_km", k_b);
-        }
-        for (key, current) in [
-            ("planner.estimator_unmodelled_current", pl.estimator_unmodelled_current),
-            ("planner.estimator_current", pl.estimator_current),
-            ("cna.adcp_current", Some(self.cna.adcp_current)),
-        ] {
-            if let Some([east, north]) = current {
-                p.finite(&format!("{key}[0]"), east);
-                p.finite(&format!("{key}[1]"), north);
-            }
-        }
-        p.non_negative("planner.estimator_drift_levels", pl.estimator_drift_levels);
-        self.validate_estimator_tree(p);
-        if let Some(truth) = pl.estimator_truth.and_then(TruthChoice::model) {
-            truth.check_fields("planner.estimator_truth.", p);
-        }
-        pl.horizon.check_fields("planner.horizon.", p);
-        if pl.estimator_pitch_levels == Some(0) {
-            p.push("planner.estimator_pitch_levels", "0", ">= 1 (or absent: every level)");
-        }
-        if pl.start_after_reports == 0 {
-            p.push("planner.start_after_reports", "0", ">= 1");
-        }
-        if pl.link == PlannerLink::ScenarioChannel && self.comms.tl == TlModel::Bellhop {
-            // A direct BELLHOP run per sampled distance and bearing would take hours.
-            p.push("planner.link", "scenario_channel", "\"assumed\", or comms.tl of kind analytic or bellhop_grid");
-        }
-        let ids = || PenaltyCase::ALL.iter().map(|c| c.id()).collect::<Vec<&str>>().join(", ");
-        if let Some(case) = pl.estimator_penalty_case.as_ref().filter(|c| PenaltyCase::from_id(c).is_none()) {
-            p.push("planner.estimator_penalty_case", case.clone(), ids());
-        }
-        if PenaltyCase::from_id(&pl.penalty_case).is_none() {
-            p.push("planner.penalty_case", pl.penalty_case.clone(), ids());
-        } else if let Err(e) = self.planner_config().validate() {
-            match e {
-                PlanError::Invalid(found) => {
-                    found.0.into_iter().for_each(|bad| p.push(planner_field(&bad.field), bad.value, bad.allowed))
-                }
-                other => p.push("planner", other.to_string(), "a valid planner configuration"),
-            }
-        }
+        let area = crate::policy::registry::survey_area(self);
+        (area.max.0 - area.min.0).hypot(area.max.1 - area.min.1)
     }
 
     /// The seafloor: the site's grid if given, else the shelf if given, else a flat bottom at
@@ -1115,7 +826,7 @@ impl Scenario {
             None => 0.0,
             Some(CruiseDepth::Metres(z)) => z,
             Some(CruiseDepth::Cast) => {
-                let limits = match self.planner_config().motion.cna {
+                let limits = match self.platform().cna {
                     CnaKind::Auv { min_depth, max_depth, .. } => (min_depth, max_depth),
                     CnaKind::Asc {} => (0.0, 0.0),
                 };
@@ -1130,30 +841,32 @@ impl Scenario {
         }
     }
 
-    /// The look-ahead planner's configuration for this scenario.
-    pub fn planner_config(&self) -> PlannerConfig {
-        let p = &self.planner;
-        PlannerConfig {
-            look_ahead: p.look_ahead,
-            motion: MotionConfig {
-                speed: self.cna.speed,
-                tau: self.comms.tau,
-                heading_options: p.heading_options,
-                max_turn_rate_deg_s: self.cna.max_turn_rate_deg_s,
-                cna: self.cna.auv.as_ref().map_or(CnaKind::Asc {}, |a| {
-                    let mut kind = CnaKind::auv(a.pitch_options);
-                    if let CnaKind::Auv { min_depth, .. } = &mut kind {
-                        *min_depth = a.min_depth_m;
-                    }
-                    kind
-                }),
-            },
-            error: p.error,
-            cost: coopnav_plan::CostSpec::Hudson,
-            limits: p.limits,
-            penalties: PenaltyCase::from_id(&p.penalty_case).unwrap_or(PenaltyCase::C1).penalties(),
-            search: SearchConfig { parallel: p.parallel, deadline: p.deadline, ..SearchConfig::default() },
+    /// The CNA as a vehicle: its speed and turn limit, the decision period τ, an ASC or an
+    /// AUV CNA with its pitch options and shallowest working depth.
+    pub fn platform(&self) -> Platform {
+        Platform {
+            speed: self.cna.speed,
+            tau: self.comms.tau,
+            max_turn_rate_deg_s: self.cna.max_turn_rate_deg_s,
+            cna: self.cna.auv.as_ref().map_or(CnaKind::Asc {}, |a| {
+                let mut kind = CnaKind::auv(a.pitch_options);
+                if let CnaKind::Auv { min_depth, .. } = &mut kind {
+                    *min_depth = a.min_depth_m;
+                }
+                kind
+            }),
         }
+    }
+
+    /// Hudson's planner's configuration for this scenario (`[policy.planner]`).
+    pub fn planner_config(&self) -> PlannerConfig {
+        self.spec_config(&self.policy.planner)
+    }
+
+    /// The search configuration `spec` gives on this mission (the cost left as Hudson's:
+    /// `PlannerSpec::config`).
+    pub fn spec_config(&self, spec: &PlannerSpec) -> PlannerConfig {
+        spec.config(&self.platform(), &self.mission_facts(), self.survey_extent_m(spec))
     }
 
     /// The facts of this mission the planner's rule reads (coopnav_plan `auto`): N, the CNA's
@@ -1168,39 +881,26 @@ impl Scenario {
     }
 
     /// `planner-estimator`'s settings: the rule's for this mission ([`Scenario::mission_facts`],
-    /// coopnav_plan `auto::for_mission`), each replaced by the file's `planner.estimator_*` key
-    /// where it sets one (an unknown penalty case is refused by `validate`).
-    pub fn estimator_settings(&self) -> EstimatorSettings {
-        let p = &self.planner;
-        let rule = auto::for_mission(&self.mission_facts());
-        EstimatorSettings {
-            heading_options: p.estimator_heading_options.unwrap_or(rule.heading_options),
-            look_ahead: p.estimator_look_ahead.unwrap_or(rule.look_ahead),
-            pitch_levels: p.estimator_pitch_levels.or(rule.pitch_levels),
-            aggregate: p.estimator_aggregate.unwrap_or(rule.aggregate),
-            bias_per_km: p.estimator_bias_per_km.unwrap_or(rule.bias_per_km),
-            bias_profile: p.estimator_bias_profile.unwrap_or(rule.bias_profile),
-            level_off: p.estimator_level_off.unwrap_or(rule.level_off),
-            slot_reach: p.estimator_slot_reach.unwrap_or(rule.slot_reach),
-            terminal_levels: p.estimator_terminal_levels.unwrap_or(rule.terminal_levels),
-            reach_success: p.estimator_reach_success.unwrap_or(rule.reach_success),
-            penalty_case: match &p.estimator_penalty_case {
-                Some(id) => PenaltyCase::from_id(id),
-                None => rule.penalty_case,
-            },
-            cna_variance: p.estimator_cna_variance.unwrap_or(rule.cna_variance),
-            truth: p.estimator_truth.map_or(rule.truth, TruthChoice::model),
-            unmodelled_current: p.estimator_unmodelled_current.unwrap_or(rule.unmodelled_current),
-            current: p.estimator_current.unwrap_or(rule.current),
-        }
+    /// coopnav_plan `auto::for_mission`), each replaced by the key its table sets. None when its
+    /// table names Hudson's cost.
+    pub fn estimator_settings(&self) -> Option<EstimatorSettings> {
+        self.policy.planner_estimator.estimator_settings(&self.mission_facts())
+    }
+
+    /// What each planner instance flies on this mission, as the manifest records it: its search
+    /// configuration (tree, motion, penalties, limits, search; the estimator cost's parameters
+    /// are the settings beside it) and, with the estimator cost, the settings its table and the
+    /// rule chose (`auto::for_mission`).
+    pub fn resolved_planners(&self) -> serde_json::Value {
+        let planners = self.planner_specs().map(|(name, spec)| {
+            let settings = spec.estimator_settings(&self.mission_facts());
+            (name, serde_json::json!({ "config": self.spec_config(spec), "estimator_settings": settings }))
+        });
+        serde_json::Value::Object(planners.into_iter().map(|(k, v)| (k.to_string(), v)).collect())
     }
 
     pub fn predictor_config(&self) -> PredictorConfig {
-        let mut c = self.planner.predictor;
-        if self.planner.thesis_waypoints {
-            c.waypoints = WaypointUse::thesis(self.planner.look_ahead);
-        }
-        c
+        self.policy.predictor
     }
 
     /// The survey path of survey AUV `k`: its `fleet.paths` entry if given, else its lawnmower.
@@ -1230,7 +930,7 @@ impl Scenario {
     /// keep surveying for the whole 3 h), τ = 30 s, A = 5, L = 5, 10 Hz EKFs. The fleet spans
     /// 4.2 km, so its 5 s slots are planned for ranges up to 2.4 km at rate 1 (3.08 s of air
     /// time); at rate 0 (3.9 s) they hold only 1 km, and longer ranges collide with the next slot.
-    /// The CNA knows the AUVs' mission plans (`planner.before_first_report = "mission_plan"`): on
+    /// The CNA knows the AUVs' mission plans (`policy.before_first_report = "mission_plan"`): on
     /// the BELLHOP grid it never hears auv0 and auv1 from its start otherwise, and never looks for
     /// them (docs/evaluation.md has the difference it makes).
     pub fn bench() -> Self {
@@ -1241,9 +941,10 @@ impl Scenario {
         s.fleet.lane_spacing = 50.0;
         s.fleet.block_offset = 850.0;
         s.cna.x = 2100.0;
-        (s.planner.heading_options, s.planner.look_ahead, s.comms.tau, s.dt) = (5, 5, 30.0, 0.1);
+        let tree = &mut s.policy.planner.tree;
+        (tree.heading_options, tree.look_ahead, s.comms.tau, s.dt) = (Some(5), Some(5), 30.0, 0.1);
         (s.comms.cna_rate, s.comms.status_rate, s.comms.max_range_m) = (Rate::R1, Rate::R1, 2400.0);
-        s.planner.before_first_report = BeforeFirstReport::MissionPlan;
+        s.policy.before_first_report = BeforeFirstReport::MissionPlan;
         s
     }
 
@@ -1255,18 +956,15 @@ impl Scenario {
     }
 }
 
-/// Where this file sets each `PlannerConfig` setting (`planner_config` assembles it from the CNA,
-/// comms and planner tables; the penalties come from `planner.penalty_case`, a checked preset).
-fn planner_field(field: &str) -> String {
+/// Where this file states a planner's platform setting (`Scenario::platform` takes them from the
+/// CNA and comms tables); every other field is the spec's own, already named by its path.
+fn platform_field(field: &str) -> String {
     let file_name = match field {
-        "motion.speed" => "cna.speed",
-        "motion.tau" => "comms.tau",
-        "motion.max_turn_rate_deg_s" => "cna.max_turn_rate_deg_s",
-        "motion.cna.pitch_options" => "cna.auv.pitch_options",
-        _ => {
-            let own = field.strip_prefix("motion.").or_else(|| field.strip_prefix("search.")).unwrap_or(field);
-            return format!("planner.{own}");
-        }
+        "platform.speed" => "cna.speed",
+        "platform.tau" => "comms.tau",
+        "platform.max_turn_rate_deg_s" => "cna.max_turn_rate_deg_s",
+        "platform.cna.pitch_options" => "cna.auv.pitch_options",
+        other => return other.to_string(),
     };
     file_name.to_string()
 }
@@ -1275,6 +973,7 @@ fn planner_field(field: &str) -> String {
 mod tests {
     use super::*;
     use crate::models::schedule::SlotSpec;
+    use coopnav_plan::PenaltyCase;
 
     fn err(text: &str) -> String {
         Scenario::parse(text, Path::new("s.toml")).unwrap_err().to_string()
@@ -1284,7 +983,8 @@ mod tests {
     fn example_is_valid_and_the_default_mission() {
         let s = Scenario::parse(EXAMPLE, Path::new("example.toml")).unwrap();
         assert_eq!((s.fleet.n_auvs, s.seed, s.duration_s), (3, 1, 3600.0));
-        assert_eq!((s.planner.heading_options, s.planner.look_ahead), (5, 5));
+        let hudson = s.planner_config();
+        assert_eq!((hudson.motion.heading_options, hudson.look_ahead), (5, 5));
         Scenario::bench().validate(Path::new("bench")).unwrap();
         // The commented-out options of the example are valid too.
         let options =
@@ -1354,7 +1054,7 @@ mod tests {
             .replace("capture_margin_db = 6.0", "capture_margin_db = -1.0")
             .replace("radius_m = 50.0", "radius_m = 0.0")
             .replace("divergence_window_s = 60.0", "divergence_window_s = nan")
-            .replace("standoff_radius_m = 150.0", "standoff_radius_m = -150.0");
+            .replace("radius_m = 150.0", "radius_m = -150.0");
         let e = err(&text);
         for field in [
             "sensors.speed_sd",
@@ -1364,7 +1064,7 @@ mod tests {
             "channel.collisions.capture_margin_db",
             "fleet.finish.radius_m",
             "health.divergence_window_s",
-            "cna.standoff_radius_m",
+            "policy.centroid-standoff.radius_m",
         ] {
             assert!(e.contains(&format!("field {field} = ")), "{field} missing from: {e}");
         }
@@ -1381,44 +1081,86 @@ mod tests {
         assert!(e.contains("field fleet.vehicle = ") && e.contains("max_yaw_rate"), "{e}");
     }
 
-    /// The default mission without its `planner.estimator_*` lines (tests that write their own).
-    fn example_without_estimator_settings() -> String {
-        EXAMPLE.lines().filter(|l| !l.starts_with("estimator_")).map(|l| format!("{l}\n")).collect()
+    /// The example with its `[policy.NAME]` table replaced by `table` (the lines after the header).
+    fn with_policy_table(name: &str, table: &str) -> String {
+        let header = format!("[policy.{name}]\n");
+        let at = EXAMPLE.find(&header).unwrap_or_else(|| panic!("the example has no {header}"));
+        let end = EXAMPLE[at + header.len()..].find("\n[").map_or(EXAMPLE.len(), |e| at + header.len() + e + 1);
+        format!("{}{header}{table}\n{}", &EXAMPLE[..at], &EXAMPLE[end..])
     }
 
-    /// Eight AUVs with τ = 30 s leave 3.3 s per slot, less than rate 0's 3.9 s of air time; τ = 44 s fits.
+    /// The estimator's own table is checked on the mission: its tree as the rule and its keys set
+    /// it, its cost's fields, each named by its path; a bad field elsewhere is not blamed on it.
     #[test]
     fn the_estimator_planners_own_settings_are_checked() {
-        let example = example_without_estimator_settings();
-        let text = example.replace(
-            "[planner]\n",
-            "[planner]\nestimator_penalty_case = \"99\"\nestimator_look_ahead = 70\nestimator_terminal_levels = -1.0\n\
-             estimator_bias_per_km = -2.0\nestimator_reach_success = 1.5\nestimator_pitch_levels = 0\n\
-             estimator_unmodelled_current = [nan, 0.0]\nestimator_drift_levels = -1.0\nestimator_heading_options = 1\n",
+        let text = with_policy_table(
+            "planner-estimator",
+            "tree = { heading_options = 1, look_ahead = 70, pitch_levels = 0 }\npenalty = { case = \"99\" }\n\
+             cost = { kind = \"estimator\", terminal_levels = -1.0, bias_per_km = -2.0, reach_success = 1.5, \
+             unmodelled_current = [nan, 0.0], drift_levels = -1.0 }",
         );
         let e = err(&text);
-        let fields = ["penalty_case", "look_ahead", "terminal_levels", "bias_per_km", "reach_success", "pitch_levels"];
-        assert!(e.contains("planner.estimator_heading_options = 1"), "{e}");
-        for field in fields.into_iter().chain(["unmodelled_current[0]", "drift_levels"]) {
-            assert!(e.contains(&format!("planner.estimator_{field}")), "{field}: {e}");
+        for field in [
+            "tree.heading_options = 1",
+            "tree.look_ahead = 70",
+            "tree.pitch_levels = 0",
+            "penalty.case = '99'",
+            "cost.terminal_levels",
+            "cost.bias_per_km",
+            "cost.reach_success",
+            "cost.unmodelled_current[0]",
+            "cost.drift_levels",
+        ] {
+            assert!(e.contains(&format!("field policy.planner-estimator.{field}")), "{field}: {e}");
         }
-        let ok = example.replace(
-            "[planner]\n",
-            "[planner]\nestimator_penalty_case = \"3\"\nestimator_look_ahead = 3\nestimator_heading_options = 7\n",
+        let ok = with_policy_table(
+            "planner-estimator",
+            "tree = { look_ahead = 3, heading_options = 7 }\npenalty = { case = \"3\" }\ncost = { kind = \"estimator\" }",
         );
-        let other_field_bad = err(&ok.replace("heading_options = 5", "heading_options = 1"));
+        let other_field_bad =
+            err(&ok.replace("tree = { heading_options = 5, look_ahead = 5 }", "tree = { heading_options = 1 }"));
         assert!(
-            other_field_bad.contains("planner.heading_options") && !other_field_bad.contains("estimator_look_ahead"),
-            "a valid estimator look-ahead is blamed for another field: {other_field_bad}"
+            other_field_bad.contains("policy.planner.tree.heading_options")
+                && !other_field_bad.contains("policy.planner-estimator"),
+            "a valid estimator tree is blamed for another field: {other_field_bad}"
         );
         let sc = Scenario::parse(&ok, Path::new("s.toml")).unwrap();
-        assert_eq!(
-            (sc.planner.estimator_penalty_case.as_deref(), sc.planner.estimator_look_ahead),
-            (Some("3"), Some(3))
+        let e = sc.estimator_settings().unwrap();
+        assert_eq!((e.penalty_case, e.look_ahead, e.heading_options), (Some(PenaltyCase::C3), 3, 7));
+        let too_large = err(&ok.replace("heading_options = 7", "heading_options = 2000"));
+        assert!(too_large.contains("policy.planner-estimator.tree.look_ahead = 3 with 2000 options"), "{too_large}");
+    }
+
+    /// The rule's tree too large for the mission is named under the estimator's table: A = 21,
+    /// L = 2 at N = 8 fits, and a file's L = 9 there does not.
+    #[test]
+    fn the_rules_tree_is_checked_under_the_estimators_table() {
+        let eight = EXAMPLE.replace("n_auvs = 3", "n_auvs = 8").replace("tau = 30.0", "tau = 44.0");
+        let sc = Scenario::parse(&eight, Path::new("s.toml")).unwrap();
+        assert_eq!(sc.estimator_settings().map(|e| (e.heading_options, e.look_ahead)), Some((21, 2)));
+        let deep =
+            eight.replace("[policy.planner-estimator]\n", "[policy.planner-estimator]\ntree = { look_ahead = 9 }\n");
+        let e = err(&deep);
+        assert!(e.contains("field policy.planner-estimator.tree.look_ahead = 9 with 21 options"), "{e}");
+    }
+
+    /// An old-form file is refused with every moved key listed once, with its new place.
+    #[test]
+    fn an_old_form_file_is_refused_listing_every_moved_key() {
+        let old = EXAMPLE.replace(
+            "[policy]\n",
+            "[planner]\nlook_ahead = 5\npenalty_case = \"1\"\nestimator_look_ahead = 3\nlink = \"assumed\"\n\n[policy]\n",
         );
-        assert_eq!(sc.planner.estimator_heading_options, Some(7));
-        let too_large = err(&ok.replace("estimator_heading_options = 7", "estimator_heading_options = 2000"));
-        assert!(too_large.contains("planner.estimator_look_ahead = 3 with 2000 options"), "{too_large}");
+        let e = err(&old);
+        assert!(e.contains("s.toml: the old planner form") && e.contains("4 moved key(s)"), "{e}");
+        for line in [
+            "planner.look_ahead -> policy.planner.tree.look_ahead",
+            "planner.penalty_case -> policy.planner.penalty",
+            "planner.estimator_look_ahead -> policy.planner-estimator.tree.look_ahead",
+            "planner.link -> policy.link",
+        ] {
+            assert!(e.contains(line), "{line}: {e}");
+        }
     }
 
     /// Hudson's schedule: AUV k sends (k + 1)·τ/(N + 1) after the broadcast starts, so its reach
@@ -1447,64 +1189,70 @@ mod tests {
     #[test]
     fn the_planners_link_is_the_assumed_model_unless_the_file_names_the_scenario_channel() {
         let plain = Scenario::parse(EXAMPLE, Path::new("e.toml")).unwrap();
-        assert_eq!(plain.planner.link, PlannerLink::Assumed);
+        assert_eq!(plain.policy.link, PlannerLink::Assumed);
         assert!(!toml::to_string(&plain).unwrap().contains("link"), "the default is not written");
-        let with = |link: &str| EXAMPLE.replace("[planner]\n", &format!("[planner]\nlink = \"{link}\"\n"));
+        let with = |link: &str| EXAMPLE.replace("[policy]\n", &format!("[policy]\nlink = \"{link}\"\n"));
         let sc = Scenario::parse(&with("scenario_channel"), Path::new("c.toml")).unwrap();
-        assert_eq!(sc.planner.link, PlannerLink::ScenarioChannel);
+        assert_eq!(sc.policy.link, PlannerLink::ScenarioChannel);
         let e = err(&with("sonar"));
         assert!(e.contains("sonar") && e.contains("scenario_channel"), "{e}");
         // A direct BELLHOP run per sampled distance is refused before BELLHOP is looked for.
         let direct =
             with("scenario_channel").replace("kind = \"analytic\", k = 1.5, freq_hz = 25000.0", "kind = \"bellhop\"");
         let e = err(&direct);
-        assert!(e.contains("planner.link") && e.contains("bellhop_grid") && !e.contains("field comms.tl"), "{e}");
+        assert!(e.contains("policy.link") && e.contains("bellhop_grid") && !e.contains("field comms.tl"), "{e}");
     }
 
     #[test]
     fn the_estimator_counts_expected_pings_unless_the_file_asks_for_reports_only() {
         let plain = Scenario::parse(EXAMPLE, Path::new("e.toml")).unwrap();
-        assert_eq!(plain.planner.estimator_tracking, EstimatorTracking::ExpectedPings);
-        assert!(!toml::to_string(&plain).unwrap().contains("estimator_tracking"), "the default is not written");
-        let with = |v: &str| EXAMPLE.replace("[planner]\n", &format!("[planner]\nestimator_tracking = \"{v}\"\n"));
+        let tracking = |sc: &Scenario| sc.policy.planner_estimator.estimator_cost().unwrap().tracking;
+        assert_eq!(tracking(&plain), EstimatorTracking::ExpectedPings);
+        assert!(!toml::to_string(&plain).unwrap().contains("tracking"), "the default is not written");
+        let with = |v: &str| {
+            with_policy_table("planner-estimator", &format!("cost = {{ kind = \"estimator\", tracking = \"{v}\" }}"))
+        };
         let sc = Scenario::parse(&with("reports_only"), Path::new("r.toml")).unwrap();
-        assert_eq!(sc.planner.estimator_tracking, EstimatorTracking::ReportsOnly);
+        assert_eq!(tracking(&sc), EstimatorTracking::ReportsOnly);
         let e = err(&with("hopeful"));
         assert!(e.contains("hopeful") && e.contains("reports_only") && e.contains("expected_pings"), "{e}");
     }
 
-    /// Without `estimator_truth` the rule's truth model is scored; a file's model replaces it and
+    /// Without `cost.truth` the rule's truth model is scored; a file's model replaces it and
     /// `"covariance"` scores the filters' covariance; the absent key is not written.
     #[test]
     fn the_estimator_scores_the_rules_truth_model_unless_the_file_says_otherwise() {
         let plain = Scenario::parse(EXAMPLE, Path::new("e.toml")).unwrap();
-        assert_eq!(plain.planner.estimator_truth, None);
-        assert_eq!(plain.estimator_settings().truth, Some(auto::ASC_TRUTH));
-        assert!(!toml::to_string(&plain).unwrap().contains("estimator_truth"), "the rule's is not written");
-        let with = |v: &str| EXAMPLE.replace("[planner]\n", &format!("[planner]\nestimator_truth = {v}\n"));
+        let truth_key = |sc: &Scenario| sc.policy.planner_estimator.estimator_cost().unwrap().truth;
+        assert_eq!(truth_key(&plain), None);
+        assert_eq!(plain.estimator_settings().unwrap().truth, Some(coopnav_plan::auto::ASC_TRUTH));
+        assert!(!toml::to_string(&plain).unwrap().contains("truth"), "the rule's is not written");
+        let with = |v: &str| {
+            with_policy_table("planner-estimator", &format!("cost = {{ kind = \"estimator\", truth = {v} }}"))
+        };
         let truth = "{ drift_m2_s = 0.03, range_noise = { sigma_m = 1.8, per_km_m = 0.0 }, cna_diffusion_m2_s = 0.01 }";
         let sc = Scenario::parse(&with(truth), Path::new("t.toml")).unwrap();
-        let spec = sc.estimator_settings().truth.unwrap();
+        let spec = sc.estimator_settings().unwrap().truth.unwrap();
         assert_eq!((spec.drift_m2_s, spec.range_noise.sigma_m, spec.cna_diffusion_m2_s), (0.03, 1.8, 0.01));
         let again = Scenario::parse(&toml::to_string(&sc).unwrap(), Path::new("t.toml")).unwrap();
-        assert_eq!(again.planner.estimator_truth, Some(TruthChoice::Model(spec)));
+        assert_eq!(truth_key(&again), Some(TruthChoice::Model(spec)));
         let covariance = Scenario::parse(&with("\"covariance\""), Path::new("c.toml")).unwrap();
-        assert_eq!(covariance.estimator_settings().truth, None);
+        assert_eq!(covariance.estimator_settings().unwrap().truth, None);
         let again = Scenario::parse(&toml::to_string(&covariance).unwrap(), Path::new("c.toml")).unwrap();
-        assert_eq!(again.planner.estimator_truth, Some(TruthChoice::Cost(CovarianceWord::Covariance)));
+        assert_eq!(truth_key(&again), Some(TruthChoice::Cost(CovarianceWord::Covariance)));
         let e = err(&with(&truth.replace("drift_m2_s = 0.03", "drift_m2_s = -0.03")));
-        assert!(e.contains("planner.estimator_truth.drift_m2_s") && e.contains(">= 0"), "{e}");
+        assert!(e.contains("policy.planner-estimator.cost.truth.drift_m2_s") && e.contains(">= 0"), "{e}");
         assert!(Scenario::parse(&with("\"none\""), Path::new("n.toml")).is_err());
     }
 
     #[test]
     fn an_auv_not_yet_heard_is_ignored_unless_the_file_gives_the_mission_plan() {
         let plain = Scenario::parse(EXAMPLE, Path::new("e.toml")).unwrap();
-        assert_eq!(plain.planner.before_first_report, BeforeFirstReport::Ignore);
+        assert_eq!(plain.policy.before_first_report, BeforeFirstReport::Ignore);
         let line = "before_first_report = \"ignore\"";
         let planned = EXAMPLE.replace(line, "before_first_report = \"mission_plan\"");
         let sc = Scenario::parse(&planned, Path::new("p.toml")).unwrap();
-        assert_eq!(sc.planner.before_first_report, BeforeFirstReport::MissionPlan);
+        assert_eq!(sc.policy.before_first_report, BeforeFirstReport::MissionPlan);
         let e = err(&EXAMPLE.replace(line, "before_first_report = \"guess\""));
         assert!(e.contains("before_first_report") && e.contains("mission_plan") && e.contains("s.toml"), "{e}");
     }
@@ -1523,8 +1271,8 @@ mod tests {
         assert!(e.contains("fleet.n_auvs") && e.contains("1..=31") && e.contains("s.toml"), "{e}");
         let e = err(&EXAMPLE.replace("tau = 30.0", "tau = 1.0"));
         assert!(e.contains("comms.tau"), "{e}");
-        let e = err(&EXAMPLE.replace("penalty_case = \"1\"", "penalty_case = \"zz\""));
-        assert!(e.contains("planner.penalty_case"), "{e}");
+        let e = err(&EXAMPLE.replace("penalty = { case = \"1\" }", "penalty = { case = \"zz\" }"));
+        assert!(e.contains("policy.planner.penalty.case"), "{e}");
         let e = err(&EXAMPLE.replace("seed = 1", "seed = 1\nsurprise = 2"));
         assert!(e.contains("surprise"), "{e}");
         let e = err(&EXAMPLE.replace("cna_rate = 0", "cna_rate = 3"));
@@ -1548,8 +1296,12 @@ mod tests {
         assert!(e.contains("field fleet") && e.contains("15 000"), "{e}");
         let e = err(&EXAMPLE
             .replace("heading_options = 5", "heading_options = 1")
-            .replace("look_ahead = 5", "look_ahead = 70"));
-        assert!(e.contains("field planner.heading_options = 1") && e.contains("field planner.look_ahead = 70"), "{e}");
+            .replace("look_ahead = 5 }", "look_ahead = 70 }"));
+        assert!(
+            e.contains("field policy.planner.tree.heading_options = 1")
+                && e.contains("field policy.planner.tree.look_ahead = 70"),
+            "{e}"
+        );
     }
 
     #[test]

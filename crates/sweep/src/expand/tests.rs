@@ -54,9 +54,9 @@ fn every_bad_axis_path_value_overlay_and_policy_is_named_at_once() {
 
 #[test]
 fn an_unset_optional_field_is_a_valid_path_and_a_bad_cell_names_its_axis_values() {
-    let ok = format!("{HEAD}[[axis]]\npath = \"planner.estimator_look_ahead\"\nvalues = [3]\n");
+    let ok = format!("{HEAD}[[axis]]\npath = \"policy.planner-estimator.tree.look_ahead\"\nvalues = [3]\n");
     let e = expand(&sweep(&ok), Path::new("s.toml"), false).unwrap();
-    assert_eq!(e.cells[0].scenario.planner.estimator_look_ahead, Some(3));
+    assert_eq!(e.cells[0].scenario.policy.planner_estimator.tree.look_ahead, Some(3));
     let bad = format!("{HEAD}[[axis]]\npath = \"fleet.n_auvs\"\nvalues = [2, 0]\n");
     let p = problems(&bad);
     assert_eq!(p.len(), 1, "{p:#?}");
