@@ -73,7 +73,7 @@ const CELLS_FILE: &str = "scenarios/experiments/closed-loop-vs-baselines.toml";
 const FILES: [(&str, &str); 2] = [("default", crate::scenario::world::EXAMPLE), ("../sloping-auv-cna.toml", SLOPING)];
 
 /// The one axis of [`CELLS`]: the fleet size.
-const AXIS: (&str, &str) = ("n_auvs", "fleet.n_auvs");
+const AXIS: (&str, &str) = ("N", "fleet.n_auvs");
 
 /// One evaluation scenario: its name, the fleet sizes it is flown with, its mission file and how
 /// the sweep expansion makes a cell of it ([`CELLS`]).
@@ -87,7 +87,7 @@ pub struct Setting {
 }
 
 impl Setting {
-    /// The mission for `n` AUVs: the cell of the file with `n_auvs = n` as the sweep expansion
+    /// The mission for `n` AUVs: the cell of the file with `N = n` as the sweep expansion
     /// makes it (`fleet.n_auvs = n`, every conditional overlay that applies, the reduced form's
     /// overlay), with the evaluation's seed and, if given, the duration. The planners' settings
     /// are the file's and, for `planner-estimator`, the rule's for that mission.
@@ -147,7 +147,7 @@ fn setup_from(text: &str, opts: &ReproOptions) -> Result<(Vec<Setting>, usize), 
             .iter()
             .map(|v| v.as_integer().and_then(|n| usize::try_from(n).ok()))
             .collect::<Option<Vec<usize>>>()
-            .ok_or_else(|| fail(format!("{CELLS_FILE}: scenario {}: n_auvs must be whole numbers", b.name)))?;
+            .ok_or_else(|| fail(format!("{CELLS_FILE}: scenario {}: N must be whole numbers", b.name)))?;
         settings.push(Setting { name: b.name.clone(), n, base: b.scenario.clone(), rules: e.rules.clone() });
     }
     // Every cell is checked before any run, with the evaluation's seed.

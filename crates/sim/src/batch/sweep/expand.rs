@@ -26,6 +26,53 @@ use coopnav_core::limits::{self, Estimate, MAX_POINTS};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
+/// The fixed columns of the sweep's results tables (docs/sweeps.md, Columns), which a name given
+/// to an axis (its own column) may not be.
+pub const RESERVED_NAMES: [&str; 42] = [
+    "auv",
+    "auv_name",
+    "buoy_received",
+    "buoy_sent",
+    "cell",
+    "distance_max_m",
+    "distance_mean_m",
+    "distance_min_m",
+    "diverged",
+    "diverged_at_s",
+    "downlink_lost_in_air",
+    "downlink_received",
+    "downlink_sent",
+    "error",
+    "error_cep50_m",
+    "error_max_m",
+    "error_mean_m",
+    "error_p95_m",
+    "error_rms_m",
+    "error_to_sigma",
+    "healthy",
+    "limit_violation",
+    "modelled_mean_m",
+    "n_auvs",
+    "nees_in_95",
+    "nees_mean",
+    "nis_in_95",
+    "nis_mean",
+    "planner_deadline_misses",
+    "planner_decisions",
+    "planner_failures",
+    "planner_mean_levels",
+    "policy",
+    "ranges_applied",
+    "run",
+    "run_id",
+    "scenario",
+    "seed",
+    "sigma_mean_m",
+    "uplink_lost_in_air",
+    "uplink_received",
+    "uplink_sent",
+];
+
 /// Which form of the sweep to expand.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Form {
@@ -385,6 +432,12 @@ fn check_axes(sweep: &SweepFile, problems: &mut Vec<String>) -> Vec<CheckedAxis>
             }
         };
         if let Some(c) = checked {
+            if axis.name.is_some() && RESERVED_NAMES.contains(&c.rule.name.as_str()) {
+                problems.push(format!(
+                    "axis[{i}].name = \"{}\": a column of the results tables already has that name (give another)",
+                    c.rule.name
+                ));
+            }
             if out.iter().any(|o| o.rule.name == c.rule.name) {
                 problems.push(format!("axis[{i}].path = \"{}\": already an axis", c.rule.name));
             }

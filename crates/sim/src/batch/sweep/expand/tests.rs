@@ -94,9 +94,9 @@ fn form_problems(text: &str, form: Form) -> Vec<String> {
 /// at the default mission's 30 s period 6 AUVs' slots cannot hold a 1 km range (the cell is
 /// invalid without the overlay).
 const SIZED: &str = "policies = [\"racetrack\"]\nruns = 1\n\
-                     [[axis]]\nname = \"n_auvs\"\npath = \"fleet.n_auvs\"\n\
-                     [[scenario]]\nfile = \"default\"\nvalues = { n_auvs = [5, 6] }\n\
-                     [[conditional]]\noverlay = \"sized\"\nwhen = { n_auvs = { min = 6 } }\n\
+                     [[axis]]\nname = \"size\"\npath = \"fleet.n_auvs\"\n\
+                     [[scenario]]\nfile = \"default\"\nvalues = { size = [5, 6] }\n\
+                     [[conditional]]\noverlay = \"sized\"\nwhen = { size = { min = 6 } }\n\
                      [overlay.sized]\ncomms = { tau = 44.0, cna_rate = 1, status_rate = 1, max_range_m = 2500.0 }\n";
 
 #[test]
@@ -106,8 +106,8 @@ fn a_conditional_overlay_applies_exactly_from_its_minimum_on() {
     let got: Vec<(usize, f64, f64)> =
         e.cells.iter().map(|c| (c.scenario.fleet.n_auvs, c.scenario.comms.tau, c.scenario.comms.max_range_m)).collect();
     assert_eq!(got, [(5, base.tau, base.max_range_m), (6, 44.0, 2500.0)]);
-    assert_eq!(e.axes, ["n_auvs"]);
-    assert_eq!(e.cells[1].label(), "default, n_auvs = 6");
+    assert_eq!(e.axes, ["size"]);
+    assert_eq!(e.cells[1].label(), "default, size = 6");
     // The rules make the cell of any value the same way: 7 is sized, 1 is not.
     let of = |n: i64| e.rules.scenario(&e.bases[0].scenario, &[toml::Value::Integer(n)]).unwrap().comms.tau;
     assert_eq!((of(1), of(5), of(6), of(7)), (base.tau, base.tau, 44.0, 44.0));
@@ -115,10 +115,10 @@ fn a_conditional_overlay_applies_exactly_from_its_minimum_on() {
     // From 7 on, the 6-AUV cell keeps the 30 s period its slots cannot hold: refused, named.
     let p = form_problems(&SIZED.replace("min = 6", "min = 7"), Form::Full);
     assert_eq!(p.len(), 1, "{p:#?}");
-    assert!(p[0].starts_with("cell default, n_auvs = 6: "), "{}", p[0]);
+    assert!(p[0].starts_with("cell default, size = 6: "), "{}", p[0]);
     // max and in: up to 5 (only the first cell), and one of [6].
     let e = expand_form(
-        &SIZED.replace("min = 6", "max = 5").replace("values = { n_auvs = [5, 6] }", "values = { n_auvs = [4, 5] }"),
+        &SIZED.replace("min = 6", "max = 5").replace("values = { size = [5, 6] }", "values = { size = [4, 5] }"),
         Form::Full,
     )
     .unwrap();
@@ -134,24 +134,31 @@ fn a_malformed_condition_names_its_field() {
         assert_ne!(text, SIZED);
         form_problems(&text, Form::Full)
     };
+    let p = bad("name = \"size\"", "name = \"n_auvs\"");
+    assert!(
+        p.contains(
+            &"axis[0].name = \"n_auvs\": a column of the results tables already has that name (give another)".into()
+        ),
+        "{p:#?}"
+    );
     let p = bad("min = 6", "minimum = 6");
     assert_eq!(p.len(), 1, "{p:#?}");
-    assert!(p[0].starts_with("conditional[0].when.n_auvs = { minimum = 6 }: unknown field `minimum`"), "{}", p[0]);
+    assert!(p[0].starts_with("conditional[0].when.size = { minimum = 6 }: unknown field `minimum`"), "{}", p[0]);
     assert!(p[0].contains("allowed: a table of min, max and in"), "{}", p[0]);
-    let p = bad("when = { n_auvs", "when = { n_auv");
-    assert_eq!(p, ["conditional[0].when.n_auv: no axis named n_auv (axes: n_auvs)"]);
+    let p = bad("when = { size", "when = { siz");
+    assert_eq!(p, ["conditional[0].when.siz: no axis named siz (axes: size)"]);
     let p = bad("{ min = 6 }", "6");
-    assert!(p[0].starts_with("conditional[0].when.n_auvs = 6: invalid type: integer `6`"), "{}", p[0]);
+    assert!(p[0].starts_with("conditional[0].when.size = 6: invalid type: integer `6`"), "{}", p[0]);
     let p = bad("{ min = 6 }", "{}");
-    assert_eq!(p, ["conditional[0].when.n_auvs = {}: give min, max or in"]);
+    assert_eq!(p, ["conditional[0].when.size = {}: give min, max or in"]);
     let p = bad("min = 6", "min = 7, max = 6");
-    assert_eq!(p, ["conditional[0].when.n_auvs: min = 7 is above max = 6: no value meets it"]);
+    assert_eq!(p, ["conditional[0].when.size: min = 7 is above max = 6: no value meets it"]);
     let p = bad("overlay = \"sized\"", "overlay = \"size\"");
     assert!(p.iter().any(|x| x == "conditional[0].overlay = \"size\": no [overlay.size] (allowed: sized)"), "{p:#?}");
     let p = bad("[5, 6]", "[\"five\"]");
-    assert!(p.iter().any(|x| x.starts_with("scenario[0].values.n_auvs[0] = \"five\": ")), "{p:#?}");
+    assert!(p.iter().any(|x| x.starts_with("scenario[0].values.size[0] = \"five\": ")), "{p:#?}");
     assert!(
-        p.iter().any(|x| x.contains("min and max compare numbers, and axis n_auvs has the value \"five\"")),
+        p.iter().any(|x| x.contains("min and max compare numbers, and axis size has the value \"five\"")),
         "{p:#?}"
     );
 }
