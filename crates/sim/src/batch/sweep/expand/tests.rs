@@ -134,13 +134,6 @@ fn a_malformed_condition_names_its_field() {
         assert_ne!(text, SIZED);
         form_problems(&text, Form::Full)
     };
-    let p = bad("name = \"size\"", "name = \"n_auvs\"");
-    assert!(
-        p.contains(
-            &"axis[0].name = \"n_auvs\": a column of the results tables already has that name (give another)".into()
-        ),
-        "{p:#?}"
-    );
     let p = bad("min = 6", "minimum = 6");
     assert_eq!(p.len(), 1, "{p:#?}");
     assert!(p[0].starts_with("conditional[0].when.size = { minimum = 6 }: unknown field `minimum`"), "{}", p[0]);
