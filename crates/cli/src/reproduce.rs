@@ -3,7 +3,7 @@
 //! a documented known deviation, 1 some check failed without one (or the run itself failed).
 
 use anyhow::{bail, Result};
-use coopnav_sim::experiments::{self, Check, ReproOptions, ReproReport, Size};
+use coopnav_sim::experiments::{self, Check, ReproOptions, Size};
 use coopnav_sim::output::{Manifest, RunDir};
 use indicatif::{ProgressBar, ProgressStyle};
 use std::io::IsTerminal;
@@ -79,7 +79,7 @@ pub fn run(args: Args) -> Result<ExitCode> {
     let report = experiments::run(&id, &opts);
     bar.finish_and_clear();
     let report = report?;
-    let text = printed(&report);
+    let text = report.printed();
     println!("{text}");
     if args.json {
         println!("{}", serde_json::to_string_pretty(&report)?);
@@ -119,12 +119,6 @@ fn spinner(id: &str) -> Result<ProgressBar> {
     bar.set_style(ProgressStyle::with_template(&format!("{{spinner}} {id} [{{elapsed_precise}}] {{msg}}"))?);
     bar.enable_steady_tick(Duration::from_millis(200));
     Ok(bar)
-}
-
-/// The table and one line per check, as printed.
-fn printed(report: &ReproReport) -> String {
-    let lines: Vec<String> = report.checks.iter().map(Check::line).collect();
-    format!("{}\n{}", report.table, lines.join("\n"))
 }
 
 #[cfg(test)]

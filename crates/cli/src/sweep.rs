@@ -5,7 +5,8 @@
 
 use crate::input;
 use anyhow::{bail, Context, Result};
-use coopnav_sweep::plan::{plan_file, Plan};
+use coopnav_sweep::expand::Form;
+use coopnav_sweep::plan::{plan_form, Plan};
 use coopnav_sweep::slurm::{write_scripts, SlurmSpec};
 use coopnav_sweep::{merge, shard, status};
 use indicatif::{ProgressBar, ProgressStyle};
@@ -40,6 +41,9 @@ pub enum Command {
         /// Plan even when the estimated work is above coopnav's limits (coopnav_core::limits).
         #[arg(long)]
         allow_large: bool,
+        /// Plan the sweep file's reduced form (its [reduced] table: fewer runs and cells).
+        #[arg(long)]
+        reduced: bool,
     },
     /// Run shards of a plan (restartable: finished runs are skipped, an interrupted shard resumes).
     Run {
@@ -101,9 +105,10 @@ pub fn run(args: Args) -> Result<()> {
         bail!("give a sweep command (plan, run, merge, status, slurm) or --example; see `coopnav sweep --help`");
     };
     match command {
-        Command::Plan { file, shards, output, force, allow_large } => {
+        Command::Plan { file, shards, output, force, allow_large, reduced } => {
             let text = input::read(&file, allow_large)?;
-            let (dir, e) = plan_file(&file, &text, shards, &output, force, allow_large, &command_line())?;
+            let form = if reduced { Form::Reduced } else { Form::Full };
+            let (dir, e) = plan_form(&file, &text, form, shards, &output, force, allow_large, &command_line())?;
             let runs = e.cells.len() * e.policies.len() * e.runs;
             println!(
                 "{} cells x {} policies x {} runs = {runs} runs in {shards} shards -> {}",
@@ -137,7 +142,11 @@ pub fn run(args: Args) -> Result<()> {
         Command::Merge { dir, output, force } => {
             let plan = Plan::open(&dir)?;
             let m = merge::merge(&plan, output.as_deref(), force, &command_line())?;
-            print!("{}", m.table);
+            match &m.report {
+                // The table `coopnav reproduce` prints for the reproduction the sweep file holds.
+                Some(report) => println!("{}", report.printed()),
+                None => print!("{}", m.table),
+            }
             println!("wrote {}", m.dir.display());
             if !m.failures.is_empty() {
                 for f in &m.failures {

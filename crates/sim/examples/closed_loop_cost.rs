@@ -43,7 +43,7 @@ fn main() -> Result<(), Box<dyn Error>> {
     let chosen = |name: &str, n: usize, policy: &str| {
         only.is_empty() || (only[0] == name && only[1] == n.to_string() && only[2] == policy)
     };
-    let (settings, full_runs, _) = setup(&ReproOptions::new(Size::Full, 1))?;
+    let (settings, full_runs) = setup(&ReproOptions::new(Size::Full, 1))?;
     println!("scenario n policy cpu_ms_per_run projected_s setup decide advance transmit deliver sense observe");
     let mut total = 0.0;
     for s in &settings {

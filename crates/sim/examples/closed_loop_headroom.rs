@@ -150,7 +150,7 @@ fn scenario_for(name: &str, n: &str, duration: Option<f64>) -> Result<Scenario, 
             sc.with_auvs(n.parse()?)
         }
     } else {
-        let (settings, _, _) = setup(&ReproOptions::new(Size::Full, TUNING_SEED + 1))?;
+        let (settings, _) = setup(&ReproOptions::new(Size::Full, TUNING_SEED + 1))?;
         let setting = settings.iter().find(|s| s.name == name).ok_or_else(|| format!("no scenario {name}"))?;
         setting.scenario(n.parse()?, TUNING_SEED, None)?
     };

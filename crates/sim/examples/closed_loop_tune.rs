@@ -23,7 +23,7 @@ fn main() -> Result<(), Error> {
         None | Some("-") => None,
         Some(d) => Some(d.parse::<f64>()?),
     };
-    let (settings, _, _) = setup(&ReproOptions::new(Size::Full, TUNING_SEED + 1))?;
+    let (settings, _) = setup(&ReproOptions::new(Size::Full, TUNING_SEED + 1))?;
     let setting =
         settings.iter().find(|s| s.name == scenario.as_str()).ok_or_else(|| format!("no scenario {scenario}"))?;
     let mut sc = setting.scenario(n, TUNING_SEED, duration)?;

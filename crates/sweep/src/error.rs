@@ -1,5 +1,6 @@
 //! What can go wrong with a sweep, each error naming the file or directory it is about.
 
+use coopnav_sim::batch::sweep::SweepFileError;
 use coopnav_sim::output::OutputError;
 use std::path::PathBuf;
 use thiserror::Error;
@@ -24,6 +25,8 @@ pub enum SweepError {
     Busy { dir: PathBuf, shard: usize },
     #[error("{dir}: {} not finished (run them with `coopnav sweep run {} --shard I`, see `coopnav sweep status`)", shard_list(shards), dir.display())]
     Unfinished { dir: PathBuf, shards: Vec<usize> },
+    #[error("{dir}: cannot report reproduction {id} from the merged runs: {message}")]
+    Report { dir: PathBuf, id: String, message: String },
     #[error("cannot encode {file}: {message}")]
     Encode { file: String, message: String },
     #[error("cannot write {path}: {source}")]
@@ -34,6 +37,16 @@ pub enum SweepError {
     Write(#[from] coopnav_sim::output::WriteError),
     #[error(transparent)]
     TooLarge(#[from] coopnav_core::limits::TooLarge),
+}
+
+impl From<SweepFileError> for SweepError {
+    fn from(e: SweepFileError) -> Self {
+        match e {
+            SweepFileError::Read { file, message } => SweepError::Read { file, message },
+            SweepFileError::Invalid { file, problems } => SweepError::Invalid { file, problems },
+            SweepFileError::TooLarge(t) => SweepError::TooLarge(t),
+        }
+    }
 }
 
 fn problems_text(problems: &[String]) -> String {

@@ -1,9 +1,11 @@
 //! Sweeps: a study of many closed-loop missions described by one file and run anywhere.
 //!
 //! A sweep file ([`file`]) names base scenarios, the CNA policies every cell compares, the runs
-//! per policy, axes (any scenario field by its path, or a choice among named overlays) and the
-//! overlays themselves. [`expand`] validates the whole file and expands it into cells in a fixed
-//! order; [`plan`] writes the plan directory (manifest, one scenario file per cell, shard files)
+//! per policy, axes (any scenario field by its path, or a choice among named overlays), the
+//! overlays themselves, overlays applied where a cell's axis values meet a condition, and a
+//! reduced form. [`expand`] validates the whole file and expands it into cells in a fixed order
+//! (both live in `coopnav_sim::batch::sweep`, re-exported here, so that the reproductions whose
+//! cells are a sweep file expand them the same way); [`plan`] writes the plan directory (manifest, one scenario file per cell, shard files)
 //! and reads it back, refusing one written by another coopnav version or edited since;
 //! [`shard`] runs shards (restartable, one process per shard, results journaled run by run);
 //! [`merge`] joins finished shards into the paired comparison `simulate --runs` writes, plus
@@ -11,8 +13,7 @@
 //! writes the `sbatch --array` script that runs the shards on a cluster.
 
 pub mod error;
-pub mod expand;
-pub mod file;
+pub use coopnav_sim::batch::sweep::{expand, file};
 pub mod merge;
 pub mod plan;
 pub mod shard;

@@ -12,6 +12,7 @@ use crate::plan::Plan;
 use crate::shard::{read_finished, Outcome, Record};
 use crate::table::tables;
 use coopnav_sim::batch::mc::{compare, comparison_table, Comparison};
+use coopnav_sim::experiments::{sweep_report, ReproReport};
 use coopnav_sim::observe::metrics::RunResult;
 use coopnav_sim::output::run::differences_svg;
 use coopnav_sim::output::{Manifest, RunDir, MANIFEST};
@@ -50,6 +51,10 @@ struct CellOut<'a> {
     comparison: Option<&'a Comparison>,
 }
 
+/// Where the merge writes the report of the reproduction the sweep file names (`report`):
+/// `table.txt`, `report.json` and the plots, as `coopnav reproduce ID -o DIR` writes them.
+pub const REPORT_DIR: &str = "reproduction";
+
 /// What a merge wrote.
 #[derive(Debug, Clone)]
 pub struct Merged {
@@ -57,6 +62,8 @@ pub struct Merged {
     /// comparison.txt's text.
     pub table: String,
     pub failures: Vec<Failure>,
+    /// The reproduction's report (the sweep file's `report`), when every run finished.
+    pub report: Option<ReproReport>,
 }
 
 /// Every record of the plan, in id order, or the shards not finished.
@@ -176,7 +183,32 @@ pub fn merge(plan: &Plan, target: Option<&Path>, force: bool, command: &str) -> 
     if !failures.is_empty() {
         dir.write_csv("failures.csv", failures.iter())?;
     }
-    Ok(Merged { dir: dir.finish()?, table, failures })
+    let report = match (reproduction(plan)?, failures.is_empty()) {
+        (Some(id), true) => {
+            let cells: Vec<(&str, &coopnav_sim::scenario::Scenario)> =
+                plan.cells.iter().map(|c| (c.base.as_str(), &c.scenario)).collect();
+            let all: Vec<Comparison> = comparisons.into_iter().flatten().collect();
+            let report = sweep_report(&id, &cells, all, plan.inputs.runs).map_err(|e| SweepError::Report {
+                dir: plan.dir.clone(),
+                id: id.clone(),
+                message: e.to_string(),
+            })?;
+            dir.write_text(&format!("{REPORT_DIR}/table.txt"), &report.printed())?;
+            dir.write_json(&format!("{REPORT_DIR}/report.json"), &report)?;
+            for (name, svg) in &report.plots {
+                dir.write_text(&format!("{REPORT_DIR}/{name}"), svg)?;
+            }
+            Some(report)
+        }
+        _ => None,
+    };
+    Ok(Merged { dir: dir.finish()?, table, failures, report })
+}
+
+/// The reproduction the plan's sweep file names (`report`), if any.
+fn reproduction(plan: &Plan) -> Result<Option<String>, SweepError> {
+    let sweep = crate::file::SweepFile::parse(&plan.inputs.sweep, Path::new(&plan.inputs.sweep_file))?;
+    Ok(sweep.report)
 }
 
 /// A cell's name in the plot: its axis values, or its base scenario when there are no axes.

@@ -20,7 +20,8 @@
 //! edited since it was written, or a shard file of another plan is refused.
 
 use crate::error::{io, SweepError};
-use crate::expand::{Cell, Expansion};
+use crate::expand::{Cell, Expansion, Form};
+use coopnav_sim::experiments::SWEEP_REPORTS;
 use coopnav_sim::output::{Manifest, RunDir, MANIFEST};
 use coopnav_sim::scenario::Scenario;
 use serde::{Deserialize, Serialize};
@@ -42,6 +43,9 @@ pub struct PlanInputs {
     pub runs: usize,
     pub axes: Vec<String>,
     pub cells: Vec<CellEntry>,
+    /// Whether this is the sweep file's reduced form (`sweep plan --reduced`).
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub reduced: bool,
 }
 
 /// One cell as the manifest lists it.
@@ -157,6 +161,7 @@ pub fn write_plan(
             .enumerate()
             .map(|(k, c)| CellEntry { file: cell_file(k, n), base: c.base.clone(), labels: c.labels.clone() })
             .collect(),
+        reduced: e.form == Form::Reduced,
     };
     plan.digest = digest(&plan, &texts);
     let inputs_json = serde_json::to_value(&plan)
@@ -258,7 +263,8 @@ impl Plan {
 }
 
 /// `coopnav sweep plan`: checks the sweep file `file` (text `text`) whole, estimates its work
-/// against the limits (lifted by `allow_large`), and writes its plan into `target`.
+/// against the limits (lifted by `allow_large`), and writes the plan of its full form into
+/// `target`.
 pub fn plan_file(
     file: &Path,
     text: &str,
@@ -268,12 +274,33 @@ pub fn plan_file(
     allow_large: bool,
     command: &str,
 ) -> Result<(PathBuf, Expansion), SweepError> {
+    plan_form(file, text, Form::Full, shards, target, force, allow_large, command)
+}
+
+/// [`plan_file`] of the sweep's `form` (`sweep plan --reduced`: its `[reduced]` table).
+#[allow(clippy::too_many_arguments)]
+pub fn plan_form(
+    file: &Path,
+    text: &str,
+    form: Form,
+    shards: usize,
+    target: &Path,
+    force: bool,
+    allow_large: bool,
+    command: &str,
+) -> Result<(PathBuf, Expansion), SweepError> {
     let sweep = crate::file::SweepFile::parse(text, file)?;
-    let e = crate::expand::expand(&sweep, file, allow_large)?;
+    if let Some(id) = sweep.report.as_ref().filter(|id| !SWEEP_REPORTS.contains(&id.as_str())) {
+        let allowed = SWEEP_REPORTS.join(", ");
+        let problems =
+            vec![format!("report = \"{id}\": no reproduction reports from a sweep's runs (allowed: {allowed})")];
+        return Err(SweepError::Invalid { file: file.to_path_buf(), problems });
+    }
+    let e = crate::expand::expand_with(&sweep, file, form, allow_large, &crate::expand::from_disk(file))?;
     coopnav_core::limits::check(crate::expand::work(&e), allow_large)?;
     let dir = file.parent().unwrap_or(Path::new(""));
     let bases: Vec<PathBuf> =
-        sweep.scenarios.iter().filter(|s| *s != crate::file::EMBEDDED).map(|s| dir.join(s)).collect();
+        sweep.scenario_files().into_iter().filter(|s| *s != crate::file::EMBEDDED).map(|s| dir.join(s)).collect();
     let mut inputs: Vec<&Path> = bases.iter().map(PathBuf::as_path).collect();
     inputs.push(file);
     let out = write_plan(&e, file, text, shards, target, force, &inputs, command)?;

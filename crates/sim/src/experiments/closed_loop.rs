@@ -6,8 +6,9 @@
 //! 2, 3, 5 and 8 survey AUVs. A cell is won when the paired 95 % CI of (planner − baseline) lies
 //! entirely below zero; every other cell is printed with its measured cause.
 //!
-//! The cells are data: `scenarios/experiments/closed-loop-vs-baselines.toml` names each scenario
-//! file, the fleet sizes it is flown with, the overlays laid over it from a fleet size on (from 6
+//! The cells are data: `scenarios/experiments/closed-loop-vs-baselines.toml`, a sweep file
+//! (docs/sweeps.md) expanded by the sweep expansion, names each scenario file, the fleet sizes it
+//! is flown with, the overlays laid over it from a fleet size on (from 6
 //! AUVs on every policy flies a schedule sized for the fleet: rate 0's 1 km slots lost the last
 //! slot's AUV for every policy) and the reduced form. Nothing is set per cell here: each cell flies
 //! what `coopnav simulate` flies for its file, `planner-estimator` with the settings of the
@@ -23,11 +24,11 @@
 use super::{Check, Experiment, ExperimentError, ReproOptions, ReproReport, Size};
 use crate::batch::mc::{comparison_table, monte_carlo_grid};
 use crate::batch::mc::{paired_per_auv, Ci, Comparison, PolicySummary};
+use crate::batch::sweep::expand::{expand_with, Form, Rules};
+use crate::batch::sweep::file::SweepFile;
 use crate::output::plot::PlotError;
 use crate::output::plot::{intervals_svg, Interval};
 use crate::policy::registry::POLICY_NAMES;
-use crate::scenario::file::overlay;
-use crate::scenario::generate::SizeRule;
 use crate::scenario::Scenario;
 use coopnav_plan::auto::{self, ASC_TRUTH, BIAS_PER_KM, DEPTH_AWARE_BIAS_PER_KM, REACH_SUCCESS, SPREAD_FLEET_MIN_AUVS};
 use serde::{Deserialize, Serialize};
@@ -59,73 +60,40 @@ pub fn experiments() -> Vec<Experiment> {
     }]
 }
 
-/// The experiment's cells, embedded: scenario files, N per scenario, the fleet-size overlays and
-/// the reduced form.
+/// The experiment's cells, embedded: a sweep file (docs/sweeps.md) of the scenario files, N per
+/// scenario, the fleet-size overlay and the reduced form, expanded by the sweep expansion
+/// ([`crate::batch::sweep::expand`]) as `coopnav sweep plan` expands it.
 const CELLS: &str = include_str!("../../../../scenarios/experiments/closed-loop-vs-baselines.toml");
 
 /// Where [`CELLS`] lives, for messages.
 const CELLS_FILE: &str = "scenarios/experiments/closed-loop-vs-baselines.toml";
 
 /// The scenario files [`CELLS`] may name, embedded, by the name it gives them (relative to its
-/// folder; "default" is the embedded default mission, as in a sweep file).
+/// folder; "default" is the embedded default mission, as in every sweep file).
 const FILES: [(&str, &str); 2] = [("default", crate::scenario::world::EXAMPLE), ("../sloping-auv-cna.toml", SLOPING)];
 
-/// [`CELLS`] as written.
-#[derive(Debug, Clone, Deserialize)]
-#[serde(deny_unknown_fields)]
-struct CellsFile {
-    runs: usize,
-    scenario: Vec<ScenarioCells>,
-    #[serde(default)]
-    fleet_size: Vec<SizeRule>,
-    reduced: ReducedCells,
-}
+/// The one axis of [`CELLS`]: the fleet size.
+const AXIS: (&str, &str) = ("N", "fleet.n_auvs");
 
-/// One scenario file and the fleet sizes it is flown with.
-#[derive(Debug, Clone, Deserialize)]
-#[serde(deny_unknown_fields)]
-struct ScenarioCells {
-    name: String,
-    file: String,
-    n_auvs: Vec<usize>,
-}
-
-/// The reduced form: runs, mission length, and which scenarios and N it keeps.
-#[derive(Debug, Clone, Deserialize)]
-#[serde(deny_unknown_fields)]
-struct ReducedCells {
-    runs: usize,
-    duration_s: f64,
-    cells: Vec<ReducedScenario>,
-}
-
-#[derive(Debug, Clone, Deserialize)]
-#[serde(deny_unknown_fields)]
-struct ReducedScenario {
-    scenario: String,
-    n_auvs: Vec<usize>,
-}
-
-/// One evaluation scenario: its name, the fleet sizes it is flown with, its mission file and the
-/// overlays laid over it from a fleet size on ([`CELLS`]).
+/// One evaluation scenario: its name, the fleet sizes it is flown with, its mission file and how
+/// the sweep expansion makes a cell of it ([`CELLS`]).
 #[derive(Debug, Clone)]
 pub struct Setting {
     pub name: String,
     pub n: Vec<usize>,
     pub base: Scenario,
-    pub fleet_size: Vec<SizeRule>,
+    /// The sweep file's rules: the N axis, the overlays from a fleet size on, the form's overlay.
+    pub rules: Rules,
 }
 
 impl Setting {
-    /// The mission for `n` AUVs: the file with `fleet.n_auvs = n`, every fleet-size overlay that
-    /// applies (in file order), the evaluation's seed and, if given, the duration. The planners'
-    /// settings are the file's and, for `planner-estimator`, the rule's for that mission.
+    /// The mission for `n` AUVs: the cell of the file with `N = n` as the sweep expansion
+    /// makes it (`fleet.n_auvs = n`, every conditional overlay that applies, the reduced form's
+    /// overlay), with the evaluation's seed and, if given, the duration. The planners' settings
+    /// are the file's and, for `planner-estimator`, the rule's for that mission.
     pub fn scenario(&self, n: usize, seed: u64, duration: Option<f64>) -> Result<Scenario, ExperimentError> {
-        let mut sc = self.base.with_auvs(n);
-        for rule in self.fleet_size.iter().filter(|r| n >= r.min_auvs) {
-            sc = overlay(&sc, toml::Value::Table(rule.patch.clone()))
-                .map_err(|e| fail(format!("{CELLS_FILE}: fleet_size (min_auvs = {}): {e}", rule.min_auvs)))?;
-        }
+        let value = toml::Value::Integer(i64::try_from(n).map_err(|e| fail(e.to_string()))?);
+        let mut sc = self.rules.scenario(&self.base, &[value]).map_err(|e| fail(format!("{CELLS_FILE}: {e}")))?;
         sc.seed = seed;
         if let Some(d) = duration {
             sc.duration_s = d;
@@ -134,46 +102,61 @@ impl Setting {
     }
 }
 
-/// The experiment's size: (settings, runs per policy and cell, mission duration override), read
-/// from [`CELLS`].
-pub fn setup(opts: &ReproOptions) -> Result<(Vec<Setting>, usize, Option<f64>), ExperimentError> {
+/// The experiment's size: (settings, runs per policy and cell), read from [`CELLS`] in the form
+/// of `opts` (the reduced form's shorter missions are its overlay, in every cell).
+pub fn setup(opts: &ReproOptions) -> Result<(Vec<Setting>, usize), ExperimentError> {
     setup_from(CELLS, opts)
 }
 
 /// [`setup`] from the cells file's text.
-fn setup_from(text: &str, opts: &ReproOptions) -> Result<(Vec<Setting>, usize, Option<f64>), ExperimentError> {
-    let file: CellsFile = toml::from_str(text).map_err(|e| fail(format!("{CELLS_FILE}: {e}")))?;
-    let mut settings = Vec::new();
-    for s in &file.scenario {
-        let text = FILES.iter().find(|(name, _)| *name == s.file).map(|(_, text)| *text).ok_or_else(|| {
-            let known: Vec<&str> = FILES.iter().map(|(name, _)| *name).collect();
-            fail(format!("{CELLS_FILE}: scenario {}: file {:?} is not one of {}", s.name, s.file, known.join(", ")))
-        })?;
-        let base: Scenario = toml::from_str(text).map_err(|e| fail(format!("{CELLS_FILE}: {}: {e}", s.file)))?;
-        settings.push(Setting { name: s.name.clone(), n: s.n_auvs.clone(), base, fleet_size: file.fleet_size.clone() });
+fn setup_from(text: &str, opts: &ReproOptions) -> Result<(Vec<Setting>, usize), ExperimentError> {
+    let file = Path::new(CELLS_FILE);
+    let sweep = SweepFile::parse(text, file).map_err(|e| fail(e.to_string()))?;
+    if sweep.policies != policies() {
+        return Err(fail(format!(
+            "{CELLS_FILE}: policies = {:?}: the reproduction compares {JUDGED}, first, with every other policy, in \
+             this order: {:?}",
+            sweep.policies,
+            policies()
+        )));
     }
-    let (runs, duration) = match opts.size {
-        Size::Full => (file.runs, None),
-        Size::Reduced => {
-            let mut reduced = Vec::new();
-            for cell in &file.reduced.cells {
-                let mut s = settings.iter().find(|s| s.name == cell.scenario).cloned().ok_or_else(|| {
-                    fail(format!("{CELLS_FILE}: reduced.cells names scenario {:?}, not in [[scenario]]", cell.scenario))
-                })?;
-                s.n = cell.n_auvs.clone();
-                reduced.push(s);
-            }
-            settings = reduced;
-            (file.reduced.runs, Some(file.reduced.duration_s))
-        }
+    let axes: Vec<(Option<&str>, Option<&str>)> =
+        sweep.axes.iter().map(|a| (a.name.as_deref(), a.path.as_deref())).collect();
+    if axes != [(Some(AXIS.0), Some(AXIS.1))] {
+        return Err(fail(format!(
+            "{CELLS_FILE}: the reproduction's cells have one axis, name = \"{}\", path = \"{}\"",
+            AXIS.0, AXIS.1
+        )));
+    }
+    let load = |name: &str| {
+        let known: Vec<&str> = FILES.iter().map(|(name, _)| *name).collect();
+        let (_, text) = FILES
+            .iter()
+            .find(|(own, _)| *own == name)
+            .ok_or_else(|| format!("not one of {} (the files the reproduction embeds)", known.join(", ")))?;
+        Scenario::parse(text, Path::new(name)).map_err(|e| e.to_string())
     };
-    // Every cell is checked before any run: a bad overlay fails here, naming the file.
+    let form = match opts.size {
+        Size::Full => Form::Full,
+        Size::Reduced => Form::Reduced,
+    };
+    let e = expand_with(&sweep, file, form, false, &load).map_err(|e| fail(e.to_string()))?;
+    let mut settings = Vec::new();
+    for b in &e.bases {
+        let n = b.values[0]
+            .iter()
+            .map(|v| v.as_integer().and_then(|n| usize::try_from(n).ok()))
+            .collect::<Option<Vec<usize>>>()
+            .ok_or_else(|| fail(format!("{CELLS_FILE}: scenario {}: N must be whole numbers", b.name)))?;
+        settings.push(Setting { name: b.name.clone(), n, base: b.scenario.clone(), rules: e.rules.clone() });
+    }
+    // Every cell is checked before any run, with the evaluation's seed.
     for s in &settings {
         for &n in &s.n {
-            s.scenario(n, opts.seed, duration)?.validate(Path::new(CELLS_FILE)).map_err(|e| fail(e.to_string()))?;
+            s.scenario(n, opts.seed, None)?.validate(file).map_err(|e| fail(e.to_string()))?;
         }
     }
-    Ok((settings, runs, duration))
+    Ok((settings, e.runs))
 }
 
 fn fail(message: String) -> ExperimentError {
@@ -198,8 +181,8 @@ pub struct Cell {
 
 /// Runs the experiment; `progress(done)` counts the finished runs of the whole grid.
 pub fn run_with_progress(opts: &ReproOptions, progress: &(dyn Fn(u64) + Sync)) -> Result<ReproReport, ExperimentError> {
-    let (settings, runs, duration) = setup(opts)?;
-    evaluate(&settings, runs, duration, opts.seed, &policies(), progress)
+    let (settings, runs) = setup(opts)?;
+    evaluate(&settings, runs, None, opts.seed, &policies(), progress)
 }
 
 /// Every cell of `settings` with `runs` runs per policy (`policies`, `JUDGED` first; [`policies`]
@@ -213,6 +196,20 @@ pub fn evaluate(
     policies: &[String],
     progress: &(dyn Fn(u64) + Sync),
 ) -> Result<ReproReport, ExperimentError> {
+    check_inputs(seed, policies)?;
+    // Every cell's runs go through one pool (no cell waits for the previous cell's slowest run).
+    let names: Vec<&str> = settings.iter().flat_map(|s| s.n.iter().map(move |_| s.name.as_str())).collect();
+    let scenarios: Vec<Scenario> = settings
+        .iter()
+        .flat_map(|s| s.n.iter().map(move |&n| s.scenario(n, seed, duration)))
+        .collect::<Result<_, _>>()?;
+    let comparisons = monte_carlo_grid(&scenarios, policies, runs, progress).map_err(|e| fail(e.to_string()))?;
+    let named: Vec<(&str, &Scenario)> = names.iter().copied().zip(&scenarios).collect();
+    report(&named, comparisons, runs, seed)
+}
+
+/// The seed and policies an evaluation may use (refused before any run).
+fn check_inputs(seed: u64, policies: &[String]) -> Result<(), ExperimentError> {
     if seed == TUNING_SEED {
         return Err(fail(format!(
             "seed {TUNING_SEED} chose the planner's settings; evaluate on another base seed (--seed)"
@@ -221,8 +218,26 @@ pub fn evaluate(
     if policies.first().map(String::as_str) != Some(JUDGED) {
         return Err(fail(format!("the first policy must be {JUDGED}, the one judged")));
     }
+    Ok(())
+}
+
+/// The report of cells already run: each cell's (scenario name, scenario) and its comparison,
+/// in the same order, `runs` runs per policy from base seed `seed`. [`evaluate`] runs the cells
+/// and reports here; `coopnav sweep merge` reports here from a sweep's merged runs.
+pub fn report(
+    named: &[(&str, &Scenario)],
+    comparisons: Vec<Comparison>,
+    runs: usize,
+    seed: u64,
+) -> Result<ReproReport, ExperimentError> {
+    let policies: Vec<String> =
+        comparisons.first().map_or(Vec::new(), |c| c.policies.iter().map(|p| p.policy.clone()).collect());
+    check_inputs(seed, &policies)?;
+    if named.len() != comparisons.len() {
+        return Err(fail(format!("{} cells but {} comparisons", named.len(), comparisons.len())));
+    }
     // The AUV CNA's true-error model as the rule gives it for the first AUV-CNA scenario.
-    let auv_diffusion = settings.iter().find_map(|s| s.base.cna.auv.as_ref().map(|a| a.nav_diffusion));
+    let auv_diffusion = named.iter().find_map(|(_, s)| s.cna.auv.as_ref().map(|a| a.nav_diffusion));
     let auv_cna_truth = auto::auv_cna_truth(auv_diffusion.unwrap_or(0.0));
     let mut table = format!(
         "True mean navigation error of the survey AUVs (m), {runs} runs per policy and cell, base seed {seed} \
@@ -240,17 +255,9 @@ pub fn evaluate(
         ASC_TRUTH.drift_m2_s, ASC_TRUTH.range_noise.sigma_m, auv_cna_truth.drift_m2_s, auv_cna_truth.cna_diffusion_m2_s
     );
     let (mut checks, mut cells, mut data) = (Vec::new(), Vec::new(), Vec::new());
-    // Every cell's runs go through one pool (no cell waits for the previous cell's slowest run).
-    let names: Vec<&str> = settings.iter().flat_map(|s| s.n.iter().map(move |_| s.name.as_str())).collect();
-    let scenarios: Vec<Scenario> = settings
-        .iter()
-        .flat_map(|s| s.n.iter().map(move |&n| s.scenario(n, seed, duration)))
-        .collect::<Result<_, _>>()?;
-    let named: Vec<(&str, &Scenario)> = names.iter().copied().zip(&scenarios).collect();
-    table += &estimator_trees(&named);
+    table += &estimator_trees(named);
     table.push('\n');
-    let comparisons = monte_carlo_grid(&scenarios, policies, runs, progress).map_err(|e| fail(e.to_string()))?;
-    for ((name, sc), c) in names.iter().zip(&scenarios).zip(comparisons) {
+    for ((name, sc), c) in named.iter().zip(comparisons) {
         let comms = &sc.comms;
         let _ = writeln!(
             table,
@@ -265,9 +272,11 @@ pub fn evaluate(
     }
     table += &summary_grid(&cells);
     let mut plots = Vec::new();
-    for s in settings {
-        let own: Vec<Cell> = cells.iter().filter(|c| c.scenario == s.name).cloned().collect();
-        plots.push((format!("differences-{}.svg", s.name), difference_svg(&own).map_err(|e| fail(e.to_string()))?));
+    let mut scenario_names: Vec<&str> = named.iter().map(|(name, _)| *name).collect();
+    scenario_names.dedup();
+    for name in scenario_names {
+        let own: Vec<Cell> = cells.iter().filter(|c| c.scenario == name).cloned().collect();
+        plots.push((format!("differences-{name}.svg"), difference_svg(&own).map_err(|e| fail(e.to_string()))?));
     }
     let data = serde_json::json!({ "comparisons": data, "cells": cells });
     Ok(ReproReport { plots, ..ReproReport::new(ID.into(), table, checks, data) })
@@ -579,7 +588,7 @@ mod tests {
 
     #[test]
     fn spread_fleets_trade_the_level_0_penalty_for_the_reach_cost_to_go() {
-        let (settings, _, _) = setup(&ReproOptions::new(Size::Full, 1)).unwrap();
+        let (settings, _) = setup(&ReproOptions::new(Size::Full, 1)).unwrap();
         for setting in &settings {
             let small = setting.scenario(2, 1, None).unwrap().estimator_settings().unwrap();
             let spread = setting.scenario(5, 1, None).unwrap().estimator_settings().unwrap();
@@ -593,7 +602,7 @@ mod tests {
     /// its mean, and `simulate` on the default mission flies the same planner as the N = 3 cell.
     #[test]
     fn in_the_current_the_estimator_scores_true_error_with_the_current_as_its_mean() {
-        let (settings, _, _) = setup(&ReproOptions::new(Size::Full, 1)).unwrap();
+        let (settings, _) = setup(&ReproOptions::new(Size::Full, 1)).unwrap();
         let cell = |name: &str| settings.iter().find(|s| s.name == name).unwrap().scenario(3, 1, None).unwrap();
         // (The sloping scenario's AUV CNA: `the_auv_cna_works_below_the_surface_at_every_fleet_size`.)
         let current = cell("current");
@@ -670,7 +679,7 @@ mod tests {
     /// and 8 planner-estimator scores true error with the CNA's own diffusion.
     #[test]
     fn the_auv_cna_works_below_the_surface_at_every_fleet_size() {
-        let (settings, _, _) = setup(&ReproOptions::new(Size::Full, 1)).unwrap();
+        let (settings, _) = setup(&ReproOptions::new(Size::Full, 1)).unwrap();
         let sloping = settings.iter().find(|s| s.name == "sloping-auv-cna").unwrap();
         for n in [1, 2, 3, 5, 8] {
             let sc = sloping.scenario(n, 1, None).unwrap();
@@ -695,7 +704,7 @@ mod tests {
     /// `coopnav_plan::auto`'s test holds every setting of every cell).
     #[test]
     fn each_cell_plans_with_its_tree() {
-        let (settings, _, _) = setup(&ReproOptions::new(Size::Full, 1)).unwrap();
+        let (settings, _) = setup(&ReproOptions::new(Size::Full, 1)).unwrap();
         let cells: Vec<(String, Scenario)> = settings
             .iter()
             .flat_map(|s| s.n.iter().map(|&n| (s.name.clone(), s.scenario(n, 1, None).unwrap())))
@@ -723,7 +732,7 @@ mod tests {
     /// last one under rate 0's (the measured reason for the change); smaller fleets keep rate 0.
     #[test]
     fn eight_auvs_fly_a_schedule_sized_for_the_fleet() {
-        let (settings, _, _) = setup(&ReproOptions::new(Size::Full, 1)).unwrap();
+        let (settings, _) = setup(&ReproOptions::new(Size::Full, 1)).unwrap();
         let heard = |sc: &Scenario| {
             let c = monte_carlo(sc, &["centroid-standoff".to_string()], 1, &|_| {}).unwrap();
             c.policies[0].auv_heard_runs.clone()
@@ -741,9 +750,9 @@ mod tests {
         }
     }
 
-    /// A cell file naming a scenario file the experiment does not embed, or a reduced cell of a
-    /// scenario it does not list, is refused by name; a bad fleet-size overlay is refused before
-    /// any run.
+    /// A cell file naming a scenario file the experiment does not embed, a reduced cell of a
+    /// scenario it does not list, or another list of policies is refused by name; a bad
+    /// fleet-size overlay is refused before any run.
     #[test]
     fn bad_cells_are_refused_by_name() {
         let opts = ReproOptions::new(Size::Reduced, 1);
@@ -752,15 +761,35 @@ mod tests {
             setup_from(&text, &opts).map(|_| ()).unwrap_err().to_string()
         };
         let e = err(CELLS.replace("file = \"default\"", "file = \"elsewhere.toml\""));
-        assert!(e.contains("\"elsewhere.toml\" is not one of default, ../sloping-auv-cna.toml"), "{e}");
-        let e = err(CELLS.replace("{ scenario = \"current\"", "{ scenario = \"nowhere\""));
-        assert!(e.contains("reduced.cells names scenario \"nowhere\""), "{e}");
+        assert!(
+            e.contains("scenario[0].file = \"elsewhere.toml\": not one of default, ../sloping-auv-cna.toml"),
+            "{e}"
+        );
+        let e = err(CELLS.replace("{ name = \"current\"", "{ name = \"nowhere\""));
+        assert!(e.contains("reduced.scenario[0].name = \"nowhere\": no such base scenario"), "{e}");
+        let e = err(CELLS.replace("\"none\", ", ""));
+        assert!(e.contains("policies = [") && e.contains("every other policy"), "{e}");
         let full = ReproOptions::new(Size::Full, 1);
         let bad = CELLS.replace("max_range_m = 2500.0", "max_range_m = \"far\"");
         assert_ne!(bad, CELLS);
         let e = setup_from(&bad, &full).map(|_| ()).unwrap_err().to_string();
-        assert!(e.contains("fleet_size (min_auvs = 6)"), "{e}");
+        assert!(e.contains("overlay.fleet-sized-schedule: ") && e.contains("max_range_m"), "{e}");
         assert!(setup_from(CELLS, &full).is_ok());
+    }
+
+    /// The reduced form is the file's [reduced] table: its runs, its cells in its order, its
+    /// 15-minute missions; the full form flies one hour.
+    #[test]
+    fn the_reduced_form_is_the_sweep_files_reduced_table() {
+        let (settings, runs) = setup(&ReproOptions::new(Size::Reduced, 1)).unwrap();
+        assert_eq!(runs, 8);
+        let cells: Vec<(&str, Vec<usize>)> = settings.iter().map(|s| (s.name.as_str(), s.n.clone())).collect();
+        assert_eq!(cells, [("current", vec![1, 3]), ("sloping-auv-cna", vec![2])]);
+        assert_eq!(settings[0].scenario(3, 7, None).unwrap().duration_s, 900.0);
+        assert_eq!(settings[0].scenario(3, 7, None).unwrap().seed, 7);
+        let (full, runs) = setup(&ReproOptions::new(Size::Full, 1)).unwrap();
+        assert_eq!((runs, full[1].n.clone()), (100, vec![1, 2, 3, 5, 8]));
+        assert_eq!(full[0].scenario(3, 1, None).unwrap().duration_s, 3600.0);
     }
 
     #[test]

@@ -29,14 +29,14 @@ fn fail(message: String) -> ExperimentError {
 }
 
 fn cna_navigation(opts: &ReproOptions) -> Result<ReproReport, ExperimentError> {
-    let (settings, runs, duration) = setup(opts)?;
+    let (settings, runs) = setup(opts)?;
     let as_evaluated: Vec<Setting> = settings.into_iter().filter(|s| s.base.cna.auv.is_some()).collect();
     if as_evaluated.is_empty() {
         return Err(fail("closed-loop-vs-baselines has no setting with an AUV CNA".into()));
     }
     let exact: Vec<Setting> = as_evaluated.iter().map(broadcasting_truth).collect();
     let both: Vec<Setting> = as_evaluated.into_iter().chain(exact).collect();
-    let report = evaluate(&both, runs, duration, opts.seed, &policies(), opts.progress)?;
+    let report = evaluate(&both, runs, None, opts.seed, &policies(), opts.progress)?;
     let cells: Vec<Cell> = serde_json::from_value(report.data["cells"].clone()).map_err(|e| fail(e.to_string()))?;
     let table = format!("{}\n{}", side_by_side(&both, &cells), report.table);
     Ok(ReproReport { id: ID.into(), table, ..report })
@@ -114,7 +114,7 @@ mod tests {
 
     #[test]
     fn only_the_broadcast_changes_in_the_counterfactual() {
-        let (settings, _, _) = setup(&ReproOptions::new(Size::Full, 1)).unwrap();
+        let (settings, _) = setup(&ReproOptions::new(Size::Full, 1)).unwrap();
         let sloping = settings.iter().find(|s| s.base.cna.auv.is_some()).unwrap();
         let exact = broadcasting_truth(sloping);
         let (a, b) = (sloping.scenario(3, 1, None).unwrap(), exact.scenario(3, 1, None).unwrap());

@@ -122,6 +122,13 @@ impl ReproReport {
     pub fn all_passed(&self) -> bool {
         self.checks.iter().all(|c| c.passed)
     }
+
+    /// The table and one line per check, as `coopnav reproduce` prints it (and writes it to
+    /// `table.txt`).
+    pub fn printed(&self) -> String {
+        let lines: Vec<String> = self.checks.iter().map(Check::line).collect();
+        format!("{}\n{}", self.table, lines.join("\n"))
+    }
 }
 
 #[derive(Debug, Error)]
@@ -151,6 +158,30 @@ pub fn registry() -> Vec<Experiment> {
     all.extend(generalization::experiments());
     all.extend(aiding::experiments());
     all
+}
+
+/// The reproductions whose cells are a sweep file and whose report a sweep's merged runs give
+/// (the sweep file's `report` key).
+pub const SWEEP_REPORTS: [&str; 1] = ["closed-loop-vs-baselines"];
+
+/// The report of reproduction `id` (one of [`SWEEP_REPORTS`]) from cells already run: each
+/// cell's (base scenario name, scenario) and its comparison, `runs` runs per policy, every cell
+/// from the same base seed.
+pub fn sweep_report(
+    id: &str,
+    cells: &[(&str, &crate::scenario::Scenario)],
+    comparisons: Vec<crate::batch::mc::Comparison>,
+    runs: usize,
+) -> Result<ReproReport, ExperimentError> {
+    if !SWEEP_REPORTS.contains(&id) {
+        return Err(ExperimentError::Unknown(id.to_string()));
+    }
+    let seeds: std::collections::BTreeSet<u64> = cells.iter().map(|(_, s)| s.seed).collect();
+    let [seed] = seeds.iter().copied().collect::<Vec<_>>()[..] else {
+        let message = format!("its cells must share one base seed, and they have {seeds:?}");
+        return Err(ExperimentError::Failed { id: id.to_string(), message });
+    };
+    closed_loop::report(cells, comparisons, runs, seed)
 }
 
 /// Runs the experiment named `id`.
