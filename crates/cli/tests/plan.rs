@@ -38,7 +38,7 @@ fn bad_input_exits_non_zero_and_writes_nothing() {
     let s = short_example(dir.path());
     let text = std::fs::read_to_string(dir.path().join(&s)).unwrap();
     let cases = [
-        ("unknown.toml", text.replace("look_ahead = 4", "look_ahead = 4\ncolour = 1"), "colour"),
+        ("unknown.toml", text.replace("[policy.planner]\n", "[policy.planner]\ncolour = 1\n"), "colour"),
         ("a1.toml", text.replace("heading_options = 5", "heading_options = 1"), "heading_options"),
         ("speed.toml", text.replace("speed = 3.0 ", "speed = -1.0 "), "speed"),
         ("turn.toml", text.replace("max_turn_rate_deg_s = 4.0", "max_turn_rate_deg_s = 20.0"), "max_turn_rate_deg_s"),
