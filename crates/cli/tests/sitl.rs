@@ -8,34 +8,17 @@
 
 mod netns;
 
-use coopnav_lcm::messages::{Clock, Decision, Message};
-use coopnav_lcm::{Schema, Udpm};
 use coopnav_live::sitl::{run_lockstep, SitlOptions};
-use coopnav_live::CnaChannels;
 use coopnav_sim::scenario::file::load;
 use coopnav_sim::scenario::Scenario;
-use netns::{in_private_netns, refused, wait_or_kill};
+use netns::{coopnav_ok, in_private_netns, refused, stop_clock_at_decision};
 use std::path::{Path, PathBuf};
-use std::process::{Command, Stdio};
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
 const URL: &str = "udpm://239.255.76.67:7667?ttl=0&recv_buf_size=4194304";
 
 fn scenario_path(name: &str) -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../scenarios").join(name)
-}
-
-fn coopnav(args: &[&str]) -> String {
-    let child = Command::new(env!("CARGO_BIN_EXE_coopnav"))
-        .args(args)
-        .stdin(Stdio::null())
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
-    let out = wait_or_kill(child, Duration::from_secs(240), "coopnav");
-    assert!(out.status.success(), "coopnav {args:?}: {}", String::from_utf8_lossy(&out.stderr));
-    String::from_utf8_lossy(&out.stdout).into_owned()
 }
 
 /// Every file `simulate` wrote is in the sitl run, equal; the manifest and report once each
@@ -64,8 +47,8 @@ fn lockstep_equals_simulate(file: &str) {
     let bin = env!("CARGO_BIN_EXE_coopnav");
     let sim_args = ["simulate", sc, "-o", sim.to_str().unwrap()];
     let sitl_args = ["sitl", sc, "--lockstep", "-o", sitl.to_str().unwrap(), "--url", URL];
-    coopnav(&sim_args);
-    let said = coopnav(&sitl_args);
+    coopnav_ok(&sim_args, Duration::from_secs(240));
+    let said = coopnav_ok(&sitl_args, Duration::from_secs(240));
     println!("{said}");
     assert!(said.contains("(0 missed, 0 on other inputs)"), "{said}");
     let join = |args: &[&str]| [&[bin][..], args].concat().join(" ");
@@ -94,22 +77,8 @@ fn sitl_reports_a_cna_that_stopped_commanding_and_holds_its_last_command() {
     in_private_netns("sitl_reports_a_cna_that_stopped_commanding_and_holds_its_last_command", || {
         let path = scenario_path("default.toml");
         let sc: Scenario = load(&path, Scenario::validate).unwrap();
-        let ch = CnaChannels::default();
-        // Watches the child's records; at decision 40 stops its clock.
-        let mut watch = Udpm::new(URL).unwrap();
-        watch.subscribe(&ch.decision).unwrap();
-        let stopper = std::thread::spawn(move || {
-            let (schema, start) = (Schema::coopnav(), Instant::now());
-            while start.elapsed() < Duration::from_secs(60) {
-                let Some(m) = watch.recv_timeout(Duration::from_millis(200)).unwrap() else { continue };
-                if Decision::decode(&schema, &m.data).unwrap().seq == 40 {
-                    let stop = Clock { running: false, ..Clock::default() }.encode(&schema).unwrap();
-                    watch.publish(&CnaChannels::default().clock, &stop).unwrap();
-                    return true;
-                }
-            }
-            false
-        });
+        // Stops the child's clock at decision 40.
+        let stopper = stop_clock_at_decision(URL, 40);
         let bin = env!("CARGO_BIN_EXE_coopnav").to_string();
         let child =
             [&bin, "live", "cna", path.to_str().unwrap(), "--policy", "planner", "--clock", "bus", "--url", URL];

@@ -10,15 +10,11 @@
 
 mod netns;
 
-use coopnav_lcm::messages::{Clock, Decision, Message};
-use coopnav_lcm::{Schema, Udpm};
 use coopnav_live::sitl::{run, BusFaults, LiveAuvs, Pace, Restart, SitlOptions, SitlRun};
-use coopnav_live::CnaChannels;
 use coopnav_sim::scenario::file::load;
 use coopnav_sim::scenario::Scenario;
-use netns::{in_private_netns, wait_or_kill};
+use netns::{coopnav_ok, in_private_netns, stop_clock_at_decision};
 use std::path::{Path, PathBuf};
-use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
 const URL: &str = "udpm://239.255.76.67:7667?ttl=0&recv_buf_size=4194304";
@@ -245,20 +241,7 @@ fn a_free_running_world_reports_a_cna_that_stopped_commanding() {
     in_private_netns("a_free_running_world_reports_a_cna_that_stopped_commanding", || {
         let tmp = tempfile::tempdir().unwrap();
         let (file, sc) = shortened("default.toml", 450.0, tmp.path());
-        let mut watch = Udpm::new(URL).unwrap();
-        watch.subscribe(&CnaChannels::default().decision).unwrap();
-        let stopper = std::thread::spawn(move || {
-            let (schema, start) = (Schema::coopnav(), Instant::now());
-            while start.elapsed() < Duration::from_secs(60) {
-                let Some(m) = watch.recv_timeout(Duration::from_millis(200)).unwrap() else { continue };
-                if Decision::decode(&schema, &m.data).unwrap().seq == 5 {
-                    let stop = Clock { running: false, ..Clock::default() }.encode(&schema).unwrap();
-                    watch.publish(&CnaChannels::default().clock, &stop).unwrap();
-                    return true;
-                }
-            }
-            false
-        });
+        let stopper = stop_clock_at_decision(URL, 5);
         let opts = options(&file, "planner", Pace::Warp(30.0), None);
         let run = run(&sc, "planner", &opts).unwrap();
         assert!(stopper.join().unwrap());
@@ -269,20 +252,6 @@ fn a_free_running_world_reports_a_cna_that_stopped_commanding() {
         assert_eq!(run.child_summary.unwrap()["decisions"], 6);
         assert!(run.result.fleet.error.mean.is_finite());
     });
-}
-
-/// `coopnav ARGS`, bounded in time.
-fn coopnav(args: &[&str], timeout: Duration) -> String {
-    let child = Command::new(env!("CARGO_BIN_EXE_coopnav"))
-        .args(args)
-        .stdin(Stdio::null())
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
-    let out = wait_or_kill(child, timeout, "coopnav");
-    assert!(out.status.success(), "coopnav {args:?}: {}", String::from_utf8_lossy(&out.stderr));
-    String::from_utf8_lossy(&out.stdout).into_owned()
 }
 
 /// The percentile `q` of `v` (linear between order statistics).
@@ -309,12 +278,12 @@ fn one_hour_five_auvs_at_warp_30_with_live_auvs_is_inside_the_in_process_spread(
     let json = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("sitl-five-auvs-mc.json");
     if std::env::var_os("COOPNAV_LIVE_IN_NETNS").is_none() {
         let args = ["simulate", file.to_str().unwrap(), "--runs", "20", "--policy", "planner-estimator"];
-        coopnav(&[&args[..], &["--json", json.to_str().unwrap(), "--force"]].concat(), Duration::from_secs(3600));
+        coopnav_ok(&[&args[..], &["--json", json.to_str().unwrap(), "--force"]].concat(), Duration::from_secs(3600));
     }
     in_private_netns("one_hour_five_auvs_at_warp_30_with_live_auvs_is_inside_the_in_process_spread", || {
         let tmp = tempfile::tempdir().unwrap();
         let sitl = tmp.path().join("sitl");
-        let said = coopnav(
+        let said = coopnav_ok(
             &[
                 "sitl",
                 file.to_str().unwrap(),
@@ -376,12 +345,12 @@ fn a_live_navigators_log_postprocesses_to_the_estimates_the_run_scored() {
         let (file, _) = shortened("default.toml", 300.0, tmp.path());
         let (sitl, post) = (tmp.path().join("sitl"), tmp.path().join("post"));
         let args = ["sitl", file.to_str().unwrap(), "--lockstep", "--live-auvs", "--policy", "planner", "--url", URL];
-        println!("{}", coopnav(&[&args[..], &["-o", sitl.to_str().unwrap()]].concat(), Duration::from_secs(200)));
+        println!("{}", coopnav_ok(&[&args[..], &["-o", sitl.to_str().unwrap()]].concat(), Duration::from_secs(200)));
         for name in ["cna.lcm", "auv0.lcm", "auv0.toml", "auv0.log", "auv0.post.toml", "summary.json", "run.alog"] {
             assert!(sitl.join(name).is_file(), "{name}");
         }
         let (log, cfg) = (sitl.join("auv2.log"), sitl.join("auv2.post.toml"));
-        coopnav(
+        coopnav_ok(
             &[
                 "hbl",
                 "postprocess",

@@ -6,8 +6,11 @@
 
 #![allow(dead_code)] // each test binary compiles this module; not all of them use every helper
 
+use coopnav_lcm::messages::{Clock, Decision, Message};
+use coopnav_lcm::{Schema, Udpm};
+use coopnav_live::CnaChannels;
 use std::io::{BufRead, BufReader, Read};
-use std::process::{Child, Command, Stdio};
+use std::process::{Child, Command, Output, Stdio};
 use std::sync::mpsc;
 use std::time::{Duration, Instant};
 
@@ -22,9 +25,8 @@ fn unshare() -> (&'static str, &'static str) {
     unreachable!("the tests needing a private namespace are ignored without one")
 }
 
-/// Runs `coopnav` with `args` (bounded by 20 s, killed by its pid past it) and checks that it
-/// fails with a message containing `expected`.
-pub fn refused(args: &[&str], expected: &str) {
+/// Runs `coopnav` with `args`, its stdin closed, bounded by `timeout` (killed by its pid past it).
+pub fn coopnav_bounded(args: &[&str], timeout: Duration) -> Output {
     let child = Command::new(env!("CARGO_BIN_EXE_coopnav"))
         .args(args)
         .stdin(Stdio::null())
@@ -32,13 +34,48 @@ pub fn refused(args: &[&str], expected: &str) {
         .stderr(Stdio::piped())
         .spawn()
         .unwrap();
-    let out = wait_or_kill(child, Duration::from_secs(20), &format!("coopnav {args:?}"));
+    wait_or_kill(child, timeout, &format!("coopnav {args:?}"))
+}
+
+/// Runs `coopnav` with `args` as [`coopnav_bounded`], checks that it succeeded and returns its
+/// stdout.
+pub fn coopnav_ok(args: &[&str], timeout: Duration) -> String {
+    let out = coopnav_bounded(args, timeout);
+    assert!(out.status.success(), "coopnav {args:?}: {}", String::from_utf8_lossy(&out.stderr));
+    String::from_utf8_lossy(&out.stdout).into_owned()
+}
+
+/// Runs `coopnav` with `args` (bounded by 20 s) and checks that it fails with a message
+/// containing `expected`.
+pub fn refused(args: &[&str], expected: &str) {
+    let out = coopnav_bounded(args, Duration::from_secs(20));
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(!out.status.success() && err.contains(expected), "{args:?}: {err}");
 }
 
+/// Watches the decision records on `url` and, at the one numbered `seq`, publishes a stopped
+/// clock, so the CNA process stops commanding. The thread gives up after 60 s; it returns whether
+/// it saw that decision.
+pub fn stop_clock_at_decision(url: &str, seq: i64) -> std::thread::JoinHandle<bool> {
+    let ch = CnaChannels::default();
+    let mut watch = Udpm::new(url).unwrap();
+    watch.subscribe(&ch.decision).unwrap();
+    std::thread::spawn(move || {
+        let (schema, start) = (Schema::coopnav(), Instant::now());
+        while start.elapsed() < Duration::from_secs(60) {
+            let Some(m) = watch.recv_timeout(Duration::from_millis(200)).unwrap() else { continue };
+            if Decision::decode(&schema, &m.data).unwrap().seq == seq {
+                let stop = Clock { running: false, ..Clock::default() }.encode(&schema).unwrap();
+                watch.publish(&ch.clock, &stop).unwrap();
+                return true;
+            }
+        }
+        false
+    })
+}
+
 /// Waits for `child` at most `timeout`; past it, kills it (by its pid) and panics.
-pub fn wait_or_kill(mut child: Child, timeout: Duration, what: &str) -> std::process::Output {
+pub fn wait_or_kill(mut child: Child, timeout: Duration, what: &str) -> Output {
     let deadline = Instant::now() + timeout;
     loop {
         if child.try_wait().expect("try_wait").is_some() {
