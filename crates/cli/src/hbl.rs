@@ -468,9 +468,23 @@ fn tune_cmd(c: &Common, spec_path: &Path) -> Result<()> {
     for (coefficient, value) in &r.coefficients {
         // The name as the spec file spells it (serde's snake_case), not the Rust variant.
         let name = serde_json::to_value(coefficient)?;
-        println!("{:<24} {value:>12.6}", name.as_str().unwrap_or_default());
+        println!("{:<24} {:>12}", name.as_str().unwrap_or_default(), significant(*value, 4));
     }
     Ok(())
+}
+
+/// `value` to `digits` significant digits: fixed-point between 10⁻³ and 10⁶, scientific outside,
+/// so that a coefficient of 3·10⁻⁹ prints as `3.000e-9`, not as `0.000000`.
+fn significant(value: f64, digits: usize) -> String {
+    let magnitude = value.abs();
+    if value == 0.0 || !value.is_finite() {
+        return format!("{value}");
+    }
+    if !(1e-3..1e6).contains(&magnitude) {
+        return format!("{value:.*e}", digits.saturating_sub(1));
+    }
+    let decimals = (digits as i32 - 1 - magnitude.log10().floor() as i32).max(0) as usize;
+    format!("{value:.decimals$}")
 }
 
 /// The paths `hbl postprocess` reads and writes.
@@ -742,4 +756,20 @@ fn print_tuning(r: &TuneReport) {
         post_tune::Kept::Start => "the starting values",
     };
     println!("kept {kept}");
+}
+
+#[cfg(test)]
+mod tests {
+    use super::significant;
+
+    #[test]
+    fn coefficients_print_at_their_precision() {
+        assert_eq!(significant(3e-9, 4), "3.000e-9");
+        assert_eq!(significant(-2.5e-7, 3), "-2.50e-7");
+        assert_eq!(significant(0.0123456, 4), "0.01235");
+        assert_eq!(significant(1.5, 4), "1.500");
+        assert_eq!(significant(1234.5678, 4), "1235");
+        assert_eq!(significant(2.0e7, 2), "2.0e7");
+        assert_eq!(significant(0.0, 4), "0");
+    }
 }
