@@ -432,11 +432,18 @@ fn check_axes(sweep: &SweepFile, problems: &mut Vec<String>) -> Vec<CheckedAxis>
             }
         };
         if let Some(c) = checked {
-            if axis.name.is_some() && RESERVED_NAMES.contains(&c.rule.name.as_str()) {
-                problems.push(format!(
-                    "axis[{i}].name = \"{}\": a column of the results tables already has that name (give another)",
-                    c.rule.name
-                ));
+            if RESERVED_NAMES.contains(&c.rule.name.as_str()) {
+                problems.push(if axis.name.is_some() {
+                    format!(
+                        "axis[{i}].name = \"{}\": a column of the results tables already has that name (give another)",
+                        c.rule.name
+                    )
+                } else {
+                    format!(
+                        "axis[{i}].path = \"{}\": a column of the results tables already has that name (give the axis a name)",
+                        c.rule.name
+                    )
+                });
             }
             if out.iter().any(|o| o.rule.name == c.rule.name) {
                 problems.push(format!("axis[{i}].path = \"{}\": already an axis", c.rule.name));

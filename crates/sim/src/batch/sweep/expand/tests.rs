@@ -73,7 +73,7 @@ fn an_unset_optional_field_is_a_valid_path_and_a_bad_cell_names_its_axis_values(
 fn the_cell_count_is_held_to_the_limit_before_expansion() {
     let values = (0..4000).map(|v| v.to_string()).collect::<Vec<_>>().join(", ");
     let text =
-        format!("{HEAD}[[axis]]\npath = \"seed\"\nvalues = [{values}]\n[[axis]]\npath = \"dt\"\nvalues = [{values}]\n");
+        format!("{HEAD}[[axis]]\nname = \"base_seed\"\npath = \"seed\"\nvalues = [{values}]\n[[axis]]\npath = \"dt\"\nvalues = [{values}]\n");
     let e = expand(&sweep(&text), Path::new("s.toml"), false).unwrap_err().to_string();
     assert!(e.contains("sweep cells ≈ 1.600e7") && e.contains("--allow-large"), "{e}");
 }
@@ -253,4 +253,19 @@ fn a_path_indexes_an_array_entry_and_keeps_the_others() {
     assert!(p[0].contains("`curves[x]`: an index is written [N], N a whole number from 0"), "{p:#?}");
     let p = bad("comms.success.curves[1].p_b");
     assert!(p[0].contains("no field `p_b` in [comms.success.curves[1]]"), "{p:#?}");
+}
+
+#[test]
+fn an_axis_named_like_a_results_column_is_refused_given_or_by_its_path() {
+    let named = format!("{HEAD}[[axis]]\nname = \"n_auvs\"\npath = \"fleet.n_auvs\"\nvalues = [2, 3]\n");
+    let p = problems(&named);
+    assert_eq!(p, ["axis[0].name = \"n_auvs\": a column of the results tables already has that name (give another)"]);
+    let by_path = format!("{HEAD}[[axis]]\npath = \"seed\"\nvalues = [1, 2]\n");
+    let p = problems(&by_path);
+    assert_eq!(
+        p,
+        ["axis[0].path = \"seed\": a column of the results tables already has that name (give the axis a name)"]
+    );
+    let renamed = format!("{HEAD}[[axis]]\nname = \"base_seed\"\npath = \"seed\"\nvalues = [1, 2]\n");
+    assert_eq!(expand(&sweep(&renamed), Path::new("s.toml"), false).unwrap().axes, ["base_seed"]);
 }
