@@ -49,6 +49,7 @@ impl ScenarioCommand for Advise {
     const EXAMPLE: &'static str = EXAMPLE;
     const EMBEDDED: &'static str = "default";
     const RUN_PREFIX: &'static str = "advise";
+    const FORMAT: crate::input::Format = crate::input::Format::Mission;
     const READ: fn(&str, &std::path::Path) -> Result<Scenario, coopnav_sim::scenario::file::ScenarioError> =
         Scenario::read;
     const VALIDATE: Validate<Scenario> = Scenario::validate;

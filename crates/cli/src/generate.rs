@@ -45,7 +45,9 @@ struct Row<'a> {
 }
 
 pub fn run(args: Args) -> Result<()> {
-    let mut ranges = Ranges::load(&args.file)?;
+    let text = crate::input::read(&args.file, false)?;
+    let read = Ranges::parse(&text, &args.file);
+    let mut ranges = crate::input::parsed_as(read, &text, &args.file, crate::input::Format::Generator)?;
     ranges.seed = args.seed.unwrap_or(ranges.seed);
     ranges.missions = args.missions.unwrap_or(ranges.missions);
     ranges.validate(&args.file)?;

@@ -1,7 +1,7 @@
 //! `coopnav hbl simulate|montecarlo|grid|tune|postprocess`: the Gill hybrid-baseline tools.
 
 use crate::alog_import;
-use crate::input;
+use crate::input::{self, Format};
 use anyhow::{Context, Result};
 use coopnav_core::limits;
 use coopnav_nav::cycle::Configuration;
@@ -175,7 +175,10 @@ impl Common {
 
 fn scenario(c: &Common) -> Result<Scenario> {
     match &c.config {
-        Some(p) => Ok(hbl_scenario::parse(&input::read(p, c.allow_large)?, p)?),
+        Some(p) => {
+            let text = input::read(p, c.allow_large)?;
+            input::parsed_as(hbl_scenario::parse(&text, p), &text, p, Format::Mission)
+        }
         None => Ok(table5_scenario(Configuration::HblTwo)?),
     }
 }
@@ -237,8 +240,9 @@ pub fn run_command(cmd: Command) -> Result<()> {
 const ORIGIN_HINT: &str =
     "# origin = { lat_deg = 47.97, lon_deg = -116.5, height_m = 630.0 }  # WGS-84 origin of lat/lon (_ll) log rows";
 
-fn example(kind: ExampleKind) -> Result<()> {
-    let text = match kind {
+/// The example file of `kind`, without the header `hbl example` prints above it.
+pub(crate) fn example_text(kind: ExampleKind) -> Result<String> {
+    Ok(match kind {
         ExampleKind::Scenario => table5_file(Configuration::HblTwo).1.to_string(),
         // Absent options don't serialise: show the geodetic one.
         ExampleKind::LogFormat => format!(
@@ -256,7 +260,11 @@ fn example(kind: ExampleKind) -> Result<()> {
         })?,
         ExampleKind::Post => format!("{ORIGIN_HINT}\n{}", toml::to_string_pretty(&PostConfig::default())?),
         ExampleKind::AlogMap => toml::to_string_pretty(&crate::alog_import::AlogMapping::default())?,
-    };
+    })
+}
+
+fn example(kind: ExampleKind) -> Result<()> {
+    let text = example_text(kind)?;
     let what = match kind {
         ExampleKind::Scenario => "HBL scenario (Gill 2013 Table 5, HBL Two; an engine scenario file) for --config",
         ExampleKind::LogFormat => "log format for `hbl simulate --log-format`",
@@ -301,7 +309,11 @@ fn scenario_name(c: &Common) -> String {
 
 fn log_format(path: Option<&Path>, allow_large: bool) -> Result<LogFormat> {
     let format: LogFormat = match path {
-        Some(p) => toml::from_str(&input::read(p, allow_large)?).with_context(|| format!("in {}", p.display()))?,
+        Some(p) => {
+            let text = input::read(p, allow_large)?;
+            let read = toml::from_str(&text).with_context(|| format!("in {}", p.display()));
+            input::parsed_as(read, &text, p, Format::HblLogFormat)?
+        }
         None => LogFormat::default(),
     };
     format.validate().with_context(|| path.map_or(String::new(), |p| format!("in {}", p.display())))?;
@@ -420,7 +432,11 @@ fn montecarlo(c: &Common, runs: usize) -> Result<()> {
 fn grid_cmd(c: &Common, grid_path: Option<&Path>) -> Result<()> {
     let mut sc = scenario(c)?;
     let spec: GridSpec = match grid_path {
-        Some(p) => toml::from_str(&input::read(p, c.allow_large)?).with_context(|| format!("in {}", p.display()))?,
+        Some(p) => {
+            let text = input::read(p, c.allow_large)?;
+            let read = toml::from_str(&text).with_context(|| format!("in {}", p.display()));
+            input::parsed_as(read, &text, p, Format::HblGrid)?
+        }
         None => GridSpec::default(),
     };
     spec.validate()
@@ -448,8 +464,9 @@ fn grid_cmd(c: &Common, grid_path: Option<&Path>) -> Result<()> {
 
 fn tune_cmd(c: &Common, spec_path: &Path) -> Result<()> {
     let sc = scenario(c)?;
-    let spec: TuneSpec = toml::from_str(&input::read(spec_path, c.allow_large)?)
-        .with_context(|| format!("in {}", spec_path.display()))?;
+    let text = input::read(spec_path, c.allow_large)?;
+    let read = toml::from_str(&text).with_context(|| format!("in {}", spec_path.display()));
+    let spec: TuneSpec = input::parsed_as(read, &text, spec_path, Format::HblTune)?;
     spec.validate().with_context(|| format!("in {}", spec_path.display()))?;
     limits::check(work::hbl_tune(&sc, &spec), c.allow_large)?;
     let r = tune(&sc, zone_spec(&sc, c)?, &spec)?;
@@ -528,7 +545,9 @@ fn postprocess(
     let PostFiles { log, alog_map, config, out } = files;
     let mut cfg = match config {
         Some(p) => {
-            PostConfig::from_toml(&input::read(p, allow_large)?).with_context(|| format!("in {}", p.display()))?
+            let text = input::read(p, allow_large)?;
+            let read = PostConfig::from_toml(&text).with_context(|| format!("in {}", p.display()));
+            input::parsed_as(read, &text, p, Format::HblPost)?
         }
         None => PostConfig::default(),
     };

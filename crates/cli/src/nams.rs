@@ -112,7 +112,7 @@ pub fn run(args: Args) -> Result<()> {
         return Ok(());
     };
     let text = input::read(config, args.allow_large)?;
-    let file = parse_file(&text, config)?;
+    let file = input::parsed_as(parse_file(&text, config), &text, config, input::Format::Nams)?;
     limits::check(work::nams(&file.experiment), args.allow_large)?;
     let tl = provider(&file.tl, &file.experiment)?;
     let run = match &args.out {

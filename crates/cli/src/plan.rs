@@ -44,6 +44,7 @@ impl ScenarioCommand for Plan {
     const EXAMPLE: &'static str = EXAMPLE;
     const EMBEDDED: &'static str = "example";
     const RUN_PREFIX: &'static str = "plan";
+    const FORMAT: crate::input::Format = crate::input::Format::Plan;
     const READ: fn(&str, &Path) -> Result<Scenario, coopnav_sim::scenario::file::ScenarioError> = Scenario::read;
     const VALIDATE: Validate<Scenario> = Scenario::validate;
     const WORK: fn(&Scenario) -> Vec<Estimate> = work::predeploy;

@@ -5,7 +5,7 @@
 //! (the one given, or a fresh `runs/<prefix>-<name>`). Each command says what differs in a
 //! [`ScenarioCommand`].
 
-use crate::input;
+use crate::input::{self, Format};
 use anyhow::Result;
 use coopnav_core::limits::{self, Estimate};
 use coopnav_sim::output::RunDir;
@@ -27,6 +27,8 @@ pub trait ScenarioCommand {
     const EMBEDDED: &'static str;
     /// Fresh run directories are `runs/<RUN_PREFIX>-<scenario name>`.
     const RUN_PREFIX: &'static str;
+    /// The format the scenario file is in (a file in another is named as such).
+    const FORMAT: Format;
     /// Reads the scenario type from text without validating it (`file` names it in messages).
     const READ: fn(&str, &Path) -> Result<Self::Scenario, ScenarioError>;
     /// The scenario type's validation (`file` names it in messages).
@@ -109,7 +111,7 @@ impl<C: ScenarioCommand> ScenarioArgs<C> {
 
     /// Parses `text` (read from `file`), checks its sizes against the work limits, validates it.
     fn parse(&self, text: &str, file: &Path) -> Result<C::Scenario> {
-        let scenario = (C::READ)(text, file)?;
+        let scenario = input::parsed_as((C::READ)(text, file), text, file, C::FORMAT)?;
         limits::check((C::WORK)(&scenario), self.allow_large)?;
         (C::VALIDATE)(&scenario, file)?;
         Ok(scenario)

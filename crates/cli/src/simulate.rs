@@ -52,6 +52,7 @@ impl ScenarioCommand for Simulate {
     const EXAMPLE: &'static str = EXAMPLE;
     const EMBEDDED: &'static str = "default";
     const RUN_PREFIX: &'static str = "sim";
+    const FORMAT: crate::input::Format = crate::input::Format::Mission;
     const READ: fn(&str, &Path) -> Result<Scenario, coopnav_sim::scenario::file::ScenarioError> = Scenario::read;
     const VALIDATE: Validate<Scenario> = Scenario::validate;
     /// One run; `--runs` is checked once the policies are known.

@@ -58,6 +58,7 @@ impl ScenarioCommand for Sitl {
     const EXAMPLE: &'static str = EXAMPLE;
     const EMBEDDED: &'static str = "default";
     const RUN_PREFIX: &'static str = "sitl";
+    const FORMAT: crate::input::Format = crate::input::Format::Mission;
     const READ: fn(&str, &std::path::Path) -> Result<Scenario, coopnav_sim::scenario::file::ScenarioError> =
         Scenario::read;
     const VALIDATE: Validate<Scenario> = Scenario::validate;

@@ -108,7 +108,8 @@ pub fn run(args: Args) -> Result<()> {
         Command::Plan { file, shards, output, force, allow_large, reduced } => {
             let text = input::read(&file, allow_large)?;
             let form = if reduced { Form::Reduced } else { Form::Full };
-            let (dir, e) = plan_form(&file, &text, form, shards, &output, force, allow_large, &command_line())?;
+            let planned = plan_form(&file, &text, form, shards, &output, force, allow_large, &command_line());
+            let (dir, e) = input::parsed_as(planned, &text, &file, input::Format::Sweep)?;
             let runs = e.cells.len() * e.policies.len() * e.runs;
             println!(
                 "{} cells x {} policies x {} runs = {runs} runs in {shards} shards -> {}",

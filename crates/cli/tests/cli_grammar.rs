@@ -1,5 +1,6 @@
-//! One grammar across commands: every command that writes a directory takes `-o/--output`, and
-//! an error prints once, as one cause chain, with no repeated text.
+//! One grammar across commands: every command that writes a directory takes `-o/--output`, an
+//! error prints once, as one cause chain, with no repeated text, and a file of another of
+//! coopnav's formats is named as such.
 
 mod common;
 
@@ -38,6 +39,36 @@ fn an_error_prints_once_as_a_cause_chain() {
     assert_eq!(err.matches("Error:").count(), 1, "{err}");
     assert!(err.contains("bad.toml"), "{err}");
     assert!(!tmp.path().join("run").exists());
+}
+
+#[test]
+fn a_file_of_another_format_is_named_with_the_command_that_reads_it() {
+    let tmp = tempfile::tempdir().unwrap();
+    let printed = |args: &[&str], file: &str| {
+        let out = coopnav(tmp.path(), args);
+        assert!(out.status.success(), "{args:?}");
+        std::fs::write(tmp.path().join(file), out.stdout).unwrap();
+    };
+    printed(&["plan", "--example"], "plan.toml");
+    printed(&["simulate", "--example"], "mission.toml");
+    let cases: [(&[&str], &str); 3] = [
+        (&["simulate", "plan.toml", "-o", "run"], "plan.toml is a planning scenario (read by `coopnav plan FILE`"),
+        (
+            &["plan", "mission.toml", "-o", "run"],
+            "mission.toml is a closed-loop mission (read by `coopnav simulate FILE`",
+        ),
+        (
+            &["sweep", "plan", "mission.toml", "-o", "run"],
+            "mission.toml is a closed-loop mission (read by `coopnav simulate FILE`",
+        ),
+    ];
+    for (args, named) in cases {
+        let out = coopnav(tmp.path(), args);
+        assert!(!out.status.success(), "{args:?}");
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(err.starts_with(&format!("Error: {named}")), "{args:?}: {err}");
+        assert!(!tmp.path().join("run").exists());
+    }
 }
 
 #[test]
