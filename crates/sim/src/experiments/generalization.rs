@@ -28,8 +28,9 @@ use std::path::Path;
 
 /// The experiment's id; `coopnav reproduce` writes it to its output directory as it goes ([`run_in`]).
 pub const ID: &str = "closed-loop-generalization";
-const FILE: &str = "scenarios/generators/generalization.toml";
-const RANGES: &str = include_str!("../../../../scenarios/generators/generalization.toml");
+/// The generator file the study flies, and its text (embedded).
+pub const FILE: &str = "scenarios/generators/generalization.toml";
+pub const RANGES: &str = include_str!("../../../../scenarios/generators/generalization.toml");
 
 /// The study's size: every mission of the file, 10 paired runs each.
 pub const FULL: StudySize = StudySize { missions: None, runs: 10 };
