@@ -66,3 +66,55 @@ fn the_closed_loop_evaluation_writes_its_table_numbers_and_difference_plots() {
     let again = coopnav(tmp.path(), &["reproduce", "closed-loop-vs-baselines", "--reduced", "-o", "eval"]);
     assert!(String::from_utf8_lossy(&again.stderr).contains("--force"), "an existing directory is refused first");
 }
+
+#[test]
+fn the_generalization_study_killed_after_its_first_mission_resumes_to_the_same_bytes() {
+    let tmp = tempfile::tempdir().unwrap();
+    let args = |dir: &str| ["reproduce", "closed-loop-generalization", "--reduced", "-o", dir].map(String::from);
+    // Straight through.
+    let straight = coopnav(tmp.path(), &args("straight").each_ref().map(String::as_str));
+    let stdout = String::from_utf8_lossy(&straight.stdout);
+    assert_eq!(straight.status.code(), Some(expected_status(&stdout)), "{stdout}");
+    let stderr = String::from_utf8_lossy(&straight.stderr);
+    // Off a terminal, progress comes as lines, the last one the whole study.
+    assert!(stderr.contains("closed-loop-generalization: missions 3/3 (0 read back), runs 99/99"), "{stderr}");
+    // Killed once its first mission is written, then run again on the same directory.
+    let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_coopnav"))
+        .args(args("resumed"))
+        .current_dir(tmp.path())
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .unwrap();
+    let first = tmp.path().join("resumed/missions/000.cbor");
+    let start = std::time::Instant::now();
+    while !first.exists() {
+        assert!(start.elapsed().as_secs() < 600, "no first mission after 10 minutes");
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+    child.kill().unwrap();
+    child.wait().unwrap();
+    let last = tmp.path().join("resumed/missions/002.cbor");
+    if last.exists() {
+        // The kill came too late to interrupt anything: the state it should have left.
+        std::fs::remove_file(&last).unwrap();
+    }
+    assert!(!tmp.path().join("resumed/table.txt").exists());
+    let resumed = coopnav(tmp.path(), &args("resumed").each_ref().map(String::as_str));
+    assert_eq!(resumed.status.code(), straight.status.code());
+    let stderr = String::from_utf8_lossy(&resumed.stderr);
+    assert!(!stderr.contains("(0 read back)"), "the resumed run read back what was written: {stderr}");
+    for file in ["table.txt", "report.json", "differences-vs-zigzag.svg"] {
+        let a = std::fs::read(tmp.path().join("straight").join(file)).unwrap();
+        let b = std::fs::read(tmp.path().join("resumed").join(file)).unwrap();
+        assert!(a == b, "{file} differs between the straight and the resumed study");
+    }
+    // The same directory under another seed is refused, naming what differs; nothing is flown.
+    let other = coopnav(
+        tmp.path(),
+        &["reproduce", "closed-loop-generalization", "--reduced", "--seed", "36000", "-o", "straight"],
+    );
+    assert_eq!(other.status.code(), Some(1));
+    let stderr = String::from_utf8_lossy(&other.stderr);
+    assert!(stderr.contains("seed: 35000 there, 36000 here"), "{stderr}");
+}

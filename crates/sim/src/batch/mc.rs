@@ -168,6 +168,17 @@ struct Job {
     run: usize,
 }
 
+/// Every run of [`monte_carlo`] on `sc`, not yet compared: policy by policy (in the order of
+/// `policies`), run by run within each; [`compare`] of them is [`monte_carlo`]'s comparison.
+pub fn monte_carlo_runs(
+    sc: &Scenario,
+    policies: &[String],
+    runs: usize,
+    progress: &(dyn Fn(u64) + Sync),
+) -> Result<Vec<RunResult>, PolicyError> {
+    grid_runs(std::slice::from_ref(sc), policies, runs, progress, &|| false)
+}
+
 fn grid_until(
     scenarios: &[Scenario],
     policies: &[String],
@@ -175,6 +186,23 @@ fn grid_until(
     progress: &(dyn Fn(u64) + Sync),
     stop: &(dyn Fn() -> bool + Sync),
 ) -> Result<Vec<Comparison>, PolicyError> {
+    let results = grid_runs(scenarios, policies, runs, progress, stop)?;
+    let per_cell = policies.len() * runs;
+    Ok(scenarios
+        .iter()
+        .enumerate()
+        .map(|(c, sc)| compare(sc, policies, runs, &results[c * per_cell..(c + 1) * per_cell]))
+        .collect())
+}
+
+/// Every run of every cell, cell by cell, then policy by policy, then run by run.
+fn grid_runs(
+    scenarios: &[Scenario],
+    policies: &[String],
+    runs: usize,
+    progress: &(dyn Fn(u64) + Sync),
+    stop: &(dyn Fn() -> bool + Sync),
+) -> Result<Vec<RunResult>, PolicyError> {
     let specs = scenarios
         .iter()
         .map(|sc| policies.iter().map(|p| PolicySpec::new(p, sc)).collect::<Result<Vec<_>, _>>())
@@ -198,12 +226,7 @@ fn grid_until(
     )
     .into_iter()
     .collect::<Result<Vec<RunResult>, PolicyError>>()?;
-    let per_cell = policies.len() * runs;
-    Ok(scenarios
-        .iter()
-        .enumerate()
-        .map(|(c, sc)| compare(sc, policies, runs, &results[c * per_cell..(c + 1) * per_cell]))
-        .collect())
+    Ok(results)
 }
 
 /// The relative cost of one run, for scheduling only (results never depend on it): the fleet

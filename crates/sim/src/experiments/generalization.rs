@@ -17,15 +17,20 @@
 
 use super::closed_loop::policies;
 use super::missions::{self, Study, StudySize};
+use super::study_dir::{digest, Stamp, StudyDir};
 use super::{Check, Experiment, ExperimentError, ReproOptions, ReproReport};
-use crate::batch::mc::{monte_carlo_grid, Ci, Comparison};
+use crate::batch::mc::{compare, monte_carlo_grid, monte_carlo_runs, Ci, Comparison};
+use crate::observe::metrics::RunResult;
 use crate::output::plot::{intervals_svg, Interval};
 use serde::Serialize;
 use std::fmt::Write as _;
+use std::path::Path;
 
-const ID: &str = "closed-loop-generalization";
-const FILE: &str = "scenarios/generators/generalization.toml";
-const RANGES: &str = include_str!("../../../../scenarios/generators/generalization.toml");
+/// The experiment's id; `coopnav reproduce` writes it to its output directory as it goes ([`run_in`]).
+pub const ID: &str = "closed-loop-generalization";
+/// The generator file the study flies, and its text (embedded).
+pub const FILE: &str = "scenarios/generators/generalization.toml";
+pub const RANGES: &str = include_str!("../../../../scenarios/generators/generalization.toml");
 
 /// The study's size: every mission of the file, 10 paired runs each.
 pub const FULL: StudySize = StudySize { missions: None, runs: 10 };
@@ -150,8 +155,94 @@ pub fn evaluate(study: &Study, progress: &(dyn Fn(u64) + Sync)) -> Result<ReproR
     let names = policies();
     let scenarios: Vec<_> = study.missions.iter().map(|m| m.scenario.clone()).collect();
     let comparisons = monte_carlo_grid(&scenarios, &names, study.runs, progress).map_err(|e| fail(e.to_string()))?;
+    report(study, &comparisons)
+}
+
+/// How far a study written to a directory ([`run_in`]) has got.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Status {
+    /// Missions whose runs are in the directory, of `missions_total`.
+    pub missions_done: usize,
+    pub missions_total: usize,
+    /// Of `missions_done`, those an earlier process wrote (read back, not flown).
+    pub missions_resumed: usize,
+    /// Runs this process has finished, of the `runs_total` it has to fly.
+    pub runs_done: u64,
+    pub runs_total: u64,
+}
+
+/// The study for `opts`, each mission's runs written to `dir/missions/` as soon as the mission
+/// finishes and missions already there (from an earlier, interrupted run of the same study) read
+/// back instead of flown ([`StudyDir`]); the report is computed from the files, so it is the same
+/// whether the study ran straight through or was resumed. `tell` hears after every run and every
+/// mission. The missions are flown one after another, each mission's runs in parallel: each
+/// mission's comparison is bit-identical to its own [`monte_carlo`].
+pub fn run_in(opts: &ReproOptions, dir: &Path, tell: &(dyn Fn(Status) + Sync)) -> Result<ReproReport, ExperimentError> {
+    let study = missions::study(ID, FILE, RANGES, opts, FULL, REDUCED)?;
+    let names = policies();
+    let ranges = &study.ranges;
+    let stamp = Stamp {
+        experiment: ID.into(),
+        generator: FILE.into(),
+        generator_digest: digest(RANGES.as_bytes()),
+        seed: ranges.seed,
+        missions: ranges.missions,
+        runs: study.runs,
+        policies: names.clone(),
+        version: env!("CARGO_PKG_VERSION").into(),
+    };
+    let store = StudyDir::open(dir, stamp).map_err(fail)?;
+    let digests = study
+        .missions
+        .iter()
+        .map(|m| toml::to_string(&m.scenario).map(|t| digest(t.as_bytes())).map_err(|e| fail(e.to_string())))
+        .collect::<Result<Vec<_>, _>>()?;
+    let mut results: Vec<Option<Vec<RunResult>>> = Vec::with_capacity(study.missions.len());
+    for (m, d) in study.missions.iter().zip(&digests) {
+        results.push(store.load(m.facts.index, m.facts.seed, d).map_err(fail)?);
+    }
+    let resumed = results.iter().filter(|r| r.is_some()).count();
+    let per_mission = (names.len() * study.runs) as u64;
+    let runs_total = (study.missions.len() - resumed) as u64 * per_mission;
+    let status = std::sync::Mutex::new(Status {
+        missions_done: resumed,
+        missions_total: study.missions.len(),
+        missions_resumed: resumed,
+        runs_done: 0,
+        runs_total,
+    });
+    let report_status = |f: &dyn Fn(&mut Status)| {
+        let mut s = status.lock().unwrap_or_else(|p| p.into_inner());
+        f(&mut s);
+        tell(*s);
+    };
+    report_status(&|_| {});
+    for (i, m) in study.missions.iter().enumerate() {
+        if results[i].is_some() {
+            continue;
+        }
+        let runs = monte_carlo_runs(&m.scenario, &names, study.runs, &|_| report_status(&|s| s.runs_done += 1))
+            .map_err(|e| fail(e.to_string()))?;
+        store.store(m.facts.index, m.facts.seed, &digests[i], &runs).map_err(fail)?;
+        report_status(&|s| s.missions_done += 1);
+    }
+    // Every mission read back from its file, the fresh ones too: the report sees the same bytes
+    // however the study got there.
+    let mut comparisons = Vec::with_capacity(study.missions.len());
+    for (m, d) in study.missions.iter().zip(&digests) {
+        let runs = store
+            .load(m.facts.index, m.facts.seed, d)
+            .map_err(fail)?
+            .ok_or_else(|| fail(format!("{} vanished", store.mission_path(m.facts.index).display())))?;
+        comparisons.push(compare(&m.scenario, &names, study.runs, &runs));
+    }
+    report(&study, &comparisons)
+}
+
+/// The report on `study` from each mission's comparison (in the order of `study.missions`).
+fn report(study: &Study, comparisons: &[Comparison]) -> Result<ReproReport, ExperimentError> {
     let mut outcomes = Vec::new();
-    for (m, c) in study.missions.iter().zip(&comparisons) {
+    for (m, c) in study.missions.iter().zip(comparisons) {
         for p in &c.paired {
             outcomes.push(Outcome {
                 mission: m.facts.index,
@@ -189,7 +280,7 @@ pub fn evaluate(study: &Study, progress: &(dyn Fn(u64) + Sync)) -> Result<ReproR
         table += "  none\n";
     }
     for o in &lost {
-        let (m, c) = mission(study, &comparisons, o.mission)?;
+        let (m, c) = mission(study, comparisons, o.mission)?;
         let b = index_of(c, &o.baseline)?;
         let d = &o.difference;
         let _ = writeln!(
@@ -209,7 +300,7 @@ pub fn evaluate(study: &Study, progress: &(dyn Fn(u64) + Sync)) -> Result<ReproR
     let mut worst: Vec<&Outcome> = outcomes.iter().collect();
     worst.sort_by(|a, b| b.difference.mean.total_cmp(&a.difference.mean));
     for o in worst.iter().take(5) {
-        let (m, _) = mission(study, &comparisons, o.mission)?;
+        let (m, _) = mission(study, comparisons, o.mission)?;
         let d = &o.difference;
         let _ = writeln!(
             table,
@@ -227,7 +318,7 @@ pub fn evaluate(study: &Study, progress: &(dyn Fn(u64) + Sync)) -> Result<ReproR
     let unhealthy: Vec<usize> = study
         .missions
         .iter()
-        .zip(&comparisons)
+        .zip(comparisons)
         .filter(|(_, c)| c.policies.iter().any(|s| !s.healthy))
         .map(|(m, _)| m.facts.index)
         .collect();
@@ -304,6 +395,31 @@ mod tests {
         assert_eq!(report.plots.len(), baselines);
         assert!(report.plots.iter().all(|(name, svg)| name.starts_with("differences-vs-") && svg.contains("<svg")));
         assert!(report.table.contains("Every mission lost"));
+        // Written to a directory as it goes, each mission read back from its file: the same
+        // report, number for number (CBOR keeps every f64), and one file per mission.
+        let tmp = tempfile::tempdir().unwrap();
+        let dir = tmp.path().join("study");
+        let seen = std::sync::Mutex::new(Vec::new());
+        let written = run_in(&ReproOptions::new(Size::Reduced, 1), &dir, &|s| seen.lock().unwrap().push(s)).unwrap();
+        assert_eq!(written.printed(), report.printed());
+        assert_eq!(serde_json::to_string(&written).unwrap(), serde_json::to_string(&report).unwrap());
+        for i in 0..3 {
+            assert!(dir.join(format!("missions/{i:03}.cbor")).is_file(), "mission {i}");
+        }
+        let seen = seen.into_inner().unwrap();
+        let last = *seen.last().unwrap();
+        let per_mission = (baselines as u64 + 1) * 3;
+        assert_eq!(
+            last,
+            Status {
+                missions_done: 3,
+                missions_total: 3,
+                missions_resumed: 0,
+                runs_done: 3 * per_mission,
+                runs_total: 3 * per_mission
+            }
+        );
+        assert_eq!(seen.iter().filter(|s| s.missions_done == 1).count() as u64, per_mission + 1, "{seen:?}");
     }
 
     fn outcome(mission: usize, baseline: &str, mean: f64, half: f64) -> Outcome {

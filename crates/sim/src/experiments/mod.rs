@@ -12,6 +12,7 @@ pub mod gill;
 pub mod hudson;
 pub mod missions;
 pub mod nams;
+pub mod study_dir;
 
 use serde::Serialize;
 use thiserror::Error;
