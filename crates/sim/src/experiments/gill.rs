@@ -1,7 +1,9 @@
 //! Reproductions of Gill (2013), hybrid-baseline navigation (Gill 2013, §3.1–3.2): Table 5 (MSBL vs
 //! HBL One vs HBL Two), the HBL Short vs Long cycle comparison, Table 4 (buoy quantisation
 //! resolution) and the buoy-location grid, all on the one engine from the scenario files
-//! `scenarios/gill-table5-*.toml` (with per-experiment overrides written here). Bands are ours,
+//! `scenarios/gill-table5-*.toml` (with per-experiment overrides written here). Every simulated thesis
+//! number printed is compared in a band (docs/models.md#gill-bands; Table 5's field column is
+//! not simulated). Bands are ours,
 //! around the thesis's values (docs/evaluation.md, study 3); the reduced (CI) forms widen each
 //! band by two Monte Carlo standard
 //! errors computed from the runs.

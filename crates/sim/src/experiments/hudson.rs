@@ -2,7 +2,8 @@
 //! Appendix A / Table 6.1 pre-deployment sweep, and the Sec. 5.1–5.2 distance-penalty cases.
 //!
 //! The thesis geometry is partly lost (docs/models.md#hudson-geometry), so each experiment runs a canonical geometry
-//! recorded here and checks properties and trends rather than the exact numbers:
+//! recorded here, checks properties and trends, and compares every thesis number it prints in the
+//! bands of docs/models.md#hudson-bands:
 //! - Sec. 5.3 (invented, docs/models.md#hudson-geometry): survey AUV k covers x ∈ [100k, 100k + 100] with four 500 m
 //!   lanes northward, 25 m apart, at 1.5 m/s; depth z̄_k + 10·sin(2πt/T_k) with
 //!   z̄ = 70, 60, 50, 45, 40 m and T = 600, 500, 700, 450, 550 s; CNA from (140, 0, 0) heading

@@ -1,6 +1,7 @@
 //! Thesis reproductions: each experiment is a named function that runs our models on the thesis's
 //! set-up (or our recorded reconstruction of it), and returns our numbers beside the thesis's,
-//! plus the property checks (trends, bands) that must hold.
+//! each thesis number compared in a stated band ([`ThesisTable`]), plus the property checks
+//! (trends, orderings) that must hold.
 //!
 //! `coopnav reproduce <id>` runs one; CI runs the reduced forms through the sim crate's tests.
 
@@ -256,11 +257,12 @@ impl ThesisTable {
         self.verdict == Verdict::Fail && self.cause.is_none()
     }
 
-    /// The table as printed: every number with its band and whether ours lies inside, then
+    /// The table as printed: every compared number with its band and whether ours lies inside
+    /// (the numbers not compared are counted, not listed), then
     /// `"<id>: N of M thesis numbers within their bands"` and its verdict line.
     pub fn printed(&self) -> String {
         let mut s = format!("\n{} — band: {}\n", self.id, self.band_reason);
-        for n in &self.numbers {
+        for n in self.numbers.iter().filter(|n| n.within.is_some()) {
             let (ours, mark) = match (n.ours, n.within) {
                 (Some(o), Some(true)) => (format!("{o:.3}"), "in"),
                 (Some(o), _) => (format!("{o:.3}"), "OUT"),
