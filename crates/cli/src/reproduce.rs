@@ -1,9 +1,10 @@
 //! `coopnav reproduce <id>`: runs one thesis reproduction and prints it. Its exit status tells a
-//! script the outcome: 0 every check passed, [`KNOWN_DEVIATIONS_ONLY`] (3) every failed check is
-//! a documented known deviation, 1 some check failed without one (or the run itself failed).
+//! script the outcome: 0 no check and no thesis table failed (undecided ones do not fail),
+//! [`CAUSES_MEASURED`] (3) every failed check or table has its measured cause printed, 1 some
+//! check or table failed without one (or the run itself failed).
 
 use anyhow::{bail, Context, Result};
-use coopnav_sim::experiments::{self, generalization, Check, ReproOptions, ReproReport, Size};
+use coopnav_sim::experiments::{self, generalization, Outcome, ReproOptions, ReproReport, Size};
 use coopnav_sim::output::{check_replaceable, write_file, Manifest, RunDir};
 use indicatif::{ProgressBar, ProgressStyle};
 use std::io::IsTerminal;
@@ -13,26 +14,8 @@ use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::Mutex;
 use std::time::{Duration, Instant};
 
-/// Exit status when the only failed checks are documented known deviations.
-pub const KNOWN_DEVIATIONS_ONLY: u8 = 3;
-
-/// How a reproduction's checks came out.
-#[derive(Debug, PartialEq)]
-enum Outcome {
-    AllPassed,
-    KnownDeviationsOnly(usize),
-    Unexplained(usize),
-}
-
-fn outcome(checks: &[Check]) -> Outcome {
-    let failed = checks.iter().filter(|c| !c.passed).count();
-    let unexplained = checks.iter().filter(|c| !c.acceptable()).count();
-    match (failed, unexplained) {
-        (0, _) => Outcome::AllPassed,
-        (n, 0) => Outcome::KnownDeviationsOnly(n),
-        (_, n) => Outcome::Unexplained(n),
-    }
-}
+/// Exit status when every failed check or table has its measured cause printed.
+pub const CAUSES_MEASURED: u8 = 3;
 
 #[derive(clap::Args)]
 pub struct Args {
@@ -111,19 +94,19 @@ fn printed(report: &ReproReport, json: bool) -> Result<String> {
     Ok(text)
 }
 
-/// The exit status the report's checks call for.
+/// The exit status the report's checks and thesis tables call for.
 fn exit(report: &ReproReport) -> Result<ExitCode> {
-    match outcome(&report.checks) {
-        Outcome::AllPassed => Ok(ExitCode::SUCCESS),
-        Outcome::KnownDeviationsOnly(n) => {
+    match report.outcome() {
+        Outcome::NoFailure => Ok(ExitCode::SUCCESS),
+        Outcome::CausesMeasured(n) => {
             eprintln!(
-                "{}: {n} check(s) failed, each a documented known deviation (exit {KNOWN_DEVIATIONS_ONLY})",
+                "{}: {n} check(s) or table(s) failed, each with its measured cause printed (exit {CAUSES_MEASURED})",
                 report.id
             );
-            Ok(ExitCode::from(KNOWN_DEVIATIONS_ONLY))
+            Ok(ExitCode::from(CAUSES_MEASURED))
         }
         Outcome::Unexplained(n) => {
-            bail!("{}: {n} property check(s) failed without a documented reason; see above", report.id)
+            bail!("{}: {n} check(s) or thesis table(s) failed without a measured cause; see above", report.id)
         }
     }
 }
@@ -209,20 +192,4 @@ fn spinner(id: &str) -> Result<ProgressBar> {
     bar.set_style(ProgressStyle::with_template(&format!("{{spinner}} {id} [{{elapsed_precise}}] {{msg}}"))?);
     bar.enable_steady_tick(Duration::from_millis(200));
     Ok(bar)
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn exit_outcome_separates_known_deviations_from_unexplained_failures() {
-        let pass = Check::new("a", true, "");
-        let known = Check::new("b", false, "").known_deviation("measured reason");
-        let bad = Check::new("c", false, "");
-        assert_eq!(outcome(&[pass.clone()]), Outcome::AllPassed);
-        assert_eq!(outcome(&[pass.clone(), pass.clone().known_deviation("unused")]), Outcome::AllPassed);
-        assert_eq!(outcome(&[pass.clone(), known.clone()]), Outcome::KnownDeviationsOnly(1));
-        assert_eq!(outcome(&[pass, known, bad]), Outcome::Unexplained(1));
-    }
 }

@@ -135,13 +135,13 @@ fn run(dir: &Path, args: &str, stdout_file: Option<&str>) -> Vec<u8> {
             let code = out.status.code();
             let stdout = String::from_utf8_lossy(&out.stdout);
             eprintln!("note: `coopnav {args}` exit {code:?}, expected check failures: {why}");
-            // The status is the one its printed checks call for (1 for a plain `[FAIL]`, else 3
-            // for a known deviation, else 0): an exit 1 with no failed check printed is the run
-            // failing, not its checks.
+            // The status is the one its printed checks and tables call for (1 for a plain
+            // `[FAIL]`, else 3 for a failure with its measured cause, else 0): an exit 1 with no
+            // failure printed is the run failing, not its checks.
             let lines = || stdout.lines();
             let want = if lines().any(|l| l.starts_with("[FAIL]")) {
                 1
-            } else if lines().any(|l| l.starts_with("[FAIL, known deviation]")) {
+            } else if lines().any(|l| l.starts_with("[FAIL, measured cause]")) {
                 3
             } else {
                 0

@@ -298,28 +298,28 @@ mod tests {
         let good_nees = vec![filter(0, "none", 2.0), filter(0, "zigzag", 1.5), filter(1, "zigzag", 3.0)];
         let checks = verdict(&good_aided, &good_nees, bounds);
         assert_eq!(checks.len(), 3, "{checks:?}");
-        assert!(checks.iter().all(|c| c.passed), "{checks:?}");
+        assert!(checks.iter().all(|c| c.passed()), "{checks:?}");
         // A tie (CI across zero) is not worse; a CI above zero is.
         let mut bad = good_aided.clone();
         bad.push(aided(2, "zigzag", 240.0, 30.0));
         let checks = verdict(&bad, &good_nees, bounds);
         let worse = checks.iter().find(|c| c.name.contains("worse")).unwrap();
-        assert!(!worse.passed && worse.detail.contains("worst mission 2"), "{worse:?}");
+        assert!(!worse.passed() && worse.detail.contains("worst mission 2"), "{worse:?}");
         let mut inconsistent = good_nees.clone();
         inconsistent.push(filter(3, "none", 199.0));
         let checks = verdict(&good_aided, &inconsistent, bounds);
         let none = checks.iter().find(|c| c.name.starts_with("none:")).unwrap();
-        assert!(!none.passed && none.detail.contains("highest 199.00"), "{none:?}");
+        assert!(!none.passed() && none.detail.contains("highest 199.00"), "{none:?}");
         // Too conservative fails as well.
         let checks = verdict(&good_aided, &[filter(0, "none", 0.2)], bounds);
-        assert!(!checks[0].passed);
+        assert!(!checks[0].passed());
     }
 
     #[test]
     #[ignore = "fails: on mission 1 one filter is under-confident (mean NEES 0.35-0.48 below the 0.54 bound); reproduce aiding-never-hurts"]
     fn the_reduced_invariant_holds() {
         let report = aiding_never_hurts(&ReproOptions::new(Size::Reduced, 1)).unwrap();
-        let failed: Vec<String> = report.checks.iter().filter(|c| !c.passed).map(Check::line).collect();
+        let failed: Vec<String> = report.checks.iter().filter(|c| !c.passed()).map(Check::line).collect();
         assert!(failed.is_empty(), "{}\n{}", report.table, failed.join("\n"));
     }
 

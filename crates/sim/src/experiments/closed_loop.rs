@@ -552,13 +552,13 @@ mod tests {
         let by_name =
             |name: String| r.checks.iter().find(|c| c.name == name).unwrap_or_else(|| panic!("no check {name}"));
         for (scenario, n) in [("current", 1), ("current", 3), ("sloping-auv-cna", 2)] {
-            assert!(by_name(format!("{scenario} N={n}: every filter healthy")).passed);
+            assert!(by_name(format!("{scenario} N={n}: every filter healthy")).passed());
         }
         // In a current, dead reckoning alone must lose clearly, whatever else happens. (Without
         // current, over the reduced 15 minutes, it does not: see the module's report.)
         for n in [1, 3] {
             let dr = by_name(format!("current N={n}: planner-estimator beats none"));
-            assert!(dr.passed, "{}", dr.detail);
+            assert!(dr.passed(), "{}", dr.detail);
         }
         // With current at N = 3 the planner must beat every baseline, Hudson's planner included:
         // before the range-bias model and the cost-to-go it lost to zigzag, centroid and trail.
@@ -567,19 +567,19 @@ mod tests {
         // its check must still be there and explained.
         for name in policies().iter().skip(1).filter(|&name| name != "centroid-standoff") {
             let c = by_name(format!("current N=3: planner-estimator beats {name}"));
-            assert!(c.passed, "{name}: {}", c.detail);
+            assert!(c.passed(), "{name}: {}", c.detail);
         }
         let standoff = by_name("current N=3: planner-estimator beats centroid-standoff".into());
-        assert!(standoff.passed || r.table.contains("cell not won, current N=3 vs centroid-standoff"));
+        assert!(standoff.passed() || r.table.contains("cell not won, current N=3 vs centroid-standoff"));
         // One check per baseline and cell, plus health per cell.
         assert_eq!(r.checks.len(), 3 * policies().len());
         assert!(r.table.contains("greedy-fisher") && r.table.contains("open-loop"));
-        let lost = r.checks.iter().filter(|c| c.name.contains("beats") && !c.passed).count();
+        let lost = r.checks.iter().filter(|c| c.name.contains("beats") && !c.passed()).count();
         assert_eq!(r.table.matches("cell not won").count(), lost);
         let cells_lost: std::collections::BTreeSet<&str> = r
             .checks
             .iter()
-            .filter(|c| c.name.contains("beats") && !c.passed)
+            .filter(|c| c.name.contains("beats") && !c.passed())
             .filter_map(|c| c.name.split(':').next())
             .collect();
         assert_eq!(r.table.matches("cell cause,").count(), cells_lost.len());

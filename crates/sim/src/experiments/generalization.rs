@@ -431,23 +431,23 @@ mod tests {
     fn the_verdict_fails_on_a_lost_share_above_two_percent_or_a_pooled_ci_not_below_zero() {
         // 100 missions vs one baseline, all won: both checks pass.
         let won: Vec<Outcome> = (0..100).map(|i| outcome(i, "zigzag", -2.0 - (i % 7) as f64, 0.5)).collect();
-        assert!(verdict(&won).iter().all(|c| c.passed), "{:?}", verdict(&won));
+        assert!(verdict(&won).iter().all(|c| c.passed()), "{:?}", verdict(&won));
         // Three lost of 100 (> 2 %): the lost-share check fails, the pooled one still passes.
         let mut three = won.clone();
         for o in three.iter_mut().take(3) {
             *o = outcome(o.mission, "zigzag", 1.0, 0.5);
         }
         let checks = verdict(&three);
-        assert!(checks[0].passed && !checks[1].passed, "{checks:?}");
+        assert!(checks[0].passed() && !checks[1].passed(), "{checks:?}");
         assert!(checks[1].detail.starts_with("3 lost"), "{}", checks[1].detail);
         // Two lost of 100 is allowed.
         let two: Vec<Outcome> = three.iter().skip(1).cloned().chain([won[0].clone()]).collect();
-        assert!(verdict(&two)[1].passed);
+        assert!(verdict(&two)[1].passed());
         // No mission lost, but a pooled difference whose CI reaches zero: the pooled check fails.
         let tied: Vec<Outcome> =
             (0..50).map(|i| outcome(i, "racetrack", if i % 2 == 0 { -1.0 } else { 0.9 }, 3.0)).collect();
         let checks = verdict(&tied);
-        assert!(!checks[0].passed && checks[1].passed, "{checks:?}");
+        assert!(!checks[0].passed() && checks[1].passed(), "{checks:?}");
         assert_eq!(tallies(&tied)[0].tied, 50);
     }
 

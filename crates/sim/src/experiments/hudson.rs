@@ -2,7 +2,8 @@
 //! Appendix A / Table 6.1 pre-deployment sweep, and the Sec. 5.1–5.2 distance-penalty cases.
 //!
 //! The thesis geometry is partly lost (docs/models.md#hudson-geometry), so each experiment runs a canonical geometry
-//! recorded here and checks properties and trends rather than the exact numbers:
+//! recorded here, checks properties and trends, and compares every thesis number it prints in the
+//! bands of docs/models.md#hudson-bands:
 //! - Sec. 5.3 (invented, docs/models.md#hudson-geometry): survey AUV k covers x ∈ [100k, 100k + 100] with four 500 m
 //!   lanes northward, 25 m apart, at 1.5 m/s; depth z̄_k + 10·sin(2πt/T_k) with
 //!   z̄ = 70, 60, 50, 45, 40 m and T = 600, 500, 700, 450, 550 s; CNA from (140, 0, 0) heading
@@ -21,7 +22,7 @@
 //! them in all four tables the thesis tops with an AUV CNA. Table 6.1's 2.22 m floor is reached
 //! with the horizontal bearing only.
 
-use super::{Check, ExperimentError, ReproOptions, ReproReport, Size};
+use super::{Band, Check, ExperimentError, ReproOptions, ReproReport, Size, ThesisNumber, ThesisTable, Verdict};
 use coopnav_core::{DepthProfile, Heading, Lawnmower, Track, Vec3};
 use coopnav_plan::predeploy::{self, Mission, Summary};
 use coopnav_plan::{
@@ -354,48 +355,133 @@ fn table_53(
         let not_run = if skipped.contains(&ts) { "  not run" } else { "" };
         let _ = writeln!(table, "{ours:<42}| {} {:>7.1}{:>5.2}{:>5.2}{not_run}", ts.label(), t.5, t.6, t.7);
     }
-    let mut checks = checks_53(&rows, &setups, n, 10.0);
-    checks.push(cna_kind_order(&rows, sort, thesis));
+    let mut checks = checks_53(&rows, &setups);
+    let full = opts.size == Size::Full;
+    checks.push(cna_kind_order(id, &rows, sort, thesis, n, full, end)?);
+    let numbers = thesis_numbers_53(&rows, thesis, full);
     Ok(ReproReport::new(
         id.into(),
         table,
         checks,
         serde_json::to_value(&rows[..rows.len().min(20)]).unwrap_or_default(),
-    ))
+    )
+    .with_tables(vec![ThesisTable::new(id, BAND_53, numbers)]))
+}
+
+/// The Sec. 5.3 tables' band (docs/models.md#hudson-bands).
+const BAND_53: &str = "errors ±20 %, costs ±44 % (= 1.2² − 1: the cost sums squared errors), each thesis row's \
+set-up run by us; the Sec. 5.3 geometry is invented (docs/models.md#hudson-geometry); the reduced form's 900 s \
+missions do not reproduce these numbers and compare none";
+const BAND_ERROR_53: Band = Band::Relative { percent: 20.0 };
+const BAND_COST_53: Band = Band::Relative { percent: 44.0 };
+
+/// The thesis row's set-up.
+fn thesis_setup(t: &ThesisRow) -> Setup {
+    Setup { b: if t.0 { t.3 } else { 0 }, speed: t.1, a: t.2, l: t.4 }
+}
+
+/// Each thesis row's cost, max and RMS error beside ours for the same set-up (`None` when the
+/// sweep did not run it, or in the reduced form, whose missions are cut short).
+fn thesis_numbers_53(rows: &[Row], thesis: &[ThesisRow], full: bool) -> Vec<ThesisNumber> {
+    let mut out = Vec::new();
+    for t in thesis {
+        let ts = thesis_setup(t);
+        let ours = rows.iter().find(|r| r.setup == ts).filter(|_| full).map(|r| &r.summary);
+        let label = ts.label();
+        out.push(ThesisNumber::new(format!("{label} cost"), t.5, ours.map(|s| s.average_cost), BAND_COST_53));
+        out.push(ThesisNumber::new(format!("{label} max"), t.6, ours.map(|s| s.max_error), BAND_ERROR_53));
+        out.push(ThesisNumber::new(format!("{label} rms"), t.7, ours.map(|s| s.rms_error), BAND_ERROR_53));
+    }
+    out
+}
+
+/// Best value of the sort key among AUV-CNA (`auv`) or ASC set-ups.
+fn best_of_kind(rows: &[Row], sort: SortBy, auv: bool) -> f64 {
+    rows.iter().filter(|r| (r.setup.b > 0) == auv).map(|r| sort.key(&r.summary)).fold(f64::INFINITY, f64::min)
+}
+
+/// The CNA kind on top: the AUV CNA when its best beats the ASC's best.
+fn auv_on_top(best_auv: f64, best_asc: f64) -> bool {
+    best_auv < best_asc
+}
+
+/// The measured cause of a CNA-kind ordering against the thesis's: the same set-ups re-run under
+/// the other bearing model put the thesis's kind on top. `None` when they do not (the bearing
+/// model is then not the cause).
+fn bearing_cause(thesis_auv_on_top: bool, other_auv: f64, other_asc: f64, other: BearingMode) -> Option<String> {
+    (auv_on_top(other_auv, other_asc) == thesis_auv_on_top).then(|| {
+        format!(
+            "re-run under the {other:?} bearing, the same set-ups (five best of each kind) give best AUV CNA \
+             {other_auv:.3}, best ASC {other_asc:.3}: the thesis's kind on top; the bearing model decides this \
+             ordering (docs/models.md#hudson-error-model)"
+        )
+    })
 }
 
 /// The thesis's top row says whether an AUV CNA or the ASC wins the table; ours must agree: the
 /// best AUV-CNA set-up beats (AUV on top) or does not beat (ASC on top) the best ASC one, by the
-/// table's sort key.
-fn cna_kind_order(rows: &[Row], sort: SortBy, thesis: &[ThesisRow]) -> Check {
-    let best = |auv: bool| {
-        rows.iter().filter(|r| (r.setup.b > 0) == auv).map(|r| sort.key(&r.summary)).fold(f64::INFINITY, f64::min)
-    };
-    let (auv, asc) = (best(true), best(false));
+/// table's sort key. In the full form a failure re-runs the five best set-ups of each kind under
+/// the other bearing model and attaches that as the measured cause only if the ordering flips.
+/// The reduced form (900 s missions, 16 set-ups) does not reproduce the table the thesis ordered:
+/// it prints its ordering, undecided.
+fn cna_kind_order(
+    id: &str,
+    rows: &[Row],
+    sort: SortBy,
+    thesis: &[ThesisRow],
+    n: usize,
+    full: bool,
+    end: Option<f64>,
+) -> Result<Check, ExperimentError> {
+    let (auv, asc) = (best_of_kind(rows, sort, true), best_of_kind(rows, sort, false));
     let thesis_auv_on_top = thesis[0].0;
-    let ours_auv_on_top = auv < asc;
+    let ours_auv_on_top = auv_on_top(auv, asc);
     let kind = |on_top: bool| if on_top { "AUV CNA" } else { "ASC" };
-    let check = Check::new(
-        format!("the {} is on top, as in the thesis", kind(thesis_auv_on_top)),
-        ours_auv_on_top == thesis_auv_on_top,
-        format!("ours: best AUV CNA {auv:.3}, best ASC {asc:.3} ({} on top)", kind(ours_auv_on_top)),
-    );
-    if thesis_auv_on_top {
-        return check;
+    let name = format!("the {} is on top, as in the thesis", kind(thesis_auv_on_top));
+    let detail = format!("ours: best AUV CNA {auv:.3}, best ASC {asc:.3} ({} on top)", kind(ours_auv_on_top));
+    if !full {
+        return Ok(Check::with_verdict(
+            name,
+            Verdict::Undecided,
+            format!(
+                "{detail}; reduced: 900 s missions over 16 set-ups do not reproduce the thesis's table, not compared"
+            ),
+        ));
     }
-    check.known_deviation(
-        "the thesis's ASC wins Tables 5.6, 5.7 and 5.9 narrowly (by 1.8 %, 0.7 % and 7 % in cost); under the 3-D \
-         bearing our AUV CNA wins them by 10-20 % (reduced forms), and under the horizontal bearing it ties the ASC \
-         or wins; no bearing model we have gives both orderings (module doc)",
-    )
+    let check = Check::new(name, ours_auv_on_top == thesis_auv_on_top, detail);
+    if check.passed() {
+        return Ok(check);
+    }
+    let other = match BEARING_53 {
+        BearingMode::Slant3d => BearingMode::Horizontal,
+        _ => BearingMode::Slant3d,
+    };
+    let mut best: Vec<Setup> = Vec::new();
+    for auv_kind in [true, false] {
+        best.extend(rows.iter().filter(|r| (r.setup.b > 0) == auv_kind).take(5).map(|r| r.setup));
+    }
+    let tracks = adjacent_lawnmowers(n, AREAS_53, true)?;
+    let model = Model { bearing: other, ..MODEL_53 };
+    let again = sweep(id, &best, model, &tracks, Vec3::new(140.0, 0.0, 0.0), end)?;
+    let (other_auv, other_asc) = (best_of_kind(&again, sort, true), best_of_kind(&again, sort, false));
+    let cause = bearing_cause(thesis_auv_on_top, other_auv, other_asc, other);
+    let check = match cause {
+        Some(_) => check,
+        None => {
+            let d = format!(
+                "{}; under the {other:?} bearing the same set-ups give AUV CNA {other_auv:.3}, ASC {other_asc:.3}: no flip",
+                check.detail
+            );
+            Check { detail: d, ..check }
+        }
+    };
+    Ok(check.caused_by(cause))
 }
 
-fn checks_53(rows: &[Row], setups: &[Setup], n: usize, tau: f64) -> Vec<Check> {
+fn checks_53(rows: &[Row], setups: &[Setup]) -> Vec<Check> {
     let max_speed = setups.iter().map(|s| s.speed).fold(0.0, f64::max);
     let max_l = setups.iter().map(|s| s.l).max().unwrap_or(0);
     let best = &rows[0];
-    let floor = (2.0 + 0.1 * tau).sqrt();
-    let lowest = rows.iter().map(|r| r.summary.rms_error).fold(f64::INFINITY, f64::min);
     // Best cost among set-ups at the top speed vs the lowest speed.
     let best_at = |pred: &dyn Fn(&Setup) -> bool| {
         rows.iter().filter(|r| pred(&r.setup)).map(|r| r.summary.average_cost).fold(f64::INFINITY, f64::min)
@@ -417,12 +503,6 @@ fn checks_53(rows: &[Row], setups: &[Setup], n: usize, tau: f64) -> Vec<Check> {
             deep <= shallow,
             format!("L = {max_l}: {deep:.1} m^2, L = 0: {shallow:.1} m^2"),
         ),
-        Check::new(
-            "no AUV beats the error floor sqrt(2 sigma^2 + alpha tau) after t = 0",
-            rows.iter().all(|r| r.summary.max_error >= floor - 1e-9),
-            format!("floor {floor:.3} m; lowest RMS {lowest:.3} m (RMS includes t = 0 at 1.414 m)"),
-        ),
-        Check::new("every run covers N AUVs", rows.iter().all(|r| r.summary.n_auvs == n), format!("N = {n}")),
     ]
 }
 
@@ -464,7 +544,18 @@ fn t53(o: &ReproOptions) -> Result<ReproReport, ExperimentError> {
         per.iter().map(|c| format!("{c:.1}")).collect::<Vec<_>>().join(", ")
     );
     r.checks.push(check);
-    Ok(r)
+    // The thesis's best average cost per AUV: Tables 5.9, 5.8, 5.7, 5.6, 5.3's top rows over N.
+    let thesis = [T59[0].5, T58[0].5 / 2.0, T57[0].5 / 3.0, T56[0].5 / 4.0, T53[0].5 / 5.0];
+    let full = o.size == Size::Full;
+    let numbers = thesis
+        .iter()
+        .zip(&per)
+        .enumerate()
+        .map(|(k, (&t, &ours))| {
+            ThesisNumber::new(format!("best cost per AUV, N = {}", k + 1), t, full.then_some(ours), BAND_COST_53)
+        })
+        .collect();
+    Ok(r.with_tables(vec![ThesisTable::new("hudson-per-auv-cost", BAND_53, numbers)]))
 }
 fn t54(o: &ReproOptions) -> Result<ReproReport, ExperimentError> {
     table_53("hudson-table-5.4", 5, SortBy::MaxError, &T54, o)
@@ -498,8 +589,10 @@ const T61: [(usize, usize, f64, f64, f64); 6] = [
 /// Deepest L per A in Appendix A (Hudson 2012, App. A).
 const L_MAX_61: [usize; 8] = [9, 7, 6, 5, 5, 5, 4, 4];
 
-fn t61(opts: &ReproOptions) -> Result<ReproReport, ExperimentError> {
-    let id = "hudson-table-6.1";
+/// The Appendix A sweep: every (A, L, s) the thesis ran (795 set-ups), or the reduced form's
+/// 27 (A = 2, 5, 9; L ≤ 2; s = 0.5, 2, 4 m/s), each over the whole mission; sorted by RMS, then
+/// max error.
+fn sweep_61(id: &str, opts: &ReproOptions) -> Result<Vec<Row>, ExperimentError> {
     let mut setups = Vec::new();
     let speeds: Vec<f64> = match opts.size {
         Size::Full => (0..15).map(|i| 0.5 + 0.25 * i as f64).collect(),
@@ -522,11 +615,37 @@ fn t61(opts: &ReproOptions) -> Result<ReproReport, ExperimentError> {
     rows.sort_by(|x, y| {
         x.summary.rms_error.total_cmp(&y.summary.rms_error).then(x.summary.max_error.total_cmp(&y.summary.max_error))
     });
+    Ok(rows)
+}
+
+/// Table 6.1's and Appendix A's band (docs/models.md#hudson-bands).
+const BAND_61: &str = "±0.10 m on max and RMS error, each thesis row's set-up run by us; the survey path is lost \
+and ours invented (docs/models.md#hudson-geometry); the reduced form compares the rows it runs";
+const BAND_M_61: Band = Band::Absolute { plus_minus: 0.10 };
+
+/// Ours for set-up (A, L, s) of an ASC sweep, if it ran.
+fn asc_row(rows: &[Row], a: usize, l: usize, speed: f64) -> Option<&Summary> {
+    rows.iter().find(|r| r.setup == Setup { b: 0, speed, a, l }).map(|r| &r.summary)
+}
+
+/// The thesis's max and RMS error of set-up (A, L, s) beside ours.
+fn numbers_61(rows: &[Row], a: usize, l: usize, speed: f64, max: f64, rms: f64) -> [ThesisNumber; 2] {
+    let ours = asc_row(rows, a, l, speed);
+    let label = format!("A = {a}, L = {l}, s = {speed:.2}");
+    [
+        ThesisNumber::new(format!("{label} max"), max, ours.map(|s| s.max_error), BAND_M_61),
+        ThesisNumber::new(format!("{label} rms"), rms, ours.map(|s| s.rms_error), BAND_M_61),
+    ]
+}
+
+fn t61(opts: &ReproOptions) -> Result<ReproReport, ExperimentError> {
+    let id = "hudson-table-6.1";
+    let rows = sweep_61(id, opts)?;
     let mut table = String::new();
     let _ = writeln!(
         table,
         "{id}: ASC CNA, one survey AUV, lawnmower at 90 m, tau = 30 s, {} set-ups (sorted by RMS)",
-        setups.len()
+        rows.len()
     );
     let _ = writeln!(table, "{:<36}| thesis:  A  L    s   max   rms", "ours:  A  L    s   max   rms");
     for (i, t) in T61.iter().enumerate() {
@@ -538,27 +657,12 @@ fn t61(opts: &ReproOptions) -> Result<ReproReport, ExperimentError> {
         );
     }
     let best = &rows[0];
-    let steps = best.summary.steps as f64;
-    // The RMS floor with the t = 0 value (1.414 m) included: sqrt((2 + 5·n)/(n + 1)).
-    let rms_floor = ((2.0 + 5.0 * steps) / (steps + 1.0)).sqrt();
     let greedy2 = rows
         .iter()
         .filter(|r| r.setup.a == 2 && r.setup.l == 0)
         .map(|r| r.summary.rms_error)
         .fold(f64::INFINITY, f64::min);
-    let worst_row = rows.last().unwrap_or(best);
-    let worst = worst_row.summary.rms_error;
     let checks = vec![
-        Check::new(
-            "best RMS error near the thesis's 2.22 m (band 2.20-2.32 m)",
-            (2.20..=2.32).contains(&best.summary.rms_error),
-            format!("ours {:.3} m with {}", best.summary.rms_error, best.setup.label()),
-        ),
-        Check::new(
-            "no run beats the sqrt(2 sigma^2 + alpha tau) floor (2.236 m; RMS floor with t = 0 included)",
-            rows.iter().all(|r| r.summary.rms_error >= rms_floor - 1e-9),
-            format!("RMS floor {rms_floor:.4} m for {steps} steps"),
-        ),
         Check::new(
             "best set-ups use high CNA speed (>= 3 m/s)",
             rows[..5].iter().all(|r| r.setup.speed >= 3.0),
@@ -567,24 +671,60 @@ fn t61(opts: &ReproOptions) -> Result<ReproReport, ExperimentError> {
         Check::new(
             "A = 2, L = 0 (greedy, +-120 deg) is far from the best",
             greedy2 > best.summary.rms_error + 0.2,
-            format!("best A = 2, L = 0 RMS {greedy2:.2} m; worst run {worst:.2} m (thesis 3.06-3.72)"),
-        ),
-        Check::new(
-            "the worst set-up stays within the thesis's worst RMS (A = 2, L = 0: 3.06-3.72 m at every speed)",
-            worst <= 3.72 + 0.05,
-            format!("ours worst {worst:.2} m with {}", worst_row.setup.label()),
-        )
-        .known_deviation(
-            "not explained yet: the thesis's survey path (the Halifax trials' lawnmower) is lost and ours is \
-             invented (docs/models.md#hudson-geometry); the best rows match (2.22 m floor) but the greedy two-option rows do not",
+            format!("best A = 2, L = 0 RMS {greedy2:.2} m; best {:.2} m", best.summary.rms_error),
         ),
     ];
+    let mut numbers: Vec<ThesisNumber> = T61.iter().flat_map(|t| numbers_61(&rows, t.0, t.1, t.2, t.3, t.4)).collect();
+    // The sweep's best RMS: Table 6.1's top value, compared in the full sweep only (the reduced
+    // one does not run the thesis's best set-ups).
+    let full = opts.size == Size::Full;
+    numbers.push(ThesisNumber::new(
+        "best RMS over the sweep",
+        T61[0].4,
+        full.then_some(best.summary.rms_error),
+        BAND_M_61,
+    ));
     Ok(ReproReport::new(
         id.into(),
         table,
         checks,
         serde_json::to_value(&rows[..rows.len().min(30)]).unwrap_or_default(),
-    ))
+    )
+    .with_tables(vec![ThesisTable::new(id, BAND_61, numbers)]))
+}
+
+/// Appendix A as a reproduction of its own: every set-up the thesis prints, its max and RMS
+/// error beside ours, with the mean difference per speed.
+fn appendix_a(opts: &ReproOptions) -> Result<ReproReport, ExperimentError> {
+    let id = "hudson-appendix-a";
+    let rows = sweep_61(id, opts)?;
+    let numbers: Vec<ThesisNumber> = super::hudson_appendix_a::APPENDIX_A
+        .iter()
+        .flat_map(|&(a, l, s, max, rms)| numbers_61(&rows, a, l, s, max, rms))
+        .collect();
+    let mut table = format!(
+        "{id}: ASC CNA, one survey AUV, lawnmower at 90 m, tau = 30 s, {} set-ups run; {} thesis rows\n",
+        rows.len(),
+        super::hudson_appendix_a::APPENDIX_A.len()
+    );
+    let _ = writeln!(table, "ours − thesis RMS by CNA speed (rows compared): mean, greedy A = 2, L = 0");
+    for i in 0..15 {
+        let speed = 0.5 + 0.25 * i as f64;
+        let diffs: Vec<(usize, usize, f64)> = super::hudson_appendix_a::APPENDIX_A
+            .iter()
+            .filter(|r| r.2 == speed)
+            .filter_map(|&(a, l, s, _, rms)| asc_row(&rows, a, l, s).map(|o| (a, l, o.rms_error - rms)))
+            .collect();
+        if diffs.is_empty() {
+            continue;
+        }
+        let mean = diffs.iter().map(|d| d.2).sum::<f64>() / diffs.len() as f64;
+        let greedy = diffs.iter().find(|d| d.0 == 2 && d.1 == 0).map_or(f64::NAN, |d| d.2);
+        let _ =
+            writeln!(table, "  s = {speed:.2}: {mean:+.3} m over {} rows; A = 2, L = 0: {greedy:+.2} m", diffs.len());
+    }
+    Ok(ReproReport::new(id.into(), table, Vec::new(), serde_json::Value::Null)
+        .with_tables(vec![ThesisTable::new(id, BAND_61, numbers)]))
 }
 
 /// Sec. 5.1–5.2: every Table 5.2 case, ASC, N = 2 and 5, τ = 10 s, A = 5, s = 1.5 m/s.
@@ -655,17 +795,26 @@ fn penalty_cases(opts: &ReproOptions) -> Result<ReproReport, ExperimentError> {
                     format!("max distance: worst of those cases {held:.0} m; case 1 {:.0} m, case 8 {:.0} m, case 2 {:.0} m", orig.max_distance, five.max_distance, none.max_distance),
                 ));
                 if let Some(c11) = get(PenaltyCase::C11, l_top) {
+                    // Case 10 is case 11 with the look-ahead penalty: when it holds the far AUV
+                    // and case 11 does not, the run has measured that the missing look-ahead
+                    // penalty is what lets the far AUV go (our additive 5×Cost² reconstruction,
+                    // docs/models.md#hudson-penalties).
+                    let c10 = get(PenaltyCase::C10, l_top);
+                    let cause = c10.filter(|c10| c10.max_distance <= 1862.0 + 20.0).map(|c10| {
+                        format!(
+                            "case 10 (the same 5×Cost² with the look-ahead penalty) holds {:.0} m at L = {l_top}: \
+                             without the look-ahead penalty our additive reconstruction of eq. (9) lets the deep \
+                             search trade the far AUV for cheaper steps (docs/models.md#hudson-penalties)",
+                            c10.max_distance
+                        )
+                    });
                     checks.push(
                         Check::new(
                             format!("N = 5: case 11 (5×Cost², no look-ahead penalty) holds the max distance near 1862 m (L = {l_top})"),
                             c11.max_distance <= 1862.0 + 20.0,
                             format!("max distance {:.0} m", c11.max_distance),
                         )
-                        .known_deviation(
-                            "eq. (9)'s form is lost (Hudson 2012, Sec. 3.2; docs/models.md#hudson-penalties); our 5×Cost² reconstruction adds its violation \
-                             term to the cost instead of scaling it, so with no look-ahead penalty the deep search trades a far AUV for \
-                             cheaper steps (2,286 m at L = 4; 1,847 m at L = 0-3, and case 10, the same with the look-ahead penalty, holds 1,847 m at every L)",
-                        ),
+                        .caused_by(cause),
                     );
                 }
                 checks.push(Check::new(
@@ -683,17 +832,6 @@ fn penalty_cases(opts: &ReproOptions) -> Result<ReproReport, ExperimentError> {
     let (drift_with, drift_without) = far_start_drift(opts)?;
     let _ = writeln!(table, "N = 1 starting 1.05 km away, greedy (L = 0): max distance over the second half: case 1 {drift_with:.0} m, case 2 {drift_without:.0} m");
     checks.push(Check::new("Sec. 5.1: the penalty stops a greedy CNA starting > 1 km away from drifting off (<= 1.1 x max distance; unpenalised > 1.5 x)", drift_with <= 1100.0 && drift_without > 1500.0, format!("case 1 {drift_with:.0} m vs case 2 {drift_without:.0} m")));
-    let orig = PenaltyCase::C1.penalties().primary;
-    let flip = |d_max: f64, d_min: f64| {
-        use coopnav_plan::{Penalty, Violation};
-        orig.apply(5.0, &Violation { too_close: 0.0, too_far: d_max - 1000.0 })
-            > orig.apply(5.0, &Violation { too_close: 100.0 - d_min, too_far: 0.0 })
-    };
-    checks.push(Check::new(
-        "eq. 13: Orig. prefers too close once d_max + 2 d_min > 1200 m",
-        flip(1003.0, 99.0) && !flip(1001.0, 99.0),
-        "1003 + 2*99 = 1201 flips; 1001 + 2*99 = 1199 does not".to_string(),
-    ));
     Ok(ReproReport::new(id.into(), table, checks, serde_json::Value::Array(data)))
 }
 
@@ -747,9 +885,96 @@ pub fn experiments() -> Vec<super::Experiment> {
             run: t61,
         },
         E {
+            id: "hudson-appendix-a",
+            about: "Hudson Appendix A: every pre-deployment set-up the thesis prints, max and RMS error",
+            run: appendix_a,
+        },
+        E {
             id: "hudson-penalty-cases",
             about: "Hudson Sec. 5.1-5.2: every Table 5.2 distance-penalty case, N = 2 and 5",
             run: penalty_cases,
         },
     ]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn summary(cost: f64, max: f64, rms: f64) -> Summary {
+        Summary {
+            steps: 1,
+            n_auvs: 1,
+            average_cost: cost,
+            total_cost: cost,
+            average_penalised_cost: cost,
+            max_error: max,
+            rms_error: rms,
+            rms_error_per_auv: vec![rms],
+            min_distance: 0.0,
+            mean_distance: 0.0,
+            max_distance: 0.0,
+            too_close_steps: 0,
+            too_far_steps: 0,
+            truncated_decisions: 0,
+        }
+    }
+
+    #[test]
+    fn the_thesis_rows_pass_their_own_bands_and_moved_ones_fail() {
+        let rows: Vec<Row> =
+            T59.iter().map(|t| Row { setup: thesis_setup(t), summary: summary(t.5, t.6, t.7) }).collect();
+        let table = ThesisTable::new("t", BAND_53, thesis_numbers_53(&rows, &T59, true));
+        assert_eq!((table.compared, table.within, table.verdict), (27, 27, Verdict::Pass));
+        // Errors 21 % high fall out; costs 43 % high stay in, 45 % high fall out.
+        let moved: Vec<Row> = T59
+            .iter()
+            .map(|t| Row { setup: thesis_setup(t), summary: summary(t.5 * 1.43, t.6 * 1.21, t.7 * 1.21) })
+            .collect();
+        let table = ThesisTable::new("t", BAND_53, thesis_numbers_53(&moved, &T59, true));
+        assert_eq!((table.within, table.verdict), (9, Verdict::Fail));
+        let moved: Vec<Row> =
+            T59.iter().map(|t| Row { setup: thesis_setup(t), summary: summary(t.5 * 1.45, t.6, t.7) }).collect();
+        assert_eq!(ThesisTable::new("t", BAND_53, thesis_numbers_53(&moved, &T59, true)).within, 18);
+        // The reduced form compares none of them.
+        let reduced = ThesisTable::new("t", BAND_53, thesis_numbers_53(&rows, &T59, false));
+        assert_eq!((reduced.compared, reduced.verdict), (0, Verdict::Undecided));
+    }
+
+    #[test]
+    fn table_6_1_numbers_are_compared_by_set_up() {
+        let rows: Vec<Row> = T61
+            .iter()
+            .map(|t| Row { setup: Setup { b: 0, speed: t.2, a: t.0, l: t.1 }, summary: summary(0.0, t.3, t.4) })
+            .collect();
+        let ok: Vec<ThesisNumber> = T61.iter().flat_map(|t| numbers_61(&rows, t.0, t.1, t.2, t.3, t.4)).collect();
+        assert!(ok.iter().all(|n| n.within == Some(true)));
+        // 0.11 m off is out; a set-up not run is not compared.
+        let [max, rms] = numbers_61(&rows, 7, 5, 3.5, 2.29 - 0.11, 2.22 + 0.11);
+        assert_eq!((max.within, rms.within), (Some(false), Some(false)));
+        let [max, _] = numbers_61(&rows, 2, 0, 3.25, 5.08, 3.72);
+        assert_eq!(max.within, None);
+    }
+
+    #[test]
+    fn the_bearing_is_a_cause_only_when_it_flips_the_ordering() {
+        // Thesis: ASC on top. Ours under the other bearing: ASC on top (tie included) → cause.
+        assert!(bearing_cause(false, 4.9, 4.6, BearingMode::Horizontal).is_some());
+        assert!(bearing_cause(false, 4.6, 4.6, BearingMode::Horizontal).is_some());
+        // Still the AUV CNA on top → not the cause.
+        assert!(bearing_cause(false, 4.5, 4.6, BearingMode::Horizontal).is_none());
+        // Thesis: AUV on top.
+        assert!(bearing_cause(true, 4.5, 4.6, BearingMode::Horizontal).is_some());
+        assert!(bearing_cause(true, 4.6, 4.6, BearingMode::Horizontal).is_none());
+    }
+
+    #[test]
+    fn the_appendix_a_transcription_holds_the_thesis_extremes() {
+        let rows = &super::super::hudson_appendix_a::APPENDIX_A;
+        assert_eq!(rows[0], (2, 0, 0.5, 3.54, 3.07));
+        let best = rows.iter().map(|r| r.4).fold(f64::INFINITY, f64::min);
+        let worst = rows.iter().map(|r| r.4).fold(0.0, f64::max);
+        assert_eq!((best, worst), (2.22, 3.72));
+        assert!(rows.iter().all(|r| r.1 <= L_MAX_61[r.0 - 2]), "every row is a set-up the full sweep runs");
+    }
 }

@@ -5,10 +5,14 @@
 //! over the synthetic shelf, and the reproduction uses the analytic TL model (spherical
 //! spreading + Thorp, k = 2, chosen because it is closer than k = 1.5 to what the real BELLHOP
 //! gives on that shelf; see the note in the output) so that it runs anywhere in seconds.
-//! Absolute numbers therefore differ; the ordering — adaptive beats the best control on
-//! bandwidth in both environments — is what is checked.
+//! Absolute numbers therefore differ; the orderings (adaptive against the best control) are
+//! checked, and their effect sizes (adaptive over control) compared with the thesis's in the band
+//! of docs/models.md#nams-bands.
 
-use super::{Check, Experiment, ExperimentError, ReproOptions, ReproReport, Size};
+use super::{
+    ordering_verdict, Band, Check, Experiment, ExperimentError, ReproOptions, ReproReport, Size, ThesisNumber,
+    ThesisTable, Verdict,
+};
 use crate::batch::nams::{run_experiment, Cell, ExperimentResult, ExperimentTl};
 use crate::models::tl_spec::{GridModel, TlModel};
 use crate::scenario::nams::{Behaviour, ExperimentConfig, Scenario};
@@ -58,13 +62,28 @@ const THESIS: [(&str, [(f64, f64); 3]); 2] = [
     ("scenario 4", [(3.6, 2.9), (102.6, 57.8), (0.38, 1.00)]),
 ];
 
-/// Why scenario 4's status-period direction is not resolved (on the BELLHOP grid, 40
-/// repetitions, seeds 1–3).
-const S4_PERIOD_DEVIATION: &str = "the thesis's adaptive vehicle skips 62 % of its transmit opportunities in scenario 4 \
-(duty 0.38), and that is what makes its status period 78 % longer than the control's. Ours skips only 28–30 % on the \
-synthetic shelf (duty 0.70–0.72), so the two periods end within noise of each other: on the BELLHOP grid, adaptive minus \
-fixed rate 1 was −1.6, +1.4 and +1.0 s at seeds 1, 2 and 3 (standard error of the difference 1.3–1.6 s); on the analytic \
-TL +2.0 s at seed 1. The thesis's +44.8 s is out of reach of our channel, and the sign at 40 repetitions is a coin toss.";
+/// Adaptive duty cycle at or above which scenario 4's status period is measured to be out of the
+/// thesis's reach: the thesis's adaptive vehicle skips 62 % of its slots (duty 0.38, Nams 2014,
+/// §5.4.3), and those skipped slots are what lengthen its status period by 78 %; a vehicle that
+/// skips fewer than two in five (duty ≥ 0.60) cannot lengthen it that much (docs/models.md#nams-bands).
+const S4_DUTY_CAUSE: f64 = 0.60;
+
+/// The measured cause of scenario 4's status-period direction failing: our adaptive duty, when it
+/// is at least [`S4_DUTY_CAUSE`].
+fn s4_period_cause(adaptive_duty: f64) -> Option<String> {
+    (adaptive_duty >= S4_DUTY_CAUSE).then(|| {
+        format!(
+            "our adaptive vehicle transmits in {:.0} % of its slots (duty {adaptive_duty:.2} ≥ {S4_DUTY_CAUSE}) against \
+             the thesis's 38 %: it skips {:.0} % of them where the thesis's skips 62 %, and the skipped slots are what \
+             lengthen the thesis's status period",
+            adaptive_duty * 100.0,
+            (1.0 - adaptive_duty) * 100.0
+        )
+    })
+}
+
+/// Tables 9–11's band (docs/models.md#nams-bands): each effect size, adaptive over best control.
+const BAND_NAMS: Band = Band::Relative { percent: 25.0 };
 
 fn tables_9_11(opts: &ReproOptions) -> Result<ReproReport, ExperimentError> {
     let tl = default_tl();
@@ -141,6 +160,7 @@ pub fn report(
         "scenario", "metric", "adaptive", "control", "(which)", "adaptive", "control"
     );
     let mut checks = Vec::new();
+    let mut numbers = Vec::new();
     let mut data = Vec::new();
     for (scenario, thesis) in THESIS {
         if !cfg.scenarios.iter().any(|s| s.name == scenario) {
@@ -161,11 +181,23 @@ pub fn report(
                 "{:<11} {:<24} {:>9.2} {:>9.2} {:>18} | {:>9.2} {:>9.2}",
                 scenario, name, ours[k].0, ours[k].1, c.behaviour, thesis[k].0, thesis[k].1
             );
+            let (sa, sc) = match k {
+                0 => (a.sd.bandwidth, c.sd.bandwidth),
+                1 => (a.sd.status_period, c.sd.status_period),
+                _ => (a.sd.duty_cycle, c.sd.duty_cycle),
+            };
+            let se = (sa.powi(2) + sc.powi(2)).sqrt() / (cfg.repetitions as f64).sqrt();
             if k > 0 {
-                let check = direction_check(scenario, name, ours[k], thesis[k]);
-                let period_in_s4 = k == 1 && scenario == "scenario 4";
-                checks.push(if period_in_s4 { check.known_deviation(S4_PERIOD_DEVIATION) } else { check });
+                let check = direction_check(scenario, name, ours[k], thesis[k], se);
+                let cause = (k == 1 && scenario == "scenario 4").then(|| s4_period_cause(a.mean.duty_cycle)).flatten();
+                checks.push(check.caused_by(cause));
             }
+            numbers.push(ThesisNumber::new(
+                format!("{scenario} {name}: adaptive / control"),
+                thesis[k].0 / thesis[k].1,
+                Some(ours[k].0 / ours[k].1),
+                BAND_NAMS,
+            ));
         }
         let margin = 2.0 * (a.sd.bandwidth.powi(2) + c.sd.bandwidth.powi(2)).sqrt() / (cfg.repetitions as f64).sqrt();
         checks.push(Check::new(
@@ -179,16 +211,31 @@ pub fn report(
         data.push(serde_json::json!({"scenario": scenario, "adaptive": a, "best_control": c, "thesis": {"bandwidth": thesis[0], "status_period": thesis[1], "duty_cycle": thesis[2]}}));
     }
     let _ = writeln!(t, "\nAbsolute values differ from the thesis by construction (no Bedford Basin bathymetry: the synthetic shelf, and the TL above); the thesis's own channel gave rate 1 only ≈ 38 % success in scenario 1.");
-    Ok(ReproReport::new(id.into(), t, checks, serde_json::json!({"cells": result.cells, "tables": data})))
+    let table = ThesisTable::new(
+        id,
+        "±25 % on each effect size, adaptive over the best control (docs/models.md#nams-bands): our channel is the \
+         synthetic shelf, not Bedford Basin, so absolute values are not compared",
+        numbers,
+    );
+    Ok(ReproReport::new(id.into(), t, checks, serde_json::json!({"cells": result.cells, "tables": data}))
+        .with_tables(vec![table]))
 }
 
-/// Tables 10–11 (status period, duty cycle): adaptive vs best control lie the thesis's way round
-/// (equal within 0.05 where the thesis's two are equal).
-fn direction_check(scenario: &str, metric: &str, ours: (f64, f64), thesis: (f64, f64)) -> Check {
-    let passed = if thesis.0 == thesis.1 {
-        (ours.0 - ours.1).abs() < 0.05
+/// Tables 10–11 (status period, duty cycle): adaptive vs best control lie the thesis's way round.
+/// Where the thesis's two differ, the difference (oriented the thesis's way) with its 95 % CI
+/// (±1.96 `se`, the standard error of the difference over the repetitions) decides: above zero
+/// passes, below fails, spanning zero is undecided. Where the thesis's two are equal, ours must
+/// be equal within 0.05.
+fn direction_check(scenario: &str, metric: &str, ours: (f64, f64), thesis: (f64, f64), se: f64) -> Check {
+    let verdict = if thesis.0 == thesis.1 {
+        if (ours.0 - ours.1).abs() < 0.05 {
+            Verdict::Pass
+        } else {
+            Verdict::Fail
+        }
     } else {
-        (ours.0 - ours.1).signum() == (thesis.0 - thesis.1).signum()
+        let d = (ours.0 - ours.1) * (thesis.0 - thesis.1).signum();
+        ordering_verdict(d - 1.96 * se, d + 1.96 * se)
     };
     let relation = |a: f64, b: f64| {
         if a > b {
@@ -199,11 +246,11 @@ fn direction_check(scenario: &str, metric: &str, ours: (f64, f64), thesis: (f64,
             "="
         }
     };
-    Check::new(
+    Check::with_verdict(
         format!("{scenario}: {metric}, adaptive vs best control the thesis's way round"),
-        passed,
+        verdict,
         format!(
-            "ours {:.2} {} {:.2}; thesis {:.2} {} {:.2}",
+            "ours {:.2} {} {:.2} (SE of the difference {se:.2}); thesis {:.2} {} {:.2}",
             ours.0,
             relation(ours.0, ours.1),
             ours.1,
@@ -224,7 +271,11 @@ mod tests {
     fn reduced_reproduction_keeps_the_ordering() {
         let r = tables_9_11(&ReproOptions::new(Size::Reduced, 1)).unwrap();
         for c in &r.checks {
-            assert!(c.passed, "{}: {}", c.name, c.detail);
+            assert!(c.acceptable(), "{}: {}", c.name, c.detail);
+        }
+        // The bandwidth ordering is resolved even in the reduced form.
+        for c in r.checks.iter().filter(|c| c.name.contains("bandwidth")) {
+            assert!(c.passed(), "{}: {}", c.name, c.detail);
         }
         // Per scenario: bandwidth, and the status-period and duty-cycle directions.
         assert_eq!(r.checks.len(), 6);
@@ -232,10 +283,36 @@ mod tests {
 
     #[test]
     fn a_direction_against_the_thesis_fails() {
-        assert!(direction_check("s", "m", (40.0, 30.0), (32.4, 24.4)).passed);
-        assert!(!direction_check("s", "m", (20.0, 30.0), (32.4, 24.4)).passed);
-        assert!(direction_check("s", "m", (1.0, 0.97), (1.0, 1.0)).passed);
-        assert!(!direction_check("s", "m", (0.6, 1.0), (1.0, 1.0)).passed);
+        let v = |ours, thesis, se| direction_check("s", "m", ours, thesis, se).verdict;
+        assert_eq!(v((40.0, 30.0), (32.4, 24.4), 1.0), Verdict::Pass);
+        assert_eq!(v((20.0, 30.0), (32.4, 24.4), 1.0), Verdict::Fail);
+        // Within noise of each other: undecided either way round.
+        assert_eq!(v((31.0, 30.0), (32.4, 24.4), 1.0), Verdict::Undecided);
+        assert_eq!(v((29.0, 30.0), (32.4, 24.4), 1.0), Verdict::Undecided);
+        assert_eq!(v((0.60, 1.0), (0.38, 1.0), 0.01), Verdict::Pass);
+        assert_eq!(v((1.0, 0.97), (1.0, 1.0), 0.0), Verdict::Pass);
+        assert_eq!(v((0.6, 1.0), (1.0, 1.0), 0.0), Verdict::Fail);
+    }
+
+    #[test]
+    fn the_thesis_effect_sizes_sit_in_their_band_and_moved_ones_do_not() {
+        for (_, rows) in THESIS {
+            for (a, c) in rows {
+                let effect = a / c;
+                assert!(BAND_NAMS.contains(effect, effect));
+                assert!(BAND_NAMS.contains(effect, effect * 1.24) && !BAND_NAMS.contains(effect, effect * 1.26));
+                assert!(!BAND_NAMS.contains(effect, effect * 0.74));
+            }
+        }
+        // Scenario 4's status period against the thesis: ours +3 % (1.03) is out of +78 % (1.775).
+        assert!(!BAND_NAMS.contains(102.6 / 57.8, 1.03));
+    }
+
+    #[test]
+    fn the_duty_cycle_is_a_cause_only_at_or_above_its_threshold() {
+        assert!(s4_period_cause(0.70).is_some());
+        assert!(s4_period_cause(S4_DUTY_CAUSE).is_some());
+        assert!(s4_period_cause(0.38).is_none() && s4_period_cause(0.59).is_none());
     }
 
     #[test]
