@@ -1183,6 +1183,28 @@ mod tests {
     }
 
     #[test]
+    fn the_start_variance_is_the_mean_excess_of_the_early_innovations() {
+        let r = |t: f64, innovation: f64, held_out: bool| RangeResidual {
+            t,
+            beacon: 1,
+            applied: false,
+            held_out,
+            innovation,
+            innovation_sd: 5.0,
+            smoothed: f64::NAN,
+            smoothed_sd: f64::NAN,
+            noise_sd: f64::NAN,
+            nis: 0.0,
+        };
+        let p0 = [16.0, 9.0, 0.0, 0.0, 0.0];
+        // S = 25 of which 16 is the start's: each range's excess is y² − 9.
+        let early = [r(10.0, 20.0, false), r(20.0, 0.0, false), r(30.0, 50.0, true), r(200.0, 50.0, false)];
+        assert_eq!(start_variance(&early, 120.0, &p0), ((391.0 - 9.0) / 2.0, 2));
+        assert_eq!(start_variance(&early[1..2], 120.0, &p0), (0.0, 1), "never below zero");
+        assert_eq!(start_variance(&early[3..], 120.0, &p0), (0.0, 0), "none in the window");
+    }
+
+    #[test]
     fn round_trip_through_csv() {
         let entries = vec![
             Entry { t: 0.0, record: Record::Init { e: 1.0, n: 2.0, speed: 0.85, compass_deg: 90.0 } },
