@@ -532,6 +532,9 @@ struct TuningSummary<'a> {
     sd: &'a post_tune::TunedSd,
     held_out_before: &'a post_tune::CrossValidation,
     held_out_after: &'a post_tune::CrossValidation,
+    /// The held-out figures of the kept values (the start's, the search's result's or another
+    /// candidate's).
+    held_out_kept: &'a post_tune::CrossValidation,
 }
 
 fn postprocess(
@@ -627,6 +630,7 @@ fn postprocess(
         sd: &t.sd,
         held_out_before: &t.before.cross_validation,
         held_out_after: &t.after.cross_validation,
+        held_out_kept: &t.kept.cross_validation,
     });
     let summary = PostprocessSummary { summary: &result.summary, quality: &quality, tuning };
     dir.write_json("summary.json", &summary)?;
@@ -771,7 +775,7 @@ fn print_tuning(r: &TuneReport) {
     );
     let kept = match r.guard.kept {
         post_tune::Kept::Tuned => "the tuned values",
-        post_tune::Kept::BestCandidate => "the search's best candidate",
+        post_tune::Kept::BestCandidate => "the search's best valid candidate",
         post_tune::Kept::Start => "the starting values",
     };
     println!("kept {kept}");

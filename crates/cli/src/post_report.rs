@@ -97,7 +97,7 @@ fn tuning_rows(t: &TuneReport) -> Vec<[String; 4]> {
             "whole compass bias, with the smoothed bias state (deg)".into(),
             format!("{:.3}", t.before.compass_bias_deg),
             format!("{:.3}", t.after.compass_bias_deg),
-            String::new(),
+            format!("{:.3}", t.kept.compass_bias_deg),
         ],
         [
             "initial E/N variance (m²)".into(),
@@ -109,13 +109,13 @@ fn tuning_rows(t: &TuneReport) -> Vec<[String; 4]> {
             "held-out log predictive density".into(),
             format!("{:.2}", t.before.held_out_log_predictive),
             format!("{:.2}", t.after.held_out_log_predictive),
-            String::new(),
+            format!("{:.2}", t.kept.held_out_log_predictive),
         ],
         [
             "ranges gated (full run)".into(),
             t.before.ranges_gated.to_string(),
             t.after.ranges_gated.to_string(),
-            String::new(),
+            t.kept.ranges_gated.to_string(),
         ],
     ]
 }
@@ -196,7 +196,7 @@ pub fn render(
         r.heading("Tuning");
         let kept = match t.guard.kept {
             Kept::Tuned => "the tuned values",
-            Kept::BestCandidate => "the search's best candidate",
+            Kept::BestCandidate => "the search's best valid candidate",
             Kept::Start => "the starting values",
         };
         r.paragraph(&format!(

@@ -11,6 +11,7 @@ pub mod ekf;
 pub mod fieldlog;
 pub mod post;
 pub mod post_quality;
+pub mod post_reference;
 pub mod post_tune;
 pub mod range;
 pub mod smoother;

@@ -282,6 +282,27 @@ impl CheckFields for FixMatching {
     }
 }
 
+/// The initial E/N variance the first ranges support (docs/models.md#post-start). Each range
+/// received within `window_s` of the start is predicted by the filter dead-reckoning from the
+/// `init` row without any range: its innovation y has variance S = R + h P hᵀ, of which h P₀ hᵀ
+/// (at most the larger of `auv.p0[0]`, `auv.p0[1]`) is the start's. The mean of y² − (S − h P₀ hᵀ)
+/// over those ranges is the start's variance along their lines of sight that the ranges show;
+/// when it exceeds the configured p0, both p0[0] and p0[1] are widened to it. It only widens: a
+/// start the ranges agree with keeps the configured p0.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct StartVariance {
+    /// The ranges received within this many seconds of the start are used (0: off). Invented
+    /// default: 120 s, the first minutes of a log (not tuned on any log).
+    pub window_s: f64,
+}
+
+impl Default for StartVariance {
+    fn default() -> Self {
+        StartVariance { window_s: 120.0 }
+    }
+}
+
 /// The post-processing filter's state vector (the model lives beside the filter, in `auv`).
 pub use crate::auv::AuvModel;
 
@@ -324,6 +345,10 @@ pub struct PostConfig {
     pub speed_scale: f64,
     /// Subtracted from every `heading` row (deg; a compass offset; `--tune` estimates it).
     pub heading_bias_deg: f64,
+    /// The filter's initial E/N variance from the log's first ranges: widened from `auv.p0` to
+    /// what the ranges of the first `window_s` seconds, dead-reckoned from the `init` row, show
+    /// (docs/models.md#post-start). `{ window_s = 0 }` keeps `auv.p0` as configured.
+    pub start: StartVariance,
     /// Geodetic origin of the local east/north frame, needed by `_ll` log rows (docs/models.md#gill-geodesy).
     /// `_ll` positions are taken at its height above the ellipsoid (the site's water surface).
     pub origin: Option<Geodetic>,
@@ -347,6 +372,7 @@ impl Default for PostConfig {
             velocity_sd_m_s: 0.05,
             speed_scale: 1.0,
             heading_bias_deg: 0.0,
+            start: StartVariance::default(),
             origin: None,
         }
     }
@@ -383,6 +409,7 @@ impl PostConfig {
         self.outriggers.check_fields("outriggers.", &mut p);
         self.fixes.check_fields("fixes.", &mut p);
         p.non_negative("buoy_depth", self.buoy_depth);
+        p.non_negative("start.window_s", self.start.window_s);
         Ok(p.finish()?)
     }
     /// The local frame of `_ll` log rows, if an origin is configured.
@@ -399,6 +426,8 @@ pub struct PostSample {
     pub filtered_sd: [f64; 2],
     pub smoothed: [f64; 2],
     pub smoothed_sd: [f64; 2],
+    /// Covariance of the smoothed E and N (m²): with `smoothed_sd`, the position's 2×2 covariance.
+    pub smoothed_cov_en: f64,
     /// Smoothed heading bias b (rad): the compass's offset from the direction of motion.
     pub smoothed_heading_bias: f64,
     /// Smoothed water current (east, north, m/s), with the `current` model.
@@ -450,6 +479,10 @@ pub struct PostSummary {
     /// the track smoothed without a range predicts it (the score `--tune` maximises over folds of
     /// held-out ranges; docs/models.md#post-tuning).
     pub held_out_log_predictive: f64,
+    /// The filter's initial E and N variance (m²): `auv.p0`, or wider when the first ranges
+    /// showed the start further off (`start`), and how many ranges that used.
+    pub initial_en_variance_m2: [f64; 2],
+    pub start_ranges: usize,
     pub truth_points: usize,
     pub mean_filtered_error: Option<f64>,
     pub mean_smoothed_error: Option<f64>,
@@ -664,7 +697,7 @@ pub fn postprocess(entries: &[Entry], cfg: &PostConfig) -> Result<PostResult, Po
 
 /// Runs the post-processing EKF and the RTS smoother over general log rows.
 pub fn postprocess_rows(rows: &[LogRow], cfg: &PostConfig) -> Result<PostResult, PostError> {
-    run(rows, cfg, Pass { smooth: true, hold_out_every: 0, hold_out_phase: 0, prediction_step_s: None })
+    run(rows, cfg, Pass::FULL)
 }
 
 /// What one pass over a log computes.
@@ -680,6 +713,15 @@ pub(crate) struct Pass {
     /// block-averaged dead reckoning. Q stays per `auv.step_s` (a step of h adds Q·h/step_s), so
     /// the process noise means the same at any piece length.
     pub prediction_step_s: Option<f64>,
+    /// Predict every range without applying it (the start's pre-pass): `held_out` still marks
+    /// the pass's held-out ones.
+    pub predict_only: bool,
+}
+
+impl Pass {
+    /// A full pass: every range used, smoothed, at the log's rate.
+    pub(crate) const FULL: Pass =
+        Pass { smooth: true, hold_out_every: 0, hold_out_phase: 0, prediction_step_s: None, predict_only: false };
 }
 
 /// One pass of the filter (and smoother) over the rows, processed in time order.
@@ -716,15 +758,45 @@ pub(crate) fn run(rows: &[LogRow], cfg: &PostConfig, pass: Pass) -> Result<PostR
             - 1,
         ..PostSummary::default()
     };
-    let params = AuvParams { range_gate: cfg.range_gate, ..cfg.auv.clone() };
+    let mut params = AuvParams { range_gate: cfg.range_gate, ..cfg.auv.clone() };
+    let mut summary = summary;
+    if cfg.start.window_s > 0.0 && !pass.predict_only {
+        let pre = Pass { smooth: false, predict_only: true, ..pass };
+        let (p0, n) = start_variance(&run(rows, cfg, pre)?.residuals, t0 + cfg.start.window_s, &cfg.auv.p0);
+        params.p0[0] = params.p0[0].max(p0);
+        params.p0[1] = params.p0[1].max(p0);
+        summary.start_ranges = n;
+    }
+    summary.initial_en_variance_m2 = [params.p0[0], params.p0[1]];
     let (e0, n0, speed0, psi0) = (init.0, init.1, init.2, math_heading(init.3));
-    let events =
-        order.iter().filter(|&&i| !duplicate[i]).map(|&i| (time(&rows[i]), &rows[i])).filter(|(t, _)| *t >= t0);
+    // The start's pre-pass needs only its window.
+    let end = if pass.predict_only { t0 + cfg.start.window_s } else { f64::INFINITY };
+    let events = order
+        .iter()
+        .filter(|&&i| !duplicate[i])
+        .map(|&i| (time(&rows[i]), &rows[i]))
+        .filter(|(t, _)| *t >= t0)
+        .take_while(|(t, _)| *t <= end);
     let run = Run { beacons: &beacons, cfg, pass };
     match cfg.model {
         AuvModel::Thesis => run.filter(AuvEkf::new(t0, e0, n0, speed0, psi0, params), events, summary),
         AuvModel::Current(c) => run.filter(AuvEkf::with_current(t0, e0, n0, speed0, psi0, params, c), events, summary),
     }
+}
+
+/// The start's E/N variance the pre-pass's ranges received before `until` show (0 when they show
+/// none), and how many of them (those the pass does not hold out) it used ([`StartVariance`]).
+fn start_variance(residuals: &[RangeResidual], until: f64, p0: &[f64; 5]) -> (f64, usize) {
+    let start = p0[0].max(p0[1]);
+    let early: Vec<f64> = residuals
+        .iter()
+        .filter(|r| r.t <= until && !r.held_out && r.innovation_sd.is_finite())
+        .map(|r| r.innovation.powi(2) - (r.innovation_sd.powi(2) - start))
+        .collect();
+    if early.is_empty() {
+        return (0.0, 0);
+    }
+    ((early.iter().sum::<f64>() / early.len() as f64).max(0.0), early.len())
 }
 
 /// Which rows repeat an earlier row exactly (same time, observation and σ), by file index. Rows of
@@ -892,7 +964,7 @@ impl Run<'_> {
                     let k = self.pass.hold_out_every;
                     let held_out = k > 0 && summary.ranges % k == self.pass.hold_out_phase % k;
                     let variance = row.sigma.map_or_else(|| cfg.auv.range_noise.variance(travel_time), |s| s * s);
-                    let gate = if held_out { HOLD_OUT } else { cfg.range_gate };
+                    let gate = if held_out || self.pass.predict_only { HOLD_OUT } else { cfg.range_gate };
                     let sd = fix_sd.unwrap_or(cfg.transponder_sd_m);
                     let up = f.update_range_with(&m, auv_depth, variance, sd, &gate);
                     let step = record(&f, yaw_rate, &mut history);
@@ -1012,6 +1084,7 @@ fn sample<const M: usize>(filtered: &Smoothed<M>, s: &Smoothed<M>) -> PostSample
         filtered_sd: [filtered.p[(0, 0)].sqrt(), filtered.p[(1, 1)].sqrt()],
         smoothed: [s.x[0], s.x[1]],
         smoothed_sd: [s.p[(0, 0)].sqrt(), s.p[(1, 1)].sqrt()],
+        smoothed_cov_en: s.p[(0, 1)],
         smoothed_heading_bias: s.x[BIAS],
         smoothed_current: (M > CURRENT_N).then(|| [s.x[CURRENT_E], s.x[CURRENT_N]]),
         truth: None,
@@ -1107,6 +1180,28 @@ mod tests {
             .unwrap()
             .frame()
             .unwrap()
+    }
+
+    #[test]
+    fn the_start_variance_is_the_mean_excess_of_the_early_innovations() {
+        let r = |t: f64, innovation: f64, held_out: bool| RangeResidual {
+            t,
+            beacon: 1,
+            applied: false,
+            held_out,
+            innovation,
+            innovation_sd: 5.0,
+            smoothed: f64::NAN,
+            smoothed_sd: f64::NAN,
+            noise_sd: f64::NAN,
+            nis: 0.0,
+        };
+        let p0 = [16.0, 9.0, 0.0, 0.0, 0.0];
+        // S = 25 of which 16 is the start's: each range's excess is y² − 9.
+        let early = [r(10.0, 20.0, false), r(20.0, 0.0, false), r(30.0, 50.0, true), r(200.0, 50.0, false)];
+        assert_eq!(start_variance(&early, 120.0, &p0), ((391.0 - 9.0) / 2.0, 2));
+        assert_eq!(start_variance(&early[1..2], 120.0, &p0), (0.0, 1), "never below zero");
+        assert_eq!(start_variance(&early[3..], 120.0, &p0), (0.0, 0), "none in the window");
     }
 
     #[test]

@@ -27,6 +27,7 @@ use argmin::core::{CostFunction, Executor, State};
 use argmin::solver::neldermead::NelderMead;
 use serde::{Deserialize, Serialize};
 use std::borrow::Cow;
+use std::cell::RefCell;
 
 /// How to tune.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -196,10 +197,11 @@ pub struct Scored {
 pub enum Kept {
     /// The search converged to values that predict the held-out ranges better.
     Tuned,
-    /// The search stopped at its cap; its best candidate still predicts the held-out ranges
-    /// better and rejects no more ranges, so it is kept.
+    /// A candidate the search evaluated that predicts the held-out ranges better than the
+    /// starting values and rejects no more ranges: the search's result when it stopped at its cap,
+    /// or, when that result is not valid, the valid candidate with the best score.
     BestCandidate,
-    /// The starting (configured) values: the result was not better.
+    /// The starting (configured) values: no candidate checked was better.
     Start,
 }
 
@@ -208,37 +210,86 @@ pub enum Kept {
 pub struct Guard {
     pub kept: Kept,
     pub converged: bool,
+    /// Other candidates of the search scored at full rate because its result was not valid (the
+    /// best-scored first, at most [`MAX_CANDIDATES_CHECKED`]).
+    pub candidates_checked: usize,
     pub warning: Option<String>,
 }
 
+/// Other candidates scored at full rate when the search's result is not valid (invented,
+/// docs/models.md#post-tuning): each costs a cross-validation and a full run.
+pub const MAX_CANDIDATES_CHECKED: usize = 8;
+
+/// A candidate's values in one phrase.
+fn describe(v: &Tuned) -> String {
+    format!(
+        "range σ {:.3} m, q_en {:.3e} m², speed scale {:.4}, compass offset {:.2}°, p0_en {:.1} m²",
+        v.range_sd_m, v.q_en, v.speed_scale, v.heading_bias_deg, v.p0_en
+    )
+}
+
 impl Guard {
-    fn judge(before: &Scored, after: &Scored, converged: bool, max_iters: u64) -> Guard {
-        let worse = !(after.held_out_log_predictive > before.held_out_log_predictive);
-        let more_gated = after.ranges_gated > before.ranges_gated;
+    /// Whether `s` predicts the held-out ranges better than `before` and rejects no more ranges.
+    fn valid(before: &Scored, s: &Scored) -> bool {
+        s.held_out_log_predictive > before.held_out_log_predictive && s.ranges_gated <= before.ranges_gated
+    }
+
+    /// `after` is the search's result; `alternative` the best-scored other valid candidate found
+    /// among the `checked` scored when `after` is not valid.
+    fn judge(
+        before: &Scored,
+        after: &Scored,
+        alternative: Option<&Scored>,
+        checked: usize,
+        converged: bool,
+        max_iters: u64,
+    ) -> Guard {
         let cap = format!("the search stopped at its cap of {max_iters} iterations before converging");
-        let (kept, warning) = if worse || more_gated {
-            let why = if worse {
+        let also = if converged { String::new() } else { format!(", and {cap}") };
+        let (kept, warning) = if Guard::valid(before, after) {
+            if converged {
+                (Kept::Tuned, None)
+            } else {
+                let w = format!(
+                    "tuning: {cap}; kept its best candidate, which predicts the held-out ranges better than the starting values and rejects no more ranges"
+                );
+                (Kept::BestCandidate, Some(w))
+            }
+        } else {
+            let why = if !(after.held_out_log_predictive > before.held_out_log_predictive) {
                 format!(
-                    "the tuned values predict the held-out ranges no better than the starting ones (log predictive density {:.2} against {:.2})",
+                    "the search's result predicts the held-out ranges no better than the starting values (log predictive density {:.2} against {:.2})",
                     after.held_out_log_predictive, before.held_out_log_predictive
                 )
             } else {
                 format!(
-                    "the tuned values reject {} range(s) at the gate where the starting ones reject {}",
+                    "the search's result rejects {} range(s) at the gate where the starting values reject {}",
                     after.ranges_gated, before.ranges_gated
                 )
             };
-            let also = if converged { String::new() } else { format!(", and {cap}") };
-            (Kept::Start, Some(format!("tuning: kept the starting values: {why}{also}")))
-        } else if !converged {
-            let w = format!(
-                "tuning: {cap}; kept its best candidate, which predicts the held-out ranges better than the starting values and rejects no more ranges"
-            );
-            (Kept::BestCandidate, Some(w))
-        } else {
-            (Kept::Tuned, None)
+            match alternative {
+                Some(a) => (
+                    Kept::BestCandidate,
+                    Some(format!(
+                        "tuning: kept the best-scored other candidate of the search ({}), which predicts the held-out ranges better than the starting values (log predictive density {:.2} against {:.2}) and rejects {} range(s) where they reject {}: {why}{also}",
+                        describe(&a.values),
+                        a.held_out_log_predictive,
+                        before.held_out_log_predictive,
+                        a.ranges_gated,
+                        before.ranges_gated
+                    )),
+                ),
+                None => {
+                    let others = if checked == 0 {
+                        "no other candidate of the search predicted them better while rejecting no more ranges".to_string()
+                    } else {
+                        format!("none of the {checked} best-scored other candidates checked did better")
+                    };
+                    (Kept::Start, Some(format!("tuning: kept the starting values: {why}, and {others}{also}")))
+                }
+            }
         };
-        Guard { kept, converged, warning }
+        Guard { kept, converged, candidates_checked: checked, warning }
     }
 }
 
@@ -248,11 +299,13 @@ pub struct TuneReport {
     pub before: Scored,
     /// The search's result (kept or not: see `guard`).
     pub after: Scored,
+    /// The figures of the values the run keeps (`before`, `after` or another candidate).
+    pub kept: Scored,
     /// The SDs of the search's result.
     pub sd: TunedSd,
     pub bounds: Bounds,
     pub guard: Guard,
-    /// The values the run uses: `after`'s, or `before`'s when the guard kept the start.
+    /// The values the run uses: `kept`'s.
     pub chosen: Tuned,
     pub hold_out_every: usize,
     pub iterations: u64,
@@ -284,11 +337,14 @@ struct Folds {
     held_out: Vec<(f64, f64, f64)>,
     /// Σ r²/R and count over the used ranges (R the range noise alone).
     used_excess: (f64, usize),
+    /// Ranges the folds' gates rejected, summed over the folds.
+    gated: usize,
 }
 
 impl Folds {
     fn add(&mut self, r: &PostResult) {
         self.log_predictive += r.summary.held_out_log_predictive;
+        self.gated += r.summary.ranges_gated;
         for x in &r.residuals {
             if x.held_out && !x.smoothed.is_nan() {
                 self.held_out.push((x.innovation, x.smoothed, x.smoothed_sd));
@@ -318,7 +374,7 @@ impl Folds {
 fn folds(rows: &[LogRow], cfg: &PostConfig, folds: usize, step_s: Option<f64>) -> Result<Folds, PostError> {
     let mut sum = Folds::default();
     for phase in 0..folds {
-        let pass = Pass { smooth: true, hold_out_every: folds, hold_out_phase: phase, prediction_step_s: step_s };
+        let pass = Pass { hold_out_every: folds, hold_out_phase: phase, prediction_step_s: step_s, ..Pass::FULL };
         sum.add(&run(rows, cfg, pass)?);
     }
     Ok(sum)
@@ -341,6 +397,18 @@ struct Problem<'a> {
     start: Tuned,
     bounds: Bounds,
     hold_out_every: usize,
+    /// Every candidate the search evaluated, in order.
+    searched: RefCell<Vec<Candidate>>,
+}
+
+/// One candidate the search evaluated: its search coordinates, cost, and its folds' held-out log
+/// predictive density and gated ranges (on the search's rows).
+#[derive(Debug, Clone, PartialEq)]
+struct Candidate {
+    u: Vec<f64>,
+    cost: f64,
+    log_predictive: f64,
+    gated: usize,
 }
 
 /// The cost of a run the filter or smoother could not complete (a singular covariance at an
@@ -355,7 +423,10 @@ impl Problem<'_> {
         let Ok(f) = folds(&self.rows, &values.apply(self.base), self.hold_out_every, self.step_s) else {
             return FAILED;
         };
-        -f.log_predictive + self.prior(&values) + floor_penalty(f.used_excess) + 1e3 * outside
+        let cost = -f.log_predictive + self.prior(&values) + floor_penalty(f.used_excess) + 1e3 * outside;
+        let c = Candidate { u: u.to_vec(), cost, log_predictive: f.log_predictive, gated: f.gated };
+        self.searched.borrow_mut().push(c);
+        cost
     }
 
     /// −log of the Gaussian prior about the start, in search coordinates.
@@ -406,7 +477,7 @@ fn floor_penalty((sum, n): (f64, usize)) -> f64 {
 fn score(rows: &[LogRow], base: &PostConfig, k: usize, values: Tuned) -> Result<Scored, PostError> {
     let cfg = values.apply(base);
     let cv = folds(rows, &cfg, k, None)?.cross_validation(k);
-    let full = run(rows, &cfg, Pass { smooth: true, hold_out_every: 0, hold_out_phase: 0, prediction_step_s: None })?;
+    let full = run(rows, &cfg, Pass::FULL)?;
     let s = &full.summary;
     let n = full.samples.len().max(1) as f64;
     let bias_state = full.samples.iter().map(|x| x.smoothed_heading_bias).sum::<f64>() / n;
@@ -574,7 +645,17 @@ pub fn tune(rows: &[LogRow], cfg: &PostConfig, opts: &TuneOptions) -> Result<Tun
         (Cow::Borrowed(rows), None)
     };
     let bounds = Bounds::of(&start);
-    let problem = Problem { rows: rows_searched, step_s, base: cfg, start, bounds, hold_out_every: k };
+    let problem = Problem {
+        rows: rows_searched,
+        step_s,
+        base: cfg,
+        start,
+        bounds,
+        hold_out_every: k,
+        searched: RefCell::new(Vec::new()),
+    };
+    // The start's figures on the search's rows, for the other candidates' pre-selection.
+    let start_folds = folds(&problem.rows, cfg, k, step_s)?;
     // Initial simplex: the start and one vertex per coordinate, a step typical of its scale.
     let origin = start.to_search();
     let mut simplex = vec![origin.clone()];
@@ -594,17 +675,59 @@ pub fn tune(rows: &[LogRow], cfg: &PostConfig, opts: &TuneOptions) -> Result<Tun
     let evaluations = state.get_func_counts().get("cost_count").copied().unwrap_or(0);
     let iterations = state.get_iter();
     let converged = iterations < opts.max_iters;
+    let searched = problem.searched.take();
     let (values, _) = bounds.from_search(&best);
     let sd = problem.sd(&best, &values);
     let after = score(rows, cfg, k, values)?;
-    let guard = Guard::judge(&before, &after, converged, opts.max_iters);
-    let chosen = if guard.kept == Kept::Start { start } else { values };
+    // When the result is not valid, the other candidates that beat the start on the search's own
+    // folds, best-scored first and each set of values once, are scored at full rate in turn.
+    let mut alternative = None;
+    let mut checked = 0;
+    if !Guard::valid(&before, &after) {
+        let mut pool: Vec<(Tuned, f64)> = searched
+            .iter()
+            .filter(|c| {
+                c.cost < FAILED && c.log_predictive > start_folds.log_predictive && c.gated <= start_folds.gated
+            })
+            .map(|c| (bounds.from_search(&c.u).0, c.cost))
+            .filter(|(v, _)| *v != values && *v != start)
+            .collect();
+        pool.sort_by(|a, b| a.1.total_cmp(&b.1));
+        pool.dedup_by(|a, b| a.0 == b.0);
+        for (v, _) in pool.into_iter().take(MAX_CANDIDATES_CHECKED) {
+            checked += 1;
+            let s = score(rows, cfg, k, v)?;
+            if Guard::valid(&before, &s) {
+                alternative = Some(s);
+                break;
+            }
+        }
+    }
+    let guard = Guard::judge(&before, &after, alternative.as_ref(), checked, converged, opts.max_iters);
+    let kept = match (guard.kept, alternative) {
+        (Kept::Start, _) => before,
+        (Kept::BestCandidate, Some(a)) => a,
+        _ => after,
+    };
+    let chosen = kept.values;
     let mut config = chosen.apply(cfg);
     if let (Some(s), true) = (sd.heading_bias_deg, guard.kept != Kept::Start) {
         // The compass-bias state starts no narrower than the tuned bias is known.
         config.auv.p0[BIAS] = config.auv.p0[BIAS].max(s.to_radians().powi(2));
     }
-    Ok(TuneReport { before, after, sd, bounds, guard, chosen, hold_out_every: k, iterations, evaluations, config })
+    Ok(TuneReport {
+        before,
+        after,
+        kept,
+        sd,
+        bounds,
+        guard,
+        chosen,
+        hold_out_every: k,
+        iterations,
+        evaluations,
+        config,
+    })
 }
 
 #[cfg(test)]
@@ -678,20 +801,33 @@ mod tests {
     #[test]
     fn the_guard_keeps_the_start_unless_the_result_predicts_better_and_rejects_no_more() {
         let start = scored(-100.0, 2);
-        let g = Guard::judge(&start, &scored(-80.0, 2), true, 50);
+        let g = Guard::judge(&start, &scored(-80.0, 2), None, 0, true, 50);
         assert_eq!((g.kept, g.warning), (Kept::Tuned, None));
-        let g = Guard::judge(&start, &scored(-80.0, 2), false, 50);
+        let g = Guard::judge(&start, &scored(-80.0, 2), None, 0, false, 50);
         assert_eq!(g.kept, Kept::BestCandidate);
         assert!(g.warning.unwrap().contains("cap of 50 iterations"));
-        let g = Guard::judge(&start, &scored(-120.0, 2), true, 50);
-        assert_eq!(g.kept, Kept::Start);
-        assert!(g.warning.unwrap().contains("no better"));
-        let g = Guard::judge(&start, &scored(-100.0, 2), true, 50);
-        assert_eq!(g.kept, Kept::Start, "equal is not better");
-        let g = Guard::judge(&start, &scored(-80.0, 3), false, 50);
+        let g = Guard::judge(&start, &scored(-120.0, 2), None, 8, true, 50);
         assert_eq!(g.kept, Kept::Start);
         let w = g.warning.unwrap();
-        assert!(w.contains("reject 3 range(s)") && w.contains("reject 2") && w.contains("cap of 50"), "{w}");
+        assert!(w.contains("no better") && w.contains("none of the 8"), "{w}");
+        let g = Guard::judge(&start, &scored(-100.0, 2), None, 0, true, 50);
+        assert_eq!(g.kept, Kept::Start, "equal is not better");
+        let g = Guard::judge(&start, &scored(-80.0, 3), None, 3, false, 50);
+        assert_eq!(g.kept, Kept::Start);
+        let w = g.warning.unwrap();
+        assert!(w.contains("rejects 3 range(s)") && w.contains("reject 2") && w.contains("cap of 50"), "{w}");
+        assert_eq!(w.matches("tuning:").count(), 1, "one warning: {w}");
+    }
+
+    #[test]
+    fn the_guard_keeps_a_valid_other_candidate_and_says_which_and_why() {
+        let start = scored(-100.0, 2);
+        let other = scored(-90.0, 2);
+        let g = Guard::judge(&start, &scored(-80.0, 4), Some(&other), 2, true, 50);
+        assert_eq!((g.kept, g.candidates_checked), (Kept::BestCandidate, 2));
+        let w = g.warning.unwrap();
+        assert!(w.contains("range σ 1.800 m") && w.contains("-90.00 against -100.00"), "{w}");
+        assert!(w.contains("rejects 2 range(s) where they reject 2") && w.contains("rejects 4 range(s)"), "{w}");
         assert_eq!(w.matches("tuning:").count(), 1, "one warning: {w}");
     }
 

@@ -198,6 +198,38 @@ pub fn synthetic_log(spec: &SyntheticSpec) -> Vec<LogRow> {
     rows
 }
 
+/// The rows with `extra_m` of range added to every `every`-th range (an echo: a longer path).
+pub fn with_echoes(rows: &[LogRow], every: usize, extra_m: f64) -> Vec<LogRow> {
+    let mut k = 0;
+    rows.iter()
+        .map(|r| match r.obs {
+            Observation::Range { beacon, travel_time } => {
+                k += 1;
+                let travel_time = if k % every == 0 { travel_time + extra_m / SOUND_SPEED } else { travel_time };
+                LogRow { obs: Observation::Range { beacon, travel_time }, ..*r }
+            }
+            _ => *r,
+        })
+        .collect()
+}
+
+/// The rows from `at` s on shifted `by` s later (a logger clock that jumped forward).
+pub fn with_clock_jump(rows: &[LogRow], at: f64, by: f64) -> Vec<LogRow> {
+    rows.iter().map(|r| if r.t >= at { LogRow { t: r.t + by, ..*r } } else { *r }).collect()
+}
+
+/// The rows with the `init` row's position `offset_e_m` east of where the AUV starts.
+pub fn with_start_off(rows: &[LogRow], offset_e_m: f64) -> Vec<LogRow> {
+    rows.iter()
+        .map(|r| match r.obs {
+            Observation::Init { e, n, speed, compass_deg } => {
+                LogRow { obs: Observation::Init { e: e + offset_e_m, n, speed, compass_deg }, ..*r }
+            }
+            _ => *r,
+        })
+        .collect()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
