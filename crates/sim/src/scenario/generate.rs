@@ -19,6 +19,8 @@
 //!   depths to 1 m, current speeds to 1 mm/s and directions to 1°, as a team would state them.
 //! - Named variants (CNA kind, channel, filter) and fleet-size rules (a schedule sized for the
 //!   fleet) are TOML tables laid over the scenario ([`overlay`]): what each means is in the file.
+//!   A filter variant may also set the position process noise from the drawn current
+//!   ([`PositionNoise`]).
 //!
 //! A generated mission states no policy keys: its policies are what a file without `[policy]`
 //! gets ([`Policies::default`]), `planner-estimator`'s settings the planner's rule for the mission
