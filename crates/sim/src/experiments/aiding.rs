@@ -316,7 +316,7 @@ mod tests {
     }
 
     #[test]
-    #[ignore = "fails: on mission 1 one filter is under-confident (mean NEES 0.35-0.48 below the 0.54 bound); reproduce aiding-never-hurts"]
+    #[ignore = "fails: on mission 1 one 5-state filter, ranged from one bearing 2 km off, is under-confident under trail, open-loop and greedy-fisher (mean NEES 0.44-0.50 below the 0.54 bound); reproduce aiding-never-hurts"]
     fn the_reduced_invariant_holds() {
         let report = aiding_never_hurts(&ReproOptions::new(Size::Reduced, 1)).unwrap();
         let failed: Vec<String> = report.checks.iter().filter(|c| !c.passed()).map(Check::line).collect();

@@ -19,6 +19,8 @@
 //!   depths to 1 m, current speeds to 1 mm/s and directions to 1°, as a team would state them.
 //! - Named variants (CNA kind, channel, filter) and fleet-size rules (a schedule sized for the
 //!   fleet) are TOML tables laid over the scenario ([`overlay`]): what each means is in the file.
+//!   A filter variant may also set the position process noise from the drawn current
+//!   ([`PositionNoise`]).
 //!
 //! A generated mission states no policy keys: its policies are what a file without `[policy]`
 //! gets ([`Policies::default`]), `planner-estimator`'s settings the planner's rule for the mission
@@ -71,6 +73,39 @@ pub struct Variant {
     pub name: String,
     #[serde(default)]
     pub patch: toml::Table,
+    /// A filter variant's horizontal position process noise from the mission's stated current
+    /// ([`PositionNoise`]); absent: the patched scenario's own `filter.q`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub position_noise: Option<PositionNoise>,
+}
+
+/// The survey AUVs' horizontal position process noise set from the current the team states
+/// (`cna.adcp_current`, the mission's drawn current): per axis, `still_m2_s` + `per_current_s`·|c|²
+/// m²/s, written as `filter.q[0]` and `filter.q[1]` per filter step (`filter.step_s`).
+///
+/// Why: a filter that does not model the current stands for it by this random walk. One constant
+/// is too large in near-still water (the position σ across a steady line of sight grows far faster
+/// than the true error, and the filter is under-confident) and too small in a strong current. The
+/// current's drift c·t matches a random walk q·t over t = q/c², so the noise grows as c². Both
+/// coefficients are invented and were set on the embedded example's seed 1 only
+/// (docs/models.md#position-noise): `still_m2_s` where its ranged filters' mean NEES is near 2 in
+/// still water, `per_current_s` so that its own 0.05 m/s current gives back the closed loop's
+/// position noise (`scenario::world::CLOSED_LOOP_Q_EN`).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PositionNoise {
+    /// Position noise in still water, m²/s per axis (≥ 0).
+    pub still_m2_s: f64,
+    /// Seconds of the current's drift the noise adds per (m/s)² of stated current (≥ 0).
+    pub per_current_s: f64,
+}
+
+impl PositionNoise {
+    /// Per-axis position noise per filter step of `step_s` seconds at a stated current of
+    /// `speed_m_s`.
+    pub fn per_step(&self, speed_m_s: f64, step_s: f64) -> f64 {
+        (self.still_m2_s + self.per_current_s * speed_m_s * speed_m_s) * step_s
+    }
 }
 
 /// A table laid over every mission of at least `min_auvs` AUVs (after the variants; rules apply
@@ -229,6 +264,15 @@ impl Ranges {
                 p.push(field, "[]", "at least one entry");
             }
         }
+        for v in &self.filter {
+            if let Some(n) = &v.position_noise {
+                for (key, value) in [("still_m2_s", n.still_m2_s), ("per_current_s", n.per_current_s)] {
+                    if !(value.is_finite() && value >= 0.0) {
+                        p.push(format!("filter ({}).position_noise.{key}", v.name), value.to_string(), "finite, >= 0");
+                    }
+                }
+            }
+        }
         p.finish()
     }
 
@@ -324,6 +368,11 @@ impl Ranges {
         sc.seed = seed;
         sc.duration_s = duration_s;
         sc.cna.adcp_current = [sc.fleet.current.0, sc.fleet.current.1];
+        if let Some(noise) = &filter.position_noise {
+            let q = noise.per_step(current, sc.filter.params.step_s);
+            sc.filter.params.q[0] = q;
+            sc.filter.params.q[1] = q;
+        }
         sc.policy = Policies::default();
         sc.validate(&name())?;
 
@@ -503,5 +552,39 @@ mod tests {
             GENERALIZATION.replace("n_auvs = [1, 8]", "n_auvs = [3, 9]").replace("missions = 200", "missions = 0");
         let e = Ranges::parse(&bad, Path::new("g.toml")).unwrap_err().to_string();
         assert!(e.contains("g.toml") && e.contains("n_auvs") && e.contains("missions"), "{e}");
+    }
+
+    const AIDING: &str = include_str!("../../../../scenarios/generators/aiding-never-hurts.toml");
+
+    #[test]
+    fn a_filter_variant_with_position_noise_sets_its_missions_q_from_their_current() {
+        let f = Path::new("aiding-never-hurts.toml");
+        let r = Ranges::parse(AIDING, f).unwrap();
+        let example = Scenario::example().filter.params.q;
+        let (mut five, mut seven) = (0, 0);
+        for i in 0..16 {
+            let m = r.mission(i, f).unwrap();
+            let q = m.scenario.filter.params.q;
+            // The other states' noise is the example's.
+            assert_eq!(q[2..], example[2..], "mission {i}");
+            if m.facts.filter == "5-state" {
+                // 0.30 + 84.36 c² m²/s per axis, per 0.1 s step, c the stated speed.
+                let c = m.facts.current_m_s;
+                let want = (0.30 + 84.36 * c * c) * 0.1;
+                assert!((q[0] - want).abs() < 1e-12 && q[1] == q[0], "mission {i}: {q:?} for {c} m/s");
+                five += 1;
+            } else {
+                assert_eq!(q, example, "mission {i}: the 7-state variant has no position_noise");
+                seven += 1;
+            }
+        }
+        assert!(five > 0 && seven > 0, "{five} {seven}");
+        // At the example's own 0.05 m/s the rule gives back its position noise within 0.01 %.
+        let n = PositionNoise { still_m2_s: 0.30, per_current_s: 84.36 };
+        assert!((n.per_step(0.05, 0.1) / crate::scenario::world::CLOSED_LOOP_Q_EN - 1.0).abs() < 1e-4);
+        // Mistakes are named by the variant and field.
+        let bad = AIDING.replace("still_m2_s = 0.30", "still_m2_s = -1.0");
+        let e = Ranges::parse(&bad, f).unwrap_err().to_string();
+        assert!(e.contains("filter (5-state).position_noise.still_m2_s"), "{e}");
     }
 }
