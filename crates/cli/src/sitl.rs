@@ -168,7 +168,7 @@ fn import_logs(run: &SitlRun) -> Result<()> {
             let file = std::fs::File::open(log).with_context(|| format!("{}", log.display()))?;
             let imported = field_log(std::io::BufReader::new(file), k as i16, cfg.start, &truth)?;
             std::fs::write(log.with_extension("log"), imported.log)?;
-            std::fs::write(log.with_extension("post.toml"), toml::to_string(&cfg.filter)?)?;
+            std::fs::write(log.with_extension("post.toml"), toml::to_string(&cfg.post_equivalent())?)?;
         }
     }
     Ok(())

@@ -56,7 +56,7 @@ use coopnav_lcm::messages::{AuvEstimate, AuvSensors, Message, OwttRange};
 use coopnav_lcm::Schema;
 use coopnav_nav::ekf::UpdateOutcome;
 use coopnav_nav::fieldlog::MAX_TRAVEL_TIME_S;
-use coopnav_nav::post::{AuvModel, PostConfig, PostError};
+use coopnav_nav::post::{AuvModel, PostConfig, PostError, StartVariance};
 use coopnav_nav::{AuvEkf, AuvParams, RangeMeasurement};
 use serde::{Deserialize, Serialize};
 use std::cmp::Ordering;
@@ -94,8 +94,10 @@ pub struct Start {
 }
 
 /// The navigator's settings (`--config FILE.toml`): `[filter]` is post-processing's config
-/// (`coopnav_nav::post::PostConfig`, the same keys as `hbl postprocess --config`), `[start]` the
-/// starting position, and `reorder_window_s` the reorder buffer's length.
+/// (`coopnav_nav::post::PostConfig`, the same keys as `hbl postprocess --config`; its `start`
+/// variance, a pre-pass over the first minutes' ranges, is post-processing's only: a live filter
+/// cannot read ranges it has not received), `[start]` the starting position, and
+/// `reorder_window_s` the reorder buffer's length.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct LiveConfig {
@@ -103,6 +105,14 @@ pub struct LiveConfig {
     pub start: Start,
     /// Message time (s) a message waits for later ones before it is applied. Invented default.
     pub reorder_window_s: f64,
+}
+
+impl LiveConfig {
+    /// The post-processing config whose forward filter is this navigator's filter: `filter` with
+    /// the start variance off, since the live filter starts from the configured p0.
+    pub fn post_equivalent(&self) -> PostConfig {
+        PostConfig { start: StartVariance { window_s: 0.0 }, ..self.filter.clone() }
+    }
 }
 
 impl Default for LiveConfig {

@@ -13,7 +13,7 @@ use coopnav_lcm::Schema;
 use coopnav_live::synthetic::{stream, utime, Stream, StreamMessage};
 use coopnav_live::{AuvNavigator, LiveConfig, Published};
 use coopnav_nav::fieldlog::{LogRow, Observation};
-use coopnav_nav::post::{postprocess_rows, PostConfig, PostSample};
+use coopnav_nav::post::{postprocess_rows, PostSample};
 use coopnav_nav::synthetic::{synthetic_log, SyntheticSpec};
 use std::collections::BTreeMap;
 
@@ -157,7 +157,7 @@ fn estimates_equal_post_processings_forward_filter_bit_for_bit() {
         let Stream { messages, .. } = stream(&spec, AUV);
         let (live, nav) = run_with(&messages, cfg.clone());
         let counts = nav.counts();
-        let post = postprocess_rows(&post_rows(&spec, None), &cfg.filter).unwrap();
+        let post = postprocess_rows(&post_rows(&spec, None), &cfg.post_equivalent()).unwrap();
         assert_same_as_post(&live, &post.samples);
         assert_eq!(counts.ranges_applied as usize, post.summary.ranges_applied);
         assert_eq!(counts.ranges_gated as usize, post.summary.ranges_gated);
@@ -235,7 +235,7 @@ fn a_dropped_message_costs_only_its_update() {
     let mut messages = stream(&spec, AUV).messages;
     messages.remove(range_index(&messages, 7));
     let (live, nav) = run(&messages);
-    let post = postprocess_rows(&post_rows(&spec, Some(7)), &PostConfig::default()).unwrap();
+    let post = postprocess_rows(&post_rows(&spec, Some(7)), &LiveConfig::default().post_equivalent()).unwrap();
     assert_same_as_post(&live, &post.samples);
     let ranges = stream(&spec, AUV).messages.iter().filter(|m| m.channel.ends_with("_RANGE")).count() as u64;
     assert_eq!(nav.counts().messages["COOPNAV_AUV3_RANGE"], ranges - 1);
