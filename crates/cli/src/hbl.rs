@@ -309,11 +309,7 @@ fn scenario_name(c: &Common) -> String {
 
 fn log_format(path: Option<&Path>, allow_large: bool) -> Result<LogFormat> {
     let format: LogFormat = match path {
-        Some(p) => {
-            let text = input::read(p, allow_large)?;
-            let read = toml::from_str(&text).with_context(|| format!("in {}", p.display()));
-            input::parsed_as(read, &text, p, Format::HblLogFormat)?
-        }
+        Some(p) => input::read_as(p, allow_large, Format::HblLogFormat, toml::from_str)?,
         None => LogFormat::default(),
     };
     format.validate().with_context(|| path.map_or(String::new(), |p| format!("in {}", p.display())))?;
@@ -432,11 +428,7 @@ fn montecarlo(c: &Common, runs: usize) -> Result<()> {
 fn grid_cmd(c: &Common, grid_path: Option<&Path>) -> Result<()> {
     let mut sc = scenario(c)?;
     let spec: GridSpec = match grid_path {
-        Some(p) => {
-            let text = input::read(p, c.allow_large)?;
-            let read = toml::from_str(&text).with_context(|| format!("in {}", p.display()));
-            input::parsed_as(read, &text, p, Format::HblGrid)?
-        }
+        Some(p) => input::read_as(p, c.allow_large, Format::HblGrid, toml::from_str)?,
         None => GridSpec::default(),
     };
     spec.validate()
@@ -464,9 +456,7 @@ fn grid_cmd(c: &Common, grid_path: Option<&Path>) -> Result<()> {
 
 fn tune_cmd(c: &Common, spec_path: &Path) -> Result<()> {
     let sc = scenario(c)?;
-    let text = input::read(spec_path, c.allow_large)?;
-    let read = toml::from_str(&text).with_context(|| format!("in {}", spec_path.display()));
-    let spec: TuneSpec = input::parsed_as(read, &text, spec_path, Format::HblTune)?;
+    let spec: TuneSpec = input::read_as(spec_path, c.allow_large, Format::HblTune, toml::from_str)?;
     spec.validate().with_context(|| format!("in {}", spec_path.display()))?;
     limits::check(work::hbl_tune(&sc, &spec), c.allow_large)?;
     let r = tune(&sc, zone_spec(&sc, c)?, &spec)?;
@@ -547,11 +537,7 @@ fn postprocess(
 ) -> Result<()> {
     let PostFiles { log, alog_map, config, out } = files;
     let mut cfg = match config {
-        Some(p) => {
-            let text = input::read(p, allow_large)?;
-            let read = PostConfig::from_toml(&text).with_context(|| format!("in {}", p.display()));
-            input::parsed_as(read, &text, p, Format::HblPost)?
-        }
+        Some(p) => input::read_as(p, allow_large, Format::HblPost, PostConfig::from_toml)?,
         None => PostConfig::default(),
     };
     let bytes =

@@ -134,6 +134,23 @@ pub fn parsed_as<T, E: Into<anyhow::Error>>(
     })
 }
 
+/// Reads `path` and parses it with `parse` as `format`: a parse error says `in PATH`, and names
+/// the format the file is in when it is one of coopnav's others ([`parsed_as`]).
+pub fn read_as<T, E>(
+    path: &Path,
+    allow_large: bool,
+    format: Format,
+    parse: impl FnOnce(&str) -> std::result::Result<T, E>,
+) -> Result<T>
+where
+    std::result::Result<T, E>: anyhow::Context<T, E>,
+{
+    use anyhow::Context as _;
+    let text = read(path, allow_large)?;
+    let parsed = parse(&text).with_context(|| format!("in {}", path.display()));
+    parsed_as(parsed, &text, path, format)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
