@@ -338,6 +338,101 @@ fn the_replay_shows_the_run_positions_in_a_real_browser() {
     eprintln!("screenshot: {}", shot.display());
 }
 
+/// Drives the replay's map the way a person does, with the browser's own mouse and wheel events
+/// dispatched to the page's handlers: the wheel zooms about the cursor, a drag pans, a click picks
+/// the vehicle under it and shows its state, and following a vehicle keeps it at the centre as
+/// time moves. What each action did is read back from the page's own pixel positions.
+const DRIVE_THE_MAP: &str = r#"<pre id="test-out"></pre>
+<script>
+(() => {
+  const map = document.getElementById("map"), r = map.getBoundingClientRect();
+  const [left, top] = [r.left + map.clientLeft, r.top + map.clientTop];
+  const row = (n) => document.getElementById("pos-" + n);
+  const px = (n) => [Number(row(n).dataset.px), Number(row(n).dataset.py)];
+  const mouse = (target, type, X, Y) =>
+    target.dispatchEvent(new MouseEvent(type, { bubbles: true, clientX: left + X, clientY: top + Y, button: 0 }));
+  const out = {};
+  out.a0 = px("auv0"); out.b0 = px("auv1");
+  const wheel = new WheelEvent("wheel", { bubbles: true, cancelable: true, clientX: left + out.a0[0], clientY: top + out.a0[1], deltaY: -500 });
+  // Where the event is, as the browser keeps it (whole CSS pixels), in the canvas's pixels.
+  out.cursor = [wheel.clientX - left, wheel.clientY - top];
+  map.dispatchEvent(wheel);
+  out.zoom = Number(map.dataset.zoom); out.a1 = px("auv0"); out.b1 = px("auv1");
+  mouse(map, "mousedown", 100, 100); mouse(map, "mousemove", 120, 90); mouse(map, "mousemove", 140, 70); mouse(map, "mouseup", 140, 70);
+  out.b2 = px("auv1");
+  const cna = px("cna").map(Math.round);
+  mouse(map, "mousedown", cna[0], cna[1]); mouse(map, "mouseup", cna[0], cna[1]);
+  const picked = document.getElementById("picked");
+  out.picked = picked.dataset.name; out.pickedText = picked.textContent;
+  out.cnaRow = [row("cna").dataset.x, row("cna").dataset.y, row("cna").className];
+  const follow = document.getElementById("follow");
+  follow.value = "auv1"; follow.dispatchEvent(new Event("change"));
+  out.f0 = px("auv1"); out.w0 = [row("auv1").dataset.x, row("auv1").dataset.y];
+  const slider = document.getElementById("slider");
+  slider.value = 250; slider.dispatchEvent(new Event("input"));
+  out.f1 = px("auv1"); out.w1 = [row("auv1").dataset.x, row("auv1").dataset.y];
+  out.size = [map.width, map.height];
+  document.getElementById("test-out").textContent = JSON.stringify(out);
+})();
+</script>
+"#;
+
+#[test]
+#[cfg_attr(not(chromium_installed), ignore = "Chromium is not installed: run scripts/install-chromium.sh")]
+fn the_replay_zooms_pans_picks_and_follows_in_a_real_browser() {
+    let chromium = chromium();
+    let tmp = tempfile::tempdir().unwrap();
+    let run = short_simulation(tmp.path());
+    let page = std::fs::read_to_string(run.join("replay.html")).unwrap();
+    let driven = tmp.path().join("driven.html");
+    let at = page.rfind("</body>").expect("the page ends its body");
+    std::fs::write(&driven, format!("{}{DRIVE_THE_MAP}{}", &page[..at], &page[at..])).unwrap();
+    let profile = tempfile::tempdir().unwrap();
+    let o = headless(&chromium, profile.path(), &format!("file://{}#t=150", driven.display()), &["--dump-dom"]);
+    let dom = String::from_utf8_lossy(&o.stdout);
+    let console = String::from_utf8_lossy(&o.stderr);
+    assert!(dom.contains("data-status=\"ready\""), "the page did not finish painting:\n{console}");
+    let messages: Vec<&str> = console.lines().filter(|l| l.contains(":CONSOLE")).collect();
+    assert!(messages.is_empty(), "console messages:\n{}", messages.join("\n"));
+    let start = dom.find("<pre id=\"test-out\">").expect("the driver's output") + "<pre id=\"test-out\">".len();
+    let text = &dom[start..start + dom[start..].find("</pre>").unwrap()];
+    let out: serde_json::Value =
+        serde_json::from_str(&text.replace("&amp;", "&")).unwrap_or_else(|e| panic!("{e}: {text}"));
+    let pair = |k: &str| -> (f64, f64) {
+        let v = &out[k];
+        let n = |i: usize| v[i].as_f64().or_else(|| v[i].as_str().and_then(|s| s.parse().ok())).unwrap();
+        (n(0), n(1))
+    };
+    let near = |got: (f64, f64), want: (f64, f64), tol: f64, what: &str| {
+        assert!((got.0 - want.0).abs() <= tol && (got.1 - want.1).abs() <= tol, "{what}: {got:?}, want {want:?}");
+    };
+    // The wheel (deltaY −500) over auv0 zooms in about the cursor: the pixel under it stays, and
+    // every other point moves away from it by the zoom.
+    let zoom = out["zoom"].as_f64().unwrap();
+    assert!((2.0..2.3).contains(&zoom), "zoom {zoom}");
+    let (c, a0, b0, a1, b1) = (pair("cursor"), pair("a0"), pair("b0"), pair("a1"), pair("b1"));
+    let zoomed = |p: (f64, f64)| (c.0 + zoom * (p.0 - c.0), c.1 + zoom * (p.1 - c.1));
+    near(a1, zoomed(a0), 0.15, "auv0, under the cursor");
+    near(b1, zoomed(b0), 0.15, "auv1");
+    assert!((b0.0 - a0.0).hypot(b0.1 - a0.1) > 5.0, "the two AUVs are apart on the map: {a0:?} {b0:?}");
+    // The drag moved everything by (+40, −30) pixels.
+    let b2 = pair("b2");
+    near((b2.0 - b1.0, b2.1 - b1.1), (40.0, -30.0), 0.15, "the pan");
+    // The click on the CNA picked it: its state below the map, its row marked.
+    assert_eq!(out["picked"].as_str(), Some("cna"), "{out}");
+    let (cx, cy) = pair("cnaRow");
+    let shown = out["pickedText"].as_str().unwrap();
+    assert!(shown.starts_with("cna (cna) at t = 150.0 s"), "{shown}");
+    assert!(shown.contains(&format!("x {cx:.1} m, y {cy:.1} m")), "{shown} against the row's {cx}, {cy}");
+    assert_eq!(out["cnaRow"][2].as_str(), Some("picked"));
+    // Following auv1 centres it, and keeps it centred when the time moves on, as it moves.
+    let centre = (out["size"][0].as_f64().unwrap() / 2.0, out["size"][1].as_f64().unwrap() / 2.0);
+    near(pair("f0"), centre, 0.15, "auv1 followed at t = 150");
+    near(pair("f1"), centre, 0.15, "auv1 followed at t = 250");
+    let (w0, w1) = (pair("w0"), pair("w1"));
+    assert!((w1.0 - w0.0).hypot(w1.1 - w0.1) > 20.0, "auv1 moved between the two times: {w0:?} {w1:?}");
+}
+
 /// The Python that has pymoos2, as crates/cli/build.rs found it (the test is ignored when it did not).
 fn pymoos_python() -> PathBuf {
     PathBuf::from(option_env!("COOPNAV_PYMOOS_FOUND").expect("build.rs sets it with cfg pymoos_installed"))
