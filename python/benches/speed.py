@@ -7,7 +7,7 @@ repetitions, medians), printed as JSON:
 * the default closed-loop mission: ``coopnav.simulate`` against ``coopnav simulate`` (the whole
   command, process start and run directory included; target: at most 1.1x).
 
-    python python/benches/speed.py --cli target/release/coopnav --reps 5
+    python python/benches/speed.py --cli target/release/coopnav --runs 5
 """
 
 import argparse
@@ -34,15 +34,15 @@ def timed(f):
 def main():
     parser = argparse.ArgumentParser()
     parser.add_argument("--cli", default="target/release/coopnav")
-    parser.add_argument("--reps", type=int, default=5)
+    parser.add_argument("--runs", type=int, default=5)
     args = parser.parse_args()
 
     planner, inputs = workload({"kind": "estimator"})
     rust_decision, python_decision, rust_sim, python_sim = [], [], [], []
     scenario = coopnav.Scenario.example()
     with tempfile.TemporaryDirectory() as tmp:
-        for rep in range(args.reps):
-            bench = json.loads(subprocess.run([args.cli, "bench", "planner", "--reps", "5", "--brute-max-leaves", "0"],
+        for rep in range(args.runs):
+            bench = json.loads(subprocess.run([args.cli, "bench", "planner", "--runs", "5", "--brute-max-leaves", "0"],
                                               capture_output=True, text=True, check=True).stdout)
             row = next(r for r in bench["results"]
                        if (r["workload"]["n"], r["workload"]["a"], r["workload"]["l"]) == (5, 7, 5)
@@ -55,7 +55,7 @@ def main():
             python_sim.append(timed(lambda: coopnav.simulate(scenario)))
     med = statistics.median
     print(json.dumps({
-        "reps": args.reps,
+        "runs": args.runs,
         "decision_N5_A7_L5_estimator": {
             "rust_bench_s": med(rust_decision), "python_s": med(python_decision),
             "ratio": med(python_decision) / med(rust_decision), "target": 1.5,

@@ -127,7 +127,7 @@ fn simulate<'py>(
 
 /// Seeded Monte Carlo comparison of `policies` over `runs` runs each (run i of every policy
 /// shares its seed), as `coopnav simulate --runs N --policy a,b`. Returns the comparison as the
-/// CLI's `--json` file holds it, plus `table`: the text table the CLI prints.
+/// CLI's `--json` prints it, plus `table`: the text table the CLI prints.
 #[pyfunction]
 #[pyo3(signature = (scenario, policies, runs, seed = None, allow_large = false))]
 fn monte_carlo<'py>(

@@ -36,7 +36,7 @@ def test_a_log_the_cli_refuses_is_refused_not_an_abort(cli, tmp_path):
     rows += [f"{500 * i},speed,,1.5,,,," for i in range(1, 2000)]
     log = tmp_path / "log.csv"
     log.write_text("\n".join(rows) + "\n")
-    err = cli_error(cli, "hbl", "postprocess", "--log", log, "-o", tmp_path / "out", cwd=tmp_path)
+    err = cli_error(cli, "hbl", "postprocess", log, "-o", tmp_path / "out", cwd=tmp_path)
     assert "memory of the filter history" in err
     with pytest.raises(ValueError, match="memory of the filter history"):
         coopnav.postprocess(str(log))

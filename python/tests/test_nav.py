@@ -32,7 +32,7 @@ def compare_estimates(got, directory):
 
 
 def test_postprocess_of_a_log_file_matches_the_cli(cli, hbl_log, tmp_path):
-    cli("hbl", "postprocess", "--log", hbl_log, "-o", tmp_path / "post")
+    cli("hbl", "postprocess", hbl_log, "-o", tmp_path / "post")
     got = coopnav.postprocess(str(hbl_log))
     compare_estimates(got, tmp_path / "post")
     want = read_json(tmp_path / "post" / "summary.json")
@@ -42,7 +42,7 @@ def test_postprocess_of_a_log_file_matches_the_cli(cli, hbl_log, tmp_path):
 def test_postprocess_of_numpy_columns_matches_the_file(cli, hbl_log, tmp_path):
     config = 'smoother = "unscented"\nacoustic_time_offset_s = 0.0\n'
     (tmp_path / "pp.toml").write_text(config)
-    cli("hbl", "postprocess", "--log", hbl_log, "--config", tmp_path / "pp.toml", "-o", tmp_path / "post")
+    cli("hbl", "postprocess", hbl_log, "--config", tmp_path / "pp.toml", "-o", tmp_path / "post")
     columns = read_csv(hbl_log)
     arrays = {k: np.array(floats(v)) for k, v in columns.items() if k not in ("kind", "src")}
     arrays["kind"], arrays["src"] = columns["kind"], columns["src"]
@@ -76,7 +76,7 @@ def test_the_auv_ekf_stepped_from_python_follows_the_cli_filter(cli, tmp_path):
     rows, text = hand_log()
     (tmp_path / "log.csv").write_text(text)
     (tmp_path / "pp.toml").write_text("[start]\nwindow_s = 0.0\n")
-    post = ("hbl", "postprocess", "--log", tmp_path / "log.csv", "--config", tmp_path / "pp.toml")
+    post = ("hbl", "postprocess", tmp_path / "log.csv", "--config", tmp_path / "pp.toml")
     cli(*post, "-o", tmp_path / "post")
     want = read_csv(tmp_path / "post" / "estimates.csv")
     filtered = {float(t): (float(e), float(n)) for t, e, n in zip(want["t"], want["filt_e"], want["filt_n"])}

@@ -79,7 +79,7 @@ def workload(cost):
 def test_the_bench_workload_decides_as_the_rust_bench(cli):
     import json
 
-    bench = json.loads(cli("bench", "planner", "--reps", "1", "--brute-max-leaves", "0"))
+    bench = json.loads(cli("bench", "planner", "--runs", "1", "--brute-max-leaves", "0"))
     row = next(r for r in bench["results"] if (r["workload"]["n"], r["workload"]["a"], r["workload"]["l"]) == (5, 7, 5)
                and r["workload"]["cost"]["kind"] == "estimator")
     planner, args = workload({"kind": "estimator"})

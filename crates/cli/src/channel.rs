@@ -7,7 +7,7 @@ use coopnav_acomms::tl::bellhop::{AcousticEnv, Bellhop};
 use coopnav_acomms::{Rate, SuccessModel, TransmissionLoss};
 use coopnav_core::limits::{self, Estimate, MAX_POINTS};
 use coopnav_core::validation::{InvalidFields, Problems};
-use coopnav_core::{Bathymetry, Shelf, Vec3};
+use coopnav_core::{Bathymetry, CompassDeg, Heading, Shelf, Vec3};
 use coopnav_sim::output::plot::{line_svg, Labels, Series};
 use coopnav_sim::output::{Manifest, RunDir};
 use serde::Serialize;
@@ -42,9 +42,10 @@ pub struct Args {
     /// Receiver depth, m.
     #[arg(long, default_value_t = 20.0)]
     receiver_depth: f64,
-    /// Bearing of the slice, degrees (math convention: 0 = east, counter-clockwise).
-    #[arg(long, default_value_t = 0.0)]
-    bearing_deg: f64,
+    /// Bearing of the slice from the source, compass degrees (0 = north, clockwise), as every
+    /// angle coopnav reads; 90 (east) by default.
+    #[arg(long, default_value_t = 90.0)]
+    bearing_compass_deg: f64,
     /// Largest range, m, and range step, m.
     #[arg(long, default_value_t = 3000.0)]
     max_range: f64,
@@ -84,7 +85,7 @@ impl Args {
         p.finite("--y", self.y);
         p.non_negative("--source-depth", self.source_depth);
         p.non_negative("--receiver-depth", self.receiver_depth);
-        p.finite("--bearing-deg", self.bearing_deg);
+        p.finite("--bearing-compass-deg", self.bearing_compass_deg);
         p.positive("--step", self.step);
         p.require("--max-range", self.max_range, self.max_range >= self.step, "a finite number ≥ --step");
         p.finish()
@@ -110,7 +111,7 @@ pub fn run(args: Args) -> Result<()> {
     let src = Vec3::new(args.x, args.y, args.source_depth);
     let ranges: Vec<f64> = (1..=(args.max_range / args.step).floor() as usize).map(|i| i as f64 * args.step).collect();
     let field = tl
-        .field(&src, args.bearing_deg.to_radians(), &ranges, &[args.receiver_depth])
+        .field(&src, Heading::from(CompassDeg(args.bearing_compass_deg)).radians(), &ranges, &[args.receiver_depth])
         .context("computing transmission loss")?;
     let model = SuccessModel { noise_db: args.noise_db, ..SuccessModel::default() };
     let rows: Vec<Row> = ranges

@@ -66,12 +66,13 @@ pub enum Command {
     Tune {
         #[command(flatten)]
         common: Common,
-        /// Tuning TOML (coefficients, objective, runs, max_iters, seed).
-        #[arg(long)]
-        spec: PathBuf,
+        /// Tuning TOML (coefficients, objective, runs, max_iters, seed; `hbl example tune`).
+        #[arg(long, required_unless_present = "example")]
+        spec: Option<PathBuf>,
     },
     /// Print a documented starting file: the Table 5 scenario (an engine scenario file), a grid, a
-    /// tuning spec, a log format or a post-processing config (edit and pass back with --config etc.).
+    /// tuning spec, a log format or a post-processing config (edit and pass it back: the scenario
+    /// as the positional file, the others with --grid, --spec, --log-format or --config).
     Example {
         #[arg(value_enum, default_value_t = ExampleKind::Scenario)]
         kind: ExampleKind,
@@ -79,17 +80,20 @@ pub enum Command {
     /// Post-process a CSV log: EKF then RTS smoother.
     Postprocess {
         /// The log (format in coopnav_nav::post), or a MOOS `.alog` (by its extension).
-        #[arg(long)]
-        log: PathBuf,
+        #[arg(required_unless_present = "example")]
+        log: Option<PathBuf>,
         /// For an `.alog`: TOML mapping MOOS variables to log rows (`hbl example alog-map`).
         #[arg(long)]
         alog_map: Option<PathBuf>,
         /// Post-processing TOML (auv coefficients, acoustic_time_offset_s, slant_range, ...).
         #[arg(long)]
         config: Option<PathBuf>,
-        /// Output directory.
+        /// Output directory (default: a fresh runs/hbl-postprocess).
         #[arg(short, long = "output", alias = "out")]
-        out: PathBuf,
+        out: Option<PathBuf>,
+        /// Print the default post-processing config (`--config`) as TOML and exit.
+        #[arg(long)]
+        example: bool,
         /// Replace the output directory if it exists.
         #[arg(long)]
         force: bool,
@@ -125,7 +129,7 @@ pub enum Command {
 
 #[derive(Clone, Copy, clap::ValueEnum)]
 pub enum ExampleKind {
-    /// `--config` of simulate, montecarlo, grid and tune.
+    /// The scenario file of simulate, montecarlo, grid and tune.
     Scenario,
     /// `grid --grid`.
     Grid,
@@ -141,11 +145,10 @@ pub enum ExampleKind {
 
 #[derive(clap::Args)]
 pub struct Common {
-    /// Engine scenario TOML (as `coopnav simulate` reads; `hbl example scenario`); defaults to
+    /// Engine scenario TOML (as `coopnav simulate` reads; `--example` prints one); defaults to
     /// Gill's Table 5 HBL Two set-up (scenarios/gill-table5-hbl-two.toml). Survey AUV 0 meets
     /// `ships[0]`; `buoys[0]` is the HBL buoy; the zone lies along the survey lane.
-    #[arg(long)]
-    config: Option<PathBuf>,
+    scenario: Option<PathBuf>,
     /// The measurement zone's near edge: x_rel = (AUV − ship) along the survey lane, m (default
     /// −30, Gill's Table 5; below --zone-max-m).
     #[arg(long, allow_negative_numbers = true)]
@@ -155,26 +158,43 @@ pub struct Common {
     zone_max_m: Option<f64>,
     #[arg(long, default_value_t = 1)]
     seed: u64,
-    /// Output directory.
+    /// Output directory (default: a fresh runs/hbl-<command>).
     #[arg(short, long = "output", alias = "out")]
-    out: PathBuf,
+    out: Option<PathBuf>,
     /// Replace the output directory if it exists.
     #[arg(long)]
     force: bool,
     /// Run even when the estimated work or memory is above coopnav's limits (coopnav_core::limits).
     #[arg(long)]
     allow_large: bool,
+    /// Print the default scenario (Gill's Table 5, HBL Two) as TOML and exit.
+    #[arg(long)]
+    example: bool,
 }
 
 impl Common {
     /// The files the command reads: the scenario, when given, and `more`.
     fn inputs<'a>(&'a self, more: &[Option<&'a Path>]) -> Vec<&'a Path> {
-        self.config.as_deref().into_iter().chain(more.iter().flatten().copied()).collect()
+        self.scenario.as_deref().into_iter().chain(more.iter().flatten().copied()).collect()
+    }
+
+    /// The run directory of `hbl COMMAND`: the one `-o` names (refused when it holds anything but
+    /// a run of coopnav's, or one of `inputs`), else a fresh `runs/hbl-COMMAND`.
+    fn run_dir(&self, command: &str, inputs: &[&Path]) -> Result<RunDir> {
+        output_dir(self.out.as_deref(), self.force, command, inputs)
     }
 }
 
+/// `-o DIR` when given, else a fresh `runs/hbl-COMMAND`.
+fn output_dir(out: Option<&Path>, force: bool, command: &str, inputs: &[&Path]) -> Result<RunDir> {
+    Ok(match out {
+        Some(p) => RunDir::create_for(p, force, inputs)?,
+        None => RunDir::create_fresh("runs", &format!("hbl-{command}"))?,
+    })
+}
+
 fn scenario(c: &Common) -> Result<Scenario> {
-    match &c.config {
+    match &c.scenario {
         Some(p) => {
             let text = input::read(p, c.allow_large)?;
             input::parsed_as(hbl_scenario::parse(&text, p), &text, p, Format::Mission)
@@ -206,16 +226,28 @@ fn manifest(dir: &RunDir, command: &str, seed: u64, inputs: serde_json::Value) -
 }
 
 pub fn run_command(cmd: Command) -> Result<()> {
+    if let Command::Simulate { common, .. }
+    | Command::Montecarlo { common, .. }
+    | Command::Grid { common, .. }
+    | Command::Tune { common, .. } = &cmd
+    {
+        if common.example {
+            return example(ExampleKind::Scenario);
+        }
+    }
     match cmd {
         Command::Simulate { common, run, log_format } => simulate(&common, run, log_format.as_deref()),
         Command::Montecarlo { common, runs } => montecarlo(&common, runs),
         Command::Grid { common, grid } => grid_cmd(&common, grid.as_deref()),
-        Command::Tune { common, spec } => tune_cmd(&common, &spec),
+        Command::Tune { common, spec } => {
+            tune_cmd(&common, &spec.ok_or_else(|| anyhow::anyhow!("hbl tune needs --spec FILE (`hbl example tune`)"))?)
+        }
         Command::Postprocess {
             log,
             alog_map,
             config,
             out,
+            example: print_example,
             force,
             strict,
             allow_large,
@@ -229,7 +261,9 @@ pub fn run_command(cmd: Command) -> Result<()> {
                 max_iters: tune_iters,
                 dead_reckoning_block_s: tune_block_s,
             });
-            let files = PostFiles { log: &log, alog_map: alog_map.as_deref(), config: config.as_deref(), out: &out };
+            let Some(log) = log.filter(|_| !print_example) else { return example(ExampleKind::Post) };
+            let files =
+                PostFiles { log: &log, alog_map: alog_map.as_deref(), config: config.as_deref(), out: out.as_deref() };
             postprocess(files, force, strict, allow_large, hold_out_every, tune)
         }
         Command::Example { kind } => example(kind),
@@ -266,12 +300,14 @@ pub(crate) fn example_text(kind: ExampleKind) -> Result<String> {
 fn example(kind: ExampleKind) -> Result<()> {
     let text = example_text(kind)?;
     let what = match kind {
-        ExampleKind::Scenario => "HBL scenario (Gill 2013 Table 5, HBL Two; an engine scenario file) for --config",
+        ExampleKind::Scenario => {
+            "HBL scenario (Gill 2013 Table 5, HBL Two; an engine scenario file) for `hbl simulate|montecarlo|grid|tune FILE`"
+        }
         ExampleKind::LogFormat => "log format for `hbl simulate --log-format`",
         ExampleKind::Grid => "buoy-location grid for `hbl grid --grid`",
         ExampleKind::Tune => "tuning spec for `hbl tune --spec`",
         ExampleKind::Post => "post-processing config for `hbl postprocess --config`",
-        ExampleKind::AlogMap => "MOOS variable mapping for `hbl postprocess --log X.alog --alog-map`",
+        ExampleKind::AlogMap => "MOOS variable mapping for `hbl postprocess X.alog --alog-map`",
     };
     println!("# coopnav {what}.");
     if let ExampleKind::Scenario = kind {
@@ -304,7 +340,7 @@ fn zone_spec(sc: &Scenario, c: &Common) -> Result<ZoneSpec> {
 
 /// The name a summary line gives the scenario: its file, or the default's.
 fn scenario_name(c: &Common) -> String {
-    c.config.as_ref().map_or(table5_file(Configuration::HblTwo).0.to_string(), |p| p.display().to_string())
+    c.scenario.as_ref().map_or(table5_file(Configuration::HblTwo).0.to_string(), |p| p.display().to_string())
 }
 
 fn log_format(path: Option<&Path>, allow_large: bool) -> Result<LogFormat> {
@@ -332,7 +368,7 @@ fn simulate(c: &Common, index: u64, log_path: Option<&Path>) -> Result<()> {
     let zone = zone_spec(&sc, c)?;
     let (pass, result) = record_pass(&sc, zone, format.clone(), coopnav_core::run_seed(c.seed, index))?;
     let summary = PassSummary { zone: pass.zone.metrics(), counts: RunCounts::of(&result, 0) };
-    let dir = RunDir::create_for(&c.out, c.force, &c.inputs(&[log_path]))?;
+    let dir = c.run_dir("simulate", &c.inputs(&[log_path]))?;
     manifest(&dir, "hbl simulate", c.seed, c.with_zone(json!({ "scenario": sc, "run": index, "log_format": format })))?;
     let mut csv = String::from("t,x_rel,auv_e,auv_n,est_e,est_n,sd_e,sd_n,ship_e,ship_n,ship_est_e,ship_est_n,buoy_e,buoy_n,buoy_est_e,buoy_est_n,error\n");
     for r in &pass.rows {
@@ -385,7 +421,7 @@ fn montecarlo(c: &Common, runs: usize) -> Result<()> {
     let r = zone_monte_carlo_with_progress(&sc, zone, runs, c.seed, &|n| pb.set_position(n))?;
     pb.finish_and_clear();
     let summary = r.summary(c.seed)?;
-    let dir = RunDir::create_for(&c.out, c.force, &c.inputs(&[]))?;
+    let dir = c.run_dir("montecarlo", &c.inputs(&[]))?;
     manifest(&dir, "hbl montecarlo", c.seed, c.with_zone(json!({ "scenario": sc, "runs": runs })))?;
     let mut csv = String::from("run,zone_error,zone_parallel,zone_perpendicular,approach_perpendicular,buoy_error,saturation_error,ranges_received,ranges_applied,healthy\n");
     for (i, (m, n)) in r.runs.iter().zip(&r.counts).enumerate() {
@@ -441,7 +477,7 @@ fn grid_cmd(c: &Common, grid_path: Option<&Path>) -> Result<()> {
     let cell = grid::engine_cell(&sc, zone, spec.runs_per_cell, c.seed)?;
     let cells = grid::buoy_grid(&spec, &|n| pb.set_position(n), &cell)?;
     pb.finish_and_clear();
-    let dir = RunDir::create_for(&c.out, c.force, &c.inputs(&[grid_path]))?;
+    let dir = c.run_dir("grid", &c.inputs(&[grid_path]))?;
     manifest(&dir, "hbl grid", c.seed, c.with_zone(json!({ "scenario": sc, "grid": spec })))?;
     let mut buf = Vec::new();
     grid::write_csv(&mut buf, &cells)?;
@@ -460,7 +496,7 @@ fn tune_cmd(c: &Common, spec_path: &Path) -> Result<()> {
     spec.validate().with_context(|| format!("in {}", spec_path.display()))?;
     limits::check(work::hbl_tune(&sc, &spec), c.allow_large)?;
     let r = tune(&sc, zone_spec(&sc, c)?, &spec)?;
-    let dir = RunDir::create_for(&c.out, c.force, &c.inputs(&[Some(spec_path)]))?;
+    let dir = c.run_dir("tune", &c.inputs(&[Some(spec_path)]))?;
     manifest(&dir, "hbl tune", spec.seed, c.with_zone(json!({ "scenario": sc, "spec": spec })))?;
     dir.write_json("summary.json", &r)?;
     let out = dir.finish()?;
@@ -499,7 +535,7 @@ struct PostFiles<'a> {
     log: &'a Path,
     alog_map: Option<&'a Path>,
     config: Option<&'a Path>,
-    out: &'a Path,
+    out: Option<&'a Path>,
 }
 
 /// summary.json of `hbl postprocess`: the run's counts and truth figures, what it says about its
@@ -585,7 +621,7 @@ fn postprocess(
         eprintln!("warning: {}: {w}", log.display());
     }
     let inputs: Vec<&Path> = [Some(log), alog_map, config].into_iter().flatten().collect();
-    let dir = RunDir::create_for(out, force, &inputs)?;
+    let dir = output_dir(out, force, "postprocess", &inputs)?;
     let time_origin_unix = match field_log.time {
         TimeBase::Unix { origin } => Some(origin),
         TimeBase::Relative => None,

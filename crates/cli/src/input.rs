@@ -19,7 +19,7 @@ pub fn read(path: &Path, allow_large: bool) -> Result<String> {
 /// coopnav's TOML input formats, by the command that reads each.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Format {
-    /// A closed-loop mission (`simulate`, `advise`, `sitl`, `hbl --config`).
+    /// A closed-loop mission (`simulate`, `advise`, `sitl`, `hbl simulate|montecarlo|grid|tune`).
     Mission,
     /// A pre-deployment planning scenario.
     Plan,
@@ -73,7 +73,7 @@ impl Format {
             Format::Mission => "read by `coopnav simulate FILE`; example: `coopnav simulate --example`",
             Format::Plan => "read by `coopnav plan FILE`; example: `coopnav plan --example`",
             Format::Sweep => "read by `coopnav sweep plan FILE`; example: `coopnav sweep --example`",
-            Format::Nams => "read by `coopnav nams --config FILE`; example: `coopnav nams --example`",
+            Format::Nams => "read by `coopnav nams FILE`; example: `coopnav nams --example`",
             Format::Generator => "read by `coopnav generate FILE`; example: scenarios/generators/",
             Format::HblTune => "read by `coopnav hbl tune --spec FILE`; example: `coopnav hbl example tune`",
             Format::HblGrid => "read by `coopnav hbl grid --grid FILE`; example: `coopnav hbl example grid`",

@@ -46,7 +46,7 @@ enum Command {
     Hbl(hbl::Command),
     /// Transmission loss and packet-success likelihood per WHOI rate against range (table + SVG).
     Channel(channel::Args),
-    /// Run a Nams adaptive-rate experiment from a TOML file (scenarios × behaviours × repetitions).
+    /// Run a Nams adaptive-rate experiment from a TOML file (scenarios × behaviours × runs).
     Nams(nams::Args),
     /// Write the missions a generator file draws, one scenario file each (for `simulate`).
     Generate(generate::Args),

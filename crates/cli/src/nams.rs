@@ -1,7 +1,7 @@
-//! `coopnav nams --config exp.toml`: runs a Nams adaptive-rate experiment described in a TOML
-//! file (tables `[experiment]` — any field of `ExperimentConfig`, defaults = the thesis set-up —
-//! and `[tl]`), prints the per-cell table and writes a run directory (manifest.json,
-//! summary.json, cells.csv). The file is validated before anything runs.
+//! `coopnav nams [exp.toml]`: runs a Nams adaptive-rate experiment described in a TOML file
+//! (tables `[experiment]` — any field of `ExperimentConfig`, defaults = the thesis set-up — and
+//! `[tl]`; no file: the thesis set-up itself), prints the per-cell table and writes a run
+//! directory (manifest.json, summary.json, cells.csv). The file is validated before anything runs.
 
 use crate::input;
 use anyhow::{Context, Result};
@@ -22,9 +22,8 @@ use std::sync::Arc;
 
 #[derive(clap::Args)]
 pub struct Args {
-    /// Experiment file (TOML); `--example` prints one.
-    #[arg(long, required_unless_present = "example")]
-    config: Option<PathBuf>,
+    /// Experiment file (TOML); `--example` prints one. Omit it to run the thesis set-up.
+    file: Option<PathBuf>,
     /// Output directory (default: a fresh runs/nams-N).
     #[arg(short, long = "output", alias = "out")]
     out: Option<PathBuf>,
@@ -90,15 +89,23 @@ fn provider(tl: &TlChoice, cfg: &ExperimentConfig) -> Result<Arc<dyn Transmissio
 /// The thesis experiment as a commented TOML file.
 pub(crate) fn example() -> Result<String> {
     Ok(format!(
-        "# coopnav Nams rate-selection experiment for `nams --config` (the thesis set-up).\n\
+        "# coopnav Nams rate-selection experiment for `coopnav nams FILE` (the thesis set-up).\n\
          # Every field is at its default and optional: keep only what you change. Units and sources:\n\
          # the rustdoc of coopnav_sim::scenario::nams::ExperimentConfig (`cargo doc --open`).\n{}",
         toml::to_string_pretty(&File::default())?
     ))
 }
 
+/// Keys of an experiment file that have a new name (one name for a count of runs across coopnav).
+const RENAMED: &[(&str, &str)] = &[("experiment.repetitions", "experiment.runs")];
+
 /// Parses and validates an experiment file (`path` names it in errors).
 pub(crate) fn parse_file(text: &str, path: &Path) -> Result<File> {
+    let renamed = coopnav_sim::scenario::moved::moved_keys(text, RENAMED);
+    if !renamed.is_empty() {
+        let list: String = renamed.iter().map(|(old, new)| format!("\n  {old} -> {new}")).collect();
+        anyhow::bail!("{}: renamed key(s), each with its new name:{list}", path.display());
+    }
     let file: File = toml::from_str(text)
         .map_err(|e| anyhow::anyhow!(coopnav_core::validation::shortened(&e.to_string())))
         .with_context(|| format!("{}: invalid experiment file", path.display()))?;
@@ -107,20 +114,25 @@ pub(crate) fn parse_file(text: &str, path: &Path) -> Result<File> {
 }
 
 pub fn run(args: Args) -> Result<()> {
-    let Some(config) = args.config.as_ref().filter(|_| !args.example) else {
+    if args.example {
         print!("{}", example()?);
         return Ok(());
+    }
+    let file = match &args.file {
+        Some(path) => {
+            let text = input::read(path, args.allow_large)?;
+            input::parsed_as(parse_file(&text, path), &text, path, input::Format::Nams)?
+        }
+        None => File::default(),
     };
-    let text = input::read(config, args.allow_large)?;
-    let file = input::parsed_as(parse_file(&text, config), &text, config, input::Format::Nams)?;
     limits::check(work::nams(&file.experiment), args.allow_large)?;
     let tl = provider(&file.tl, &file.experiment)?;
     let run = match &args.out {
-        Some(p) => RunDir::create_for(p, args.force, &[config.as_path()])?,
+        Some(p) => RunDir::create_for(p, args.force, &args.file.as_deref().into_iter().collect::<Vec<_>>())?,
         None => RunDir::create_fresh("runs", "nams")?,
     };
     let cfg = &file.experiment;
-    let pb = ProgressBar::new((cfg.scenarios.len() * cfg.behaviours.len() * cfg.repetitions) as u64);
+    let pb = ProgressBar::new((cfg.scenarios.len() * cfg.behaviours.len() * cfg.runs) as u64);
     let result = run_experiment(cfg, &ExperimentTl::Shared(tl), &|k| pb.inc(k))?;
     pb.finish_and_clear();
     println!("{:<14} {:<16} {:>9} {:>9} {:>6} {:>6}", "scenario", "behaviour", "BW B/s", "period s", "duty", "score");

@@ -31,7 +31,7 @@ pub struct Args {
     /// Base seed.
     #[arg(long, default_value_t = 1)]
     seed: u64,
-    /// Also print the numbers as JSON.
+    /// Print the report as JSON (report.json's content) on stdout in place of the table.
     #[arg(long)]
     json: bool,
     /// Also write the table, the numbers (report.json) and the plots to this directory.
@@ -84,12 +84,14 @@ pub fn run(args: Args) -> Result<ExitCode> {
     exit(&report)
 }
 
-/// Prints the report (and with `json` its numbers): what `table.txt` holds.
+/// Prints the report (with `json`, as JSON in place of the table) and returns the table:
+/// what `table.txt` holds.
 fn printed(report: &ReproReport, json: bool) -> Result<String> {
     let text = report.printed();
-    println!("{text}");
     if json {
         println!("{}", serde_json::to_string_pretty(report)?);
+    } else {
+        println!("{text}");
     }
     Ok(text)
 }

@@ -78,11 +78,6 @@ impl<C: ScenarioCommand> ScenarioArgs<C> {
         self.output.as_deref()
     }
 
-    /// `--force`: an existing output that coopnav wrote is replaced.
-    pub fn force(&self) -> bool {
-        self.force
-    }
-
     /// `--allow-large`: the work limits are lifted.
     pub fn allow_large(&self) -> bool {
         self.allow_large

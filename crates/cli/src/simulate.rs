@@ -12,13 +12,12 @@ use coopnav_sim::batch::work;
 use coopnav_sim::engine::Faults;
 use coopnav_sim::observe::metrics;
 use coopnav_sim::output::run::{write_comparison, write_run};
-use coopnav_sim::output::{check_file_target, is_coopnav_json, tagged_json, write_file};
 use coopnav_sim::policy::PolicySpec;
 use coopnav_sim::scenario::file::Validate;
 use coopnav_sim::scenario::{Scenario, EXAMPLE};
 use indicatif::{ProgressBar, ProgressStyle};
 use std::io::IsTerminal;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 #[derive(clap::Args)]
 pub struct Args {
@@ -36,9 +35,10 @@ pub struct Args {
     /// Scenario file, -o, --force, --example (here, so `--help` lists them after --seed).
     #[command(flatten)]
     scenario: ScenarioArgs<Simulate>,
-    /// Also write the comparison as JSON here (with --runs).
+    /// Print the result as JSON on stdout in place of the table: one run's summary.json, or with
+    /// --runs the comparison (comparison.json).
     #[arg(long)]
-    json: Option<PathBuf>,
+    json: bool,
 }
 
 /// What `coopnav simulate` reads: a closed-loop scenario.
@@ -75,9 +75,6 @@ pub fn run(args: Args) -> Result<()> {
     match args.runs {
         Some(0) => bail!("--runs must be at least 1"),
         Some(runs) => compare(&scenario, runs, &stem, &file, &args),
-        None if args.json.is_some() => {
-            bail!("--json writes a Monte Carlo comparison: give --runs N too (one run writes its summary.json into -o)")
-        }
         None => single(&scenario, &specs[0], &stem, &file, &args),
     }
 }
@@ -88,6 +85,13 @@ fn single(sc: &Scenario, spec: &PolicySpec, stem: &str, file: &Path, args: &Args
     let result = metrics::run_traced(sc, &mut policy, sc.seed, &Faults::default());
     let out = write_run(dir, sc, &result, &std::env::args().collect::<Vec<_>>().join(" "))
         .context("writing the run directory")?;
+    if args.json {
+        let summary = out.join("summary.json");
+        let text = std::fs::read_to_string(&summary).with_context(|| format!("reading {}", summary.display()))?;
+        print!("{text}");
+        eprintln!("wrote {}", out.display());
+        return Ok(());
+    }
     println!(
         "policy {} · {} survey AUVs · {} s · seed {} -> {}",
         result.policy,
@@ -126,26 +130,27 @@ fn single(sc: &Scenario, spec: &PolicySpec, stem: &str, file: &Path, args: &Args
 
 fn compare(sc: &Scenario, runs: usize, stem: &str, file: &Path, args: &Args) -> Result<()> {
     let policies = &args.policy;
-    // Both outputs are opened (and refused) before any work.
+    // The output is opened (and refused) before any work.
     let dir = args.scenario.output().map(|_| args.scenario.run_dir(stem, &[file])).transpose()?;
-    if let Some(path) = &args.json {
-        check_file_target(path, args.scenario.force(), is_coopnav_json, &[file])?;
-    }
     let total = (runs * policies.len()) as u64;
     let bar = if std::io::stderr().is_terminal() { ProgressBar::new(total) } else { ProgressBar::hidden() };
     bar.set_style(ProgressStyle::with_template("{bar:40} {pos}/{len} runs [{elapsed_precise} < {eta_precise}]")?);
     let c = mc::monte_carlo(sc, policies, runs, &|done| bar.set_position(done))?;
     bar.finish_and_clear();
-    print!("{}", comparison_table(&c));
-    if let Some(path) = &args.json {
-        let text = tagged_json(&c)?;
-        write_file(path, text.as_bytes(), args.scenario.force(), is_coopnav_json, &[file])
-            .with_context(|| format!("writing {}", path.display()))?;
+    if args.json {
+        println!("{}", serde_json::to_string_pretty(&c)?);
+    } else {
+        print!("{}", comparison_table(&c));
     }
     if let Some(dir) = dir {
         let out = write_comparison(dir, sc, &c, stem, &std::env::args().collect::<Vec<_>>().join(" "))
             .context("writing the comparison's run directory")?;
-        println!("wrote {}", out.display());
+        // With --json, stdout holds the JSON alone.
+        if args.json {
+            eprintln!("wrote {}", out.display());
+        } else {
+            println!("wrote {}", out.display());
+        }
     }
     Ok(())
 }

@@ -155,7 +155,7 @@ pub fn run(args: Args) -> Result<()> {
 
 /// Each live navigator's LCM log as a post-processing log beside it (`auvK.log`, with the
 /// world's truth of AUV K once a second), and its filter's config as `hbl postprocess --config`
-/// reads it (`auvK.post.toml`): `coopnav hbl postprocess --log auvK.log --config auvK.post.toml`.
+/// reads it (`auvK.post.toml`): `coopnav hbl postprocess auvK.log --config auvK.post.toml`.
 fn import_logs(run: &SitlRun) -> Result<()> {
     let rows = run.result.trace.as_ref().map(|t| t.rows.as_slice()).unwrap_or_default();
     for (k, logs) in run.auv_logs.iter().enumerate() {

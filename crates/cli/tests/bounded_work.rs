@@ -109,7 +109,7 @@ fn hbl_duration_1e9() {
     let tmp = tempfile::tempdir().unwrap();
     let long = [("duration_s = 130.0", "duration_s = 1e9")];
     edited_example(tmp.path(), &["hbl", "example", "scenario"], "h.toml", &long);
-    refused(tmp.path(), &["hbl", "simulate", "--config", "h.toml", "-o", "out"], &["duration_s / dt"]);
+    refused(tmp.path(), &["hbl", "simulate", "h.toml", "-o", "out"], &["duration_s / dt"]);
 }
 
 #[test]
@@ -140,7 +140,7 @@ fn hbl_postprocess_log_spanning_11_days() {
     std::fs::write(tmp.path().join("log.csv"), format!("t,kind,src,v1,v2,v3,v4\n0,init,,0,0,1,90\n{rows}")).unwrap();
     refused(
         tmp.path(),
-        &["hbl", "postprocess", "--log", "log.csv", "-o", "out"],
+        &["hbl", "postprocess", "log.csv", "-o", "out"],
         &["memory of the filter history", "max_gap_s", "auv.step_s"],
     );
 }
@@ -164,7 +164,7 @@ fn endless_devices_and_large_pipes_are_refused() {
     refused(tmp.path(), &["simulate", "/dev/zero", "-o", "out"], &["input file (bytes)", "/dev/zero"]);
     refused(tmp.path(), &["plan", "/dev/zero", "-o", "out"], &["input file (bytes)", "/dev/zero"]);
     // A log may be as large as its parsed rows fit the memory limit: that much is read, no more.
-    let (out, usage) = measured(tmp.path(), &["hbl", "postprocess", "--log", "/dev/zero", "-o", "out"]);
+    let (out, usage) = measured(tmp.path(), &["hbl", "postprocess", "/dev/zero", "-o", "out"]);
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("post-processing log (bytes)") && err.contains("--allow-large"), "{err}");
     let limit_kb = (coopnav_sim::batch::work::max_postprocess_log_bytes() / 1024.0) as u64;
@@ -191,17 +191,17 @@ fn endless_devices_and_large_pipes_are_refused() {
     assert!(writer.join().unwrap(), "the reader stopped before the whole 3 MB was written");
 }
 
-/// A Nams experiment's work is estimated like every other command's: 100 000 repetitions, or a
+/// A Nams experiment's work is estimated like every other command's: 100 000 runs, or a
 /// nanosecond vehicle step, is refused at once.
 #[test]
-fn nams_repetitions_and_timestep() {
+fn nams_runs_and_timestep() {
     let tmp = tempfile::tempdir().unwrap();
-    edited_example(tmp.path(), &["nams", "--example"], "reps.toml", &[("repetitions = 40", "repetitions = 100000")]);
-    refused(tmp.path(), &["nams", "--config", "reps.toml", "-o", "out"], &["repetitions", "vehicle.timestep"]);
+    edited_example(tmp.path(), &["nams", "--example"], "runs.toml", &[("runs = 40", "runs = 100000")]);
+    refused(tmp.path(), &["nams", "runs.toml", "-o", "out"], &["experiment.runs", "vehicle.timestep"]);
     edited_example(tmp.path(), &["nams", "--example"], "step.toml", &[("timestep = 0.1", "timestep = 1e-9")]);
-    refused(tmp.path(), &["nams", "--config", "step.toml", "-o", "out"], &["vehicle.timestep"]);
+    refused(tmp.path(), &["nams", "step.toml", "-o", "out"], &["vehicle.timestep"]);
     edited_example(tmp.path(), &["nams", "--example"], "shelf.toml", &[("\nspacing = 50.0", "\nspacing = 1e-3")]);
-    refused(tmp.path(), &["nams", "--config", "shelf.toml", "-o", "out"], &["experiment.shelf", "spacing"]);
+    refused(tmp.path(), &["nams", "shelf.toml", "-o", "out"], &["experiment.shelf", "spacing"]);
 }
 
 /// A shelf spacing of a millimetre asks for 1.6·10¹³ grid nodes: refused from the estimate,

@@ -48,7 +48,7 @@ fn write_alog(path: &Path, rows: &[LogRow]) {
 }
 
 fn postprocess(log: &Path, config: &Path, out: &Path, extra: &[&str]) -> serde_json::Value {
-    let mut args = vec!["hbl", "postprocess", "--log", log.to_str().unwrap(), "--config", config.to_str().unwrap()];
+    let mut args = vec!["hbl", "postprocess", log.to_str().unwrap(), "--config", config.to_str().unwrap()];
     args.extend(["-o", out.to_str().unwrap()]);
     args.extend(extra);
     let o = coopnav(&args);
@@ -106,7 +106,6 @@ fn tune_reports_before_and_after_with_held_out_ranges() {
     let o = coopnav(&[
         "hbl",
         "postprocess",
-        "--log",
         csv.to_str().unwrap(),
         "--config",
         config.to_str().unwrap(),

@@ -19,7 +19,7 @@ fn simulate_then_postprocess() {
     let post = tmp.path().join("post");
     let out = coopnav(
         tmp.path(),
-        &["hbl", "postprocess", "--log", sim.join("log.csv").to_str().unwrap(), "--out", post.to_str().unwrap()],
+        &["hbl", "postprocess", sim.join("log.csv").to_str().unwrap(), "--out", post.to_str().unwrap()],
     );
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let summary = std::fs::read_to_string(post.join("summary.json")).unwrap();
@@ -62,7 +62,7 @@ fn examples_load_back() {
     let mc = tmp.path().join("mc");
     let out = coopnav(
         tmp.path(),
-        &["hbl", "montecarlo", "--runs", "3", "--config", scenario.to_str().unwrap(), "--out", mc.to_str().unwrap()],
+        &["hbl", "montecarlo", "--runs", "3", scenario.to_str().unwrap(), "--out", mc.to_str().unwrap()],
     );
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let sim = tmp.path().join("sim");
@@ -77,7 +77,6 @@ fn examples_load_back() {
         &[
             "hbl",
             "postprocess",
-            "--log",
             sim.join("log.csv").to_str().unwrap(),
             "--config",
             post.to_str().unwrap(),
@@ -97,7 +96,7 @@ fn bad_config_exits_nonzero_and_writes_nothing() {
     let out_dir = tmp.path().join("mc");
     let out = coopnav(
         tmp.path(),
-        &["hbl", "montecarlo", "--runs", "4", "--config", cfg.to_str().unwrap(), "--out", out_dir.to_str().unwrap()],
+        &["hbl", "montecarlo", "--runs", "4", cfg.to_str().unwrap(), "--out", out_dir.to_str().unwrap()],
     );
     assert!(!out.status.success());
     let err = String::from_utf8_lossy(&out.stderr);
@@ -106,8 +105,7 @@ fn bad_config_exits_nonzero_and_writes_nothing() {
     let log = tmp.path().join("log.csv");
     std::fs::write(&log, "t,kind,src,v1,v2,v3,v4\n0,init,,0,0,0.85,90\n1,range,99,0.1,,,\n").unwrap();
     let post = tmp.path().join("post");
-    let out =
-        coopnav(tmp.path(), &["hbl", "postprocess", "--log", log.to_str().unwrap(), "--out", post.to_str().unwrap()]);
+    let out = coopnav(tmp.path(), &["hbl", "postprocess", log.to_str().unwrap(), "--out", post.to_str().unwrap()]);
     assert!(!out.status.success());
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("line 3") && err.contains("99"), "{err}");
@@ -129,8 +127,7 @@ fn geodetic_log_needs_the_origin_to_postprocess() {
     let log = sim.join("log.csv");
     assert!(std::fs::read_to_string(&log).unwrap().contains(",buoy_fix_ll,"));
     let post = tmp.path().join("post");
-    let out =
-        coopnav(tmp.path(), &["hbl", "postprocess", "--log", log.to_str().unwrap(), "--out", post.to_str().unwrap()]);
+    let out = coopnav(tmp.path(), &["hbl", "postprocess", log.to_str().unwrap(), "--out", post.to_str().unwrap()]);
     assert!(!out.status.success());
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("log.csv") && err.contains("line 2") && err.contains("origin = {"), "{err}");
@@ -142,7 +139,6 @@ fn geodetic_log_needs_the_origin_to_postprocess() {
         &[
             "hbl",
             "postprocess",
-            "--log",
             log.to_str().unwrap(),
             "--config",
             cfg.to_str().unwrap(),

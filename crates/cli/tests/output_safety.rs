@@ -133,9 +133,10 @@ fn short_scenario(dir: &Path, home: &Path) -> std::path::PathBuf {
     path
 }
 
-/// `simulate --runs --json` writes like a run directory: an existing file only with `--force`
-/// and only when coopnav wrote it, never the scenario it reads; `--json` without `--runs` is an
-/// error; `-o` with `--runs` writes the comparison's table, JSON and plot.
+/// `--json` prints the result on stdout and writes no file: the old `--json FILE` form is refused
+/// without touching the file it names; with `--runs` stdout is the comparison's JSON, byte for
+/// byte the `comparison.json` of `-o`, and one run's is its `summary.json`; `-o` with `--runs`
+/// writes the comparison's table, JSON and plot.
 #[test]
 fn the_comparison_json_and_directory_follow_the_run_directory_rules() {
     let tmp = tempfile::tempdir().unwrap();
@@ -149,29 +150,23 @@ fn the_comparison_json_and_directory_follow_the_run_directory_rules() {
     };
     for force in [&[][..], &["--force"][..]] {
         let out = runs(&[&["--json", "s.toml"][..], force].concat());
-        assert!(!out.status.success(), "--json onto the scenario must fail");
-        assert!(String::from_utf8_lossy(&out.stderr).contains("s.toml"), "{}", String::from_utf8_lossy(&out.stderr));
+        assert!(!out.status.success(), "--json takes no file: a second positional is refused");
         assert_eq!(std::fs::read_to_string(&scenario).unwrap(), original, "the scenario was overwritten");
     }
-    let notes = dir.join("notes.json");
-    std::fs::write(&notes, "{\"mine\": 1}").unwrap();
-    for force in [&[][..], &["--force"][..]] {
-        let out = runs(&[&["--json", "notes.json"][..], force].concat());
-        assert!(!out.status.success(), "a file coopnav did not write must survive");
-        assert_eq!(std::fs::read_to_string(&notes).unwrap(), "{\"mine\": 1}");
-    }
-    assert!(runs(&["--json", "c.json"]).status.success());
-    let first = std::fs::read_to_string(dir.join("c.json")).unwrap();
-    let value: serde_json::Value = serde_json::from_str(&first).unwrap();
-    assert_eq!((value["tool"].as_str(), value["runs"].as_u64()), (Some("coopnav"), Some(2)));
-    let again = runs(&["--json", "c.json"]);
-    assert!(!again.status.success() && String::from_utf8_lossy(&again.stderr).contains("--force"));
-    assert!(runs(&["--json", "c.json", "--force"]).status.success(), "coopnav's own file is replaced with --force");
-    assert_eq!(std::fs::read_to_string(dir.join("c.json")).unwrap(), first, "same seed, same bytes");
+    let out = runs(&["--json", "-o", "cmp-json"]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let value: serde_json::Value = serde_json::from_slice(&out.stdout).expect("stdout is JSON alone");
+    assert_eq!(value["runs"].as_u64(), Some(2));
+    assert_eq!(value["paired"][0]["baseline"].as_str(), Some("zigzag"));
+    assert_eq!(out.stdout, std::fs::read(dir.join("cmp-json/comparison.json")).unwrap());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("wrote "), "the directory is named on stderr");
+    let again = runs(&["--json"]);
+    assert_eq!(again.stdout, out.stdout, "same seed, same bytes");
 
-    let single = coopnav(dir, &home, &["simulate", "s.toml", "--json", "x.json", "-o", "one"]);
-    assert!(!single.status.success() && String::from_utf8_lossy(&single.stderr).contains("--runs"));
-    assert!(!dir.join("x.json").exists() && !dir.join("one").exists());
+    let single = coopnav(dir, &home, &["simulate", "s.toml", "--json", "-o", "one"]);
+    assert!(single.status.success(), "{}", String::from_utf8_lossy(&single.stderr));
+    assert_eq!(single.stdout, std::fs::read(dir.join("one/summary.json")).unwrap());
+    serde_json::from_slice::<serde_json::Value>(&single.stdout).expect("stdout is JSON alone");
 
     let out = runs(&["-o", "cmp"]);
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
@@ -214,7 +209,7 @@ fn force_refuses_a_target_that_holds_the_commands_input() {
     assert!(coopnav(dir, &home, &["hbl", "simulate", "-o", "h"]).status.success());
     let log = dir.join("h/log.csv");
     assert!(log.is_file(), "hbl simulate writes log.csv");
-    let out = coopnav(dir, &home, &["hbl", "postprocess", "--log", "h/log.csv", "-o", "h", "--force"]);
+    let out = coopnav(dir, &home, &["hbl", "postprocess", "h/log.csv", "-o", "h", "--force"]);
     assert_refused(&out, "h/log.csv");
     assert!(log.is_file(), "the log was deleted");
     assert!(hidden(dir).is_empty(), "staging left behind: {:?}", hidden(dir));

@@ -17,7 +17,7 @@ fn unused_rows_warn_and_strict_refuses_them() {
     .unwrap();
     let post = tmp.path().join("post");
     let args = |dir: &std::path::Path, strict: bool| {
-        let mut a = vec!["hbl", "postprocess", "--log", log.to_str().unwrap(), "--out"];
+        let mut a = vec!["hbl", "postprocess", log.to_str().unwrap(), "--out"];
         a.push(dir.to_str().unwrap());
         if strict {
             a.push("--strict");
@@ -53,7 +53,7 @@ fn run_directory_holds_residuals_and_the_latlon_track() {
     let post = tmp.path().join("post");
     let log = sim.join("log.csv");
     let (log, cfg, dir) = (log.to_str().unwrap(), cfg.to_str().unwrap(), post.to_str().unwrap());
-    let out = coopnav(tmp.path(), &["hbl", "postprocess", "--log", log, "--config", cfg, "--out", dir]);
+    let out = coopnav(tmp.path(), &["hbl", "postprocess", log, "--config", cfg, "--out", dir]);
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let summary: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(post.join("summary.json")).unwrap()).unwrap();
@@ -123,7 +123,7 @@ fn an_alog_postprocesses_like_the_csv_log() {
     std::fs::write(&map, &out.stdout).unwrap();
     let summary = |log: &std::path::Path, name: &str| {
         let dir = tmp.path().join(name);
-        let mut args = vec!["hbl", "postprocess", "--log", log.to_str().unwrap(), "--out", dir.to_str().unwrap()];
+        let mut args = vec!["hbl", "postprocess", log.to_str().unwrap(), "--out", dir.to_str().unwrap()];
         if name == "alog" {
             args.extend(["--alog-map", map.to_str().unwrap()]);
         }
@@ -158,10 +158,7 @@ fn bad_alog_entries_are_named() {
         let log = tmp.path().join("bad.alog");
         std::fs::write(&log, format!("{head}{bad}")).unwrap();
         let dir = tmp.path().join("out");
-        let out = coopnav(
-            tmp.path(),
-            &["hbl", "postprocess", "--log", log.to_str().unwrap(), "--out", dir.to_str().unwrap()],
-        );
+        let out = coopnav(tmp.path(), &["hbl", "postprocess", log.to_str().unwrap(), "--out", dir.to_str().unwrap()]);
         assert!(!out.status.success());
         let err = String::from_utf8_lossy(&out.stderr);
         assert!(err.contains(said) && err.contains("bad.alog"), "{bad:?}: {err}");
@@ -170,8 +167,7 @@ fn bad_alog_entries_are_named() {
     let log = tmp.path().join("none.alog");
     std::fs::write(&log, "0.000 NAV_X a 1\n1.000 NAV_Y a 2\n").unwrap();
     let dir = tmp.path().join("out");
-    let out =
-        coopnav(tmp.path(), &["hbl", "postprocess", "--log", log.to_str().unwrap(), "--out", dir.to_str().unwrap()]);
+    let out = coopnav(tmp.path(), &["hbl", "postprocess", log.to_str().unwrap(), "--out", dir.to_str().unwrap()]);
     assert!(String::from_utf8_lossy(&out.stderr).contains("both NAV_X and NAV_Y"));
 }
 
@@ -191,7 +187,7 @@ fn strict_accepts_a_log_whose_only_unused_range_is_a_gated_outlier() {
     }
     std::fs::write(&log, text).unwrap();
     let post = tmp.path().join("post");
-    let args = ["hbl", "postprocess", "--log", log.to_str().unwrap(), "--out", post.to_str().unwrap(), "--strict"];
+    let args = ["hbl", "postprocess", log.to_str().unwrap(), "--out", post.to_str().unwrap(), "--strict"];
     let out = coopnav(tmp.path(), &args);
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(out.status.success(), "{err}");

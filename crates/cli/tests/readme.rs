@@ -57,10 +57,10 @@ const REDUCED: &[Reduced] = &[
     },
     Reduced { readme: "reproduce <id>", run: "reproduce hudson-table-5.8 --reduced", input: None },
     Reduced { readme: "reproduce <id> --reduced", run: "reproduce hudson-table-5.8 --reduced", input: None },
-    Reduced { readme: "bench closed-loop --tl analytic", run: "bench closed-loop --tl analytic --reps 1", input: None },
-    Reduced { readme: "bench planner", run: "bench planner --reps 1 --brute-max-leaves 0", input: None },
+    Reduced { readme: "bench closed-loop --tl analytic", run: "bench closed-loop --tl analytic --runs 1", input: None },
+    Reduced { readme: "bench planner", run: "bench planner --runs 1 --brute-max-leaves 0", input: None },
     Reduced { readme: "bench hbl", run: "bench hbl --runs 4", input: None },
-    Reduced { readme: "bench acomms", run: "bench acomms --reps 1 --no-bellhop", input: None },
+    Reduced { readme: "bench acomms", run: "bench acomms --runs 1 --no-bellhop", input: None },
     Reduced { readme: "hbl montecarlo -o hbl-mc", run: "hbl montecarlo -o hbl-mc --runs 4", input: None },
     Reduced {
         readme: "hbl grid -o hbl-grid",
@@ -81,9 +81,9 @@ const REDUCED: &[Reduced] = &[
         )),
     },
     Reduced {
-        readme: "nams --config exp.toml -o nams",
-        run: "nams --config exp-reduced.toml -o nams",
-        input: Some(("nams --example", "exp-reduced.toml", &[("repetitions = 40", "repetitions = 1")])),
+        readme: "nams exp.toml -o nams",
+        run: "nams exp-reduced.toml -o nams",
+        input: Some(("nams --example", "exp-reduced.toml", &[("runs = 40", "runs = 1")])),
     },
 ];
 

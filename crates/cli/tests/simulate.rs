@@ -54,7 +54,7 @@ fn example_round_trips_and_bad_files_fail_cleanly() {
 #[test]
 fn the_closed_loop_bench_splits_its_fleet_error_by_auv() {
     let tmp = tempfile::tempdir().unwrap();
-    let out = coopnav(tmp.path(), &["bench", "closed-loop", "--tl", "analytic", "--reps", "1"]);
+    let out = coopnav(tmp.path(), &["bench", "closed-loop", "--tl", "analytic", "--runs", "1"]);
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let json: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     let object = json.as_object().unwrap();

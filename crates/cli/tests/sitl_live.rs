@@ -275,10 +275,11 @@ fn percentile(v: &[f64], q: f64) -> f64 {
 #[ignore = "one hour at 30 x (two minutes) and 20 in-process runs of a five-AUV mission: minutes"]
 fn one_hour_five_auvs_at_warp_30_with_live_auvs_is_inside_the_in_process_spread() {
     let file = scenario_path("sitl-five-auvs.toml");
-    let json = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("sitl-five-auvs-mc.json");
+    let mc = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("sitl-five-auvs-mc");
+    let json = mc.join("comparison.json");
     if std::env::var_os("COOPNAV_LIVE_IN_NETNS").is_none() {
         let args = ["simulate", file.to_str().unwrap(), "--runs", "20", "--policy", "planner-estimator"];
-        coopnav_ok(&[&args[..], &["--json", json.to_str().unwrap(), "--force"]].concat(), Duration::from_secs(3600));
+        coopnav_ok(&[&args[..], &["-o", mc.to_str().unwrap(), "--force"]].concat(), Duration::from_secs(3600));
     }
     in_private_netns("one_hour_five_auvs_at_warp_30_with_live_auvs_is_inside_the_in_process_spread", || {
         let tmp = tempfile::tempdir().unwrap();
@@ -354,7 +355,6 @@ fn a_live_navigators_log_postprocesses_to_the_estimates_the_run_scored() {
             &[
                 "hbl",
                 "postprocess",
-                "--log",
                 log.to_str().unwrap(),
                 "--config",
                 cfg.to_str().unwrap(),

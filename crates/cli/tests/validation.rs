@@ -76,7 +76,7 @@ fn hbl_scenario_names_every_bad_field() {
     std::fs::write(tmp.path().join("bad.toml"), bad).unwrap();
     refused_naming_every_field(
         tmp.path(),
-        &["hbl", "simulate", "--config", "bad.toml", "-o", "out"],
+        &["hbl", "simulate", "bad.toml", "-o", "out"],
         Some("bad.toml"),
         &["fleet.speed", "sensors.speed_sd", "buoys[0].drift.circular_fraction", "ships[0].outriggers.separation"],
     );
@@ -123,7 +123,7 @@ fn postprocessing_config_names_every_bad_field() {
     std::fs::write(tmp.path().join("pp.toml"), config).unwrap();
     refused_naming_every_field(
         tmp.path(),
-        &["hbl", "postprocess", "--log", "log.csv", "--config", "pp.toml", "-o", "out"],
+        &["hbl", "postprocess", "log.csv", "--config", "pp.toml", "-o", "out"],
         Some("pp.toml"),
         &[
             "max_gap_s",
@@ -175,7 +175,7 @@ fn weak_inputs_get_messages_that_name_the_line_and_field() {
     let log = "# coopnav-log 2 time=relative\nt,kind,src,v1,v2,v3,v4,sigma\n0,init,,0,0,1.5,90,\n";
     for (row, field) in [("1e300,speed,,1.5,,,,", "'t'"), ("1,speed,,1e300,,,,", "'v1'")] {
         std::fs::write(tmp.path().join("log.csv"), format!("{log}{row}\n")).unwrap();
-        let out = coopnav(tmp.path(), &["hbl", "postprocess", "--log", "log.csv", "-o", "out"]);
+        let out = coopnav(tmp.path(), &["hbl", "postprocess", "log.csv", "-o", "out"]);
         let err = String::from_utf8_lossy(&out.stderr);
         assert!(!out.status.success() && err.contains("line 4") && err.contains(field), "{row}: {err}");
         assert!(!tmp.path().join("out").exists());

@@ -20,9 +20,9 @@ use std::time::Instant;
 
 #[derive(clap::Args)]
 pub struct Args {
-    /// Repetitions per (scenario, behaviour).
+    /// Runs per (scenario, behaviour).
     #[arg(long, default_value_t = 40)]
-    reps: usize,
+    runs: usize,
     /// Skip everything that needs BELLHOP.
     #[arg(long)]
     no_bellhop: bool,
@@ -47,9 +47,9 @@ fn summary(r: &ExperimentResult) -> Value {
     Value::Array(rows)
 }
 
-fn experiment(tl: Arc<dyn TransmissionLoss>, label: &str, reps: usize) -> Result<Value> {
-    let cfg = ExperimentConfig { repetitions: reps, ..ExperimentConfig::default() };
-    let n = (cfg.scenarios.len() * cfg.behaviours.len() * reps) as u64;
+fn experiment(tl: Arc<dyn TransmissionLoss>, label: &str, runs: usize) -> Result<Value> {
+    let cfg = ExperimentConfig { runs, ..ExperimentConfig::default() };
+    let n = (cfg.scenarios.len() * cfg.behaviours.len() * runs) as u64;
     let pb = bar(n, "experiment");
     let t = Instant::now();
     let r = run_experiment(&cfg, &ExperimentTl::Shared(tl), &|k| pb.inc(k))?;
@@ -87,7 +87,7 @@ fn tracker() -> Result<Value> {
     )
 }
 
-fn bellhop(reps: usize) -> Result<Value> {
+fn bellhop(runs: usize) -> Result<Value> {
     let bathy = Arc::new(Bathymetry::shelf(&Shelf::default())?);
     let bh = match Bellhop::new(AcousticEnv::nams(bathy)) {
         Ok(b) => b,
@@ -107,7 +107,7 @@ fn bellhop(reps: usize) -> Result<Value> {
         black_box(grid.tl(black_box(&src), black_box(&rx)).ok());
     });
     let (tl_cached, grid_bytes) = (grid.tl(&src, &rx)?, grid.bytes());
-    let exp = experiment(Arc::new(grid), "cached BELLHOP grid (8 bearings from (1000, 1000, 30))", reps)?;
+    let exp = experiment(Arc::new(grid), "cached BELLHOP grid (8 bearings from (1000, 1000, 30))", runs)?;
     Ok(json!({
         "one_run_seconds": one_run,
         "tl_direct_db": tl_direct,
@@ -121,9 +121,9 @@ fn bellhop(reps: usize) -> Result<Value> {
 }
 
 pub fn run(args: Args) -> Result<()> {
-    anyhow::ensure!((1..=10_000).contains(&args.reps), "--reps {} must be in [1, 10000]", args.reps);
+    anyhow::ensure!((1..=10_000).contains(&args.runs), "--runs {} must be in [1, 10000]", args.runs);
     let tl = default_tl();
-    let analytic = experiment(Arc::new(tl), &format!("analytic, k = {}", tl.k), args.reps)?;
+    let analytic = experiment(Arc::new(tl), &format!("analytic, k = {}", tl.k), args.runs)?;
     let pb = bar(8, "analytic grid");
     let grid = CachedGrid::build(
         &tl,
@@ -132,8 +132,8 @@ pub fn run(args: Args) -> Result<()> {
         &|k| pb.inc(k),
     )?;
     pb.finish_and_clear();
-    let cached = experiment(Arc::new(grid), "cached grid of the analytic model", args.reps)?;
-    let bellhop = if args.no_bellhop { json!({"skipped": "--no-bellhop"}) } else { bellhop(args.reps)? };
+    let cached = experiment(Arc::new(grid), "cached grid of the analytic model", args.runs)?;
+    let bellhop = if args.no_bellhop { json!({"skipped": "--no-bellhop"}) } else { bellhop(args.runs)? };
     let out = json!({"target": "acomms", "experiment_analytic": analytic, "experiment_cached_analytic": cached, "tracker": tracker()?, "bellhop": bellhop});
     println!("{}", serde_json::to_string_pretty(&out)?);
     Ok(())

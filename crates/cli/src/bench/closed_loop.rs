@@ -2,7 +2,7 @@
 //! 10 Hz EKFs) with the planner and the realistic world: the default scenario's channel (Gill
 //! outliers, sound-speed profile, air time, collisions, half-duplex), the BELLHOP grid and the
 //! current-estimating filters, the CNA knowing the AUVs' mission plans before their first status
-//! (`--before-first-report ignore` for the thesis's rule); wall time (median of reps), real-time
+//! (`--before-first-report ignore` for the thesis's rule); wall time (median of runs), real-time
 //! factor and the split by engine phase (from one more run with the phase clock). The grid is
 //! computed (or read from its disk cache) before the timed runs, and its time reported apart.
 
@@ -34,9 +34,9 @@ enum FilterStates {
 
 #[derive(clap::Args)]
 pub struct Args {
-    /// Repetitions (the median run is reported).
+    /// Timed runs (the median is reported).
     #[arg(long, default_value_t = 3)]
-    reps: usize,
+    runs: usize,
     /// Search the planner's top levels with rayon.
     #[arg(long)]
     parallel: bool,
@@ -92,7 +92,7 @@ pub fn run(args: Args) -> Result<()> {
     // The timed repetitions report to no observer (reading the clock at every phase end costs
     // about 5 % of a run); one more run with the phase clock gives the split.
     let mut walls = Vec::new();
-    for _ in 0..args.reps.max(1) {
+    for _ in 0..args.runs.max(1) {
         let mut policy = spec.build(&sc)?;
         walls.push(metrics::run(&sc, &mut policy, sc.seed, &Faults::default(), &mut ()).wall_s);
     }
@@ -116,7 +116,7 @@ pub fn run(args: Args) -> Result<()> {
         "tl_prepare_s (grid computed or read from disk, untimed below)": prepare_s,
         "parallel_planner": args.parallel,
         "before_first_report": serde_json::to_value(sc.policy.before_first_report)?,
-        "reps": walls.len(),
+        "runs": walls.len(),
         "wall_s": wall_s,
         "wall_s (the run split by phase, clock read at every phase end)": r.wall_s,
         "real_time_factor": sc.duration_s / wall_s,

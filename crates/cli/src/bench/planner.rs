@@ -12,9 +12,9 @@ use std::time::Instant;
 
 #[derive(clap::Args)]
 pub struct Args {
-    /// Repetitions per measurement (the median is reported).
+    /// Timed runs per measurement (the median is reported).
     #[arg(long, default_value_t = 5)]
-    reps: usize,
+    runs: usize,
     /// Skip the brute force above this many leaves.
     #[arg(long, default_value_t = 6_000_000)]
     brute_max_leaves: u64,
@@ -28,17 +28,17 @@ pub struct Args {
     parallel_after_us: Option<u64>,
 }
 
-/// Median wall time (s) of `reps` runs of `f`, and its last result.
-fn time<T>(reps: usize, mut f: impl FnMut() -> Result<T>) -> Result<(f64, T)> {
-    let mut times = Vec::with_capacity(reps);
+/// Median wall time (s) of `runs` runs of `f`, and its last result.
+fn time<T>(runs: usize, mut f: impl FnMut() -> Result<T>) -> Result<(f64, T)> {
+    let mut times = Vec::with_capacity(runs);
     let mut last = None;
-    for _ in 0..reps {
+    for _ in 0..runs {
         let t0 = Instant::now();
         last = Some(f()?);
         times.push(t0.elapsed().as_secs_f64());
     }
     times.sort_by(f64::total_cmp);
-    Ok((times[reps / 2], last.expect("reps >= 1")))
+    Ok((times[runs / 2], last.expect("runs >= 1")))
 }
 
 /// The machine's 1-, 5- and 15-minute load averages (`/proc/loadavg`; `None` where there is none):
@@ -50,7 +50,7 @@ fn load_average() -> Option<[f64; 3]> {
 }
 
 pub fn run(args: Args) -> Result<()> {
-    let (reps, brute_max_leaves) = (args.reps.max(1), args.brute_max_leaves);
+    let (runs, brute_max_leaves) = (args.runs.max(1), args.brute_max_leaves);
     let one_thread = Workload::search(Algorithm::BranchAndBound, false);
     let mut parallel = Workload::search(Algorithm::BranchAndBound, true);
     parallel.parallel_after_nodes = args.parallel_after_nodes.unwrap_or(parallel.parallel_after_nodes);
@@ -58,14 +58,14 @@ pub fn run(args: Args) -> Result<()> {
     let load_before = load_average();
     let mut rows = Vec::new();
     for w in Workload::standard() {
-        let (t_seq, seq) = time(reps, || Ok(w.decide(one_thread)?))?;
-        let (t_par, par) = time(reps, || Ok(w.decide(parallel)?))?;
+        let (t_seq, seq) = time(runs, || Ok(w.decide(one_thread)?))?;
+        let (t_par, par) = time(runs, || Ok(w.decide(parallel)?))?;
         ensure!(
             (seq.option, seq.value) == (par.option, par.value),
             "parallel and sequential searches disagree on {w:?}"
         );
         let brute = if w.leaves() <= brute_max_leaves {
-            let (t, b) = time(1.max(reps / 2), || Ok(w.decide(Workload::search(Algorithm::BruteForce, false))?))?;
+            let (t, b) = time(1.max(runs / 2), || Ok(w.decide(Workload::search(Algorithm::BruteForce, false))?))?;
             ensure!(
                 (b.option, b.value) == (seq.option, seq.value),
                 "branch-and-bound and brute force disagree on {w:?}"
@@ -99,7 +99,7 @@ pub fn run(args: Args) -> Result<()> {
         "{}",
         serde_json::to_string_pretty(&json!({
             "target": "planner",
-            "reps": reps,
+            "runs": runs,
             "load_average": { "before": load_before, "after": load_average() },
             "results": rows,
             "missions": missions

@@ -1,5 +1,5 @@
 //! The batch runner: builds every (scenario, behaviour) cell's engine scenario once
-//! ([`super::nams_setup`]), then runs cells × repetitions on the engine in parallel (rayon), merging
+//! ([`super::nams_setup`]), then runs cells × runs on the engine in parallel (rayon), merging
 //! results in index order so the output is bit-identical on any thread count. Repetition i of
 //! scenario s uses seed run_seed(run_seed(base, s), i) for every behaviour (common random numbers).
 
@@ -72,7 +72,7 @@ pub fn run_experiment(
     cfg.validate().map_err(BatchError::Config)?;
     let slot_lens = cfg.behaviours.iter().map(|b| slot_length(cfg, b)).collect::<Result<Vec<f64>, _>>();
     let slot_lens = slot_lens.map_err(BatchError::Config)?;
-    let (ns, nb, nr) = (cfg.scenarios.len(), cfg.behaviours.len(), cfg.repetitions);
+    let (ns, nb, nr) = (cfg.scenarios.len(), cfg.behaviours.len(), cfg.runs);
     // In parallel: the cells of one square share their BELLHOP grid, built once (`models::tl`).
     let cells: Vec<EngineScenario> = (0..ns * nb)
         .into_par_iter()
@@ -138,12 +138,8 @@ mod tests {
     }
 
     fn mean_with(cfg: ExperimentConfig, behaviour: Behaviour, tl_db: f64) -> RunMetrics {
-        let cfg = ExperimentConfig {
-            scenarios: vec![Scenario::thesis(1)],
-            behaviours: vec![behaviour],
-            repetitions: 8,
-            ..cfg
-        };
+        let cfg =
+            ExperimentConfig { scenarios: vec![Scenario::thesis(1)], behaviours: vec![behaviour], runs: 8, ..cfg };
         run_experiment(&cfg, &ExperimentTl::Shared(Arc::new(Flat(tl_db))), &|_| {}).unwrap().cells[0].mean
     }
 

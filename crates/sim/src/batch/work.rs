@@ -235,11 +235,11 @@ pub fn shelf(shelf: Option<&coopnav_core::Shelf>, field: &str) -> Option<Estimat
     Some(Estimate::new("bathymetry grid nodes", fields, s.nodes(), MAX_POINTS))
 }
 
-/// A Nams rate-selection experiment: every scenario × behaviour × repetition flies both
+/// A Nams rate-selection experiment: every scenario × behaviour × run flies both
 /// vehicles over the square's lawnmower at the vehicle's step (at most `max_time`), and the
 /// shelf's grid is built once.
 pub fn nams(cfg: &crate::scenario::nams::ExperimentConfig) -> Vec<Estimate> {
-    let per_set = (cfg.behaviours.len() * cfg.repetitions) as f64;
+    let per_set = (cfg.behaviours.len() * cfg.runs) as f64;
     let steps: f64 = cfg
         .scenarios
         .iter()
@@ -253,7 +253,7 @@ pub fn nams(cfg: &crate::scenario::nams::ExperimentConfig) -> Vec<Estimate> {
         .sum();
     let mut out = vec![Estimate::new(
         "simulated vehicle-steps",
-        "experiment.scenarios (square, lane_spacing, speed) / vehicle.timestep x behaviours x repetitions",
+        "experiment.scenarios (square, lane_spacing, speed) / vehicle.timestep x behaviours x experiment.runs",
         steps * per_set,
         MAX_VEHICLE_STEPS,
     )];

@@ -47,9 +47,9 @@ pub fn default_tl() -> Thorp {
 pub fn config(opts: &ReproOptions) -> ExperimentConfig {
     let mut cfg = ExperimentConfig { seed: opts.seed, ..ExperimentConfig::default() };
     if opts.size == Size::Reduced {
-        // The two environments the tables compare, fewer repetitions.
+        // The two environments the tables compare, fewer runs.
         cfg.scenarios = vec![Scenario::thesis(1), Scenario::thesis(4)];
-        cfg.repetitions = 6;
+        cfg.runs = 6;
     }
     cfg
 }
@@ -122,12 +122,8 @@ pub fn report(
     let result = run_experiment(&cfg, tl, progress).map_err(|e| fail(e.to_string()))?;
     let adaptive = Behaviour::Adaptive(Default::default()).label();
     let mut t = String::new();
-    let _ = writeln!(
-        t,
-        "Nams Tables 9–11 — TL: {tl_label}; synthetic shelf 20→60 m; {} repetitions per cell",
-        cfg.repetitions
-    );
-    let _ = writeln!(t, "\nAll behaviours (mean ± sd over repetitions; bandwidth = received payload bytes, both directions, per second;\n net = less frame-0 header and status bytes; header B = tracking header per packet; queue = header entries per packet;\n est. err = mean (max) horizontal error of the shadow estimate of the collaborator):");
+    let _ = writeln!(t, "Nams Tables 9–11 — TL: {tl_label}; synthetic shelf 20→60 m; {} runs per cell", cfg.runs);
+    let _ = writeln!(t, "\nAll behaviours (mean ± sd over runs; bandwidth = received payload bytes, both directions, per second;\n net = less frame-0 header and status bytes; header B = tracking header per packet; queue = header entries per packet;\n est. err = mean (max) horizontal error of the shadow estimate of the collaborator):");
     let _ = writeln!(
         t,
         "{:<11} {:<16} {:>5} {:>13} {:>7} {:>15} {:>6} {:>6} {:>9} {:>7} {:>13}",
@@ -186,7 +182,7 @@ pub fn report(
                 1 => (a.sd.status_period, c.sd.status_period),
                 _ => (a.sd.duty_cycle, c.sd.duty_cycle),
             };
-            let se = (sa.powi(2) + sc.powi(2)).sqrt() / (cfg.repetitions as f64).sqrt();
+            let se = (sa.powi(2) + sc.powi(2)).sqrt() / (cfg.runs as f64).sqrt();
             if k > 0 {
                 let check = direction_check(scenario, name, ours[k], thesis[k], se);
                 let cause = (k == 1 && scenario == "scenario 4").then(|| s4_period_cause(a.mean.duty_cycle)).flatten();
@@ -199,7 +195,7 @@ pub fn report(
                 BAND_NAMS,
             ));
         }
-        let margin = 2.0 * (a.sd.bandwidth.powi(2) + c.sd.bandwidth.powi(2)).sqrt() / (cfg.repetitions as f64).sqrt();
+        let margin = 2.0 * (a.sd.bandwidth.powi(2) + c.sd.bandwidth.powi(2)).sqrt() / (cfg.runs as f64).sqrt();
         checks.push(Check::new(
             format!("{scenario}: adaptive beats the best control on bandwidth"),
             a.mean.bandwidth > c.mean.bandwidth,
@@ -223,7 +219,7 @@ pub fn report(
 
 /// Tables 10–11 (status period, duty cycle): adaptive vs best control lie the thesis's way round.
 /// Where the thesis's two differ, the difference (oriented the thesis's way) with its 95 % CI
-/// (±1.96 `se`, the standard error of the difference over the repetitions) decides: above zero
+/// (±1.96 `se`, the standard error of the difference over the runs) decides: above zero
 /// passes, below fails, spanning zero is undecided. Where the thesis's two are equal, ours must
 /// be equal within 0.05.
 fn direction_check(scenario: &str, metric: &str, ours: (f64, f64), thesis: (f64, f64), se: f64) -> Check {
@@ -319,7 +315,7 @@ mod tests {
     fn identical_on_one_and_two_threads() {
         let cfg = ExperimentConfig {
             scenarios: vec![Scenario::thesis(2)],
-            repetitions: 3,
+            runs: 3,
             max_time: Some(1800.0),
             ..ExperimentConfig::default()
         };
@@ -337,8 +333,7 @@ mod tests {
     #[test]
     #[cfg_attr(not(bellhop_installed), ignore = "BELLHOP is not installed: run scripts/install-bellhop.sh")]
     fn cells_run_on_a_bellhop_grid_of_their_own_layout() {
-        let cfg =
-            ExperimentConfig { scenarios: vec![Scenario::thesis(1)], repetitions: 2, ..ExperimentConfig::default() };
+        let cfg = ExperimentConfig { scenarios: vec![Scenario::thesis(1)], runs: 2, ..ExperimentConfig::default() };
         let grid = GridModel { bearings: 4, anchor_spacing_m: 1000.0, ..GridModel::default() };
         let on_grid = run_experiment(&cfg, &ExperimentTl::PerCell(TlModel::BellhopGrid(grid)), &|_| {}).unwrap();
         let analytic = run_experiment(&cfg, &ExperimentTl::Shared(Arc::new(default_tl())), &|_| {}).unwrap();
@@ -351,9 +346,9 @@ mod tests {
     #[test]
     fn bad_configuration_is_rejected_before_running() {
         let tl = ExperimentTl::Shared(Arc::new(default_tl()));
-        let bad = ExperimentConfig { repetitions: 0, ..ExperimentConfig::default() };
+        let bad = ExperimentConfig { runs: 0, ..ExperimentConfig::default() };
         let e = run_experiment(&bad, &tl, &|_| {}).unwrap_err().to_string();
-        assert!(e.contains("repetitions"), "{e}");
+        assert!(e.contains("experiment.runs = 0"), "{e}");
         let mut s = Scenario::thesis(1);
         s.noise_db = -3.0;
         let bad = ExperimentConfig { scenarios: vec![s], ..ExperimentConfig::default() };

@@ -466,8 +466,7 @@ fn recover_abandoned(parent: &Path, name: &str) {
             }
         } else if meta.is_file() && start_time(pid).is_none() {
             let head = file_head(&path);
-            if head.is_ok_and(|h| is_coopnav_json(&h) || String::from_utf8_lossy(&h).contains("<title>coopnav replay"))
-            {
+            if head.is_ok_and(|h| String::from_utf8_lossy(&h).contains("<title>coopnav replay")) {
                 let _ = fs::remove_file(&path);
             }
         }
@@ -574,24 +573,6 @@ fn file_head(path: &Path) -> std::io::Result<Vec<u8>> {
 
 /// How many leading bytes of an existing output file [`write_file`]'s `ours` sees.
 pub const OWNERSHIP_PREFIX: usize = 4096;
-
-/// A JSON output of coopnav's: its first key is `"tool": "coopnav"` (see [`tagged_json`]).
-pub fn is_coopnav_json(head: &[u8]) -> bool {
-    let text = String::from_utf8_lossy(head);
-    let body = text.trim_start().strip_prefix('{').unwrap_or("");
-    body.trim_start().starts_with(&format!("\"tool\": \"{TOOL}\""))
-}
-
-/// `value` (a JSON object) as pretty JSON whose first key is `"tool": "coopnav"`, so that
-/// [`write_file`] later recognises the file as coopnav's.
-pub fn tagged_json<T: Serialize + ?Sized>(value: &T) -> Result<String, serde_json::Error> {
-    let body = serde_json::to_string_pretty(value)?;
-    let inner = body.trim_start().strip_prefix('{').unwrap_or(&body);
-    if inner.trim_start().starts_with('}') {
-        return Ok(format!("{{\n  \"tool\": \"{TOOL}\"\n}}\n"));
-    }
-    Ok(format!("{{\n  \"tool\": \"{TOOL}\",{inner}\n"))
-}
 
 impl Drop for RunDir {
     fn drop(&mut self) {

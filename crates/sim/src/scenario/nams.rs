@@ -81,7 +81,7 @@ pub type Behaviour = RatePolicySpec;
 pub struct ExperimentConfig {
     pub scenarios: Vec<Scenario>,
     pub behaviours: Vec<RatePolicySpec>,
-    pub repetitions: usize,
+    pub runs: usize,
     pub seed: u64,
     pub shelf: Shelf,
     pub success: SuccessModel,
@@ -98,7 +98,7 @@ impl Default for ExperimentConfig {
         ExperimentConfig {
             scenarios: (1..=4).map(Scenario::thesis).collect(),
             behaviours: RatePolicySpec::thesis(),
-            repetitions: 40,
+            runs: 40,
             seed: 1,
             shelf: Shelf::default(),
             success: SuccessModel::default(),
@@ -131,8 +131,8 @@ impl ExperimentConfig {
         if self.behaviours.is_empty() {
             problems.push(format!("{t}.behaviours"), "[]", "at least one behaviour");
         }
-        if !(1..=100_000).contains(&self.repetitions) {
-            problems.push(format!("{t}.repetitions"), self.repetitions.to_string(), "an integer in [1, 100000]");
+        if !(1..=100_000).contains(&self.runs) {
+            problems.push(format!("{t}.runs"), self.runs.to_string(), "an integer in [1, 100000]");
         }
         for (i, s) in self.scenarios.iter().enumerate() {
             s.collect_problems(&format!("{t}.scenarios[{i}]"), problems);
@@ -190,14 +190,14 @@ mod tests {
 
     #[test]
     fn every_bad_field_is_named_at_once() {
-        let text = "repetitions = 0\nmax_time = -5.0\n[tdma]\nbase_slot = nan\n[shelf]\nspacing = -1.0\n\
+        let text = "runs = 0\nmax_time = -5.0\n[tdma]\nbase_slot = nan\n[shelf]\nspacing = -1.0\n\
                     [[scenarios]]\nname = \"a\"\nsquare = 500.0\nlane_spacing = 50.0\nnoise_db = nan\n\
                     altitude = -2.0\nspeed = 99.0\n";
         let cfg: ExperimentConfig = toml::from_str(text).unwrap();
         let e = cfg.validate_file(Path::new("exp.toml"), "experiment").unwrap_err().to_string();
         for field in [
             "exp.toml",
-            "experiment.repetitions = 0",
+            "experiment.runs = 0",
             "experiment.max_time = -5",
             "experiment.tdma.base_slot = NaN",
             "experiment.shelf.spacing = -1",
