@@ -6,6 +6,7 @@
 //! time are reported per policy and per mission-hour, with the engine alone (policy `none`) as
 //! the floor every policy pays.
 
+use super::planner::load_average;
 use anyhow::{bail, Context, Result};
 use coopnav_core::run_seed;
 use coopnav_sim::engine::Faults;
@@ -45,13 +46,6 @@ fn process_cpu_s() -> Option<f64> {
         ns += text.split_whitespace().next()?.parse::<u64>().ok()?;
     }
     Some(ns as f64 * 1e-9)
-}
-
-/// The machine's 1-, 5- and 15-minute load averages (`/proc/loadavg`).
-fn load_average() -> Option<[f64; 3]> {
-    let text = std::fs::read_to_string("/proc/loadavg").ok()?;
-    let mut fields = text.split_whitespace().map(|f| f.parse::<f64>().ok());
-    Some([fields.next()??, fields.next()??, fields.next()??])
 }
 
 pub fn run(args: Args) -> Result<()> {
