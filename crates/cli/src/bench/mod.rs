@@ -6,6 +6,7 @@ use clap::Subcommand;
 
 mod acomms;
 mod closed_loop;
+mod generated;
 mod hbl;
 mod planner;
 mod post;
@@ -24,6 +25,9 @@ pub enum Target {
     /// The closed loop: 3 h mission, 5 survey AUVs, τ = 30 s, planner A = 5, L = 5, 10 Hz EKFs;
     /// wall time against the ≤ 0.22 s target (5×10⁴ × real time), split by engine phase.
     ClosedLoop(closed_loop::Args),
+    /// Missions of the generalization study's generator file, one run per CNA policy as the
+    /// study flies it: CPU and wall seconds per mission-hour per policy.
+    GeneratedMission(generated::Args),
     /// Post-processing (EKF + RTS) of a generated 24 h, 10 Hz, 5-beacon field log (targets:
     /// ≤ 10 s, ≤ 500 MB under `/usr/bin/time -v`); `--tune` times the tuning too (≤ 2 min).
     Post(post::Args),
@@ -35,6 +39,7 @@ pub fn run(target: Target) -> Result<()> {
         Target::Hbl(args) => hbl::run(args),
         Target::Acomms(args) => acomms::run(args),
         Target::ClosedLoop(args) => closed_loop::run(args),
+        Target::GeneratedMission(args) => generated::run(args),
         Target::Post(args) => post::run(args),
     }
 }
