@@ -277,8 +277,9 @@ impl SortBy {
 /// Largest tree a Sec. 5.3 sweep decision may have: (A·B)^(L+1). The thesis's MATLAB ran every
 /// combination; in the full form we skip AUV-CNA set-ups above this (recorded as a deviation:
 /// with every combination, up to (9·6)^4 = 8.5 M leaves per decision, one table took > 18 min
-/// on this shared 2-core machine; with this cap, 1.5–3 min). The table says how many were
-/// skipped and marks the thesis rows among them.
+/// on this shared 2-core machine; with this cap, 1.5–3 min). The cap never skips a thesis row of
+/// the table being reproduced ([`grid_53`]): those run in full with the same exact search, so
+/// every thesis number is compared. The table says how many set-ups were skipped.
 const FULL_LEAF_CAP: f64 = 2.2e5;
 
 /// A sweep's set-ups: those run and those skipped for their tree size.
@@ -287,7 +288,10 @@ struct Grid {
     skipped: Vec<Setup>,
 }
 
-fn grid_53(size: Size) -> Grid {
+/// The Sec. 5.3 grid of `size`. The full form also runs every thesis row of the table (`thesis`)
+/// whose tree is over [`FULL_LEAF_CAP`], with the same exact search: the cap thins the sweep, not
+/// the set-ups the thesis's numbers are compared on.
+fn grid_53(size: Size, thesis: &[ThesisRow]) -> Grid {
     let (speeds, a_set, bs, ls): (Vec<f64>, Vec<usize>, Vec<usize>, Vec<usize>) = match size {
         Size::Full => {
             ((1..=8).map(|i| 0.5 * i as f64).collect(), (3..=9).collect(), vec![0, 2, 3, 4, 5, 6], (0..=3).collect())
@@ -300,8 +304,10 @@ fn grid_53(size: Size) -> Grid {
             for &a in &a_set {
                 for &l in &ls {
                     let leaves = ((a * b.max(1)) as f64).powi(l as i32 + 1);
-                    let into = if leaves <= FULL_LEAF_CAP { &mut grid.run } else { &mut grid.skipped };
-                    into.push(Setup { b, speed, a, l });
+                    let setup = Setup { b, speed, a, l };
+                    let thesis_row = size == Size::Full && thesis.iter().any(|t| thesis_setup(t) == setup);
+                    let into = if leaves <= FULL_LEAF_CAP || thesis_row { &mut grid.run } else { &mut grid.skipped };
+                    into.push(setup);
                 }
             }
         }
@@ -321,7 +327,7 @@ fn table_53(
 ) -> Result<ReproReport, ExperimentError> {
     let tracks = adjacent_lawnmowers(n, AREAS_53, true)?;
     let end = (opts.size == Size::Reduced).then_some(REDUCED_END_53);
-    let Grid { run: setups, skipped } = grid_53(opts.size);
+    let Grid { run: setups, skipped } = grid_53(opts.size, thesis);
     let mut rows = sweep(id, &setups, MODEL_53, &tracks, Vec3::new(140.0, 0.0, 0.0), end)?;
     rows.sort_by(|x, y| sort.key(&x.summary).total_cmp(&sort.key(&y.summary)));
     let mut table = String::new();
@@ -359,14 +365,19 @@ fn table_53(
     let full = opts.size == Size::Full;
     checks.push(cna_kind_order(id, &rows, sort, thesis, n, full, end)?);
     let numbers = thesis_numbers_53(&rows, thesis, full);
+    let not_run = thesis.iter().filter(|t| skipped.contains(&thesis_setup(t))).count();
+    let why = if full { format!("{not_run} thesis set-ups over the leaf cap not run") } else { REDUCED_53.to_string() };
     Ok(ReproReport::new(
         id.into(),
         table,
         checks,
         serde_json::to_value(&rows[..rows.len().min(20)]).unwrap_or_default(),
     )
-    .with_tables(vec![ThesisTable::new(id, BAND_53, numbers)]))
+    .with_tables(vec![ThesisTable::new(id, BAND_53, numbers).not_compared_because(why)]))
 }
+
+/// Why the reduced Sec. 5.3 forms compare none of the thesis's numbers.
+const REDUCED_53: &str = "reduced form: its 900 s missions do not reproduce these numbers";
 
 /// The Sec. 5.3 tables' band (docs/models.md#hudson-bands).
 const BAND_53: &str = "errors ±20 %, costs ±44 % (= 1.2² − 1: the cost sums squared errors), each thesis row's \
@@ -555,7 +566,7 @@ fn t53(o: &ReproOptions) -> Result<ReproReport, ExperimentError> {
             ThesisNumber::new(format!("best cost per AUV, N = {}", k + 1), t, full.then_some(ours), BAND_COST_53)
         })
         .collect();
-    Ok(r.with_tables(vec![ThesisTable::new("hudson-per-auv-cost", BAND_53, numbers)]))
+    Ok(r.with_tables(vec![ThesisTable::new("hudson-per-auv-cost", BAND_53, numbers).not_compared_because(REDUCED_53)]))
 }
 fn t54(o: &ReproOptions) -> Result<ReproReport, ExperimentError> {
     table_53("hudson-table-5.4", 5, SortBy::MaxError, &T54, o)
@@ -690,7 +701,18 @@ fn t61(opts: &ReproOptions) -> Result<ReproReport, ExperimentError> {
         checks,
         serde_json::to_value(&rows[..rows.len().min(30)]).unwrap_or_default(),
     )
-    .with_tables(vec![ThesisTable::new(id, BAND_61, numbers)]))
+    .with_tables(vec![ThesisTable::new(id, BAND_61, numbers).not_compared_because(reduced_61(opts))]))
+}
+
+/// Why an Appendix A sweep leaves thesis rows not compared: the reduced form's thinner sweep
+/// (the full one runs every set-up the thesis prints).
+fn reduced_61(opts: &ReproOptions) -> &'static str {
+    match opts.size {
+        Size::Reduced => {
+            "reduced form: 27 set-ups (A = 2, 5, 9; L <= 2; s = 0.5, 2, 4 m/s), the thesis rows outside not run"
+        }
+        Size::Full => "set-ups outside the sweep not run",
+    }
 }
 
 /// Appendix A as a reproduction of its own: every set-up the thesis prints, its max and RMS
@@ -724,7 +746,7 @@ fn appendix_a(opts: &ReproOptions) -> Result<ReproReport, ExperimentError> {
             writeln!(table, "  s = {speed:.2}: {mean:+.3} m over {} rows; A = 2, L = 0: {greedy:+.2} m", diffs.len());
     }
     Ok(ReproReport::new(id.into(), table, Vec::new(), serde_json::Value::Null)
-        .with_tables(vec![ThesisTable::new(id, BAND_61, numbers)]))
+        .with_tables(vec![ThesisTable::new(id, BAND_61, numbers).not_compared_because(reduced_61(opts))]))
 }
 
 /// Sec. 5.1–5.2: every Table 5.2 case, ASC, N = 2 and 5, τ = 10 s, A = 5, s = 1.5 m/s.
@@ -918,6 +940,25 @@ mod tests {
             too_far_steps: 0,
             truncated_decisions: 0,
         }
+    }
+
+    #[test]
+    fn the_full_grid_runs_every_thesis_row_and_caps_only_the_others() {
+        for thesis in [&T53[..], &T54, &T55, &T56, &T57, &T58, &T59] {
+            let grid = grid_53(Size::Full, thesis);
+            for t in thesis {
+                assert!(grid.run.contains(&thesis_setup(t)) && !grid.skipped.contains(&thesis_setup(t)));
+            }
+            // Every set-up not run is over the cap, and none of them is a thesis row.
+            assert!(grid.skipped.iter().all(|s| ((s.a * s.b.max(1)) as f64).powi(s.l as i32 + 1) > FULL_LEAF_CAP));
+        }
+        // Table 5.8's rows over the cap: six of eight, the largest (A = 8, B = 6, L = 3) at 48^4 leaves.
+        let over = T58.iter().filter(|t| ((t.2 * t.3) as f64).powi(t.4 as i32 + 1) > FULL_LEAF_CAP).count();
+        assert_eq!(over, 6);
+        let (capped, t58) = (grid_53(Size::Full, &[]), grid_53(Size::Full, &T58));
+        assert_eq!((t58.run.len(), t58.skipped.len()), (capped.run.len() + 6, capped.skipped.len() - 6));
+        // The reduced grid does not depend on the table.
+        assert_eq!(grid_53(Size::Reduced, &T58).run, grid_53(Size::Reduced, &[]).run);
     }
 
     #[test]

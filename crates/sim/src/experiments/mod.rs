@@ -226,6 +226,9 @@ pub struct ThesisTable {
     pub verdict: Verdict,
     /// Set only when the run measured why the table fell below its share.
     pub cause: Option<String>,
+    /// Why the numbers this run lists and does not compare were not compared (a reduced form's
+    /// shortened missions, set-ups a full sweep did not run); printed beside the count.
+    pub not_compared: Option<String>,
 }
 
 impl ThesisTable {
@@ -242,7 +245,22 @@ impl ThesisTable {
             within,
             verdict,
             cause: None,
+            not_compared: None,
         }
+    }
+
+    /// Says why the numbers not compared were not (ignored when the run compares every one).
+    pub fn not_compared_because(self, why: impl Into<String>) -> Self {
+        if self.compared < self.numbers.len() {
+            ThesisTable { not_compared: Some(why.into()), ..self }
+        } else {
+            self
+        }
+    }
+
+    /// `" (compares k of M: why)"` when the run compares fewer than it lists, else nothing.
+    fn compared_note(&self) -> String {
+        compared_note(self.compared, self.numbers.len(), self.not_compared.iter().map(String::as_str))
     }
 
     /// Attaches the cause the run measured for the table falling below its share (ignored
@@ -279,12 +297,9 @@ impl ThesisTable {
                 n.high
             ));
         }
-        let total = self.numbers.len();
         let mut summary =
             format!("{}: {} of {} thesis numbers within their bands", self.id, self.within, self.compared);
-        if self.compared < total {
-            summary.push_str(&format!(" (reduced: compares {} of {total})", self.compared));
-        }
+        summary.push_str(&self.compared_note());
         let tag = match (self.verdict, &self.cause) {
             (Verdict::Pass, _) => "pass",
             (Verdict::Undecided, _) => "undecided",
@@ -297,6 +312,22 @@ impl ThesisTable {
         }
         s
     }
+}
+
+/// `" (compares k of M: why; why2)"` when `compared < listed`, each distinct reason once in the
+/// order given; `" (compares k of M: not said why)"` when no reason is given; else nothing.
+fn compared_note<'a>(compared: usize, listed: usize, why: impl Iterator<Item = &'a str>) -> String {
+    if compared >= listed {
+        return String::new();
+    }
+    let mut reasons: Vec<&str> = Vec::new();
+    for w in why {
+        if !reasons.contains(&w) {
+            reasons.push(w);
+        }
+    }
+    let why = if reasons.is_empty() { "not said why".to_string() } else { reasons.join("; ") };
+    format!(" (compares {compared} of {listed}: {why})")
 }
 
 /// A table's verdict from its counts: undecided when nothing is compared, else pass when
@@ -406,9 +437,8 @@ impl ReproReport {
             if b.compared > 0 {
                 line.push_str(&format!(" ({:.0} %)", 100.0 * b.within as f64 / b.compared as f64));
             }
-            if b.compared < b.listed {
-                line.push_str(&format!(" (reduced: compares {} of {})", b.compared, b.listed));
-            }
+            let why = self.thesis_tables.iter().filter_map(|t| t.not_compared.as_deref());
+            line.push_str(&compared_note(b.compared, b.listed, why));
             out.push_str(&format!("\n{line}\n"));
         }
         let lines: Vec<String> = self.checks.iter().map(Check::line).collect();
@@ -526,12 +556,46 @@ mod tests {
         // Nothing reproduced: undecided, and the output says how many it compares.
         let t = ThesisTable::new("t", "r", numbers(&[None, None]));
         assert_eq!(t.verdict, Verdict::Undecided);
-        assert!(t.printed().contains("t: 0 of 0 thesis numbers within their bands (reduced: compares 0 of 2)"));
+        assert!(t.printed().contains("t: 0 of 0 thesis numbers within their bands (compares 0 of 2: not said why)"));
         // Only the compared numbers count.
         let t = ThesisTable::new("t", "r", numbers(&[Some(10.0), None, Some(30.0)]));
         assert_eq!((t.compared, t.within, t.verdict), (2, 1, Verdict::Fail));
         assert_eq!(table_verdict(10, 8, 0.8), Verdict::Pass);
         assert_eq!(table_verdict(10, 7, 0.8), Verdict::Fail);
+    }
+
+    #[test]
+    fn the_count_of_numbers_compared_says_why_the_rest_were_not() {
+        let band = Band::Relative { percent: 20.0 };
+        let numbers =
+            |ours: &[Option<f64>]| ours.iter().map(|&o| ThesisNumber::new("x", 10.0, o, band)).collect::<Vec<_>>();
+        let report = |tables: Vec<ThesisTable>| {
+            ReproReport::new("r".into(), String::new(), vec![], serde_json::Value::Null).with_tables(tables)
+        };
+        // A reduced form that compares none of its numbers says it is reduced.
+        let reduced = ThesisTable::new("a", "r", numbers(&[None, None, None]))
+            .not_compared_because("reduced form: 900 s missions");
+        let text = reduced.printed();
+        assert!(text
+            .contains("a: 0 of 0 thesis numbers within their bands (compares 0 of 3: reduced form: 900 s missions)"));
+        // A full form that skipped set-ups says so, and does not call itself reduced.
+        let skipped = ThesisTable::new("b", "r", numbers(&[Some(10.0), Some(10.0), None, None]))
+            .not_compared_because("2 set-ups over the leaf cap not run");
+        let text = skipped.printed();
+        assert!(text.contains(
+            "b: 2 of 2 thesis numbers within their bands (compares 2 of 4: 2 set-ups over the leaf cap not run)"
+        ));
+        assert!(!text.contains("reduced"));
+        // A table that compares every number prints no note, even when given a reason.
+        let whole = ThesisTable::new("c", "r", numbers(&[Some(10.0)])).not_compared_because("never printed");
+        assert!(whole.not_compared.is_none() && !whole.printed().contains("compares"));
+        // The report's total names each table's reason once.
+        let again = ThesisTable::new("d", "r", numbers(&[None])).not_compared_because("reduced form: 900 s missions");
+        let text = report(vec![reduced, skipped, whole, again]).printed();
+        assert!(text.contains(
+            "r: 3 of 3 thesis numbers within their bands (100 %) (compares 3 of 9: reduced form: 900 s missions; \
+             2 set-ups over the leaf cap not run)"
+        ));
     }
 
     #[test]
