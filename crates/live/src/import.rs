@@ -16,6 +16,9 @@
 //! the live navigator's filter (the reorder buffer, in time order, is the log's own ordering).
 //! Payloads that do not decode, sensors of another AUV and repeated payloads (the navigator
 //! counted and dropped them) are left out and counted.
+//!
+//! All the live processes' logs together ([`LiveRecord`], the CNA's and every navigator's) become
+//! a run as the MOOS tools see it ([`run_alog`]: `coopnav live import` writes it as `run.alog`).
 
 use crate::auv::{Channels, LiveError, Start};
 use crate::cna::CnaChannels;
@@ -112,7 +115,8 @@ pub const COMMAND_VARIABLE: &str = "COOPNAV_CNA_COMMAND";
 pub const DECISION_VARIABLE: &str = "COOPNAV_CNA_DECISION";
 
 /// A bus time (s) at or after this is a Unix time (a vehicle's clock), before it a mission time
-/// from epoch 0 (the software-in-the-loop world's clock): 2001-09-09T01:46:40Z.
+/// from epoch 0 (the software-in-the-loop world's clock): 2001-09-09T01:46:40Z, a format choice
+/// (no mission lasts 31 years, no vehicle's clock reads before 2001).
 const UNIX_TIME_FROM_S: f64 = 1e9;
 
 /// The `owtt_range_t` `src` of the CNA's ranging broadcasts, as the software-in-the-loop world

@@ -8,6 +8,7 @@
 //! | `VIEW_RANGE_PULSE` | each ranging broadcast | ring centred on the sender at `t`, `radius` = distance to the receiver |
 //! | `VIEW_COMMS_PULSE` | each data packet | beam from sender (`sx`,`sy`) to receiver (`tx`,`ty`) |
 //! | `VIEW_SEGLIST` | each leg the planner chose | `pts={x,y,depth:…}`, label `cna_leg` |
+//! | any other | a caller's [`Posting`]s ([`write_run_alog_with`]) | as given |
 //!
 //! Truth and estimate are separate vehicles (`auv0` and `auv0_est`), `GROUP` says which
 //! (`truth`, `estimate`, `cna`, `beacon`). Positions between a track's samples are interpolated
