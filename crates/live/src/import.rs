@@ -289,7 +289,7 @@ pub struct ImportedRun {
     pub legs_without_track: u64,
 }
 
-/// The run of `record`: the mapping of docs/models.md's table.
+/// The run of `record`, mapped as follows.
 ///
 /// | LCM message | alog |
 /// |---|---|
