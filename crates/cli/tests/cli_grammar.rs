@@ -20,6 +20,7 @@ fn every_directory_writer_takes_dash_o_output() {
         &["hbl", "tune"],
         &["hbl", "postprocess"],
         &["reproduce"],
+        &["live", "import"],
     ];
     for command in commands {
         let help = coopnav(tmp.path(), &[command, &["--help"][..]].concat());

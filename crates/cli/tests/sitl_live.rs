@@ -378,3 +378,63 @@ fn a_live_navigators_log_postprocesses_to_the_estimates_the_run_scored() {
         assert!(matched >= 295, "{matched} of {} seconds matched", scored.len());
     });
 }
+
+/// A software-in-the-loop run's LCM logs, imported with the world's truth: every decision the
+/// CNA process logged is a COOPNAV_CNA_DECISION (the decision_t payloads read here with
+/// coopnav-lcm's own reader), each AUV has a truth and an estimate track, and the post-processing
+/// log and config equal, byte for byte, the ones `sitl` wrote from the same logs.
+#[test]
+#[cfg_attr(not(private_netns), ignore = "needs `unshare -n` (or -rn) to make a private network namespace")]
+fn a_sitl_runs_logs_import_with_truth_into_a_run_the_tools_read() {
+    in_private_netns("a_sitl_runs_logs_import_with_truth_into_a_run_the_tools_read", || {
+        use coopnav_lcm::messages::{Decision, Message};
+        use coopnav_lcm::{LogReader, Schema};
+        let tmp = tempfile::tempdir().unwrap();
+        let (file, sc) = shortened("default.toml", 120.0, tmp.path());
+        let (sitl, imported) = (tmp.path().join("sitl"), tmp.path().join("imported"));
+        let args = ["sitl", file.to_str().unwrap(), "--lockstep", "--live-auvs", "--policy", "planner", "--url", URL];
+        coopnav_ok(&[&args[..], &["-o", sitl.to_str().unwrap()]].concat(), Duration::from_secs(200));
+        let n = sc.fleet.n_auvs;
+        let mut logs = vec![sitl.join("cna.lcm").display().to_string()];
+        logs.extend((0..n).map(|k| sitl.join(format!("auv{k}.lcm")).display().to_string()));
+        let truth = sitl.join("timeseries.csv");
+        let mut import: Vec<&str> = vec!["live", "import"];
+        import.extend(logs.iter().map(String::as_str));
+        import.extend(["--truth", truth.to_str().unwrap(), "-o", imported.to_str().unwrap()]);
+        println!("{}", coopnav_ok(&import, Duration::from_secs(60)));
+
+        let schema = Schema::coopnav();
+        let cna_log = std::fs::File::open(sitl.join("cna.lcm")).unwrap();
+        let mut seqs: Vec<i64> = LogReader::new(cna_log)
+            .map(|e| e.unwrap())
+            .filter(|e| e.channel == "COOPNAV_CNA_DECISION")
+            .map(|e| Decision::decode(&schema, &e.data).unwrap().seq)
+            .collect();
+        seqs.sort();
+        seqs.dedup();
+        let world: serde_json::Value = serde_json::from_slice(&std::fs::read(sitl.join("sitl.json")).unwrap()).unwrap();
+        assert_eq!(seqs.len() as u64, world["world"]["decisions"].as_u64().unwrap());
+        assert!(seqs.len() >= 3, "{} decisions", seqs.len());
+        let alog = coopnav_moos::read_alog_file(&imported.join("run.alog")).unwrap();
+        let posted: Vec<i64> =
+            alog.postings("COOPNAV_CNA_DECISION").map(|e| e.field("seq").unwrap().parse().unwrap()).collect();
+        assert_eq!(posted, seqs);
+        for k in 0..n {
+            let reports =
+                |name: String| alog.postings("NODE_REPORT").filter(|e| e.field("NAME") == Some(name.as_str())).count();
+            assert!(reports(format!("auv{k}")) >= 115, "auv{k} truth");
+            assert!(reports(format!("auv{k}_est")) >= 115, "auv{k} estimate");
+            for name in [format!("auv{k}.log"), format!("auv{k}.post.toml")] {
+                assert_eq!(
+                    std::fs::read(imported.join(&name)).unwrap(),
+                    std::fs::read(sitl.join(&name)).unwrap(),
+                    "{name}"
+                );
+            }
+        }
+        assert!(alog.postings("VIEW_RANGE_PULSE").count() > 0 && alog.postings("VIEW_COMMS_PULSE").count() > 0);
+        let scenario = alog.postings("COOPNAV_SCENARIO").next().unwrap();
+        assert!(scenario.value.contains("truth from the simulated world"), "{}", scenario.value);
+        coopnav_ok(&["view", imported.to_str().unwrap()], Duration::from_secs(60));
+    });
+}

@@ -83,6 +83,8 @@ pub enum LiveError {
     Unsupported { what: String },
     #[error("sitl: {0}")]
     Child(String),
+    #[error("truth {path}, line {line}: {what}")]
+    Truth { path: String, line: usize, what: String },
 }
 
 /// Where the filter starts (local east/north, metres).

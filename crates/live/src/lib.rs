@@ -9,7 +9,8 @@
 //! - [`sitl`]: software in the loop, in lockstep or free running: the engine as the world, the
 //!   CNA's decisions taken by a `coopnav live cna` child on the bus, and with live AUVs every
 //!   survey AUV navigated by a `coopnav live auv` child;
-//! - [`import`]: a live navigator's LCM log as a post-processing log;
+//! - [`import`]: a live navigator's LCM log as a post-processing log, and the live processes'
+//!   logs together as a run's alog (`coopnav live import`);
 //! - [`world`]: the LCM messages a CNA receives in a simulated mission, published or recorded;
 //! - [`run`]: the process loop around them on coopnav-lcm's UDP multicast transport ([`run_auv`]),
 //!   with its LCM log, its stop conditions (a stop flag set on SIGINT/SIGTERM, a duration, an idle

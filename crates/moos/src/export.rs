@@ -8,6 +8,7 @@
 //! | `VIEW_RANGE_PULSE` | each ranging broadcast | ring centred on the sender at `t`, `radius` = distance to the receiver |
 //! | `VIEW_COMMS_PULSE` | each data packet | beam from sender (`sx`,`sy`) to receiver (`tx`,`ty`) |
 //! | `VIEW_SEGLIST` | each leg the planner chose | `pts={x,y,depth:…}`, label `cna_leg` |
+//! | any other | a caller's [`Posting`]s ([`write_run_alog_with`]) | as given |
 //!
 //! Truth and estimate are separate vehicles (`auv0` and `auv0_est`), `GROUP` says which
 //! (`truth`, `estimate`, `cna`, `beacon`). Positions between a track's samples are interpolated
@@ -42,10 +43,32 @@ pub enum ExportError {
 }
 
 /// One entry before sorting: (time, variable, value).
-type Row = (f64, &'static str, String);
+type Row<'a> = (f64, &'a str, String);
+
+/// An entry a caller posts beside the run's own, in a variable the mapping above does not write
+/// (e.g. the CNA's commands and decisions read from a live run's LCM logs).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Posting {
+    /// Seconds since LOGSTART.
+    pub t: f64,
+    pub variable: String,
+    pub value: String,
+}
 
 /// Writes `run` as an alog into `out`, entries in time order, starting at `log_start` (Unix s).
 pub fn write_run_alog<W: Write>(run: &RunLog, file_name: &str, log_start: f64, out: W) -> Result<W, ExportError> {
+    write_run_alog_with(run, &[], file_name, log_start, out)
+}
+
+/// [`write_run_alog`] with `extra` entries merged in time order; at one instant they follow the
+/// run's own entries, in the order given.
+pub fn write_run_alog_with<W: Write>(
+    run: &RunLog,
+    extra: &[Posting],
+    file_name: &str,
+    log_start: f64,
+    out: W,
+) -> Result<W, ExportError> {
     let mut rows: Vec<Row> = vec![
         (0.0, "COOPNAV_SCENARIO", one_line(&run.scenario)),
         (0.0, "COOPNAV_COMMAND", one_line(&run.command)),
@@ -61,7 +84,11 @@ pub fn write_run_alog<W: Write>(run: &RunLog, file_name: &str, log_start: f64, o
         let pts: Vec<String> = leg.points.iter().map(|p| format!("{:.2},{:.2},{:.2}", p[0], p[1], p[2])).collect();
         rows.push((leg.t, "VIEW_SEGLIST", format!("pts={{{}}},label=cna_leg,edge_color=orange", pts.join(":"))));
     }
-    // Stable: entries at one instant keep the order above (description, vehicles, pulses, legs).
+    for posting in extra {
+        rows.push((posting.t, &posting.variable, posting.value.clone()));
+    }
+    // Stable: entries at one instant keep the order above (description, vehicles, pulses, legs,
+    // extra postings).
     rows.sort_by(|a, b| a.0.total_cmp(&b.0));
     let mut writer = AlogWriter::new(out, file_name, log_start)?;
     for (t, variable, value) in &rows {
@@ -75,7 +102,7 @@ fn one_line(text: &str) -> String {
     text.split_whitespace().collect::<Vec<_>>().join(" ")
 }
 
-fn node_reports(run: &RunLog, vehicle: &Vehicle, log_start: f64, rows: &mut Vec<Row>) {
+fn node_reports(run: &RunLog, vehicle: &Vehicle, log_start: f64, rows: &mut Vec<Row<'_>>) {
     let (Some(first), Some(last)) = (vehicle.samples.first(), vehicle.samples.last()) else {
         return;
     };
@@ -125,7 +152,7 @@ fn node_report(run: &RunLog, vehicle: &Vehicle, s: &Sample, (speed, heading): (f
     v
 }
 
-fn pulse_row(run: &RunLog, pulse: &Pulse, log_start: f64) -> Result<Row, ExportError> {
+fn pulse_row(run: &RunLog, pulse: &Pulse, log_start: f64) -> Result<Row<'static>, ExportError> {
     let from = position(run, &pulse.from, pulse.t)?;
     let to = position(run, &pulse.to, pulse.t)?;
     let (fate, colour) = if pulse.received { ("received", "green") } else { ("lost", "red") };

@@ -14,6 +14,6 @@ pub mod replay;
 pub mod run;
 
 pub use alog::{read_alog, read_alog_file, Alog, AlogEntry, AlogError, AlogWriter};
-pub use export::{write_run_alog, ExportError};
+pub use export::{write_run_alog, write_run_alog_with, ExportError, Posting};
 pub use mission::{mission_files, MissionFiles, MissionSpec, Waypoint};
 pub use run::{Leg, Pulse, PulseKind, Role, RunLog, Sample, Vehicle, SIMULATED_LOG_START};
