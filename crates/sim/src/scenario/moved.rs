@@ -204,6 +204,27 @@ mod tests {
         assert!(empty.contains("planner -> [policy.planner]"), "{empty}");
     }
 
+    /// A file in both old forms gets both headlines and every key of each in one message; the
+    /// CNA form's keys are no `[planner]` keys, so they are not listed as unknown ones.
+    #[test]
+    fn keys_of_both_old_forms_come_in_one_message() {
+        let old = "[cna]\ngps_sd = 1.0\nauv = { pitch_options = 1, depth = 10.0, nav_diffusion = 0.01 }\n\
+                   [planner]\nlink = \"assumed\"\n";
+        let e = refuse_old_form(old, Path::new("both.toml"), &[&SIMULATE, &CNA_NAVIGATION]).unwrap_err().to_string();
+        assert!(e.starts_with("scenario both.toml: the old planner form") && e.contains("; the old CNA form"), "{e}");
+        for line in [
+            "planner.link -> policy.link",
+            "cna.gps_sd -> cna.navigation = { kind = \"gps\", sd_m }",
+            "cna.auv.nav_diffusion -> cna.navigation = { kind = \"dead-reckoning\", diffusion_m2_s }",
+        ] {
+            assert!(e.contains(&format!("\n  {line}")), "{line} missing from: {e}");
+        }
+        assert!(e.contains("3 moved key(s)") && !e.contains("no such key"), "{e}");
+        let cna_only = refuse_old_form("[cna]\ngps_sd = 2.0\n", Path::new("c.toml"), &[&SIMULATE, &CNA_NAVIGATION]);
+        let e = cna_only.unwrap_err().to_string();
+        assert!(e.starts_with("scenario c.toml: the old CNA form") && e.contains("1 moved key(s)"), "{e}");
+    }
+
     #[test]
     fn a_pre_deployment_files_motion_keys_go_to_the_platform() {
         let old = "[planner]\nlook_ahead = 4\npenalty = { case = \"8\" }\n[planner.motion]\nspeed = 3.0\ntau = 10.0\n\
