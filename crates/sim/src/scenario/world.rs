@@ -988,10 +988,16 @@ mod tests {
         assert_eq!((hudson.motion.heading_options, hudson.look_ahead), (5, 5));
         Scenario::bench().validate(Path::new("bench")).unwrap();
         // The commented-out options of the example are valid too.
-        let options =
-            EXAMPLE.replace("# status_adaptive", "status_adaptive").replace("# shelf", "shelf").replace("# auv", "auv");
+        // The AUV CNA's lines replace the ASC's navigation.
+        let options = EXAMPLE
+            .replace("# status_adaptive", "status_adaptive")
+            .replace("# shelf", "shelf")
+            .replace("navigation = { kind = \"gps\", sd_m = 1.0 }\n", "")
+            .replace("# navigation", "navigation")
+            .replace("# auv", "auv");
         let s = Scenario::parse(&options, Path::new("options.toml")).unwrap();
         assert!(s.comms.status_adaptive.is_some() && s.fleet.shelf.is_some() && s.cna.auv.is_some());
+        assert!(s.cna.navigation.surfacing().is_some() && s.cna.navigation.diffusion_m2_s() == 0.01);
         let survey_s = Scenario::bench().lawnmower(0).path_length() / 1.5;
         assert!(survey_s >= 3.0 * 3600.0 * 0.95, "bench survey lasts {survey_s} s");
     }
