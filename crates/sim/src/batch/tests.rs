@@ -199,14 +199,13 @@ fn status_rates_follow_the_fixed_rate_or_the_adaptive_selector() {
 fn an_auv_cna_plans_with_pitch_and_broadcasts_its_own_estimate() {
     let mut sc = short(2, 1200.0);
     sc.policy.planner.tree.look_ahead = Some(2);
-    sc.cna.auv = Some(scenario::AuvCna {
-        pitch_options: 3,
-        depth: scenario::CruiseDepth::Metres(10.0),
-        min_depth_m: 0.0,
-        nav_diffusion: 0.01,
-        surfacing: None,
-        broadcasts_truth: false,
-    });
+    sc.cna.auv =
+        Some(scenario::AuvCna { pitch_options: 3, depth: scenario::CruiseDepth::Metres(10.0), min_depth_m: 0.0 });
+    sc.cna.navigation =
+        crate::models::cna_navigation::CnaNavigation::DeadReckoning(crate::models::cna_navigation::DeadReckoning {
+            diffusion_m2_s: 0.01,
+            surfacing: None,
+        });
     sc.validate(std::path::Path::new("t")).unwrap();
     let r = one_run(&sc, "planner", 6, true, &Faults::default());
     let dr = one_run(&sc, "none", 6, false, &Faults::default());

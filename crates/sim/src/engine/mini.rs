@@ -10,8 +10,8 @@ use super::observe::{BuoyFix, BuoySample, Observer, ShipSample};
 use super::phases::{arrival, measured_travel, Payload};
 use super::vehicles::lerp;
 use super::Engine;
-use crate::models::channel::receiver;
 use crate::models::channel::Clock;
+use crate::models::channel::RECEIVER_AT_SURVEY_AUV;
 use crate::models::minipacket::{quantised, SUCCESS_RATE};
 use crate::models::schedule::Owner;
 use crate::scenario::world::Scenario;
@@ -112,7 +112,7 @@ impl Engine<'_> {
             Owner::Cna | Owner::Auv(_) => return,
         };
         for (k, (silent, p0, v, clock, tl)) in receivers.into_iter().enumerate() {
-            let decoded = sc.comms.success.draw(SUCCESS_RATE, tl, receiver(false), rng).frame0() && !silent;
+            let decoded = sc.comms.success.draw(SUCCESS_RATE, tl, RECEIVER_AT_SURVEY_AUV, rng).frame0() && !silent;
             let (tt, travel_time) = measured_travel(sc, from, t_tx, &sender_clock, (p0, v, &clock), rng);
             let payload = Payload::Mini { kind, value, travel_time, decoded };
             self.air.push(arrival(owner, Owner::Auv(k), t_tx, tt, air, tl, Some(payload)));

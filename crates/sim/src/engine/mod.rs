@@ -245,7 +245,7 @@ impl<'a> Engine<'a> {
         let cna = Cna {
             craft: Craft { pos: start.pos, prev: start.pos, heading: start.heading.radians(), target: None },
             nav_error: (0.0, 0.0),
-            own: OwnNav::new(sc.cna.auv.as_ref().map_or(0.0, |a| a.nav_diffusion)),
+            own: OwnNav::new(sc.cna.navigation.diffusion_m2_s()),
             rng_gps: streams.rng(stream::CNA_GPS),
             rng_nav: streams.rng(stream::CNA_NAV),
             clock: sc.channel.clocks.draw(&mut streams.rng(stream::CNA_CLOCK)),

@@ -14,12 +14,11 @@ use super::peer::PeerLink;
 use super::vehicles::lerp;
 use super::vehicles::SurveyAuv;
 use super::{Engine, FleetView};
-use crate::models::channel::receiver;
 use crate::models::channel::{air_time, Clock};
+use crate::models::channel::{RECEIVER_AT_CNA, RECEIVER_AT_SURVEY_AUV};
 use crate::models::finish::Finish;
 use crate::models::health::nees_2d;
 use crate::models::minipacket::SUCCESS_RATE;
-use crate::models::noise::normal;
 use crate::models::peer::{StatusFormat, StatusTo};
 use crate::models::schedule::{Message, Owner};
 use crate::models::surfacing::Step;
@@ -73,8 +72,8 @@ impl Engine<'_> {
         }
         let t_dec = self.next_decision as f64 * tau;
         self.next_decision += 1;
-        let surfacing = self.sc.cna.auv.as_ref().and_then(|a| a.surfacing.as_ref());
-        let step = self.cna.own.step(surfacing, t_dec, self.cna.craft.pos.z);
+        let navigation = &self.sc.cna.navigation;
+        let step = self.cna.own.step(navigation.surfacing(), t_dec, self.cna.craft.pos.z);
         let fix = self.cna_fix(t_dec, matches!(step, Step::Fix { .. } | Step::WorkWithFix));
         let transmits = self.policy.as_policy().transmits();
         let cna = &mut self.cna;
@@ -90,10 +89,7 @@ impl Engine<'_> {
             speed: self.sc.cna.speed,
             fleet: &fleet,
             reported: &cna.reported,
-            cna_variance: match &self.sc.cna.auv {
-                None => self.sc.cna.gps_sd * self.sc.cna.gps_sd,
-                Some(_) => cna.own.variance(t_dec),
-            },
+            cna_variance: navigation.variance(&cna.own, t_dec),
         };
         let here = cna.craft.pos;
         // The policy decides even while the CNA surfaces, so its own models keep stepping.
@@ -103,30 +99,15 @@ impl Engine<'_> {
         obs.on_decision(&Decision { t: t_dec, from: here, to: cna.craft.target });
     }
 
-    /// Draws the CNA's navigation error for this cycle and returns its position fix (`surfaced`:
-    /// an AUV CNA takes its GPS fix at the surface now).
+    /// Draws the CNA's navigation error for this cycle (its `cna.navigation` model, over the τ
+    /// since the last decision) and returns the position it broadcasts (`surfaced`: it takes its
+    /// GPS fix at the surface now).
     fn cna_fix(&mut self, t_dec: f64, surfaced: bool) -> Vec3 {
-        let cna = &mut self.cna;
-        let gps = |sd: f64, rng: &mut ChaCha8Rng| (sd * normal(rng), sd * normal(rng));
-        cna.nav_error = match &self.sc.cna.auv {
-            None => gps(self.sc.cna.gps_sd, &mut cna.rng_gps),
-            Some(a) if surfaced => gps(a.surfacing.map_or(0.0, |s| s.gps_sd_m), &mut cna.rng_gps),
-            Some(a) => {
-                let sd = (a.nav_diffusion * if t_dec > 0.0 { self.sc.comms.tau } else { 0.0 }).sqrt();
-                (cna.nav_error.0 + sd * normal(&mut cna.rng_nav), cna.nav_error.1 + sd * normal(&mut cna.rng_nav))
-            }
-        };
-        let (p, (de, dn)) = (self.cna.craft.pos, self.broadcast_error());
+        let (cna, navigation) = (&mut self.cna, &self.sc.cna.navigation);
+        let dt = if t_dec > 0.0 { self.sc.comms.tau } else { 0.0 };
+        cna.nav_error = navigation.error(cna.nav_error, surfaced, dt, &mut cna.rng_gps, &mut cna.rng_nav);
+        let (p, (de, dn)) = (cna.craft.pos, navigation.broadcast_error(cna.nav_error));
         Vec3::new(p.x + de, p.y + dn, p.z)
-    }
-
-    /// What the CNA's broadcast position adds to its true one: its navigation error, or nothing
-    /// for a CNA that broadcasts its truth (`cna.auv.broadcasts_truth`, a counterfactual).
-    fn broadcast_error(&self) -> (f64, f64) {
-        match &self.sc.cna.auv {
-            Some(a) if a.broadcasts_truth => (0.0, 0.0),
-            _ => self.cna.nav_error,
-        }
     }
 
     /// Truth to `t_next`: the CNA craft, the ships, then every survey AUV (after its finish
@@ -182,7 +163,7 @@ impl Engine<'_> {
         }
         let sc = self.sc;
         let from = lerp(self.cna.craft.prev, self.cna.craft.pos, frac);
-        let (de, dn) = self.broadcast_error();
+        let (de, dn) = sc.cna.navigation.broadcast_error(self.cna.nav_error);
         let fix = Vec3::new(from.x + de, from.y + dn, from.z);
         let (id, rate) = match self.cna_choice(fix, t_tx, obs) {
             (id, Choice::Transmit(rate)) => (id, rate),
@@ -195,7 +176,7 @@ impl Engine<'_> {
             let p0 = lerp(self.auvs[k].prev, self.auvs[k].truth, frac);
             let tl = self.tl_db(&from, &p0);
             let a = &mut self.auvs[k];
-            let decoded = sc.comms.success.draw(rate, tl, receiver(false), &mut a.rng_down).frame0() && !silent;
+            let decoded = sc.comms.success.draw(rate, tl, RECEIVER_AT_SURVEY_AUV, &mut a.rng_down).frame0() && !silent;
             let (v, clock) = (a.velocity(sc.dt), a.clock);
             let (tt, travel_time) = measured_travel(sc, from, t_tx, &self.cna.clock, (p0, v, &clock), &mut a.rng_range);
             let acked = self.cna.acked[k].clone();
@@ -238,7 +219,8 @@ impl Engine<'_> {
             let (p0, v, clock) = (lerp(a.prev, a.truth, frac), a.velocity(sc.dt), a.clock);
             let tl = self.tl_db(&from, &p0);
             let buoy = &mut self.buoys[b];
-            let decoded = sc.comms.success.draw(rate, tl, receiver(false), &mut buoy.rng_link).frame0() && !silent;
+            let decoded =
+                sc.comms.success.draw(rate, tl, RECEIVER_AT_SURVEY_AUV, &mut buoy.rng_link).frame0() && !silent;
             let (tt, travel_time) = measured_travel(sc, from, t_tx, &buoy.clock, (p0, v, &clock), &mut buoy.rng_link);
             let payload = Payload::Position { rate, fix, travel_time, decoded };
             self.air.push(arrival(Owner::Buoy(b), Owner::Auv(k), t_tx, tt, air, tl, Some(payload)));
@@ -293,7 +275,7 @@ impl Engine<'_> {
         let air = air_time(rate);
         let tt = sc.channel.sound_speed.travel_time(from, |d| c0 + cv * d);
         let rng_up = &mut self.auvs[j].rng_up;
-        let reception = sc.comms.success.draw(rate, tl, receiver(true), rng_up);
+        let reception = sc.comms.success.draw(rate, tl, RECEIVER_AT_CNA, rng_up);
         let decoded = reception.frame0() && !silent;
         self.air.transmit(Owner::Auv(j), t_tx, t_tx + air);
         let to_peers = sc.comms.status_to == StatusTo::CnaAndAuvs;

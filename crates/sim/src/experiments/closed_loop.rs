@@ -26,6 +26,7 @@ use crate::batch::mc::{comparison_table, monte_carlo_grid};
 use crate::batch::mc::{paired_per_auv, Ci, Comparison, PolicySummary};
 use crate::batch::sweep::expand::{expand_with, Form, Rules};
 use crate::batch::sweep::file::SweepFile;
+use crate::models::cna_navigation::CnaNavigation;
 use crate::output::plot::PlotError;
 use crate::output::plot::{intervals_svg, Interval};
 use crate::policy::registry::POLICY_NAMES;
@@ -237,7 +238,7 @@ pub fn report(
         return Err(fail(format!("{} cells but {} comparisons", named.len(), comparisons.len())));
     }
     // The AUV CNA's true-error model as the rule gives it for the first AUV-CNA scenario.
-    let auv_diffusion = named.iter().find_map(|(_, s)| s.cna.auv.as_ref().map(|a| a.nav_diffusion));
+    let auv_diffusion = named.iter().find_map(|(_, s)| s.cna.auv.as_ref().map(|_| s.cna.navigation.diffusion_m2_s()));
     let auv_cna_truth = auto::auv_cna_truth(auv_diffusion.unwrap_or(0.0));
     let mut table = format!(
         "True mean navigation error of the survey AUVs (m), {runs} runs per policy and cell, base seed {seed} \
@@ -265,7 +266,7 @@ pub fn report(
             comms.tau, comms.cna_rate, comms.status_rate, comms.max_range_m
         );
         table += &comparison_table(&c);
-        let inherits_cna_error = sc.cna.auv.as_ref().is_some_and(|a| !a.broadcasts_truth);
+        let inherits_cna_error = sc.cna.auv.is_some() && !matches!(sc.cna.navigation, CnaNavigation::Exact(_));
         cell_checks(name, &c, inherits_cna_error, &mut table, &mut checks, &mut cells)?;
         table.push('\n');
         data.push(serde_json::to_value(&c).map_err(|e| fail(e.to_string()))?);
@@ -689,7 +690,7 @@ mod tests {
                 CnaKind::Auv { min_depth, .. } => assert!(!at_surface(min_depth) && depth >= min_depth, "N = {n}"),
                 CnaKind::Asc {} => panic!("N = {n}: an ASC"),
             }
-            let diffusion = sc.cna.auv.as_ref().unwrap().nav_diffusion;
+            let diffusion = sc.cna.navigation.diffusion_m2_s();
             assert_eq!(diffusion, 0.01, "the scenario's own diffusion");
             let truth = sc.estimator_settings().unwrap().truth;
             assert_eq!(

@@ -1,14 +1,15 @@
 //! `closed-loop-cna-navigation` (docs/evaluation.md, study 2): what the AUV CNA's own navigation
 //! error costs in the AUV-CNA cells of `closed-loop-vs-baselines`. The
 //! cells of `closed-loop-vs-baselines` whose CNA is an AUV, run twice on the same seeds: as
-//! evaluated, and with the CNA broadcasting its true position (`cna.auv.broadcasts_truth`, a
-//! counterfactual: its navigation error is still drawn, its σ grows and it surfaces as before,
+//! evaluated, and with the CNA broadcasting its true position (`cna.navigation = { kind =
+//! "exact" }`, a counterfactual: its navigation error is still drawn, its σ grows and it surfaces as before,
 //! but no range carries the error). Every survey AUV fixed by the CNA's ranges inherits the
 //! CNA's own navigation error, whatever the CNA's path; the second run shows how much of every
 //! policy's error, and of the planner's margins, that error is.
 
 use super::closed_loop::{evaluate, policies, setup, Cell, Setting};
 use super::{Experiment, ExperimentError, ReproOptions, ReproReport};
+use crate::models::cna_navigation::CnaNavigation;
 use std::fmt::Write as _;
 
 const ID: &str = "closed-loop-cna-navigation";
@@ -45,8 +46,8 @@ fn cna_navigation(opts: &ReproOptions) -> Result<ReproReport, ExperimentError> {
 /// `s` with the CNA broadcasting its true position, named `<name>-exact-cna`.
 fn broadcasting_truth(s: &Setting) -> Setting {
     let mut base = s.base.clone();
-    if let Some(auv) = base.cna.auv.as_mut() {
-        auv.broadcasts_truth = true;
+    if let CnaNavigation::DeadReckoning(walk) = base.cna.navigation {
+        base.cna.navigation = CnaNavigation::Exact(walk);
     }
     Setting { name: format!("{}-{EXACT}", s.name), base, ..s.clone() }
 }
@@ -118,9 +119,10 @@ mod tests {
         let sloping = settings.iter().find(|s| s.base.cna.auv.is_some()).unwrap();
         let exact = broadcasting_truth(sloping);
         let (a, b) = (sloping.scenario(3, 1, None).unwrap(), exact.scenario(3, 1, None).unwrap());
-        assert!(!a.cna.auv.as_ref().unwrap().broadcasts_truth && b.cna.auv.as_ref().unwrap().broadcasts_truth);
+        let CnaNavigation::DeadReckoning(walk) = a.cna.navigation else { panic!("{:?}", a.cna.navigation) };
+        assert_eq!(b.cna.navigation, CnaNavigation::Exact(walk));
         let mut b = b;
-        b.cna.auv.as_mut().unwrap().broadcasts_truth = false;
+        b.cna.navigation = CnaNavigation::DeadReckoning(walk);
         assert_eq!(a, b);
     }
 }

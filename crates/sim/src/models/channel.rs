@@ -370,14 +370,12 @@ impl Collisions {
     }
 }
 
-/// Receiver type of a link's far end.
-pub fn receiver(to_cna: bool) -> Receiver {
-    if to_cna {
-        Receiver::Barge
-    } else {
-        Receiver::Iver2
-    }
-}
+/// The receiver type (the success model's Table 5 columns) of a link that ends at a survey AUV
+/// (the CNA's broadcast, a buoy's, a mini-packet): the Iver2's.
+pub const RECEIVER_AT_SURVEY_AUV: Receiver = Receiver::Iver2;
+
+/// The receiver type of a link that ends at the CNA (a survey AUV's status): the barge's.
+pub const RECEIVER_AT_CNA: Receiver = Receiver::Barge;
 
 #[cfg(test)]
 mod tests {

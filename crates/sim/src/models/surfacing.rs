@@ -9,7 +9,7 @@
 //! surface craft does. Checked at each decision (every τ).
 //! Invented parameters (no thesis value): the period, threshold, fix time and fix σ.
 
-use coopnav_core::validation::Problems;
+use coopnav_core::validation::{CheckFields, Problems};
 use serde::{Deserialize, Serialize};
 
 /// Which rule sends the CNA up.
@@ -22,7 +22,7 @@ pub enum SurfaceWhen {
     Sigma { sigma_m: f64 },
 }
 
-/// `[cna.auv.surfacing]`: the rule, and what a fix takes and gives.
+/// `cna.navigation.surfacing` (dead reckoning): the rule, and what a fix takes and gives.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Surfacing {
@@ -33,8 +33,8 @@ pub struct Surfacing {
     pub gps_sd_m: f64,
 }
 
-impl Surfacing {
-    pub fn validate(&self, prefix: &str, p: &mut Problems) {
+impl CheckFields for Surfacing {
+    fn check_fields(&self, prefix: &str, p: &mut Problems) {
         match self.when {
             SurfaceWhen::Period { period_s } => p.positive(&format!("{prefix}when.period_s"), period_s),
             SurfaceWhen::Sigma { sigma_m } => p.positive(&format!("{prefix}when.sigma_m"), sigma_m),
@@ -210,10 +210,11 @@ mod tests {
     fn bad_settings_are_named() {
         let mut p = Problems::default();
         Surfacing { fix_time_s: -1.0, ..rule(SurfaceWhen::Sigma { sigma_m: 0.0 }) }
-            .validate("cna.auv.surfacing.", &mut p);
+            .check_fields("cna.navigation.surfacing.", &mut p);
         let text = format!("{p:?}");
         assert!(
-            text.contains("cna.auv.surfacing.when.sigma_m") && text.contains("cna.auv.surfacing.fix_time_s"),
+            text.contains("cna.navigation.surfacing.when.sigma_m")
+                && text.contains("cna.navigation.surfacing.fix_time_s"),
             "{text}"
         );
     }

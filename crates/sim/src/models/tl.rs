@@ -199,7 +199,7 @@ fn source_layers(g: &GridModel, sc: &Scenario, cna_depth: f64, (lo, hi): ((f64, 
         // Without these layers a depth change of more than the tolerance would leave every
         // later CNA packet without a transmission loss, i.e. lost. From the surface even below a
         // working `min_depth`: the CNA climbs there for its GPS fixes, and pings meanwhile.
-        let top = if sc.cna.auv.as_ref().is_some_and(|a| a.surfacing.is_some()) { 0.0 } else { min_depth.max(0.0) };
+        let top = if sc.cna.navigation.surfacing().is_some() { 0.0 } else { min_depth.max(0.0) };
         depths.extend(span(top, max_depth.min(water().1)));
     }
     match sc.fleet.depth {

@@ -337,19 +337,15 @@ fn a_ship_on_a_fixed_track_converges_onto_it_and_keeps_its_speed() {
 /// dives back to its working depth, and does it again as its σ regrows; every policy alike.
 #[test]
 fn an_auv_cna_surfaces_for_a_fix_and_dives_back() {
+    use crate::models::cna_navigation::{CnaNavigation, DeadReckoning};
     use crate::models::surfacing::{SurfaceWhen, Surfacing};
     use crate::scenario::world::{AuvCna, CruiseDepth};
     let mut sc = short_survey(Finish::Loiter { radius_m: 50.0 }, 900.0);
     // σ² grows 0.05 m²/s: σ = 2 m after 80 s, then 1 + 0.05·t reaches 4 m² 60 s after each fix.
     let surfacing = Surfacing { when: SurfaceWhen::Sigma { sigma_m: 2.0 }, fix_time_s: 30.0, gps_sd_m: 1.0 };
-    sc.cna.auv = Some(AuvCna {
-        pitch_options: 1,
-        depth: CruiseDepth::Metres(10.0),
-        min_depth_m: 0.0,
-        nav_diffusion: 0.05,
-        surfacing: Some(surfacing),
-        broadcasts_truth: false,
-    });
+    sc.cna.auv = Some(AuvCna { pitch_options: 1, depth: CruiseDepth::Metres(10.0), min_depth_m: 0.0 });
+    sc.cna.navigation =
+        CnaNavigation::DeadReckoning(DeadReckoning { diffusion_m2_s: 0.05, surfacing: Some(surfacing) });
     for policy in ["centroid", "planner"] {
         let (r, trace) = traced(&sc, policy, 4);
         assert!(r.fleet.healthy, "{policy}");
@@ -367,23 +363,19 @@ fn an_auv_cna_surfaces_for_a_fix_and_dives_back() {
     }
 }
 
-/// The counterfactual CNA (`cna.auv.broadcasts_truth`) still draws its navigation error but no
-/// range carries it: the fleet navigates exactly as under a CNA whose error never grows, and
-/// differently from one that broadcasts its error.
+/// The counterfactual CNA (`cna.navigation = { kind = "exact" }`) still draws its navigation
+/// error but no range carries it: the fleet navigates exactly as under a CNA whose error never
+/// grows, and differently from one that broadcasts its error.
 #[test]
 fn a_cna_broadcasting_its_truth_leaves_its_navigation_error_out_of_every_range() {
+    use crate::models::cna_navigation::{CnaNavigation, DeadReckoning};
     use crate::scenario::world::{AuvCna, CruiseDepth};
-    let with = |nav_diffusion: f64, broadcasts_truth: bool| {
+    let with = |diffusion_m2_s: f64, broadcasts_truth: bool| {
         let mut sc = short_survey(Finish::Loiter { radius_m: 50.0 }, 900.0);
-        let depth = CruiseDepth::Metres(10.0);
-        sc.cna.auv = Some(AuvCna {
-            pitch_options: 1,
-            depth,
-            min_depth_m: 0.0,
-            nav_diffusion,
-            surfacing: None,
-            broadcasts_truth,
-        });
+        sc.cna.auv = Some(AuvCna { pitch_options: 1, depth: CruiseDepth::Metres(10.0), min_depth_m: 0.0 });
+        let walk = DeadReckoning { diffusion_m2_s, surfacing: None };
+        sc.cna.navigation =
+            if broadcasts_truth { CnaNavigation::Exact(walk) } else { CnaNavigation::DeadReckoning(walk) };
         let (r, _) = traced(&sc, "centroid", 5);
         r.fleet.error.mean
     };
@@ -611,7 +603,9 @@ fn a_filter_converting_with_the_cast_loses_the_profiles_range_bias() {
     let mut sc = Scenario::example().with_auvs(1);
     sc.duration_s = 1800.0;
     sc.fleet.depth = coopnav_core::DepthTarget::Depth { depth: 80.0 };
-    (sc.fleet.current, sc.fleet.init_position_sd, sc.cna.gps_sd) = ((0.0, 0.0), 0.0, 0.0);
+    (sc.fleet.current, sc.fleet.init_position_sd) = ((0.0, 0.0), 0.0);
+    sc.cna.navigation =
+        crate::models::cna_navigation::CnaNavigation::Gps(crate::models::cna_navigation::Gps { sd_m: 0.0 });
     let s = &mut sc.sensors;
     (s.speed_sd, s.compass_bias_step_deg, s.compass_white_deg, s.yaw_rate_white_deg_s) = (0.0, 0.0, 0.0, 0.0);
     sc.channel.range_error = RangeError::Gaussian { extra_sd: 0.0 };

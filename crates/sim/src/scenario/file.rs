@@ -142,9 +142,11 @@ pub fn overlay<T: Serialize + DeserializeOwned>(base: &T, patch: toml::Value) ->
     merged.try_into().map_err(|e: toml::de::Error| e.to_string())
 }
 
+/// `patch` merged into `into` key by key; a table whose `kind` the patch changes is replaced
+/// whole (a model of another kind keeps none of the old kind's fields).
 fn merge(into: &mut toml::Value, patch: toml::Value) {
     match (into, patch) {
-        (toml::Value::Table(a), toml::Value::Table(b)) => {
+        (toml::Value::Table(a), toml::Value::Table(b)) if b.get("kind").is_none_or(|k| a.get("kind") == Some(k)) => {
             for (k, v) in b {
                 match a.get_mut(&k) {
                     Some(slot) => merge(slot, v),
@@ -183,6 +185,19 @@ mod tests {
         assert_eq!(overlay(&base, patch).unwrap(), Outer { a: 1.0, inner: Inner { b: 2.0, c: 9.0 } });
         let bad: toml::Value = toml::from_str("[inner]\nd = 1.0\n").unwrap();
         assert!(overlay(&base, bad).unwrap_err().contains("unknown field"));
+    }
+
+    /// A patch that names another kind replaces the model; one of the same kind merges into it.
+    #[test]
+    fn overlay_replaces_a_model_whose_kind_the_patch_changes() {
+        let base: toml::Value = toml::from_str("m = { kind = \"gps\", sd_m = 2.0 }\nn = 1").unwrap();
+        let other: toml::Value = toml::from_str("m = { kind = \"walk\", d = 0.1 }").unwrap();
+        let replaced: toml::Value = overlay(&base, other).unwrap();
+        assert_eq!(replaced, toml::from_str::<toml::Value>("m = { kind = \"walk\", d = 0.1 }\nn = 1").unwrap());
+        let same: toml::Value = toml::from_str("m = { kind = \"gps\", extra = 3 }").unwrap();
+        let merged: toml::Value = overlay(&base, same).unwrap();
+        assert_eq!(merged["m"]["sd_m"].as_float(), Some(2.0));
+        assert_eq!(merged["m"]["extra"].as_integer(), Some(3));
     }
 
     #[derive(Debug, Deserialize)]

@@ -142,7 +142,7 @@ impl Scenario {
     /// [`Scenario::parse`] without the validation; positions in latitude/longitude are placed on
     /// the plane at `site.origin` (`scenario::site`).
     pub fn read(text: &str, file: &Path) -> Result<Self, ScenarioError> {
-        super::moved::refuse_old_form(text, file, super::moved::PLAN)?;
+        super::moved::refuse_old_form(text, file, &[&super::moved::PLAN])?;
         match super::site::resolved(text, file, &toml::Value::Table(toml::Table::new()))? {
             Some(tree) => scenario_file::parse_tree(tree, file, |_, _| Ok(())),
             None => scenario_file::parse(text, file, |_, _| Ok(())),

@@ -4,6 +4,7 @@
 
 use crate::models::buoy::{BuoySpec, MAX_BUOYS};
 use crate::models::channel::Channel;
+use crate::models::cna_navigation::CnaNavigation;
 use crate::models::filter::{FilterRate, FilterSoundSpeed, FilterSpec};
 use crate::models::finish::Finish;
 pub use crate::models::health::Health;
@@ -12,7 +13,6 @@ use crate::models::mower::MowerSpec;
 use crate::models::peer::{mask_width, StatusFormat, StatusTo};
 use crate::models::schedule::{longest_air, payload_problem, Fit, Owner, Schedule};
 use crate::models::ship::{ShipSpec, MAX_SHIPS};
-use crate::models::surfacing::Surfacing;
 use crate::models::tl_spec::TlModel;
 pub use crate::scenario::file::ScenarioError;
 use crate::scenario::file::{self as scenario_file, overlay, Problem, Problems};
@@ -191,8 +191,9 @@ fn one() -> f64 {
     1.0
 }
 
-/// The CNA: an autonomous surface craft with GPS, or (with `auv`) an AUV CNA that changes depth
-/// by pitch and broadcasts its own dead-reckoned position estimate.
+/// The CNA: an autonomous surface craft, or (with `auv`) an AUV CNA that changes depth by pitch;
+/// how it knows its own position, and so what position it broadcasts, is its `navigation` model
+/// ([`CnaNavigation`]).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Cna {
@@ -204,9 +205,9 @@ pub struct Cna {
     /// Turn-rate limit of the craft, deg/s (Table 5.1: 4).
     #[serde(default = "default_turn_rate")]
     pub max_turn_rate_deg_s: f64,
-    /// GPS position SD of the fix the CNA broadcasts, m (ASC).
-    #[serde(default = "one")]
-    pub gps_sd: f64,
+    /// How it navigates (default: GPS, [`CnaNavigation::default`]).
+    #[serde(default)]
+    pub navigation: CnaNavigation,
     /// An AUV CNA instead of an ASC.
     #[serde(default)]
     pub auv: Option<AuvCna>,
@@ -217,7 +218,9 @@ pub struct Cna {
     pub adcp_current: [f64; 2],
 }
 
-/// An AUV as the CNA (Hudson's AUV-CNA case: heading and pitch options).
+/// An AUV as the CNA (Hudson's AUV-CNA case: heading and pitch options): the vehicle; its
+/// navigation is `cna.navigation` (an AUV has no GPS below the surface: `dead-reckoning`, or the
+/// counterfactual `exact`).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct AuvCna {
@@ -231,17 +234,6 @@ pub struct AuvCna {
     /// only when not 0.
     #[serde(default, skip_serializing_if = "is_surface")]
     pub min_depth_m: f64,
-    /// Growth of the CNA's own horizontal position-error variance, m²/s per axis (a random walk:
-    /// what it broadcasts is its truth plus this error). Invented: no thesis value.
-    pub nav_diffusion: f64,
-    /// When it climbs for a GPS fix (None: never; [`Surfacing`]).
-    #[serde(default)]
-    pub surfacing: Option<Surfacing>,
-    /// A counterfactual, not a vehicle (`reproduce closed-loop-cna-navigation`): true =
-    /// the CNA broadcasts its TRUE position. Its navigation error is still drawn, its σ still grows
-    /// and it surfaces as configured; only no range or command carries the error. Default false.
-    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
-    pub broadcasts_truth: bool,
 }
 
 fn is_surface(depth: &f64) -> bool {
@@ -389,7 +381,8 @@ impl Scenario {
 
     /// [`Scenario::parse`] without the validation (for callers that check sizes first).
     pub fn read(text: &str, file: &Path) -> Result<Self, ScenarioError> {
-        crate::scenario::moved::refuse_old_form(text, file, crate::scenario::moved::SIMULATE)?;
+        use crate::scenario::moved::{refuse_old_form, CNA_NAVIGATION, SIMULATE};
+        refuse_old_form(text, file, &[&SIMULATE, &CNA_NAVIGATION])?;
         match site::resolved(text, file, &lawnmower_keys())? {
             Some(tree) => scenario_file::parse_tree(tree, file, |_, _| Ok(())),
             None => scenario_file::parse(text, file, |_, _| Ok(())),
@@ -598,7 +591,15 @@ impl Scenario {
         p.check("cna.heading_compass_deg", c.heading_compass_deg, |_| true, "a finite number");
         p.positive("cna.speed", c.speed);
         p.positive("cna.max_turn_rate_deg_s", c.max_turn_rate_deg_s);
-        p.non_negative("cna.gps_sd", c.gps_sd);
+        c.navigation.check_fields("cna.navigation.", p);
+        if c.auv.is_some() && c.navigation.is_gps() {
+            p.push(
+                "cna.navigation.kind",
+                "\"gps\" with cna.auv",
+                "\"dead-reckoning\" or \"exact\" for an AUV CNA (no GPS below the surface; it takes its fixes by \
+                 navigation.surfacing)",
+            );
+        }
         if let Some(a) = &c.auv {
             if a.pitch_options == 0 {
                 p.push("cna.auv.pitch_options", "0", ">= 1");
@@ -611,15 +612,11 @@ impl Scenario {
                     "0 <= depth < 100 m (the planner's AUV-CNA depth limits), or \"cast\"",
                 );
             }
-            p.non_negative("cna.auv.nav_diffusion", a.nav_diffusion);
             p.check("cna.auv.min_depth_m", a.min_depth_m, |v| (0.0..100.0).contains(&v), "0 <= min_depth_m < 100 m");
             if let CruiseDepth::Metres(z) = a.depth {
                 if z < a.min_depth_m {
                     p.push("cna.auv.depth", z.to_string(), format!(">= cna.auv.min_depth_m ({} m)", a.min_depth_m));
                 }
-            }
-            if let Some(s) = &a.surfacing {
-                s.validate("cna.auv.surfacing.", p);
             }
         }
     }
@@ -874,7 +871,11 @@ impl Scenario {
     pub fn mission_facts(&self) -> MissionFacts {
         MissionFacts {
             n_auvs: self.fleet.n_auvs,
-            cna: self.cna.auv.as_ref().map_or(CnaFact::Asc, |a| CnaFact::Auv { nav_diffusion_m2_s: a.nav_diffusion }),
+            cna: self
+                .cna
+                .auv
+                .as_ref()
+                .map_or(CnaFact::Asc, |_| CnaFact::Auv { nav_diffusion_m2_s: self.cna.navigation.diffusion_m2_s() }),
             adcp_current: self.cna.adcp_current,
             filters_estimate_current: matches!(self.filter.model, AuvModel::Current(_)),
         }
@@ -987,10 +988,16 @@ mod tests {
         assert_eq!((hudson.motion.heading_options, hudson.look_ahead), (5, 5));
         Scenario::bench().validate(Path::new("bench")).unwrap();
         // The commented-out options of the example are valid too.
-        let options =
-            EXAMPLE.replace("# status_adaptive", "status_adaptive").replace("# shelf", "shelf").replace("# auv", "auv");
+        // The AUV CNA's lines replace the ASC's navigation.
+        let options = EXAMPLE
+            .replace("# status_adaptive", "status_adaptive")
+            .replace("# shelf", "shelf")
+            .replace("navigation = { kind = \"gps\", sd_m = 1.0 }\n", "")
+            .replace("# navigation", "navigation")
+            .replace("# auv", "auv");
         let s = Scenario::parse(&options, Path::new("options.toml")).unwrap();
         assert!(s.comms.status_adaptive.is_some() && s.fleet.shelf.is_some() && s.cna.auv.is_some());
+        assert!(s.cna.navigation.surfacing().is_some() && s.cna.navigation.diffusion_m2_s() == 0.01);
         let survey_s = Scenario::bench().lawnmower(0).path_length() / 1.5;
         assert!(survey_s >= 3.0 * 3600.0 * 0.95, "bench survey lasts {survey_s} s");
     }
@@ -1279,15 +1286,10 @@ mod tests {
         assert!(e.contains("comms.cna_rate"), "{e}");
         let e = err(&EXAMPLE.replace("speed = 1.5", "speed = -1.5"));
         assert!(e.contains("fleet.speed"), "{e}");
-        let e = err(&EXAMPLE
-            .replace("gps_sd = 1.0", "gps_sd = 1.0\nauv = { pitch_options = 0, depth = 10.0, nav_diffusion = 0.01 }"));
+        let e = err(&EXAMPLE.replace(GPS, &format!("{DEAD_RECKONING}\nauv = {{ pitch_options = 0, depth = 10.0 }}")));
         assert!(e.contains("cna.auv.pitch_options"), "{e}");
-        let auv = |fields: &str| {
-            EXAMPLE.replace(
-                "gps_sd = 1.0",
-                &format!("gps_sd = 1.0\nauv = {{ pitch_options = 1, {fields}, nav_diffusion = 0.01 }}"),
-            )
-        };
+        let auv =
+            |fields: &str| EXAMPLE.replace(GPS, &format!("{DEAD_RECKONING}\nauv = {{ pitch_options = 1, {fields} }}"));
         let e = err(&auv("depth = 1.0, min_depth_m = 2.0"));
         assert!(e.contains("cna.auv.depth = 1") && e.contains(">= cna.auv.min_depth_m (2 m)"), "{e}");
         let e = err(&auv("depth = 10.0, min_depth_m = -1.0"));
@@ -1304,22 +1306,48 @@ mod tests {
         );
     }
 
+    /// The example's CNA navigation line, and an AUV CNA's in its place.
+    const GPS: &str = "navigation = { kind = \"gps\", sd_m = 1.0 }";
+    const DEAD_RECKONING: &str = "navigation = { kind = \"dead-reckoning\", diffusion_m2_s = 0.01 }";
+
     #[test]
     fn an_auv_cna_broadcasts_its_estimate_unless_the_file_asks_for_the_counterfactual() {
-        let auv = |extra: &str| {
-            let cna = format!("gps_sd = 1.0\nauv = {{ pitch_options = 1, depth = 10.0, nav_diffusion = 0.01{extra} }}");
-            Scenario::parse(&EXAMPLE.replace("gps_sd = 1.0", &cna), Path::new("a.toml")).unwrap()
+        let auv = |kind: &str| {
+            let cna = format!(
+                "navigation = {{ kind = \"{kind}\", diffusion_m2_s = 0.01 }}\nauv = {{ pitch_options = 1, depth = 10.0 }}"
+            );
+            Scenario::parse(&EXAMPLE.replace(GPS, &cna), Path::new("a.toml")).unwrap()
         };
-        let plain = auv("");
-        assert!(!plain.cna.auv.as_ref().unwrap().broadcasts_truth);
-        assert!(!toml::to_string(&plain).unwrap().contains("broadcasts_truth"), "the default is not written");
-        let exact = auv(", broadcasts_truth = true");
-        assert!(exact.cna.auv.as_ref().unwrap().broadcasts_truth);
+        let plain = auv("dead-reckoning");
+        assert_eq!(plain.cna.navigation.broadcast_error((3.0, 4.0)), (3.0, 4.0));
+        let exact = auv("exact");
+        assert_eq!(exact.cna.navigation.broadcast_error((3.0, 4.0)), (0.0, 0.0));
+        assert_eq!(exact.cna.navigation.diffusion_m2_s(), 0.01);
         let again = Scenario::parse(&toml::to_string(&exact).unwrap(), Path::new("a.toml")).unwrap();
-        assert_eq!(again.cna.auv, exact.cna.auv);
-        let cna =
-            "gps_sd = 1.0\nauv = { pitch_options = 1, depth = 10.0, nav_diffusion = 0.01, broadcasts_truth = \"yes\" }";
-        let e = err(&EXAMPLE.replace("gps_sd = 1.0", cna));
-        assert!(e.contains("broadcasts_truth") && e.contains("expected a boolean"), "{e}");
+        assert_eq!((again.cna.auv, again.cna.navigation), (exact.cna.auv, exact.cna.navigation));
+        let e = err(&EXAMPLE.replace(GPS, &format!("{GPS}\nauv = {{ pitch_options = 1, depth = 10.0 }}")));
+        assert!(e.contains("cna.navigation.kind") && e.contains("\"dead-reckoning\" or \"exact\""), "{e}");
+        let e = err(&EXAMPLE.replace(GPS, "navigation = { kind = \"gps\", sd_m = -1.0 }"));
+        assert!(e.contains("cna.navigation.sd_m"), "{e}");
+    }
+
+    /// A file in the old CNA form gets every moved key with its new place in one message.
+    #[test]
+    fn the_old_cna_keys_are_refused_with_their_new_places() {
+        let old = EXAMPLE.replace(
+            GPS,
+            "gps_sd = 1.0\nauv = { pitch_options = 1, depth = 10.0, nav_diffusion = 0.01, broadcasts_truth = true, \
+             surfacing = { when = { kind = \"period\", period_s = 900.0 }, fix_time_s = 60.0, gps_sd_m = 1.0 } }",
+        );
+        let e = err(&old);
+        for line in [
+            "cna.gps_sd -> cna.navigation = { kind = \"gps\", sd_m }",
+            "cna.auv.nav_diffusion -> cna.navigation = { kind = \"dead-reckoning\", diffusion_m2_s }",
+            "cna.auv.surfacing -> cna.navigation.surfacing",
+            "cna.auv.broadcasts_truth -> cna.navigation = { kind = \"exact\", diffusion_m2_s, surfacing }",
+        ] {
+            assert!(e.contains(&format!("\n  {line}")), "{line} missing from: {e}");
+        }
+        assert!(e.contains("4 moved key(s)") && e.contains("cna.navigation"), "{e}");
     }
 }
