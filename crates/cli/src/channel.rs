@@ -9,9 +9,9 @@ use coopnav_core::limits::{self, Estimate, MAX_POINTS};
 use coopnav_core::validation::{InvalidFields, Problems};
 use coopnav_core::{Bathymetry, CompassDeg, Heading, Shelf, Vec3};
 use coopnav_sim::output::plot::{line_svg, Labels, Series};
-use coopnav_sim::output::{Manifest, RunDir};
+use coopnav_sim::output::Manifest;
 use serde::Serialize;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 #[derive(Clone, Copy, Debug, clap::ValueEnum, Serialize)]
@@ -100,10 +100,8 @@ pub fn run(args: Args) -> Result<()> {
         Some(p) => Bathymetry::load(p)?,
         None => Bathymetry::shelf(&Shelf::default())?,
     };
-    let run = match &args.out {
-        Some(p) => RunDir::create_for(p, args.force, &args.bathymetry.as_deref().into_iter().collect::<Vec<_>>())?,
-        None => RunDir::create_fresh("runs", "channel")?,
-    };
+    let inputs: Vec<&Path> = args.bathymetry.as_deref().into_iter().collect();
+    let run = crate::run_dir::given_or_fresh(args.out.as_deref(), args.force, &inputs, "channel")?;
     let tl: Box<dyn TransmissionLoss> = match args.model {
         Model::Analytic => Box::new(Thorp { k: args.k, ..Thorp::default() }),
         Model::Bellhop => Box::new(Bellhop::new(AcousticEnv::nams(Arc::new(bathy)))?),

@@ -3,7 +3,7 @@
 //! of every mission's facts (missions.csv).
 
 use anyhow::{Context, Result};
-use coopnav_sim::output::{Manifest, RunDir};
+use coopnav_sim::output::Manifest;
 use coopnav_sim::scenario::generate::Ranges;
 use serde::Serialize;
 use std::path::PathBuf;
@@ -51,10 +51,7 @@ pub fn run(args: Args) -> Result<()> {
     ranges.seed = args.seed.unwrap_or(ranges.seed);
     ranges.missions = args.missions.unwrap_or(ranges.missions);
     ranges.validate(&args.file)?;
-    let dir = match &args.out {
-        Some(p) => RunDir::create_for(p, args.force, &[&args.file])?,
-        None => RunDir::create_fresh("runs", "generate")?,
-    };
+    let dir = crate::run_dir::given_or_fresh(args.out.as_deref(), args.force, &[&args.file], "generate")?;
     let missions = ranges.generate(&args.file)?;
     let mut rows = Vec::new();
     for m in &missions {

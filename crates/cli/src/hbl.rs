@@ -2,6 +2,7 @@
 
 use crate::alog_import;
 use crate::input::{self, Format};
+use crate::run_dir::given_or_fresh;
 use anyhow::{Context, Result};
 use coopnav_core::limits;
 use coopnav_nav::cycle::Configuration;
@@ -181,16 +182,8 @@ impl Common {
     /// The run directory of `hbl COMMAND`: the one `-o` names (refused when it holds anything but
     /// a run of coopnav's, or one of `inputs`), else a fresh `runs/hbl-COMMAND`.
     fn run_dir(&self, command: &str, inputs: &[&Path]) -> Result<RunDir> {
-        output_dir(self.out.as_deref(), self.force, command, inputs)
+        given_or_fresh(self.out.as_deref(), self.force, inputs, &format!("hbl-{command}"))
     }
-}
-
-/// `-o DIR` when given, else a fresh `runs/hbl-COMMAND`.
-fn output_dir(out: Option<&Path>, force: bool, command: &str, inputs: &[&Path]) -> Result<RunDir> {
-    Ok(match out {
-        Some(p) => RunDir::create_for(p, force, inputs)?,
-        None => RunDir::create_fresh("runs", &format!("hbl-{command}"))?,
-    })
 }
 
 fn scenario(c: &Common) -> Result<Scenario> {
@@ -621,7 +614,7 @@ fn postprocess(
         eprintln!("warning: {}: {w}", log.display());
     }
     let inputs: Vec<&Path> = [Some(log), alog_map, config].into_iter().flatten().collect();
-    let dir = output_dir(out, force, "postprocess", &inputs)?;
+    let dir = given_or_fresh(out, force, &inputs, "hbl-postprocess")?;
     let time_origin_unix = match field_log.time {
         TimeBase::Unix { origin } => Some(origin),
         TimeBase::Relative => None,

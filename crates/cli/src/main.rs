@@ -18,6 +18,7 @@ mod nams;
 mod plan;
 mod post_report;
 mod reproduce;
+mod run_dir;
 mod scenario_args;
 mod simulate;
 mod sitl;

@@ -13,7 +13,7 @@ use coopnav_core::limits;
 use coopnav_core::{Bathymetry, Vec3};
 use coopnav_sim::batch::nams::{run_experiment, ExperimentTl};
 use coopnav_sim::batch::work;
-use coopnav_sim::output::{Manifest, RunDir};
+use coopnav_sim::output::Manifest;
 use coopnav_sim::scenario::nams::ExperimentConfig;
 use indicatif::ProgressBar;
 use serde::{Deserialize, Serialize};
@@ -127,10 +127,8 @@ pub fn run(args: Args) -> Result<()> {
     };
     limits::check(work::nams(&file.experiment), args.allow_large)?;
     let tl = provider(&file.tl, &file.experiment)?;
-    let run = match &args.out {
-        Some(p) => RunDir::create_for(p, args.force, &args.file.as_deref().into_iter().collect::<Vec<_>>())?,
-        None => RunDir::create_fresh("runs", "nams")?,
-    };
+    let inputs: Vec<&Path> = args.file.as_deref().into_iter().collect();
+    let run = crate::run_dir::given_or_fresh(args.out.as_deref(), args.force, &inputs, "nams")?;
     let cfg = &file.experiment;
     let pb = ProgressBar::new((cfg.scenarios.len() * cfg.behaviours.len() * cfg.runs) as u64);
     let result = run_experiment(cfg, &ExperimentTl::Shared(tl), &|k| pb.inc(k))?;

@@ -116,9 +116,6 @@ impl<C: ScenarioCommand> ScenarioArgs<C> {
     /// `runs/<RUN_PREFIX>-<stem>`.
     /// `inputs` are the files the command reads: a directory holding one is never replaced.
     pub fn run_dir(&self, stem: &str, inputs: &[&Path]) -> Result<RunDir> {
-        Ok(match &self.output {
-            Some(o) => RunDir::create_for(o, self.force, inputs)?,
-            None => RunDir::create_fresh("runs", &format!("{}-{stem}", C::RUN_PREFIX))?,
-        })
+        crate::run_dir::given_or_fresh(self.output.as_deref(), self.force, inputs, &format!("{}-{stem}", C::RUN_PREFIX))
     }
 }
