@@ -33,4 +33,4 @@ if command -v systemctl >/dev/null 2>&1 && [ -d /run/systemd/system ]; then
   $sudo systemctl disable --now slurmctld slurmd munge >/dev/null 2>&1 || true
 fi
 have_all
-echo "Slurm $(dpkg-query -W -f "${Version}" slurmd 2>/dev/null) and MUNGE installed"
+echo "Slurm $(dpkg-query -W -f '${Version}' slurmd 2>/dev/null) and MUNGE installed"
