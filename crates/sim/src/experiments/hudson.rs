@@ -1,21 +1,20 @@
 //! Reproductions of Hudson (2012): the Sec. 5.3 variable-depth sweeps (Tables 5.3–5.9), the
 //! Appendix A / Table 6.1 pre-deployment sweep, and the Sec. 5.1–5.2 distance-penalty cases.
 //!
-//! The thesis geometry is partly lost (docs/models.md#hudson-geometry), so each experiment runs a canonical geometry
-//! recorded here, checks properties and trends, and compares every thesis number it prints in the
-//! bands of docs/models.md#hudson-bands:
-//! - Sec. 5.3 (invented, docs/models.md#hudson-geometry): survey AUV k covers x ∈ [100k, 100k + 100] with four 500 m
-//!   lanes northward, 25 m apart, at 1.5 m/s; depth z̄_k + 10·sin(2πt/T_k) with
-//!   z̄ = 70, 60, 50, 45, 40 m and T = 600, 500, 700, 450, 550 s; CNA from (140, 0, 0) heading
-//!   east; τ = 10 s; penalty case 1 (the trials' Orig. + doubling).
-//! - Table 6.1 (invented; the thesis's survey path is lost): one AUV on a 200 m × 100 m lawnmower
-//!   (five lanes 25 m apart) at
-//!   1 m/s and 90 m, CNA from (140, 0, 0); τ = 30 s; penalty case 1.
-//! - Sec. 5.2: 500 m × 1500 m areas side by side (five lanes 100 m apart, spacing invented),
-//!   constant 90 m depth, CNA speed 1.5 m/s, A = 5 (τ and A invented).
+//! The thesis geometry is partly lost (docs/models.md#hudson-geometry), so each experiment flies
+//! a canonical geometry written as a pre-deployment scenario file under `scenarios/hudson/` (the
+//! survey tracks, the CNA's start, τ, the penalty case and the bearing model; each file's header
+//! says what is stated and what invented), checks properties and trends, and compares every
+//! thesis number it prints in the bands of docs/models.md#hudson-bands:
+//! - Sec. 5.3 (`sec-5.3.toml`): five AUVs on 100 m × 500 m areas at sinusoidal depths, τ = 10 s,
+//!   penalty case 1, the 3-D bearing.
+//! - Table 6.1 and Appendix A (`table-6.1.toml`): one AUV on a 200 m × 100 m lawnmower at 90 m,
+//!   τ = 30 s, penalty case 1, the horizontal bearing.
+//! - Sec. 5.1–5.2 (`sec-5.2.toml`): 500 m × 1500 m areas side by side at 90 m, τ = 10 s, the
+//!   horizontal bearing; the CNA at 1.5 m/s with A = 5.
 //!
 //! Bearing model (docs/models.md#hudson-error-model): no one model gives both the Sec. 5.3 and the
-//! Table 6.1 results, so each experiment names its own (`BEARING_53`, `BEARING_61`); the
+//! Table 6.1 results, so each geometry file names its own; the
 //! configuration default stays the horizontal bearing (`coopnav_plan::BearingMode`). With the
 //! horizontal bearing an AUV CNA scores exactly like the ASC in most Sec. 5.3 tables (its pitch
 //! only shortens its step); with the 3-D bearing the thesis's CNA-kind ordering returns, among
@@ -23,37 +22,68 @@
 //! with the horizontal bearing only.
 
 use super::{Band, Check, ExperimentError, ReproOptions, ReproReport, Size, ThesisNumber, ThesisTable, Verdict};
-use coopnav_core::{DepthProfile, Heading, Lawnmower, Track, Vec3};
+use crate::scenario::plan::Scenario as PlanScenario;
+use coopnav_core::{Track, Vec3};
 use coopnav_plan::predeploy::{self, Mission, Summary};
 use coopnav_plan::{
-    BearingMode, CnaKind, CnaPose, Deadline, DistanceLimits, ErrorModel, LookAheadPlanner, MotionConfig, PenaltyCase,
-    PlannerConfig, SearchConfig,
+    BearingMode, CnaKind, Deadline, LookAheadPlanner, MotionConfig, PenaltyCase, PlannerConfig, SearchConfig,
 };
 use rayon::prelude::*;
 use serde::Serialize;
 use std::fmt::Write;
+use std::path::Path;
 
-/// One planner set-up of a sweep.
+/// One planner set-up of a sweep, in the thesis's letters in its reports (B, s, A, L).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct Setup {
     /// Pitch options B; 0 = ASC CNA.
-    pub b: usize,
-    pub speed: f64,
-    pub a: usize,
-    pub l: usize,
+    #[serde(rename = "b")]
+    pub pitch_options: usize,
+    /// The CNA's speed s, m/s.
+    #[serde(rename = "speed")]
+    pub cna_speed: f64,
+    /// Heading options A.
+    #[serde(rename = "a")]
+    pub heading_options: usize,
+    /// Look-ahead levels L.
+    #[serde(rename = "l")]
+    pub look_ahead: usize,
 }
 
 impl Setup {
     fn cna(&self) -> CnaKind {
-        if self.b == 0 {
+        if self.pitch_options == 0 {
             CnaKind::Asc {}
         } else {
-            CnaKind::auv(self.b)
+            CnaKind::auv(self.pitch_options)
         }
     }
+    /// `base` (the geometry file's planner) with this set-up's CNA kind, speed, A and L, each
+    /// decision searched on one thread (many runs go in parallel) with no deadline (offline).
+    fn planner(&self, base: &PlannerConfig) -> PlannerConfig {
+        PlannerConfig {
+            look_ahead: self.look_ahead,
+            motion: MotionConfig {
+                speed: self.cna_speed,
+                heading_options: self.heading_options,
+                cna: self.cna(),
+                ..base.motion
+            },
+            search: SearchConfig { parallel: false, deadline: Deadline::None, ..base.search },
+            ..base.clone()
+        }
+    }
+
+    /// The tree's leaves, (A·max(B, 1))^(L+1).
+    fn leaves(&self) -> f64 {
+        ((self.heading_options * self.pitch_options.max(1)) as f64).powi(self.look_ahead as i32 + 1)
+    }
     fn label(&self) -> String {
-        let b = if self.b == 0 { "-".to_string() } else { self.b.to_string() };
-        format!("{:<4}{:>5.2}{:>3}{:>3}{:>3}", if self.b == 0 { "ASC" } else { "AUV" }, self.speed, self.a, b, self.l)
+        let (kind, b) = match self.pitch_options {
+            0 => ("ASC", "-".to_string()),
+            b => ("AUV", b.to_string()),
+        };
+        format!("{kind:<4}{:>5.2}{:>3}{b:>3}{:>3}", self.cna_speed, self.heading_options, self.look_ahead)
     }
 }
 
@@ -64,122 +94,57 @@ pub struct Row {
     pub summary: Summary,
 }
 
-/// The Sec. 5.3 sweeps (Tables 5.3–5.9) measure the bearing change in 3-D: the thesis's AUV CNAs
-/// win there because depth changes turn the line of sight (module doc).
-const BEARING_53: BearingMode = BearingMode::Slant3d;
-/// Table 6.1 and the penalty cases keep the horizontal bearing: its 2.22 m floor (module doc).
-const BEARING_61: BearingMode = BearingMode::Horizontal;
+/// A geometry of `scenarios/hudson/`: a pre-deployment scenario file (`coopnav plan` reads it
+/// too) with the survey AUVs' tracks, the CNA's start, and the planner's decision period,
+/// penalties and error model; each set-up of a sweep sets the CNA's kind, speed, A, B and L.
+struct Geometry {
+    /// The file, as messages name it.
+    file: &'static str,
+    text: &'static str,
+}
 
-fn planner(s: &Setup, tau: f64, case: PenaltyCase, bearing: BearingMode) -> PlannerConfig {
-    PlannerConfig {
-        look_ahead: s.l,
-        motion: MotionConfig { speed: s.speed, tau, heading_options: s.a, max_turn_rate_deg_s: 4.0, cna: s.cna() },
-        error: ErrorModel { bearing, ..ErrorModel::default() },
-        cost: coopnav_plan::CostSpec::Hudson,
-        limits: DistanceLimits::default(),
-        penalties: case.penalties(),
-        // Many runs go in parallel, so each decision searches on one thread; no deadline (offline).
-        search: SearchConfig { parallel: false, deadline: Deadline::None, ..SearchConfig::default() },
+/// Sec. 5.1–5.2: 500 m × 1500 m areas side by side, constant 90 m depth.
+const SEC_52: Geometry =
+    Geometry { file: "scenarios/hudson/sec-5.2.toml", text: include_str!("../../../../scenarios/hudson/sec-5.2.toml") };
+/// Sec. 5.3 (Tables 5.3–5.9): 100 m × 500 m areas, sinusoidal depths, the 3-D bearing.
+const SEC_53: Geometry =
+    Geometry { file: "scenarios/hudson/sec-5.3.toml", text: include_str!("../../../../scenarios/hudson/sec-5.3.toml") };
+/// Table 6.1 and Appendix A: one AUV on a 200 m × 100 m lawnmower, τ = 30 s.
+const TABLE_61: Geometry = Geometry {
+    file: "scenarios/hudson/table-6.1.toml",
+    text: include_str!("../../../../scenarios/hudson/table-6.1.toml"),
+};
+
+impl Geometry {
+    /// The file's mission flown by its first `n` survey AUVs, stopped at `end` if that comes
+    /// before the shortest of their tracks ends.
+    fn mission(&self, n: usize, end: Option<f64>) -> Result<Mission, ExperimentError> {
+        let file = Path::new(self.file);
+        let scenario = PlanScenario::parse(self.text, file).map_err(|e| fail(self.file, e.to_string()))?;
+        if n > scenario.auv.len() {
+            return Err(fail(self.file, format!("{n} survey AUVs asked for, the file has {}", scenario.auv.len())));
+        }
+        let mut m = scenario.build(file, Path::new(".")).map_err(|e| fail(self.file, e.to_string()))?;
+        m.names.truncate(n);
+        m.tracks.truncate(n);
+        m.sigma0.truncate(n);
+        m.eps0.truncate(n);
+        let data_end = m.tracks.iter().map(Track::end_time).fold(f64::INFINITY, f64::min);
+        m.end_time = end.map_or(data_end, |e| e.min(data_end));
+        Ok(m)
     }
-}
-
-/// Survey areas side by side going east from (0, 0): AUV k flies `lanes` northward lanes of
-/// `length` m, `spacing` m apart, starting at x = k·width.
-#[derive(Clone, Copy)]
-struct Areas {
-    width: f64,
-    length: f64,
-    spacing: f64,
-    lanes: usize,
-}
-
-/// Sec. 5.2 (stated): 500 m × 1500 m areas; the lane spacing (100 m) is invented.
-const AREAS_52: Areas = Areas { width: 500.0, length: 1500.0, spacing: 100.0, lanes: 5 };
-/// Sec. 5.3 (area size lost, docs/models.md#hudson-geometry): 100 m × 500 m areas, four lanes 25 m apart. Invented,
-/// and chosen among 500×1500, 200×600 and 100×500 as the one whose costs have the thesis
-/// tables' magnitude (N = 2 and N = 5 best rows); it is not a fit.
-const AREAS_53: Areas = Areas { width: 100.0, length: 500.0, spacing: 25.0, lanes: 4 };
-
-fn adjacent_lawnmowers(n: usize, areas: Areas, variable_depth: bool) -> Result<Vec<Track>, ExperimentError> {
-    const MEAN: [f64; 5] = [70.0, 60.0, 50.0, 45.0, 40.0];
-    const PERIOD: [f64; 5] = [600.0, 500.0, 700.0, 450.0, 550.0];
-    (0..n)
-        .map(|k| {
-            let depth = if variable_depth {
-                DepthProfile::Sinusoid { mean: MEAN[k % 5], amplitude: 10.0, period: PERIOD[k % 5] }
-            } else {
-                DepthProfile::Constant { depth: 90.0 }
-            };
-            let m = Lawnmower {
-                origin: (areas.width * k as f64, 0.0),
-                lane_heading: Heading::from_radians(std::f64::consts::FRAC_PI_2),
-                lane_length: areas.length,
-                spacing: -areas.spacing,
-                lanes: areas.lanes,
-                speed: 1.5,
-                depth,
-            };
-            m.track(1.0).map_err(|e| fail("track", e.to_string()))
-        })
-        .collect()
-}
-
-/// The Table 6.1 survey (invented: docs/models.md#hudson-geometry).
-fn small_lawnmower() -> Result<Vec<Track>, ExperimentError> {
-    let m = Lawnmower {
-        origin: (0.0, 0.0),
-        lane_heading: Heading::from_radians(std::f64::consts::FRAC_PI_2),
-        lane_length: 200.0,
-        spacing: -25.0,
-        lanes: 5,
-        speed: 1.0,
-        depth: DepthProfile::Constant { depth: 90.0 },
-    };
-    Ok(vec![m.track(1.0).map_err(|e| fail("track", e.to_string()))?])
 }
 
 fn fail(id: &str, message: String) -> ExperimentError {
     ExperimentError::Failed { id: id.into(), message }
 }
 
-fn mission(tracks: &[Track], cfg: PlannerConfig, start: Vec3, end_time: Option<f64>) -> Mission {
-    let data_end = tracks.iter().map(Track::end_time).fold(f64::INFINITY, f64::min);
-    Mission {
-        planner: cfg,
-        cna: CnaPose { pos: start, heading: Heading::from_radians(0.0), pitch: 0.0 },
-        names: (1..=tracks.len()).map(|k| format!("auv{k}")).collect(),
-        tracks: tracks.to_vec(),
-        sigma0: vec![1.0; tracks.len()],
-        eps0: vec![1.0; tracks.len()],
-        start_time: 0.0,
-        end_time: end_time.map_or(data_end, |e| e.min(data_end)),
-    }
-}
-
-/// How one sweep is run: decision period, penalty case and bearing model.
-#[derive(Clone, Copy)]
-struct Model {
-    tau: f64,
-    case: PenaltyCase,
-    bearing: BearingMode,
-}
-
-/// Sec. 5.3: τ = 10 s, case 1, 3-D bearing.
-const MODEL_53: Model = Model { tau: 10.0, case: PenaltyCase::C1, bearing: BEARING_53 };
-
-/// Runs every set-up (in parallel, merged in order).
-fn sweep(
-    id: &str,
-    setups: &[Setup],
-    model: Model,
-    tracks: &[Track],
-    start: Vec3,
-    end: Option<f64>,
-) -> Result<Vec<Row>, ExperimentError> {
+/// Runs every set-up on `base` (in parallel, merged in order).
+fn sweep(id: &str, setups: &[Setup], base: &Mission) -> Result<Vec<Row>, ExperimentError> {
     setups
         .par_iter()
         .map(|s| {
-            let m = mission(tracks, planner(s, model.tau, model.case, model.bearing), start, end);
+            let m = Mission { planner: s.planner(&base.planner), ..base.clone() };
             let mut p = LookAheadPlanner::new(m.planner).map_err(|e| fail(id, e.to_string()))?;
             let r = predeploy::run(&m, &mut p, &|_| {}).map_err(|e| fail(id, e.to_string()))?;
             Ok(Row { setup: *s, summary: r.summary })
@@ -303,8 +268,8 @@ fn grid_53(size: Size, thesis: &[ThesisRow]) -> Grid {
         for &speed in &speeds {
             for &a in &a_set {
                 for &l in &ls {
-                    let leaves = ((a * b.max(1)) as f64).powi(l as i32 + 1);
-                    let setup = Setup { b, speed, a, l };
+                    let setup = Setup { pitch_options: b, cna_speed: speed, heading_options: a, look_ahead: l };
+                    let leaves = setup.leaves();
                     let thesis_row = size == Size::Full && thesis.iter().any(|t| thesis_setup(t) == setup);
                     let into = if leaves <= FULL_LEAF_CAP || thesis_row { &mut grid.run } else { &mut grid.skipped };
                     into.push(setup);
@@ -325,10 +290,9 @@ fn table_53(
     thesis: &[ThesisRow],
     opts: &ReproOptions,
 ) -> Result<ReproReport, ExperimentError> {
-    let tracks = adjacent_lawnmowers(n, AREAS_53, true)?;
     let end = (opts.size == Size::Reduced).then_some(REDUCED_END_53);
     let Grid { run: setups, skipped } = grid_53(opts.size, thesis);
-    let mut rows = sweep(id, &setups, MODEL_53, &tracks, Vec3::new(140.0, 0.0, 0.0), end)?;
+    let mut rows = sweep(id, &setups, &SEC_53.mission(n, end)?)?;
     rows.sort_by(|x, y| sort.key(&x.summary).total_cmp(&sort.key(&y.summary)));
     let mut table = String::new();
     let _ = writeln!(
@@ -357,7 +321,7 @@ fn table_53(
                 )
             })
             .unwrap_or_default();
-        let ts = Setup { b: if t.0 { t.3 } else { 0 }, speed: t.1, a: t.2, l: t.4 };
+        let ts = thesis_setup(t);
         let not_run = if skipped.contains(&ts) { "  not run" } else { "" };
         let _ = writeln!(table, "{ours:<42}| {} {:>7.1}{:>5.2}{:>5.2}{not_run}", ts.label(), t.5, t.6, t.7);
     }
@@ -388,7 +352,7 @@ const BAND_COST_53: Band = Band::Relative { percent: 44.0 };
 
 /// The thesis row's set-up.
 fn thesis_setup(t: &ThesisRow) -> Setup {
-    Setup { b: if t.0 { t.3 } else { 0 }, speed: t.1, a: t.2, l: t.4 }
+    Setup { pitch_options: if t.0 { t.3 } else { 0 }, cna_speed: t.1, heading_options: t.2, look_ahead: t.4 }
 }
 
 /// Each thesis row's cost, max and RMS error beside ours for the same set-up (`None` when the
@@ -408,7 +372,10 @@ fn thesis_numbers_53(rows: &[Row], thesis: &[ThesisRow], full: bool) -> Vec<Thes
 
 /// Best value of the sort key among AUV-CNA (`auv`) or ASC set-ups.
 fn best_of_kind(rows: &[Row], sort: SortBy, auv: bool) -> f64 {
-    rows.iter().filter(|r| (r.setup.b > 0) == auv).map(|r| sort.key(&r.summary)).fold(f64::INFINITY, f64::min)
+    rows.iter()
+        .filter(|r| (r.setup.pitch_options > 0) == auv)
+        .map(|r| sort.key(&r.summary))
+        .fold(f64::INFINITY, f64::min)
 }
 
 /// The CNA kind on top: the AUV CNA when its best beats the ASC's best.
@@ -463,17 +430,17 @@ fn cna_kind_order(
     if check.passed() {
         return Ok(check);
     }
-    let other = match BEARING_53 {
+    let mut base = SEC_53.mission(n, end)?;
+    let other = match base.planner.error.bearing {
         BearingMode::Slant3d => BearingMode::Horizontal,
         _ => BearingMode::Slant3d,
     };
+    base.planner.error.bearing = other;
     let mut best: Vec<Setup> = Vec::new();
     for auv_kind in [true, false] {
-        best.extend(rows.iter().filter(|r| (r.setup.b > 0) == auv_kind).take(5).map(|r| r.setup));
+        best.extend(rows.iter().filter(|r| (r.setup.pitch_options > 0) == auv_kind).take(5).map(|r| r.setup));
     }
-    let tracks = adjacent_lawnmowers(n, AREAS_53, true)?;
-    let model = Model { bearing: other, ..MODEL_53 };
-    let again = sweep(id, &best, model, &tracks, Vec3::new(140.0, 0.0, 0.0), end)?;
+    let again = sweep(id, &best, &base)?;
     let (other_auv, other_asc) = (best_of_kind(&again, sort, true), best_of_kind(&again, sort, false));
     let cause = bearing_cause(thesis_auv_on_top, other_auv, other_asc, other);
     let check = match cause {
@@ -490,19 +457,19 @@ fn cna_kind_order(
 }
 
 fn checks_53(rows: &[Row], setups: &[Setup]) -> Vec<Check> {
-    let max_speed = setups.iter().map(|s| s.speed).fold(0.0, f64::max);
-    let max_l = setups.iter().map(|s| s.l).max().unwrap_or(0);
+    let max_speed = setups.iter().map(|s| s.cna_speed).fold(0.0, f64::max);
+    let max_l = setups.iter().map(|s| s.look_ahead).max().unwrap_or(0);
     let best = &rows[0];
     // Best cost among set-ups at the top speed vs the lowest speed.
     let best_at = |pred: &dyn Fn(&Setup) -> bool| {
         rows.iter().filter(|r| pred(&r.setup)).map(|r| r.summary.average_cost).fold(f64::INFINITY, f64::min)
     };
-    let (fast, slow) = (best_at(&|s| s.speed == max_speed), best_at(&|s| s.speed < max_speed));
-    let (deep, shallow) = (best_at(&|s| s.l == max_l), best_at(&|s| s.l == 0));
+    let (fast, slow) = (best_at(&|s| s.cna_speed == max_speed), best_at(&|s| s.cna_speed < max_speed));
+    let (deep, shallow) = (best_at(&|s| s.look_ahead == max_l), best_at(&|s| s.look_ahead == 0));
     vec![
         Check::new(
             "best set-up uses the highest CNA speed",
-            best.setup.speed == max_speed,
+            best.setup.cna_speed == max_speed,
             format!(
                 "best {} (cost {:.1}); top speed {max_speed} m/s best {fast:.1} vs slower best {slow:.1}",
                 best.setup.label(),
@@ -522,18 +489,15 @@ fn checks_53(rows: &[Row], setups: &[Setup]) -> Vec<Check> {
 fn per_auv_trend(opts: &ReproOptions) -> Result<(Vec<f64>, Check), ExperimentError> {
     let end = (opts.size == Size::Reduced).then_some(REDUCED_END_53);
     let (a_set, l_max) = if opts.size == Size::Reduced { (vec![3, 5], 2) } else { (vec![3, 5, 7], 3) };
-    let setups: Vec<Setup> =
-        a_set.iter().flat_map(|&a| (0..=l_max).map(move |l| Setup { b: 0, speed: 4.0, a, l })).collect();
+    let setups: Vec<Setup> = a_set
+        .iter()
+        .flat_map(|&a| {
+            (0..=l_max).map(move |l| Setup { pitch_options: 0, cna_speed: 4.0, heading_options: a, look_ahead: l })
+        })
+        .collect();
     let per: Vec<f64> = (1..=5)
         .map(|n| {
-            let rows = sweep(
-                "hudson-table-5.3",
-                &setups,
-                MODEL_53,
-                &adjacent_lawnmowers(n, AREAS_53, true)?,
-                Vec3::new(140.0, 0.0, 0.0),
-                end,
-            )?;
+            let rows = sweep("hudson-table-5.3", &setups, &SEC_53.mission(n, end)?)?;
             Ok(rows.iter().map(|r| r.summary.average_cost).fold(f64::INFINITY, f64::min) / n as f64)
         })
         .collect::<Result<_, ExperimentError>>()?;
@@ -616,13 +580,11 @@ fn sweep_61(id: &str, opts: &ReproOptions) -> Result<Vec<Row>, ExperimentError> 
         let l_max = if opts.size == Size::Reduced { 2 } else { L_MAX_61[a - 2] };
         for l in 0..=l_max {
             for &speed in &speeds {
-                setups.push(Setup { b: 0, speed, a, l });
+                setups.push(Setup { pitch_options: 0, cna_speed: speed, heading_options: a, look_ahead: l });
             }
         }
     }
-    let tracks = small_lawnmower()?;
-    let model = Model { tau: 30.0, case: PenaltyCase::C1, bearing: BEARING_61 };
-    let mut rows = sweep(id, &setups, model, &tracks, Vec3::new(140.0, 0.0, 0.0), None)?;
+    let mut rows = sweep(id, &setups, &TABLE_61.mission(1, None)?)?;
     rows.sort_by(|x, y| {
         x.summary.rms_error.total_cmp(&y.summary.rms_error).then(x.summary.max_error.total_cmp(&y.summary.max_error))
     });
@@ -636,7 +598,9 @@ const BAND_M_61: Band = Band::Absolute { plus_minus: 0.10 };
 
 /// Ours for set-up (A, L, s) of an ASC sweep, if it ran.
 fn asc_row(rows: &[Row], a: usize, l: usize, speed: f64) -> Option<&Summary> {
-    rows.iter().find(|r| r.setup == Setup { b: 0, speed, a, l }).map(|r| &r.summary)
+    rows.iter()
+        .find(|r| r.setup == Setup { pitch_options: 0, cna_speed: speed, heading_options: a, look_ahead: l })
+        .map(|r| &r.summary)
 }
 
 /// The thesis's max and RMS error of set-up (A, L, s) beside ours.
@@ -664,19 +628,29 @@ fn t61(opts: &ReproOptions) -> Result<ReproReport, ExperimentError> {
         let _ = writeln!(
             table,
             "     {:>3}{:>3}{:>5.2}{:>6.2}{:>6.2}{:10}|        {:>3}{:>3}{:>5.2}{:>6.2}{:>6.2}",
-            r.setup.a, r.setup.l, r.setup.speed, r.summary.max_error, r.summary.rms_error, "", t.0, t.1, t.2, t.3, t.4
+            r.setup.heading_options,
+            r.setup.look_ahead,
+            r.setup.cna_speed,
+            r.summary.max_error,
+            r.summary.rms_error,
+            "",
+            t.0,
+            t.1,
+            t.2,
+            t.3,
+            t.4
         );
     }
     let best = &rows[0];
     let greedy2 = rows
         .iter()
-        .filter(|r| r.setup.a == 2 && r.setup.l == 0)
+        .filter(|r| r.setup.heading_options == 2 && r.setup.look_ahead == 0)
         .map(|r| r.summary.rms_error)
         .fold(f64::INFINITY, f64::min);
     let checks = vec![
         Check::new(
             "best set-ups use high CNA speed (>= 3 m/s)",
-            rows[..5].iter().all(|r| r.setup.speed >= 3.0),
+            rows[..5].iter().all(|r| r.setup.cna_speed >= 3.0),
             rows[..5].iter().map(|r| r.setup.label()).collect::<Vec<_>>().join("; "),
         ),
         Check::new(
@@ -760,15 +734,16 @@ fn penalty_cases(opts: &ReproOptions) -> Result<ReproReport, ExperimentError> {
     let mut checks = Vec::new();
     let mut data = Vec::new();
     for n in [2usize, 5] {
-        let tracks = adjacent_lawnmowers(n, AREAS_52, false)?;
+        let base = SEC_52.mission(n, end)?;
         let jobs: Vec<(PenaltyCase, usize)> =
             PenaltyCase::ALL.iter().flat_map(|&c| ls.iter().map(move |&l| (c, l))).collect();
         let rows: Vec<(PenaltyCase, usize, Summary)> = jobs
             .par_iter()
             .map(|&(case, l)| {
-                let s = Setup { b: 0, speed: 1.5, a: 5, l };
-                let model = Model { tau: 10.0, case, bearing: BEARING_61 };
-                let r = sweep(id, &[s], model, &tracks, Vec3::new(140.0, 0.0, 0.0), end)?;
+                let s = Setup { pitch_options: 0, cna_speed: 1.5, heading_options: 5, look_ahead: l };
+                let mut m = base.clone();
+                m.planner.penalties = case.penalties();
+                let r = sweep(id, &[s], &m)?;
                 Ok((case, l, r[0].summary.clone()))
             })
             .collect::<Result<_, ExperimentError>>()?;
@@ -857,8 +832,9 @@ fn penalty_cases(opts: &ReproOptions) -> Result<ReproReport, ExperimentError> {
     Ok(ReproReport::new(id.into(), table, checks, serde_json::Value::Array(data)))
 }
 
-/// One AUV on a straight northward line from (0, 0, 90); the CNA starts 1.05 km east of it.
-/// Returns the max distance over the second half with case 1 and with case 2.
+/// Sec. 5.2's planner and first AUV, flying a straight northward line from (0, 0, 90) in place of
+/// its lawnmower, with the CNA starting 1.05 km east of it. Returns the max distance over the
+/// second half with case 1 and with case 2.
 fn far_start_drift(opts: &ReproOptions) -> Result<(f64, f64), ExperimentError> {
     let end = if opts.size == Size::Reduced { 2000.0 } else { 5000.0 };
     let track = Track::new(vec![
@@ -866,10 +842,13 @@ fn far_start_drift(opts: &ReproOptions) -> Result<(f64, f64), ExperimentError> {
         coopnav_core::TrackSample { t: end, pos: Vec3::new(0.0, 1.5 * end, 90.0) },
     ])
     .map_err(|e| fail("drift", e.to_string()))?;
-    let run = |case| -> Result<f64, ExperimentError> {
-        let s = Setup { b: 0, speed: 1.5, a: 5, l: 0 };
-        let cfg = planner(&s, 10.0, case, BEARING_61);
-        let m = mission(std::slice::from_ref(&track), cfg, Vec3::new(1046.0, 0.0, 0.0), None);
+    let mut base = SEC_52.mission(1, None)?;
+    (base.tracks, base.end_time) = (vec![track], end);
+    base.cna.pos = Vec3::new(1046.0, 0.0, 0.0);
+    let run = |case: PenaltyCase| -> Result<f64, ExperimentError> {
+        let s = Setup { pitch_options: 0, cna_speed: 1.5, heading_options: 5, look_ahead: 0 };
+        let mut m = Mission { planner: s.planner(&base.planner), ..base.clone() };
+        m.planner.penalties = case.penalties();
         let mut p = LookAheadPlanner::new(m.planner).map_err(|e| fail("drift", e.to_string()))?;
         let r = predeploy::run(&m, &mut p, &|_| {}).map_err(|e| fail("drift", e.to_string()))?;
         let half = r.steps.len() / 2;
@@ -943,6 +922,42 @@ mod tests {
     }
 
     #[test]
+    fn each_geometry_file_gives_its_experiments_period_penalty_bearing_and_tracks() {
+        let m53 = SEC_53.mission(5, None).unwrap();
+        let p = &m53.planner;
+        assert_eq!(
+            (p.motion.tau, p.error.bearing, p.penalties),
+            (10.0, BearingMode::Slant3d, PenaltyCase::C1.penalties())
+        );
+        // AUV k at z̄_k + 10 sin(2πt/T_k): a quarter period in, 10 m below its mean (within 1 mm:
+        // the track is sampled every second and linear in between, 0.25 mm off at 112.5 s of 450).
+        for (k, (mean, period)) in
+            [(70.0, 600.0), (60.0, 500.0), (50.0, 700.0), (45.0, 450.0), (40.0, 550.0)].into_iter().enumerate()
+        {
+            assert!((m53.tracks[k].at(period / 4.0).z - (mean + 10.0)).abs() < 1e-3, "auv {k}");
+            assert_eq!(m53.tracks[k].at(0.0).x, 100.0 * k as f64);
+        }
+        assert_eq!(
+            (m53.cna.pos, m53.cna.heading.radians()),
+            (Vec3::new(140.0, 0.0, 0.0), 0.0),
+            "from (140, 0, 0) east"
+        );
+        let m52 = SEC_52.mission(2, None).unwrap();
+        assert_eq!((m52.planner.motion.tau, m52.planner.error.bearing), (10.0, BearingMode::Horizontal));
+        assert_eq!((m52.tracks.len(), m52.tracks[1].at(0.0).x, m52.tracks[0].at(0.0).z), (2, 500.0, 90.0));
+        let m61 = TABLE_61.mission(1, None).unwrap();
+        let p = &m61.planner;
+        assert_eq!(
+            (p.motion.tau, p.error.bearing, p.penalties),
+            (30.0, BearingMode::Horizontal, PenaltyCase::C1.penalties())
+        );
+        // 200 m lanes, 25 m apart, five of them at 1 m/s: 1000 m of lanes and 100 m of steps.
+        assert!((m61.end_time - 1100.0).abs() < 1.0 + 1e-9, "{}", m61.end_time);
+        assert_eq!(SEC_53.mission(2, Some(900.0)).unwrap().end_time, 900.0);
+        assert!(SEC_53.mission(6, None).is_err(), "the file has five AUVs");
+    }
+
+    #[test]
     fn the_full_grid_runs_every_thesis_row_and_caps_only_the_others() {
         for thesis in [&T53[..], &T54, &T55, &T56, &T57, &T58, &T59] {
             let grid = grid_53(Size::Full, thesis);
@@ -950,7 +965,7 @@ mod tests {
                 assert!(grid.run.contains(&thesis_setup(t)) && !grid.skipped.contains(&thesis_setup(t)));
             }
             // Every set-up not run is over the cap, and none of them is a thesis row.
-            assert!(grid.skipped.iter().all(|s| ((s.a * s.b.max(1)) as f64).powi(s.l as i32 + 1) > FULL_LEAF_CAP));
+            assert!(grid.skipped.iter().all(|s| s.leaves() > FULL_LEAF_CAP));
         }
         // Table 5.8's rows over the cap: six of eight, the largest (A = 8, B = 6, L = 3) at 48^4 leaves.
         let over = T58.iter().filter(|t| ((t.2 * t.3) as f64).powi(t.4 as i32 + 1) > FULL_LEAF_CAP).count();
@@ -986,7 +1001,10 @@ mod tests {
     fn table_6_1_numbers_are_compared_by_set_up() {
         let rows: Vec<Row> = T61
             .iter()
-            .map(|t| Row { setup: Setup { b: 0, speed: t.2, a: t.0, l: t.1 }, summary: summary(0.0, t.3, t.4) })
+            .map(|t| Row {
+                setup: Setup { pitch_options: 0, cna_speed: t.2, heading_options: t.0, look_ahead: t.1 },
+                summary: summary(0.0, t.3, t.4),
+            })
             .collect();
         let ok: Vec<ThesisNumber> = T61.iter().flat_map(|t| numbers_61(&rows, t.0, t.1, t.2, t.3, t.4)).collect();
         assert!(ok.iter().all(|n| n.within == Some(true)));
