@@ -8,9 +8,10 @@ use crate::engine::Faults;
 use crate::models::tl_spec::TlModel;
 use crate::observe::link_tally::{LinkTally, RunMetrics};
 use crate::observe::metrics::{run, run_with_tl};
-use crate::policy::PolicySpec;
+use crate::policy::{PolicyError, PolicySpec};
 use crate::scenario::nams::ExperimentConfig;
 use crate::scenario::world::{Scenario as EngineScenario, ScenarioError};
+use coopnav_acomms::selector::RatePolicyError;
 use coopnav_acomms::TransmissionLoss;
 use coopnav_core::run_seed;
 use rayon::prelude::*;
@@ -20,12 +21,14 @@ use thiserror::Error;
 
 #[derive(Debug, Error)]
 pub enum BatchError {
-    #[error("experiment configuration: {0}")]
-    Config(String),
+    #[error("{0}")]
+    Config(ScenarioError),
+    #[error("experiment configuration: a behaviour: {0}")]
+    Behaviour(#[from] RatePolicyError),
     #[error("a cell's engine scenario: {0}")]
     Scenario(#[from] ScenarioError),
     #[error("the silent CNA: {0}")]
-    Policy(String),
+    Policy(#[from] PolicyError),
 }
 
 /// The transmission loss an experiment's runs see.
@@ -70,8 +73,7 @@ pub fn run_experiment(
     progress: &(dyn Fn(u64) + Sync),
 ) -> Result<ExperimentResult, BatchError> {
     cfg.validate().map_err(BatchError::Config)?;
-    let slot_lens = cfg.behaviours.iter().map(|b| slot_length(cfg, b)).collect::<Result<Vec<f64>, _>>();
-    let slot_lens = slot_lens.map_err(BatchError::Config)?;
+    let slot_lens = cfg.behaviours.iter().map(|b| slot_length(cfg, b)).collect::<Result<Vec<f64>, _>>()?;
     let (ns, nb, nr) = (cfg.scenarios.len(), cfg.behaviours.len(), cfg.runs);
     // In parallel: the cells of one square share their BELLHOP grid, built once (`models::tl`).
     let cells: Vec<EngineScenario> = (0..ns * nb)
@@ -90,7 +92,7 @@ pub fn run_experiment(
             let (s, rep) = (i / (nb * nr), i % nr);
             let sc = &cells[i / nr];
             let silent = PolicySpec::new("none", sc).and_then(|p| p.build(sc));
-            let mut policy = silent.map_err(|e| BatchError::Policy(e.to_string()))?;
+            let mut policy = silent?;
             let mut tally = LinkTally::new(sc.fleet.n_auvs);
             let seed = run_seed(run_seed(cfg.seed, s as u64), rep as u64);
             match tl {
@@ -125,7 +127,7 @@ pub fn run_experiment(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::scenario::nams::{Behaviour, EstimatorMode, Scenario};
+    use crate::scenario::nams::{table_6, Behaviour, EstimatorMode};
     use coopnav_acomms::{Rate, TlError};
     use coopnav_core::Vec3;
 
@@ -139,7 +141,7 @@ mod tests {
 
     fn mean_with(cfg: ExperimentConfig, behaviour: Behaviour, tl_db: f64) -> RunMetrics {
         let cfg =
-            ExperimentConfig { scenarios: vec![Scenario::thesis(1)], behaviours: vec![behaviour], runs: 8, ..cfg };
+            ExperimentConfig { scenarios: vec![table_6()[0].clone()], behaviours: vec![behaviour], runs: 8, ..cfg };
         run_experiment(&cfg, &ExperimentTl::Shared(Arc::new(Flat(tl_db))), &|_| {}).unwrap().cells[0].mean
     }
 
@@ -165,7 +167,7 @@ mod tests {
         // With perfect dead reckoning only the extrapolation is left: a metre, not the 13 m mean
         // the IVER2's sensors give (the old loop reported truth and held 5 m mean / 25 m max).
         let cfg = ExperimentConfig::default();
-        let (scenario, behaviour) = (Scenario::thesis(1), Behaviour::Fixed { rate: Rate::R1 });
+        let (scenario, behaviour) = (table_6()[0].clone(), Behaviour::Fixed { rate: Rate::R1 });
         let slot_s = slot_length(&cfg, &behaviour).unwrap();
         let mut sc = engine_scenario(&scenario, &cfg, &behaviour, slot_s, None).unwrap();
         let run_once = |sc: &EngineScenario| {

@@ -15,7 +15,7 @@ use super::{
 };
 use crate::batch::nams::{run_experiment, Cell, ExperimentResult, ExperimentTl};
 use crate::models::tl_spec::{GridModel, TlModel};
-use crate::scenario::nams::{Behaviour, ExperimentConfig, Scenario};
+use crate::scenario::nams::{table_6, Behaviour, ExperimentConfig};
 use coopnav_acomms::tl::analytic::Thorp;
 use std::fmt::Write as _;
 use std::sync::Arc;
@@ -48,7 +48,8 @@ pub fn config(opts: &ReproOptions) -> ExperimentConfig {
     let mut cfg = ExperimentConfig { seed: opts.seed, ..ExperimentConfig::default() };
     if opts.size == Size::Reduced {
         // The two environments the tables compare, fewer runs.
-        cfg.scenarios = vec![Scenario::thesis(1), Scenario::thesis(4)];
+        let table = table_6();
+        cfg.scenarios = vec![table[0].clone(), table[3].clone()];
         cfg.runs = 6;
     }
     cfg
@@ -314,7 +315,7 @@ mod tests {
     #[test]
     fn identical_on_one_and_two_threads() {
         let cfg = ExperimentConfig {
-            scenarios: vec![Scenario::thesis(2)],
+            scenarios: vec![table_6()[1].clone()],
             runs: 3,
             max_time: Some(1800.0),
             ..ExperimentConfig::default()
@@ -333,7 +334,7 @@ mod tests {
     #[test]
     #[cfg_attr(not(bellhop_installed), ignore = "BELLHOP is not installed: run scripts/install-bellhop.sh")]
     fn cells_run_on_a_bellhop_grid_of_their_own_layout() {
-        let cfg = ExperimentConfig { scenarios: vec![Scenario::thesis(1)], runs: 2, ..ExperimentConfig::default() };
+        let cfg = ExperimentConfig { scenarios: vec![table_6()[0].clone()], runs: 2, ..ExperimentConfig::default() };
         let grid = GridModel { bearings: 4, anchor_spacing_m: 1000.0, ..GridModel::default() };
         let on_grid = run_experiment(&cfg, &ExperimentTl::PerCell(TlModel::BellhopGrid(grid)), &|_| {}).unwrap();
         let analytic = run_experiment(&cfg, &ExperimentTl::Shared(Arc::new(default_tl())), &|_| {}).unwrap();
@@ -349,7 +350,7 @@ mod tests {
         let bad = ExperimentConfig { runs: 0, ..ExperimentConfig::default() };
         let e = run_experiment(&bad, &tl, &|_| {}).unwrap_err().to_string();
         assert!(e.contains("experiment.runs = 0"), "{e}");
-        let mut s = Scenario::thesis(1);
+        let mut s = table_6()[0].clone();
         s.noise_db = -3.0;
         let bad = ExperimentConfig { scenarios: vec![s], ..ExperimentConfig::default() };
         assert!(run_experiment(&bad, &tl, &|_| {}).unwrap_err().to_string().contains("noise_db"));

@@ -5,13 +5,14 @@ pub use crate::models::peer::EstimatorMode;
 use crate::scenario::file::{Problems, ScenarioError};
 use coopnav_acomms::selector::RatePolicySpec;
 use coopnav_acomms::{Receiver, SuccessModel, Tdma};
+use coopnav_core::validation::CheckFields;
 use coopnav_core::{Iver2Params, Shelf};
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 
-/// One mission environment.
+/// One mission environment, written whole (every field) in a file.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(default, deny_unknown_fields)]
+#[serde(deny_unknown_fields)]
 pub struct Scenario {
     pub name: String,
     /// Side of the square lawnmower, m (500 or 2000 in the thesis).
@@ -27,32 +28,25 @@ pub struct Scenario {
     pub speed: f64,
 }
 
-impl Default for Scenario {
-    fn default() -> Self {
-        Scenario::thesis(1)
+/// Thesis Table 6's four scenarios as an experiment file (`scenarios/experiments/nams-table-6.toml`).
+pub const TABLE_6: &str = include_str!("../../../../scenarios/experiments/nams-table-6.toml");
+
+/// Thesis Table 6's scenarios 1–4, read from [`TABLE_6`].
+pub fn table_6() -> Vec<Scenario> {
+    #[derive(Deserialize)]
+    #[serde(deny_unknown_fields)]
+    struct File {
+        experiment: Scenarios,
     }
+    #[derive(Deserialize)]
+    #[serde(deny_unknown_fields)]
+    struct Scenarios {
+        scenarios: Vec<Scenario>,
+    }
+    toml::from_str::<File>(TABLE_6).expect("the embedded Table 6 file parses").experiment.scenarios
 }
 
 impl Scenario {
-    /// Thesis Table 6 scenarios 1–4.
-    pub fn thesis(n: usize) -> Scenario {
-        let (square, noise_db) = match n {
-            1 => (500.0, 0.0),
-            2 => (500.0, 6.0),
-            3 => (2000.0, 0.0),
-            _ => (2000.0, 6.0),
-        };
-        Scenario {
-            name: format!("scenario {n}"),
-            square,
-            lane_spacing: square / 10.0,
-            noise_db,
-            receiver: Receiver::Iver2,
-            altitude: 5.0,
-            speed: 3.0 * 1852.0 / 3600.0,
-        }
-    }
-
     /// Adds every out-of-range field to `problems`; `at` is this scenario's path in the file.
     fn collect_problems(&self, at: &str, problems: &mut Problems) {
         let mut in_range = |name: &str, v: f64, lo: f64, hi: f64| {
@@ -96,7 +90,7 @@ pub struct ExperimentConfig {
 impl Default for ExperimentConfig {
     fn default() -> Self {
         ExperimentConfig {
-            scenarios: (1..=4).map(Scenario::thesis).collect(),
+            scenarios: table_6(),
             behaviours: RatePolicySpec::thesis(),
             runs: 40,
             seed: 1,
@@ -113,8 +107,8 @@ impl Default for ExperimentConfig {
 
 impl ExperimentConfig {
     /// Checks every field before anything runs; the message names every bad field and its allowed range.
-    pub fn validate(&self) -> Result<(), String> {
-        self.validate_file(Path::new("experiment configuration"), "experiment").map_err(|e| e.to_string())
+    pub fn validate(&self) -> Result<(), ScenarioError> {
+        self.validate_file(Path::new("experiment configuration"), "experiment")
     }
 
     /// As [`ExperimentConfig::validate`], for a file (`file`) holding this configuration in table `table`.
@@ -139,19 +133,14 @@ impl ExperimentConfig {
         }
         for (i, b) in self.behaviours.iter().enumerate() {
             if let Err(e) = b.build() {
-                problems.push(format!("{t}.behaviours[{i}]"), "rejected", e);
+                problems.push(format!("{t}.behaviours[{i}]"), "rejected", e.to_string());
             }
         }
         if let Some(max_time) = self.max_time {
             problems.positive(&format!("{t}.max_time"), max_time);
         }
-        // The acomms and vehicle models check themselves and name their first bad field.
-        if let Err(e) = self.success.validate() {
-            problems.push(format!("{t}.success"), "rejected", e);
-        }
-        if let Err(e) = self.vehicle.validate() {
-            problems.push(format!("{t}.vehicle"), "rejected", e);
-        }
+        self.success.check_fields(&format!("{t}.success."), problems);
+        self.vehicle.check_fields(&format!("{t}.vehicle."), problems);
         problems.positive(&format!("{t}.tdma.base_slot"), self.tdma.base_slot);
         problems.positive(&format!("{t}.tdma.rate5_slot"), self.tdma.rate5_slot);
         problems.non_negative(&format!("{t}.tdma.ack_extra"), self.tdma.ack_extra);
@@ -189,10 +178,24 @@ mod tests {
     }
 
     #[test]
+    fn table_6_is_the_thesis_four_and_a_scenario_is_written_whole() {
+        let t = table_6();
+        let squares_noise: Vec<(f64, f64)> = t.iter().map(|s| (s.square, s.noise_db)).collect();
+        assert_eq!(squares_noise, [(500.0, 0.0), (500.0, 6.0), (2000.0, 0.0), (2000.0, 6.0)]);
+        // 3 kn at 5 m altitude, the lanes a tenth of the square.
+        assert!(t.iter().all(|s| s.speed == 3.0 * 1852.0 / 3600.0 && s.altitude == 5.0));
+        assert!(t.iter().all(|s| s.lane_spacing == s.square / 10.0 && s.receiver == Receiver::Iver2));
+        assert_eq!(ExperimentConfig::default().scenarios, t);
+        let partial = "[[scenarios]]\nname = \"a\"\nsquare = 500.0\n";
+        let e = toml::from_str::<ExperimentConfig>(partial).unwrap_err().to_string();
+        assert!(e.contains("missing field `lane_spacing`"), "{e}");
+    }
+
+    #[test]
     fn every_bad_field_is_named_at_once() {
         let text = "runs = 0\nmax_time = -5.0\n[tdma]\nbase_slot = nan\n[shelf]\nspacing = -1.0\n\
                     [[scenarios]]\nname = \"a\"\nsquare = 500.0\nlane_spacing = 50.0\nnoise_db = nan\n\
-                    altitude = -2.0\nspeed = 99.0\n";
+                    receiver = \"iver2\"\naltitude = -2.0\nspeed = 99.0\n";
         let cfg: ExperimentConfig = toml::from_str(text).unwrap();
         let e = cfg.validate_file(Path::new("exp.toml"), "experiment").unwrap_err().to_string();
         for field in [
