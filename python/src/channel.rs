@@ -8,6 +8,7 @@ use coopnav_acomms::tl::analytic::Thorp;
 use coopnav_acomms::tl::bellhop::{AcousticEnv, Bellhop};
 use coopnav_acomms::tl::cached::{CachedGrid, GridSpec};
 use coopnav_acomms::{Rate, SuccessModel, TransmissionLoss as Tl};
+use coopnav_core::validation::{CheckFields, Problems};
 use coopnav_core::{Bathymetry, Shelf, Vec3};
 use numpy::{PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2};
 use pyo3::exceptions::PyValueError;
@@ -118,7 +119,9 @@ fn p_success<'py>(
     let rate = Rate::new(rate).map_err(value_error)?;
     let mut m: SuccessModel = settings(model, "success model")?;
     m.noise_db = noise_db;
-    m.validate().map_err(PyValueError::new_err)?;
+    let mut problems = Problems::new();
+    m.check_fields("", &mut problems);
+    problems.finish().map_err(|e| PyValueError::new_err(e.to_string()))?;
     Ok(PyArray1::from_vec(py, tl_db.as_array().iter().map(|&tl| m.p_success(rate, tl)).collect()))
 }
 

@@ -5,8 +5,10 @@
 //! rates 0 and 5 in turn) and [`AdaptiveBins`] (the thesis's adaptive distance-bin selector).
 
 use crate::rates::Rate;
+use coopnav_core::validation::{CheckFields, InvalidFields, Problems};
 use serde::{Deserialize, Serialize};
 use std::collections::{BTreeMap, VecDeque};
+use thiserror::Error;
 
 /// A policy's decision for one own slot.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
@@ -69,25 +71,34 @@ pub enum RatePolicySpec {
     Adaptive(AdaptiveConfig),
 }
 
+/// Why a rate policy's specification makes no policy: its field and what is allowed.
+#[derive(Debug, Clone, PartialEq, Error)]
+pub enum RatePolicyError {
+    #[error("rate {0}: allowed 0, 1, 4 or 5")]
+    Rate(Rate),
+    #[error("rates {0:?}: allowed a non-empty list of 0, 1, 4 or 5")]
+    Rates(Vec<Rate>),
+    #[error("the adaptive selector: {0}")]
+    Adaptive(#[from] InvalidFields),
+}
+
 impl RatePolicySpec {
-    /// The policy, or what is wrong with the specification (naming the field and what is allowed).
-    pub fn build(&self) -> Result<Box<dyn RatePolicy>, String> {
+    /// The policy, or what is wrong with the specification.
+    pub fn build(&self) -> Result<Box<dyn RatePolicy>, RatePolicyError> {
         let usable = |r: &Rate| !r.spec().deprecated;
         Ok(match self {
             RatePolicySpec::Fixed { rate } if usable(rate) => Box::new(FixedRate { rate: *rate }),
             RatePolicySpec::Alternating { rates } if !rates.is_empty() && rates.iter().all(usable) => {
                 Box::new(Alternating::new(rates.clone()))
             }
-            RatePolicySpec::Fixed { rate } => return Err(format!("rate {rate}: allowed 0, 1, 4 or 5")),
-            RatePolicySpec::Alternating { rates } => {
-                return Err(format!("rates {rates:?}: allowed a non-empty list of 0, 1, 4 or 5"))
-            }
+            RatePolicySpec::Fixed { rate } => return Err(RatePolicyError::Rate(*rate)),
+            RatePolicySpec::Alternating { rates } => return Err(RatePolicyError::Rates(rates.clone())),
             RatePolicySpec::Adaptive(cfg) => Box::new(AdaptiveBins::new(cfg.clone())?),
         })
     }
 
     /// Every rate the policy may use, or what is wrong with it.
-    pub fn rates(&self) -> Result<Vec<Rate>, String> {
+    pub fn rates(&self) -> Result<Vec<Rate>, RatePolicyError> {
         Ok(self.build()?.rates())
     }
 
@@ -218,28 +229,35 @@ fn is_zero(n: &u32) -> bool {
     *n == 0
 }
 
-impl AdaptiveConfig {
-    /// Checks ranges; the error names the field and what is allowed.
-    pub fn validate(&self) -> Result<(), String> {
+impl CheckFields for AdaptiveConfig {
+    /// Every field in its range, the thresholds within `d_max`, at least one rate enabled.
+    fn check_fields(&self, prefix: &str, p: &mut Problems) {
+        let field = |name: &str| format!("{prefix}{name}");
         if self.memory == 0 {
-            return Err("adaptive.memory must be ≥ 1".into());
+            p.push(field("memory"), "0", "an integer >= 1");
         }
-        if !(0.0..=0.5).contains(&self.tolerance) {
-            return Err(format!("adaptive.tolerance {} must be in [0, 0.5]", self.tolerance));
-        }
-        if !(self.step > 0.0 && self.d_max > 0.0) {
-            return Err("adaptive.step and adaptive.d_max must be > 0 m".into());
-        }
-        if self.targets.iter().any(|t| !(0.0..=1.0).contains(t)) {
-            return Err("adaptive.targets must each be in [0, 1] (0 disables the rate)".into());
+        p.check(&field("tolerance"), self.tolerance, |v| (0.0..=0.5).contains(&v), "a number in [0, 0.5]");
+        p.positive(&field("step"), self.step);
+        p.positive(&field("d_max"), self.d_max);
+        for (k, &t) in self.targets.iter().enumerate() {
+            p.check(
+                &field(&format!("targets[{k}]")),
+                t,
+                |v| (0.0..=1.0).contains(&v),
+                "a number in [0, 1] (0 disables the rate)",
+            );
         }
         if self.targets.iter().all(|t| *t == 0.0) {
-            return Err("adaptive.targets: at least one rate must have a target > 0".into());
+            p.push(field("targets"), format!("{:?}", self.targets), "at least one rate with a target > 0");
         }
-        if self.data_thresholds.iter().chain(&self.status_thresholds).any(|t| !(0.0..=self.d_max).contains(t)) {
-            return Err(format!("adaptive thresholds must be in [0, d_max = {}] m", self.d_max));
+        for (name, list) in
+            [("data_thresholds", &self.data_thresholds[..]), ("status_thresholds", &self.status_thresholds[..])]
+        {
+            for (k, &d) in list.iter().enumerate() {
+                let allowed = format!("a distance in [0, d_max = {}] m", self.d_max);
+                p.check(&field(&format!("{name}[{k}]")), d, |v| (0.0..=self.d_max).contains(&v), &allowed);
+            }
         }
-        Ok(())
     }
 }
 
@@ -363,8 +381,10 @@ pub type Thresholds = Vec<(Rate, f64)>;
 const RATE_ORDER: [(usize, Rate); 4] = [(3, Rate::R5), (2, Rate::R4), (1, Rate::R1), (0, Rate::R0)];
 
 impl AdaptiveBins {
-    pub fn new(cfg: AdaptiveConfig) -> Result<Self, String> {
-        cfg.validate()?;
+    pub fn new(cfg: AdaptiveConfig) -> Result<Self, InvalidFields> {
+        let mut problems = Problems::new();
+        cfg.check_fields("", &mut problems);
+        problems.finish()?;
         let enabled = |k: usize| cfg.targets[k] > 0.0;
         let data = RATE_ORDER
             .iter()
@@ -665,10 +685,12 @@ mod tests {
         assert!(parse("kind = \"adaptive\"\nmemroy = 4").is_err(), "unknown fields are refused");
         assert!(parse("kind = \"greedy\"").is_err());
         let deprecated = RatePolicySpec::Fixed { rate: Rate::new(2).unwrap() };
-        assert!(deprecated.rates().unwrap_err().contains("allowed 0, 1, 4 or 5"));
-        assert!(RatePolicySpec::Alternating { rates: vec![] }.rates().unwrap_err().contains("non-empty"));
+        assert_eq!(deprecated.rates().unwrap_err(), RatePolicyError::Rate(Rate::new(2).unwrap()));
+        assert!(deprecated.rates().unwrap_err().to_string().contains("allowed 0, 1, 4 or 5"));
+        assert_eq!(RatePolicySpec::Alternating { rates: vec![] }.rates().unwrap_err(), RatePolicyError::Rates(vec![]));
         let bad = RatePolicySpec::Adaptive(AdaptiveConfig { memory: 0, ..AdaptiveConfig::default() });
-        assert!(bad.rates().unwrap_err().contains("adaptive.memory"));
+        let message = bad.rates().unwrap_err().to_string();
+        assert!(message.contains("adaptive selector") && message.contains("field memory"), "{message}");
         assert_eq!(bad.label(), "invalid");
         let thesis = RatePolicySpec::thesis();
         let labels: Vec<String> = thesis.iter().map(RatePolicySpec::label).collect();
@@ -679,10 +701,14 @@ mod tests {
     #[test]
     fn config_validation_names_the_field() {
         let bad = AdaptiveConfig { tolerance: 0.9, ..AdaptiveConfig::default() };
-        assert!(AdaptiveBins::new(bad).unwrap_err().contains("tolerance"));
+        assert_eq!(AdaptiveBins::new(bad).unwrap_err().0[0].field, "tolerance");
         let none = AdaptiveConfig { targets: [0.0; 4], ..AdaptiveConfig::default() };
-        assert!(AdaptiveBins::new(none).unwrap_err().contains("targets"));
+        assert_eq!(AdaptiveBins::new(none).unwrap_err().0[0].field, "targets");
         let far = AdaptiveConfig { data_thresholds: [1.0, 1.0, 9999.0, 1.0], ..AdaptiveConfig::default() };
-        assert!(AdaptiveBins::new(far).is_err());
+        assert_eq!(AdaptiveBins::new(far).unwrap_err().0[0].field, "data_thresholds[2]");
+        // Every bad field at once, each named.
+        let many = AdaptiveConfig { memory: 0, step: -1.0, targets: [0.0, 2.0, 0.3, 0.0], ..AdaptiveConfig::default() };
+        let fields: Vec<String> = AdaptiveBins::new(many).unwrap_err().0.into_iter().map(|p| p.field).collect();
+        assert_eq!(fields, ["memory", "step", "targets[1]"]);
     }
 }

@@ -6,6 +6,7 @@
 //! probability, losing a uniformly drawn number 1..n−1 of uniformly chosen frames.
 
 use crate::rates::Rate;
+use coopnav_core::validation::{CheckFields, Problems};
 use rand::seq::index::sample;
 use rand::Rng;
 use serde::{Deserialize, Serialize};
@@ -81,23 +82,28 @@ impl Default for SuccessModel {
     }
 }
 
-impl SuccessModel {
-    /// Checks probabilities and thresholds; names the bad field.
-    pub fn validate(&self) -> Result<(), String> {
+impl CheckFields for SuccessModel {
+    /// Probabilities in [0, 1], each curve's thresholds finite and in order, the noise ≥ 0 dB.
+    fn check_fields(&self, prefix: &str, p: &mut Problems) {
         for (i, c) in self.curves.iter().enumerate() {
-            if !(0.0..=1.0).contains(&c.p_a) || c.tl_ab >= c.tl_bc || !c.tl_ab.is_finite() || !c.tl_bc.is_finite() {
-                return Err(format!("success.curves[{i}]: need 0 ≤ p_a ≤ 1 and finite tl_ab < tl_bc, got {c:?}"));
+            let at = format!("{prefix}curves[{i}]");
+            p.probability(&format!("{at}.p_a"), c.p_a);
+            p.finite(&format!("{at}.tl_ab"), c.tl_ab);
+            p.finite(&format!("{at}.tl_bc"), c.tl_bc);
+            if c.tl_ab >= c.tl_bc {
+                p.push(format!("{at}.tl_bc"), c.tl_bc.to_string(), format!("a loss above tl_ab = {} dB", c.tl_ab));
             }
         }
-        if self.partial.iter().flatten().any(|p| !(0.0..=1.0).contains(p)) {
-            return Err("success.partial: every probability must be in [0, 1]".into());
+        for (i, row) in self.partial.iter().enumerate() {
+            for (j, &v) in row.iter().enumerate() {
+                p.probability(&format!("{prefix}partial[{i}][{j}]"), v);
+            }
         }
-        if !(self.noise_db.is_finite() && self.noise_db >= 0.0) {
-            return Err(format!("success.noise_db = {} must be ≥ 0 dB", self.noise_db));
-        }
-        Ok(())
+        p.non_negative(&format!("{prefix}noise_db"), self.noise_db);
     }
+}
 
+impl SuccessModel {
     fn curve(&self, rate: Rate) -> &SuccessCurve {
         &self.curves[match rate.index() {
             0 => 0,
@@ -166,13 +172,19 @@ mod tests {
 
     #[test]
     fn validation_names_the_field() {
-        assert!(SuccessModel::default().validate().is_ok());
+        let fields = |m: &SuccessModel| {
+            let mut p = Problems::new();
+            m.check_fields("success.", &mut p);
+            p.finish().err().map(|e| e.0.into_iter().map(|p| p.field).collect::<Vec<_>>()).unwrap_or_default()
+        };
+        assert!(fields(&SuccessModel::default()).is_empty());
         let mut m = SuccessModel::default();
         m.partial[1][0] = 1.5;
-        assert!(m.validate().unwrap_err().contains("partial"));
+        assert_eq!(fields(&m), ["success.partial[1][0]"]);
         let mut m = SuccessModel::default();
         m.curves[2].tl_bc = 10.0;
-        assert!(m.validate().unwrap_err().contains("curves[2]"));
+        m.noise_db = -1.0;
+        assert_eq!(fields(&m), ["success.curves[2].tl_bc", "success.noise_db"]);
     }
 
     #[test]

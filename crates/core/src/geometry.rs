@@ -20,6 +20,37 @@ pub fn horizontal_bearing(from: &Vec3, to: &Vec3) -> f64 {
     (to.y - from.y).atan2(to.x - from.x)
 }
 
+/// An axis-aligned rectangle (x east, y north), metres.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Rect {
+    pub min: (f64, f64),
+    pub max: (f64, f64),
+}
+
+impl Rect {
+    /// The smallest rectangle holding every point (an empty one, min +∞ and max −∞, for none).
+    pub fn around(points: impl IntoIterator<Item = (f64, f64)>) -> Rect {
+        let empty = Rect { min: (f64::INFINITY, f64::INFINITY), max: (f64::NEG_INFINITY, f64::NEG_INFINITY) };
+        points.into_iter().fold(empty, |r, (x, y)| Rect {
+            min: (r.min.0.min(x), r.min.1.min(y)),
+            max: (r.max.0.max(x), r.max.1.max(y)),
+        })
+    }
+
+    /// The rectangle shrunk by `inset` on every side (never past its centre line).
+    pub fn inset(self, inset: f64) -> Rect {
+        let half_w = (self.max.0 - self.min.0) / 2.0;
+        let half_h = (self.max.1 - self.min.1) / 2.0;
+        let (dx, dy) = (inset.min(half_w), inset.min(half_h));
+        Rect { min: (self.min.0 + dx, self.min.1 + dy), max: (self.max.0 - dx, self.max.1 - dy) }
+    }
+
+    /// The diagonal's length, m.
+    pub fn diagonal(&self) -> f64 {
+        (self.max.0 - self.min.0).hypot(self.max.1 - self.min.1)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::hypot_within;

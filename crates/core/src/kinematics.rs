@@ -9,6 +9,7 @@
 //! "shadow simulation") and by the simulators, so it knows nothing about modems.
 
 use crate::bathymetry::Bathymetry;
+use crate::validation::{CheckFields, Problems};
 use crate::{hypot_within, wrap_pi, Heading, Vec3};
 use serde::{Deserialize, Serialize};
 
@@ -95,36 +96,37 @@ impl Default for Iver2Params {
     }
 }
 
-impl Iver2Params {
-    /// Checks that every step, limit and gain can drive the model; names the bad field.
-    pub fn validate(&self) -> Result<(), String> {
-        let positive = [
+impl CheckFields for Iver2Params {
+    /// Every step, limit and gain must be able to drive the model.
+    fn check_fields(&self, prefix: &str, p: &mut Problems) {
+        let field = |name: &str| format!("{prefix}{name}");
+        for (name, v) in [
             ("timestep", self.timestep),
             ("max_lin_accel", self.max_lin_accel),
             ("max_pitch_rate", self.max_pitch_rate),
             ("max_yaw_rate", self.max_yaw_rate),
             ("max_pitch", self.max_pitch),
             ("waypoint_tolerance", self.waypoint_tolerance),
-        ];
-        for (name, v) in positive {
-            if !(v.is_finite() && v > 0.0) {
-                return Err(format!("vehicle.{name} = {v} must be a finite number > 0"));
-            }
+        ] {
+            p.positive(&field(name), v);
         }
         if self.timestep > 10.0 {
-            return Err(format!("vehicle.timestep = {} must be ≤ 10 s", self.timestep));
+            p.push(field("timestep"), self.timestep.to_string(), "a step of at most 10 s");
         }
-        if !(0.0..1.0).contains(&self.turn_slowdown) {
-            return Err(format!("vehicle.turn_slowdown = {} must be in [0, 1)", self.turn_slowdown));
+        p.check(&field("turn_slowdown"), self.turn_slowdown, |v| (0.0..1.0).contains(&v), "a number in [0, 1)");
+        if let Some(a) = self.max_yaw_accel {
+            p.positive(&field("max_yaw_accel"), a);
         }
-        if self.max_yaw_accel.is_some_and(|a| !(a.is_finite() && a > 0.0)) {
-            return Err("vehicle.max_yaw_accel must be > 0 when set".into());
+        for (name, g) in [
+            ("kp_speed", self.kp_speed),
+            ("kd_speed", self.kd_speed),
+            ("kp_yaw", self.kp_yaw),
+            ("kd_yaw", self.kd_yaw),
+            ("kp_pitch", self.kp_pitch),
+            ("kd_pitch", self.kd_pitch),
+        ] {
+            p.finite(&field(name), g);
         }
-        let gains = [self.kp_speed, self.kd_speed, self.kp_yaw, self.kd_yaw, self.kp_pitch, self.kd_pitch];
-        if gains.iter().any(|g| !g.is_finite()) {
-            return Err("vehicle gains (kp_*, kd_*) must be finite".into());
-        }
-        Ok(())
     }
 }
 
@@ -338,13 +340,24 @@ mod tests {
 
     #[test]
     fn bad_params_are_named() {
-        assert!(Iver2Params::default().validate().is_ok());
-        let e = Iver2Params { timestep: 0.0, ..Iver2Params::default() }.validate().unwrap_err();
-        assert!(e.contains("timestep"), "{e}");
-        assert!(Iver2Params { turn_slowdown: 1.0, ..Iver2Params::default() }
-            .validate()
-            .unwrap_err()
-            .contains("turn_slowdown"));
+        let fields = |v: Iver2Params| {
+            let mut p = Problems::new();
+            v.check_fields("vehicle.", &mut p);
+            p.finish().err().map(|e| e.0.into_iter().map(|p| p.field).collect::<Vec<_>>()).unwrap_or_default()
+        };
+        assert!(fields(Iver2Params::default()).is_empty());
+        let bad = Iver2Params {
+            timestep: 0.0,
+            turn_slowdown: 1.0,
+            max_yaw_accel: Some(-1.0),
+            kd_pitch: f64::NAN,
+            ..Iver2Params::default()
+        };
+        assert_eq!(
+            fields(bad),
+            ["vehicle.timestep", "vehicle.turn_slowdown", "vehicle.max_yaw_accel", "vehicle.kd_pitch"]
+        );
+        assert_eq!(fields(Iver2Params { timestep: 11.0, ..Iver2Params::default() }), ["vehicle.timestep"]);
     }
 
     #[test]

@@ -21,7 +21,7 @@ pub mod validation;
 pub use angle::{rem_euclid, wrap_pi, CompassDeg, Degrees, Heading, Radians};
 pub use bathymetry::{Bathymetry, BathymetryError, Shelf};
 pub use geodesy::{Ecef, Enu, GeodesyError, Geodetic, LatLon, LatLonStorage, LocalFrame};
-pub use geometry::{hypot_within, Vec3};
+pub use geometry::{hypot_within, Rect, Vec3};
 pub use kinematics::{DepthTarget, Iver2, Iver2Params, Iver2State, Waypoint};
 pub use mission::{DepthProfile, Lawnmower, SurveyPath, Track, TrackError, TrackSample};
 pub use rng::{run_seed, SeedStream};

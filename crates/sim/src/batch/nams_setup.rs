@@ -11,6 +11,7 @@ use crate::models::schedule::{Schedule, SlotSpec};
 use crate::models::tl_spec::TlModel;
 use crate::scenario::nams::{Behaviour, ExperimentConfig, Scenario};
 use crate::scenario::world::{Scenario as EngineScenario, ScenarioError};
+use coopnav_acomms::selector::RatePolicyError;
 use coopnav_acomms::SuccessModel;
 use coopnav_core::{Bathymetry, DepthTarget, Heading, Iver2, Iver2State, Vec3, Waypoint};
 use std::path::Path;
@@ -22,7 +23,7 @@ pub const TEMPLATE: &str = include_str!("../../../../scenarios/nams-1.toml");
 const MAX_MISSION: f64 = 48.0 * 3600.0;
 
 /// Slot length the behaviour forces on the network (15 s if it may use rate 5).
-pub fn slot_length(cfg: &ExperimentConfig, behaviour: &Behaviour) -> Result<f64, String> {
+pub fn slot_length(cfg: &ExperimentConfig, behaviour: &Behaviour) -> Result<f64, RatePolicyError> {
     Ok(cfg.tdma.slot_length(behaviour.rates()?, cfg.ack))
 }
 

@@ -10,7 +10,7 @@
 //!   Nams 2014, §5.2). The acknowledgements ride in the statuses the way the CNA's ride in its
 //!   broadcast (one bit per packet, not modelled in the status bytes).
 
-use coopnav_acomms::selector::{Choice, Outcome, RatePolicy, RatePolicySpec};
+use coopnav_acomms::selector::{Choice, Outcome, RatePolicy, RatePolicyError, RatePolicySpec};
 
 #[derive(Clone)]
 pub struct CnaRate {
@@ -24,7 +24,7 @@ pub struct CnaRate {
 
 impl CnaRate {
     /// The CNA's policy for a fleet of `n_auvs` (validation has checked the specification).
-    pub fn new(spec: &RatePolicySpec, n_auvs: usize) -> Result<Self, String> {
+    pub fn new(spec: &RatePolicySpec, n_auvs: usize) -> Result<Self, RatePolicyError> {
         Ok(CnaRate { selector: spec.build()?, sent: 0, judged_by: vec![Vec::new(); n_auvs] })
     }
 

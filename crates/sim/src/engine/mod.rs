@@ -273,7 +273,7 @@ impl<'a> Engine<'a> {
             peer_draws: (0..n).map(|k| streams.rng(peer::STREAM_BASE + k as u64)).collect(),
             air: InFlight::new(sc.channel.collisions.capture_margin_db),
             range_speed: sc.filter.range_speed(&sc.channel.sound_speed),
-            tl: tl.map_or_else(|| sc.comms.tl.provider(sc), Ok).unwrap_or_else(|e| {
+            tl: tl.map_or_else(|| sc.tl_provider(), Ok).unwrap_or_else(|e| {
                 // Validation builds the provider first, so this is a scenario built in code.
                 tracing::error!(error = %e, "transmission loss unavailable: every packet is lost");
                 Arc::new(Unavailable)

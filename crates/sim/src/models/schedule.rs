@@ -314,7 +314,7 @@ fn rate_policy_problems(
             rates.into_iter().filter_map(|r| payload_problem(field, r, status_bytes)).collect()
         }
         (Ok(_), _) => Vec::new(),
-        (Err(e), _) => vec![(field.into(), "rejected".into(), e)],
+        (Err(e), _) => vec![(field.into(), "rejected".into(), e.to_string())],
     }
 }
 
@@ -576,7 +576,7 @@ mod tests {
                 ("s.slots[0].rate_policy", "no rate policy: only a survey AUV's or the CNA's slot names one"),
                 ("s.slots[2].rate_policy", "a rate whose frames hold the 40-byte message"),
                 ("s.slots[2].rate_policy", "the rate policy of auv0's first slot (one policy per transmitter)"),
-                ("s.slots[3].rate_policy", "adaptive.memory must be ≥ 1"),
+                ("s.slots[3].rate_policy", "the adaptive selector: field memory = 0: allowed an integer >= 1"),
             ]
         );
     }

@@ -11,35 +11,58 @@
 
 use super::tl_spec::{GridModel, TlModel, MAX_GRID_FIELDS};
 use crate::models::channel::SoundSpeed;
-use crate::scenario::start::cna_start;
-use crate::scenario::world::Scenario;
 use coopnav_acomms::tl::bellhop::{AcousticEnv, Bellhop};
 use coopnav_acomms::tl::cached::{AnchorLattice, CachedGrid, GridSpec, LatticeSpec};
 use coopnav_acomms::tl::{TlError, TransmissionLoss};
-use coopnav_core::DepthTarget;
-use coopnav_plan::CnaKind;
+use coopnav_core::{Bathymetry, DepthTarget};
 use serde::Serialize;
 use std::collections::HashMap;
 use std::hash::{Hash, Hasher};
 use std::sync::{Arc, Mutex, OnceLock};
 
+/// What a transmission-loss provider reads of a mission: the water, and where packets leave
+/// from. The scenario builds it (`Scenario::tl_site`); the models know nothing else of a scenario.
+#[derive(Debug, Clone)]
+pub struct TlSite {
+    /// The seafloor.
+    pub bathymetry: Bathymetry,
+    /// The water's true sound-speed profile.
+    pub sound_speed: SoundSpeed,
+    /// Every point a grid's lattice covers: the survey AUVs' waypoints, the CNA's start, the
+    /// buoys' deployments.
+    pub points: Vec<(f64, f64)>,
+    /// The CNA's depth at its start, m.
+    pub cna_depth: f64,
+    /// The depths of the other fixed transmitters, m: each buoy's modem, then each ship's
+    /// outriggers.
+    pub transponder_depths: Vec<f64>,
+    /// An AUV CNA's depth span, m: from its top (the surface, when it climbs there for its fixes)
+    /// to the deepest its planner may take it. `None` for a surface CNA.
+    pub cna_span: Option<(f64, f64)>,
+    /// The survey AUVs' depth or altitude.
+    pub fleet_depth: DepthTarget,
+    /// The schedule's longest range, m.
+    pub max_range_m: f64,
+}
+
 impl TlModel {
-    /// The provider a run uses. BELLHOP kinds need the program; a grid is computed at most once
-    /// per process and once per machine (disk cache), whichever run asks first.
-    pub fn provider(&self, sc: &Scenario) -> Result<Arc<dyn TransmissionLoss>, TlError> {
+    /// The provider a run uses, `site` asked for only by the kinds that read it. BELLHOP kinds
+    /// need the program; a grid is computed at most once per process and once per machine (disk
+    /// cache), whichever run asks first.
+    pub fn provider(&self, site: impl FnOnce() -> TlSite) -> Result<Arc<dyn TransmissionLoss>, TlError> {
         match self {
             TlModel::Analytic(t) => Ok(Arc::new(*t)),
-            TlModel::Bellhop => Ok(Arc::new(Bellhop::new(environment(sc))?)),
-            TlModel::BellhopGrid(g) => grid(g, sc).map(|l| l as Arc<dyn TransmissionLoss>),
+            TlModel::Bellhop => Ok(Arc::new(Bellhop::new(environment(&site()))?)),
+            TlModel::BellhopGrid(g) => grid(g, &site()).map(|l| l as Arc<dyn TransmissionLoss>),
         }
     }
 }
 
 /// The thesis's acoustic environment (Nams 2014, §4.2 and App. A: mud half-space, 25 kHz, BT-1 pattern) over
-/// the scenario's bathymetry, with the scenario's true sound-speed profile.
-fn environment(sc: &Scenario) -> AcousticEnv {
-    let mut env = AcousticEnv::nams(Arc::new(sc.bathymetry()));
-    env.ssp = match &sc.channel.sound_speed {
+/// the site's bathymetry, with its true sound-speed profile.
+fn environment(site: &TlSite) -> AcousticEnv {
+    let mut env = AcousticEnv::nams(Arc::new(site.bathymetry.clone()));
+    env.ssp = match &site.sound_speed {
         SoundSpeed::Constant { c } => vec![(0.0, *c)],
         s @ SoundSpeed::Profile { points } => {
             let below = points.iter().filter(|p| p[0] > 0.0).map(|p| (p[0], p[1]));
@@ -62,9 +85,9 @@ struct GridInputs<'a> {
     bellhop_bytes: u64,
 }
 
-fn grid(g: &GridModel, sc: &Scenario) -> Result<Arc<AnchorLattice>, TlError> {
-    let env = environment(sc);
-    let (lattice, spec) = layout(g, sc);
+fn grid(g: &GridModel, site: &TlSite) -> Result<Arc<AnchorLattice>, TlError> {
+    let env = environment(site);
+    let (lattice, spec) = layout(g, site);
     let layers = lattice.source_depths.len();
     let fields = lattice.nx * lattice.ny * layers * spec.bearings;
     if fields > MAX_GRID_FIELDS {
@@ -149,14 +172,9 @@ fn build_apart(bellhop: &Bellhop, lattice: LatticeSpec, spec: GridSpec) -> Resul
 /// The anchors over the survey blocks, the CNA start and the buoys' deployments (widened by the
 /// margin), one layer per depth a transmitter sends from, and the field each one holds: to 1.2 ×
 /// the schedule's longest range, over the deepest water there.
-fn layout(g: &GridModel, sc: &Scenario) -> (LatticeSpec, GridSpec) {
-    let start = cna_start(sc).pos;
-    let points = (0..sc.fleet.n_auvs)
-        .flat_map(|k| sc.lawnmower(k).waypoints())
-        .chain([(start.x, start.y)])
-        .chain(sc.buoys.iter().map(|b| (b.x, b.y)));
+pub(crate) fn layout(g: &GridModel, site: &TlSite) -> (LatticeSpec, GridSpec) {
     let (mut lo, mut hi) = ((f64::INFINITY, f64::INFINITY), (f64::NEG_INFINITY, f64::NEG_INFINITY));
-    for (x, y) in points {
+    for &(x, y) in &site.points {
         (lo, hi) = ((lo.0.min(x), lo.1.min(y)), (hi.0.max(x), hi.1.max(y)));
     }
     let (lo, hi) = ((lo.0 - g.margin_m, lo.1 - g.margin_m), (hi.0 + g.margin_m, hi.1 + g.margin_m));
@@ -166,11 +184,11 @@ fn layout(g: &GridModel, sc: &Scenario) -> (LatticeSpec, GridSpec) {
         spacing: g.anchor_spacing_m,
         nx: count(hi.0 - lo.0),
         ny: count(hi.1 - lo.1),
-        source_depths: source_layers(g, sc, start.z, (lo, hi)),
+        source_depths: source_layers(g, site, (lo, hi)),
         depth_tolerance: SOURCE_DEPTH_TOLERANCE_M,
     };
-    let max_range = (1.2 * sc.comms.max_range_m / g.range_step_m).ceil() * g.range_step_m;
-    let max_depth = (sc.bathymetry().max_depth() / g.depth_step_m).ceil() * g.depth_step_m;
+    let max_range = (1.2 * site.max_range_m / g.range_step_m).ceil() * g.range_step_m;
+    let max_depth = (site.bathymetry.max_depth() / g.depth_step_m).ceil() * g.depth_step_m;
     let spec =
         GridSpec { bearings: g.bearings, range_step: g.range_step_m, max_range, depth_step: g.depth_step_m, max_depth };
     (lattice, spec)
@@ -185,24 +203,19 @@ const SOURCE_DEPTH_TOLERANCE_M: f64 = 1.0;
 /// outriggers, and the survey AUVs' (their status messages): their depth, or, keeping altitude,
 /// the span the terrain under the lattice gives them. A span gets one layer every
 /// `source_depth_step_m`. Sorted, without near-duplicates.
-fn source_layers(g: &GridModel, sc: &Scenario, cna_depth: f64, (lo, hi): ((f64, f64), (f64, f64))) -> Vec<f64> {
-    let mut depths: Vec<f64> = std::iter::once(cna_depth)
-        .chain(sc.buoys.iter().map(|b| b.modem_depth_m))
-        .chain(sc.ships.iter().map(|s| s.outriggers.depth))
-        .collect();
-    let water = || water_span(sc, (lo, hi));
+fn source_layers(g: &GridModel, site: &TlSite, (lo, hi): ((f64, f64), (f64, f64))) -> Vec<f64> {
+    let mut depths: Vec<f64> = std::iter::once(site.cna_depth).chain(site.transponder_depths.iter().copied()).collect();
+    let water = || water_span(&site.bathymetry, (lo, hi));
     let span = |top: f64, bottom: f64| {
         let layers = ((bottom - top) / g.source_depth_step_m).ceil().max(0.0) as usize;
         (0..=layers).map(move |i| (top + i as f64 * g.source_depth_step_m).min(bottom))
     };
-    if let CnaKind::Auv { min_depth, max_depth, .. } = sc.platform().cna {
+    if let Some((top, deepest)) = site.cna_span {
         // Without these layers a depth change of more than the tolerance would leave every
-        // later CNA packet without a transmission loss, i.e. lost. From the surface even below a
-        // working `min_depth`: the CNA climbs there for its GPS fixes, and pings meanwhile.
-        let top = if sc.cna.navigation.surfacing().is_some() { 0.0 } else { min_depth.max(0.0) };
-        depths.extend(span(top, max_depth.min(water().1)));
+        // later CNA packet without a transmission loss, i.e. lost.
+        depths.extend(span(top, deepest.min(water().1)));
     }
-    match sc.fleet.depth {
+    match site.fleet_depth {
         DepthTarget::Depth { depth } => depths.push(depth),
         DepthTarget::Altitude { altitude } => {
             let (shallow, deep) = water();
@@ -216,8 +229,7 @@ fn source_layers(g: &GridModel, sc: &Scenario, cna_depth: f64, (lo, hi): ((f64, 
 
 /// The shallowest and deepest water under the lattice's box, m, sampled every
 /// [`TERRAIN_SAMPLE_M`].
-fn water_span(sc: &Scenario, (lo, hi): ((f64, f64), (f64, f64))) -> (f64, f64) {
-    let bathymetry = sc.bathymetry();
+fn water_span(bathymetry: &Bathymetry, (lo, hi): ((f64, f64), (f64, f64))) -> (f64, f64) {
     let (nx, ny) =
         (((hi.0 - lo.0) / TERRAIN_SAMPLE_M).ceil() as usize, ((hi.1 - lo.1) / TERRAIN_SAMPLE_M).ceil() as usize);
     (0..=nx)
@@ -320,55 +332,50 @@ mod tests {
         assert!(TlModel::Analytic(Thorp { k: -1.0, freq_hz: 25_000.0 }).problems("t.")[0].0 == "t.k");
     }
 
-    #[test]
-    fn the_lattice_covers_the_fleet_and_the_grid_the_schedules_range() {
-        let sc = Scenario::example();
-        let (lattice, spec) = layout(&GridModel::default(), &sc);
-        let far = lattice.anchor_extent();
-        for k in 0..sc.fleet.n_auvs {
-            for (x, y) in sc.lawnmower(k).waypoints() {
-                assert!(x >= lattice.origin.0 && y >= lattice.origin.1 && x <= far.0 && y <= far.1, "({x}, {y})");
-            }
-        }
-        assert!(spec.max_range >= sc.comms.max_range_m && spec.max_depth >= sc.bathymetry().max_depth());
-        assert_eq!(lattice.source_depths, [0.0, 20.0], "the ASC's depth and the AUVs'");
-    }
-
-    /// A library scenario, parsed without validation (validating builds the grid), and the source
-    /// layers its grid gets at 10 m steps.
-    fn library_layers(file: &str) -> (Scenario, Vec<f64>) {
-        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenarios").join(file);
-        let sc: Scenario = toml::from_str(&std::fs::read_to_string(path).unwrap()).unwrap();
-        let (lattice, _) = layout(&GridModel { source_depth_step_m: 10.0, ..GridModel::default() }, &sc);
-        (sc, lattice.source_depths)
-    }
-
-    #[test]
-    fn every_transmitter_depth_has_a_layer() {
-        let (sc, layers) = library_layers("full-stack.toml");
-        // The ASC at 0 m, the buoys' 1 m modems, the AUVs at 15 m over 30–90 m of shelf.
-        assert_eq!(&layers[..2], [0.0, 1.0]);
-        assert_eq!(layers[2], 15.0, "over the shallowest 30 m");
-        assert!(layers[2..].windows(2).all(|w| w[1] - w[0] <= 10.0 + 1e-9), "{layers:?}");
-        let bathymetry = sc.bathymetry();
-        for (x, y) in (0..sc.fleet.n_auvs).flat_map(|k| sc.lawnmower(k).waypoints()) {
-            let z = bathymetry.depth_at(x, y) - 15.0;
-            assert!(z >= layers[2] && z <= *layers.last().unwrap(), "an AUV at {z} m, layers {layers:?}");
+    /// A flat 100 m sea with a constant sound speed, an ASC at the surface and AUVs at 20 m,
+    /// ranging 1 km over a 1 km square: a site no scenario file gives.
+    fn flat_site() -> TlSite {
+        let bathymetry =
+            Bathymetry::new(-20_000.0, -20_000.0, 40_000.0, 40_000.0, 2, 2, vec![100.0; 4]).expect("a valid grid");
+        TlSite {
+            bathymetry,
+            sound_speed: SoundSpeed::Constant { c: 1500.0 },
+            points: vec![(0.0, 0.0), (1000.0, 0.0), (1000.0, 1000.0), (0.0, 1000.0)],
+            cna_depth: 0.0,
+            transponder_depths: vec![],
+            cna_span: None,
+            fleet_depth: DepthTarget::Depth { depth: 20.0 },
+            max_range_m: 1000.0,
         }
     }
 
     #[test]
-    fn an_auv_cna_has_layers_over_every_depth_it_can_reach() {
-        let (_, layers) = library_layers("sloping-auv-cna.toml");
-        // From the surface (where the CNA climbs for its fixes) down to the shelf's deepest water, 90 m
-        // (the lattice reaches past x = 1700 m), never more than a step apart: a lookup anywhere
-        // in between is blended, never refused.
-        assert_eq!((layers[0], *layers.last().unwrap()), (0.0, 90.0), "{layers:?}");
-        assert!(layers.windows(2).all(|w| w[1] - w[0] <= 10.0 + 1e-9), "{layers:?}");
-        // The ASC of the default mission still gets only its own depth.
+    fn the_lattice_covers_every_point_the_transmitters_depths_and_the_range() {
+        let site =
+            TlSite { transponder_depths: vec![1.0, 5.0], points: vec![(-250.0, 40.0), (900.0, 1310.0)], ..flat_site() };
+        let g = GridModel { anchor_spacing_m: 500.0, margin_m: 100.0, ..GridModel::default() };
+        let (lattice, spec) = layout(&g, &site);
+        // The box (−250, 40)–(900, 1310) widened by 100 m: origin (−350, −60), 1350 × 1470 m,
+        // so ⌈1350/500⌉ + 1 = 4 by ⌈1470/500⌉ + 1 = 4 anchors.
+        assert_eq!(lattice.origin, (-350.0, -60.0));
+        assert_eq!((lattice.nx, lattice.ny, lattice.spacing), (4, 4, 500.0));
+        assert_eq!(lattice.source_depths, [0.0, 1.0, 5.0, 20.0], "the CNA, the transponders, the AUVs");
+        // 1.2 × 1000 m on the range step, the 100 m floor on the depth step.
+        assert_eq!(spec.max_range, (1200.0 / g.range_step_m).ceil() * g.range_step_m);
+        assert_eq!(spec.max_depth, (100.0 / g.depth_step_m).ceil() * g.depth_step_m);
+    }
+
+    #[test]
+    fn an_auv_cnas_span_gets_a_layer_every_step_down_to_the_water_under_the_lattice() {
         let g = GridModel { source_depth_step_m: 10.0, ..GridModel::default() };
-        let (asc, _) = layout(&g, &Scenario::example());
-        assert_eq!(asc.source_depths, [0.0, 20.0]);
+        // A span deeper than the 100 m sea stops at the sea floor.
+        let site = TlSite { cna_depth: 5.0, cna_span: Some((0.0, 250.0)), ..flat_site() };
+        let (lattice, _) = layout(&g, &site);
+        let want: Vec<f64> = (0..=10).map(|i| 10.0 * i as f64).collect();
+        assert_eq!(lattice.source_depths, [&want[..1], &[5.0], &want[1..]].concat());
+        // Near-duplicates (within half the tolerance) collapse into one layer.
+        let site = TlSite { cna_depth: 20.2, ..flat_site() };
+        assert_eq!(layout(&g, &site).0.source_depths, [20.0]);
     }
 
     #[test]
@@ -404,7 +411,7 @@ mod tests {
 
     /// A grid of a few short BELLHOP runs: the lattice's 4 anchors × 2 source layers × `bearings`,
     /// to `range_m` (part of the key: each round of a test gets keys of its own).
-    fn small_grid(sc: &Scenario, bearings: usize, range_m: f64, cache_dir: &std::path::Path) -> (GridModel, Scenario) {
+    fn small_grid(site: &TlSite, bearings: usize, range_m: f64, cache_dir: &std::path::Path) -> (GridModel, TlSite) {
         let g = GridModel {
             bearings,
             range_step_m: 20.0,
@@ -413,9 +420,7 @@ mod tests {
             cache_dir: Some(cache_dir.to_path_buf()),
             ..GridModel::default()
         };
-        let mut sc = sc.clone();
-        sc.comms.max_range_m = range_m;
-        (g, sc)
+        (g, TlSite { max_range_m: range_m, ..site.clone() })
     }
 
     #[test]
@@ -423,7 +428,7 @@ mod tests {
     fn grids_asked_for_from_inside_a_pools_jobs_are_built_once_per_key_without_deadlock() {
         use rayon::prelude::*;
         let dir = tempfile::tempdir().unwrap();
-        let example = Scenario::example();
+        let example = flat_site();
         let (done, finished) = std::sync::mpsc::channel();
         let cache = dir.path().to_path_buf();
         // An experiment's runs: each does uneven parallel work of its own (so workers wait in
@@ -444,8 +449,8 @@ mod tests {
                                         ((job * 7 + i * 13) % 20) as u64,
                                     ))
                                 });
-                                let (g, sc) = &keys[job % 2];
-                                grid(g, sc).map_err(|e| e.to_string())
+                                let (g, site) = &keys[job % 2];
+                                grid(g, site).map_err(|e| e.to_string())
                             })
                             .collect()
                     })
@@ -470,8 +475,8 @@ mod tests {
 
     #[test]
     fn the_environment_carries_the_scenarios_profile_from_the_surface() {
-        let mut sc = Scenario::example();
-        sc.channel.sound_speed = SoundSpeed::Profile { points: vec![[5.0, 1500.0], [50.0, 1480.0]] };
-        assert_eq!(environment(&sc).ssp, vec![(0.0, 1500.0), (5.0, 1500.0), (50.0, 1480.0)]);
+        let site =
+            TlSite { sound_speed: SoundSpeed::Profile { points: vec![[5.0, 1500.0], [50.0, 1480.0]] }, ..flat_site() };
+        assert_eq!(environment(&site).ssp, vec![(0.0, 1500.0), (5.0, 1500.0), (50.0, 1480.0)]);
     }
 }

@@ -5,7 +5,7 @@
 //! pattern.
 
 use super::{CnaCommand, CnaPolicy, PolicyContext};
-use coopnav_core::{Heading, Vec3};
+use coopnav_core::{Heading, Rect, Vec3};
 
 /// No CNA: the survey AUVs navigate on dead reckoning alone.
 #[derive(Debug, Clone, Copy, Default)]
@@ -20,23 +20,6 @@ impl CnaPolicy for NoCna {
     }
     fn decide(&mut self, _: &PolicyContext) -> CnaCommand {
         CnaCommand::Hold
-    }
-}
-
-/// An axis-aligned rectangle (x east, y north), metres.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Rect {
-    pub min: (f64, f64),
-    pub max: (f64, f64),
-}
-
-impl Rect {
-    /// The rectangle shrunk by `inset` on every side (never past its centre line).
-    fn inset(self, inset: f64) -> Rect {
-        let half_w = (self.max.0 - self.min.0) / 2.0;
-        let half_h = (self.max.1 - self.min.1) / 2.0;
-        let (dx, dy) = (inset.min(half_w), inset.min(half_h));
-        Rect { min: (self.min.0 + dx, self.min.1 + dy), max: (self.max.0 - dx, self.max.1 - dy) }
     }
 }
 

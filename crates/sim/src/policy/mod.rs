@@ -14,7 +14,7 @@ mod greedy;
 pub mod planner;
 pub mod registry;
 
-pub use baselines::{Centroid, CentroidStandoff, FixedPattern, MidpointRelay, NoCna, Rect, TimedWaypoints, Trail};
+pub use baselines::{Centroid, CentroidStandoff, FixedPattern, MidpointRelay, NoCna, TimedWaypoints, Trail};
 pub use greedy::GreedyFisher;
 pub use planner::{ErrorTracker, PlannerPolicy, PlannerStats};
 pub use registry::{Policy, PolicyError, PolicySpec, POLICY_NAMES};

@@ -3,12 +3,11 @@
 
 use super::planner::{LikelihoodLink, PingLikelihood, PlannerPolicy, PlannerStats, UnheardGrowth};
 use crate::policy::{
-    Centroid, CentroidStandoff, CnaPolicy, FixedPattern, GreedyFisher, MidpointRelay, NoCna, Rect, TimedWaypoints,
-    Trail,
+    Centroid, CentroidStandoff, CnaPolicy, FixedPattern, GreedyFisher, MidpointRelay, NoCna, TimedWaypoints, Trail,
 };
 use crate::scenario::start::cna_start;
 use crate::scenario::world::{EstimatorTracking, PlannerLink, Scenario};
-use coopnav_acomms::selector::{FixedRate, RatePolicy};
+use coopnav_acomms::selector::{FixedRate, RatePolicy, RatePolicyError};
 use coopnav_acomms::tl::{TlError, TransmissionLoss, TL_CEILING};
 use coopnav_core::{Bathymetry, DepthTarget, Vec3};
 use coopnav_nav::AuvModel;
@@ -22,22 +21,76 @@ use coopnav_plan::{PlannerConfig, PlannerSpec};
 use std::sync::Arc;
 use thiserror::Error;
 
-/// Every policy name, the planners first: `planner` scores with Hudson's model, `planner-estimator`
-/// with the survey AUVs' filter covariances (docs/models.md#estimator-cost); `greedy-fisher` is the one-step
-/// Fisher-information baseline.
-pub const POLICY_NAMES: [&str; 11] = [
-    "planner",
-    "planner-estimator",
-    "none",
-    "racetrack",
-    "zigzag",
-    "centroid",
-    "centroid-standoff",
-    "trail",
-    "relay",
-    "open-loop",
-    "greedy-fisher",
+/// How a policy is built for one run: from its name (for its errors), the scenario and, for
+/// `open-loop`, the plan computed once for the scenario ([`PolicySpec`]).
+type Build = fn(&str, &Scenario, Option<&TimedWaypoints>) -> Result<Policy, PolicyError>;
+
+/// Every CNA policy, the planners first, by the name a scenario or a command gives it: the one
+/// place a name is written beside what it builds. `planner` scores with Hudson's model,
+/// `planner-estimator` with the survey AUVs' filter covariances (docs/models.md#estimator-cost);
+/// `greedy-fisher` is the one-step Fisher-information baseline; the rest are the baselines of
+/// [`crate::policy`], each with its parameters in its own `[policy.NAME]` table.
+const REGISTRY: [(&str, Build); 11] = [
+    ("planner", |name, sc, _| planner(name, &sc.policy.planner, sc)),
+    ("planner-estimator", |name, sc, _| planner(name, &sc.policy.planner_estimator, sc)),
+    ("none", |_, _, _| baseline(NoCna)),
+    ("racetrack", |_, sc, _| {
+        let r = &sc.policy.racetrack;
+        baseline(FixedPattern::racetrack(sc.survey_area(), r.inset_m, r.capture_radius_m))
+    }),
+    ("zigzag", |_, sc, _| {
+        let z = &sc.policy.zigzag;
+        baseline(FixedPattern::zigzag(sc.survey_area(), z.legs, z.capture_radius_m))
+    }),
+    ("centroid", |_, _, _| baseline(Centroid)),
+    ("centroid-standoff", |_, sc, _| baseline(CentroidStandoff { radius: sc.policy.centroid_standoff.radius_m })),
+    ("trail", |_, sc, _| {
+        let t = &sc.policy.trail;
+        let angle = std::f64::consts::PI * (t.angle_deg / 180.0);
+        baseline(Trail { auv: t.auv.unwrap_or(sc.fleet.n_auvs / 2), range: t.range_m, angle })
+    }),
+    ("relay", |_, sc, _| {
+        baseline(MidpointRelay { base: (sc.cna.x, sc.cna.y), auv: sc.policy.relay.auv.unwrap_or(sc.fleet.n_auvs / 2) })
+    }),
+    ("open-loop", |name, sc, planned| match planned {
+        Some(p) => baseline(p.clone()),
+        None => baseline(open_loop(sc).map_err(|source| PolicyError::Plan { name: name.to_string(), source })?),
+    }),
+    ("greedy-fisher", |name, sc, _| {
+        let link_err = |source| PolicyError::Link { name: name.to_string(), source };
+        let link = LinkTable::sample(&LikelihoodLink(&modem_likelihood(sc).map_err(link_err)?))
+            .map_err(|source| PolicyError::Plan { name: name.to_string(), source })?;
+        let g = &sc.policy.greedy_fisher;
+        baseline(GreedyFisher::new(sc.fleet.n_auvs, link, filter_model(sc).1, g.candidates, g.sigma_prior_m))
+    }),
 ];
+
+/// Every policy name, in [`REGISTRY`]'s order.
+pub const POLICY_NAMES: [&str; REGISTRY.len()] = {
+    let mut names = [""; REGISTRY.len()];
+    let mut i = 0;
+    while i < REGISTRY.len() {
+        names[i] = REGISTRY[i].0;
+        i += 1;
+    }
+    names
+};
+
+/// The policy whose plan is computed once per scenario ([`PolicySpec`]), not once per run.
+const PLANNED_ONCE: &str = "open-loop";
+
+fn baseline(p: impl CnaPolicy + 'static) -> Result<Policy, PolicyError> {
+    Ok(Policy::Baseline(Box::new(p)))
+}
+
+/// `name`'s entry of [`REGISTRY`].
+fn registered(name: &str) -> Result<Build, PolicyError> {
+    REGISTRY
+        .iter()
+        .find(|(n, _)| *n == name)
+        .map(|(_, b)| *b)
+        .ok_or_else(|| PolicyError::Unknown { name: name.to_string() })
+}
 
 #[derive(Debug, Error)]
 pub enum PolicyError {
@@ -55,7 +108,7 @@ pub enum LinkError {
     #[error("the policies' link model (policy.link = \"scenario_channel\"): {0}")]
     Channel(#[from] TlError),
     #[error("the CNA slot's rate_policy: {0}")]
-    RatePolicy(String),
+    RatePolicy(RatePolicyError),
 }
 
 /// A configured CNA policy; the planner is kept visible for its statistics.
@@ -79,16 +132,6 @@ impl Policy {
     }
 }
 
-/// The bounding box of every AUV's lawnmower.
-pub fn survey_area(sc: &Scenario) -> Rect {
-    let pts: Vec<(f64, f64)> = (0..sc.fleet.n_auvs).flat_map(|k| sc.lawnmower(k).waypoints()).collect();
-    let fold = |f: fn(f64, f64) -> f64, init: f64, pick: fn(&(f64, f64)) -> f64| pts.iter().map(pick).fold(init, f);
-    Rect {
-        min: (fold(f64::min, f64::INFINITY, |p| p.0), fold(f64::min, f64::INFINITY, |p| p.1)),
-        max: (fold(f64::max, f64::NEG_INFINITY, |p| p.0), fold(f64::max, f64::NEG_INFINITY, |p| p.1)),
-    }
-}
-
 /// A checked policy name with whatever it needs precomputed (the open-loop plan), so Monte
 /// Carlo runs build their policies cheaply.
 #[derive(Debug, Clone)]
@@ -99,11 +142,9 @@ pub struct PolicySpec {
 
 impl PolicySpec {
     pub fn new(name: &str, sc: &Scenario) -> Result<Self, PolicyError> {
-        if !POLICY_NAMES.contains(&name) {
-            return Err(PolicyError::Unknown { name: name.to_string() });
-        }
+        registered(name)?;
         let open_loop = match name {
-            "open-loop" => Some(open_loop(sc).map_err(|source| PolicyError::Plan { name: name.to_string(), source })?),
+            PLANNED_ONCE => Some(open_loop(sc).map_err(|source| PolicyError::Plan { name: name.to_string(), source })?),
             _ => None,
         };
         Ok(PolicySpec { name: name.to_string(), open_loop })
@@ -121,40 +162,7 @@ const BIAS_TABLE_DEPTH_M: f64 = 200.0;
 /// Builds policy `name` for scenario `sc` from its `[policy.NAME]` table (`planned`: a
 /// precomputed open-loop plan).
 fn build(name: &str, sc: &Scenario, planned: Option<&TimedWaypoints>) -> Result<Policy, PolicyError> {
-    let n = sc.fleet.n_auvs;
-    let pol = &sc.policy;
-    let plan_err = |source| PolicyError::Plan { name: name.to_string(), source };
-    let link_err = |source| PolicyError::Link { name: name.to_string(), source };
-    let baseline: Box<dyn CnaPolicy> = match name {
-        "planner" => return planner(name, &sc.policy.planner, sc),
-        "planner-estimator" => return planner(name, &sc.policy.planner_estimator, sc),
-        "none" => Box::new(NoCna),
-        "racetrack" => {
-            let r = &pol.racetrack;
-            Box::new(FixedPattern::racetrack(survey_area(sc), r.inset_m, r.capture_radius_m))
-        }
-        "zigzag" => Box::new(FixedPattern::zigzag(survey_area(sc), pol.zigzag.legs, pol.zigzag.capture_radius_m)),
-        "centroid" => Box::new(Centroid),
-        "centroid-standoff" => Box::new(CentroidStandoff { radius: pol.centroid_standoff.radius_m }),
-        "trail" => Box::new(Trail {
-            auv: pol.trail.auv.unwrap_or(n / 2),
-            range: pol.trail.range_m,
-            angle: std::f64::consts::PI * (pol.trail.angle_deg / 180.0),
-        }),
-        "relay" => Box::new(MidpointRelay { base: (sc.cna.x, sc.cna.y), auv: pol.relay.auv.unwrap_or(n / 2) }),
-        "greedy-fisher" => {
-            let link =
-                LinkTable::sample(&LikelihoodLink(&modem_likelihood(sc).map_err(link_err)?)).map_err(plan_err)?;
-            let g = &pol.greedy_fisher;
-            Box::new(GreedyFisher::new(n, link, filter_model(sc).1, g.candidates, g.sigma_prior_m))
-        }
-        "open-loop" => match planned {
-            Some(p) => Box::new(p.clone()),
-            None => Box::new(open_loop(sc).map_err(plan_err)?),
-        },
-        _ => return Err(PolicyError::Unknown { name: name.to_string() }),
-    };
-    Ok(Policy::Baseline(baseline))
+    registered(name)?(name, sc, planned)
 }
 
 /// The look-ahead search's whole configuration for planner instance `name` (`planner` or
@@ -302,7 +310,7 @@ impl ChannelSample {
                 Vec3::new(x / n, y / n, z)
             })
             .collect();
-        Ok(ChannelSample { tl: sc.comms.tl.provider(sc)?, sources, bathymetry: sc.bathymetry(), depth: sc.fleet.depth })
+        Ok(ChannelSample { tl: sc.tl_provider()?, sources, bathymetry: sc.bathymetry(), depth: sc.fleet.depth })
     }
 
     /// The mean of `success(TL)` over every source and bearing at slant distance `d`; a TL the

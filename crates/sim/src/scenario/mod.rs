@@ -13,6 +13,7 @@ pub mod policies;
 pub mod site;
 pub mod start;
 pub mod survey_import;
+pub mod tl_site;
 pub mod tracks;
 pub mod world;
 

@@ -23,7 +23,7 @@ use coopnav_acomms::selector::AdaptiveConfig;
 use coopnav_acomms::status::CovTrailer;
 use coopnav_acomms::{Rate, Receiver, SuccessModel};
 use coopnav_core::validation::CheckFields;
-use coopnav_core::{Bathymetry, CompassDeg, DepthTarget, Heading, Iver2Params, Lawnmower, Shelf, SurveyPath};
+use coopnav_core::{Bathymetry, CompassDeg, DepthTarget, Heading, Iver2Params, Lawnmower, Rect, Shelf, SurveyPath};
 use coopnav_nav::{AuvModel, AuvParams, RangeNoise};
 use coopnav_plan::auto::{CnaFact, EstimatorSettings, MissionFacts};
 use coopnav_plan::predict::PredictorConfig;
@@ -35,6 +35,9 @@ use std::path::Path;
 /// The embedded default mission (`coopnav simulate` with no scenario, `--example`): the
 /// library's `scenarios/default.toml`.
 pub const EXAMPLE: &str = include_str!("../../../../scenarios/default.toml");
+
+/// The closed-loop benchmark's mission: the library's `scenarios/bench-closed-loop.toml`.
+pub const BENCH: &str = include_str!("../../../../scenarios/bench-closed-loop.toml");
 
 /// The whole file.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -431,7 +434,7 @@ impl Scenario {
         if p.is_empty() && !matches!(self.comms.tl, TlModel::Analytic(_)) {
             // The BELLHOP kinds need the program, and a grid is computed (or read from the disk
             // cache) here, once, so that a run never finds it missing.
-            if let Err(e) = self.comms.tl.provider(self) {
+            if let Err(e) = self.tl_provider() {
                 p.push(
                     "comms.tl",
                     e.to_string(),
@@ -496,9 +499,7 @@ impl Scenario {
         }
         p.non_negative("fleet.init_position_sd", f.init_position_sd);
         p.extend(f.finish.problems("fleet.finish."));
-        if let Err(e) = f.vehicle.validate() {
-            p.push("fleet.vehicle", e, "the IVER2 model's ranges");
-        }
+        f.vehicle.check_fields("fleet.vehicle.", p);
         if !(f.lawnmowers.is_empty() || f.lawnmowers.len() == f.n_auvs) {
             p.push("fleet.lawnmowers", format!("{} entries", f.lawnmowers.len()), "none, or one per survey AUV");
         }
@@ -657,9 +658,7 @@ impl Scenario {
         }
         let status_rates: Vec<Rate> = match &c.status_adaptive {
             Some(a) => {
-                if let Err(e) = a.validate() {
-                    p.push("comms.status_adaptive", e, "see the message");
-                }
+                a.check_fields("comms.status_adaptive.", p);
                 Rate::usable().to_vec()
             }
             None => vec![c.status_rate],
@@ -771,8 +770,7 @@ impl Scenario {
         if spec.estimator_cost().is_none() {
             return 0.0;
         }
-        let area = crate::policy::registry::survey_area(self);
-        (area.max.0 - area.min.0).hypot(area.max.1 - area.min.1)
+        self.survey_area().diagonal()
     }
 
     /// The seafloor: the site's grid if given, else the shelf if given, else a flat bottom at
@@ -904,6 +902,11 @@ impl Scenario {
         self.policy.predictor
     }
 
+    /// The bounding box of every AUV's survey path.
+    pub fn survey_area(&self) -> Rect {
+        Rect::around((0..self.fleet.n_auvs).flat_map(|k| self.lawnmower(k).waypoints()))
+    }
+
     /// The survey path of survey AUV `k`: its `fleet.paths` entry if given, else its lawnmower.
     pub fn lawnmower(&self, k: usize) -> SurveyPath {
         let f = &self.fleet;
@@ -927,26 +930,10 @@ impl Scenario {
             .into()
     }
 
-    /// The benchmark mission (`coopnav bench closed-loop`): 3 h, 5 survey AUVs on 16-lane blocks (long enough to
-    /// keep surveying for the whole 3 h), τ = 30 s, A = 5, L = 5, 10 Hz EKFs. The fleet spans
-    /// 4.2 km, so its 5 s slots are planned for ranges up to 2.4 km at rate 1 (3.08 s of air
-    /// time); at rate 0 (3.9 s) they hold only 1 km, and longer ranges collide with the next slot.
-    /// The CNA knows the AUVs' mission plans (`policy.before_first_report = "mission_plan"`): on
-    /// the BELLHOP grid it never hears auv0 and auv1 from its start otherwise, and never looks for
-    /// them (docs/evaluation.md has the difference it makes).
+    /// The closed-loop benchmark's mission (`coopnav bench closed-loop`), [`BENCH`].
     pub fn bench() -> Self {
-        let mut s = Self::example().with_auvs(5);
-        s.duration_s = 3.0 * 3600.0;
-        s.fleet.lanes = 16;
-        s.fleet.lane_length = 950.0;
-        s.fleet.lane_spacing = 50.0;
-        s.fleet.block_offset = 850.0;
-        s.cna.x = 2100.0;
-        let tree = &mut s.policy.planner.tree;
-        (tree.heading_options, tree.look_ahead, s.comms.tau, s.dt) = (Some(5), Some(5), 30.0, 0.1);
-        (s.comms.cna_rate, s.comms.status_rate, s.comms.max_range_m) = (Rate::R1, Rate::R1, 2400.0);
-        s.policy.before_first_report = BeforeFirstReport::MissionPlan;
-        s
+        Scenario::parse(BENCH, Path::new("scenarios/bench-closed-loop.toml"))
+            .expect("the embedded bench mission is valid")
     }
 
     /// Copy with N survey AUVs (experiments sweep N).
@@ -1085,7 +1072,7 @@ mod tests {
     #[test]
     fn a_survey_auv_model_outside_its_ranges_is_refused_naming_it() {
         let e = err(&EXAMPLE.replacen("[cna]", "[fleet.vehicle]\nmax_yaw_rate = -1.0\n\n[cna]", 1));
-        assert!(e.contains("field fleet.vehicle = ") && e.contains("max_yaw_rate"), "{e}");
+        assert!(e.contains("field fleet.vehicle.max_yaw_rate = -1: allowed a finite number > 0"), "{e}");
     }
 
     /// The example with its `[policy.NAME]` table replaced by `table` (the lines after the header).
