@@ -39,7 +39,8 @@
 //! negative variance, and a status whose bytes do not decode are counted as `malformed`; a
 //! status from an AUV outside the fleet as `wrong_source`, one received before the sending
 //! AUV's first slot as `unscheduled`, the same status (source, receive time, bytes) twice as a
-//! `duplicate`; a clock older than the newest one as `stale_clock`. Each is dropped and logged
+//! `duplicate`; a status older than the newest one applied from its AUV (reordered or delayed on
+//! the bus) as `stale_status`; a clock older than the newest one as `stale_clock`. Each is dropped and logged
 //! with `tracing`; none stops the planner.
 
 use crate::auv::LiveError;
@@ -90,6 +91,8 @@ pub struct CnaCounts {
     pub duplicates: u64,
     pub wrong_source: u64,
     pub unscheduled: u64,
+    /// Statuses older than the newest one applied from the same AUV (reordered or delayed).
+    pub stale_status: u64,
     pub stale_clock: u64,
     pub other_channel: u64,
     pub decisions: u64,
@@ -304,6 +307,12 @@ impl CnaPlanner {
         let Some((report, cov)) = belief::read_node_status(&frame.data, t_tx) else {
             return self.malformed(&channel, "the status bytes do not decode as a node report");
         };
+        if self.predictors[j].history().last().is_some_and(|newest| report.t < newest.t) {
+            // Applied, its covariance would replace the newer report's.
+            self.counts.stale_status += 1;
+            tracing::warn!(auv = j, t = report.t, "a status older than the AUV's newest one: dropped");
+            return;
+        }
         self.remember(key);
         self.reported[j] = Some(cov);
         self.predictors[j].receive(report);

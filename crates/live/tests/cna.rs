@@ -5,10 +5,10 @@
 //! policy's (built and stepped by coopnav-sim); the live planner decodes the payloads, rebuilds
 //! its knowledge of the fleet from the status bytes and the schedule, and decides by itself.
 
-use coopnav_lcm::messages::{CnaCommand as CommandMsg, Decision, Message};
+use coopnav_lcm::messages::{CnaCommand as CommandMsg, Decision, Message, StatusFrame};
 use coopnav_lcm::Schema;
-use coopnav_live::world::{record, Recorded};
-use coopnav_live::{CnaChannels, CnaPlanner, Outgoing};
+use coopnav_live::world::{record, Recorded, WorldMessage};
+use coopnav_live::{CnaChannels, CnaCounts, CnaPlanner, Outgoing};
 use coopnav_sim::engine::Faults;
 use coopnav_sim::observe::metrics;
 use coopnav_sim::policy::{CnaCommand, PolicySpec};
@@ -135,4 +135,143 @@ fn without_the_statuses_the_decisions_differ() {
         .count();
     assert!(differ > 10, "{differ} decisions differ");
     assert!(cna.counts().malformed + cna.counts().statuses_applied > 0);
+}
+
+/// The commands the planner published for `messages`, decoded, and its counts.
+fn commands_for(sc: &Scenario, messages: &[WorldMessage]) -> (CnaCounts, Vec<CommandMsg>) {
+    let mut cna = CnaPlanner::new(sc, "planner-estimator", 0).unwrap();
+    let out: Vec<Outgoing> = messages.iter().flat_map(|m| cna.handle(&m.channel, &m.payload).unwrap()).collect();
+    let schema = Schema::coopnav();
+    let ch = CnaChannels::default();
+    let commands =
+        out.iter().filter(|o| o.channel == ch.command).map(|o| CommandMsg::decode(&schema, &o.payload).unwrap());
+    (cna.counts().clone(), commands.collect())
+}
+
+/// Whether two runs published the same commands; a difference is reported by its first decision.
+fn first_difference(a: &[CommandMsg], b: &[CommandMsg]) -> Option<String> {
+    if a.len() != b.len() {
+        return Some(format!("{} commands against {}", a.len(), b.len()));
+    }
+    a.iter().zip(b).position(|(x, y)| x != y).map(|i| format!("decision {i}: {:?} against {:?}", a[i], b[i]))
+}
+
+fn status(m: &WorldMessage) -> StatusFrame {
+    StatusFrame::decode(&Schema::coopnav(), &m.payload).unwrap()
+}
+
+fn status_message(frame: &StatusFrame) -> WorldMessage {
+    WorldMessage { channel: CnaChannels::default().status, payload: frame.encode(&Schema::coopnav()).unwrap() }
+}
+
+/// Duplicated statuses, statuses from outside the fleet, truncated messages on every channel and
+/// clocks older than the newest are each counted and dropped: every command is the clean run's,
+/// bit for bit, and every clean status is applied.
+#[test]
+fn duplicated_foreign_malformed_and_stale_inputs_are_counted_and_change_nothing() {
+    let sc = scenario("default.toml");
+    let rec = record(&sc, "planner-estimator").unwrap();
+    let ch = CnaChannels::default();
+    let (clean_counts, clean) = commands_for(&sc, &rec.messages);
+    let mut faulty = Vec::new();
+    let (mut duplicated, mut foreign, mut truncated, mut stale) = (0, 0, 0, 0);
+    let mut last_clock: Option<WorldMessage> = None;
+    for (i, m) in rec.messages.iter().enumerate() {
+        faulty.push(m.clone());
+        if m.channel == ch.status && i % 3 == 0 {
+            faulty.push(m.clone());
+            duplicated += 1;
+        }
+        if m.channel == ch.status && i % 7 == 1 {
+            faulty.push(status_message(&StatusFrame { src: 9, ..status(m) }));
+            foreign += 1;
+        }
+        if i % 11 == 2 {
+            faulty
+                .push(WorldMessage { channel: m.channel.clone(), payload: m.payload[..m.payload.len() / 2].to_vec() });
+            truncated += 1;
+        }
+        if m.channel == ch.clock {
+            if let Some(previous) = last_clock.replace(m.clone()) {
+                if i % 5 == 0 {
+                    faulty.push(previous);
+                    stale += 1;
+                }
+            }
+        }
+    }
+    assert!(
+        duplicated > 20 && foreign > 5 && truncated > 20 && stale > 10,
+        "{duplicated} {foreign} {truncated} {stale}"
+    );
+    let (counts, commands) = commands_for(&sc, &faulty);
+    assert_eq!(first_difference(&commands, &clean), None, "every command is the clean run's");
+    let got = (counts.duplicates, counts.wrong_source, counts.malformed, counts.stale_clock);
+    assert_eq!(got, (duplicated, foreign, truncated, stale), "{counts:?}");
+    assert_eq!((counts.statuses_applied, counts.decisions), (clean_counts.statuses_applied, clean_counts.decisions));
+}
+
+/// A status that arrives after a newer one from the same AUV (reordered on the bus, or delayed) is
+/// counted as stale and does not replace the newer one's report or covariance: the commands are
+/// the clean run's. Statuses reordered between AUVs change nothing either.
+#[test]
+fn a_reordered_status_is_counted_and_never_replaces_a_newer_one() {
+    let sc = scenario("default.toml");
+    let rec = record(&sc, "planner-estimator").unwrap();
+    let ch = CnaChannels::default();
+    let (_, clean) = commands_for(&sc, &rec.messages);
+    // Each AUV's status delivered again after that AUV's next one (a late copy with its own
+    // receive time, so not a duplicate), and each pair of statuses between two fixes swapped.
+    let mut faulty = rec.messages.clone();
+    let mut previous: std::collections::HashMap<i16, StatusFrame> = Default::default();
+    let mut inserts = Vec::new();
+    for (i, m) in faulty.iter().enumerate().filter(|(_, m)| m.channel == ch.status) {
+        let frame = status(m);
+        if let Some(older) = previous.insert(frame.src, frame) {
+            if i % 4 == 0 {
+                inserts.push((i + 1, StatusFrame { receive_time: older.receive_time + 0.25, ..older }));
+            }
+        }
+    }
+    let late = inserts.len() as u64;
+    for (at, copy) in inserts.into_iter().rev() {
+        faulty.insert(at, status_message(&copy));
+    }
+    let mut swapped = 0;
+    for i in 0..faulty.len() - 1 {
+        let both = faulty[i].channel == ch.status && faulty[i + 1].channel == ch.status;
+        if both && status(&faulty[i]).src != status(&faulty[i + 1]).src {
+            faulty.swap(i, i + 1);
+            swapped += 1;
+        }
+    }
+    assert!(late > 5 && swapped > 5, "{late} late, {swapped} swapped");
+    let (counts, commands) = commands_for(&sc, &faulty);
+    assert_eq!(counts.stale_status, late, "{counts:?}");
+    assert_eq!(first_difference(&commands, &clean), None, "every command is the clean run's");
+}
+
+/// Statuses lost on the bus cost only their information: every decision is still taken, each
+/// status that arrived is applied, and the decisions differ from the clean run's (the planner
+/// used what it heard).
+#[test]
+fn a_dropped_status_costs_only_its_information() {
+    let sc = scenario("default.toml");
+    let rec = record(&sc, "planner-estimator").unwrap();
+    let ch = CnaChannels::default();
+    let (clean_counts, clean) = commands_for(&sc, &rec.messages);
+    let mut kept = Vec::new();
+    let mut dropped = 0;
+    for (i, m) in rec.messages.iter().enumerate() {
+        if m.channel == ch.status && i % 2 == 0 {
+            dropped += 1;
+        } else {
+            kept.push(m.clone());
+        }
+    }
+    let (counts, commands) = commands_for(&sc, &kept);
+    assert_eq!(commands.len(), clean.len(), "every decision taken");
+    assert_eq!(counts.statuses_applied, clean_counts.statuses_applied - dropped);
+    assert_eq!(counts.malformed + counts.duplicates + counts.stale_status, 0, "{counts:?}");
+    assert!(first_difference(&commands, &clean).is_some(), "the lost statuses changed the plan");
 }
