@@ -90,8 +90,8 @@ fn provider(tl: &TlChoice, cfg: &ExperimentConfig) -> Result<Arc<dyn Transmissio
 pub(crate) fn example() -> Result<String> {
     Ok(format!(
         "# coopnav Nams rate-selection experiment for `coopnav nams FILE` (the thesis set-up).\n\
-         # Every field is at its default and optional: keep only what you change, but write a\n\
-         # scenario whole (every field). The four scenarios are Table 6's\n\
+         # Every field is at its default and optional: keep only what you change (a scenario's\n\
+         # missing fields are scenario 1's). The four scenarios are Table 6's\n\
          # (scenarios/experiments/nams-table-6.toml). Units and sources: the rustdoc of\n\
          # coopnav_sim::scenario::nams::ExperimentConfig (`cargo doc --open`).\n{}",
         toml::to_string_pretty(&File::default())?

@@ -10,22 +10,61 @@ use coopnav_core::{Iver2Params, Shelf};
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 
-/// One mission environment, written whole (every field) in a file.
+/// One mission environment. A field a file leaves out is Table 6 scenario 1's ([`TABLE_6`]'s
+/// first entry, which gives every field).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Scenario {
+    #[serde(default = "first::name")]
     pub name: String,
     /// Side of the square lawnmower, m (500 or 2000 in the thesis).
+    #[serde(default = "first::square")]
     pub square: f64,
     /// Lane spacing, m. Invented: docs/models.md#nams-scenarios (50 m small, 200 m large).
+    #[serde(default = "first::lane_spacing")]
     pub lane_spacing: f64,
     /// Extra ambient noise, dB (0 or 6).
+    #[serde(default = "first::noise_db")]
     pub noise_db: f64,
+    #[serde(default = "first::receiver")]
     pub receiver: Receiver,
     /// Altitude above the seafloor, m (5 m altitude keeping).
+    #[serde(default = "first::altitude")]
     pub altitude: f64,
     /// Speed through water, m/s (3 kn).
+    #[serde(default = "first::speed")]
     pub speed: f64,
+}
+
+/// Each field's default: Table 6 scenario 1's. Per field (serde calls one only when its field is
+/// missing), so reading [`TABLE_6`], whose entries give every field, asks for none of them.
+mod first {
+    use super::{table_6, Receiver, Scenario};
+
+    fn scenario() -> Scenario {
+        table_6().swap_remove(0)
+    }
+    pub fn name() -> String {
+        scenario().name
+    }
+    pub fn square() -> f64 {
+        scenario().square
+    }
+    pub fn lane_spacing() -> f64 {
+        scenario().lane_spacing
+    }
+    pub fn noise_db() -> f64 {
+        scenario().noise_db
+    }
+    pub fn receiver() -> Receiver {
+        scenario().receiver
+    }
+    pub fn altitude() -> f64 {
+        scenario().altitude
+    }
+    pub fn speed() -> f64 {
+        scenario().speed
+    }
 }
 
 /// Thesis Table 6's four scenarios as an experiment file (`scenarios/experiments/nams-table-6.toml`).
@@ -178,7 +217,7 @@ mod tests {
     }
 
     #[test]
-    fn table_6_is_the_thesis_four_and_a_scenario_is_written_whole() {
+    fn table_6_is_the_thesis_four_and_gives_a_partial_scenario_its_missing_fields() {
         let t = table_6();
         let squares_noise: Vec<(f64, f64)> = t.iter().map(|s| (s.square, s.noise_db)).collect();
         assert_eq!(squares_noise, [(500.0, 0.0), (500.0, 6.0), (2000.0, 0.0), (2000.0, 6.0)]);
@@ -186,16 +225,18 @@ mod tests {
         assert!(t.iter().all(|s| s.speed == 3.0 * 1852.0 / 3600.0 && s.altitude == 5.0));
         assert!(t.iter().all(|s| s.lane_spacing == s.square / 10.0 && s.receiver == Receiver::Iver2));
         assert_eq!(ExperimentConfig::default().scenarios, t);
-        let partial = "[[scenarios]]\nname = \"a\"\nsquare = 500.0\n";
-        let e = toml::from_str::<ExperimentConfig>(partial).unwrap_err().to_string();
-        assert!(e.contains("missing field `lane_spacing`"), "{e}");
+        // A field left out is scenario 1's.
+        let partial = "[[scenarios]]\nname = \"a\"\nsquare = 800.0\nnoise_db = 3.0\n";
+        let read = toml::from_str::<ExperimentConfig>(partial).unwrap().scenarios;
+        let want = Scenario { name: "a".into(), square: 800.0, noise_db: 3.0, ..t[0].clone() };
+        assert_eq!(read, [want]);
     }
 
     #[test]
     fn every_bad_field_is_named_at_once() {
         let text = "runs = 0\nmax_time = -5.0\n[tdma]\nbase_slot = nan\n[shelf]\nspacing = -1.0\n\
                     [[scenarios]]\nname = \"a\"\nsquare = 500.0\nlane_spacing = 50.0\nnoise_db = nan\n\
-                    receiver = \"iver2\"\naltitude = -2.0\nspeed = 99.0\n";
+                    altitude = -2.0\nspeed = 99.0\n";
         let cfg: ExperimentConfig = toml::from_str(text).unwrap();
         let e = cfg.validate_file(Path::new("exp.toml"), "experiment").unwrap_err().to_string();
         for field in [
