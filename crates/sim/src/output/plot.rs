@@ -67,7 +67,8 @@ impl Series {
     }
 }
 
-/// An event marked on a line plot: a triangle at (x, y) with its text beside it.
+/// An event marked on a line plot: a numbered triangle at (x, y), its text on the numbered line
+/// under the plot (where no line of the plot crosses it).
 #[derive(Debug, Clone, PartialEq)]
 pub struct Marker {
     pub x: f64,
@@ -108,8 +109,9 @@ pub fn line_svg(labels: Labels, series: &[Series]) -> Result<String, PlotError> 
     line_svg_marked(labels, series, &[], "")
 }
 
-/// A line plot of every series with `markers` drawn over the lines and `note` (when not empty)
-/// written under the plot: how a plot explains an event it shows.
+/// A line plot of every series with `markers` drawn over the lines, and under the plot `note`
+/// (when not empty) and one numbered line per marker: how a plot explains an event it shows.
+/// The plot keeps its size; the figure grows by one text row per line.
 pub fn line_svg_marked(labels: Labels, series: &[Series], markers: &[Marker], note: &str) -> Result<String, PlotError> {
     let (x, y) = bounds(series);
     draw(labels, series, x, with_legend_headroom(y, series), markers, note)
@@ -203,14 +205,15 @@ fn draw(
     let fail = |e: &dyn std::fmt::Display| PlotError::new(labels.title, e);
     let mut svg = String::new();
     {
-        let root = SVGBackend::with_string(&mut svg, SIZE).into_drawing_area();
+        let lines: Vec<(String, String)> = (!note.is_empty())
+            .then(|| (String::new(), note.to_string()))
+            .into_iter()
+            .chain(markers.iter().enumerate().map(|(i, m)| (format!("{}", i + 1), m.text.clone())))
+            .collect();
+        let below = NOTE_PX * lines.len() as u32;
+        let root = SVGBackend::with_string(&mut svg, (SIZE.0, SIZE.1 + below)).into_drawing_area();
         root.fill(&WHITE).map_err(|e| fail(&e))?;
-        let (area, note_area) = if note.is_empty() {
-            (root.clone(), None)
-        } else {
-            let (plot, below) = root.split_vertically(SIZE.1 - NOTE_PX);
-            (plot, Some(below))
-        };
+        let (area, note_area) = root.split_vertically(SIZE.1);
         let mut chart = ChartBuilder::on(&area)
             .caption(labels.title, ("sans-serif", TITLE_FONT))
             .margin(12)
@@ -246,20 +249,17 @@ fn draw(
                 PathElement::new(sample, style)
             });
         }
-        for m in markers {
+        let small = |h: HPos| TextStyle::from(("sans-serif", SMALL_FONT).into_font()).pos(Pos::new(h, VPos::Center));
+        for (i, m) in markers.iter().enumerate() {
             let style = rgb(m.colour).filled();
             chart.draw_series([TriangleMarker::new((m.x, m.y), 8, style)]).map_err(|e| fail(&e))?;
-            // The text beside the triangle, on the side with room, over a white box so lines
-            // behind it do not cross it.
+            // The marker's number just above its triangle.
             let (px, py) = chart.backend_coord(&(m.x, m.y));
-            let right = px < (SIZE.0 as i32) * 2 / 3;
-            let width = (m.text.chars().count() as f64 * 0.56 * f64::from(SMALL_FONT) / 1.24) as i32;
-            let (x0, x1) = if right { (px + 10, px + 14 + width) } else { (px - 14 - width, px - 10) };
-            area.draw(&Rectangle::new([(x0, py - 9), (x1, py + 9)], WHITE.mix(0.7).filled())).map_err(|e| fail(&e))?;
-            let anchor = Pos::new(if right { HPos::Left } else { HPos::Right }, VPos::Center);
-            let text = TextStyle::from(("sans-serif", SMALL_FONT).into_font()).pos(anchor);
-            area.draw(&Text::new(m.text.clone(), (if right { px + 12 } else { px - 12 }, py), text))
-                .map_err(|e| fail(&e))?;
+            let colour = rgb(m.colour);
+            let number = TextStyle::from(("sans-serif", SMALL_FONT).into_font().style(FontStyle::Bold))
+                .color(&colour)
+                .pos(Pos::new(HPos::Center, VPos::Bottom));
+            area.draw(&Text::new(format!("{}", i + 1), (px, py - 10), number)).map_err(|e| fail(&e))?;
         }
         if has_legend(series) {
             chart
@@ -271,9 +271,12 @@ fn draw(
                 .draw()
                 .map_err(|e| fail(&e))?;
         }
-        if let Some(note_area) = note_area {
-            let text = TextStyle::from(("sans-serif", SMALL_FONT).into_font()).pos(Pos::new(HPos::Left, VPos::Center));
-            note_area.draw(&Text::new(note.to_string(), (14, (NOTE_PX / 2) as i32), text)).map_err(|e| fail(&e))?;
+        for (i, (number, text)) in lines.iter().enumerate() {
+            let y = (NOTE_PX as i32) * i as i32 + (NOTE_PX / 2) as i32;
+            if !number.is_empty() {
+                note_area.draw(&Text::new(number.clone(), (30, y), small(HPos::Right))).map_err(|e| fail(&e))?;
+            }
+            note_area.draw(&Text::new(text.clone(), (38, y), small(HPos::Left))).map_err(|e| fail(&e))?;
         }
         root.present().map_err(|e| fail(&e))?;
     }

@@ -95,8 +95,8 @@ pub fn differences_svg(cells: &[(String, &Comparison)]) -> Result<String, PlotEr
 fn jump_note(tr: &Trace, gate: Option<f64>) -> String {
     let gate = gate.map_or(String::new(), |g| format!(", gate {g:.2}"));
     format!(
-        "Triangles: a rise of {:.1} m or more in one second, with the range the filter applied then \
-         (its error against the truth, its NIS{gate}, the filter's σ before) or what else happened.",
+        "Triangles: rises of {:.1} m or more in one second, and what the filter did then (a range: \
+         its true error, NIS{gate}, σ before):",
         jumps::threshold(tr)
     )
 }
