@@ -63,8 +63,13 @@ fn cause(ranges: &[RangeUpdate], k: usize, (prior, row): (Option<&TraceRow>, &Tr
         _ => None,
     });
     if let Some((u, nis)) = applied {
-        let off =
-            if u.error_m >= 0.0 { format!("{:.1} m long", u.error_m) } else { format!("{:.1} m short", -u.error_m) };
+        let off = if u.error_m.abs() < 0.05 {
+            "within 0.1 m".to_string()
+        } else if u.error_m > 0.0 {
+            format!("{:.1} m long", u.error_m)
+        } else {
+            format!("{:.1} m short", -u.error_m)
+        };
         let sd = prior.map_or(String::new(), |r| format!(", σ {:.1} m before", r.est_sd));
         let previous = mine().filter(|p| p.t < u.t && p.outcome.applied()).last();
         let silence = match previous {
@@ -135,6 +140,11 @@ mod tests {
             range(100.4, 0, UpdateOutcome::Applied { nis: 9.87 }, 9.46),
             range(110.5, 1, UpdateOutcome::Gated { nis: 30.0 }, -7.0),
         ];
+        let mut within = trace.clone();
+        within.ranges[1].error_m = -0.04;
+        assert!(jumps(&within)[0].cause.starts_with("range within 0.1 m applied, NIS 9.9"));
+        within.ranges[1].error_m = -0.06;
+        assert!(jumps(&within)[0].cause.starts_with("range 0.1 m short applied"));
         // The largest error is 16 m: a quarter is 4 m, below the 5 m floor.
         assert_eq!(threshold(&trace), 5.0);
         let j = jumps(&trace);

@@ -91,13 +91,23 @@ pub fn differences_svg(cells: &[(String, &Comparison)]) -> Result<String, PlotEr
     intervals_svg(&title, &format!("difference, m (negative = {reference} better)"), &rows)
 }
 
-/// The error plot's note: what its triangles mark (`gate`: the filters' NIS gate, if any).
-fn jump_note(tr: &Trace, gate: Option<f64>) -> String {
+/// The most rises the error plot marks (each adds a line under it).
+const MARKED: usize = 8;
+
+/// The error plot's note: what its triangles mark (`gate`: the filters' NIS gate, if any), when
+/// it marks `shown` of `total` rises.
+fn jump_note(tr: &Trace, gate: Option<f64>, shown: usize, total: usize) -> String {
+    let rise = jumps::threshold(tr);
+    if shown < total {
+        return format!(
+            "Triangles: the {shown} largest of {total} rises of {rise:.1} m or more in one second (the report \
+             lists all), and what the filter did then:"
+        );
+    }
     let gate = gate.map_or(String::new(), |g| format!(", gate {g:.2}"));
     format!(
-        "Triangles: rises of {:.1} m or more in one second, and what the filter did then (a range: \
-         its true error, NIS{gate}, σ before):",
-        jumps::threshold(tr)
+        "Triangles: rises of {rise:.1} m or more in one second, and what the filter did then (a range: \
+         its true error, NIS{gate}, σ before):"
     )
 }
 
@@ -145,7 +155,12 @@ fn plots(n: usize, tr: &Trace, jumps: &[Jump], gate: Option<f64>) -> Result<Vec<
     Ok(vec![
         track_svg(Labels { title: "Tracks", x: "east [m]", y: "north [m]" }, &tracks)?,
         {
-            let markers: Vec<Marker> = jumps
+            // The largest MARKED rises, in time order; the report lists every one.
+            let mut marked: Vec<&Jump> = jumps.iter().collect();
+            marked.sort_by(|a, b| (b.after - b.before).total_cmp(&(a.after - a.before)));
+            marked.truncate(MARKED);
+            marked.sort_by(|a, b| a.t.total_cmp(&b.t));
+            let markers: Vec<Marker> = marked
                 .iter()
                 .map(|j| Marker {
                     x: j.t,
@@ -154,7 +169,7 @@ fn plots(n: usize, tr: &Trace, jumps: &[Jump], gate: Option<f64>) -> Result<Vec<
                     text: jump_text(j),
                 })
                 .collect();
-            let note = if jumps.is_empty() { String::new() } else { jump_note(tr, gate) };
+            let note = if jumps.is_empty() { String::new() } else { jump_note(tr, gate, markers.len(), jumps.len()) };
             line_svg_marked(
                 Labels { title: "Navigation error", x: "time [s]", y: "error [m]" },
                 &errors,
@@ -259,4 +274,49 @@ fn report(sc: &Scenario, r: &RunResult, svgs: &[String], jumps: &[Jump], command
         h.figure(file, caption, svg);
     }
     h.render()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::engine::TraceRow;
+
+    #[test]
+    fn the_error_plot_marks_the_largest_rises_and_says_how_many_it_left_out() {
+        // One AUV whose error falls back to 1 m after each of ten rises of 10 to 19 m.
+        let mut trace = Trace::default();
+        let row = |t: f64, error: f64| TraceRow {
+            t,
+            auv: 0,
+            true_x: 0.0,
+            true_y: 0.0,
+            true_z: 20.0,
+            est_x: 0.0,
+            est_y: 0.0,
+            error,
+            est_sd: 1.0,
+            p_ee: 1.0,
+            p_en: 0.0,
+            p_nn: 1.0,
+            nees: 1.0,
+            modelled: None,
+            cna_x: 0.0,
+            cna_y: 0.0,
+            cna_z: 0.0,
+            distance: 100.0,
+        };
+        for i in 0..10 {
+            let t = 10.0 * f64::from(i);
+            trace.rows.extend([row(t, 1.0), row(t + 1.0, 11.0 + f64::from(i)), row(t + 2.0, 1.0)]);
+        }
+        let jumps = jumps::jumps(&trace);
+        assert_eq!(jumps.len(), 10);
+        let svg = &plots(1, &trace, &jumps, Some(10.83)).unwrap()[1];
+        assert_eq!(svg.matches("<polygon").count(), MARKED);
+        assert!(svg.contains("Triangles: the 8 largest of 10 rises of 5.0 m or more"), "the note");
+        // The two smallest, +10 m at 1 s and +11 m at 11 s, are left out.
+        assert!(!svg.contains("auv0 1 s,") && !svg.contains("auv0 11 s,") && svg.contains("auv0 21 s, +12.0 m"));
+        let report = jumps.iter().map(jump_text).collect::<Vec<_>>().join("; ");
+        assert!(report.starts_with("auv0 1 s, +10.0 m: no range applied: dead reckoning"), "{report}");
+    }
 }
