@@ -247,8 +247,8 @@ pub fn render(
         let (t0, t1) = (result.residuals[0].t, result.residuals[result.residuals.len() - 1].t);
         let series = [
             Series::new("NIS", residual(|x| x.nis)),
-            Series::new("95 % bounds", vec![(t0, NIS_95.1), (t1, NIS_95.1)]),
-            Series::new("lower", vec![(t0, NIS_95.0), (t1, NIS_95.0)]),
+            Series::new("95 % bounds", vec![(t0, NIS_95.1), (t1, NIS_95.1)]).reference(),
+            Series::new("lower", vec![(t0, NIS_95.0), (t1, NIS_95.0)]).reference(),
         ];
         let labels = Labels { title: "Normalised innovation squared", x: "time (s)", y: "NIS" };
         r.figure("nis", "NIS of every range with the two-sided 95 % χ²(1) bounds.", &line_svg(labels, &series)?);

@@ -338,6 +338,47 @@ fn the_replay_shows_the_run_positions_in_a_real_browser() {
     eprintln!("screenshot: {}", shot.display());
 }
 
+#[test]
+#[cfg_attr(not(chromium_installed), ignore = "Chromium is not installed: run scripts/install-chromium.sh")]
+fn the_replay_draws_auv_k_in_the_plots_colour_k_beyond_ten_auvs() {
+    let chromium = chromium();
+    let tmp = tempfile::tempdir().unwrap();
+    let text = String::from_utf8(coopnav(&["simulate", "--example"]).stdout).unwrap();
+    let eleven: String = text
+        .lines()
+        .map(|l| match l {
+            l if l.starts_with("duration_s") => "duration_s = 120.0".to_string(),
+            l if l.starts_with("n_auvs") => "n_auvs = 11".to_string(),
+            // Twelve slots of 5 s, each holding a packet's air time and travel, and a turn rate
+            // that keeps a decision's turns under 180 degrees.
+            l if l.starts_with("tau ") => "tau = 60.0".to_string(),
+            l if l.starts_with("max_turn_rate_deg_s") => "max_turn_rate_deg_s = 2.0".to_string(),
+            l => l.to_string(),
+        })
+        .collect::<Vec<_>>()
+        .join("\n");
+    let scenario = tmp.path().join("eleven.toml");
+    std::fs::write(&scenario, eleven).unwrap();
+    let run = tmp.path().join("sim");
+    succeed(&["simulate", scenario.to_str().unwrap(), "--policy", "none", "-o", run.to_str().unwrap()]);
+    let profile = tempfile::tempdir().unwrap();
+    let page = format!("file://{}#t=30", run.join("replay.html").display());
+    let dom = String::from_utf8_lossy(&headless(&chromium, profile.path(), &page, &["--dump-dom"]).stdout).to_string();
+    assert!(dom.contains("data-status=\"ready\""), "the page did not finish painting");
+    // The legend's entry of each AUV and its colour. The alog's names sort
+    // auv0, auv1, auv10, auv2, ...; the plots draw auvK in colour K of the eight.
+    let legend_colour = |name: &str| -> String {
+        let entry = dom.find(&format!("● {name} ")).unwrap_or_else(|| panic!("no legend entry of {name}"));
+        let style = &dom[dom[..entry].rfind("style=\"").unwrap()..entry];
+        style.split("color:").nth(1).unwrap().split([';', '"']).next().unwrap().trim().to_string()
+    };
+    for (name, rgb) in
+        [("auv0", "#0072b2"), ("auv2", "#009e73"), ("auv7", "#999933"), ("auv9", "#d55e00"), ("auv10", "#009e73")]
+    {
+        assert_eq!(legend_colour(name), rgb, "{name}");
+    }
+}
+
 /// Drives the replay's map the way a person does, with the browser's own mouse and wheel events
 /// dispatched to the page's handlers: the wheel zooms about the cursor, a drag pans, a click picks
 /// the vehicle under it and shows its state, and following a vehicle keeps it at the centre as

@@ -1,6 +1,6 @@
 //! `coopnav simulate` end to end: the default mission writes a run directory with the report,
-//! `--example` prints a scenario that runs, and a bad scenario fails naming the field and writes
-//! nothing.
+//! its error plot marks and explains the error's one-second jump, `--example` prints a scenario
+//! that runs, and a bad scenario fails naming the field and writes nothing.
 
 mod common;
 
@@ -26,6 +26,42 @@ fn default_mission_writes_a_fresh_run_directory() {
             assert!(run.join(f).is_file(), "{expected}/{f}");
         }
     }
+}
+
+/// The numbers in `text` (after `after`), as written.
+fn number_after(text: &str, after: &str) -> f64 {
+    let rest = &text[text.find(after).unwrap_or_else(|| panic!("no {after:?} in {text:?}")) + after.len()..];
+    rest.split(|c: char| !(c.is_ascii_digit() || c == '.' || c == '-')).next().unwrap().parse().unwrap()
+}
+
+#[test]
+fn the_default_error_plot_explains_its_jump() {
+    // The default mission's timeseries.csv (before the plot marked anything): auv2's true error
+    // rises from 8.32 m at 1144 s to 23.06 m at 1145 s, the largest one-second rise of the run,
+    // at the range of the CNA's 1140 s broadcast.
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path().join("run");
+    let out = coopnav(tmp.path(), &["simulate", "-o", dir.to_str().unwrap()]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let svg = std::fs::read_to_string(dir.join("error.svg")).unwrap();
+    let marker = svg
+        .split("<text")
+        .filter_map(|t| t.split_once('>').map(|(_, x)| x.split("</text>").next().unwrap().trim()))
+        .find(|t| t.starts_with("auv2 1145 s, +14.7 m: range "))
+        .unwrap_or_else(|| panic!("no marker of auv2's jump at 1145 s"));
+    // The scenario's channel: 5.55 % of ranges are outliers 5 to 10 m long.
+    let long = number_after(marker, "range ");
+    assert!((5.0..=10.0).contains(&long) && marker.contains(" m long applied, NIS "), "{marker}");
+    // Applied, so under the 10.83 gate.
+    assert!(number_after(marker, "NIS ") < 10.83, "{marker}");
+    // The filter's σ before it, from timeseries.csv at 1144 s: 20.6 m.
+    assert!(marker.contains("σ 20.6 m before"), "{marker}");
+    // A triangle in auv2's colour (Okabe-Ito bluish green), numbered, and the note saying what
+    // triangles mark: rises of a quarter of the run's largest error, 26.83 m in timeseries.csv.
+    assert!(svg.contains("<polygon") && svg.contains("#009E73"), "the triangle");
+    assert!(svg.contains("Triangles: rises of 6.7 m or more in one second"), "the note");
+    let report = std::fs::read_to_string(dir.join("report.html")).unwrap();
+    assert!(report.contains("Error jumps marked on the error plot: auv2 1145 s, +14.7 m"), "the report");
 }
 
 #[test]

@@ -207,6 +207,12 @@ pub struct RangeUpdate {
     pub t: f64,
     pub auv: usize,
     pub outcome: UpdateOutcome,
+    /// The range the filter was given less the one the true travel time gives at the same sound
+    /// speed, m: what the channel's range error and the clocks added (positive: long).
+    pub error_m: f64,
+    /// The update left the filter's NIS bounds and the filter recovered (inflated its position
+    /// and relinearised).
+    pub recovered: bool,
 }
 
 /// A packet's fate on one survey AUV's link (at the end of its arrival): a broadcast from the CNA,
@@ -308,6 +314,8 @@ pub struct Trace {
     /// CNA true track (t, position) every second; an AUV CNA's depth included.
     pub cna: Vec<(f64, Vec3)>,
     pub decisions: Vec<Decision>,
+    /// Every range a survey AUV's filter was offered, in time order.
+    pub ranges: Vec<RangeUpdate>,
 }
 
 impl Observer for Trace {
@@ -320,6 +328,9 @@ impl Observer for Trace {
     }
     fn on_packet(&mut self, event: &CommsEvent) {
         self.comms.push(*event);
+    }
+    fn on_range_update(&mut self, update: &RangeUpdate) {
+        self.ranges.push(*update);
     }
 }
 

@@ -483,17 +483,17 @@ impl Engine<'_> {
         let (ce, cn) = a.ekf.current();
         let delay = meta.end - meta.start;
         let shift = Vec3::new((speed * psi.cos() + ce) * delay, (speed * psi.sin() + cn) * delay, 0.0);
-        let m = RangeMeasurement {
-            range: self.range_speed.between(fix.z, a.truth.z) * travel_time,
-            travel_time,
-            transponder: fix + shift,
-        };
-        let recovered = a.ekf.recoveries().count;
+        let sound = self.range_speed.between(fix.z, a.truth.z);
+        let m = RangeMeasurement { range: sound * travel_time, travel_time, transponder: fix + shift };
+        // The arrival starts when the true signal reaches the AUV.
+        let error_m = m.range - sound * (meta.start - meta.t_tx);
+        let recoveries = a.ekf.recoveries().count;
         let outcome = a.ekf.update_range(&m, Some(a.truth.z));
-        if a.ekf.recoveries().count > recovered {
+        let recovered = a.ekf.recoveries().count > recoveries;
+        if recovered {
             tracing::info!(t = meta.end, auv = k, "the filter's ranges left their NIS bounds: it recovered");
         }
-        obs.on_range_update(&RangeUpdate { t: meta.end, auv: k, outcome });
+        obs.on_range_update(&RangeUpdate { t: meta.end, auv: k, outcome, error_m, recovered });
     }
 
     /// Filters to `t_next` at the end of truth step `step` (every step, or every few with a

@@ -19,16 +19,9 @@ pub const PAGE: &str = "advice.html";
 /// The map's file name.
 pub const MAP: &str = "error-map.svg";
 
-/// Colour-blind-safe sequential scale (viridis), low to high.
-const SCALE: [(u8, u8, u8); 5] = [(68, 1, 84), (59, 82, 139), (33, 145, 140), (94, 201, 98), (253, 231, 37)];
-
+/// The map's colour at `f` in [0, 1]: the shared colour-blind-safe sequential scale (viridis).
 fn colour(f: f64) -> String {
-    let f = f.clamp(0.0, 1.0) * (SCALE.len() - 1) as f64;
-    let i = (f.floor() as usize).min(SCALE.len() - 2);
-    let t = f - i as f64;
-    let mix = |a: u8, b: u8| (a as f64 + (b as f64 - a as f64) * t).round() as u8;
-    let (a, b) = (SCALE[i], SCALE[i + 1]);
-    format!("#{:02x}{:02x}{:02x}", mix(a.0, b.0), mix(a.1, b.1), mix(a.2, b.2))
+    coopnav_moos::palette::hex(coopnav_moos::palette::sequential(f))
 }
 
 fn esc(s: &str) -> String {

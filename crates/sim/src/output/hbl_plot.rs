@@ -5,15 +5,19 @@
 use super::record::PassRow;
 use crate::batch::grid::GridCell;
 use crate::observe::profile::ProfileBin;
-use crate::output::plot::{line_svg, track_svg, Labels, Series};
+use crate::output::plot::{line_svg, tick_decimals, tick_label, track_svg, Labels, Series};
+use crate::output::plot::{AXIS_FONT, SMALL_FONT, TITLE_FONT};
+use coopnav_moos::palette;
 use plotters::prelude::*;
 
 pub use crate::output::plot::PlotError;
 
-/// Colour of `v` on a blue (low) → red (high) ramp over [lo, hi].
+/// Colour of `v` on the colour-blind-safe sequential scale (viridis: dark purple low, yellow
+/// high) over [lo, hi].
 fn ramp(v: f64, lo: f64, hi: f64) -> RGBColor {
-    let f = if hi > lo { ((v - lo) / (hi - lo)).clamp(0.0, 1.0) } else { 0.0 };
-    RGBColor((40.0 + 215.0 * f) as u8, (60.0 + 80.0 * (1.0 - (2.0 * f - 1.0).abs())) as u8, (255.0 * (1.0 - f)) as u8)
+    let f = if hi > lo { (v - lo) / (hi - lo) } else { 0.0 };
+    let (r, g, b) = palette::sequential(f);
+    RGBColor(r, g, b)
 }
 
 /// Quantile of the colour scale's top: cells above it share the top colour, so one outlying
@@ -31,8 +35,8 @@ fn colour_range(values: &[f64]) -> ((f64, f64), usize) {
     ((lo, hi), v.iter().filter(|&&x| x > hi).count())
 }
 
-const HEAT_SIZE: (u32, u32) = (820, 440);
-const BAR_WIDTH: u32 = 110;
+const HEAT_SIZE: (u32, u32) = (900, 480);
+const BAR_WIDTH: u32 = 130;
 
 /// Heat map of mean zone error per buoy cell (`spacing` = cell size in m), with a colour bar.
 pub fn heat_map(cells: &[GridCell], spacing: f64) -> Result<String, PlotError> {
@@ -53,14 +57,25 @@ pub fn heat_map(cells: &[GridCell], spacing: f64) -> Result<String, PlotError> {
         let h = spacing / 2.0;
         let min = |v: &[f64]| v.iter().copied().fold(f64::INFINITY, f64::min);
         let max = |v: &[f64]| v.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+        let (x, y) = ((min(&xs) - h, max(&xs) + h), (min(&ys) - h, max(&ys) + h));
         let mut chart = ChartBuilder::on(&map_area)
-            .caption(caption, ("sans-serif", 15))
+            .caption(caption, ("sans-serif", if above == 0 { TITLE_FONT } else { 18 }))
             .margin(10)
-            .x_label_area_size(35)
-            .y_label_area_size(45)
-            .build_cartesian_2d(min(&xs) - h..max(&xs) + h, min(&ys) - h..max(&ys) + h)
+            .x_label_area_size(48)
+            .y_label_area_size(64)
+            .build_cartesian_2d(x.0..x.1, y.0..y.1)
             .map_err(|e| err(&e))?;
-        chart.configure_mesh().x_desc("buoy x (m, along path)").y_desc("buoy y (m)").draw().map_err(|e| err(&e))?;
+        let (xd, yd) = (tick_decimals(x), tick_decimals(y));
+        chart
+            .configure_mesh()
+            .x_desc("buoy x (m, along path)")
+            .y_desc("buoy y (m)")
+            .x_label_formatter(&|v| tick_label(*v, xd))
+            .y_label_formatter(&|v| tick_label(*v, yd))
+            .label_style(("sans-serif", SMALL_FONT))
+            .axis_desc_style(("sans-serif", AXIS_FONT))
+            .draw()
+            .map_err(|e| err(&e))?;
         chart
             .draw_series(cells.iter().map(|c| {
                 Rectangle::new([(c.x - h, c.y - h), (c.x + h, c.y + h)], ramp(c.zone_error.mean, lo, hi).filled())
@@ -83,18 +98,24 @@ where
     const STEPS: usize = 64;
     let top = if hi > lo { hi } else { lo + 1.0 };
     let mut bar = ChartBuilder::on(area)
-        .margin_top(40)
-        .margin_bottom(45)
-        .margin_right(10)
-        .y_label_area_size(55)
+        .margin_top(44)
+        .margin_bottom(58)
+        .margin_right(14)
+        .y_label_area_size(80)
         .build_cartesian_2d(0.0..1.0, lo..top)
         .map_err(|e| e.to_string())?;
+    // The bar's plotting area is narrow: plotters' default label size (a share of it) would be
+    // about 4 px, so the sizes are set.
+    let d = tick_decimals((lo, top));
     bar.configure_mesh()
         .disable_x_mesh()
         .disable_y_mesh()
         .disable_x_axis()
         .y_desc("zone error (m)")
         .y_labels(6)
+        .y_label_formatter(&|v| tick_label(*v, d))
+        .label_style(("sans-serif", SMALL_FONT))
+        .axis_desc_style(("sans-serif", AXIS_FONT))
         .draw()
         .map_err(|e| e.to_string())?;
     let step = (top - lo) / STEPS as f64;
@@ -110,14 +131,15 @@ where
 pub fn tracks(rows: &[PassRow]) -> Result<String, PlotError> {
     let line =
         |f: fn(&PassRow) -> Option<[f64; 2]>| rows.iter().filter_map(f).map(|p| (p[0], p[1])).collect::<Vec<_>>();
+    // The AUV's truth and estimate in its one colour (the estimate dashed), the ship in the CNA's.
     let mut series = vec![
-        Series::new("AUV true", line(|r| Some(r.auv_true))),
-        Series::new("AUV estimated", line(|r| Some(r.auv_est))),
-        Series::new("ship", line(|r| Some(r.ship_true))),
+        Series::new("AUV true", line(|r| Some(r.auv_true))).colour(0),
+        Series::new("AUV estimated", line(|r| Some(r.auv_est))).colour(0).dashed(),
+        Series::new("ship", line(|r| Some(r.ship_true))).cna(),
     ];
     let buoy = line(|r| r.buoy_true);
     if !buoy.is_empty() {
-        series.push(Series::new("buoy", buoy));
+        series.push(Series::new("buoy", buoy).colour(1));
     }
     track_svg(Labels { title: "AUV true vs estimated track, ship and buoy", x: "east (m)", y: "north (m)" }, &series)
 }
@@ -127,13 +149,13 @@ const X_REL: &str = "x_rel (m, + = behind the ship)";
 /// The measurement zone's ends as vertical lines from 0 to `top`.
 fn zone_edges(zone: (f64, f64), top: f64) -> [Series; 2] {
     let edge = |x: f64| vec![(x, 0.0), (x, top)];
-    [Series::new("zone start", edge(zone.0)), Series::new("zone end", edge(zone.1))]
+    [Series::new("zone start", edge(zone.0)).reference(), Series::new("zone end", edge(zone.1)).reference().dashed()]
 }
 
 /// AUV position error against x_rel, with the measurement zone's ends marked by vertical lines.
 pub fn error_vs_xrel(rows: &[PassRow], zone: (f64, f64)) -> Result<String, PlotError> {
     let top = rows.iter().map(|r| r.error).fold(1.0, f64::max);
-    let mut series = vec![Series::new("error", rows.iter().map(|r| (r.x_rel, r.error)).collect())];
+    let mut series = vec![Series::new("error", rows.iter().map(|r| (r.x_rel, r.error)).collect()).colour(0)];
     series.extend(zone_edges(zone, top));
     line_svg(Labels { title: "AUV position error vs x_rel", x: X_REL, y: "error (m)" }, &series)
 }
@@ -205,6 +227,12 @@ mod tests {
         assert!(distinct >= 20, "the ordinary cells use only {distinct} colours");
         // Nearest rank of the 95 % quantile of 41 cells is the 39th: the 2 m cell and the outlier lie above.
         assert!(svg.contains("2 cell(s) above 1.97 m") && svg.contains("zone error (m)"), "caption and colour bar");
+        // Every text, the colour bar's labels among them, readable at 100 %.
+        let sizes: Vec<f64> =
+            svg.split("font-size=\"").skip(1).filter_map(|r| r.split('"').next()?.parse().ok()).collect();
+        assert!(sizes.len() > 10 && sizes.iter().all(|&px| px >= crate::output::plot::MIN_TEXT_PX), "{sizes:?}");
+        // The colour bar labels its top, 1.97 m, at 2 decimals' ticks or fewer, never 4-digit noise.
+        assert!(!svg.contains("1.9700"), "bar labels at their precision");
         assert_eq!(colour_range(&[3.0, f64::NAN, 1.0, 2.0]), ((1.0, 3.0), 0));
         assert_eq!(colour_range(&[]), ((0.0, 1.0), 0));
     }

@@ -24,6 +24,7 @@
 
 pub mod advise;
 pub mod hbl_plot;
+pub mod jumps;
 pub mod log_format;
 pub mod moos_export;
 pub mod plan;

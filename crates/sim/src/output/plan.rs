@@ -133,9 +133,12 @@ fn moos_points(mission: &Mission, result: &RunResult) -> String {
 fn write_plots(dir: &RunDir, mission: &Mission, result: &RunResult) -> Result<(), WriteError> {
     let steps = &result.steps;
     let n = mission.names.len();
-    let mut tracks = vec![Series::new("CNA", steps.iter().map(|s| (s.cna.pos.x, s.cna.pos.y)).collect())];
+    // Each vehicle in its one colour (coopnav_moos::palette), as the closed-loop plots and the replay draw it.
+    let mut tracks = vec![Series::new("CNA", steps.iter().map(|s| (s.cna.pos.x, s.cna.pos.y)).collect()).cna()];
     let per_auv = |f: &dyn Fn(usize, &StepRecord) -> (f64, f64)| -> Vec<Series> {
-        (0..n).map(|k| Series::new(mission.names[k].clone(), steps.iter().map(|s| f(k, s)).collect())).collect()
+        (0..n)
+            .map(|k| Series::new(mission.names[k].clone(), steps.iter().map(|s| f(k, s)).collect()).colour(k))
+            .collect()
     };
     tracks.extend(per_auv(&|k, s| (s.auv[k].x, s.auv[k].y)));
     dir.write_text(
@@ -152,8 +155,9 @@ fn write_plots(dir: &RunDir, mission: &Mission, result: &RunResult) -> Result<()
     )?;
     let mut dist = per_auv(&|k, s| (s.t, s.distance[k]));
     let (t0, t1) = (steps[0].t, steps[steps.len() - 1].t);
-    dist.push(Series::new("min limit", vec![(t0, mission.planner.limits.min), (t1, mission.planner.limits.min)]));
-    dist.push(Series::new("max limit", vec![(t0, mission.planner.limits.max), (t1, mission.planner.limits.max)]));
+    let limit = |name: &str, d: f64| Series::new(name, vec![(t0, d), (t1, d)]).reference();
+    dist.push(limit("min limit", mission.planner.limits.min));
+    dist.push(limit("max limit", mission.planner.limits.max).dashed());
     dir.write_text(
         "distance.svg",
         &line_svg(Labels { title: "CNA to survey AUV distance", x: "time (s)", y: "3-D distance (m)" }, &dist)?,

@@ -1,8 +1,12 @@
-//! SVG plots shared by every run type: line plots (a quantity against time or distance) and
-//! track plots (x east, y north, equal scales). Each returns the SVG as a string, so it can be
-//! written as a file or inlined into an HTML report.
+//! SVG plots shared by every run type: line plots (a quantity against time or distance, with
+//! optional marked events), track plots (x east, y north, equal scales) and interval plots (paired
+//! differences against zero). Each returns the SVG as a string, so it can be written as a file or
+//! inlined into an HTML report. Every text is at least [`MIN_TEXT_PX`] tall and every tick label
+//! carries the digits its tick step needs, no more.
 
 use coopnav_moos::palette;
+use plotters::coord::ranged1d::{BoldPoints, Ranged};
+use plotters::coord::types::RangedCoordf64;
 use plotters::prelude::*;
 use thiserror::Error;
 
@@ -25,8 +29,8 @@ impl PlotError {
 pub struct Series {
     pub name: String,
     pub points: Vec<(f64, f64)>,
-    /// A vehicle's colour (`coopnav_moos::palette`); by default a colour by the series'
-    /// position, so every line differs.
+    /// A vehicle's colour (`coopnav_moos::palette`); by default the palette's colour of the
+    /// series' position, so every line differs.
     pub colour: Option<palette::Rgb>,
     /// Dashed rather than solid: how a plot tells an estimate from the truth of the same vehicle.
     pub dashed: bool,
@@ -50,10 +54,27 @@ impl Series {
         self
     }
 
+    /// Draws in [`palette::REFERENCE`]: a reference line (a limit, a bound, a zone's edge) rather
+    /// than a vehicle or a result.
+    pub fn reference(mut self) -> Self {
+        self.colour = Some(palette::REFERENCE);
+        self
+    }
+
     pub fn dashed(mut self) -> Self {
         self.dashed = true;
         self
     }
+}
+
+/// An event marked on a line plot: a numbered triangle at (x, y), its text on the numbered line
+/// under the plot (where no line of the plot crosses it).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Marker {
+    pub x: f64,
+    pub y: f64,
+    pub colour: palette::Rgb,
+    pub text: String,
 }
 
 /// Axis labels and title of a plot.
@@ -64,16 +85,36 @@ pub struct Labels<'a> {
     pub y: &'a str,
 }
 
+/// The smallest text any plot carries, in SVG pixels: readable at 100 % zoom.
+pub const MIN_TEXT_PX: f64 = 11.0;
+/// Font sizes as plotters takes them: its SVG backend writes a size s as s / 1.24 px, so 14 is
+/// 11.3 px on the page (tick labels, legends, row labels, notes), 16 is 12.9 px (axis titles) and
+/// 24 is 19.4 px (plot titles).
+pub(crate) const SMALL_FONT: u32 = 14;
+pub(crate) const AXIS_FONT: u32 = 16;
+pub(crate) const TITLE_FONT: u32 = 24;
+/// The most tick labels on an axis.
+const TICKS: usize = 10;
+
 const SIZE: (u32, u32) = (900, 600);
 /// Height of the plotting area in pixels (the figure less caption, margins and x labels).
-const PLOT_HEIGHT_PX: f64 = 600.0 - 40.0 - 24.0 - 40.0;
+const PLOT_HEIGHT_PX: f64 = 600.0 - 44.0 - 24.0 - 50.0;
 /// Height of one legend row, and of the legend box's padding, in pixels.
-const LEGEND_ROW_PX: f64 = 20.0;
+const LEGEND_ROW_PX: f64 = 22.0;
+/// Height of the strip under a plot that holds its note.
+const NOTE_PX: u32 = 24;
 
 /// A line plot of every series against a shared x axis.
 pub fn line_svg(labels: Labels, series: &[Series]) -> Result<String, PlotError> {
+    line_svg_marked(labels, series, &[], "")
+}
+
+/// A line plot of every series with `markers` drawn over the lines, and under the plot `note`
+/// (when not empty) and one numbered line per marker: how a plot explains an event it shows.
+/// The plot keeps its size; the figure grows by one text row per line.
+pub fn line_svg_marked(labels: Labels, series: &[Series], markers: &[Marker], note: &str) -> Result<String, PlotError> {
     let (x, y) = bounds(series);
-    draw(labels, series, x, with_legend_headroom(y, series))
+    draw(labels, series, x, with_legend_headroom(y, series), markers, note)
 }
 
 /// A track plot (y north against x east) with equal metres per pixel on both axes.
@@ -89,7 +130,7 @@ pub fn track_svg(labels: Labels, series: &[Series]) -> Result<String, PlotError>
         let grow = (w / aspect - h) / 2.0;
         y = (y.0 - grow, y.1 + grow);
     }
-    draw(labels, series, x, y)
+    draw(labels, series, x, y, &[], "")
 }
 
 /// Range of all finite points with a 5 % margin (and a unit span when degenerate).
@@ -126,25 +167,75 @@ fn padded((lo, hi): (f64, f64)) -> (f64, f64) {
     (lo - 0.05 * span, hi + 0.05 * span)
 }
 
-fn draw(labels: Labels, series: &[Series], x: (f64, f64), y: (f64, f64)) -> Result<String, PlotError> {
+/// How many decimals the tick labels of an axis over `range` need: the fewest that print every
+/// tick plotters places there (at most [`TICKS`]) exactly, so 500 reads "500" and 0.25 "0.25".
+pub(crate) fn tick_decimals((lo, hi): (f64, f64)) -> usize {
+    let ticks = RangedCoordf64::from(lo..hi).key_points(BoldPoints(TICKS));
+    (0..=9)
+        .find(|&d| {
+            let scale = 10f64.powi(d as i32);
+            ticks.iter().all(|t| ((t * scale).round() - t * scale).abs() < 1e-6)
+        })
+        .unwrap_or(9)
+}
+
+/// A tick's label at `decimals` decimals (never "-0").
+pub(crate) fn tick_label(v: f64, decimals: usize) -> String {
+    let s = format!("{v:.decimals$}");
+    if s.trim_start_matches('-').chars().all(|c| c == '0' || c == '.') {
+        s.trim_start_matches('-').to_string()
+    } else {
+        s
+    }
+}
+
+fn rgb((r, g, b): palette::Rgb) -> RGBColor {
+    RGBColor(r, g, b)
+}
+
+fn draw(
+    labels: Labels,
+    series: &[Series],
+    x: (f64, f64),
+    y: (f64, f64),
+    markers: &[Marker],
+    note: &str,
+) -> Result<String, PlotError> {
+    use plotters::style::text_anchor::{HPos, Pos, VPos};
     let fail = |e: &dyn std::fmt::Display| PlotError::new(labels.title, e);
     let mut svg = String::new();
     {
-        let root = SVGBackend::with_string(&mut svg, SIZE).into_drawing_area();
+        let lines: Vec<(String, String)> = (!note.is_empty())
+            .then(|| (String::new(), note.to_string()))
+            .into_iter()
+            .chain(markers.iter().enumerate().map(|(i, m)| (format!("{}", i + 1), m.text.clone())))
+            .collect();
+        let below = NOTE_PX * lines.len() as u32;
+        let root = SVGBackend::with_string(&mut svg, (SIZE.0, SIZE.1 + below)).into_drawing_area();
         root.fill(&WHITE).map_err(|e| fail(&e))?;
-        let mut chart = ChartBuilder::on(&root)
-            .caption(labels.title, ("sans-serif", 22))
+        let (area, note_area) = root.split_vertically(SIZE.1);
+        let mut chart = ChartBuilder::on(&area)
+            .caption(labels.title, ("sans-serif", TITLE_FONT))
             .margin(12)
-            .x_label_area_size(40)
-            .y_label_area_size(60)
+            .x_label_area_size(50)
+            .y_label_area_size(75)
             .build_cartesian_2d(x.0..x.1, y.0..y.1)
             .map_err(|e| fail(&e))?;
-        chart.configure_mesh().x_desc(labels.x).y_desc(labels.y).draw().map_err(|e| fail(&e))?;
+        let (xd, yd) = (tick_decimals(x), tick_decimals(y));
+        chart
+            .configure_mesh()
+            .x_desc(labels.x)
+            .y_desc(labels.y)
+            .x_labels(TICKS)
+            .y_labels(TICKS)
+            .x_label_formatter(&|v| tick_label(*v, xd))
+            .y_label_formatter(&|v| tick_label(*v, yd))
+            .label_style(("sans-serif", SMALL_FONT))
+            .axis_desc_style(("sans-serif", AXIS_FONT))
+            .draw()
+            .map_err(|e| fail(&e))?;
         for (i, s) in series.iter().enumerate() {
-            let colour = match s.colour {
-                Some((r, g, b)) => RGBColor(r, g, b).to_rgba(),
-                None => Palette99::pick(i).to_rgba(),
-            };
+            let colour = rgb(s.colour.unwrap_or_else(|| palette::vehicle(i))).to_rgba();
             let style = colour.stroke_width(2);
             let points = s.points.iter().copied();
             let drawn = if s.dashed {
@@ -158,14 +249,34 @@ fn draw(labels: Labels, series: &[Series], x: (f64, f64), y: (f64, f64)) -> Resu
                 PathElement::new(sample, style)
             });
         }
+        let small = |h: HPos| TextStyle::from(("sans-serif", SMALL_FONT).into_font()).pos(Pos::new(h, VPos::Center));
+        for (i, m) in markers.iter().enumerate() {
+            let style = rgb(m.colour).filled();
+            chart.draw_series([TriangleMarker::new((m.x, m.y), 8, style)]).map_err(|e| fail(&e))?;
+            // The marker's number just above its triangle.
+            let (px, py) = chart.backend_coord(&(m.x, m.y));
+            let colour = rgb(m.colour);
+            let number = TextStyle::from(("sans-serif", SMALL_FONT).into_font().style(FontStyle::Bold))
+                .color(&colour)
+                .pos(Pos::new(HPos::Center, VPos::Bottom));
+            area.draw(&Text::new(format!("{}", i + 1), (px, py - 10), number)).map_err(|e| fail(&e))?;
+        }
         if has_legend(series) {
             chart
                 .configure_series_labels()
                 .position(SeriesLabelPosition::UpperRight)
+                .label_font(("sans-serif", SMALL_FONT))
                 .background_style(WHITE.mix(0.8))
                 .border_style(BLACK)
                 .draw()
                 .map_err(|e| fail(&e))?;
+        }
+        for (i, (number, text)) in lines.iter().enumerate() {
+            let y = (NOTE_PX as i32) * i as i32 + (NOTE_PX / 2) as i32;
+            if !number.is_empty() {
+                note_area.draw(&Text::new(number.clone(), (30, y), small(HPos::Right))).map_err(|e| fail(&e))?;
+            }
+            note_area.draw(&Text::new(text.clone(), (38, y), small(HPos::Left))).map_err(|e| fail(&e))?;
         }
         root.present().map_err(|e| fail(&e))?;
     }
@@ -173,7 +284,7 @@ fn draw(labels: Labels, series: &[Series], x: (f64, f64), y: (f64, f64)) -> Resu
 }
 
 /// One row of an interval plot: a label, a mean and its interval, and whether it is good news
-/// (green) or not (red).
+/// (blue) or not (vermillion).
 #[derive(Debug, Clone, PartialEq)]
 pub struct Interval {
     pub label: String,
@@ -183,47 +294,141 @@ pub struct Interval {
     pub good: bool,
 }
 
-/// One horizontal interval per row against a zero line, labelled beside it: how paired
-/// differences and their confidence intervals are shown. The axis spans at most ±200 (a wider
-/// interval is clipped at the edge).
+/// How far from the rows' median mean, in robust standard deviations, a row's mean may lie and
+/// still set the axis.
+const BULK_SDS: f64 = 5.0;
+/// The widest axis an interval plot draws, either side of zero.
+const INTERVAL_AXIS_CAP: f64 = 200.0;
+/// Height of one interval row, px.
+const ROW_PX: u32 = 26;
+
+fn median(v: &mut [f64]) -> f64 {
+    v.sort_by(f64::total_cmp);
+    let n = v.len();
+    if n % 2 == 1 {
+        v[n / 2]
+    } else {
+        (v[n / 2 - 1] + v[n / 2]) / 2.0
+    }
+}
+
+/// The x range an interval plot shows, before padding: zero and every interval of the bulk,
+/// capped at ±[`INTERVAL_AXIS_CAP`]. The bulk is every row when there are fewer than three, else
+/// the rows whose mean lies within [`BULK_SDS`] robust standard deviations of the median mean (the
+/// SD estimated as 1.4826 × the median absolute deviation, and at least the median interval's
+/// width), so one far row (a policy that never helps) does not squash the rest to a line.
+pub(crate) fn interval_axis(intervals: &[Interval]) -> (f64, f64) {
+    let finite: Vec<&Interval> =
+        intervals.iter().filter(|c| c.mean.is_finite() && c.low.is_finite() && c.high.is_finite()).collect();
+    let bulk: Vec<&Interval> = if finite.len() < 3 {
+        finite
+    } else {
+        let mid = median(&mut finite.iter().map(|c| c.mean).collect::<Vec<_>>());
+        let mad = median(&mut finite.iter().map(|c| (c.mean - mid).abs()).collect::<Vec<_>>());
+        let width = median(&mut finite.iter().map(|c| c.high - c.low).collect::<Vec<_>>());
+        let sd = (1.4826 * mad).max(width);
+        finite.into_iter().filter(|c| (c.mean - mid).abs() <= BULK_SDS * sd).collect()
+    };
+    let lo = bulk.iter().map(|c| c.low).fold(0.0, f64::min).max(-INTERVAL_AXIS_CAP);
+    let hi = bulk.iter().map(|c| c.high).fold(0.0, f64::max).min(INTERVAL_AXIS_CAP);
+    (lo, hi)
+}
+
+/// A row's mean and interval as the comparison table prints them (2 decimals).
+fn interval_text(c: &Interval) -> String {
+    format!("{:.2} [{:.2}, {:.2}]", c.mean, c.low, c.high)
+}
+
+/// One horizontal interval per row against a zero line, its label at the left and its mean and
+/// interval printed at the right: how paired differences and their confidence intervals are
+/// shown. The axis spans the bulk of the rows ([`interval_axis`]); an interval reaching beyond it
+/// is drawn to the edge and ends in a triangle pointing off the axis, and a row whose mean lies
+/// beyond it is a triangle at the edge with its mean printed beside; a note under the plot says so.
 pub fn intervals_svg(title: &str, x_desc: &str, intervals: &[Interval]) -> Result<String, PlotError> {
     use plotters::style::text_anchor::{HPos, Pos, VPos};
     let mut svg = String::new();
     {
         let rows = intervals.len().max(1);
-        let height = (60 + 14 * rows) as u32;
+        let (lo, hi) = interval_axis(intervals);
+        let pad = 0.05 * (hi - lo).max(1.0);
+        let (x0, x1) = (lo - pad, hi + pad);
+        let clipped = intervals.iter().any(|c| c.low < x0 || c.high > x1);
+        let height = 100 + ROW_PX * rows as u32 + if clipped { NOTE_PX } else { 0 };
         let root = SVGBackend::with_string(&mut svg, (900, height)).into_drawing_area();
         let e = |e: &dyn std::fmt::Display| PlotError::new(title, e);
         root.fill(&WHITE).map_err(|x| e(&x))?;
-        let lo = intervals.iter().map(|c| c.low).fold(0.0, f64::min).max(-200.0);
-        let hi = intervals.iter().map(|c| c.high).fold(0.0, f64::max).min(200.0);
-        let pad = 0.05 * (hi - lo).max(1.0);
-        let mut chart = ChartBuilder::on(&root)
-            .caption(title, ("sans-serif", 16))
+        let (area, note_area) = if clipped {
+            let (plot, below) = root.split_vertically(height - NOTE_PX);
+            (plot, Some(below))
+        } else {
+            (root.clone(), None)
+        };
+        let mut chart = ChartBuilder::on(&area)
+            .caption(title, ("sans-serif", 20))
             .margin(10)
-            .x_label_area_size(30)
-            .y_label_area_size(260)
-            .build_cartesian_2d((lo - pad)..(hi + pad), 0.0..rows as f64)
+            .x_label_area_size(48)
+            .y_label_area_size(250)
+            .right_y_label_area_size(180)
+            .build_cartesian_2d(x0..x1, 0.0..rows as f64)
             .map_err(|x| e(&x))?;
-        chart.configure_mesh().y_labels(0).x_desc(x_desc).draw().map_err(|x| e(&x))?;
+        let xd = tick_decimals((x0, x1));
+        chart
+            .configure_mesh()
+            .y_labels(0)
+            .x_labels(TICKS)
+            .x_label_formatter(&|v| tick_label(*v, xd))
+            .label_style(("sans-serif", SMALL_FONT))
+            .axis_desc_style(("sans-serif", AXIS_FONT))
+            .x_desc(x_desc)
+            .draw()
+            .map_err(|x| e(&x))?;
         chart.draw_series(LineSeries::new([(0.0, 0.0), (0.0, rows as f64)], BLACK)).map_err(|x| e(&x))?;
-        // One label per interval, beside it (the mesh's own labels thin out to "nice" ticks).
-        let label_style = TextStyle::from(("sans-serif", 11).into_font()).pos(Pos::new(HPos::Right, VPos::Center));
+        // One label per interval at each side (the mesh's own labels thin out to "nice" ticks).
+        let small = |h: HPos| TextStyle::from(("sans-serif", SMALL_FONT).into_font()).pos(Pos::new(h, VPos::Center));
         for (i, c) in intervals.iter().enumerate() {
             let y = (rows - 1 - i) as f64 + 0.5;
-            let (px, py) = chart.backend_coord(&(lo - pad, y));
-            root.draw(&Text::new(c.label.clone(), (px - 8, py), label_style.clone())).map_err(|x| e(&x))?;
-            let colour = if c.good { GREEN } else { RED };
-            let clip = |v: f64| v.clamp(lo - pad, hi + pad);
+            let colour = rgb(if c.good { GOOD } else { BAD });
+            let (left, py) = chart.backend_coord(&(x0, y));
+            let (right, _) = chart.backend_coord(&(x1, y));
+            root.draw(&Text::new(c.label.clone(), (left - 8, py), small(HPos::Right))).map_err(|x| e(&x))?;
+            root.draw(&Text::new(interval_text(c), (right + 8, py), small(HPos::Left))).map_err(|x| e(&x))?;
+            let clip = |v: f64| v.clamp(x0, x1);
             chart
                 .draw_series(LineSeries::new([(clip(c.low), y), (clip(c.high), y)], colour.stroke_width(2)))
                 .map_err(|x| e(&x))?;
-            chart.draw_series([Circle::new((clip(c.mean), y), 3, colour.filled())]).map_err(|x| e(&x))?;
+            if (x0..=x1).contains(&c.mean) {
+                chart.draw_series([Circle::new((c.mean, y), 4, colour.filled())]).map_err(|x| e(&x))?;
+            }
+            // A triangle at each edge the row reaches past, pointing off the axis.
+            for (past, edge, dir) in [(c.low < x0, left, -1), (c.high > x1, right, 1)] {
+                if !past {
+                    continue;
+                }
+                let tip = (edge + dir * 2, py);
+                let base = edge - dir * 10;
+                root.draw(&Polygon::new(vec![tip, (base, py - 7), (base, py + 7)], colour.filled()))
+                    .map_err(|x| e(&x))?;
+            }
+            if !(x0..=x1).contains(&c.mean) {
+                let (text_x, h) = if c.mean < x0 { (left + 14, HPos::Left) } else { (right - 14, HPos::Right) };
+                root.draw(&Text::new(format!("mean {:.2} off the axis", c.mean), (text_x, py), small(h)))
+                    .map_err(|x| e(&x))?;
+            }
+        }
+        if let Some(note_area) = note_area {
+            let note = "Axis: the rows' bulk (means within 5 robust SDs of their median); \
+                        a triangle marks an interval past it (numbers at the right).";
+            note_area.draw(&Text::new(note, (14, (NOTE_PX / 2) as i32), small(HPos::Left))).map_err(|x| e(&x))?;
         }
         root.present().map_err(|x| e(&x))?;
     }
     Ok(svg)
 }
+
+/// An interval plot's colours: good news in blue, the rest in vermillion (a pair that stays
+/// apart under the common colour-vision deficiencies, where green and red do not).
+const GOOD: palette::Rgb = (0, 114, 178);
+const BAD: palette::Rgb = (213, 94, 0);
 
 #[cfg(test)]
 mod tests {
@@ -291,5 +496,91 @@ mod tests {
         assert!(track_svg(labels, &[Series::new("still", vec![(5.0, 5.0)])]).is_ok());
         assert!(track_svg(labels, &[]).is_ok());
         assert!(line_svg(labels, &[Series::new("nan", vec![(f64::NAN, 1.0)])]).is_ok());
+    }
+
+    /// Every `font-size` in `svg`, px.
+    pub(crate) fn font_sizes(svg: &str) -> Vec<f64> {
+        svg.split("font-size=\"").skip(1).filter_map(|r| r.split('"').next()?.parse().ok()).collect()
+    }
+
+    /// The text of every `<text>` element of `svg`.
+    fn texts(svg: &str) -> Vec<String> {
+        svg.split("<text")
+            .skip(1)
+            .filter_map(|t| Some(t.split_once('>')?.1.split("</text>").next()?.trim().to_string()))
+            .collect()
+    }
+
+    fn differences() -> Vec<Interval> {
+        let row = |label: &str, mean: f64, half: f64| Interval {
+            label: label.to_string(),
+            mean,
+            low: mean - half,
+            high: mean + half,
+            good: mean < 0.0,
+        };
+        vec![
+            row("vs planner", -6.09, 0.8),
+            row("vs none", -85.67, 5.27),
+            row("vs racetrack", -5.82, 0.83),
+            row("vs zigzag", -3.85, 0.38),
+            row("vs centroid", -3.90, 0.64),
+        ]
+    }
+
+    #[test]
+    fn every_text_is_readable_at_full_size() {
+        let s: Vec<Series> =
+            (0..3).map(|k| Series::new(format!("auv{k}"), vec![(0.0, 0.0), (3600.0, 9.0)]).colour(k)).collect();
+        let labels = Labels { title: "t", x: "time [s]", y: "error [m]" };
+        let marker = Marker { x: 1145.0, y: 8.0, colour: palette::vehicle(2), text: "a jump".into() };
+        for svg in [
+            line_svg(labels, &s).unwrap(),
+            line_svg_marked(labels, &s, &[marker], "a note").unwrap(),
+            track_svg(labels, &s).unwrap(),
+            intervals_svg("d", "difference, m", &differences()).unwrap(),
+            intervals_svg("one row", "difference, m", &differences()[..1]).unwrap(),
+        ] {
+            let sizes = font_sizes(&svg);
+            assert!(sizes.len() > 10, "{} texts", sizes.len());
+            let min = sizes.iter().copied().fold(f64::INFINITY, f64::min);
+            assert!(min >= MIN_TEXT_PX, "a text {min:.1} px tall");
+        }
+    }
+
+    #[test]
+    fn tick_labels_carry_the_digits_their_step_needs() {
+        let labels = Labels { title: "t", x: "x", y: "y" };
+        let svg = line_svg(labels, &[Series::new("", vec![(0.0, 0.0), (3600.0, 0.3)])]).unwrap();
+        let ticks: Vec<String> = texts(&svg).into_iter().filter(|t| t.parse::<f64>().is_ok()).collect();
+        // x every 500 s, y every 0.05.
+        for t in ["500", "3500", "0.05", "0.30"] {
+            assert!(ticks.iter().any(|x| x == t), "no tick {t} in {ticks:?}");
+        }
+        assert!(!ticks.iter().any(|t| t == "500.0" || t == "0.3" || t == "0.050" || t.starts_with('-')), "{ticks:?}");
+        assert_eq!(tick_label(-0.0001, 2), "0.00");
+        assert_eq!(tick_label(-2.5, 1), "-2.5");
+    }
+
+    #[test]
+    fn one_far_interval_does_not_squash_the_others_and_is_marked() {
+        let svg = intervals_svg("d", "difference, m", &differences()).unwrap();
+        // The axis is fitted to the four rows near -4 m: its ticks stop short of -10.
+        let ticks: Vec<f64> = texts(&svg).iter().filter_map(|t| t.parse().ok()).collect();
+        assert!(ticks.iter().all(|&t| t > -10.0), "ticks {ticks:?}");
+        assert!(ticks.contains(&-6.0) && ticks.contains(&0.0), "ticks {ticks:?}");
+        let t = texts(&svg);
+        assert!(t.iter().any(|x| x == "mean -85.67 off the axis"), "{t:?}");
+        assert!(t.iter().any(|x| x == "-85.67 [-90.94, -80.40]"), "{t:?}");
+        assert!(t.iter().any(|x| x.starts_with("Axis: the rows")), "the note");
+        // The one triangle: a polygon at the axis' left edge.
+        assert_eq!(svg.matches("<polygon").count(), 1, "one clipped end");
+        // Without the far row nothing is clipped: no triangle and no note.
+        let rest: Vec<Interval> = differences().into_iter().filter(|c| c.label != "vs none").collect();
+        let svg = intervals_svg("d", "difference, m", &rest).unwrap();
+        assert_eq!(svg.matches("<polygon").count(), 0);
+        assert!(!svg.contains("Axis: the rows"));
+        // Two rows set the axis together, however far apart.
+        assert_eq!(interval_axis(&differences()[..2]), (-90.94, 0.0));
     }
 }

@@ -1,12 +1,13 @@
 //! The run directory of one closed-loop mission: time series CSV, the comms log, summary.json,
-//! manifest.json, SVG plots (tracks true/estimated/CNA, error vs time per AUV, comms timeline)
-//! and a self-contained report.html that shows every plot inline.
+//! manifest.json, SVG plots (tracks true/estimated/CNA, error vs time per AUV with its marked
+//! jumps, comms timeline) and a self-contained report.html that shows every plot inline.
 
 use crate::batch::mc::{comparison_table, Comparison};
 use crate::engine::{Trace, TraceRow};
 use crate::observe::metrics::RunResult;
+use crate::output::jumps::{self, Jump};
 use crate::output::plot::{intervals_svg, Interval};
-use crate::output::plot::{line_svg, track_svg, Labels, PlotError, Series};
+use crate::output::plot::{line_svg, line_svg_marked, track_svg, Labels, Marker, PlotError, Series};
 use crate::output::report::HtmlReport;
 use crate::output::{Manifest, RunDir, WriteError};
 use crate::scenario::world::Scenario;
@@ -15,7 +16,7 @@ use std::path::PathBuf;
 /// The plots every run directory holds: (file, caption).
 pub const PLOTS: [(&str, &str); 3] = [
     ("tracks.svg", "Tracks of every survey AUV, true (solid) and estimated (dashed, same colour), and the CNA's track"),
-    ("error.svg", "True navigation error of each survey AUV over time (solid), beside the planner's modelled error (dashed, same colour)"),
+    ("error.svg", "True navigation error of each survey AUV over time (solid), beside the planner's modelled error (dashed, same colour); a triangle marks each one-second rise that stands out, with what the filter did then"),
     ("comms.svg", "Comms timeline: cumulative packets received per AUV, CNA broadcast down (solid) and status up (dashed, same colour)"),
 ];
 
@@ -27,12 +28,13 @@ pub fn write_run(dir: RunDir, sc: &Scenario, result: &RunResult, command: &str) 
     dir.write_json("summary.json", result)?;
     dir.write_csv("timeseries.csv", trace.rows.iter())?;
     dir.write_csv("comms.csv", trace.comms.iter())?;
-    let svgs = plots(sc.fleet.n_auvs, trace)?;
+    let jumps = jumps::jumps(trace);
+    let svgs = plots(sc.fleet.n_auvs, trace, &jumps, sc.filter.params.range_gate.max_nis)?;
     for ((file, _), svg) in PLOTS.iter().zip(&svgs) {
         dir.write_text(file, svg)?;
     }
     crate::output::moos_export::write_moos_files(&dir, &crate::output::moos_export::closed_loop_run(sc, result)?)?;
-    dir.write_text("report.html", &report(sc, result, &svgs, command))?;
+    dir.write_text("report.html", &report(sc, result, &svgs, &jumps, command))?;
     Ok(dir.finish()?)
 }
 
@@ -89,7 +91,32 @@ pub fn differences_svg(cells: &[(String, &Comparison)]) -> Result<String, PlotEr
     intervals_svg(&title, &format!("difference, m (negative = {reference} better)"), &rows)
 }
 
-fn plots(n: usize, tr: &Trace) -> Result<Vec<String>, PlotError> {
+/// The most rises the error plot marks (each adds a line under it).
+const MARKED: usize = 8;
+
+/// The error plot's note: what its triangles mark (`gate`: the filters' NIS gate, if any), when
+/// it marks `shown` of `total` rises.
+fn jump_note(tr: &Trace, gate: Option<f64>, shown: usize, total: usize) -> String {
+    let rise = jumps::threshold(tr);
+    if shown < total {
+        return format!(
+            "Triangles: the {shown} largest of {total} rises of {rise:.1} m or more in one second (the report \
+             lists all), and what the filter did then:"
+        );
+    }
+    let gate = gate.map_or(String::new(), |g| format!(", gate {g:.2}"));
+    format!(
+        "Triangles: rises of {rise:.1} m or more in one second, and what the filter did then (a range: \
+         its true error, NIS{gate}, σ before):"
+    )
+}
+
+/// A jump's marker text: the AUV, the rise and its cause.
+fn jump_text(j: &Jump) -> String {
+    format!("auv{} {:.0} s, +{:.1} m: {}", j.auv, j.t, j.after - j.before, j.cause)
+}
+
+fn plots(n: usize, tr: &Trace, jumps: &[Jump], gate: Option<f64>) -> Result<Vec<String>, PlotError> {
     let per_auv = |f: &dyn Fn(&TraceRow) -> (f64, f64), k: usize| {
         tr.rows.iter().filter(|r| r.auv == k).map(f).collect::<Vec<_>>()
     };
@@ -127,12 +154,34 @@ fn plots(n: usize, tr: &Trace) -> Result<Vec<String>, PlotError> {
     }
     Ok(vec![
         track_svg(Labels { title: "Tracks", x: "east [m]", y: "north [m]" }, &tracks)?,
-        line_svg(Labels { title: "Navigation error", x: "time [s]", y: "error [m]" }, &errors)?,
+        {
+            // The largest MARKED rises, in time order; the report lists every one.
+            let mut marked: Vec<&Jump> = jumps.iter().collect();
+            marked.sort_by(|a, b| (b.after - b.before).total_cmp(&(a.after - a.before)));
+            marked.truncate(MARKED);
+            marked.sort_by(|a, b| a.t.total_cmp(&b.t));
+            let markers: Vec<Marker> = marked
+                .iter()
+                .map(|j| Marker {
+                    x: j.t,
+                    y: j.after,
+                    colour: coopnav_moos::palette::vehicle(j.auv),
+                    text: jump_text(j),
+                })
+                .collect();
+            let note = if jumps.is_empty() { String::new() } else { jump_note(tr, gate, markers.len(), jumps.len()) };
+            line_svg_marked(
+                Labels { title: "Navigation error", x: "time [s]", y: "error [m]" },
+                &errors,
+                &markers,
+                &note,
+            )?
+        },
         line_svg(Labels { title: "Comms timeline", x: "time [s]", y: "packets received" }, &comms)?,
     ])
 }
 
-fn report(sc: &Scenario, r: &RunResult, svgs: &[String], command: &str) -> String {
+fn report(sc: &Scenario, r: &RunResult, svgs: &[String], jumps: &[Jump], command: &str) -> String {
     let mut h = HtmlReport::new(format!("coopnav closed-loop mission: policy {}", r.policy));
     h.provenance(command, Some(r.seed));
     h.paragraph(&format!(
@@ -217,8 +266,57 @@ fn report(sc: &Scenario, r: &RunResult, svgs: &[String], command: &str) -> Strin
         ));
     }
     h.heading("Plots");
+    if !jumps.is_empty() {
+        let told: Vec<String> = jumps.iter().map(jump_text).collect();
+        h.paragraph(&format!("Error jumps marked on the error plot: {}.", told.join("; ")));
+    }
     for ((file, caption), svg) in PLOTS.iter().zip(svgs) {
         h.figure(file, caption, svg);
     }
     h.render()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::engine::TraceRow;
+
+    #[test]
+    fn the_error_plot_marks_the_largest_rises_and_says_how_many_it_left_out() {
+        // One AUV whose error falls back to 1 m after each of ten rises of 10 to 19 m.
+        let mut trace = Trace::default();
+        let row = |t: f64, error: f64| TraceRow {
+            t,
+            auv: 0,
+            true_x: 0.0,
+            true_y: 0.0,
+            true_z: 20.0,
+            est_x: 0.0,
+            est_y: 0.0,
+            error,
+            est_sd: 1.0,
+            p_ee: 1.0,
+            p_en: 0.0,
+            p_nn: 1.0,
+            nees: 1.0,
+            modelled: None,
+            cna_x: 0.0,
+            cna_y: 0.0,
+            cna_z: 0.0,
+            distance: 100.0,
+        };
+        for i in 0..10 {
+            let t = 10.0 * f64::from(i);
+            trace.rows.extend([row(t, 1.0), row(t + 1.0, 11.0 + f64::from(i)), row(t + 2.0, 1.0)]);
+        }
+        let jumps = jumps::jumps(&trace);
+        assert_eq!(jumps.len(), 10);
+        let svg = &plots(1, &trace, &jumps, Some(10.83)).unwrap()[1];
+        assert_eq!(svg.matches("<polygon").count(), MARKED);
+        assert!(svg.contains("Triangles: the 8 largest of 10 rises of 5.0 m or more"), "the note");
+        // The two smallest, +10 m at 1 s and +11 m at 11 s, are left out.
+        assert!(!svg.contains("auv0 1 s,") && !svg.contains("auv0 11 s,") && svg.contains("auv0 21 s, +12.0 m"));
+        let report = jumps.iter().map(jump_text).collect::<Vec<_>>().join("; ");
+        assert!(report.starts_with("auv0 1 s, +10.0 m: no range applied: dead reckoning"), "{report}");
+    }
 }
