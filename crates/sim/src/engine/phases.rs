@@ -176,9 +176,11 @@ impl Engine<'_> {
             let p0 = lerp(self.auvs[k].prev, self.auvs[k].truth, frac);
             let tl = self.tl_db(&from, &p0);
             let a = &mut self.auvs[k];
-            let decoded = sc.comms.success.draw(rate, tl, RECEIVER_AT_SURVEY_AUV, &mut a.rng_down).frame0() && !silent;
+            let decoded =
+                sc.comms.success.draw(rate, tl, RECEIVER_AT_SURVEY_AUV, &mut a.modem.rng_down).frame0() && !silent;
             let (v, clock) = (a.velocity(sc.dt), a.clock);
-            let (tt, travel_time) = measured_travel(sc, from, t_tx, &self.cna.clock, (p0, v, &clock), &mut a.rng_range);
+            let (tt, travel_time) =
+                measured_travel(sc, from, t_tx, &self.cna.clock, (p0, v, &clock), &mut a.modem.rng_range);
             let acked = self.cna.acked[k].clone();
             let payload = Payload::Broadcast { id, rate, fix, travel_time, acked, decoded };
             self.air.push(arrival(Owner::Cna, Owner::Auv(k), t_tx, tt, air, tl, Some(payload)));
@@ -247,10 +249,10 @@ impl Engine<'_> {
         } else {
             let a = &self.auvs[j];
             let (ex, ey) = a.ekf.position();
-            a.cna_heard.map(|c| (c.x - ex).hypot(c.y - ey))
+            a.modem.cna_heard.map(|c| (c.x - ex).hypot(c.y - ey))
         };
         let a = &mut self.auvs[j];
-        let choice = a.selector.choose(slot_id, distance);
+        let choice = a.modem.selector.choose(slot_id, distance);
         obs.on_status_choice(&StatusChoice { t: t_tx, auv: j, distance, choice });
         let Choice::Transmit(rate) = choice else { return };
         let encoded = match self.peers.get_mut(j) {
@@ -266,7 +268,7 @@ impl Engine<'_> {
         };
         obs.on_status_sent(&StatusSent { t: t_tx, auv: j, rate, header_entries, header_bits });
         if !nams {
-            a.unacked.push(slot_id);
+            a.modem.unacked.push(slot_id);
         }
         let from = lerp(a.prev, a.truth, frac);
         let craft = &self.cna.craft;
@@ -274,12 +276,12 @@ impl Engine<'_> {
         let tl = self.tl_db(&from, &c0);
         let air = air_time(rate);
         let tt = sc.channel.sound_speed.travel_time(from, |d| c0 + cv * d);
-        let rng_up = &mut self.auvs[j].rng_up;
+        let rng_up = &mut self.auvs[j].modem.rng_up;
         let reception = sc.comms.success.draw(rate, tl, RECEIVER_AT_CNA, rng_up);
         let decoded = reception.frame0() && !silent;
         self.air.transmit(Owner::Auv(j), t_tx, t_tx + air);
         let to_peers = sc.comms.status_to == StatusTo::CnaAndAuvs;
-        let heard_broadcasts = std::mem::take(&mut self.auvs[j].heard_broadcasts);
+        let heard_broadcasts = std::mem::take(&mut self.auvs[j].modem.heard_broadcasts);
         let payload = Payload::Status { rate, slot_id, bytes: bytes.clone(), decoded, reception, heard_broadcasts };
         self.air.push(arrival(Owner::Auv(j), Owner::Cna, t_tx, tt, air, tl, Some(payload)));
         for m in (0..self.auvs.len()).filter(|m| *m != j) {
@@ -309,7 +311,7 @@ impl Engine<'_> {
     /// distance it decides on is the one to its farthest shadowed peer (from its own estimate).
     fn peer_distance(&mut self, j: usize, t_tx: f64, frac: f64, obs: &mut dyn Observer) -> Option<f64> {
         let (outcomes, heard) = self.peers[j].take_feedback();
-        self.auvs[j].selector.feedback(&outcomes, heard);
+        self.auvs[j].modem.selector.feedback(&outcomes, heard);
         let (ex, ey) = self.auvs[j].ekf.position();
         let mut farthest: Option<f64> = None;
         for m in (0..self.auvs.len()).filter(|m| *m != j) {
@@ -336,7 +338,7 @@ impl Engine<'_> {
                     obs.on_packet(&event(&meta, "down", k, decoded, survived));
                     if received {
                         if self.cna.rate.is_some() {
-                            self.auvs[k].heard_broadcasts.push(id);
+                            self.auvs[k].modem.heard_broadcasts.push(id);
                         }
                         heard(obs, &meta, k, travel_time, Some(fix));
                         self.hear_broadcast(k, &meta, fix, travel_time, &acked, obs);
@@ -457,9 +459,9 @@ impl Engine<'_> {
     ) {
         let a = &mut self.auvs[k];
         let outcomes: Vec<Outcome> =
-            a.unacked.drain(..).map(|slot| Outcome { slot, success: acked.contains(&slot) }).collect();
-        a.selector.feedback(&outcomes, true);
-        a.cna_heard = Some(fix);
+            a.modem.unacked.drain(..).map(|slot| Outcome { slot, success: acked.contains(&slot) }).collect();
+        a.modem.selector.feedback(&outcomes, true);
+        a.modem.cna_heard = Some(fix);
         self.apply_range(k, meta, fix, travel_time, obs);
     }
 

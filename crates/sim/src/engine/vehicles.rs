@@ -73,8 +73,23 @@ pub struct SurveyAuv {
     rng_white: ChaCha8Rng,
     rng_yaw: ChaCha8Rng,
     rng_gps: ChaCha8Rng,
+    /// Its acoustic modem.
+    pub modem: AuvModem,
+    /// Propulsion off (a finished vehicle holding or surfacing).
+    adrift: bool,
+    /// Its last survey waypoint: where a finished vehicle loiters or holds station.
+    pub station: (f64, f64),
+}
+
+/// A survey AUV's acoustic modem: its noise streams, its status-rate selector and what it has
+/// heard of the CNA.
+#[derive(Clone)]
+pub struct AuvModem {
+    /// The measured travel time's noise.
     pub rng_range: ChaCha8Rng,
+    /// Whether a packet to it (the CNA's broadcast) decodes.
     pub rng_down: ChaCha8Rng,
+    /// Whether a packet from it (its status) decodes.
     pub rng_up: ChaCha8Rng,
     /// Rate selection for the status messages, and the status slots it still waits to hear about.
     pub selector: Box<dyn RatePolicy>,
@@ -84,10 +99,6 @@ pub struct SurveyAuv {
     /// The CNA's broadcasts decoded since its last status (acknowledged in it, when the CNA's
     /// broadcast has a rate policy).
     pub heard_broadcasts: Vec<u64>,
-    /// Propulsion off (a finished vehicle holding or surfacing).
-    adrift: bool,
-    /// Its last survey waypoint: where a finished vehicle loiters or holds station.
-    pub station: (f64, f64),
 }
 
 /// The filter's model and coefficients with the current the team states ([`Adcp`]): the true
@@ -133,13 +144,15 @@ impl SurveyAuv {
             rng_white: rng(stream::COMPASS_WHITE),
             rng_yaw: rng(stream::YAW_RATE),
             rng_gps: rng(stream::GPS),
-            rng_range: rng(stream::RANGE),
-            rng_down: rng(stream::DOWNLINK),
-            rng_up: rng(stream::UPLINK),
-            selector: status_policy(sc, k).build().expect("validated rate policy"),
-            unacked: Vec::new(),
-            cna_heard: None,
-            heard_broadcasts: Vec::new(),
+            modem: AuvModem {
+                rng_range: rng(stream::RANGE),
+                rng_down: rng(stream::DOWNLINK),
+                rng_up: rng(stream::UPLINK),
+                selector: status_policy(sc, k).build().expect("validated rate policy"),
+                unacked: Vec::new(),
+                cna_heard: None,
+                heard_broadcasts: Vec::new(),
+            },
             adrift: false,
             station: pts.last().copied().unwrap_or(start),
         }
@@ -152,9 +165,9 @@ impl SurveyAuv {
             &mut self.rng_white,
             &mut self.rng_yaw,
             &mut self.rng_gps,
-            &mut self.rng_range,
-            &mut self.rng_down,
-            &mut self.rng_up,
+            &mut self.modem.rng_range,
+            &mut self.modem.rng_down,
+            &mut self.modem.rng_up,
         ] {
             redraw(r, streams);
         }
