@@ -191,7 +191,7 @@ pub fn run_in(opts: &ReproOptions, dir: &Path, tell: &(dyn Fn(Status) + Sync)) -
         policies: names.clone(),
         version: env!("CARGO_PKG_VERSION").into(),
     };
-    let store = StudyDir::open(dir, stamp).map_err(fail)?;
+    let store = StudyDir::open(dir, stamp).map_err(|e| fail(e.to_string()))?;
     let digests = study
         .missions
         .iter()
@@ -199,7 +199,7 @@ pub fn run_in(opts: &ReproOptions, dir: &Path, tell: &(dyn Fn(Status) + Sync)) -
         .collect::<Result<Vec<_>, _>>()?;
     let mut results: Vec<Option<Vec<RunResult>>> = Vec::with_capacity(study.missions.len());
     for (m, d) in study.missions.iter().zip(&digests) {
-        results.push(store.load(m.facts.index, m.facts.seed, d).map_err(fail)?);
+        results.push(store.load(m.facts.index, m.facts.seed, d).map_err(|e| fail(e.to_string()))?);
     }
     let resumed = results.iter().filter(|r| r.is_some()).count();
     let per_mission = (names.len() * study.runs) as u64;
@@ -223,7 +223,7 @@ pub fn run_in(opts: &ReproOptions, dir: &Path, tell: &(dyn Fn(Status) + Sync)) -
         }
         let runs = monte_carlo_runs(&m.scenario, &names, study.runs, &|_| report_status(&|s| s.runs_done += 1))
             .map_err(|e| fail(e.to_string()))?;
-        store.store(m.facts.index, m.facts.seed, &digests[i], &runs).map_err(fail)?;
+        store.store(m.facts.index, m.facts.seed, &digests[i], &runs).map_err(|e| fail(e.to_string()))?;
         report_status(&|s| s.missions_done += 1);
     }
     // Every mission read back from its file, the fresh ones too: the report sees the same bytes
@@ -232,7 +232,7 @@ pub fn run_in(opts: &ReproOptions, dir: &Path, tell: &(dyn Fn(Status) + Sync)) -
     for (m, d) in study.missions.iter().zip(&digests) {
         let runs = store
             .load(m.facts.index, m.facts.seed, d)
-            .map_err(fail)?
+            .map_err(|e| fail(e.to_string()))?
             .ok_or_else(|| fail(format!("{} vanished", store.mission_path(m.facts.index).display())))?;
         comparisons.push(compare(&m.scenario, &names, study.runs, &runs));
     }

@@ -32,23 +32,26 @@ pub const CHOSEN_ON: [ChosenOn; 2] = [
     },
 ];
 
+/// A study's seeds meet seeds a setting was chosen on.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum ChosenSeedError {
+    #[error("mission seed {base} chose {what}; generate from a seed range without it")]
+    Base { base: u64, what: &'static str },
+    #[error("run {run} of mission seed {seed} has a run seed of base {base}, which chose {what}")]
+    Run { run: u64, seed: u64, base: u64, what: &'static str },
+}
+
 /// Err naming the seed when a mission of `ranges` has a base seed a setting was chosen on, or one
 /// of its first `runs` run seeds is one of those runs' seeds.
-pub fn refuse_chosen(ranges: &Ranges, runs: usize) -> Result<(), String> {
+pub fn refuse_chosen(ranges: &Ranges, runs: usize) -> Result<(), ChosenSeedError> {
     for chosen in &CHOSEN_ON {
         if ranges.seeds().contains(&chosen.base) {
-            return Err(format!(
-                "mission seed {} chose {}; generate from a seed range without it",
-                chosen.base, chosen.what
-            ));
+            return Err(ChosenSeedError::Base { base: chosen.base, what: chosen.what });
         }
         let taken: std::collections::HashSet<u64> = (0..chosen.runs).map(|j| run_seed(chosen.base, j)).collect();
         for seed in ranges.seeds() {
-            if let Some(j) = (0..runs as u64).find(|&j| taken.contains(&run_seed(seed, j))) {
-                return Err(format!(
-                    "run {j} of mission seed {seed} has a run seed of base {}, which chose {}",
-                    chosen.base, chosen.what
-                ));
+            if let Some(run) = (0..runs as u64).find(|&j| taken.contains(&run_seed(seed, j))) {
+                return Err(ChosenSeedError::Run { run, seed, base: chosen.base, what: chosen.what });
             }
         }
     }
@@ -93,7 +96,7 @@ pub fn study(
     };
     ranges.missions = size.missions.unwrap_or(ranges.missions);
     ranges.validate(path).map_err(|e| fail(e.to_string()))?;
-    refuse_chosen(&ranges, size.runs).map_err(fail)?;
+    refuse_chosen(&ranges, size.runs).map_err(|e| fail(e.to_string()))?;
     let missions = ranges.generate(path).map_err(|e| fail(e.to_string()))?;
     Ok(Study { file, ranges, missions, runs: size.runs })
 }
@@ -144,9 +147,10 @@ mod tests {
         assert!(refuse_chosen(&r, 10).is_ok());
         r.seed = TUNING_SEED - 5;
         let e = refuse_chosen(&r, 10).unwrap_err();
-        assert!(e.contains(&TUNING_SEED.to_string()), "{e}");
+        assert!(matches!(e, ChosenSeedError::Base { base: TUNING_SEED, .. }), "{e}");
+        assert!(e.to_string().contains(&format!("mission seed {TUNING_SEED} chose")), "{e}");
         r.seed = 0;
-        assert!(refuse_chosen(&r, 10).unwrap_err().contains("mission seed 1"));
+        assert!(matches!(refuse_chosen(&r, 10).unwrap_err(), ChosenSeedError::Base { base: 1, .. }));
         r.seed = 2;
         assert!(refuse_chosen(&r, 10).is_ok());
     }

@@ -15,10 +15,56 @@
 //! sweep shards are (`coopnav-sweep`).
 
 use crate::observe::metrics::RunResult;
-use crate::output::{write_file, Manifest};
+use crate::output::{write_file, Manifest, OutputError};
 use serde::{Deserialize, Serialize};
 use std::fs;
 use std::path::{Path, PathBuf};
+use thiserror::Error;
+
+/// Why a study directory cannot be opened, read or written; each names the file and what to do.
+#[derive(Debug, Error)]
+pub enum StudyDirError {
+    #[error("{}: {source}", path.display())]
+    Io { path: PathBuf, source: std::io::Error },
+    #[error(
+        "{} is neither empty nor a study directory ({}: {source}); name a new directory, or pass --force to replace it",
+        dir.display(),
+        manifest.display()
+    )]
+    NotAStudy { dir: PathBuf, manifest: PathBuf, source: std::io::Error },
+    #[error("{}: {source}", manifest.display())]
+    Manifest { manifest: PathBuf, source: serde_json::Error },
+    #[error(
+        "{}: field inputs.study is not a study's stamp ({source}); {} holds another run: name a new directory, or pass --force to replace it",
+        manifest.display(),
+        dir.display()
+    )]
+    NotAStamp { dir: PathBuf, manifest: PathBuf, source: serde_json::Error },
+    #[error(
+        "{} holds another study's missions ({}: {}); resume it with the same generator file, seed, size and \
+         coopnav version, name a new directory, or pass --force to replace it",
+        dir.display(),
+        manifest.display(),
+        differs.join("; ")
+    )]
+    OtherStudy { dir: PathBuf, manifest: PathBuf, differs: Vec<String> },
+    #[error("{}: not a coopnav mission results file", path.display())]
+    NotMissionResults { path: PathBuf },
+    #[error("{}: unreadable mission results ({message})", path.display())]
+    Unreadable { path: PathBuf, message: String },
+    #[error("{} is not mission {index} of this study ({}); remove it to fly the mission again", path.display(), differs.join("; "))]
+    OtherMission { path: PathBuf, index: usize, differs: Vec<String> },
+    #[error(
+        "{}: {found} run results, where {} ({policies} policies x {runs} runs) are expected; remove it to fly the mission again",
+        path.display(),
+        policies * runs
+    )]
+    RunCount { path: PathBuf, found: usize, policies: usize, runs: usize },
+    #[error("{0}")]
+    Encode(String),
+    #[error(transparent)]
+    Write(#[from] OutputError),
+}
 
 /// The first line of every mission file.
 pub const MAGIC: &[u8] = b"coopnav study mission results\n";
@@ -95,48 +141,37 @@ impl StudyDir {
     /// Opens `dir` for the study `stamp`: an absent or empty directory is made a new study (its
     /// manifest written at once); a directory whose manifest carries the same stamp is resumed;
     /// anything else is refused, naming the directory and what differs.
-    pub fn open(dir: &Path, stamp: Stamp) -> Result<StudyDir, String> {
+    pub fn open(dir: &Path, stamp: Stamp) -> Result<StudyDir, StudyDirError> {
         let manifest = dir.join(MANIFEST);
+        let io = |source| StudyDirError::Io { path: dir.to_path_buf(), source };
         let empty = match fs::read_dir(dir) {
             Ok(mut entries) => entries.next().is_none(),
             Err(e) if e.kind() == std::io::ErrorKind::NotFound => true,
-            Err(e) => return Err(format!("{}: {e}", dir.display())),
+            Err(e) => return Err(io(e)),
         };
         if empty {
-            fs::create_dir_all(dir.join(MISSIONS)).map_err(|e| format!("{}: {e}", dir.display()))?;
+            fs::create_dir_all(dir.join(MISSIONS)).map_err(io)?;
             let inputs = serde_json::json!({ "id": stamp.experiment, "seed": stamp.seed, "study": stamp });
             let m = Manifest::new("reproduce", Some(stamp.seed), inputs);
-            let text = serde_json::to_string_pretty(&m).map_err(|e| e.to_string())? + "\n";
-            write_file(&manifest, text.as_bytes(), false, |_| false, &[]).map_err(|e| e.to_string())?;
+            let text = serde_json::to_string_pretty(&m).map_err(|e| StudyDirError::Encode(e.to_string()))? + "\n";
+            write_file(&manifest, text.as_bytes(), false, |_| false, &[])?;
             return Ok(StudyDir { dir: dir.to_path_buf(), stamp });
         }
-        let text = fs::read_to_string(&manifest).map_err(|e| {
-            format!(
-                "{} is neither empty nor a study directory ({}: {e}); name a new directory, or pass --force to replace it",
-                dir.display(),
-                manifest.display()
-            )
+        let text = fs::read_to_string(&manifest).map_err(|source| StudyDirError::NotAStudy {
+            dir: dir.to_path_buf(),
+            manifest: manifest.clone(),
+            source,
         })?;
-        let value: serde_json::Value =
-            serde_json::from_str(&text).map_err(|e| format!("{}: {e}", manifest.display()))?;
-        let there: Stamp = serde_json::from_value(value["inputs"]["study"].clone()).map_err(|e| {
-            format!(
-                "{}: field inputs.study is not a study's stamp ({e}); {} holds another run: name a new directory, or pass --force to replace it",
-                manifest.display(),
-                dir.display()
-            )
+        let value: serde_json::Value = serde_json::from_str(&text)
+            .map_err(|source| StudyDirError::Manifest { manifest: manifest.clone(), source })?;
+        let there: Stamp = serde_json::from_value(value["inputs"]["study"].clone()).map_err(|source| {
+            StudyDirError::NotAStamp { dir: dir.to_path_buf(), manifest: manifest.clone(), source }
         })?;
         let differs = there.differences(&stamp);
         if !differs.is_empty() {
-            return Err(format!(
-                "{} holds another study's missions ({}: {}); resume it with the same generator file, seed, size and \
-                 coopnav version, name a new directory, or pass --force to replace it",
-                dir.display(),
-                manifest.display(),
-                differs.join("; ")
-            ));
+            return Err(StudyDirError::OtherStudy { dir: dir.to_path_buf(), manifest, differs });
         }
-        fs::create_dir_all(dir.join(MISSIONS)).map_err(|e| format!("{}: {e}", dir.display()))?;
+        fs::create_dir_all(dir.join(MISSIONS)).map_err(io)?;
         Ok(StudyDir { dir: dir.to_path_buf(), stamp })
     }
 
@@ -157,18 +192,23 @@ impl StudyDir {
     /// Mission `index`'s runs when an earlier run wrote them (None: not yet flown). A file whose
     /// header is not this mission's (another study, seed or scenario) or that does not hold
     /// policies × runs results is refused, naming it.
-    pub fn load(&self, index: usize, seed: u64, scenario_digest: &str) -> Result<Option<Vec<RunResult>>, String> {
+    pub fn load(
+        &self,
+        index: usize,
+        seed: u64,
+        scenario_digest: &str,
+    ) -> Result<Option<Vec<RunResult>>, StudyDirError> {
         let path = self.mission_path(index);
         let bytes = match fs::read(&path) {
             Ok(b) => b,
             Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(None),
-            Err(e) => return Err(format!("{}: {e}", path.display())),
+            Err(source) => return Err(StudyDirError::Io { path, source }),
         };
-        let body = bytes
-            .strip_prefix(MAGIC)
-            .ok_or_else(|| format!("{}: not a coopnav mission results file", path.display()))?;
-        let file: MissionFile =
-            ciborium::from_reader(body).map_err(|e| format!("{}: unreadable mission results ({e})", path.display()))?;
+        let Some(body) = bytes.strip_prefix(MAGIC) else {
+            return Err(StudyDirError::NotMissionResults { path });
+        };
+        let file: MissionFile = ciborium::from_reader(body)
+            .map_err(|e| StudyDirError::Unreadable { path: path.clone(), message: e.to_string() })?;
         let expected = self.header(index, seed, scenario_digest);
         if file.header != expected {
             let mut what = file.header.stamp.differences(&expected.stamp);
@@ -181,31 +221,27 @@ impl StudyDir {
                     what.push(format!("{name}: {there} there, {here} here"));
                 }
             }
-            return Err(format!(
-                "{} is not mission {index} of this study ({}); remove it to fly the mission again",
-                path.display(),
-                what.join("; ")
-            ));
+            return Err(StudyDirError::OtherMission { path, index, differs: what });
         }
-        let want = self.stamp.policies.len() * self.stamp.runs;
-        if file.results.len() != want {
-            return Err(format!(
-                "{}: {} run results, where {want} ({} policies x {} runs) are expected; remove it to fly the mission again",
-                path.display(),
-                file.results.len(),
-                self.stamp.policies.len(),
-                self.stamp.runs
-            ));
+        if file.results.len() != self.stamp.policies.len() * self.stamp.runs {
+            let (policies, runs) = (self.stamp.policies.len(), self.stamp.runs);
+            return Err(StudyDirError::RunCount { path, found: file.results.len(), policies, runs });
         }
         Ok(Some(file.results))
     }
 
     /// Writes mission `index`'s runs (staged beside the file and renamed over it once whole).
-    pub fn store(&self, index: usize, seed: u64, scenario_digest: &str, results: &[RunResult]) -> Result<(), String> {
+    pub fn store(
+        &self,
+        index: usize,
+        seed: u64,
+        scenario_digest: &str,
+        results: &[RunResult],
+    ) -> Result<(), StudyDirError> {
         let file = MissionFile { header: self.header(index, seed, scenario_digest), results: results.to_vec() };
         let mut bytes = MAGIC.to_vec();
-        ciborium::into_writer(&file, &mut bytes).map_err(|e| e.to_string())?;
-        write_file(&self.mission_path(index), &bytes, false, |_| false, &[]).map_err(|e| e.to_string())
+        ciborium::into_writer(&file, &mut bytes).map_err(|e| StudyDirError::Encode(e.to_string()))?;
+        Ok(write_file(&self.mission_path(index), &bytes, false, |_| false, &[])?)
     }
 }
 
@@ -235,6 +271,8 @@ mod tests {
         StudyDir::open(&dir, stamp()).unwrap();
         let other = Stamp { seed: 8, version: "0.2.0".into(), ..stamp() };
         let e = StudyDir::open(&dir, other).unwrap_err();
+        assert!(matches!(&e, StudyDirError::OtherStudy { differs, .. } if differs.len() == 2), "{e}");
+        let e = e.to_string();
         assert!(e.contains("seed: 7 there, 8 here"), "{e}");
         assert!(e.contains("version: \"0.1.0\" there, \"0.2.0\" here"), "{e}");
         assert!(!e.contains("runs:"), "{e}");
@@ -242,7 +280,7 @@ mod tests {
         let busy = tmp.path().join("busy");
         fs::create_dir(&busy).unwrap();
         fs::write(busy.join("notes.txt"), "mine").unwrap();
-        let e = StudyDir::open(&busy, stamp()).unwrap_err();
+        let e = StudyDir::open(&busy, stamp()).unwrap_err().to_string();
         assert!(e.contains("neither empty nor a study directory"), "{e}");
     }
 
@@ -253,10 +291,11 @@ mod tests {
         assert!(d.load(0, 7, "d0").unwrap().is_none());
         d.store(0, 7, "d0", &[]).unwrap();
         // Zero results where one is expected.
-        assert!(d.load(0, 7, "d0").unwrap_err().contains("0 run results"));
-        let e = d.load(0, 7, "other").unwrap_err();
+        let e = d.load(0, 7, "d0").unwrap_err().to_string();
+        assert!(e.contains(": 0 run results, where 1 (1 policies x 1 runs) are expected"), "{e}");
+        let e = d.load(0, 7, "other").unwrap_err().to_string();
         assert!(e.contains("scenario_digest: d0 there, other here"), "{e}");
         fs::write(d.mission_path(1), b"junk").unwrap();
-        assert!(d.load(1, 8, "d1").unwrap_err().contains("not a coopnav mission results file"));
+        assert!(d.load(1, 8, "d1").unwrap_err().to_string().contains("not a coopnav mission results file"));
     }
 }
