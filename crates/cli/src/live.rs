@@ -78,9 +78,8 @@ pub struct AuvArgs {
     /// LCM URL (UDP multicast).
     #[arg(long, default_value = "udpm://239.255.76.67:7667?ttl=0")]
     url: String,
-    /// Config (TOML): `[filter]` post-processing's filter config, `[start]` e, n (m),
-    /// `reorder_window_s` (default 2 s).
-    #[arg(long)]
+    /// Navigator config (TOML): `[filter]` post-processing's filter config, `[start]` e, n (m),
+    /// `reorder_window_s` (default 2 s). Omit it for the defaults.
     config: Option<PathBuf>,
     /// Write what was received and published to this LCM log (lcm-logger's format).
     #[arg(long)]

@@ -98,6 +98,8 @@ fn the_main_input_is_positional_and_the_old_flags_are_refused() {
         (&["hbl", "grid"], "Usage: coopnav hbl grid [OPTIONS] [SCENARIO]"),
         (&["hbl", "tune"], "Usage: coopnav hbl tune [OPTIONS] "),
         (&["hbl", "postprocess"], "Usage: coopnav hbl postprocess [OPTIONS] "),
+        (&["live", "auv"], "Usage: coopnav live auv [OPTIONS] --auv <AUV> [CONFIG]"),
+        (&["live", "cna"], "Usage: coopnav live cna [OPTIONS] [SCENARIO]"),
     ];
     for (command, usage) in usages {
         let help = coopnav(tmp.path(), &[command, &["--help"][..]].concat());
@@ -112,6 +114,7 @@ fn the_main_input_is_positional_and_the_old_flags_are_refused() {
         &["simulate", "x.toml", "--runs", "2", "--json", "c.json", "-o", "run"],
         &["bench", "planner", "--reps", "1"],
         &["channel", "--bearing-deg", "0", "-o", "run"],
+        &["live", "auv", "--auv", "0", "--config", "x.toml", "--log", "run"],
     ];
     for args in old {
         let out = coopnav(tmp.path(), args);

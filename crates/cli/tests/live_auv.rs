@@ -191,7 +191,7 @@ fn live_auv_refuses_a_bad_config_or_argument_naming_it() {
         let bad = dir.path().join("bad.toml");
         std::fs::write(&bad, "reorder_window_s = 1e9\n").unwrap();
         let cases: [(&[&str], &str); 3] = [
-            (&["--config", bad.to_str().unwrap()], "reorder_window_s = 1000000000"),
+            (&[bad.to_str().unwrap()], "reorder_window_s = 1000000000"),
             (&["--duration", "0"], "--duration 0: give a positive number of seconds"),
             (&["--url", "udpm://10.0.0.1:7667"], "not a multicast group"),
         ];

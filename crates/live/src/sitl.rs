@@ -127,8 +127,8 @@ pub struct Restart {
 /// The survey AUVs' live navigators.
 #[derive(Debug, Clone)]
 pub struct LiveAuvs {
-    /// The program and its first arguments (`coopnav live auv`); the world adds `--auv K --url
-    /// URL --config DIR/auvK.toml --log DIR/auvK.lcm`.
+    /// The program and its first arguments (`coopnav live auv`); the world adds `DIR/auvK.toml
+    /// --auv K --url URL --log DIR/auvK.lcm`.
     pub program: Vec<String>,
     /// Where their configs and LCM logs go.
     pub dir: PathBuf,
@@ -830,12 +830,10 @@ impl Navigators {
             toml::to_string(&self.configs[k]).map_err(|e| LiveError::Child(format!("config of AUV {k}: {e}")))?;
         std::fs::write(&config, text).map_err(|e| LiveError::Child(format!("{}: {e}", config.display())))?;
         let mut args = self.opts.program.clone();
-        for (flag, value) in [
-            ("--auv", k.to_string()),
-            ("--url", self.url.clone()),
-            ("--config", config.display().to_string()),
-            ("--log", log.display().to_string()),
-        ] {
+        args.push(config.display().to_string());
+        for (flag, value) in
+            [("--auv", k.to_string()), ("--url", self.url.clone()), ("--log", log.display().to_string())]
+        {
             args.extend([flag.to_string(), value]);
         }
         self.children[k] = Some(ChildProc::start(&args, &format!("live auv {k}"))?);
