@@ -692,6 +692,9 @@ impl Observer for WorldObserver {
         }
     }
     fn on_range_update(&mut self, update: &RangeUpdate) {
+        // The trace explains the error plot's jumps by the ranges offered, as `simulate`'s does.
+        // With live AUVs the outcome recorded is the engine's own filter's on the same range.
+        self.trace.on_range_update(update);
         if self.live {
             self.scored.push(Scored::Range(*update));
         }
