@@ -88,10 +88,11 @@ fn cause(ranges: &[RangeUpdate], k: usize, (prior, row): (Option<&TraceRow>, &Tr
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
 
-    fn row(t: f64, auv: usize, error: f64, z: f64) -> TraceRow {
+    /// A trace row of AUV `auv` at `t` with `error` at depth `z` (the other fields neutral).
+    pub(crate) fn row(t: f64, auv: usize, error: f64, z: f64) -> TraceRow {
         TraceRow {
             t,
             auv,

@@ -279,32 +279,12 @@ fn report(sc: &Scenario, r: &RunResult, svgs: &[String], jumps: &[Jump], command
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::engine::TraceRow;
 
     #[test]
     fn the_error_plot_marks_the_largest_rises_and_says_how_many_it_left_out() {
         // One AUV whose error falls back to 1 m after each of ten rises of 10 to 19 m.
         let mut trace = Trace::default();
-        let row = |t: f64, error: f64| TraceRow {
-            t,
-            auv: 0,
-            true_x: 0.0,
-            true_y: 0.0,
-            true_z: 20.0,
-            est_x: 0.0,
-            est_y: 0.0,
-            error,
-            est_sd: 1.0,
-            p_ee: 1.0,
-            p_en: 0.0,
-            p_nn: 1.0,
-            nees: 1.0,
-            modelled: None,
-            cna_x: 0.0,
-            cna_y: 0.0,
-            cna_z: 0.0,
-            distance: 100.0,
-        };
+        let row = |t: f64, error: f64| crate::output::jumps::tests::row(t, 0, error, 20.0);
         for i in 0..10 {
             let t = 10.0 * f64::from(i);
             trace.rows.extend([row(t, 1.0), row(t + 1.0, 11.0 + f64::from(i)), row(t + 2.0, 1.0)]);
