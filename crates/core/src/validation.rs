@@ -34,6 +34,13 @@ impl std::fmt::Display for InvalidFields {
     }
 }
 
+impl InvalidFields {
+    /// The bad fields' names, in the order found.
+    pub fn fields(&self) -> Vec<String> {
+        self.0.iter().map(|p| p.field.clone()).collect()
+    }
+}
+
 /// Collects every bad field of one input.
 #[derive(Debug, Default)]
 pub struct Problems {
@@ -48,13 +55,6 @@ impl Problems {
     pub fn push(&mut self, field: impl Into<String>, value: impl Into<String>, allowed: impl Into<String>) {
         let value = quoted(value.into());
         self.list.push(Problem { field: field.into(), value, allowed: allowed.into() });
-    }
-
-    /// Adds (field, value, allowed) triples, as the models' `problems()` return them.
-    pub fn extend(&mut self, found: impl IntoIterator<Item = (String, String, String)>) {
-        for (field, value, allowed) in found {
-            self.push(field, value, allowed);
-        }
     }
 
     /// `value` must be finite and inside `ok`; `allowed` says so in words.

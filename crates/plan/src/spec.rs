@@ -17,7 +17,7 @@ use crate::penalty::{PenaltyCase, PenaltyFn, PenaltyPair};
 use crate::planner::{Algorithm, CostSpec, Deadline, DistanceLimits, PlannerConfig, SearchConfig};
 use crate::true_error::TruthSpec;
 use crate::PlanError;
-use coopnav_core::validation::{CheckFields, Problems};
+use coopnav_core::validation::{CheckFields, Problem, Problems};
 use serde::{Deserialize, Serialize};
 
 /// A of Hudson's planner when its table sets none (Hudson 2012, Table 5.1's five headings).
@@ -108,11 +108,12 @@ impl PenaltySpec {
     }
 
     /// The penalty pair, or the problem with the keys given (field names relative to `prefix`).
-    pub fn pair(&self, prefix: &str) -> Result<PenaltyPair, (String, String, String)> {
+    pub fn pair(&self, prefix: &str) -> Result<PenaltyPair, Problem> {
         match (&self.case, self.primary, self.look_ahead) {
             (Some(id), None, None) => PenaltyCase::from_id(id).map(PenaltyCase::penalties).ok_or_else(|| {
                 let ids: Vec<&str> = PenaltyCase::ALL.iter().map(|c| c.id()).collect();
-                (format!("{prefix}case"), format!("'{id}'"), format!("a Table 5.2 case: {}", ids.join(", ")))
+                let allowed = format!("a Table 5.2 case: {}", ids.join(", "));
+                Problem { field: format!("{prefix}case"), value: format!("'{id}'"), allowed }
             }),
             (None, Some(primary), Some(look_ahead)) => Ok(PenaltyPair { primary, look_ahead }),
             _ => {
@@ -127,7 +128,8 @@ impl PenaltySpec {
                 let given =
                     if keys.is_empty() { "none of case, primary, look_ahead".into() } else { keys.join(" and ") };
                 let trimmed = prefix.strip_suffix('.').unwrap_or(prefix).to_string();
-                Err((trimmed, given, "either case = \"<Table 5.2 case>\" or both primary and look_ahead".into()))
+                let allowed = "either case = \"<Table 5.2 case>\" or both primary and look_ahead".into();
+                Err(Problem { field: trimmed, value: given, allowed })
             }
         }
     }
@@ -523,7 +525,7 @@ impl PlannerSpec {
         let field = |name: &str| format!("{prefix}{name}");
         if let Some(penalty) = &self.penalty {
             if let Err(problem) = penalty.pair(&field("penalty.")) {
-                p.extend([problem]);
+                p.push(problem.field, problem.value, problem.allowed);
             }
             if let Some(pair) = penalty.primary.zip(penalty.look_ahead) {
                 PenaltyPair { primary: pair.0, look_ahead: pair.1 }.check_fields(&field("penalty."), p);

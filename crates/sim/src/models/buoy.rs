@@ -4,9 +4,10 @@
 //! range, beside the CNA's. The spec (`[[buoys]]`) and its validation live here; the engine's
 //! buoy vehicle is in `engine/vehicles.rs`.
 
-use super::minipacket::zone_problems;
+use super::minipacket::check_zone;
 use crate::models::noise::{BuoyMotion, LakeDrift};
 use coopnav_acomms::Rate;
+use coopnav_core::validation::{CheckFields, Problems};
 use coopnav_nav::codec::Zone;
 use coopnav_nav::SurfaceParams;
 use rand_chacha::ChaCha8Rng;
@@ -83,15 +84,12 @@ impl BuoySpec {
             Drift::Lake(s) => BuoyMotion::lake(p0, &s, rng),
         }
     }
+}
 
-    /// Every bad field, as (field under `prefix`, value, allowed).
-    pub fn problems(&self, prefix: &str) -> Vec<(String, String, String)> {
-        let mut out = Vec::new();
-        let mut need = |field: &str, v: f64, ok: bool, allowed: &str| {
-            if !(v.is_finite() && ok) {
-                out.push((format!("{prefix}{field}"), v.to_string(), allowed.to_string()));
-            }
-        };
+impl CheckFields for BuoySpec {
+    fn check_fields(&self, prefix: &str, p: &mut Problems) {
+        let mut need =
+            |field: &str, v: f64, ok: bool, allowed: &str| p.require(&format!("{prefix}{field}"), v, ok, allowed);
         need("x", self.x, true, "a finite number");
         need("y", self.y, true, "a finite number");
         need("modem_depth_m", self.modem_depth_m, (0.0..=100.0).contains(&self.modem_depth_m), "0..=100 m");
@@ -111,16 +109,11 @@ impl BuoySpec {
             }
         }
         if let Some(zone) = &self.zone {
-            out.extend(zone_problems(&format!("{prefix}zone."), zone));
+            check_zone(&format!("{prefix}zone."), zone, p);
         }
         if self.rate.spec().deprecated {
-            out.push((
-                format!("{prefix}rate"),
-                self.rate.to_string(),
-                "0, 1, 4 or 5 (rates 2 and 3 are deprecated)".into(),
-            ));
+            p.push(format!("{prefix}rate"), self.rate.to_string(), "0, 1, 4 or 5 (rates 2 and 3 are deprecated)");
         }
-        out
     }
 }
 
@@ -150,7 +143,7 @@ mod tests {
     fn bad_buoy_fields_are_named() {
         let mut b = spec(Drift::Constant { velocity_m_s: [3.0, 0.0] });
         (b.modem_depth_m, b.rate) = (-1.0, Rate::new(2).unwrap());
-        let fields: Vec<String> = b.problems("buoys[1].").into_iter().map(|p| p.0).collect();
+        let fields = b.validate("buoys[1].").unwrap_err().fields();
         assert_eq!(fields, ["buoys[1].modem_depth_m", "buoys[1].drift.velocity_m_s", "buoys[1].rate"]);
         let unknown = toml::from_str::<BuoySpec>("x = 1.0\ny = 2.0\ndrift = { kind = \"anchored\" }");
         assert!(unknown.unwrap_err().to_string().contains("anchored"));

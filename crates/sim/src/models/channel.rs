@@ -6,6 +6,7 @@
 
 use crate::models::noise::{draw_reception, normal, Acoustic, Reception};
 use coopnav_acomms::{Rate, Receiver};
+use coopnav_core::validation::{CheckFields, Problems};
 use coopnav_core::Vec3;
 use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
@@ -83,27 +84,24 @@ impl Mixture {
             ..Acoustic::default()
         }
     }
+}
 
-    fn problems(&self, prefix: &str) -> Vec<(String, String, String)> {
-        let mut out = Vec::new();
-        let mut need = |field: &str, v: f64, ok: bool, allowed: &str| {
-            if !(v.is_finite() && ok) {
-                out.push((format!("{prefix}{field}"), v.to_string(), allowed.to_string()));
-            }
-        };
-        for (field, p) in [
+impl CheckFields for Mixture {
+    fn check_fields(&self, prefix: &str, p: &mut Problems) {
+        let mut need =
+            |field: &str, v: f64, ok: bool, allowed: &str| p.require(&format!("{prefix}{field}"), v, ok, allowed);
+        for (field, share) in [
             ("p_slightly_long", self.p_slightly_long),
             ("p_slightly_short", self.p_slightly_short),
             ("p_outlier", self.p_outlier),
         ] {
-            need(field, p, (0.0..=1.0).contains(&p), "a probability in [0, 1]");
+            need(field, share, (0.0..=1.0).contains(&share), "a probability in [0, 1]");
         }
         let sum = self.p_slightly_long + self.p_slightly_short + self.p_outlier;
         need("p_slightly_long + p_slightly_short + p_outlier", sum, sum <= 1.0 + 1e-9, "a sum <= 1");
         need("slight_max_m", self.slight_max_m, self.slight_max_m >= 0.0, "a finite number >= 0");
         need("outlier_min_m", self.outlier_min_m, self.outlier_min_m >= 0.0, "a finite number >= 0");
         need("outlier_max_m", self.outlier_max_m, self.outlier_max_m >= self.outlier_min_m, ">= outlier_min_m");
-        out
     }
 }
 
@@ -137,15 +135,13 @@ impl RangeError {
             },
         }
     }
+}
 
-    /// Every bad field, as (field under `prefix`, value, allowed).
-    pub fn problems(&self, prefix: &str) -> Vec<(String, String, String)> {
+impl CheckFields for RangeError {
+    fn check_fields(&self, prefix: &str, p: &mut Problems) {
         match self {
-            RangeError::Gaussian { extra_sd } if !(extra_sd.is_finite() && *extra_sd >= 0.0) => {
-                vec![(format!("{prefix}extra_sd"), extra_sd.to_string(), "a finite number >= 0".into())]
-            }
-            RangeError::Gaussian { .. } => Vec::new(),
-            RangeError::GillMixture(m) => m.problems(prefix),
+            RangeError::Gaussian { extra_sd } => p.non_negative(&format!("{prefix}extra_sd"), *extra_sd),
+            RangeError::GillMixture(m) => m.check_fields(prefix, p),
         }
     }
 }
@@ -275,35 +271,32 @@ impl SoundSpeed {
         let later = to(tt0);
         (later - from).norm() / c(later)
     }
+}
 
-    pub fn problems(&self, prefix: &str) -> Vec<(String, String, String)> {
+impl CheckFields for SoundSpeed {
+    fn check_fields(&self, prefix: &str, p: &mut Problems) {
         let speed_ok = |c: f64| c.is_finite() && (1300.0..=1700.0).contains(&c);
         match self {
             SoundSpeed::Constant { c } if !speed_ok(*c) => {
-                vec![(format!("{prefix}c"), c.to_string(), "1300..=1700 m/s".into())]
+                p.push(format!("{prefix}c"), c.to_string(), "1300..=1700 m/s")
             }
-            SoundSpeed::Constant { .. } => Vec::new(),
+            SoundSpeed::Constant { .. } => {}
             SoundSpeed::Profile { points } => {
-                let mut out = Vec::new();
                 if points.is_empty() {
-                    out.push((format!("{prefix}points"), "[]".into(), "at least one [depth, speed] point".into()));
+                    p.push(format!("{prefix}points"), "[]", "at least one [depth, speed] point");
                 }
-                for (i, p) in points.iter().enumerate() {
-                    if !(p[0].is_finite() && p[0] >= 0.0) {
-                        out.push((format!("{prefix}points[{i}][0]"), p[0].to_string(), "a depth >= 0 m".into()));
+                for (i, point) in points.iter().enumerate() {
+                    let [depth, speed] = *point;
+                    if !(depth.is_finite() && depth >= 0.0) {
+                        p.push(format!("{prefix}points[{i}][0]"), depth.to_string(), "a depth >= 0 m");
                     }
-                    if !speed_ok(p[1]) {
-                        out.push((format!("{prefix}points[{i}][1]"), p[1].to_string(), "1300..=1700 m/s".into()));
+                    if !speed_ok(speed) {
+                        p.push(format!("{prefix}points[{i}][1]"), speed.to_string(), "1300..=1700 m/s");
                     }
-                    if i > 0 && !(p[0] > points[i - 1][0]) {
-                        out.push((
-                            format!("{prefix}points[{i}][0]"),
-                            p[0].to_string(),
-                            "depths strictly increasing".into(),
-                        ));
+                    if i > 0 && !(depth > points[i - 1][0]) {
+                        p.push(format!("{prefix}points[{i}][0]"), depth.to_string(), "depths strictly increasing");
                     }
                 }
-                out
             }
         }
     }
@@ -332,15 +325,13 @@ impl Clocks {
         let (a, b) = (normal(rng), normal(rng));
         Clock { offset: self.offset_sd_s * a, drift: self.drift_sd_ppm * 1e-6 * b }
     }
+}
 
-    pub fn problems(&self, prefix: &str) -> Vec<(String, String, String)> {
-        let mut out = Vec::new();
+impl CheckFields for Clocks {
+    fn check_fields(&self, prefix: &str, p: &mut Problems) {
         for (field, v, max) in [("offset_sd_s", self.offset_sd_s, 1.0), ("drift_sd_ppm", self.drift_sd_ppm, 100.0)] {
-            if !(v.is_finite() && (0.0..=max).contains(&v)) {
-                out.push((format!("{prefix}{field}"), v.to_string(), format!("0..={max}")));
-            }
+            p.check(&format!("{prefix}{field}"), v, |v| (0.0..=max).contains(&v), &format!("0..={max}"));
         }
-        out
     }
 }
 
@@ -359,13 +350,10 @@ pub struct Collisions {
     pub capture_margin_db: Option<f64>,
 }
 
-impl Collisions {
-    pub fn problems(&self, prefix: &str) -> Vec<(String, String, String)> {
-        match self.capture_margin_db {
-            Some(m) if !(m.is_finite() && m >= 0.0) => {
-                vec![(format!("{prefix}capture_margin_db"), m.to_string(), "a finite number >= 0 dB".into())]
-            }
-            _ => Vec::new(),
+impl CheckFields for Collisions {
+    fn check_fields(&self, prefix: &str, p: &mut Problems) {
+        if let Some(m) = self.capture_margin_db {
+            p.check(&format!("{prefix}capture_margin_db"), m, |m| m >= 0.0, "a finite number >= 0 dB");
         }
     }
 }

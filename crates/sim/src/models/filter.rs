@@ -50,7 +50,7 @@ impl CheckFields for FilterSpec {
             );
         }
         if let FilterSoundSpeed::Cast { points: Some(points) } = &self.sound_speed {
-            p.extend(SoundSpeed::Profile { points: points.clone() }.problems(&format!("{prefix}{SOUND_SPEED_KEY}.")));
+            SoundSpeed::Profile { points: points.clone() }.check_fields(&format!("{prefix}{SOUND_SPEED_KEY}."), p);
         }
     }
 }
@@ -142,15 +142,15 @@ impl FilterRate {
         }
     }
 
-    /// The problem with this rate at truth step `dt`, if any: (field, value, allowed).
-    pub fn problem(&self, prefix: &str, dt: f64) -> Option<(String, String, String)> {
-        let FilterRate::Decimated { period_s } = self else { return None };
+    /// Checks this rate at truth step `dt` under `prefix`: [`CheckFields`]'s shape with the step
+    /// as one more argument.
+    pub fn check_fields(&self, prefix: &str, dt: f64, p: &mut Problems) {
+        let FilterRate::Decimated { period_s } = self else { return };
         let per_second = (1.0 / dt).round() as u64;
-        let ok = whole_steps(*period_s, dt).is_some_and(|k| per_second % k == 0);
-        (!ok).then(|| {
+        if !whole_steps(*period_s, dt).is_some_and(|k| per_second % k == 0) {
             let allowed = format!("a whole number of truth steps (dt = {dt} s) that divides one second");
-            (format!("{prefix}rate.period_s"), period_s.to_string(), allowed)
-        })
+            p.push(format!("{prefix}rate.period_s"), period_s.to_string(), allowed);
+        }
     }
 }
 
@@ -293,10 +293,14 @@ mod tests {
         let typo = toml::from_str::<FilterSpec>("rate = { kind = \"decimated\", period = 0.5 }\n").unwrap_err();
         assert!(typo.to_string().contains("rate") && typo.to_string().contains("period"), "{typo}");
         assert_eq!((spec.rate.steps(0.1), FilterRate::EveryStep.steps(0.1)), (5, 1));
-        assert!(spec.rate.problem("filter.", 0.1).is_none());
+        let fields = |rate: &FilterRate| {
+            let mut p = Problems::new();
+            rate.check_fields("filter.", 0.1, &mut p);
+            p.finish().err().map(|e| e.fields()).unwrap_or_default()
+        };
+        assert!(fields(&spec.rate).is_empty());
         for bad in [0.25, 0.3, 0.05, 0.0, f64::NAN] {
-            let (field, ..) = FilterRate::Decimated { period_s: bad }.problem("filter.", 0.1).expect("refused");
-            assert_eq!(field, "filter.rate.period_s", "{bad}");
+            assert_eq!(fields(&FilterRate::Decimated { period_s: bad }), ["filter.rate.period_s"], "{bad}");
         }
     }
 

@@ -3,6 +3,7 @@
 //! it when the current pushes it out), or surface (propulsion off, rise, take GPS fixes).
 //! Its speed sensor reads what the vehicle really does, so dead reckoning sees the true motion.
 
+use coopnav_core::validation::{CheckFields, Problems};
 use serde::{Deserialize, Serialize};
 
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -70,22 +71,20 @@ impl Finish {
             Finish::Surface { ascent_rate_m_s, .. } => Action::Ascend(ascent_rate_m_s),
         }
     }
+}
 
-    pub fn problems(&self, prefix: &str) -> Vec<(String, String, String)> {
+impl CheckFields for Finish {
+    fn check_fields(&self, prefix: &str, p: &mut Problems) {
         let (field, v) = match *self {
             Finish::Loiter { radius_m } | Finish::Hold { radius_m } => ("radius_m", radius_m),
             Finish::Surface { ascent_rate_m_s, gps_sd_m } => {
                 if !(gps_sd_m.is_finite() && gps_sd_m > 0.0) {
-                    return vec![(format!("{prefix}gps_sd_m"), gps_sd_m.to_string(), "a finite number > 0".into())];
+                    return p.push(format!("{prefix}gps_sd_m"), gps_sd_m.to_string(), "a finite number > 0");
                 }
                 ("ascent_rate_m_s", ascent_rate_m_s)
             }
         };
-        if v.is_finite() && v > 0.0 && v <= 1000.0 {
-            Vec::new()
-        } else {
-            vec![(format!("{prefix}{field}"), v.to_string(), "0 < value <= 1000".into())]
-        }
+        p.check(&format!("{prefix}{field}"), v, |v| v > 0.0 && v <= 1000.0, "0 < value <= 1000");
     }
 }
 
@@ -104,7 +103,7 @@ mod tests {
         let surface = Finish::Surface { ascent_rate_m_s: 0.5, gps_sd_m: 3.0 };
         assert_eq!(surface.act(true, (0.0, 0.0), (0.0, 0.0)), Action::Ascend(0.5));
         assert_eq!(surface.act(false, (0.0, 0.0), (0.0, 0.0)), Action::Continue);
-        assert_eq!(hold.problems("f.").len(), 0);
-        assert_eq!(Finish::Hold { radius_m: f64::NAN }.problems("f.")[0].0, "f.radius_m");
+        assert!(hold.validate("f.").is_ok());
+        assert_eq!(Finish::Hold { radius_m: f64::NAN }.validate("f.").unwrap_err().fields(), ["f.radius_m"]);
     }
 }

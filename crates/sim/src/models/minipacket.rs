@@ -4,6 +4,7 @@
 //! `coopnav_nav::codec`. Its air time and the channel's success curve it uses are here.
 
 use coopnav_acomms::Rate;
+use coopnav_core::validation::Problems;
 use coopnav_core::{CompassDeg, Heading};
 use coopnav_nav::codec::{decode_heading_deg, encode_heading_deg, Zone, SPEED_AXIS};
 use coopnav_nav::StateKind;
@@ -34,18 +35,13 @@ pub fn quantised(kind: StateKind, pos: [f64; 2], speed: f64, psi: f64, zone: &Zo
     }
 }
 
-/// Every bad field of a quantisation zone under `prefix` (`ships[0].zone.`).
-pub fn zone_problems(prefix: &str, zone: &Zone) -> Vec<(String, String, String)> {
-    let mut out = Vec::new();
+/// Checks a quantisation zone's fields under `prefix` (`ships[0].zone.`). A function, not a
+/// [`CheckFields`](coopnav_core::validation::CheckFields) impl: the zone is the navigation crate's type.
+pub fn check_zone(prefix: &str, zone: &Zone, p: &mut Problems) {
     for (axis, a) in [("east", zone.east), ("north", zone.north)] {
-        if !a.origin.is_finite() {
-            out.push((format!("{prefix}{axis}.origin"), a.origin.to_string(), "a finite number".into()));
-        }
-        if !(a.resolution.is_finite() && a.resolution > 0.0) {
-            out.push((format!("{prefix}{axis}.resolution"), a.resolution.to_string(), "a finite number > 0".into()));
-        }
+        p.finite(&format!("{prefix}{axis}.origin"), a.origin);
+        p.positive(&format!("{prefix}{axis}.resolution"), a.resolution);
     }
-    out
 }
 
 #[cfg(test)]

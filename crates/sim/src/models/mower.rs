@@ -4,6 +4,7 @@
 //! two vehicles start at opposite corners of one square and fly it in opposite directions
 //! (invented: docs/models.md#nams-scenarios).
 
+use coopnav_core::validation::{CheckFields, Problems};
 use serde::{Deserialize, Serialize};
 
 /// Which side of the lane heading the next lane lies.
@@ -31,18 +32,17 @@ impl MowerSpec {
             Turn::Right => -lane_spacing,
         }
     }
+}
 
-    /// Every bad field, as (field under `prefix`, value, allowed).
-    pub fn problems(&self, prefix: &str) -> Vec<(String, String, String)> {
+impl CheckFields for MowerSpec {
+    fn check_fields(&self, prefix: &str, p: &mut Problems) {
         let fields = [
             ("origin[0]", self.origin.0),
             ("origin[1]", self.origin.1),
             ("lane_heading_compass_deg", self.lane_heading_compass_deg),
         ];
-        fields
-            .into_iter()
-            .filter(|(_, v)| !v.is_finite())
-            .map(|(f, v)| (format!("{prefix}{f}"), v.to_string(), "a finite number".into()))
-            .collect()
+        for (field, v) in fields {
+            p.finite(&format!("{prefix}{field}"), v);
+        }
     }
 }

@@ -13,6 +13,7 @@
 use super::channel::{air_time, capacity};
 use coopnav_acomms::selector::RatePolicySpec;
 use coopnav_acomms::Rate;
+use coopnav_core::validation::Problems;
 use coopnav_nav::cycle::{Configuration, Cycle, Transmitter};
 use coopnav_nav::{Side, StateKind};
 use serde::{Deserialize, Serialize};
@@ -176,28 +177,28 @@ impl Schedule {
         slots.iter().filter(|s| parse_owner(&s.who) == Some(owner)).find_map(|s| s.rate_policy.as_ref())
     }
 
-    /// Every problem, as (field under `prefix`, value, allowed).
-    pub fn problems(&self, prefix: &str, fit: &Fit) -> Vec<(String, String, String)> {
-        let mut out = Vec::new();
+    /// Checks the schedule under `prefix` against what it must carry (`fit`). It takes `fit`, so it
+    /// is [`CheckFields`]'s shape with one more argument rather than an impl of it.
+    pub fn check_fields(&self, prefix: &str, fit: &Fit, p: &mut Problems) {
         if let Schedule::GillCycle { cycle, configuration } = self {
             let period = cycle.cycle().period();
             if (period - fit.tau).abs() > 1e-9 {
-                out.push(("comms.tau".into(), fit.tau.to_string(), format!("{period} s, the period of Gill's cycle")));
+                p.push("comms.tau", fit.tau.to_string(), format!("{period} s, the period of Gill's cycle"));
             }
             if fit.n_ships == 0 {
-                out.push((format!("{prefix}kind"), "gill_cycle".into(), "a scenario with a [[ships]] entry".into()));
+                p.push(format!("{prefix}kind"), "gill_cycle", "a scenario with a [[ships]] entry");
             }
             if configuration.has_buoy() && fit.n_buoys == 0 {
-                out.push((
+                p.push(
                     format!("{prefix}configuration"),
-                    configuration.label().into(),
-                    "msbl, or a scenario with a [[buoys]] entry (HBL ranges to buoy0)".into(),
-                ));
+                    configuration.label(),
+                    "msbl, or a scenario with a [[buoys]] entry (HBL ranges to buoy0)",
+                );
             }
         }
         if let Schedule::Tdma { slots } = self {
             if slots.is_empty() {
-                out.push((format!("{prefix}slots"), "[]".into(), "at least one slot".into()));
+                p.push(format!("{prefix}slots"), "[]", "at least one slot");
             }
             for (i, s) in slots.iter().enumerate() {
                 let field = |f: &str| format!("{prefix}slots[{i}].{f}");
@@ -210,56 +211,46 @@ impl Schedule {
                     None => false,
                 };
                 if !known {
-                    out.push((field("who"), s.who.clone(), owners_allowed(fit)));
+                    p.push(field("who"), s.who.clone(), owners_allowed(fit));
                 }
                 match (owner, s.message) {
-                    (Some(Owner::Ship(..)), None) => {
-                        out.push((field("message"), "none".into(), "east, north, speed or heading".into()))
-                    }
-                    (Some(Owner::Cna | Owner::Auv(_)), Some(kind)) => out.push((
+                    (Some(Owner::Ship(..)), None) => p.push(field("message"), "none", "east, north, speed or heading"),
+                    (Some(Owner::Cna | Owner::Auv(_)), Some(kind)) => p.push(
                         field("message"),
                         format!("{kind:?}").to_lowercase(),
-                        "no message: mini-packets come from ships and buoys".into(),
-                    )),
+                        "no message: mini-packets come from ships and buoys",
+                    ),
                     _ => {}
                 }
                 if let Some(spec) = &s.rate_policy {
-                    out.extend(rate_policy_problems(&field("rate_policy"), owner, spec, fit.status_bytes));
+                    check_rate_policy(&field("rate_policy"), owner, spec, fit.status_bytes, p);
                     let first = match owner {
                         Some(o @ (Owner::Auv(_) | Owner::Cna)) => self.policy_of(o),
                         _ => Some(spec),
                     };
                     if first != Some(spec) {
-                        out.push((
+                        p.push(
                             field("rate_policy"),
                             format!("{spec:?}"),
                             format!("the rate policy of {}'s first slot (one policy per transmitter)", s.who),
-                        ));
+                        );
                     }
                 }
                 if !(s.start_s.is_finite() && s.start_s >= 0.0 && s.length_s.is_finite() && s.length_s > 0.0) {
-                    out.push((
-                        field("start_s"),
-                        format!("{} + {}", s.start_s, s.length_s),
-                        "start >= 0, length > 0".into(),
-                    ));
+                    p.push(field("start_s"), format!("{} + {}", s.start_s, s.length_s), "start >= 0, length > 0");
                 } else if s.start_s + s.length_s > fit.tau + 1e-9 {
-                    out.push((
+                    p.push(
                         field("length_s"),
                         s.length_s.to_string(),
                         format!("the slot to end by comms.tau = {}", fit.tau),
-                    ));
+                    );
                 }
             }
         }
         let slots = self.slots(fit.tau, fit.n_auvs, fit.n_buoys);
         for (i, pair) in slots.windows(2).enumerate() {
             if pair[0].start_s + pair[0].length_s > pair[1].start_s + 1e-9 {
-                out.push((
-                    format!("{prefix}slot {}", i + 1),
-                    format!("{:?}", pair[1].owner),
-                    "slots that do not overlap".into(),
-                ));
+                p.push(format!("{prefix}slot {}", i + 1), format!("{:?}", pair[1].owner), "slots that do not overlap");
             }
         }
         for (i, s) in slots.iter().enumerate() {
@@ -278,7 +269,7 @@ impl Schedule {
             };
             let need = air + fit.travel_s + fit.guard_s;
             if s.length_s + 1e-9 < need {
-                out.push((
+                p.push(
                     format!("{prefix}slot {i} ({who}, at {:.2} s)", s.start_s),
                     format!("{:.2} s long", s.length_s),
                     format!(
@@ -286,35 +277,23 @@ impl Schedule {
                          use faster rates or fewer slots)",
                         fit.travel_s, fit.guard_s
                     ),
-                ));
+                );
             }
         }
-        out
     }
 }
 
 /// A slot's `rate_policy` (at `field`): only on a survey AUV's or the CNA's slot, a valid policy,
 /// and (an AUV's) every rate holding the status message. The CNA's broadcast (its fix and one ack
 /// per AUV) fits the smallest frame of every rate.
-fn rate_policy_problems(
-    field: &str,
-    owner: Option<Owner>,
-    spec: &RatePolicySpec,
-    status_bytes: usize,
-) -> Vec<(String, String, String)> {
+fn check_rate_policy(field: &str, owner: Option<Owner>, spec: &RatePolicySpec, status_bytes: usize, p: &mut Problems) {
     if !matches!(owner, Some(Owner::Auv(_) | Owner::Cna)) {
-        return vec![(
-            field.into(),
-            format!("{spec:?}"),
-            "no rate policy: only a survey AUV's or the CNA's slot names one".into(),
-        )];
+        return p.push(field, format!("{spec:?}"), "no rate policy: only a survey AUV's or the CNA's slot names one");
     }
     match (spec.rates(), owner) {
-        (Ok(rates), Some(Owner::Auv(_))) => {
-            rates.into_iter().filter_map(|r| payload_problem(field, r, status_bytes)).collect()
-        }
-        (Ok(_), _) => Vec::new(),
-        (Err(e), _) => vec![(field.into(), "rejected".into(), e.to_string())],
+        (Ok(rates), Some(Owner::Auv(_))) => rates.into_iter().for_each(|r| check_payload(field, r, status_bytes, p)),
+        (Ok(_), _) => {}
+        (Err(e), _) => p.push(field, "rejected", e.to_string()),
     }
 }
 
@@ -380,11 +359,11 @@ fn owners_allowed(fit: &Fit) -> String {
     format!("{} or {auvs}", named.join(", "))
 }
 
-/// The message at `rate` carrying `bytes`: a problem unless the rate's frames hold it.
-pub fn payload_problem(field: &str, rate: Rate, bytes: usize) -> Option<(String, String, String)> {
-    (bytes > capacity(rate)).then(|| {
-        (field.to_string(), format!("rate {rate}"), format!("a rate whose frames hold the {bytes}-byte message"))
-    })
+/// The message at `rate` carrying `bytes`: a problem at `field` unless the rate's frames hold it.
+pub fn check_payload(field: &str, rate: Rate, bytes: usize, p: &mut Problems) {
+    if bytes > capacity(rate) {
+        p.push(field, format!("rate {rate}"), format!("a rate whose frames hold the {bytes}-byte message"));
+    }
 }
 
 /// Longest air time of any of `rates`.
@@ -396,6 +375,14 @@ pub fn longest_air(rates: impl IntoIterator<Item = Rate>) -> f64 {
 mod tests {
     use super::*;
     use coopnav_acomms::selector::AdaptiveConfig;
+    use coopnav_core::validation::Problem;
+
+    /// Every problem `schedule` has under `prefix`, in the order found.
+    fn problems_of(schedule: &Schedule, prefix: &str, fit: &Fit) -> Vec<Problem> {
+        let mut p = Problems::new();
+        schedule.check_fields(prefix, fit, &mut p);
+        p.finish().err().map(|e| e.0).unwrap_or_default()
+    }
 
     fn fit(tau: f64, n: usize) -> Fit {
         Fit {
@@ -420,7 +407,7 @@ mod tests {
             s.iter().map(|s| (s.owner, s.start_s)).collect::<Vec<_>>(),
             [(Owner::Cna, 0.0), (Owner::Auv(0), 10.0), (Owner::Auv(1), 20.0)]
         );
-        assert!(Schedule::default().problems("comms.schedule.", &fit(30.0, 5)).is_empty());
+        assert!(problems_of(&Schedule::default(), "comms.schedule.", &fit(30.0, 5)).is_empty());
     }
 
     #[test]
@@ -438,18 +425,18 @@ mod tests {
         );
         let slot = |who: &str, start_s| SlotSpec::packet(who, start_s, 10.0);
         let tdma = Schedule::Tdma { slots: vec![slot("cna", 0.0), slot("buoy0", 10.0), slot("buoy2", 20.0)] };
-        let p = tdma.problems("s.", &Fit { n_buoys: 2, ..fit(30.0, 1) });
+        let p = problems_of(&tdma, "s.", &Fit { n_buoys: 2, ..fit(30.0, 1) });
         assert_eq!(p.len(), 1, "{p:?}");
-        assert_eq!((p[0].0.as_str(), p[0].2.as_str()), ("s.slots[2].who", "cna, buoy0..buoy1 or auv0..auv0"));
+        assert_eq!((p[0].field.as_str(), p[0].allowed.as_str()), ("s.slots[2].who", "cna, buoy0..buoy1 or auv0..auv0"));
     }
 
     #[test]
     fn a_schedule_that_cannot_fit_is_refused_naming_the_slot() {
         // Eight AUVs in 30 s: 3.33 s slots, shorter than 3.9 s of air time alone.
-        let p = Schedule::default().problems("comms.schedule.", &fit(30.0, 8));
+        let p = problems_of(&Schedule::default(), "comms.schedule.", &fit(30.0, 8));
         assert_eq!(p.len(), 9, "{p:?}");
-        assert!(p[3].0.contains("slot 3 (auv2"), "{p:?}");
-        assert!(p[3].2.contains("air time 3.90 s") && p[3].2.contains("travel 0.70 s"), "{p:?}");
+        assert!(p[3].field.contains("slot 3 (auv2"), "{p:?}");
+        assert!(p[3].allowed.contains("air time 3.90 s") && p[3].allowed.contains("travel 0.70 s"), "{p:?}");
         let tdma = Schedule::Tdma {
             slots: vec![
                 SlotSpec::packet("cna", 0.0, 6.0),
@@ -457,8 +444,8 @@ mod tests {
                 SlotSpec::packet("auv7", 10.0, 25.0),
             ],
         };
-        let p = tdma.problems("s.", &fit(30.0, 1));
-        let fields: Vec<&str> = p.iter().map(|x| x.0.as_str()).collect();
+        let p = problems_of(&tdma, "s.", &fit(30.0, 1));
+        let fields: Vec<&str> = p.iter().map(|x| x.field.as_str()).collect();
         assert!(fields.contains(&"s.slots[2].who") && fields.contains(&"s.slots[2].length_s"), "{p:?}");
         assert!(fields.iter().any(|f| f.starts_with("s.slot 1 (auv0")), "{p:?}");
     }
@@ -491,7 +478,7 @@ mod tests {
         let one = Schedule::GillCycle { cycle: GillCycle::HblLong, configuration: Configuration::HblOne };
         assert!(one.slots(20.0, 1, 1).iter().all(|s| s.owner != Owner::Ship(0, Starboard)));
         let with_ship = Fit { n_ships: 1, n_buoys: 1, travel_s: 0.67, guard_s: 0.1, ..fit(20.0, 1) };
-        assert!(hbl_two.problems("comms.schedule.", &with_ship).is_empty());
+        assert!(problems_of(&hbl_two, "comms.schedule.", &with_ship).is_empty());
     }
 
     #[test]
@@ -512,9 +499,12 @@ mod tests {
                 slot("buoy0", 4.0, None),
             ],
         };
-        let p = tdma.problems("s.", &fit);
+        let p = problems_of(&tdma, "s.", &fit);
         assert_eq!(p.len(), 1, "{p:?}");
-        assert!(p[0].0.starts_with("s.slot 2 (buoy0, at 4.00 s)") && p[0].2.contains("air time 3.90 s"), "{p:?}");
+        assert!(
+            p[0].field.starts_with("s.slot 2 (buoy0, at 4.00 s)") && p[0].allowed.contains("air time 3.90 s"),
+            "{p:?}"
+        );
         // A ship slot must name its component, a CNA slot may not; a Gill cycle needs its period.
         let bad = Schedule::Tdma {
             slots: vec![
@@ -523,14 +513,17 @@ mod tests {
                 slot("ship1.port", 4.0, None),
             ],
         };
-        let fields: Vec<String> = bad.problems("s.", &fit).into_iter().map(|p| p.0).collect();
+        let fields: Vec<String> = problems_of(&bad, "s.", &fit).into_iter().map(|p| p.field).collect();
         assert_eq!(fields, ["s.slots[0].message", "s.slots[1].message", "s.slots[2].who", "s.slots[2].message"]);
         let gill = Schedule::GillCycle { cycle: GillCycle::HblShort, configuration: Configuration::HblTwo };
-        let p = gill.problems("s.", &fit);
-        assert_eq!((p.len(), p[0].0.as_str(), p[0].2.as_str()), (1, "comms.tau", "16 s, the period of Gill's cycle"));
-        assert!(gill.problems("s.", &Fit { tau: 16.0, ..fit }).is_empty());
-        let p = gill.problems("s.", &Fit { tau: 16.0, n_buoys: 0, n_ships: 0, ..fit });
-        let fields: Vec<&str> = p.iter().map(|p| p.0.as_str()).collect();
+        let p = problems_of(&gill, "s.", &fit);
+        assert_eq!(
+            (p.len(), p[0].field.as_str(), p[0].allowed.as_str()),
+            (1, "comms.tau", "16 s, the period of Gill's cycle")
+        );
+        assert!(problems_of(&gill, "s.", &Fit { tau: 16.0, ..fit }).is_empty());
+        let p = problems_of(&gill, "s.", &Fit { tau: 16.0, n_buoys: 0, n_ships: 0, ..fit });
+        let fields: Vec<&str> = p.iter().map(|p| p.field.as_str()).collect();
         assert_eq!(fields, ["s.kind", "s.configuration"], "{p:?}");
     }
 
@@ -547,16 +540,22 @@ mod tests {
         // 4 s holds rate 5's 3.04 s of air time + 0.9 s, not the comms default's 3.9 s.
         let short =
             |policy| Schedule::Tdma { slots: vec![slot("cna", 0.0, 10.0, None), slot("auv0", 10.0, 4.0, policy)] };
-        assert!(short(Some(r5.clone())).problems("s.", &fit(30.0, 1)).is_empty());
+        assert!(problems_of(&short(Some(r5.clone())), "s.", &fit(30.0, 1)).is_empty());
         assert_eq!(short(Some(r5.clone())).status_policy(0), Some(&r5));
-        let p = short(None).problems("s.", &fit(30.0, 1));
-        assert!(p.len() == 1 && p[0].0.starts_with("s.slot 1 (auv0") && p[0].2.contains("air time 3.90 s"), "{p:?}");
+        let p = problems_of(&short(None), "s.", &fit(30.0, 1));
+        assert!(
+            p.len() == 1 && p[0].field.starts_with("s.slot 1 (auv0") && p[0].allowed.contains("air time 3.90 s"),
+            "{p:?}"
+        );
         // The CNA's slot too: sized by its policy's slowest rate, not by comms.cna_rate's.
         let cna = |length_s, policy| Schedule::Tdma { slots: vec![slot("cna", 0.0, length_s, policy)] };
-        assert!(cna(4.0, Some(r5.clone())).problems("s.", &fit(30.0, 0)).is_empty());
+        assert!(problems_of(&cna(4.0, Some(r5.clone())), "s.", &fit(30.0, 0)).is_empty());
         assert_eq!(cna(4.0, Some(r5.clone())).cna_policy(), Some(&r5));
-        let p = cna(4.0, None).problems("s.", &fit(30.0, 0));
-        assert!(p.len() == 1 && p[0].0.starts_with("s.slot 0 (cna") && p[0].2.contains("air time 3.90 s"), "{p:?}");
+        let p = problems_of(&cna(4.0, None), "s.", &fit(30.0, 0));
+        assert!(
+            p.len() == 1 && p[0].field.starts_with("s.slot 0 (cna") && p[0].allowed.contains("air time 3.90 s"),
+            "{p:?}"
+        );
         // A policy on a buoy's slot, two policies for one AUV, a rate too small for the
         // 40-byte status, and an invalid adaptive configuration are each named.
         let bad_adaptive = RatePolicySpec::Adaptive(AdaptiveConfig { memory: 0, ..AdaptiveConfig::default() });
@@ -568,8 +567,8 @@ mod tests {
                 slot("auv1", 15.0, 5.0, Some(bad_adaptive)),
             ],
         };
-        let p = bad.problems("s.", &Fit { status_bytes: 40, n_buoys: 1, ..fit(30.0, 2) });
-        let named: Vec<(&str, &str)> = p.iter().map(|p| (p.0.as_str(), p.2.as_str())).collect();
+        let p = problems_of(&bad, "s.", &Fit { status_bytes: 40, n_buoys: 1, ..fit(30.0, 2) });
+        let named: Vec<(&str, &str)> = p.iter().map(|p| (p.field.as_str(), p.allowed.as_str())).collect();
         assert_eq!(
             named,
             [
@@ -598,8 +597,13 @@ slots = [{ who = "cna", start_s = 0.0, length_s = 10.0 },
 
     #[test]
     fn a_message_longer_than_the_rate_is_refused() {
-        assert!(payload_problem("comms.status_rate", Rate::R0, 26).is_none());
-        let p = payload_problem("comms.status_rate", Rate::R0, 40).unwrap();
-        assert!(p.0 == "comms.status_rate" && p.2.contains("40-byte"), "{p:?}");
+        let payload = |bytes| {
+            let mut p = Problems::new();
+            check_payload("comms.status_rate", Rate::R0, bytes, &mut p);
+            p.finish().err().map(|e| e.0).unwrap_or_default()
+        };
+        assert!(payload(26).is_empty());
+        let p = payload(40);
+        assert!(p.len() == 1 && p[0].field == "comms.status_rate" && p[0].allowed.contains("40-byte"), "{p:?}");
     }
 }

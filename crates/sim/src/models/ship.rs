@@ -4,7 +4,8 @@
 //! (`[[ships]]`), the pilot and their validation live here; the engine's ship is in
 //! `engine/vehicles.rs`.
 
-use super::minipacket::zone_problems;
+use super::minipacket::check_zone;
+use coopnav_core::validation::{CheckFields, Problems};
 use coopnav_core::{wrap_pi, CompassDeg, Heading};
 use coopnav_nav::codec::Zone;
 use coopnav_nav::{Outriggers, SurfaceParams};
@@ -103,23 +104,20 @@ impl ShipSpec {
     pub fn track(&self) -> f64 {
         Heading::from(CompassDeg(self.heading_compass_deg)).radians()
     }
+}
 
-    /// Every bad field, as (field under `prefix`, value, allowed).
-    pub fn problems(&self, prefix: &str) -> Vec<(String, String, String)> {
-        let mut out = Vec::new();
-        let mut need = |field: &str, v: f64, ok: bool, allowed: &str| {
-            if !(v.is_finite() && ok) {
-                out.push((format!("{prefix}{field}"), v.to_string(), allowed.to_string()));
-            }
-        };
+impl CheckFields for ShipSpec {
+    fn check_fields(&self, prefix: &str, p: &mut Problems) {
+        let mut need =
+            |field: &str, v: f64, ok: bool, allowed: &str| p.require(&format!("{prefix}{field}"), v, ok, allowed);
         for (field, v) in [("x", self.x), ("y", self.y), ("heading_compass_deg", self.heading_compass_deg)] {
             need(field, v, true, "a finite number");
         }
         need("speed", self.speed, self.speed > 0.0 && self.speed <= 6.0, "0 < speed <= 6 m/s");
-        let p = &self.pilot;
-        need("pilot.lookahead_m", p.lookahead_m, p.lookahead_m > 0.0, "a finite number > 0");
-        need("pilot.heading_gain", p.heading_gain, p.heading_gain > 0.0, "a finite number > 0");
-        need("pilot.max_rate_deg_s", p.max_rate_deg_s, p.max_rate_deg_s > 0.0, "a finite number > 0");
+        let pilot = &self.pilot;
+        need("pilot.lookahead_m", pilot.lookahead_m, pilot.lookahead_m > 0.0, "a finite number > 0");
+        need("pilot.heading_gain", pilot.heading_gain, pilot.heading_gain > 0.0, "a finite number > 0");
+        need("pilot.max_rate_deg_s", pilot.max_rate_deg_s, pilot.max_rate_deg_s > 0.0, "a finite number > 0");
         let s = &self.start_scatter;
         let ranges = [
             ("start_scatter.position_sd_m", s.position_sd_m, 100.0),
@@ -136,8 +134,7 @@ impl ShipSpec {
         need("outriggers.separation", o.separation, (0.0..=100.0).contains(&o.separation), "0..=100 m");
         need("outriggers.along_offset", o.along_offset, o.along_offset.abs() <= 100.0, "within ±100 m");
         need("outriggers.depth", o.depth, (0.0..=100.0).contains(&o.depth), "0..=100 m");
-        out.extend(zone_problems(&format!("{prefix}zone."), &self.zone));
-        out
+        check_zone(&format!("{prefix}zone."), &self.zone, p);
     }
 }
 
@@ -165,7 +162,7 @@ mod tests {
                     zone = { east = { origin = -183.8, resolution = 1.6 }, north = { origin = -53.6, resolution = 0.0 } }\n\
                     outriggers = { depth = -1.0 }";
         let ship: ShipSpec = toml::from_str(text).unwrap();
-        let fields: Vec<String> = ship.problems("ships[0].").into_iter().map(|p| p.0).collect();
+        let fields = ship.validate("ships[0].").unwrap_err().fields();
         assert_eq!(fields, ["ships[0].speed", "ships[0].outriggers.depth", "ships[0].zone.north.resolution"]);
         let typo = toml::from_str::<ShipSpec>(&text.replace("speed = 0.0", "sped = 1.3")).unwrap_err().to_string();
         assert!(typo.contains("sped"), "{typo}");

@@ -295,6 +295,7 @@ mod tests {
     use super::*;
     use crate::models::tl_spec::kind_defaults_to_analytic;
     use coopnav_acomms::tl::analytic::Thorp;
+    use coopnav_core::validation::CheckFields;
     use serde::Deserialize;
 
     #[derive(Debug, Deserialize)]
@@ -325,11 +326,14 @@ mod tests {
     #[test]
     fn bad_fields_are_all_named() {
         let bad = TlModel::BellhopGrid(GridModel { bearings: 0, anchor_spacing_m: 10.0, ..GridModel::default() });
-        let fields: Vec<String> = bad.problems("comms.tl.").into_iter().map(|p| p.0).collect();
+        let fields = bad.validate("comms.tl.").unwrap_err().fields();
         assert_eq!(fields, ["comms.tl.bearings", "comms.tl.anchor_spacing_m"]);
         let flat = TlModel::BellhopGrid(GridModel { source_depth_step_m: 0.1, ..GridModel::default() });
-        assert_eq!(flat.problems("comms.tl.")[0].0, "comms.tl.source_depth_step_m");
-        assert!(TlModel::Analytic(Thorp { k: -1.0, freq_hz: 25_000.0 }).problems("t.")[0].0 == "t.k");
+        assert_eq!(flat.validate("comms.tl.").unwrap_err().fields(), ["comms.tl.source_depth_step_m"]);
+        assert_eq!(
+            TlModel::Analytic(Thorp { k: -1.0, freq_hz: 25_000.0 }).validate("t.").unwrap_err().fields(),
+            ["t.k"]
+        );
     }
 
     /// A flat 100 m sea with a constant sound speed, an ASC at the surface and AUVs at 20 m,

@@ -3,6 +3,7 @@
 //! [`super::tl`]).
 
 use coopnav_acomms::tl::analytic::Thorp;
+use coopnav_core::validation::{CheckFields, Problems};
 use serde::{Deserialize, Serialize};
 use std::path::PathBuf;
 
@@ -72,15 +73,12 @@ impl TlModel {
             TlModel::Bellhop | TlModel::BellhopGrid(_) => Thorp::default(),
         }
     }
+}
 
-    /// Every bad field, as (field under `prefix`, value, allowed).
-    pub fn problems(&self, prefix: &str) -> Vec<(String, String, String)> {
-        let mut out = Vec::new();
-        let mut need = |field: &str, v: f64, ok: bool, allowed: &str| {
-            if !(v.is_finite() && ok) {
-                out.push((format!("{prefix}{field}"), v.to_string(), allowed.to_string()));
-            }
-        };
+impl CheckFields for TlModel {
+    fn check_fields(&self, prefix: &str, p: &mut Problems) {
+        let mut need =
+            |field: &str, v: f64, ok: bool, allowed: &str| p.require(&format!("{prefix}{field}"), v, ok, allowed);
         match self {
             TlModel::Analytic(t) => {
                 need("k", t.k, t.k > 0.0, "a finite number > 0");
@@ -96,7 +94,6 @@ impl TlModel {
                 need("source_depth_step_m", g.source_depth_step_m, g.source_depth_step_m >= 0.5, ">= 0.5 m");
             }
         }
-        out
     }
 }
 

@@ -11,7 +11,7 @@ pub use crate::models::health::Health;
 use crate::models::minipacket;
 use crate::models::mower::MowerSpec;
 use crate::models::peer::{mask_width, StatusFormat, StatusTo};
-use crate::models::schedule::{longest_air, payload_problem, Fit, Owner, Schedule};
+use crate::models::schedule::{check_payload, longest_air, Fit, Owner, Schedule};
 use crate::models::ship::{ShipSpec, MAX_SHIPS};
 use crate::models::tl_spec::TlModel;
 pub use crate::scenario::file::ScenarioError;
@@ -428,7 +428,7 @@ impl Scenario {
         self.validate_comms(&mut p);
         self.validate_sensors(&mut p);
         self.filter.check_fields("filter.", &mut p);
-        p.extend(self.filter.rate.problem("filter.", self.dt));
+        self.filter.rate.check_fields("filter.", self.dt, &mut p);
         p.check("health.divergence_window_s", self.health.divergence_window_s, |v| v > 0.0, "a finite number > 0");
         self.validate_policies(&mut p);
         if p.is_empty() && !matches!(self.comms.tl, TlModel::Analytic(_)) {
@@ -498,13 +498,13 @@ impl Scenario {
             p.push("fleet.current", format!("{:?}", f.current), "finite, slower than fleet.speed");
         }
         p.non_negative("fleet.init_position_sd", f.init_position_sd);
-        p.extend(f.finish.problems("fleet.finish."));
+        f.finish.check_fields("fleet.finish.", p);
         f.vehicle.check_fields("fleet.vehicle.", p);
         if !(f.lawnmowers.is_empty() || f.lawnmowers.len() == f.n_auvs) {
             p.push("fleet.lawnmowers", format!("{} entries", f.lawnmowers.len()), "none, or one per survey AUV");
         }
         for (k, m) in f.lawnmowers.iter().enumerate() {
-            p.extend(m.problems(&format!("fleet.lawnmowers[{k}].")));
+            m.check_fields(&format!("fleet.lawnmowers[{k}]."), p);
         }
         if !f.paths.is_empty() {
             if f.paths.len() != f.n_auvs {
@@ -629,8 +629,8 @@ impl Scenario {
         // A buoy's broadcast is a position report.
         let report_bytes = (HEADER_BITS + BODY_BITS).div_ceil(8) as usize;
         for (i, b) in self.buoys.iter().enumerate() {
-            p.extend(b.problems(&format!("buoys[{i}].")));
-            p.extend(payload_problem(&format!("buoys[{i}].rate"), b.rate, report_bytes));
+            b.check_fields(&format!("buoys[{i}]."), p);
+            check_payload(&format!("buoys[{i}].rate"), b.rate, report_bytes, p);
             b.filter.check_fields(&format!("buoys[{i}].filter."), p);
         }
     }
@@ -640,7 +640,7 @@ impl Scenario {
             p.push("ships", format!("{} ships", self.ships.len()), format!("at most {MAX_SHIPS}"));
         }
         for (i, ship) in self.ships.iter().enumerate() {
-            p.extend(ship.problems(&format!("ships[{i}].")));
+            ship.check_fields(&format!("ships[{i}]."), p);
             ship.filter.check_fields(&format!("ships[{i}].filter."), p);
         }
     }
@@ -685,18 +685,18 @@ impl Scenario {
             }
         }
         let broadcast_bytes = report_bytes + self.fleet.n_auvs.div_ceil(8);
-        p.extend(payload_problem("comms.cna_rate", c.cna_rate, broadcast_bytes));
+        check_payload("comms.cna_rate", c.cna_rate, broadcast_bytes, p);
         for rate in &status_rates {
-            p.extend(payload_problem("comms.status_rate", *rate, status_bytes));
+            check_payload("comms.status_rate", *rate, status_bytes, p);
         }
-        p.extend(c.tl.problems("comms.tl."));
+        c.tl.check_fields("comms.tl.", p);
         p.non_negative("comms.slot_guard_s", c.slot_guard_s);
         p.positive("comms.max_range_m", c.max_range_m);
         p.check("comms.mini_packet_air_s", c.mini_packet_air_s, |v| v > 0.0 && v <= 10.0, "0 < air time <= 10 s");
-        p.extend(self.channel.range_error.problems("channel.range_error."));
-        p.extend(self.channel.sound_speed.problems("channel.sound_speed."));
-        p.extend(self.channel.clocks.problems("channel.clocks."));
-        p.extend(self.channel.collisions.problems("channel.collisions."));
+        self.channel.range_error.check_fields("channel.range_error.", p);
+        self.channel.sound_speed.check_fields("channel.sound_speed.", p);
+        self.channel.clocks.check_fields("channel.clocks.", p);
+        self.channel.collisions.check_fields("channel.collisions.", p);
         if p.is_empty() {
             let fit = Fit {
                 tau: c.tau,
@@ -711,7 +711,7 @@ impl Scenario {
                 travel_s: c.max_range_m / self.channel.sound_speed.slowest(),
                 guard_s: c.slot_guard_s,
             };
-            p.extend(c.schedule.problems("comms.schedule.", &fit));
+            c.schedule.check_fields("comms.schedule.", &fit, p);
         }
     }
 
